@@ -24,10 +24,13 @@ class CellType(Enum):
     WEDGE6 = "wedge"
     TET4 = "tetra"
     TET10 = "tetra10"
+    HEX27 = "hexahedron27"
 
     @property
     def n_nodes(self) -> int:
-        return {"hexahedron": 8, "wedge": 6, "tetra": 4, "tetra10": 10}[self.value]
+        return {"hexahedron": 8, "wedge": 6, "tetra": 4, "tetra10": 10, "hexahedron27": 27}[
+            self.value
+        ]
 
 
 @dataclass(frozen=True)
