@@ -1,0 +1,221 @@
+"""A flexible body in a floating frame of reference (seed eq. 1-6).
+
+Position of node k: x_k = r + A s_k, s_k = X_k + psi_k q (body frame). Generalized velocity
+v = [r_dot (global), omega (body frame), q_dot] (seed eq. 1-3). A rigid body is nq = 0.
+
+Equations of motion (virtual work, Shabana ch. 5), with S = S0 + S1 q, J = tr(G) I - G:
+
+    [ m I      -A S~     A S1  ] [r_ddot]   [Q_r]
+    [ S~ A^T    J        M_wq  ] [w_dot ] = [Q_w]
+    [ S1^T A^T  M_wq^T   M_qq  ] [q_ddot]   [Q_q]
+
+Q holds the elastic force -k_hat q, gravity, nodal loads and the quadratic-velocity terms
+-L^T M (w x (w x s) + 2 w x s_dot), all written as contractions of the inertia invariants.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import scipy.sparse as sp
+
+from flexmvm.bodies.invariants import InertiaInvariants, inertia_invariants
+from flexmvm.bodies.rotation import skew
+from flexmvm.mesh.mesh import Mesh
+
+_CYCLIC = ((0, 1, 2), (1, 2, 0), (2, 0, 1))
+
+
+@dataclass(frozen=True)
+class FlexibleBody:
+    """Constant data of one body; the state (r, A, q, v) lives in the integrator.
+
+    X: (n, 3) undeformed node positions in the body frame [m]; psi: (3n, nq) basis (dense or
+    csr); k_hat: (nq, nq) reduced stiffness [N/m]; c_hat: optional reduced damping [N s/m].
+    """
+
+    name: str
+    X: np.ndarray
+    psi: np.ndarray | sp.spmatrix
+    inv: InertiaInvariants
+    k_hat: np.ndarray | sp.spmatrix
+    mesh: Mesh | None = None
+    c_hat: np.ndarray | sp.spmatrix | None = None
+    label: str = ""
+    _psi_rows: dict = field(default_factory=dict, compare=False, repr=False)
+
+    @classmethod
+    def build(cls, name, X, M_scalar, psi, k_hat, *, mesh=None, c_hat=None, label=""):
+        """Compute the inertia invariants once and return the body."""
+        inv = inertia_invariants(X, M_scalar, psi)
+        if sp.issparse(psi):
+            psi = sp.csr_matrix(psi)
+        return cls(name, np.asarray(X, float), psi, inv, k_hat, mesh, c_hat, label)
+
+    # -- sizes ----------------------------------------------------------------------------
+    @property
+    def nq(self) -> int:
+        return self.inv.nq
+
+    @property
+    def nv(self) -> int:
+        return 6 + self.nq
+
+    @property
+    def is_sparse(self) -> bool:
+        return sp.issparse(self.psi)
+
+    # -- invariant contractions -------------------------------------------------------------
+    def first_moment(self, q: np.ndarray) -> np.ndarray:
+        """S = S0 + S1 q (body frame) [kg m]."""
+        return self.inv.S0 + self.inv.S1 @ q
+
+    def _C(self, q: np.ndarray) -> list[list[np.ndarray]]:
+        """C[a][b] = s_a^T M_s P_b = G1[a][b] + G2[b][a] q, shape (nq,)."""
+        G1, G2 = self.inv.G1, self.inv.G2
+        return [[G1[a][b] + G2[b][a] @ q for b in range(3)] for a in range(3)]
+
+    def inertia_terms(self, q: np.ndarray):
+        """(S, J, M_wq, C) at q: first moment, inertia about the frame origin, the omega-q
+        coupling (3, nq) and the C contractions reused by the velocity terms."""
+        S = self.first_moment(q)
+        C = self._C(q)
+        G = self.inv.G0.copy()
+        if self.nq:
+            for a in range(3):
+                for b in range(3):
+                    G[a, b] += self.inv.G1[b][a] @ q + C[a][b] @ q
+        G = 0.5 * (G + G.T)
+        J = np.trace(G) * np.eye(3) - G
+        M_wq = np.zeros((3, self.nq))
+        for c, a, b in _CYCLIC:
+            M_wq[c] = C[a][b] - C[b][a]
+        return S, J, M_wq, C
+
+    def frame_mass(self, A: np.ndarray, S: np.ndarray, J: np.ndarray) -> np.ndarray:
+        """6 x 6 frame block [[m I, -A S~], [S~ A^T, J]]."""
+        Mff = np.zeros((6, 6))
+        Mff[:3, :3] = self.inv.mass * np.eye(3)
+        ASt = A @ skew(S)
+        Mff[:3, 3:] = -ASt
+        Mff[3:, :3] = -ASt.T
+        Mff[3:, 3:] = J
+        return Mff
+
+    def coupling_mass(self, A: np.ndarray, M_wq: np.ndarray) -> np.ndarray:
+        """6 x nq frame-elastic block [[A S1], [M_wq]]."""
+        return np.vstack([A @ self.inv.S1, M_wq])
+
+    def mass_times(self, A, q, a_vec: np.ndarray, terms=None) -> np.ndarray:
+        """M(A, q) @ a_vec without forming the full matrix (a_vec: (6 + nq,))."""
+        S, J, M_wq, _ = terms if terms is not None else self.inertia_terms(q)
+        Mff = self.frame_mass(A, S, J)
+        out = np.empty(self.nv)
+        af, aq = a_vec[:6], a_vec[6:]
+        out[:6] = Mff @ af
+        if self.nq:
+            Mfq = self.coupling_mass(A, M_wq)
+            out[:6] += Mfq @ aq
+            out[6:] = Mfq.T @ af + self.inv.M_qq @ aq
+        return out
+
+    def velocity_forces(self, A, q, v, terms=None) -> np.ndarray:
+        """Quadratic-velocity vector Q_v (6 + nq,): centrifugal and Coriolis terms."""
+        S, J, M_wq, C = terms if terms is not None else self.inertia_terms(q)
+        w, qd = v[3:6], v[6:]
+        W = skew(w)
+        Om = W @ W
+        out = np.zeros(self.nv)
+        S1qd = self.inv.S1 @ qd if self.nq else np.zeros(3)
+        out[:3] = -A @ (Om @ S + 2.0 * W @ S1qd)
+        H = np.array([[C[a][b] @ qd for b in range(3)] for a in range(3)]) if self.nq else np.zeros((3, 3))
+        out[3:6] = -(np.cross(w, J @ w) + 2.0 * (np.trace(H) * w - H.T @ w))
+        if self.nq:
+            G2 = self.inv.G2
+            Qq = np.zeros(self.nq)
+            for a in range(3):
+                for b in range(3):
+                    if Om[a, b] != 0.0:
+                        Qq -= Om[a, b] * C[b][a]
+                    if W[a, b] != 0.0:
+                        Qq -= 2.0 * W[a, b] * (G2[a][b] @ qd)
+            out[6:] = Qq
+        return out
+
+    def gravity_forces(self, A, q, g: np.ndarray, S=None) -> np.ndarray:
+        """Generalized gravity force for global acceleration g [m/s^2] (6 + nq,)."""
+        S = self.first_moment(q) if S is None else S
+        gb = A.T @ g
+        out = np.zeros(self.nv)
+        out[:3] = self.inv.mass * g
+        out[3:6] = np.cross(S, gb)
+        if self.nq:
+            out[6:] = self.inv.S1.T @ gb
+        return out
+
+    def elastic_forces(self, q, qd=None) -> np.ndarray:
+        """-k_hat q - c_hat q_dot on the elastic coordinates (nq,)."""
+        f = -(self.k_hat @ q) if self.nq else np.zeros(0)
+        if self.c_hat is not None and qd is not None and self.nq:
+            f = f - self.c_hat @ qd
+        return np.asarray(f).ravel()
+
+    # -- nodes --------------------------------------------------------------------------------
+    def psi_rows(self, k: int):
+        """psi_k: the (3, nq) rows of node k (dense for reduced bases, csr for full FE)."""
+        rows = self._psi_rows.get(k)
+        if rows is None:
+            rows = self.psi[3 * k : 3 * k + 3, :]
+            self._psi_rows[k] = rows
+        return rows
+
+    def local_displacements(self, nodes: np.ndarray, q: np.ndarray) -> np.ndarray:
+        """u_k = psi_k q in the body frame for the given node ids, shape (len(nodes), 3)."""
+        nodes = np.asarray(nodes, dtype=np.int64)
+        if not self.nq:
+            return np.zeros((len(nodes), 3))
+        idx = (3 * nodes[:, None] + np.arange(3)).ravel()
+        return np.asarray(self.psi[idx, :] @ q).reshape(-1, 3)
+
+    def node_positions(self, nodes, r, A, q) -> np.ndarray:
+        """Global positions x_k = r + A (X_k + u_k), shape (len(nodes), 3)."""
+        s = self.X[nodes] + self.local_displacements(nodes, q)
+        return r + s @ A.T
+
+    def node_velocities(self, nodes, A, q, v) -> np.ndarray:
+        """Global velocities x_dot_k = r_dot + A (w x s_k + psi_k q_dot), (len(nodes), 3)."""
+        s = self.X[nodes] + self.local_displacements(nodes, q)
+        sd = self.local_displacements(nodes, v[6:]) if self.nq else np.zeros_like(s)
+        return v[:3] + (np.cross(v[3:6], s) + sd) @ A.T
+
+    def point_jacobian(self, k: int, A, q, direction: np.ndarray):
+        """Row d^T dx_k/dv for a global direction d: returns (frame part (6,), q part (nq,))."""
+        s = self.X[k] + (self.psi_rows(k) @ q if self.nq else 0.0)
+        dl = A.T @ direction
+        frame = np.concatenate([direction, np.cross(s, dl)])
+        if not self.nq:
+            return frame, np.zeros(0)
+        qpart = self.psi_rows(k).T @ dl
+        return frame, np.asarray(qpart).ravel()
+
+    # -- integrals of motion ----------------------------------------------------------------------
+    def kinetic_energy(self, A, q, v, terms=None) -> float:
+        return 0.5 * float(v @ self.mass_times(A, q, v, terms))
+
+    def strain_energy(self, q) -> float:
+        return 0.5 * float(q @ (self.k_hat @ q)) if self.nq else 0.0
+
+    def linear_momentum(self, A, q, v, terms=None) -> np.ndarray:
+        """p = m r_dot + A (w x S + S1 q_dot) [kg m/s], global."""
+        S = self.first_moment(q) if terms is None else terms[0]
+        inner = np.cross(v[3:6], S) + (self.inv.S1 @ v[6:] if self.nq else 0.0)
+        return self.inv.mass * v[:3] + A @ inner
+
+    def angular_momentum(self, r, A, q, v, terms=None) -> np.ndarray:
+        """Angular momentum about the global origin [kg m^2/s]:
+        r x p + A (S x A^T r_dot + J w + M_wq q_dot)."""
+        S, J, M_wq, _ = terms if terms is not None else self.inertia_terms(q)
+        p = self.linear_momentum(A, q, v, (S, J, M_wq, None))
+        h_o = np.cross(S, A.T @ v[:3]) + J @ v[3:6] + (M_wq @ v[6:] if self.nq else 0.0)
+        return np.cross(r, p) + A @ h_o
