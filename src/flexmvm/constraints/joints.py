@@ -1,0 +1,195 @@
+"""Joints as bilateral position constraints phi(x) = 0 with their velocity Jacobian rows
+(seed eq. 9-11, superscript J). Every joint returns phi (m,) and Rows (m rows of Phi_v).
+
+Points are nodes of a body (for flexible bodies) or points fixed to a body's frame (body-frame
+coordinates); the ground is a fixed global point.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from flexmvm.constraints.rows import Rows
+from flexmvm.errors import InputError
+
+
+@dataclass(frozen=True)
+class BodyPoint:
+    """A node (`node`) or a frame-attached point (`local`, body frame [m]) of body `body`."""
+
+    body: int
+    node: int | None = None
+    local: tuple[float, float, float] | None = None
+
+    def __post_init__(self) -> None:
+        if (self.node is None) == (self.local is None):
+            raise InputError("a body point needs exactly one of a node id or a frame point")
+
+    def position(self, bodies, states) -> np.ndarray:
+        st = states[self.body]
+        if self.node is not None:
+            return bodies[self.body].node_positions(np.array([self.node]), st.r, st.A, st.q)[0]
+        return st.r + st.A @ np.asarray(self.local)
+
+    def add_row(self, rows: Rows, row: int, direction, sign: float, bodies, states) -> None:
+        """rows[row] += sign * d^T dx/dv for this point."""
+        body = bodies[self.body]
+        st = states[self.body]
+        d = np.asarray(direction, float)
+        if self.node is not None:
+            fr, qp = body.point_jacobian(self.node, st.A, st.q, d)
+        else:
+            p = np.asarray(self.local, float)
+            fr = np.concatenate([d, np.cross(p, st.A.T @ d)])
+            qp = np.zeros(body.nq)
+        rows.add(row, self.body, sign * fr, sign * qp, body.nq)
+
+
+Anchor = BodyPoint | np.ndarray
+
+
+def _anchor_position(a: Anchor, bodies, states) -> np.ndarray:
+    return a.position(bodies, states) if isinstance(a, BodyPoint) else np.asarray(a, float)
+
+
+class Joint:
+    """Base: n_rows rows; evaluate(bodies, states, t) -> (phi, Rows)."""
+
+    n_rows: int = 0
+
+    def evaluate(self, bodies, states, t: float) -> tuple[np.ndarray, Rows]:
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class SphericalJoint(Joint):
+    """Coincident points: x_1 - x_2 = 0 (3 rows); p2 may be a ground point."""
+
+    p1: BodyPoint
+    p2: Anchor
+    n_rows: int = 3
+
+    def evaluate(self, bodies, states, t):
+        phi = self.p1.position(bodies, states) - _anchor_position(self.p2, bodies, states)
+        rows = Rows(3)
+        for i, e in enumerate(np.eye(3)):
+            self.p1.add_row(rows, i, e, 1.0, bodies, states)
+            if isinstance(self.p2, BodyPoint):
+                self.p2.add_row(rows, i, e, -1.0, bodies, states)
+        return phi, rows
+
+
+@dataclass(frozen=True)
+class DistanceJoint(Joint):
+    """A massless inextensible string or rod: |x_1 - x_2| - length = 0 (1 row)."""
+
+    p1: BodyPoint
+    p2: Anchor
+    length: float
+    n_rows: int = 1
+
+    def __post_init__(self) -> None:
+        if not self.length > 0:
+            raise InputError(f"distance joint length must be > 0 m, got {self.length!r}")
+
+    def evaluate(self, bodies, states, t):
+        d = self.p1.position(bodies, states) - _anchor_position(self.p2, bodies, states)
+        dist = float(np.linalg.norm(d))
+        e = d / dist
+        rows = Rows(1)
+        self.p1.add_row(rows, 0, e, 1.0, bodies, states)
+        if isinstance(self.p2, BodyPoint):
+            self.p2.add_row(rows, 0, e, -1.0, bodies, states)
+        return np.array([dist - self.length]), rows
+
+
+@dataclass(frozen=True)
+class PrescribedMotion(Joint):
+    """A point moving with a prescribed velocity: x(t) - (x0 + v t) = 0 (3 rows)."""
+
+    p1: BodyPoint
+    x0: tuple[float, float, float]
+    velocity: tuple[float, float, float]
+    n_rows: int = 3
+
+    def evaluate(self, bodies, states, t):
+        target = np.asarray(self.x0) + np.asarray(self.velocity) * t
+        phi = self.p1.position(bodies, states) - target
+        rows = Rows(3)
+        for i, e in enumerate(np.eye(3)):
+            self.p1.add_row(rows, i, e, 1.0, bodies, states)
+        return phi, rows
+
+
+@dataclass(frozen=True)
+class OrientationLock(Joint):
+    """Frame directions kept perpendicular: (A1 u_i) . (A2 w_i) = 0 for each pair (u_i, w_i).
+
+    With body 2 = None the second direction is a fixed global vector. Used for revolute
+    (2 pairs) and fixed (3 pairs) joints. Row of d/dt: w1 . (u x A1^T d2) + w2 . (w x A2^T d1).
+    """
+
+    body1: int
+    body2: int | None
+    pairs: tuple[tuple[tuple[float, ...], tuple[float, ...]], ...]
+
+    @property
+    def n_rows(self) -> int:  # type: ignore[override]
+        return len(self.pairs)
+
+    def evaluate(self, bodies, states, t):
+        rows = Rows(len(self.pairs))
+        phi = np.zeros(len(self.pairs))
+        A1 = states[self.body1].A
+        A2 = states[self.body2].A if self.body2 is not None else np.eye(3)
+        for i, (u, w) in enumerate(self.pairs):
+            u, w = np.asarray(u, float), np.asarray(w, float)
+            d1, d2 = A1 @ u, A2 @ w
+            phi[i] = d1 @ d2
+            fr = np.concatenate([np.zeros(3), np.cross(u, A1.T @ d2)])
+            rows.add(i, self.body1, fr, np.zeros(bodies[self.body1].nq), bodies[self.body1].nq)
+            if self.body2 is not None:
+                fr2 = np.concatenate([np.zeros(3), np.cross(w, A2.T @ d1)])
+                rows.add(i, self.body2, fr2, np.zeros(bodies[self.body2].nq), bodies[self.body2].nq)
+        return phi, rows
+
+
+def _perpendicular_pair(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    a = axis / np.linalg.norm(axis)
+    t = np.eye(3)[int(np.argmin(np.abs(a)))]
+    b = np.cross(a, t)
+    b /= np.linalg.norm(b)
+    return b, np.cross(a, b)
+
+
+def revolute_joint(p1: BodyPoint, p2: Anchor, axis_global, states) -> list[Joint]:
+    """Spherical joint plus two orientation rows keeping body 1's axis along axis_global."""
+    axis = np.asarray(axis_global, float)
+    if not np.linalg.norm(axis) > 0:
+        raise InputError("revolute joint axis must be non-zero")
+    b, c = _perpendicular_pair(axis)
+    A1 = states[p1.body].A
+    u = A1.T @ (axis / np.linalg.norm(axis))
+    body2 = p2.body if isinstance(p2, BodyPoint) else None
+    A2 = states[body2].A if body2 is not None else np.eye(3)
+    pairs = tuple((tuple(u), tuple(A2.T @ w)) for w in (b, c))
+    return [SphericalJoint(p1, p2), OrientationLock(p1.body, body2, pairs)]
+
+
+def fixed_joint(p1: BodyPoint, p2: Anchor, states) -> list[Joint]:
+    """Spherical joint plus three orientation rows: no relative rotation."""
+    A1 = states[p1.body].A
+    body2 = p2.body if isinstance(p2, BodyPoint) else None
+    A2 = states[body2].A if body2 is not None else np.eye(3)
+    e = np.eye(3)
+    pairs = tuple(
+        (tuple(A1.T @ e[i]), tuple(A2.T @ e[j])) for i, j in ((0, 1), (1, 2), (2, 0))
+    )
+    return [SphericalJoint(p1, p2), OrientationLock(p1.body, body2, pairs)]
+
+
+def ground_joint(body: int, states) -> list[Joint]:
+    """Fix a body's frame to the ground at its current pose."""
+    return fixed_joint(BodyPoint(body, local=(0.0, 0.0, 0.0)), states[body].r.copy(), states)

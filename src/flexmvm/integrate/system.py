@@ -1,0 +1,48 @@
+"""A multibody system: bodies, joints, contact providers, gravity."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from flexmvm.bodies.body import FlexibleBody
+from flexmvm.constraints.rows import Rows
+
+
+@dataclass
+class ContactRows:
+    """Unilateral rows from contacts at the start of a step: Phi_c v+ >= lower.
+
+    keys identify the pairs (for reporting and for caching W^-1 Phi^T); gaps are the current
+    normal gaps [m]; eq_rows (leading rows) are equalities Phi v+ = lower (bonded contact).
+    """
+
+    rows: Rows
+    lower: np.ndarray
+    keys: list
+    gaps: np.ndarray
+    n_eq: int = 0
+
+    @classmethod
+    def empty(cls) -> "ContactRows":
+        return cls(Rows.empty(), np.zeros(0), [], np.zeros(0), 0)
+
+
+class ContactProvider:
+    """Interface of a contact definition used by the integrator."""
+
+    def candidate_rows(self, bodies, states, h: float) -> ContactRows:
+        raise NotImplementedError
+
+    def min_gap_ahead(self, bodies, states, horizon_s: float) -> float:
+        """Smallest predicted gap [m] within horizon_s at current velocities (step policy)."""
+        raise NotImplementedError
+
+
+@dataclass(frozen=True)
+class System:
+    bodies: tuple[FlexibleBody, ...]
+    joints: tuple = ()
+    contacts: tuple = ()
+    gravity: np.ndarray = field(default_factory=lambda: np.zeros(3))
