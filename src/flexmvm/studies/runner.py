@@ -1,0 +1,416 @@
+"""Resumable, parallel runner for the cases of a study (selection and material studies).
+
+A study is a list of :class:`Case` objects (a stable key and JSON parameters) and a case
+function ``fn(case) -> mapping``. :func:`run_cases` stores every finished case at once,
+atomically, in ``out_dir/cases/<key>.json`` as ``{"key", "params", "result"}``; a rerun loads
+the stored cases and computes only the others, so a killed sweep resumes where it stopped.
+Cases run on Dask distributed: a local process cluster by default, an existing cluster when
+a scheduler address is given, or in-process with ``serial=True``.
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import re
+import sys
+import traceback
+import uuid
+import warnings
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from tqdm import tqdm
+
+from flexmvm.errors import InputError, SolverError
+from flexmvm.results.atomic import canonical_json, write_json_atomic, write_text_atomic
+
+__all__ = ["Case", "Params", "case_path", "collect", "error_path", "run_cases"]
+
+_KEY_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,199}")
+_CASES_DIR = "cases"
+
+
+class Params(Mapping[str, Any]):
+    """Read-only, hashable, picklable mapping of JSON parameters.
+
+    Built from any JSON-serialisable mapping; values are stored in their JSON form (tuples
+    become lists, numpy scalars Python numbers), and a nested list or dict is returned as a
+    copy so the parameters cannot change after construction. Equality and hash follow the
+    canonical JSON text, so ``1`` and ``1.0`` are different parameters, as in the stored file.
+
+    Raises:
+        InputError: a key is not a string, or a value is not JSON (NaN/inf included).
+    """
+
+    __slots__ = ("_canonical", "_data")
+
+    def __init__(self, data: Mapping[str, Any]) -> None:
+        if not isinstance(data, Mapping):
+            raise InputError(f"case params: received {type(data).__name__}, expected a mapping")
+        bad = [k for k in data if not isinstance(k, str)]
+        if bad:
+            raise InputError(f"case params: received key {bad[0]!r}, expected string keys")
+        canonical = canonical_json(dict(data))
+        self._canonical = canonical
+        self._data: dict[str, Any] = json.loads(canonical)
+
+    def __getitem__(self, key: str) -> Any:
+        value = self._data[key]
+        return json.loads(json.dumps(value)) if isinstance(value, (list, dict)) else value
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._data)
+
+    def __len__(self) -> int:
+        return len(self._data)
+
+    def __eq__(self, other: object) -> bool:
+        if isinstance(other, Params):
+            return self._canonical == other._canonical
+        if isinstance(other, Mapping):
+            return self._data == dict(other)
+        return NotImplemented
+
+    def __hash__(self) -> int:
+        return hash(self._canonical)
+
+    def __reduce__(self) -> tuple[Any, ...]:
+        return (Params, (self._data,))
+
+    def __repr__(self) -> str:
+        return f"Params({self._canonical})"
+
+    def to_dict(self) -> dict[str, Any]:
+        """A fresh plain ``dict`` of the parameters (JSON form)."""
+        return json.loads(self._canonical)
+
+    @property
+    def canonical(self) -> str:
+        """Canonical JSON text (sorted keys, no spaces beyond ``json.dumps`` defaults)."""
+        return self._canonical
+
+
+@dataclass(frozen=True)
+class Case:
+    """One run of a study: a stable, file-name-safe ``key`` and JSON ``params``.
+
+    ``key`` names the stored file (``cases/<key>.json``); it must match
+    ``[A-Za-z0-9][A-Za-z0-9._-]*`` (at most 200 characters), e.g. ``"l2-j3-m13"``. ``params``
+    is converted to a read-only, hashable :class:`Params`, so cases can be set members and
+    dictionary keys and are cheap to send to Dask workers.
+
+    Raises:
+        InputError: the key is not file-name-safe, or the params are not JSON.
+    """
+
+    key: str
+    params: Mapping[str, Any]
+
+    def __post_init__(self) -> None:
+        if not isinstance(self.key, str) or not _KEY_RE.fullmatch(self.key):
+            raise InputError(
+                f"case key {self.key!r}: expected a file-name-safe string "
+                "[A-Za-z0-9][A-Za-z0-9._-]* of at most 200 characters"
+            )
+        if not isinstance(self.params, Params):
+            object.__setattr__(self, "params", Params(self.params))
+
+
+def case_path(out_dir: str | os.PathLike[str], key: str) -> Path:
+    """Path of the stored result of case ``key``: ``out_dir/cases/<key>.json``."""
+    return Path(out_dir) / _CASES_DIR / f"{key}.json"
+
+
+def error_path(out_dir: str | os.PathLike[str], key: str) -> Path:
+    """Path of the failure record of case ``key``: ``out_dir/cases/<key>.error.txt``."""
+    return Path(out_dir) / _CASES_DIR / f"{key}.error.txt"
+
+
+def _read_record(path: Path) -> dict[str, Any] | None:
+    """The stored ``{"key", "params", "result"}`` record, or None if absent or unreadable."""
+    try:
+        record = json.loads(path.read_text(encoding="utf-8"))
+    except FileNotFoundError:
+        return None
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+        return None
+    if not isinstance(record, dict) or not {"key", "params", "result"} <= record.keys():
+        return None
+    if not isinstance(record["params"], dict) or not isinstance(record["result"], dict):
+        return None
+    return record
+
+
+def _load_stored(case: Case, out_dir: Path) -> dict[str, Any] | None:
+    """The stored result of ``case``; None if it must be computed (missing or corrupt file).
+
+    Raises:
+        InputError: the stored file holds other params (or another key) for this key.
+    """
+    path = case_path(out_dir, case.key)
+    record = _read_record(path)
+    if record is None:
+        if path.exists():
+            warnings.warn(f"{path}: unreadable or incomplete case file; recomputing", stacklevel=3)
+        return None
+    stored = canonical_json(record["params"])
+    assert isinstance(case.params, Params)
+    if record["key"] != case.key or stored != case.params.canonical:
+        raise InputError(
+            f"{path}: stored params {stored} differ from case params {case.params.canonical}; "
+            "expected the same study (use another out_dir or delete the file)"
+        )
+    return record["result"]
+
+
+def _validate(cases: Sequence[Case]) -> None:
+    seen: set[str] = set()
+    for case in cases:
+        if not isinstance(case, Case):
+            raise InputError(f"run_cases: received {type(case).__name__}, expected Case objects")
+        if case.key in seen:
+            raise InputError(
+                f"run_cases: case key {case.key!r} appears twice; expected unique keys"
+            )
+        seen.add(case.key)
+
+
+def _one_line(exc: BaseException) -> str:
+    text = str(exc).strip().splitlines()
+    return f"{type(exc).__name__}: {text[0] if text else ''}".rstrip(": ")
+
+
+class _Recorder:
+    """Driver-side bookkeeping: writes each outcome at once and updates the progress bar."""
+
+    def __init__(self, out_dir: Path, results: dict[str, dict], bar: Any) -> None:
+        self.out_dir = out_dir
+        self.results = results
+        self.bar = bar
+        self.failed: list[tuple[str, str]] = []
+
+    def success(self, case: Case, result: Any) -> None:
+        if not isinstance(result, Mapping):
+            err = InputError(
+                f"case {case.key}: fn returned {type(result).__name__}, expected a mapping"
+            )
+            self.failure(case, err, "")
+            return
+        assert isinstance(case.params, Params)
+        record = {"key": case.key, "params": case.params.to_dict(), "result": dict(result)}
+        try:
+            text = canonical_json(record)
+        except InputError as exc:
+            self.failure(case, exc, "")
+            return
+        write_json_atomic(case_path(self.out_dir, case.key), json.loads(text))
+        error_path(self.out_dir, case.key).unlink(missing_ok=True)
+        self.results[case.key] = json.loads(text)["result"]
+        self.bar.update(1)
+
+    def failure(self, case: Case, exc: BaseException, tb_text: str) -> None:
+        line = _one_line(exc)
+        write_text_atomic(
+            error_path(self.out_dir, case.key),
+            f"case {case.key} failed: {line}\nparams: {case.params}\n\n{tb_text}",
+        )
+        self.failed.append((case.key, line))
+        self.bar.update(1)
+
+
+def _run_serial(pending: Sequence[Case], fn: Callable[[Case], Any], rec: _Recorder) -> None:
+    for case in pending:
+        try:
+            result = fn(case)
+        except Exception as exc:  # noqa: BLE001 - any case failure is recorded, not fatal
+            rec.failure(case, exc, traceback.format_exc())
+            continue
+        rec.success(case, result)
+
+
+def _check_picklable(fn: Callable[[Case], Any]) -> None:
+    from distributed.protocol import pickle as dask_pickle
+
+    try:
+        dask_pickle.dumps(fn)
+    except Exception as exc:  # noqa: BLE001 - pickling can raise anything; reported as input
+        raise InputError(
+            f"run_cases: fn {fn!r} cannot be pickled ({_one_line(exc)}); expected a "
+            "module-level function importable by the workers"
+        ) from None
+
+
+def _run_dask(
+    pending: Sequence[Case],
+    fn: Callable[[Case], Any],
+    rec: _Recorder,
+    scheduler: str | None,
+    n_workers: int | None,
+) -> None:
+    from distributed import Client, LocalCluster, as_completed
+
+    _check_picklable(fn)
+    cluster = None
+    if scheduler is None:
+        cluster = LocalCluster(
+            n_workers=n_workers or os.cpu_count() or 1,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+        )
+        try:
+            client = Client(cluster, set_as_default=False)
+        except BaseException:
+            cluster.close()
+            raise
+    else:
+        try:
+            client = Client(scheduler, set_as_default=False)
+        except OSError as exc:
+            raise InputError(
+                f"cannot connect to Dask scheduler {scheduler!r} ({_one_line(exc)}); "
+                "expected the address of a running scheduler, e.g. tcp://host:8786"
+            ) from None
+    try:
+        run_id = uuid.uuid4().hex[:12]
+        by_key = {}
+        futures = []
+        for case in pending:
+            fut = client.submit(fn, case, key=f"flexmvm-case-{case.key}-{run_id}", pure=False)
+            by_key[fut.key] = case
+            futures.append(fut)
+        for fut in as_completed(futures, loop=client.loop):
+            case = by_key[fut.key]
+            if fut.status == "error":
+                exc = fut.exception()
+                tb = fut.traceback()
+                rec.failure(case, exc, "".join(traceback.format_exception(type(exc), exc, tb)))
+            elif fut.status == "cancelled":
+                rec.failure(case, SolverError("cancelled by the Dask scheduler"), "")
+            else:
+                rec.success(case, fut.result())
+            fut.release()
+    finally:
+        client.close()
+        if cluster is not None:
+            cluster.close()
+
+
+def run_cases(
+    cases: Sequence[Case],
+    fn: Callable[[Case], Mapping[str, Any]],
+    out_dir: str | os.PathLike[str],
+    *,
+    scheduler: str | None = None,
+    n_workers: int | None = None,
+    progress: bool = True,
+    serial: bool = False,
+) -> dict[str, dict]:
+    """Run ``fn`` on every case not already stored in ``out_dir``; return all results.
+
+    Storage: ``out_dir/cases/<key>.json`` holds ``{"key", "params", "result"}`` (sorted keys,
+    indent 2), written atomically by the driver as soon as the case finishes, so a killed run
+    keeps every finished case. On start, a case whose file exists with the same params is
+    loaded, not recomputed; an unreadable or incomplete file (unparsable JSON) is recomputed.
+
+    Execution: with ``serial=True`` in this process, no Dask. Otherwise on Dask distributed:
+    ``scheduler=None`` starts a ``LocalCluster`` of ``n_workers`` processes (default
+    ``os.cpu_count()``), one thread each, closed at the end; ``scheduler="tcp://host:port"``
+    connects to an existing cluster, which is left running. Results come back with
+    ``distributed.as_completed``.
+
+    ``fn`` must be picklable: a function (or an instance of a class) defined at module level
+    in a module that the worker processes can import (installed, or on their ``PYTHONPATH``);
+    ``fn(case)`` returns a JSON-serialisable mapping (numpy scalars and arrays are converted,
+    NaN/inf are refused). Returned results are the JSON form, identical whether loaded or
+    computed, serial or parallel.
+
+    Failures: an exception inside a case (or a non-mapping / non-finite result) is written
+    to ``out_dir/cases/<key>.error.txt`` (one line, params, traceback) and the other cases
+    go on; a later successful run of that case removes the error file.
+
+    Args:
+        cases: the cases, with unique keys.
+        fn: the case function, ``fn(case) -> mapping``.
+        out_dir: study directory (created if missing).
+        scheduler: address of an existing Dask scheduler, or None for a local cluster.
+        n_workers: number of local worker processes (local cluster only).
+        progress: show a tqdm bar (cases done / total, time left) on stderr.
+        serial: run in this process without Dask.
+
+    Returns:
+        ``{key: result}`` for every case, loaded and computed.
+
+    Raises:
+        InputError: duplicate keys, conflicting options, an unpicklable ``fn``, or a stored
+            case file with other params under the same key (refuses to mix studies).
+        SolverError: after all successful cases are stored, if any case failed (one line:
+            how many, the first failure, where the error files are).
+    """
+    _validate(cases)
+    if serial and (scheduler is not None or n_workers is not None):
+        raise InputError("run_cases: serial=True received with scheduler/n_workers; expected one")
+    if scheduler is not None and n_workers is not None:
+        raise InputError("run_cases: n_workers applies to a local cluster; expected no scheduler")
+    if n_workers is not None and n_workers < 1:
+        raise InputError(f"run_cases: n_workers={n_workers}; expected a positive integer")
+    out = Path(out_dir)
+    (out / _CASES_DIR).mkdir(parents=True, exist_ok=True)
+
+    results: dict[str, dict] = {}
+    pending: list[Case] = []
+    for case in cases:
+        stored = _load_stored(case, out)
+        if stored is None:
+            pending.append(case)
+        else:
+            results[case.key] = stored
+
+    with tqdm(
+        total=len(cases),
+        initial=len(results),
+        unit="case",
+        desc="cases",
+        disable=not progress,
+        file=sys.stderr,
+        dynamic_ncols=True,
+    ) as bar:
+        rec = _Recorder(out, results, bar)
+        if pending and serial:
+            _run_serial(pending, fn, rec)
+        elif pending:
+            _run_dask(pending, fn, rec, scheduler, n_workers)
+
+    if rec.failed:
+        key, line = rec.failed[0]
+        raise SolverError(
+            f"{len(rec.failed)} of {len(cases)} cases failed (first: {key}: {line}); "
+            f"see {out / _CASES_DIR}/<key>.error.txt"
+        )
+    return {case.key: results[case.key] for case in cases}
+
+
+def collect(out_dir: str | os.PathLike[str]) -> list[dict[str, Any]]:
+    """All stored cases of the study in ``out_dir``, as ``{"key", "params", "result"}`` dicts,
+    sorted by key. Unreadable case files are skipped with a warning (a rerun recomputes them).
+
+    Raises:
+        InputError: ``out_dir/cases`` does not exist.
+    """
+    cases_dir = Path(out_dir) / _CASES_DIR
+    if not cases_dir.is_dir():
+        raise InputError(f"collect: {cases_dir} does not exist; expected a study directory")
+    rows = []
+    for path in sorted(cases_dir.glob("*.json")):
+        if path.name.startswith("."):
+            continue
+        record = _read_record(path)
+        if record is None:
+            warnings.warn(f"{path}: unreadable or incomplete case file; skipped", stacklevel=2)
+            continue
+        rows.append({"key": record["key"], "params": record["params"], "result": record["result"]})
+    rows.sort(key=lambda row: row["key"])
+    return rows

@@ -1,0 +1,191 @@
+"""The resumable case runner: same table serial and on Dask, resume, corruption, failures."""
+
+from __future__ import annotations
+
+import json
+import os
+import pickle
+
+import numpy as np
+import pytest
+from _study_cases import CountingCase, chain_eigenvalues, computed_keys, computing_pids
+
+from flexmvm.errors import InputError, SolverError
+from flexmvm.results.atomic import atomic_path, write_json_atomic
+from flexmvm.studies.runner import Case, case_path, collect, error_path, run_cases
+
+
+def make_cases(n_cases: int = 8) -> list[Case]:
+    return [
+        Case(f"c{i:02d}-n{4 + i}", {"n": 4 + i, "seed": 100 + i, "scale": 1.0 + 0.5 * i})
+        for i in range(n_cases)
+    ]
+
+
+def table(out_dir) -> list[dict]:
+    return collect(out_dir)
+
+
+def test_case_is_hashable_picklable_and_frozen():
+    a = Case("l2-j3-m13", {"layers": 2, "laps": 3, "modes": 13, "tags": ("x", "y")})
+    b = Case("l2-j3-m13", {"modes": 13, "laps": 3, "layers": 2, "tags": ["x", "y"]})
+    assert a == b and hash(a) == hash(b) and len({a, b}) == 1
+    assert pickle.loads(pickle.dumps(a)) == a
+    assert a.params["tags"] == ["x", "y"]
+    a.params["tags"].append("z")  # a copy: the case itself cannot change
+    assert a.params["tags"] == ["x", "y"]
+    assert Case("k", {"x": 1}) != Case("k", {"x": 1.0})
+    with pytest.raises(InputError, match="file-name-safe"):
+        Case("../evil", {})
+    with pytest.raises(InputError, match="non-finite"):
+        Case("k", {"x": float("nan")})
+
+
+def test_serial_stores_every_case_and_returns_json_form(tmp_path):
+    cases = make_cases(4)
+    results = run_cases(cases, chain_eigenvalues, tmp_path, serial=True, progress=True)
+    assert list(results) == [c.key for c in cases]
+    for case in cases:
+        record = json.loads(case_path(tmp_path, case.key).read_text())
+        assert record == {
+            "key": case.key,
+            "params": case.params.to_dict(),
+            "result": results[case.key],
+        }
+        expected = chain_eigenvalues(case)
+        np.testing.assert_allclose(results[case.key]["lowest"], expected["lowest"], rtol=0)
+    rows = collect(tmp_path)
+    assert [r["key"] for r in rows] == sorted(c.key for c in cases)
+
+
+def test_local_cluster_matches_serial_and_resumes(tmp_path):
+    """A real 2-process LocalCluster gives the serial table; stored cases are not recomputed."""
+    cases = make_cases(8)
+    run_cases(cases, chain_eigenvalues, tmp_path / "serial", serial=True, progress=False)
+
+    log = tmp_path / "log"
+    log.mkdir()
+    par = tmp_path / "parallel"
+    run_cases(cases[:3], CountingCase(log), par, serial=True, progress=False)
+    results = run_cases(cases, CountingCase(log), par, n_workers=2, progress=True)
+
+    assert computed_keys(log) == sorted(c.key for c in cases)  # each case computed once
+    assert os.getpid() not in computing_pids(log, [c.key for c in cases[3:]])  # on workers
+    assert table(par) == table(tmp_path / "serial")
+    assert results == {r["key"]: r["result"] for r in table(par)}
+
+
+def test_existing_scheduler_failure_recorded_and_cluster_left_running(tmp_path):
+    from distributed import Client, LocalCluster
+
+    cases = make_cases(4)
+    bad = Case("bad", {"n": 3, "seed": 0, "fail": True})
+    with LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster:
+        with pytest.raises(SolverError, match=r"^1 of 5 cases failed \(first: bad: ValueError"):
+            run_cases(
+                [cases[0], bad, *cases[1:]],
+                chain_eigenvalues,
+                tmp_path,
+                scheduler=cluster.scheduler_address,
+                progress=False,
+            )
+        with Client(cluster.scheduler_address, set_as_default=False) as client:
+            assert client.submit(sum, [1, 2]).result() == 3
+    text = error_path(tmp_path, "bad").read_text()
+    assert text.splitlines()[0] == "case bad failed: ValueError: deliberate failure in case bad"
+    assert "Traceback" in text and "chain_eigenvalues" in text
+    assert [r["key"] for r in collect(tmp_path)] == sorted(c.key for c in cases)
+
+
+def test_interrupted_serial_sweep_resumes_to_the_uninterrupted_table(tmp_path):
+    cases = make_cases(6)
+    run_cases(cases, chain_eigenvalues, tmp_path / "ref", serial=True, progress=False)
+    log = tmp_path / "log"
+    log.mkdir()
+    out = tmp_path / "run"
+    with pytest.raises(KeyboardInterrupt):
+        run_cases(cases, CountingCase(log, interrupt_after=4), out, serial=True, progress=False)
+    assert len(collect(out)) == 4
+    first = computed_keys(log)
+    run_cases(cases, CountingCase(log), out, serial=True, progress=False)
+    assert computed_keys(log) == sorted(c.key for c in cases)  # no case computed twice
+    assert sorted(set(computed_keys(log)) - set(first)) == sorted(c.key for c in cases[4:])
+    assert table(out) == table(tmp_path / "ref")
+
+
+def test_corrupt_case_file_is_recomputed(tmp_path):
+    cases = make_cases(3)
+    reference = run_cases(cases, chain_eigenvalues, tmp_path, serial=True, progress=False)
+    path = case_path(tmp_path, cases[1].key)
+    path.write_text(path.read_text()[:40])  # a truncated file, as a non-atomic writer leaves
+    log = tmp_path / "log"
+    log.mkdir()
+    with pytest.warns(UserWarning, match="recomputing"):
+        again = run_cases(cases, CountingCase(log), tmp_path, serial=True, progress=False)
+    assert computed_keys(log) == [cases[1].key]
+    assert again == reference
+    assert json.loads(path.read_text())["result"] == reference[cases[1].key]
+
+
+def test_stored_case_with_other_params_refused(tmp_path):
+    cases = make_cases(2)
+    run_cases(cases, chain_eigenvalues, tmp_path, serial=True, progress=False)
+    before = case_path(tmp_path, cases[0].key).read_text()
+    other = Case(cases[0].key, {**cases[0].params.to_dict(), "seed": 999})
+    with pytest.raises(InputError, match="differ from case params") as info:
+        run_cases([other, cases[1]], chain_eigenvalues, tmp_path, serial=True, progress=False)
+    assert "\n" not in str(info.value)
+    assert case_path(tmp_path, cases[0].key).read_text() == before
+
+
+def test_failing_case_serial_recorded_others_stored_then_cleared(tmp_path):
+    cases = make_cases(3)
+    bad = Case("bad", {"n": 3, "seed": 0, "fail": True})
+    with pytest.raises(SolverError) as info:
+        run_cases([bad, *cases], chain_eigenvalues, tmp_path, serial=True, progress=False)
+    message = str(info.value)
+    assert "\n" not in message and message.startswith("1 of 4 cases failed")
+    assert error_path(tmp_path, "bad").exists() and not case_path(tmp_path, "bad").exists()
+    assert [r["key"] for r in collect(tmp_path)] == sorted(c.key for c in cases)
+    log = tmp_path / "log"
+    log.mkdir()
+    with pytest.raises(SolverError):  # rerun: only the failed case is tried again
+        run_cases([bad, *cases], CountingCase(log), tmp_path, serial=True, progress=False)
+    assert computed_keys(log) == ["bad"]
+
+
+def test_non_finite_result_is_a_case_failure(tmp_path):
+    with pytest.raises(SolverError, match="non-finite number at result.x"):
+        run_cases([Case("a", {})], _nan_case, tmp_path, serial=True, progress=False)
+    assert "non-finite" in error_path(tmp_path, "a").read_text()
+    assert collect(tmp_path) == []
+
+
+def _nan_case(case: Case) -> dict:
+    return {"x": float("inf")}
+
+
+def test_invalid_arguments(tmp_path):
+    with pytest.raises(InputError, match="appears twice"):
+        run_cases([Case("a", {}), Case("a", {"x": 1})], chain_eigenvalues, tmp_path, serial=True)
+    with pytest.raises(InputError, match="serial=True"):
+        run_cases([Case("a", {})], chain_eigenvalues, tmp_path, serial=True, n_workers=2)
+    with pytest.raises(InputError, match="does not exist"):
+        collect(tmp_path / "nowhere")
+
+
+def test_atomic_write_failure_leaves_old_file(tmp_path):
+    path = tmp_path / "x.json"
+    write_json_atomic(path, {"b": 1, "a": [1.5, 2]})
+    assert path.read_text() == '{\n  "a": [\n    1.5,\n    2\n  ],\n  "b": 1\n}\n'
+    with pytest.raises(InputError, match=r"non-finite number at a\[1\]"):
+        write_json_atomic(path, {"a": np.array([1.0, np.nan])})
+    assert json.loads(path.read_text()) == {"a": [1.5, 2], "b": 1}
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["x.json"]
+    with pytest.raises(RuntimeError, match="mid-write"), atomic_path(path) as tmp:
+        tmp.write_text("partial")
+        raise RuntimeError("mid-write")
+    assert json.loads(path.read_text()) == {"a": [1.5, 2], "b": 1}
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["x.json"]

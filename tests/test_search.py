@@ -1,0 +1,149 @@
+"""Smallest passing model by per-selection bisection == brute force, with fewer runs."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from flexmvm.errors import InputError
+from flexmvm.studies.search import Candidate, brute_force, smallest_passing
+
+MODES = (7, 13, 19, 25, 31, 37, 43)  # seed §3.2
+
+
+def random_table(rng: np.random.Generator):
+    """A random study grid with scores non-decreasing in modes for every selection.
+
+    Node counts are small integers so that DOF ties across selections occur, and scores are
+    rounded to 0.005 so that score ties occur too: both tie-break rules get exercised.
+    Returns (candidates, score table, threshold).
+    """
+    n_layers, n_laps = rng.integers(1, 5), rng.integers(1, 6)
+    modes = MODES[: rng.integers(1, len(MODES) + 1)]
+    candidates, table = [], {}
+    for i in range(1, n_layers + 1):
+        for j in range(1, n_laps + 1):
+            nodes = int(rng.integers(1, 4)) * (i + j)
+            start = rng.uniform(0.5, 1.0)
+            steps = rng.exponential(0.03, len(modes)) * (rng.random(len(modes)) < 0.7)
+            scores = np.minimum(1.0, np.round((start + np.cumsum(steps)) / 0.005) * 0.005)
+            for m, s in zip(modes, scores):
+                c = Candidate((i, j), m, 3 * nodes + m)
+                candidates.append(c)
+                table[c] = float(s)
+    threshold = float(rng.choice([0.9, 0.95, 0.97, 0.99, 1.0]))
+    return candidates, table, threshold
+
+
+class Recorder:
+    """evaluate() over a score table that records its batches."""
+
+    def __init__(self, table):
+        self.table = table
+        self.batches = []
+
+    def __call__(self, batch):
+        self.batches.append(list(batch))
+        return [self.table[c] for c in batch]
+
+    @property
+    def evaluated(self):
+        return [c for b in self.batches for c in b]
+
+
+@pytest.mark.parametrize("max_open", [None, 1, 4])
+def test_matches_brute_force_on_random_monotone_tables(max_open):
+    rng = np.random.default_rng(20240611)
+    ratios, rounds, n_pass = [], [], 0
+    for _ in range(200):
+        candidates, table, threshold = random_table(rng)
+        passes = lambda s, t=threshold: s >= t
+        expected, all_scores = brute_force(candidates, Recorder(table), passes)
+        assert all_scores == table
+        rec = Recorder(table)
+        found, scores = smallest_passing(candidates, rec, passes, max_open=max_open)
+        assert found == expected
+        assert scores == {c: table[c] for c in rec.evaluated}
+        assert len(set(rec.evaluated)) == len(rec.evaluated)  # never the same run twice
+        assert all(len({c.selection for c in b}) == len(b) for b in rec.batches)
+        if max_open is not None:
+            assert max(len(b) for b in rec.batches) <= max_open
+        ratios.append(len(scores) / len(candidates))
+        rounds.append(len(rec.batches))
+        n_pass += expected is not None
+    mean_ratio = float(np.mean(ratios))
+    print(
+        f"\nmax_open={max_open}: mean evaluations / brute force = {mean_ratio:.3f}, "
+        f"mean rounds = {np.mean(rounds):.1f}, tables with a winner = {n_pass}/200"
+    )
+    assert 40 < n_pass < 200  # both outcomes are exercised
+    assert mean_ratio < 0.75
+
+
+def test_seed_sized_grid_saves_most_runs():
+    """20 selections x 7 modes (seed §3.2): far fewer than 140 runs, same winner."""
+    rng = np.random.default_rng(7)
+    ratios = []
+    for _ in range(50):
+        candidates, table = [], {}
+        for i in range(1, 5):
+            for j in range(1, 6):
+                nodes = 1 + (i - 1) * 12 + (j - 1) * 4  # grows with layers and laps
+                score = np.minimum(
+                    1.0, 0.6 + 0.4 * rng.random() + np.cumsum(rng.exponential(0.01, 7))
+                )
+                for m, s in zip(MODES, score):
+                    c = Candidate((i, j), m, 3 * nodes + m)
+                    candidates.append(c)
+                    table[c] = float(s)
+        passes = lambda s: s >= 0.99
+        expected, _ = brute_force(candidates, Recorder(table), passes)
+        found, scores = smallest_passing(candidates, Recorder(table), passes)
+        assert found == expected
+        ratios.append(len(scores) / 140)
+    print(f"\nseed-sized grid: mean evaluations / 140 = {np.mean(ratios):.3f}")
+    assert np.mean(ratios) < 0.5
+
+
+def test_no_candidate_passes_returns_none():
+    candidates = [Candidate((i, 1), m, 3 * i + m) for i in (1, 2) for m in MODES]
+    table = {c: 0.5 + 0.001 * c.modes for c in candidates}
+    found, scores = smallest_passing(candidates, Recorder(table), lambda s: s >= 0.99)
+    assert found is None
+    assert brute_force(candidates, Recorder(table), lambda s: s >= 0.99)[0] is None
+    # Bisection proves "no pass" with about log2(7) + 1 runs per selection, not 7.
+    assert len(scores) == 6
+
+
+def test_ties_higher_score_then_fewer_node_dof():
+    a = Candidate((1, 1), 13, 40)  # 27 node DOF
+    b = Candidate((2, 1), 7, 40)  # 33 node DOF
+    c = Candidate((1, 2), 19, 40)  # 21 node DOF
+    table = {a: 0.995, b: 0.999, c: 0.995}
+    found, _ = smallest_passing([a, b, c], Recorder(table), lambda s: s >= 0.99)
+    assert found == b
+    table[b] = 0.995
+    found, _ = smallest_passing([a, b, c], Recorder(table), lambda s: s >= 0.99)
+    assert found == c
+
+
+def test_invalid_input():
+    with pytest.raises(InputError, match="strictly increasing"):
+        smallest_passing(
+            [Candidate((1, 1), 7, 20), Candidate((1, 1), 13, 20)],
+            lambda b: [1.0] * len(b),
+            lambda s: True,
+        )
+    with pytest.raises(InputError, match="appears twice"):
+        brute_force(
+            [Candidate((1, 1), 7, 20), Candidate((1, 1), 7, 21)],
+            lambda b: [1.0] * len(b),
+            lambda s: True,
+        )
+    with pytest.raises(InputError, match="returned 0 scores"):
+        smallest_passing([Candidate((1, 1), 7, 20)], lambda b: [], lambda s: True)
+    with pytest.raises(InputError, match="NaN"):
+        smallest_passing([Candidate((1, 1), 7, 20)], lambda b: [float("nan")], lambda s: True)
+    with pytest.raises(InputError, match="selection"):
+        Candidate((0, 1), 7, 20)
+    assert smallest_passing([], lambda b: [], lambda s: True) == (None, {})
