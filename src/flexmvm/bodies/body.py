@@ -21,7 +21,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from flexmvm.bodies.invariants import InertiaInvariants, inertia_invariants
-from flexmvm.bodies.rotation import skew
+from flexmvm.bodies.rotation import cross3, skew
 from flexmvm.mesh.mesh import Mesh
 
 _CYCLIC = ((0, 1, 2), (1, 2, 0), (2, 0, 1))
@@ -130,7 +130,7 @@ class FlexibleBody:
         S1qd = self.inv.S1 @ qd if self.nq else np.zeros(3)
         out[:3] = -A @ (Om @ S + 2.0 * W @ S1qd)
         H = np.array([[C[a][b] @ qd for b in range(3)] for a in range(3)]) if self.nq else np.zeros((3, 3))
-        out[3:6] = -(np.cross(w, J @ w) + 2.0 * (np.trace(H) * w - H.T @ w))
+        out[3:6] = -(cross3(w, J @ w) + 2.0 * (np.trace(H) * w - H.T @ w))
         if self.nq:
             G2 = self.inv.G2
             Qq = np.zeros(self.nq)
@@ -149,7 +149,7 @@ class FlexibleBody:
         gb = A.T @ g
         out = np.zeros(self.nv)
         out[:3] = self.inv.mass * g
-        out[3:6] = np.cross(S, gb)
+        out[3:6] = cross3(S, gb)
         if self.nq:
             out[6:] = self.inv.S1.T @ gb
         return out
@@ -193,7 +193,7 @@ class FlexibleBody:
         """Row d^T dx_k/dv for a global direction d: returns (frame part (6,), q part (nq,))."""
         s = self.X[k] + (self.psi_rows(k) @ q if self.nq else 0.0)
         dl = A.T @ direction
-        frame = np.concatenate([direction, np.cross(s, dl)])
+        frame = np.concatenate([direction, cross3(s, dl)])
         if not self.nq:
             return frame, np.zeros(0)
         qpart = self.psi_rows(k).T @ dl
@@ -209,7 +209,7 @@ class FlexibleBody:
     def linear_momentum(self, A, q, v, terms=None) -> np.ndarray:
         """p = m r_dot + A (w x S + S1 q_dot) [kg m/s], global."""
         S = self.first_moment(q) if terms is None else terms[0]
-        inner = np.cross(v[3:6], S) + (self.inv.S1 @ v[6:] if self.nq else 0.0)
+        inner = cross3(v[3:6], S) + (self.inv.S1 @ v[6:] if self.nq else 0.0)
         return self.inv.mass * v[:3] + A @ inner
 
     def angular_momentum(self, r, A, q, v, terms=None) -> np.ndarray:
@@ -217,5 +217,5 @@ class FlexibleBody:
         r x p + A (S x A^T r_dot + J w + M_wq q_dot)."""
         S, J, M_wq, _ = terms if terms is not None else self.inertia_terms(q)
         p = self.linear_momentum(A, q, v, (S, J, M_wq, None))
-        h_o = np.cross(S, A.T @ v[:3]) + J @ v[3:6] + (M_wq @ v[6:] if self.nq else 0.0)
-        return np.cross(r, p) + A @ h_o
+        h_o = cross3(S, A.T @ v[:3]) + J @ v[3:6] + (M_wq @ v[6:] if self.nq else 0.0)
+        return cross3(r, p) + A @ h_o

@@ -5,6 +5,11 @@ from __future__ import annotations
 import numpy as np
 
 
+def cross3(a, b) -> np.ndarray:
+    """a x b for two 3-vectors (np.cross is slow for single vectors)."""
+    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+
+
 def skew(v: np.ndarray) -> np.ndarray:
     """Skew-symmetric matrix v~ with v~ w = v x w."""
     x, y, z = v

@@ -11,6 +11,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexmvm.bodies.rotation import cross3
 from flexmvm.constraints.rows import Rows
 from flexmvm.errors import InputError
 
@@ -42,7 +43,7 @@ class BodyPoint:
             fr, qp = body.point_jacobian(self.node, st.A, st.q, d)
         else:
             p = np.asarray(self.local, float)
-            fr = np.concatenate([d, np.cross(p, st.A.T @ d)])
+            fr = np.concatenate([d, cross3(p, st.A.T @ d)])
             qp = np.zeros(body.nq)
         rows.add(row, self.body, sign * fr, sign * qp, body.nq)
 
@@ -148,10 +149,10 @@ class OrientationLock(Joint):
             u, w = np.asarray(u, float), np.asarray(w, float)
             d1, d2 = A1 @ u, A2 @ w
             phi[i] = d1 @ d2
-            fr = np.concatenate([np.zeros(3), np.cross(u, A1.T @ d2)])
+            fr = np.concatenate([np.zeros(3), cross3(u, A1.T @ d2)])
             rows.add(i, self.body1, fr, np.zeros(bodies[self.body1].nq), bodies[self.body1].nq)
             if self.body2 is not None:
-                fr2 = np.concatenate([np.zeros(3), np.cross(w, A2.T @ d1)])
+                fr2 = np.concatenate([np.zeros(3), cross3(w, A2.T @ d1)])
                 rows.add(i, self.body2, fr2, np.zeros(bodies[self.body2].nq), bodies[self.body2].nq)
         return phi, rows
 

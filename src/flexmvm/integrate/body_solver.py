@@ -85,7 +85,11 @@ class BodySolver:
         self._A = A
         if not self.body.nq:
             self._f = None
-            self._schur = sla.cho_factor(Mff)
+            try:
+                self._schur = sla.cho_factor(Mff)
+            except np.linalg.LinAlgError:
+                raise SolverError(f"body {self.body.name!r}: rigid-body mass matrix is singular "
+                                  "(zero mass or zero inertia about an axis)") from None
             return
         f = self._factor(h)
         self._f = f

@@ -1,0 +1,224 @@
+"""The time loop: step-size policy, outputs, contact bookkeeping. The scheme is separate
+(midpoint.py); this file decides which step to take and what to keep.
+
+Time runs on an integer grid of ticks of dt_s, so output times are hit exactly. Steps are
+dt * 2^k <= dt_max (a handful of step sizes, each factored once): the smallest near contact,
+doubling every few steps in free flight, never past the next output time.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from flexmvm.errors import InputError
+from flexmvm.integrate.midpoint import MidpointIntegrator
+from flexmvm.integrate.state import BodyState
+from flexmvm.integrate.system import System
+
+GROW_AFTER_STEPS = 4
+
+
+@dataclass(frozen=True)
+class TimeGrid:
+    """t_end_s, dt_s (smallest step), dt_max_s (largest), output_dt_s; all [s]."""
+
+    t_end_s: float
+    dt_s: float
+    dt_max_s: float | None = None
+    output_dt_s: float | None = None
+
+    def ticks(self) -> tuple[int, int, int]:
+        """(total ticks, output ticks, largest step level k with 2^k ticks <= dt_max)."""
+        dt = self.dt_s
+        if not (dt > 0 and self.t_end_s > 0):
+            raise InputError(f"time: dt_s and t_end_s must be > 0, got {dt!r}, {self.t_end_s!r}")
+        out = self.output_dt_s or dt
+        n_out = round(out / dt)
+        if n_out < 1 or abs(n_out * dt - out) > 1e-9 * out:
+            raise InputError(f"time: output_dt_s = {out!r} must be a whole multiple of dt_s = {dt!r}")
+        dt_max = self.dt_max_s or dt
+        k_max = int(np.floor(np.log2(dt_max / dt) + 1e-9)) if dt_max >= dt else 0
+        return int(np.ceil(self.t_end_s / dt - 1e-9)), n_out, max(k_max, 0)
+
+
+@dataclass(frozen=True)
+class Probe:
+    """A named node of a body whose position and velocity are recorded."""
+
+    name: str
+    body: int
+    node: int
+
+
+@dataclass
+class RunResult:
+    """Histories at output times (arrays with their time axis t [s])."""
+
+    t: np.ndarray
+    body_names: list[str]
+    frame_r: np.ndarray            # (n_out, n_bodies, 3)
+    frame_v: np.ndarray            # (n_out, n_bodies, 6)
+    probe_names: list[str]
+    probe_x: np.ndarray            # (n_out, n_probes, 3)
+    probe_v: np.ndarray            # (n_out, n_probes, 3)
+    contact_force: np.ndarray      # (n_out,) normal force, impulse-averaged over the interval ending at t [N]
+    joint_force: np.ndarray        # (n_out, n_joint_rows) averaged constraint forces [N]
+    kinetic: np.ndarray
+    strain: np.ndarray
+    potential: np.ndarray
+    momentum: np.ndarray           # (n_out, 3) total linear momentum [kg m/s]
+    angular_momentum: np.ndarray   # (n_out, 3) about the origin [kg m^2/s]
+    q: list[np.ndarray]            # per body: (n_out, nq) elastic coordinates
+    frame_A: np.ndarray            # (n_out, n_bodies, 3, 3)
+    contact_intervals: list[tuple[float, float]] = field(default_factory=list)
+    max_penetration_m: float = 0.0
+    n_steps: int = 0
+    n_factorizations: int = 0
+    wall_time_s: float = 0.0
+
+    @property
+    def total_energy(self) -> np.ndarray:
+        return self.kinetic + self.strain + self.potential
+
+
+class _Recorder:
+    def __init__(self, system: System, probes, n_out_max: int, n_joint_rows: int):
+        self.system, self.probes = system, list(probes)
+        nb, npb = len(system.bodies), len(self.probes)
+        self.rows: list[dict] = []
+        self.n_joint_rows = n_joint_rows
+        self.shape = (nb, npb)
+
+    def record(self, t, states, force, jforce):
+        sysm = self.system
+        rec = {"t": t, "force": force, "jforce": jforce}
+        kin = strain = pot = 0.0
+        p = np.zeros(3)
+        h = np.zeros(3)
+        for body, st in zip(sysm.bodies, states):
+            terms = body.inertia_terms(st.q)
+            kin += body.kinetic_energy(st.A, st.q, st.v, terms)
+            strain += body.strain_energy(st.q)
+            pot -= float(sysm.gravity @ (body.inv.mass * st.r + st.A @ terms[0]))
+            p += body.linear_momentum(st.A, st.q, st.v, terms)
+            h += body.angular_momentum(st.r, st.A, st.q, st.v, terms)
+        rec.update(kin=kin, strain=strain, pot=pot, p=p, h=h)
+        rec["r"] = np.array([st.r for st in states])
+        rec["A"] = np.array([st.A for st in states])
+        rec["v"] = np.array([st.v[:6] for st in states])
+        rec["q"] = [st.q.copy() for st in states]
+        px, pv = [], []
+        for pr in self.probes:
+            body, st = sysm.bodies[pr.body], states[pr.body]
+            node = np.array([pr.node])
+            px.append(body.node_positions(node, st.r, st.A, st.q)[0])
+            pv.append(body.node_velocities(node, st.A, st.q, st.v)[0])
+        rec["px"], rec["pv"] = np.array(px).reshape(-1, 3), np.array(pv).reshape(-1, 3)
+        self.rows.append(rec)
+
+    def result(self, **extra) -> RunResult:
+        R = self.rows
+        nb = self.shape[0]
+        return RunResult(
+            t=np.array([r["t"] for r in R]),
+            body_names=[b.name for b in self.system.bodies],
+            frame_r=np.array([r["r"] for r in R]),
+            frame_v=np.array([r["v"] for r in R]),
+            probe_names=[p.name for p in self.probes],
+            probe_x=np.array([r["px"] for r in R]),
+            probe_v=np.array([r["pv"] for r in R]),
+            contact_force=np.array([r["force"] for r in R]),
+            joint_force=np.array([r["jforce"] for r in R]).reshape(len(R), self.n_joint_rows),
+            kinetic=np.array([r["kin"] for r in R]),
+            strain=np.array([r["strain"] for r in R]),
+            potential=np.array([r["pot"] for r in R]),
+            momentum=np.array([r["p"] for r in R]),
+            angular_momentum=np.array([r["h"] for r in R]),
+            q=[np.array([r["q"][b] for r in R]) for b in range(nb)],
+            frame_A=np.array([r["A"] for r in R]),
+            **extra,
+        )
+
+
+def simulate(system: System, states: list[BodyState], grid: TimeGrid, probes=(),
+             progress: bool = False, t0: float = 0.0) -> RunResult:
+    """Integrate from t0 over grid.t_end_s; returns histories at every output time."""
+    n_ticks, out_ticks, k_max = grid.ticks()
+    integ = MidpointIntegrator(system)
+    dt = grid.dt_s
+    rec = _Recorder(system, probes, n_ticks // out_ticks + 2, integ.n_joint_rows)
+    states = [s.copy() for s in states]
+    rec.record(t0, states, 0.0, np.zeros(integ.n_joint_rows))
+    bar = _progress(progress, n_ticks)
+    tick, level, calm = 0, 0, 0
+    impulse, jimpulse = 0.0, np.zeros(integ.n_joint_rows)
+    intervals: list[list[float]] = []
+    max_pen, n_steps = 0.0, 0
+    wall0 = time.perf_counter()
+    while tick < n_ticks:
+        to_out = out_ticks - tick % out_ticks
+        level = _choose_level(system, states, level, calm, k_max, dt)
+        span = 1 << level
+        while span > to_out or tick + span > n_ticks and span > 1:
+            span >>= 1
+        h = span * dt
+        t = t0 + tick * dt
+        res = integ.step(t, states, h)
+        states = res.states
+        n_steps += 1
+        tick += span
+        n_eq = res.contact.n_eq
+        f = float(res.contact_impulses[n_eq:].sum()) if res.contact_impulses.size else 0.0
+        if res.contact.gaps.size:
+            max_pen = max(max_pen, float(-res.contact.gaps.min()))
+        in_contact = f > 0.0
+        calm = 0 if (in_contact or res.contact.rows.m) else calm + 1
+        _track_intervals(intervals, in_contact, t, t + h)
+        impulse += f
+        jimpulse += res.joint_impulses
+        if tick % out_ticks == 0 or tick >= n_ticks:
+            span_t = (tick - (len(rec.rows) - 1) * out_ticks) * dt
+            rec.record(t0 + tick * dt, states, impulse / span_t, jimpulse / span_t)
+            impulse, jimpulse = 0.0, np.zeros_like(jimpulse)
+            if bar is not None:
+                bar.update(min(out_ticks, n_ticks - bar.n))
+    if bar is not None:
+        bar.close()
+    wall = time.perf_counter() - wall0
+    nfac = sum(s.n_factorizations for s in integ.solvers)
+    return rec.result(contact_intervals=[tuple(iv) for iv in intervals],
+                      max_penetration_m=max(max_pen, 0.0), n_steps=n_steps,
+                      n_factorizations=nfac, wall_time_s=wall)
+
+
+def _choose_level(system, states, level, calm, k_max, dt) -> int:
+    if k_max == 0:
+        return 0
+    if not system.contacts:
+        return k_max
+    horizon = 4 * (1 << k_max) * dt
+    for provider in system.contacts:
+        if provider.min_gap_ahead(system.bodies, states, horizon) <= 0.0:
+            return 0
+    if calm >= GROW_AFTER_STEPS:
+        return min(level + 1, k_max)
+    return level if calm else 0
+
+
+def _track_intervals(intervals, in_contact, t0, t1):
+    if in_contact:
+        if intervals and abs(intervals[-1][1] - t0) < 1e-15 + 1e-9 * max(t0, 1e-12):
+            intervals[-1][1] = t1
+        else:
+            intervals.append([t0, t1])
+
+
+def _progress(enabled: bool, total: int):
+    if not enabled:
+        return None
+    from tqdm import tqdm
+
+    return tqdm(total=total, unit="dt", desc="simulating", leave=False, mininterval=0.5)
