@@ -22,10 +22,7 @@ def cli() -> None:
 
 def _register() -> None:
     """Attach the sub-commands; each module defines one click command or group."""
-    from flexmvm.cli import mesh_cmd
-
-    cli.add_command(mesh_cmd.mesh)
-    for name in ("run_cmd", "theory_cmd", "select_cmd", "study_cmd"):
+    for name in ("mesh_cmd", "run_cmd", "theory_cmd", "select_cmd", "study_cmd"):
         try:
             module = __import__(f"flexmvm.cli.{name}", fromlist=["command"])
         except ModuleNotFoundError as exc:
