@@ -1,0 +1,248 @@
+"""Nodal fields of a flexible body at one output time: positions, displacement, velocity and
+small-strain von Mises stress, from the histories a RunResult keeps.
+
+Kinematics (seed eq. 1-3; docs/architecture.md "bodies"): node k of a body sits at
+x_k = r + A (X_k + psi_k q) and moves with x_dot_k = r_dot + A (omega x s_k + psi_k q_dot),
+s_k = X_k + psi_k q, omega in the body frame.
+
+A RunResult stores the frame velocity [r_dot, omega] (6,) at each output but not q_dot, so the
+elastic rates are estimated from the stored q by finite differences between output times
+(:func:`elastic_rates`: second-order central differences inside, one-sided at the ends; exact
+for q linear in t, error O(dt_out^2) otherwise). Nodal velocities written from a RunResult are
+therefore exact in their frame part and approximate in their elastic part.
+
+Stress (:func:`von_mises`): small-strain isotropic linear elasticity in the body frame,
+sigma = lambda tr(eps) I + 2 mu eps, eps = sym(grad u), with grad u from the isoparametric
+shape functions of each cell evaluated at the cell's own nodes; the stress tensors of the cells
+sharing a node are averaged (unweighted) and the von Mises stress is taken of the average.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from flexmvm.bodies.body import FlexibleBody
+from flexmvm.errors import InputError, MeshError
+from flexmvm.materials import Material
+from flexmvm.mesh.mesh import CellType, Mesh
+from flexmvm.mesh.quality import HEX27_IJK, shape_gradients
+
+__all__ = [
+    "NodalFields",
+    "body_geometry",
+    "displacement",
+    "elastic_displacement",
+    "elastic_rates",
+    "nodal_fields",
+    "nodal_stress",
+    "node_positions",
+    "node_velocities",
+    "von_mises",
+    "von_mises_of",
+]
+
+#: Cells per vectorised chunk in the stress evaluation (bounds memory to a few tens of MB).
+_CHUNK = 4096
+
+_TET_CORNERS = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+#: meshio/VTK tetra10 mid-edge node order (nodes 4..9).
+_TET10_EDGES = np.array([[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]])
+_WEDGE_CORNERS = np.array(
+    [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [0, 1, 1]], dtype=float
+)
+
+#: Parametric coordinates of each cell type's nodes, in meshio node order (same reference cells
+#: as mesh/quality.py: [0, 1]^3 hexahedra, unit simplex, triangle x [0, 1] wedge).
+_NODE_POINTS: dict[CellType, np.ndarray] = {
+    CellType.HEX8: HEX27_IJK[:8] / 2.0,
+    CellType.HEX27: HEX27_IJK / 2.0,
+    CellType.TET4: _TET_CORNERS,
+    CellType.TET10: np.vstack([_TET_CORNERS, _TET_CORNERS[_TET10_EDGES].mean(axis=1)]),
+    CellType.WEDGE6: _WEDGE_CORNERS,
+}
+
+
+def _frame(r: np.ndarray, A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    r = np.asarray(r, dtype=float)
+    A = np.asarray(A, dtype=float)
+    if r.shape != (3,) or A.shape != (3, 3):
+        raise InputError(f"frame: expected r (3,) and A (3, 3), got {r.shape} and {A.shape}")
+    return r, A
+
+
+def elastic_displacement(body: FlexibleBody, q: np.ndarray) -> np.ndarray:
+    """u = psi q reshaped to (n, 3): elastic displacement of every node in the body frame [m]."""
+    n = len(body.X)
+    q = np.asarray(q, dtype=float).ravel()
+    if q.shape != (body.nq,):
+        raise InputError(f"body {body.name!r}: expected q of shape ({body.nq},), got {q.shape}")
+    if body.nq == 0:
+        return np.zeros((n, 3))
+    return np.asarray(body.psi @ q).reshape(n, 3)
+
+
+def node_positions(body: FlexibleBody, r: np.ndarray, A: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Global node positions x_k = r + A (X_k + psi_k q), shape (n, 3) [m]."""
+    r, A = _frame(r, A)
+    return r + (body.X + elastic_displacement(body, q)) @ A.T
+
+
+def displacement(body: FlexibleBody, r: np.ndarray, A: np.ndarray, q: np.ndarray,
+                 r0: np.ndarray, A0: np.ndarray) -> np.ndarray:
+    """Global displacement x_k(r, A, q) - x0_k, shape (n, 3) [m], from the undeformed body at
+    the initial frame: x0_k = r0 + A0 X_k. With x0 as mesh points, ParaView's Warp By Vector of
+    this field gives the deformed body exactly (rigid motion included)."""
+    r0, A0 = _frame(r0, A0)
+    return node_positions(body, r, A, q) - (r0 + body.X @ A0.T)
+
+
+def node_velocities(body: FlexibleBody, A: np.ndarray, q: np.ndarray, frame_v: np.ndarray,
+                    q_dot: np.ndarray | None = None) -> np.ndarray:
+    """Global node velocities x_dot_k = r_dot + A (omega x s_k + psi_k q_dot), (n, 3) [m/s].
+
+    frame_v = [r_dot (global), omega (body frame)] (6,); q_dot (nq,) or None for zero elastic
+    rates (the frame part only).
+    """
+    _, A = _frame(np.zeros(3), A)
+    fv = np.asarray(frame_v, dtype=float)
+    if fv.shape != (6,):
+        raise InputError(f"frame_v: expected [r_dot, omega] of shape (6,), got {fv.shape}")
+    s = body.X + elastic_displacement(body, q)
+    local = np.cross(fv[3:], s)
+    if q_dot is not None:
+        local = local + elastic_displacement(body, q_dot)
+    return fv[:3] + local @ A.T
+
+
+def elastic_rates(t: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """Finite-difference q_dot (n_out, nq) of a history q (n_out, nq) at times t (n_out,) [s].
+
+    numpy.gradient on the (possibly non-uniform) output grid: second-order central differences
+    inside, first-order one-sided at both ends; zeros for a single output. Raises InputError
+    unless t is strictly increasing and matches q's first axis.
+    """
+    t = np.asarray(t, dtype=float)
+    q = np.asarray(q, dtype=float)
+    if t.ndim != 1 or q.ndim != 2 or len(q) != len(t):
+        raise InputError(f"elastic_rates: expected t (n,) and q (n, nq), got {t.shape} and {q.shape}")
+    if len(t) < 2 or q.shape[1] == 0:
+        return np.zeros_like(q)
+    if np.any(np.diff(t) <= 0):
+        raise InputError("elastic_rates: output times must be strictly increasing")
+    return np.gradient(q, t, axis=0)
+
+
+def _cell_stresses(X: np.ndarray, conn: np.ndarray, u: np.ndarray, cell_type: CellType,
+                   lam: float, mu: float) -> np.ndarray:
+    """Stress (n_cells, nodes_per_cell, 3, 3) [Pa] of each cell at its own nodes."""
+    grads = shape_gradients(cell_type, _NODE_POINTS[cell_type])  # (p, n, 3) dN/dxi
+    out = np.empty((len(conn), grads.shape[0], 3, 3))
+    eye = np.eye(3)
+    for lo in range(0, len(conn), _CHUNK):
+        c = conn[lo : lo + _CHUNK]
+        jac = np.einsum("cni,pnj->cpij", X[c], grads)  # dx_i/dxi_j
+        det = np.linalg.det(jac)
+        if np.any(det <= 0.0):
+            bad = lo + int(np.argwhere(det <= 0.0)[0, 0])
+            raise MeshError(
+                f"{cell_type.value} cell {bad} has a non-positive Jacobian at a node; "
+                "expected a valid mesh (see mesh.quality.check_quality)"
+            )
+        du = np.einsum("cna,pnj->cpaj", u[c], grads)  # du_a/dxi_j
+        h = du @ np.linalg.inv(jac)  # du_a/dx_i
+        eps = 0.5 * (h + np.swapaxes(h, -1, -2))
+        tr = np.trace(eps, axis1=-2, axis2=-1)
+        out[lo : lo + _CHUNK] = lam * tr[..., None, None] * eye + 2.0 * mu * eps
+    return out
+
+
+def nodal_stress(mesh: Mesh, material: Material, u_local: np.ndarray) -> np.ndarray:
+    """Node-averaged small-strain Cauchy stress (n, 3, 3) [Pa] of the elastic displacement
+    u_local (n, 3) [m] (body frame, same frame as mesh.nodes).
+
+    Each cell's stress is evaluated at its nodes from the isoparametric shape-function gradients
+    and the values of all cells sharing a node are averaged. Nodes in no cell get zero. Supports
+    every CellType (hexahedron, hexahedron27, tetra, tetra10, wedge). Raises InputError for a
+    u_local of the wrong shape or an unsupported cell type, MeshError for a cell with a
+    non-positive Jacobian at a node.
+    """
+    n = mesh.n_nodes
+    u = np.asarray(u_local, dtype=float)
+    if u.shape == (3 * n,):
+        u = u.reshape(n, 3)
+    if u.shape != (n, 3):
+        raise InputError(f"u_local: expected shape ({n}, 3) or ({3 * n},), got {u.shape}")
+    lam, mu = material.lame
+    total = np.zeros((n, 9))
+    count = np.zeros(n)
+    for block in mesh.cells:
+        if block.cell_type not in _NODE_POINTS:
+            raise InputError(
+                f"von Mises: cell type {block.cell_type.value!r} is not supported; expected one "
+                f"of {', '.join(ct.value for ct in _NODE_POINTS)}"
+            )
+        conn = block.connectivity
+        if len(conn) == 0:
+            continue
+        sig = _cell_stresses(mesh.nodes, conn, u, block.cell_type, lam, mu)
+        flat = conn.ravel()
+        for k in range(9):
+            total[:, k] += np.bincount(flat, weights=sig.reshape(-1, 9)[:, k], minlength=n)
+        count += np.bincount(flat, minlength=n)
+    return (total / np.maximum(count, 1.0)[:, None]).reshape(n, 3, 3)
+
+
+def von_mises_of(stress: np.ndarray) -> np.ndarray:
+    """Von Mises stress sqrt(3/2 s:s), s the deviator, of stress tensors (..., 3, 3) [Pa]."""
+    s = np.asarray(stress, dtype=float)
+    dev = s - np.trace(s, axis1=-2, axis2=-1)[..., None, None] * np.eye(3) / 3.0
+    return np.sqrt(1.5 * np.einsum("...ij,...ij->...", dev, dev))
+
+
+def von_mises(mesh: Mesh, material: Material, u_local: np.ndarray) -> np.ndarray:
+    """Nodal von Mises stress (n,) [Pa] of the node-averaged stress (see :func:`nodal_stress`)."""
+    return von_mises_of(nodal_stress(mesh, material, u_local))
+
+
+@dataclass(frozen=True)
+class NodalFields:
+    """Fields of one body at one output time, node order of the body's mesh.
+
+    reference: (n, 3) undeformed global positions at the initial frame, r0 + A0 X [m];
+    displacement: (n, 3) global, from reference [m]; velocity: (n, 3) global [m/s];
+    von_mises: (n,) [Pa].
+    """
+
+    reference: np.ndarray
+    displacement: np.ndarray
+    velocity: np.ndarray
+    von_mises: np.ndarray
+
+
+def body_geometry(body: FlexibleBody) -> Mesh:
+    """The body's mesh with the body's own node coordinates X (what psi refers to)."""
+    if body.mesh is None:
+        raise InputError(f"body {body.name!r} has no mesh; expected a body built with mesh=...")
+    if body.mesh.n_nodes != len(body.X):
+        raise InputError(
+            f"body {body.name!r}: mesh has {body.mesh.n_nodes} nodes, X has {len(body.X)}"
+        )
+    return Mesh(body.X, body.mesh.cells)
+
+
+def nodal_fields(body: FlexibleBody, material: Material, r: np.ndarray, A: np.ndarray,
+                 q: np.ndarray, frame_v: np.ndarray, q_dot: np.ndarray | None,
+                 r0: np.ndarray, A0: np.ndarray, geometry: Mesh | None = None) -> NodalFields:
+    """All nodal fields of `body` in state (r, A, q, [r_dot, omega], q_dot), displacement from
+    the undeformed body at (r0, A0). geometry: :func:`body_geometry` (pass it to reuse it)."""
+    geometry = body_geometry(body) if geometry is None else geometry
+    r0, A0 = _frame(r0, A0)
+    return NodalFields(
+        reference=r0 + body.X @ A0.T,
+        displacement=displacement(body, r, A, q, r0, A0),
+        velocity=node_velocities(body, A, q, frame_v, q_dot),
+        von_mises=von_mises(geometry, material, elastic_displacement(body, q)),
+    )
+
