@@ -46,6 +46,7 @@ class BodySolver:
         self._Mw0 = body.inertia_terms(np.zeros(body.nq))[2] if body.nq else np.zeros((3, 0))
         self._schur = None
         self._A = np.eye(3)
+        self.n_coupling_updates = 0
 
     def _factor(self, h: float) -> _Factor:
         f = self._cache.get(h)
@@ -79,6 +80,22 @@ class BodySolver:
         if len(self._order) > self._max:
             self._cache.pop(self._order.pop(0), None)
         return f
+
+    def refresh_coupling(self, h: float, M_wq: np.ndarray, tol: float) -> None:
+        """Use M_wq (3, nq) at the current configuration in W if it moved by more than tol
+        (relative Frobenius norm) from the one in use: 3 back-substitutions. Bodies with small
+        torsional inertia (thin rods) need it: their frame Schur complement is sensitive to
+        M_wq(q)."""
+        if not self.body.nq:
+            return
+        f = self._factor(h)
+        ref = getattr(f, "Mw_used", self._Mw0)
+        if np.linalg.norm(M_wq - ref) <= tol * max(np.linalg.norm(ref), 1e-300):
+            return
+        Zw = np.asarray(f.solve(np.ascontiguousarray(M_wq.T)))
+        f.Zw, f.S1Zw, f.MwZr, f.MwZw = Zw, self.body.inv.S1 @ Zw, M_wq @ f.Zr, M_wq @ Zw
+        f.Mw_used = M_wq.copy()
+        self.n_coupling_updates += 1
 
     def prepare(self, h: float, A: np.ndarray, Mff: np.ndarray) -> None:
         """Set the step size and the frame block for the coming solves."""
@@ -115,7 +132,7 @@ class BodySolver:
         if y.ndim == 1 and b.ndim == 2:
             y = y[:, None]
         # M_fq~ y
-        My = np.concatenate([A @ (self.body.inv.S1 @ y), self._Mw0 @ y])
+        My = np.concatenate([A @ (self.body.inv.S1 @ y), self._mw(f) @ y])
         xf = sla.lu_solve(self._schur, bf - My)
         Zx = f.Zr @ (A.T @ xf[:3]) + f.Zw @ xf[3:]
         return np.concatenate([xf, y - Zx])
@@ -124,11 +141,10 @@ class BodySolver:
         """As solve(b) for b (nv, k), given yq = W_qq^-1 b[6:] already computed."""
         f, A = self._f, self._A
         bf = b[:6]
-        My = np.concatenate([A @ (self.body.inv.S1 @ yq), self._Mw0 @ yq])
+        My = np.concatenate([A @ (self.body.inv.S1 @ yq), self._mw(f) @ yq])
         xf = sla.lu_solve(self._schur, bf - My)
         Zx = f.Zr @ (A.T @ xf[:3]) + f.Zw @ xf[3:]
         return np.concatenate([xf, yq - Zx])
 
-    def coupling(self, A: np.ndarray) -> np.ndarray:
-        """The M_fq~ block used in W (6, nq)."""
-        return np.vstack([A @ self.body.inv.S1, self._Mw0])
+    def _mw(self, f: _Factor) -> np.ndarray:
+        return getattr(f, "Mw_used", self._Mw0)

@@ -34,6 +34,12 @@ from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import ContactRows, System
 
 PENETRATION_RECOVERY = 0.2  # beta: fraction of a penetration pushed back per step
+# The frame Schur complement S = M_ff - B W_qq^-1 B^T is small when the basis nearly spans
+# the rigid motions (full FE: S ~ the mass within c h of the reference nodes, ~1e-5 of the
+# body), so W's coupling B must be that of the current configuration: it is refreshed at the
+# start of every step (3 back-substitutions) and again at the midpoint when an iteration
+# does not reduce the residual.
+SLOW_ITERATIONS = 6
 
 
 @dataclass
@@ -59,6 +65,9 @@ class MidpointIntegrator:
         self.row_reuse_tol = row_reuse_tol
         self._yq_cache: dict = {}
         self.n_joint_rows = sum(j.n_rows for j in system.joints)
+        self._loads: dict[int, list] = {}
+        for load in system.loads:
+            self._loads.setdefault(load.body, []).append(load)
 
     # ----------------------------------------------------------------------------------------
     def _residuals(self, t, states, v_plus, h):
@@ -76,8 +85,15 @@ class MidpointIntegrator:
                 F += body.gravity_forces(mid.A, mid.q, sysm.gravity, terms[0])
             if body.nq:
                 F[6:] += body.elastic_forces(mid.q, vm[6:])
+            for load in self._loads.get(len(R), ()):
+                if t + 0.5 * h >= load.t_start_s:
+                    fvec = np.asarray(load.force_n, float)
+                    fr, qp = body.point_jacobian(load.node, mid.A, mid.q, fvec)
+                    F[:6] += fr
+                    F[6:] += qp
             R.append(inertia - h * F)
-            scales.append(max(np.abs(inertia).max(), h * np.abs(F).max()))
+            momentum = body.mass_times(mid.A, mid.q, vm, terms)
+            scales.append(max(np.abs(inertia).max(), h * np.abs(F).max(), np.abs(momentum).max()))
             mids.append(mid)
             ends.append(end)
         return R, mids, ends, scales
@@ -131,12 +147,12 @@ class MidpointIntegrator:
     def step(self, t: float, states: list[BodyState], h: float) -> StepResult:
         sysm = self.system
         bodies = sysm.bodies
-        for body, solver, st in zip(bodies, self.solvers, states):
-            terms = body.inertia_terms(st.q)
-            solver.prepare(h, st.A, body.frame_mass(st.A, terms[0], terms[1]))
+        self._prepare(states, h, refresh_tol=None)
         crows = ContactRows.empty()
+        parts = []
         for provider in sysm.contacts:
             part = provider.candidate_rows(bodies, states, h)
+            parts.append((provider, part, crows.rows.m))
             crows = _merge_contacts(crows, part)
         Yc = self._contact_inverse(crows, h) if crows.rows.m else {}
         n_j = self.n_joint_rows
@@ -146,8 +162,12 @@ class MidpointIntegrator:
             R, mids, ends, scales = self._residuals(t, states, v_plus, h)
             phi, jrows = self._joint_rows(t, h, mids, ends)
             G = stack([jrows, crows.rows]) if n_j else crows.rows
+            res_norm = max(float(np.abs(r).max()) for r in R) if it else np.inf
             if it > 0 and self._converged(R, G, lam, scales, phi):
                 break
+            if it == SLOW_ITERATIONS or (it > 1 and res_norm > last_norm):
+                self._prepare(mids, h, refresh_tol=0.0)
+            last_norm = res_norm
             if it == self.max_iter:
                 raise SolverError(f"implicit midpoint step at t = {t:.6e} s (h = {h:.3e} s) did "
                                   f"not converge in {self.max_iter} iterations")
@@ -171,10 +191,24 @@ class MidpointIntegrator:
             v_plus = list(v_free)
             for b, Yb in Y.items():
                 v_plus[b] = v_free[b] + Yb @ lam
+        lam_c = lam[n_j:]
+        for provider, part, offset in parts:
+            hook = getattr(provider, "after_step", None)
+            if hook is not None:
+                hook(part, lam_c[offset : offset + part.rows.m], h)
         new_states = [e for e in ends]
         for st, vp in zip(new_states, v_plus):
             st.v = vp
         return StepResult(new_states, lam[:n_j], crows, lam[n_j:], it)
+
+    def _prepare(self, states, h, refresh_tol):
+        """Frame blocks of W at `states`; M_wq refreshed when it drifted (always for small
+        bases, by COUPLING_TOL for large ones, unconditionally when refresh_tol = 0)."""
+        for body, solver, st in zip(self.system.bodies, self.solvers, states):
+            terms = body.inertia_terms(st.q)
+            if body.nq:
+                solver.refresh_coupling(h, terms[2], 0.0)
+            solver.prepare(h, st.A, body.frame_mass(st.A, terms[0], terms[1]))
 
     def _converged(self, R, G, lam, scales, phi) -> bool:
         for b, (r, sc) in enumerate(zip(R, scales)):

@@ -41,8 +41,19 @@ class ContactProvider:
 
 
 @dataclass(frozen=True)
+class NodeLoad:
+    """A constant global force [N] on node `node` of body `body`, applied from t_start_s on."""
+
+    body: int
+    node: int
+    force_n: tuple[float, float, float]
+    t_start_s: float = 0.0
+
+
+@dataclass(frozen=True)
 class System:
     bodies: tuple[FlexibleBody, ...]
     joints: tuple = ()
     contacts: tuple = ()
     gravity: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    loads: tuple[NodeLoad, ...] = ()

@@ -1,0 +1,132 @@
+"""Undamped eigenmodes K phi = omega^2 M phi by sparse shift-invert Lanczos (ARPACK eigsh).
+
+Nothing full-size is ever densified: the shifted matrix K - sigma M is factored sparsely
+(SuperLU) and handed to eigsh as ``OPinv``. Modes are M-normalised (phi^T M phi = 1).
+Eigenvalues are checked, never abs()-ed: a negative omega^2 with
+|omega^2| <= NEG_RTOL * scale (scale = max(|sigma|, largest computed omega^2)) is round-off of
+a zero-energy mode and clipped to 0; anything more negative raises SolverError.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from flexmvm.errors import InputError, SolverError
+from flexmvm.fe.assembly import FEModel
+
+#: Relative size of a negative omega^2 accepted as round-off of a zero eigenvalue.
+NEG_RTOL = 1e-6
+
+#: Default free-free shift, relative to the mean of diag(K) / diag(M) (a bound on the
+#: highest squared mesh frequency): small enough that the lowest elastic modes are near it.
+FREE_SHIFT_REL = 1e-9
+
+Solve = Callable[[np.ndarray], np.ndarray]
+
+
+def factor(a: sp.spmatrix) -> Solve:
+    """Sparse LU of a square matrix; returns x = solve(b) for b (n,) or (n, k).
+
+    Raises SolverError if the matrix is singular.
+    """
+    try:
+        lu = spla.splu(sp.csc_matrix(a))
+    except RuntimeError as exc:
+        raise SolverError(
+            f"sparse LU of a {a.shape[0]}x{a.shape[0]} matrix failed: {exc}"
+        ) from None
+    return lu.solve
+
+
+def shift_invert_modes(M: sp.spmatrix, K: sp.spmatrix, n_modes: int, sigma: float,
+                       solve: Solve | None = None, tol: float = 0.0
+                       ) -> tuple[np.ndarray, np.ndarray]:
+    """Lowest ``n_modes`` eigenpairs of K phi = lambda M phi nearest ``sigma`` (shift-invert).
+
+    M, K: (m, m) sparse symmetric, M positive definite, K positive semi-definite.
+    solve: x = (K - sigma M)^{-1} b if already factored (e.g. CB reuses its K_ii factor).
+    Returns (lam (n_modes,) ascending [rad^2/s^2], phi (m, n_modes) M-normalised).
+    Raises InputError if n_modes is not in 1..m-1, SolverError if ARPACK fails or an
+    eigenvalue is negative beyond round-off.
+    """
+    m = M.shape[0]
+    if not 1 <= n_modes < m:
+        raise InputError(f"number of modes must be in 1..{m - 1} for {m} free DOFs, got {n_modes}")
+    if solve is None:
+        solve = factor(sp.csc_matrix(K - sigma * M))
+    op_inv = spla.LinearOperator((m, m), matvec=solve, dtype=np.float64)
+    try:
+        lam, phi = spla.eigsh(sp.csr_matrix(K), k=n_modes, M=sp.csr_matrix(M), sigma=sigma,
+                              which="LM", OPinv=op_inv, tol=tol)
+    except (spla.ArpackNoConvergence, spla.ArpackError) as exc:
+        raise SolverError(f"eigsh did not converge for {n_modes} modes (sigma={sigma:g}): {exc}"
+                          ) from None
+    order = np.argsort(lam)
+    lam, phi = lam[order], phi[:, order]
+    lam = _check_eigenvalues(lam, sigma)
+    norms = np.sqrt(np.einsum("ij,ij->j", phi, M @ phi))
+    return lam, phi / norms
+
+
+def _check_eigenvalues(lam: np.ndarray, sigma: float) -> np.ndarray:
+    """Clip round-off negatives (|lam| <= NEG_RTOL * scale) to 0, else SolverError."""
+    if not np.all(np.isfinite(lam)):
+        raise SolverError("eigsh returned non-finite eigenvalues")
+    scale = max(abs(sigma), float(np.max(np.abs(lam))))
+    if lam.min() < -NEG_RTOL * scale:
+        raise SolverError(
+            f"negative eigenvalue omega^2 = {lam.min():.3e} (scale {scale:.3e}): stiffness not "
+            "positive semi-definite or mass not positive definite"
+        )
+    return np.where(lam < 0.0, 0.0, lam)
+
+
+def to_hz(lam: np.ndarray) -> np.ndarray:
+    """Frequencies f = sqrt(lambda) / (2 pi) [Hz] of checked, non-negative eigenvalues."""
+    return np.sqrt(lam) / (2.0 * np.pi)
+
+
+def free_modes(fe: FEModel, n_modes: int, sigma: float | None = None, tol: float = 0.0
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """First ``n_modes`` free-free modes of ``fe`` (the six rigid-body modes first).
+
+    sigma: shift [rad^2/s^2], negative so K - sigma M is positive definite; default
+    -FREE_SHIFT_REL * mean(diag K) / mean(diag M).
+    Returns (freqs_hz (n_modes,), modes (3n, n_modes) M-normalised).
+    Raises InputError for sigma >= 0 or a bad n_modes, SolverError on failure.
+    """
+    if sigma is None:
+        sigma = -FREE_SHIFT_REL * float(fe.K.diagonal().mean() / fe.M.diagonal().mean())
+    if not sigma < 0:
+        raise InputError(f"free-free shift sigma must be < 0 (K is singular), got {sigma!r}")
+    lam, phi = shift_invert_modes(fe.M, fe.K, n_modes, sigma, tol=tol)
+    return to_hz(lam), phi
+
+
+def constrained_modes(M: sp.spmatrix, K: sp.spmatrix, fixed_dofs: np.ndarray, n_modes: int,
+                      tol: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+    """First ``n_modes`` modes with ``fixed_dofs`` clamped (shift-invert about sigma = 0).
+
+    M, K: (N, N) sparse; fixed_dofs: int DOF ids (must remove all rigid-body motion).
+    Returns (freqs_hz (n_modes,), modes (N, n_modes), zero rows at fixed_dofs, M-normalised).
+    Raises InputError for DOF ids outside 0..N-1, SolverError if K_ff is singular.
+    """
+    n = M.shape[0]
+    fixed = np.unique(np.asarray(fixed_dofs, dtype=np.int64))
+    if fixed.size and (fixed[0] < 0 or fixed[-1] >= n):
+        raise InputError(f"fixed DOF ids must be in 0..{n - 1}, got {fixed.min()}..{fixed.max()}")
+    free = np.setdiff1d(np.arange(n), fixed)
+    m_ff = sp.csr_matrix(M)[free][:, free]
+    k_ff = sp.csr_matrix(K)[free][:, free]
+    lam, phi_f = shift_invert_modes(m_ff, k_ff, n_modes, 0.0, tol=tol)
+    phi = np.zeros((n, n_modes))
+    phi[free] = phi_f
+    return to_hz(lam), phi
+
+
+__all__ = ["NEG_RTOL", "constrained_modes", "factor", "free_modes", "shift_invert_modes",
+           "to_hz"]

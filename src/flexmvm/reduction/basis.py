@@ -1,0 +1,215 @@
+"""Reduction bases Psi (3n x nq): nodal displacement in the body frame u = Psi q.
+
+| kind          | Psi                                             | q                          |
+|---------------|-------------------------------------------------|----------------------------|
+| FULL          | identity on every DOF but the reference ones    | nodal displacements        |
+| CRAIG_BAMPTON | [[I, 0], [-K_ii^-1 K_ib, Phi_in]] (default MVM) | u_b of retained nodes, eta |
+| SEED_BLOCK    | diag(Psi_I, I_II), seed eq. (4)                 | a_I, region-II u_II        |
+| MODAL         | first N modes of the reference-supported body   | modal coordinates          |
+
+Every Psi has zero rows at the reference DOFs (ReferenceCondition), so q carries no
+rigid-body motion. The reduced matrices are m_hat = Psi^T M Psi, k_hat = Psi^T K Psi
+(seed eq. 5; Wang, Hong, Liu 2014).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import Enum
+
+import numpy as np
+import scipy.sparse as sp
+
+from flexmvm.errors import InputError
+from flexmvm.fe.assembly import FEModel
+from flexmvm.fe.modes import constrained_modes, factor, shift_invert_modes, to_hz
+from flexmvm.reduction.reference import ReferenceCondition
+
+
+class BasisKind(Enum):
+    """Which reduction basis; values are the names used in scenarios and studies."""
+
+    FULL = "full"                 # reference FE model: every free nodal DOF
+    CRAIG_BAMPTON = "mvm"         # default MVM: retained nodes + fixed-interface modes
+    SEED_BLOCK = "mvm-seed"       # seed eq. (4): whole-body modes on region I, nodes on II
+    MODAL = "modal"               # first N modes of the reference-supported body
+
+
+@dataclass(frozen=True)
+class Basis:
+    """A reduction basis of one body.
+
+    psi: (3n, nq) ndarray (csr for FULL); u = psi @ q [m]; reference DOF rows are zero.
+    retained_nodes: (nb,) region-II node ids, in column order (FULL: every node not in the
+    reference condition; MODAL: empty). n_modes: number of modal columns.
+    mode_freqs_hz: (n_modes,) frequencies [Hz] of the modes in the modal columns.
+    """
+
+    kind: BasisKind
+    psi: np.ndarray | sp.csr_matrix
+    retained_nodes: np.ndarray
+    n_modes: int
+    reference: ReferenceCondition
+    mode_freqs_hz: np.ndarray
+
+    @property
+    def nq(self) -> int:
+        """Number of generalised elastic coordinates."""
+        return int(self.psi.shape[1])
+
+    def retained_columns(self) -> np.ndarray:
+        """Columns of psi holding the x, y, z displacement of each retained node, (nb, 3).
+
+        For FULL, a reference node's clamped components have no column and do not appear
+        (such nodes are not retained). CRAIG_BAMPTON: 0..3nb-1; SEED_BLOCK: after the modes.
+        """
+        nb = len(self.retained_nodes)
+        if self.kind is BasisKind.FULL:
+            free = self.reference.free_dofs(self.psi.shape[0])
+            dofs = 3 * self.retained_nodes[:, None] + np.arange(3)
+            return np.searchsorted(free, dofs)
+        first = self.n_modes if self.kind is BasisKind.SEED_BLOCK else 0
+        return first + np.arange(3 * nb).reshape(nb, 3)
+
+
+def _retained(fe: FEModel, reference: ReferenceCondition, nodes) -> np.ndarray:
+    """Validated retained node ids in the given order; InputError on a bad id."""
+    ids = np.asarray(nodes).ravel()
+    if ids.size == 0:
+        return np.zeros(0, dtype=np.int64)
+    if not np.issubdtype(ids.dtype, np.integer):
+        raise InputError(f"retained nodes must be integer node ids, got dtype {ids.dtype}")
+    ids = ids.astype(np.int64)
+    n = fe.mesh.n_nodes
+    if ids.min() < 0 or ids.max() >= n:
+        raise InputError(f"retained node ids must be in 0..{n - 1}, got {ids.min()}..{ids.max()}")
+    uniq, counts = np.unique(ids, return_counts=True)
+    if np.any(counts > 1):
+        raise InputError(f"retained nodes repeat: {uniq[counts > 1].tolist()[:10]}")
+    clash = np.intersect1d(ids, reference.nodes)
+    if clash.size:
+        raise InputError(
+            f"retained nodes {clash.tolist()} belong to the reference condition {reference.nodes}"
+            "; choose the reference support away from region II"
+        )
+    return ids
+
+
+def _node_dofs(nodes: np.ndarray) -> np.ndarray:
+    """DOF ids 3k + d, node-major in the given node order, (3 len(nodes),)."""
+    return (3 * nodes[:, None] + np.arange(3)).ravel()
+
+
+def _full(fe: FEModel, reference: ReferenceCondition) -> Basis:
+    free = reference.free_dofs(fe.n_dof)
+    psi = sp.csr_matrix((np.ones(free.size), (free, np.arange(free.size))),
+                        shape=(fe.n_dof, free.size))
+    nodes = np.setdiff1d(np.arange(fe.mesh.n_nodes), reference.nodes)
+    return Basis(BasisKind.FULL, psi, nodes, 0, reference, np.zeros(0))
+
+
+def _craig_bampton(fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray,
+                   n_modes: int) -> Basis:
+    """Craig-Bampton (1968): constraint modes -K_ii^-1 K_ib and fixed-interface modes.
+
+    b = the retained nodes' DOFs, i = the other DOFs not in the reference condition.
+    K_ii is factored once (SuperLU) and that factor serves the constraint modes and, as
+    OPinv of the shift-invert eigen solve about sigma = 0, the fixed-interface modes.
+    """
+    b = _node_dofs(nodes)
+    interior = np.setdiff1d(reference.free_dofs(fe.n_dof), b)
+    k_rows = fe.K[interior]
+    k_ii, k_ib = k_rows[:, interior], k_rows[:, b]
+    solve = factor(k_ii)
+    psi = np.zeros((fe.n_dof, b.size + n_modes))
+    psi[b, np.arange(b.size)] = 1.0
+    psi[interior, : b.size] = -solve(k_ib.toarray())
+    freqs = np.zeros(0)
+    if n_modes:
+        m_ii = fe.M[interior][:, interior]
+        lam, phi = shift_invert_modes(m_ii, k_ii, n_modes, 0.0, solve=solve)
+        psi[interior, b.size:] = phi
+        freqs = to_hz(lam)
+    return Basis(BasisKind.CRAIG_BAMPTON, psi, nodes, n_modes, reference, freqs)
+
+
+def _seed_block(fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray,
+                n_modes: int) -> Basis:
+    """Seed eq. (4): T = diag(Psi_I, I_II).
+
+    Choice made here: Psi_I = the first n_modes modes of the whole body supported by the
+    reference condition, with their region-II rows set to zero (restricted to region I);
+    region-II DOFs keep their nodal coordinates. Columns: the modes, then the retained
+    nodes' x, y, z.
+    """
+    b = _node_dofs(nodes)
+    psi = np.zeros((fe.n_dof, n_modes + b.size))
+    freqs = np.zeros(0)
+    if n_modes:
+        freqs, phi = constrained_modes(fe.M, fe.K, reference.fixed_dofs, n_modes)
+        phi[b] = 0.0
+        psi[:, :n_modes] = phi
+    psi[b, n_modes + np.arange(b.size)] = 1.0
+    return Basis(BasisKind.SEED_BLOCK, psi, nodes, n_modes, reference, freqs)
+
+
+def _modal(fe: FEModel, reference: ReferenceCondition, n_modes: int) -> Basis:
+    freqs, phi = constrained_modes(fe.M, fe.K, reference.fixed_dofs, n_modes)
+    return Basis(BasisKind.MODAL, phi, np.zeros(0, dtype=np.int64), n_modes, reference, freqs)
+
+
+def build_basis(fe: FEModel, kind: BasisKind, reference: ReferenceCondition,
+                retained_nodes=(), n_modes: int = 0) -> Basis:
+    """Build the basis ``kind`` of body ``fe`` (see the module table).
+
+    retained_nodes: region-II node ids (CRAIG_BAMPTON, SEED_BLOCK: at least one; FULL and
+    MODAL: none); n_modes: modal columns (MODAL: >= 1; FULL: 0).
+    Raises InputError for a wrong kind, retained nodes that are reference nodes, repeated or
+    outside the mesh, or n_modes negative or more than the free DOFs allow; SolverError if
+    a factorisation or eigen solve fails.
+    """
+    if not isinstance(kind, BasisKind):
+        raise InputError(f"basis kind must be a BasisKind, got {kind!r}")
+    if isinstance(n_modes, bool) or not isinstance(n_modes, (int, np.integer)) or n_modes < 0:
+        raise InputError(f"n_modes must be an integer >= 0, got {n_modes!r}")
+    if reference.fixed_dofs.max() >= fe.n_dof:
+        raise InputError(f"reference DOFs {reference.fixed_dofs.tolist()} exceed {fe.n_dof} DOFs")
+    nodes = _retained(fe, reference, retained_nodes)
+    if kind in (BasisKind.FULL, BasisKind.MODAL) and nodes.size:
+        raise InputError(f"a {kind.value} basis takes no retained nodes, got {nodes.size}")
+    if kind in (BasisKind.CRAIG_BAMPTON, BasisKind.SEED_BLOCK) and not nodes.size:
+        raise InputError(f"a {kind.value} basis needs at least one retained node, got none")
+    if kind is BasisKind.FULL:
+        if n_modes:
+            raise InputError(f"a full basis takes no modes, got n_modes={n_modes}")
+        return _full(fe, reference)
+    if kind is BasisKind.MODAL:
+        if n_modes < 1:
+            raise InputError("a modal basis needs n_modes >= 1, got 0")
+        return _modal(fe, reference, int(n_modes))
+    if kind is BasisKind.CRAIG_BAMPTON:
+        return _craig_bampton(fe, reference, nodes, int(n_modes))
+    return _seed_block(fe, reference, nodes, int(n_modes))
+
+
+def reduced_matrices(fe: FEModel, basis: Basis) -> tuple[np.ndarray | sp.csr_matrix,
+                                                         np.ndarray | sp.csr_matrix]:
+    """Reduced mass and stiffness m_hat = Psi^T M Psi, k_hat = Psi^T K Psi (seed eq. 5).
+
+    Returns (m_hat, k_hat), (nq, nq) [kg], [N/m] in q units; csr for FULL, dense otherwise;
+    both symmetrised ((A + A^T) / 2) to remove round-off asymmetry.
+    Raises InputError if the basis does not match the model's DOF count.
+    """
+    psi = basis.psi
+    if psi.shape[0] != fe.n_dof:
+        raise InputError(f"basis has {psi.shape[0]} rows, model has {fe.n_dof} DOFs")
+    if sp.issparse(psi):
+        m = sp.csr_matrix(psi.T @ fe.M @ psi)
+        k = sp.csr_matrix(psi.T @ fe.K @ psi)
+        return sp.csr_matrix(0.5 * (m + m.T)), sp.csr_matrix(0.5 * (k + k.T))
+    m = psi.T @ (fe.M @ psi)
+    k = psi.T @ (fe.K @ psi)
+    return 0.5 * (m + m.T), 0.5 * (k + k.T)
+
+
+__all__ = ["Basis", "BasisKind", "build_basis", "reduced_matrices"]

@@ -1,0 +1,243 @@
+"""Turn a validated Scenario into a System, initial states, probes and a time grid.
+
+Meshes, FE models and bases are cached per process (keyed by their defining data), so a study
+that runs many variants of one scenario assembles each body once.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import numpy as np
+
+from flexmvm.bodies.body import FlexibleBody
+from flexmvm.bodies.build import body_from_fe, rigid_body_from_fe
+from flexmvm.constraints.joints import (BodyPoint, DistanceJoint, PrescribedMotion, SphericalJoint,
+                                        fixed_joint, ground_joint, revolute_joint)
+from flexmvm.contact.geometry import MasterSurface
+from flexmvm.contact.pairs import ContactKind, PointToSurfaceContact
+from flexmvm.errors import InputError, MeshError
+from flexmvm.fe.assembly import FEModel, assemble
+from flexmvm.integrate.driver import Probe, TimeGrid
+from flexmvm.integrate.state import BodyState
+from flexmvm.integrate.system import System
+from flexmvm.materials import Material
+from flexmvm.mesh.io import read_mesh
+from flexmvm.mesh.mesh import Mesh
+from flexmvm.mesh.rod import EndShape, RodMesh, RodSpec, rod_mesh
+from flexmvm.reduction.basis import Basis, BasisKind, build_basis
+from flexmvm.reduction.reference import three_two_one
+from flexmvm.reduction.rod_reference import rod_reference
+
+_KIND = {"full": BasisKind.FULL, "mvm": BasisKind.CRAIG_BAMPTON,
+         "mvm-seed": BasisKind.SEED_BLOCK, "modal": BasisKind.MODAL}
+
+
+@dataclass(frozen=True)
+class BodyInfo:
+    """What was built for one body (for summaries and outputs)."""
+
+    name: str
+    model: str
+    mesh: Mesh
+    material: Material
+    dof: int                 # generalized coordinates: 6 frame + nq
+    n_retained_nodes: int
+    n_modes: int
+    rod: RodMesh | None
+
+
+@dataclass
+class BuiltScenario:
+    system: System
+    states: list[BodyState]
+    probes: list[Probe]
+    grid: TimeGrid
+    info: list[BodyInfo]
+
+
+def rod_spec(cfg) -> RodSpec:
+    kw = cfg.spec_kwargs()
+    kw["end_a"] = EndShape(str(kw["end_a"].value if hasattr(kw["end_a"], "value") else kw["end_a"]))
+    kw["end_b"] = EndShape(str(kw["end_b"].value if hasattr(kw["end_b"], "value") else kw["end_b"]))
+    return RodSpec(**kw)
+
+
+@functools.lru_cache(maxsize=8)
+def _rod(spec: RodSpec) -> RodMesh:
+    return rod_mesh(spec)
+
+
+@functools.lru_cache(maxsize=8)
+def _fe(key, material: Material) -> FEModel:
+    mesh = _rod(key).mesh if isinstance(key, RodSpec) else read_mesh(key)
+    return assemble(mesh, material)
+
+
+def reference_condition(key, mesh: Mesh, ref_set: str):
+    """A rod's default (end_b) reference is rod_reference; otherwise a 3-2-1 on the set."""
+    if isinstance(key, RodSpec) and ref_set == "end_b":
+        return rod_reference(_rod(key))
+    return three_two_one(mesh, mesh.node_set(ref_set))
+
+
+@functools.lru_cache(maxsize=64)
+def _basis(key, material: Material, kind: BasisKind, retained: tuple, modes: int, ref_set: str) -> Basis:
+    fe = _fe(key, material)
+    ref = reference_condition(key, fe.mesh, ref_set)
+    return build_basis(fe, kind, ref, retained_nodes=np.array(retained, dtype=np.int64), n_modes=modes)
+
+
+def _retained_nodes(model, mesh: Mesh, rod: RodMesh | None, where: str) -> np.ndarray:
+    if model.selection_ij is not None:
+        if rod is None:
+            raise InputError(f"{where}.selection: an i-j selection needs a [bodies.rod] body")
+        return rod.selection(*model.selection_ij)
+    reg = model.region
+    if reg is None:
+        raise InputError(f"{where}: model {model.kind.value!r} needs a selection or a region")
+    X = mesh.nodes
+    if reg.node_set is not None:
+        ids = mesh.node_set(reg.node_set)
+    elif reg.ball is not None:
+        ids = np.nonzero(np.linalg.norm(X - np.asarray(reg.ball.centre_m), axis=1) <= reg.ball.radius_m)[0]
+    elif reg.box is not None:
+        lo, hi = np.asarray(reg.box.min_m), np.asarray(reg.box.max_m)
+        ids = np.nonzero(np.all((X >= lo) & (X <= hi), axis=1))[0]
+    else:
+        ids = np.asarray(reg.node_ids, dtype=np.int64)
+        if ids.size and ids.max() >= len(X):
+            raise InputError(f"{where}.region.node_ids: node {int(ids.max())} is outside the mesh "
+                             f"(0..{len(X) - 1})")
+    if len(ids) == 0:
+        raise InputError(f"{where}.region: selects no node of the mesh")
+    return np.asarray(ids, dtype=np.int64)
+
+
+def _build_body(cfg) -> tuple[FlexibleBody, BodyInfo]:
+    where = f"bodies[{cfg.name}]"
+    material = cfg.material_obj()
+    rod = None
+    if cfg.rod is not None:
+        key = rod_spec(cfg.rod)
+        rod = _rod(key)
+    else:
+        key = str(cfg.mesh_file)
+    fe = _fe(key, material)
+    mesh = fe.mesh
+    kind = cfg.model.kind.value
+    try:
+        mesh.node_set(cfg.model.reference)
+    except MeshError as exc:
+        raise InputError(f"{where}.model.reference: {exc}") from None
+    if kind == "rigid":
+        body = rigid_body_from_fe(cfg.name, fe)
+        return body, BodyInfo(cfg.name, kind, mesh, material, 6, 0, 0, rod)
+    retained: tuple = ()
+    if kind in ("mvm", "mvm-seed"):
+        retained = tuple(int(i) for i in _retained_nodes(cfg.model, mesh, rod, f"{where}.model"))
+    modes = cfg.model.modes if kind != "full" else 0
+    basis = _basis(key, material, _KIND[kind], retained, modes, cfg.model.reference)
+    body = body_from_fe(cfg.name, fe, basis)
+    n_ret = len(retained) if kind != "full" else mesh.n_nodes
+    return body, BodyInfo(cfg.name, kind, mesh, material, body.nv, n_ret, modes, rod)
+
+
+def _initial_state(body: FlexibleBody, placement) -> BodyState:
+    A = placement.rotation.matrix()
+    v = np.zeros(body.nv)
+    v[:3] = placement.velocity_mps
+    v[3:6] = placement.angular_velocity_radps
+    return BodyState(np.asarray(placement.position_m, float), np.asarray(A, float),
+                     np.zeros(body.nq), v)
+
+
+def _nearest_node(mesh: Mesh, point, where: str, tol: float) -> int:
+    d = np.linalg.norm(mesh.nodes - np.asarray(point, float), axis=1)
+    k = int(np.argmin(d))
+    if d[k] > tol:
+        raise InputError(f"{where}: point {list(point)} is {d[k]:.3g} m from the nearest node of "
+                         f"the body (off the body; tolerance {tol:.3g} m)")
+    return k
+
+
+def _body_point(index, body: FlexibleBody, info: BodyInfo, point, where) -> BodyPoint:
+    tol = 0.25 * float(np.ptp(info.mesh.nodes, axis=0).max())
+    node = _nearest_node(info.mesh, point, where, tol)
+    if body.nq == 0:
+        return BodyPoint(index, local=tuple(float(x) for x in info.mesh.nodes[node]))
+    return BodyPoint(index, node=node)
+
+
+def build_scenario(sc) -> BuiltScenario:
+    """Meshes, FE models, bases, bodies, joints, contacts and probes of a Scenario."""
+    bodies, infos, states = [], [], []
+    for cfg in sc.bodies:
+        body, info = _build_body(cfg)
+        bodies.append(body)
+        infos.append(info)
+        states.append(_initial_state(body, cfg.placement))
+    index = {cfg.name: i for i, cfg in enumerate(sc.bodies)}
+    contacts = tuple(_contact(c, k, bodies, infos, index) for k, c in enumerate(sc.contacts))
+    joints = []
+    for k, j in enumerate(sc.joints):
+        joints.extend(_joint(j, f"joints[{k}]", bodies, infos, index, states))
+    probes = [_probe(p, f"probes[{k}]", infos, index) for k, p in enumerate(sc.probes)]
+    t = sc.time
+    grid = TimeGrid(t.t_end_s, t.dt_s, t.dt_max_s, t.output_dt_s)
+    grid.ticks()
+    system = System(tuple(bodies), tuple(joints), contacts, np.asarray(sc.gravity_mps2, float))
+    return BuiltScenario(system, states, probes, grid, infos)
+
+
+def _contact(c, k, bodies, infos, index):
+    where = f"contacts[{k}]"
+    s, m = index[c.slave_body], index[c.master_body]
+    try:
+        slave_nodes = infos[s].mesh.facet_set(c.slave_surface).nodes
+        master = MasterSurface.from_facet_set(infos[m].mesh.facet_set(c.master_surface))
+    except MeshError as exc:
+        raise InputError(f"{where}: {exc}") from None
+    radius = c.search_radius_m if c.search_radius_m is not None else 1e-3
+    return PointToSurfaceContact(bodies, s, slave_nodes, m, master, ContactKind(c.kind.value),
+                                 radius, name=f"{c.slave}->{c.master}")
+
+
+def _probe(p, where, infos, index) -> Probe:
+    b = index[p.body]
+    mesh = infos[b].mesh
+    if p.node_set is not None:
+        try:
+            ids = mesh.node_set(p.node_set)
+        except MeshError as exc:
+            raise InputError(f"{where}.node_set: {exc}") from None
+        return Probe(p.name, b, int(ids[0]))
+    tol = 0.05 * float(np.ptp(mesh.nodes, axis=0).min() or 1.0)
+    return Probe(p.name, b, _nearest_node(mesh, p.point_m, f"{where}.point_m", tol))
+
+
+def _joint(j, where, bodies, infos, index, states):
+    b = index[j.body]
+    t = j.type.value
+    if t == "ground":
+        return ground_joint(b, states)
+    p1 = _body_point(b, bodies[b], infos[b], j.point_m, f"{where}.point_m")
+    if t == "prescribed":
+        x0 = p1.position(bodies, states)
+        return [PrescribedMotion(p1, tuple(x0), tuple(j.velocity_mps))]
+    if j.body2 is not None:
+        b2 = index[j.body2]
+        p2 = _body_point(b2, bodies[b2], infos[b2], j.point2_m, f"{where}.point2_m")
+    else:
+        p2 = np.asarray(j.ground_m, float)
+    if t == "distance":
+        x1 = p1.position(bodies, states)
+        x2 = p2.position(bodies, states) if isinstance(p2, BodyPoint) else p2
+        length = j.length_m if j.length_m is not None else float(np.linalg.norm(x1 - x2))
+        return [DistanceJoint(p1, p2, length)]
+    if t == "spherical":
+        return [SphericalJoint(p1, p2)]
+    if t == "revolute":
+        return revolute_joint(p1, p2, j.axis, states)
+    return fixed_joint(p1, p2, states)
