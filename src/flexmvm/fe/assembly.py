@@ -8,7 +8,7 @@ For a mesh with n nodes the matrices are 3n x 3n, numbered node-major (DOF ``3*k
 Each cell block gets its own scikit-fem mesh and CellBasis (shape functions, isoparametric
 map, Gauss rule); the element matrices are batched array products of those values (one
 matmul per chunk of cells instead of skfem's loop over the 81 x 81 local DOF pairs of a
-HEX27, ~20x faster), scattered to our node ids and added into the global matrices (blocks
+HEX27, ~10x faster), scattered to our node ids and added into the global matrices (blocks
 may share nodes, e.g. hex8 + wedge6). tests/test_fe.py checks K and M_scalar against
 scikit-fem's own ``asm(linear_elasticity)`` to round-off.
 
@@ -67,7 +67,8 @@ class _SkfemCell:
 
     linear_mesh: skfem mesh class holding the corner topology; mesh: the class integrated on
     (isoparametric, carries all nodes); element: scalar element; intorder: quadrature degree
-    (full integration: 2x2x2 Gauss for HEX8, 3x3x3 for HEX27; exact mass for straight cells).
+    (full integration: 2x2x2 Gauss for HEX8, 3x3x3 for HEX27, degree 4 triangle x 3-point
+    line for WEDGE6, degree 2 / 4 for TET4 / TET10; mass exact for straight-sided cells).
     """
 
     linear_mesh: type
@@ -182,7 +183,7 @@ def _hrz_diagonal(basis: skfem.CellBasis, rho: float) -> np.ndarray:
     each cell keeps its mass.
     """
     dx = basis.dx                                             # (ne, nqp)
-    diag = np.stack([np.sum(b[0].value ** 2 * dx, axis=1) for b in basis.basis])
+    diag = np.stack([np.sum(np.asarray(b[0]) ** 2 * dx, axis=1) for b in basis.basis])
     return diag * (rho * dx.sum(axis=1) / diag.sum(axis=0))
 
 
@@ -193,7 +194,7 @@ def _shape_arrays(basis: skfem.CellBasis, cells: slice
     Returns N (ne, nloc, nqp), grad N (ne, nloc, 3, nqp) [1/m] and dx = |det J| w (ne, nqp)
     [m^3], local DOFs in skfem order.
     """
-    n = np.stack([b[0].value[cells] for b in basis.basis], axis=1)
+    n = np.stack([np.asarray(b[0])[cells] for b in basis.basis], axis=1)
     g = np.stack([np.moveaxis(b[0].grad[:, cells], 0, 1) for b in basis.basis], axis=1)
     return n, g, basis.dx[cells]
 
