@@ -71,7 +71,7 @@ def test_shipped_scenarios_load(name: str) -> None:
     assert b2.rod is not None and (b2.rod.end_a, b2.rod.end_b) == (RodEnd.FLAT, RodEnd.FLAT)
     assert [
         (c.slave_body, c.slave_surface, c.master_body, c.master_surface, c.kind) for c in s.contacts
-    ] == [("b1", "end_a", "b2", "end_a", ContactKind.FRICTIONLESS)]
+    ] == [("b2", "end_a", "b1", "end_a", ContactKind.FRICTIONLESS)]
     probes = {p.name: (p.body, p.node_set) for p in s.probes}
     assert probes["b2_impact_end"] == ("b2", "end_a_centre")
     assert probes["b2_free_end"] == ("b2", "end_b_centre")
@@ -155,7 +155,7 @@ BAD = [
         id="unknown-key",
     ),
     pytest.param(
-        ('master = "b2.end_a"', 'master = "b3.end_a"'),
+        ('master = "b1.end_a"', 'master = "b3.end_a"'),
         "contacts[0].master: unknown body 'b3' (bodies: b1, b2)",
         id="contact-body",
     ),
@@ -248,12 +248,12 @@ BAD = [
         ('kind = "mvm"', 'kind = "fem"'), "bodies[1].model.kind: input should be", id="model-kind"
     ),
     pytest.param(
-        ('slave = "b1.end_a"', 'slave = "b2.end_b"'),
+        ('master = "b1.end_a"', 'master = "b2.end_b"'),
         "contacts[0].master: slave and master are both on body 'b2'",
         id="self-contact",
     ),
     pytest.param(
-        ('master = "b2.end_a"', 'master = "b2.face"'),
+        ('master = "b1.end_a"', 'master = "b1.face"'),
         "contacts[0].master: rods have no set 'face'",
         id="contact-surface",
     ),
@@ -331,7 +331,7 @@ def test_mesh_file_resolved_relative_to_the_scenario(tmp_path: Path) -> None:
             'selection = "1-1"',
             "region = { ball = { centre_m = [0.0, 0.0, 0.0], radius_m = 0.002 } }",
         ),
-        ('master = "b2.end_a"', 'master = "b2.impact_face"'),  # mesh sets: the builder checks
+        ('slave = "b2.end_a"', 'slave = "b2.impact_face"'),  # mesh sets: the builder checks
     )
     s = load_scenario(path)
     b2 = s.body("b2")

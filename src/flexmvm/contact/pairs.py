@@ -64,6 +64,28 @@ def body_rows(body, st, nodes: np.ndarray, weights: np.ndarray, dirs: np.ndarray
     return frame, q
 
 
+def _clamp(proj, out, x_slave, x_master, n_quads):
+    """Replace the projections flagged `out` by the closest point of their facet: local
+    coordinates clamped to the facet, shape functions and gap recomputed there."""
+    xi = proj.xi.copy()
+    w = proj.weights.copy()
+    quad = out & (proj.facet < n_quads)
+    tri = out & ~(proj.facet < n_quads)
+    if quad.any():
+        e, h = np.clip(xi[quad, 0], -1, 1), np.clip(xi[quad, 1], -1, 1)
+        w[quad] = 0.25 * np.column_stack([(1 - e) * (1 - h), (1 + e) * (1 - h), (1 + e) * (1 + h), (1 - e) * (1 + h)])
+        xi[quad] = np.column_stack([e, h])
+    if tri.any():
+        bary = np.clip(np.column_stack([1 - xi[tri, 0] - xi[tri, 1], xi[tri, 0], xi[tri, 1]]), 0, None)
+        bary /= bary.sum(axis=1, keepdims=True)
+        w[tri] = np.column_stack([bary, np.zeros(len(bary))])
+        xi[tri] = bary[:, 1:]
+    xc = np.einsum("mk,mki->mi", w, x_master[proj.nodes])
+    gap = np.einsum("mi,mi->m", proj.normal, x_slave[proj.point] - xc)
+    return type(proj)(proj.point, proj.facet, proj.nodes, w, xi, proj.normal,
+                      np.where(out, gap, proj.gap), np.ones_like(proj.inside), proj.distance)
+
+
 class PointToSurfaceContact(ContactProvider):
     """Contact of slave nodes (body `slave`) with master facets (body `master`)."""
 
@@ -82,6 +104,8 @@ class PointToSurfaceContact(ContactProvider):
         self.surface = surface
         self.master_nodes = surface.nodes()
         self.broad = BroadPhase(bodies[master].X, surface)
+        Xs = bodies[master].X[self.master_nodes]
+        self._box = (Xs.min(axis=0), Xs.max(axis=0))
         self.kind = kind
         self.search_radius = float(search_radius_m)
         self.gap_tol = float(gap_tol_m)
@@ -101,14 +125,26 @@ class PointToSurfaceContact(ContactProvider):
         return _Kinematics(xs, vs, xm, vm)
 
     def _projection(self, bodies, states, kin: _Kinematics, reach: float):
+        """Closest facet of every slave node within reach of the master surface. A node that
+        falls outside every candidate facet (above a vertex of a convex surface, or beside an
+        edge of a dented, locally concave one) is kept with its clamped projection, so a
+        penetration can never go unseen."""
         sm = states[self.master]
         local = (kin.x_slave - sm.r) @ sm.A
-        pairs = self.broad.query(local, reach)
-        if pairs[0].size == 0:
+        lo, hi = self._box
+        near = np.nonzero(np.all((local >= lo - reach) & (local <= hi + reach), axis=1))[0]
+        if near.size == 0:
             return None
-        proj = closest_facets(project_points(kin.x_slave, kin.x_master, self.surface, pairs))
-        proj = proj.take(proj.inside)
-        return proj if len(proj) else None
+        pt, fc = self.broad.query(local[near], reach)
+        if pt.size == 0:
+            return None
+        proj = closest_facets(project_points(kin.x_slave, kin.x_master, self.surface, (near[pt], fc)))
+        if not len(proj):
+            return None
+        out = ~proj.inside
+        if out.any():
+            proj = _clamp(proj, out, kin.x_slave, kin.x_master, self.surface.n_quads)
+        return proj
 
     def _normal_velocity(self, kin, proj) -> np.ndarray:
         vc = np.einsum("mk,mki->mi", proj.weights, kin.v_master[proj.nodes])

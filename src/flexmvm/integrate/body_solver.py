@@ -1,6 +1,6 @@
 """Iteration matrix of one body for the implicit-midpoint step, solved by a bordered system.
 
-    W = [ M_ff(A, q)   M_fq~    ]      W_qq = M_qq + (h/2) C + (h^2/4) K  (constant)
+    W = [ M_ff(A, q)   M_fq~    ]      W_qq = M_qq + theta h C + theta^2 h^2 K  (constant)
         [ M_fq~^T      W_qq     ]      M_fq~ = [A S1 ; M_wq(0)]
 
 W_qq is factored once per step size h and cached, so a change of step size among a few values
@@ -37,8 +37,9 @@ class _Factor:
 class BodySolver:
     """Solves W x = b for one body; factorizations cached per step size."""
 
-    def __init__(self, body: FlexibleBody, max_cached: int = 6):
+    def __init__(self, body: FlexibleBody, theta: float = 0.5, max_cached: int = 6):
         self.body = body
+        self.theta = theta
         self._cache: dict[float, _Factor] = {}
         self._order: list[float] = []
         self._max = max_cached
@@ -53,9 +54,10 @@ class BodySolver:
         if f is not None:
             return f
         b = self.body
-        W = b.inv.M_qq + (0.25 * h * h) * b.k_hat
+        th = self.theta
+        W = b.inv.M_qq + (th * th * h * h) * b.k_hat
         if b.c_hat is not None:
-            W = W + (0.5 * h) * b.c_hat
+            W = W + (th * h) * b.c_hat
         if sp.issparse(W):
             try:
                 lu = spla.splu(sp.csc_matrix(W))

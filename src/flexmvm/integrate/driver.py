@@ -23,12 +23,14 @@ GROW_AFTER_STEPS = 4
 
 @dataclass(frozen=True)
 class TimeGrid:
-    """t_end_s, dt_s (smallest step), dt_max_s (largest), output_dt_s; all [s]."""
+    """t_end_s, dt_s (smallest step), dt_max_s (largest), output_dt_s; all [s]; theta of the
+    Moreau-Jean scheme (1/2: implicit midpoint)."""
 
     t_end_s: float
     dt_s: float
     dt_max_s: float | None = None
     output_dt_s: float | None = None
+    theta: float = 0.5
 
     def ticks(self) -> tuple[int, int, int]:
         """(total ticks, output ticks, largest step level k with 2^k ticks <= dt_max)."""
@@ -147,7 +149,7 @@ def simulate(system: System, states: list[BodyState], grid: TimeGrid, probes=(),
              progress: bool = False, t0: float = 0.0) -> RunResult:
     """Integrate from t0 over grid.t_end_s; returns histories at every output time."""
     n_ticks, out_ticks, k_max = grid.ticks()
-    integ = MidpointIntegrator(system)
+    integ = MidpointIntegrator(system, theta=grid.theta)
     dt = grid.dt_s
     rec = _Recorder(system, probes, n_ticks // out_ticks + 2, integ.n_joint_rows)
     states = [s.copy() for s in states]

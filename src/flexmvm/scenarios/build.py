@@ -30,6 +30,8 @@ from flexmvm.reduction.basis import Basis, BasisKind, build_basis
 from flexmvm.reduction.reference import three_two_one
 from flexmvm.reduction.rod_reference import rod_reference
 
+DEFAULT_SEARCH_RADIUS_M = 2e-4  # broad-phase margin beyond the distance closed in one step
+
 _KIND = {"full": BasisKind.FULL, "mvm": BasisKind.CRAIG_BAMPTON,
          "mvm-seed": BasisKind.SEED_BLOCK, "modal": BasisKind.MODAL}
 
@@ -185,7 +187,7 @@ def build_scenario(sc) -> BuiltScenario:
         joints.extend(_joint(j, f"joints[{k}]", bodies, infos, index, states))
     probes = [_probe(p, f"probes[{k}]", infos, index) for k, p in enumerate(sc.probes)]
     t = sc.time
-    grid = TimeGrid(t.t_end_s, t.dt_s, t.dt_max_s, t.output_dt_s)
+    grid = TimeGrid(t.t_end_s, t.dt_s, t.dt_max_s, t.output_dt_s, t.theta)
     grid.ticks()
     system = System(tuple(bodies), tuple(joints), contacts, np.asarray(sc.gravity_mps2, float))
     return BuiltScenario(system, states, probes, grid, infos)
@@ -199,7 +201,7 @@ def _contact(c, k, bodies, infos, index):
         master = MasterSurface.from_facet_set(infos[m].mesh.facet_set(c.master_surface))
     except MeshError as exc:
         raise InputError(f"{where}: {exc}") from None
-    radius = c.search_radius_m if c.search_radius_m is not None else 1e-3
+    radius = c.search_radius_m if c.search_radius_m is not None else DEFAULT_SEARCH_RADIUS_M
     return PointToSurfaceContact(bodies, s, slave_nodes, m, master, ContactKind(c.kind.value),
                                  radius, name=f"{c.slave}->{c.master}")
 

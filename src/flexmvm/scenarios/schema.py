@@ -22,7 +22,7 @@ from pathlib import Path
 from typing import Annotated, Any
 
 import numpy as np
-from annotated_types import Ge, Gt
+from annotated_types import Ge, Gt, Le
 from pydantic import (
     BaseModel,
     BeforeValidator,
@@ -453,6 +453,7 @@ class TimeConfig(_Frozen):
     dt_s: Positive
     dt_max_s: Positive
     output_dt_s: Positive
+    theta: Annotated[float, Strict(), Ge(0.5), Le(1.0)] = 0.55
 
     @model_validator(mode="before")
     @classmethod
