@@ -24,7 +24,8 @@ from scipy.spatial import cKDTree
 from flexmvm.errors import InputError, SolverError
 from flexmvm.mesh.mesh import FacetSet
 
-_NEWTON_MAX_ITER = 30
+_NEWTON_MAX_ITER = 20  # quadratic convergence from the centre takes ~4; the rest fold outside
+_LINE_SEARCH_HALVINGS = 12
 _NEWTON_TOL = 1e-12  # on the local coordinates, which are O(1): a relative tolerance
 _XI_BOUND = 4.0  # Newton iterates kept in [-4, 4]^2: far outside the facet, still finite
 _QUAD_SIGNS = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
@@ -213,10 +214,16 @@ def _quad_newton(xs: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]
         done |= ~stuck & (
             np.abs(step).max(axis=1) <= _NEWTON_TOL + 64 * np.finfo(float).eps * scale
         )
-        for _ in range(30):
+        for _ in range(_LINE_SEARCH_HALVINGS):
             trial = np.clip(xi + step, -_XI_BOUND, _XI_BOUND)
             r_trial = residual(trial)
-            worse = (r_trial * r_trial).sum(1) > f0 * (1.0 + 1e-12) + 1e-300
+            # growth beyond round-off of f, on pairs still iterating
+            worse = ((r_trial * r_trial).sum(1) > f0 * (1.0 + 1e-9) + 1e-30) & ~(done | stuck)
+            tiny = worse & (np.abs(step).max(axis=1) <= _NEWTON_TOL)
+            if tiny.any():  # no descent left within the tolerance: converged as far as it goes
+                done |= tiny
+                step[tiny] = 0.0
+                worse &= ~tiny
             if not worse.any():
                 break
             step[worse] *= 0.5

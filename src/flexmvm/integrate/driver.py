@@ -162,7 +162,7 @@ def simulate(system: System, states: list[BodyState], grid: TimeGrid, probes=(),
     wall0 = time.perf_counter()
     while tick < n_ticks:
         to_out = out_ticks - tick % out_ticks
-        level = _choose_level(system, states, level, calm, k_max, dt)
+        level = 0 if calm == 0 and n_steps else _choose_level(system, states, level, calm, k_max, dt)
         span = 1 << level
         while span > to_out or tick + span > n_ticks and span > 1:
             span >>= 1

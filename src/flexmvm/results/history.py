@@ -11,12 +11,15 @@ from flexmvm.errors import InputError
 from flexmvm.results.atomic import write_text_atomic
 
 
-def write_history(path: Path, t, force, probe_vx: dict[str, np.ndarray]) -> Path:
-    """Write the history CSV atomically; full float precision (%.10e)."""
-    cols = [np.asarray(t, float), np.asarray(force, float)] + [np.asarray(v, float) for v in probe_vx.values()]
-    header = ["t_s", "contact_force_N"] + [f"{name}_vx_mps" for name in probe_vx]
+def write_history(path: Path, t, force, probe_v: dict[str, np.ndarray], axis: str = "x") -> Path:
+    """Write the history CSV atomically: t_s,contact_force_N,<probe>_v<axis>_mps,... with
+    floats in repr form (they read back bit for bit)."""
+    cols = [np.asarray(t, float), np.asarray(force, float)] + [np.asarray(v, float) for v in probe_v.values()]
+    header = ["t_s", "contact_force_N"] + [f"{name}_v{axis}_mps" for name in probe_v]
     buf = io.StringIO()
-    np.savetxt(buf, np.column_stack(cols), delimiter=",", header=",".join(header), comments="", fmt="%.10e")
+    buf.write(",".join(header) + "\n")
+    for row in np.column_stack(cols):
+        buf.write(",".join(repr(float(x)) for x in row) + "\n")
     write_text_atomic(path, buf.getvalue())
     return Path(path)
 

@@ -22,6 +22,7 @@ from flexmvm.bodies.body import FlexibleBody
 from flexmvm.errors import InputError
 from flexmvm.integrate.driver import RunResult
 from flexmvm.materials import Material
+from flexmvm.results.history import write_history
 from flexmvm.results.atomic import atomic_path, write_json_atomic, write_text_atomic
 from flexmvm.results.fields import body_geometry, elastic_rates, nodal_fields
 
@@ -69,11 +70,6 @@ def _check_run(run: RunResult) -> int:
     return n
 
 
-def _float(x: float) -> str:
-    """Shortest text that reads back to the same double (repr); 'nan'/'inf' kept as such."""
-    return repr(float(x))
-
-
 def write_history_csv(path: str | os.PathLike[str], run: RunResult, probe_axis: int = 0) -> None:
     """CSV of the histories: ``t_s,contact_force_N,<probe>_v<axis>_mps,...``, one row per output.
 
@@ -84,17 +80,10 @@ def write_history_csv(path: str | os.PathLike[str], run: RunResult, probe_axis: 
     """
     if isinstance(probe_axis, bool) or probe_axis not in (0, 1, 2):
         raise InputError(f"probe_axis: expected 0, 1 or 2 (x, y, z), got {probe_axis!r}")
-    n = _check_run(run)
-    ax = _AXES[probe_axis]
-    header = ["t_s", "contact_force_N"] + [
-        f"{_safe_name('probe', p)}_v{ax}_mps" for p in run.probe_names
-    ]
+    _check_run(run)
     v = np.asarray(run.probe_v, dtype=float)[:, :, probe_axis]
-    lines = [",".join(header)]
-    for i in range(n):
-        row = [run.t[i], run.contact_force[i], *v[i]]
-        lines.append(",".join(_float(x) for x in row))
-    write_text_atomic(path, "\n".join(lines) + "\n")
+    probes = {_safe_name("probe", p): v[:, k] for k, p in enumerate(run.probe_names)}
+    write_history(path, run.t, run.contact_force, probes, axis=_AXES[probe_axis])
 
 
 def write_summary_json(path: str | os.PathLike[str], summary: Mapping[str, Any]) -> None:

@@ -1,0 +1,35 @@
+"""`flexmvm run SCENARIO --out DIR`: simulate a scenario and write its results."""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import click
+
+MODELS = ["full", "mvm", "mvm-seed", "modal", "rigid"]
+
+
+@click.command("run")
+@click.argument("scenario", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
+              help="Output directory.")
+@click.option("--model", type=click.Choice(MODELS), default=None,
+              help="Model of every non-rigid body. Default: the scenario's models AND a full-FE "
+                   "reference, plotted together (seed fig. 5).")
+@click.option("--t-end", "t_end", type=float, default=None, help="End time [s].")
+@click.option("--dt", type=float, default=None, help="Time step near contact [s].")
+@click.option("--no-fields", is_flag=True, help="Skip results.h5 and the ParaView series.")
+@click.option("--progress/--no-progress", default=True, show_default=True)
+def command(scenario, out_dir, model, t_end, dt, no_fields, progress) -> None:
+    """Simulate SCENARIO; write history.csv, summary.json, results.h5, ParaView series, PNG."""
+    from flexmvm.scenarios.main_job import run_main_job
+
+    summary = run_main_job(scenario, out_dir, model=model, t_end=t_end, dt=dt,
+                           fields=not no_fields, progress=progress, echo=click.echo)
+    keys = ("max_contact_force_N", "momentum_rel_error", "energy_rel_error", "max_penetration_m",
+            "wall_time_s")
+    click.echo("  ".join(f"{k} = {summary[k]:.4g}" for k in keys if summary.get(k) is not None))
+    if "comparison_vs_full" in summary:
+        c = summary["comparison_vs_full"]
+        click.echo("vs full FE: " + "  ".join(f"{k} = {v:.4f}" for k, v in c.items() if isinstance(v, float)))
+    click.echo(f"wrote {out_dir}")
