@@ -375,7 +375,6 @@ def test_time_and_per_body_overrides() -> None:
 @pytest.mark.parametrize(
     ("kwargs", "expected"),
     [
-        ({"model": "mvm-seed"}, "bodies[0].model.selection: kind 'mvm-seed' needs selection"),
         ({"t_end_s": 0.0}, "time.t_end_s: must be > 0"),
         ({"dt_s": 1e-5}, "time.output_dt_s: must be >= dt_s = 1e-05"),
         ({"model": "fem"}, "bodies[0].model.kind: input should be"),
@@ -389,6 +388,15 @@ def test_bad_override_gives_one_line(kwargs: dict, expected: str) -> None:
     assert "\n" not in str(info.value)
     assert str(info.value).startswith(str(SCENARIOS / "rod_impact.toml"))
     assert expected in str(info.value)
+
+
+def test_model_override_needs_a_selection() -> None:
+    """The pendulum's striker has no selection: overriding it to mvm-seed names the key."""
+    base = load_scenario(SCENARIOS / "pendulum_release.toml")
+    with pytest.raises(ScenarioError) as info:
+        base.with_overrides(model="mvm-seed")
+    assert "\n" not in str(info.value)
+    assert "bodies[0].model.selection: kind 'mvm-seed' needs selection" in str(info.value)
 
 
 def test_rotation_matrix() -> None:
