@@ -165,15 +165,17 @@ class MidpointIntegrator:
             parts.append((provider, part, crows.rows.m))
             crows = _merge_contacts(crows, part)
         Yc = self._contact_inverse(crows, h) if crows.rows.m else {}
-        n_j = self.n_joint_rows
+        Gc = {b: crows.rows.body_matrix(b) for b in crows.rows.blocks}
+        Dcc = sum((Gc[b] @ Yc[b] for b in Yc), np.zeros((crows.rows.m, crows.rows.m)))
+        n_j, m_c = self.n_joint_rows, crows.rows.m
         v_plus = [st.v.copy() for st in states]
-        lam = np.zeros(n_j + crows.rows.m)
+        lam = np.zeros(n_j + m_c)
         for it in range(self.max_iter + 1):
             R, mids, ends, scales = self._residuals(t, states, v_plus, h)
             phi, jrows = self._joint_rows(t, h, mids, ends)
-            G = stack([jrows, crows.rows]) if n_j else crows.rows
+            Gj = {b: jrows.body_matrix(b) for b in jrows.blocks} if n_j else {}
             res_norm = max(float(np.abs(r).max()) for r in R) if it else np.inf
-            if it > 0 and self._converged(R, G, lam, scales, phi):
+            if it > 0 and self._converged(R, Gj, Gc, lam, n_j, scales, phi):
                 break
             if it == SLOW_ITERATIONS or (it > 1 and res_norm > last_norm):
                 self._prepare(mids, h, refresh_tol=0.0)
@@ -181,26 +183,29 @@ class MidpointIntegrator:
             if it == self.max_iter:
                 raise SolverError(f"implicit midpoint step at t = {t:.6e} s (h = {h:.3e} s) did "
                                   f"not converge in {self.max_iter} iterations")
-            d = [s.solve(r) for s, r in zip(self.solvers, R)]
-            v_free = [vp - di for vp, di in zip(v_plus, d)]
-            if G.m == 0:
+            v_free = [vp - s.solve(r) for vp, s, r in zip(v_plus, self.solvers, R)]
+            if n_j + m_c == 0:
                 v_plus = v_free
                 continue
             Yj = self._apply_inverse(jrows) if n_j else {}
-            Y = _merge_Y(Yj, Yc, n_j, crows.rows.m, bodies)
-            D = np.zeros((G.m, G.m))
-            for b, Yb in Y.items():
-                D += G.body_matrix(b) @ Yb
-            Gvf = G.times(v_free)
-            c = Gvf.copy()
+            D = np.zeros((n_j + m_c, n_j + m_c))
+            D[n_j:, n_j:] = Dcc
+            for b, Yb in Yj.items():
+                D[:n_j, :n_j] += Gj[b] @ Yb
+                if b in Gc:
+                    D[n_j:, :n_j] += Gc[b] @ Yb
+            D[:n_j, n_j:] = D[n_j:, :n_j].T
+            c = np.zeros(n_j + m_c)
             if n_j:
-                c[:n_j] += -jrows.times(v_plus) + phi / (self.theta * h)
-            c[n_j:] -= crows.lower
-            lam = solve_mixed_lcp(D, c, n_j + crows.n_eq) if crows.n_eq == 0 else \
-                _solve_with_contact_eq(D, c, n_j, crows.n_eq)
+                c[:n_j] = jrows.times(v_free) - jrows.times(v_plus) + phi / (self.theta * h)
+            if m_c:
+                c[n_j:] = crows.rows.times(v_free) - crows.lower
+            lam = solve_mixed_lcp(D, c, n_j + crows.n_eq)
             v_plus = list(v_free)
-            for b, Yb in Y.items():
-                v_plus[b] = v_free[b] + Yb @ lam
+            for b, Yb in Yj.items():
+                v_plus[b] = v_plus[b] + Yb @ lam[:n_j]
+            for b, Yb in Yc.items():
+                v_plus[b] = v_plus[b] + Yb @ lam[n_j:]
         lam_c = lam[n_j:]
         for provider, part, offset in parts:
             hook = getattr(provider, "after_step", None)
@@ -222,12 +227,13 @@ class MidpointIntegrator:
                 solver.refresh_coupling(h, terms[2], tol)
             solver.prepare(h, st.A, body.frame_mass(st.A, terms[0], terms[1]))
 
-    def _converged(self, R, G, lam, scales, phi) -> bool:
+    def _converged(self, R, Gj, Gc, lam, n_j, scales, phi) -> bool:
         for b, (r, sc) in enumerate(zip(R, scales)):
-            res = r.copy()
-            Gb = G.body_matrix(b) if G.m else None
-            if Gb is not None:
-                res -= Gb.T @ lam
+            res = r
+            if b in Gj:
+                res = res - Gj[b].T @ lam[:n_j]
+            if b in Gc:
+                res = res - Gc[b].T @ lam[n_j:]
             if np.abs(res).max() > self.rtol * max(sc, 1e-300):
                 return False
         return not (phi.size and np.abs(phi).max() > 1e-12)
@@ -242,21 +248,3 @@ def _merge_contacts(a: ContactRows, b: ContactRows) -> ContactRows:
         raise SolverError("several bonded contact definitions are not supported in one system")
     return ContactRows(stack([a.rows, b.rows]), np.concatenate([a.lower, b.lower]),
                        a.keys + b.keys, np.concatenate([a.gaps, b.gaps]), 0)
-
-
-def _merge_Y(Yj, Yc, n_j, n_c, bodies):
-    out = {}
-    for b in set(Yj) | set(Yc):
-        nv = bodies[b].nv
-        Y = np.zeros((nv, n_j + n_c))
-        if b in Yj:
-            Y[:, :n_j] = Yj[b]
-        if b in Yc:
-            Y[:, n_j:] = Yc[b]
-        out[b] = Y
-    return out
-
-
-def _solve_with_contact_eq(D, c, n_j, n_ceq):
-    """Equalities are the joint rows and the leading n_ceq contact rows."""
-    return solve_mixed_lcp(D, c, n_j + n_ceq)
