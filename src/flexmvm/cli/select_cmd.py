@@ -1,0 +1,72 @@
+"""`flexmvm select SCENARIO --body NAME --out DIR`: the selection study (seed section 3.2)."""
+
+from __future__ import annotations
+
+import re
+from pathlib import Path
+
+import click
+
+from flexmvm.errors import InputError
+
+_DOTS = re.compile(r"^\s*(\d+)\s*\.\.\s*(\d+)\s*$")
+_COLON = re.compile(r"^\s*(\d+)\s*:\s*(\d+)\s*(?::\s*(\d+)\s*)?$")
+_ONE = re.compile(r"^\s*(\d+)\s*$")
+
+
+def parse_range(text: str, name: str = "range") -> list[int]:
+    """'1..4' -> [1, 2, 3, 4]; '7:43:6' -> [7, 13, ..., 43] (stop included when on the step;
+    step 1 if omitted); '5' -> [5]. InputError (one line) on anything else."""
+    m = _DOTS.match(text)
+    if m:
+        a, b = int(m[1]), int(m[2])
+        if a < 1 or b < a:
+            raise InputError(f"--{name} {text!r}: expected a..b with 1 <= a <= b")
+        return list(range(a, b + 1))
+    m = _COLON.match(text)
+    if m:
+        a, b, s = int(m[1]), int(m[2]), int(m[3] or 1)
+        if a < 1 or b < a or s < 1:
+            raise InputError(f"--{name} {text!r}: expected start:stop:step with "
+                             "1 <= start <= stop and step >= 1")
+        return list(range(a, b + 1, s))
+    m = _ONE.match(text)
+    if m and int(m[1]) >= 1:
+        return [int(m[1])]
+    raise InputError(f"--{name} {text!r}: expected a..b (inclusive), start:stop:step "
+                     "(stop included) or one integer >= 1")
+
+
+@click.command("select")
+@click.argument("scenario", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--body", required=True, help="The body to reduce (the seed's b2).")
+@click.option("--layers", default="1..4", show_default=True, help="Node layers i: a..b.")
+@click.option("--laps", default="1..5", show_default=True, help="Node laps j: a..b.")
+@click.option("--modes", default="7:43:6", show_default=True,
+              help="Mode counts: start:stop:step, stop included.")
+@click.option("--target", default="ncc>=0.99", show_default=True,
+              help="Accuracy target, e.g. 'ncc>=0.99,peak<=0.02'.")
+@click.option("--search", is_flag=True,
+              help="Bisect the mode counts per selection instead of running the whole grid.")
+@click.option("--scheduler", default=None, help="Address of a Dask scheduler (tcp://host:port).")
+@click.option("--workers", type=int, default=None, help="Local worker processes.")
+@click.option("--serial", is_flag=True, help="Run in this process, no Dask.")
+@click.option("--t-end", "t_end", type=float, default=None, help="End time [s].")
+@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
+              help="Study directory (a rerun resumes).")
+@click.option("--progress/--no-progress", default=True, show_default=True)
+def command(scenario, body, layers, laps, modes, target, search, scheduler, workers, serial,
+            t_end, out_dir, progress) -> None:
+    """Selection study: node selections x mode counts of BODY against the full-FE force;
+    writes ncc.csv, selection.json, fig7_ncc_map.png, fig8_ncc_modes.png."""
+    from flexmvm.metrics.ncc import Target
+    from flexmvm.studies.selection import run_selection_study
+
+    grid = (parse_range(layers, "layers"), parse_range(laps, "laps"), parse_range(modes, "modes"))
+    tgt = Target.parse(target)
+    if workers is not None and workers < 1:
+        raise InputError(f"--workers {workers}: expected a positive integer")
+    run_selection_study(scenario, body, out_dir, *grid, target=tgt, search=search,
+                        scheduler=scheduler, n_workers=workers, progress=progress, t_end_s=t_end,
+                        serial=serial, echo=click.echo)
+    click.echo(f"wrote {out_dir}")

@@ -1,0 +1,212 @@
+"""Selection and material studies on the tiny scenario tests/data/tiny_impact.toml.
+
+One brute-force sweep (layers 1..2 x laps 1..2 x modes {7, 13}, serial) is shared by the tests;
+the others copy its reference (and cases, where a test is about loading them) to avoid
+recomputing what does not matter for the test.
+"""
+
+from __future__ import annotations
+
+import csv
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import pytest
+
+from flexmvm.cli.select_cmd import parse_range
+from flexmvm.errors import InputError
+from flexmvm.metrics.ncc import Target
+from flexmvm.scenarios.schema import load_scenario
+from flexmvm.studies.selection import (estimate_selection, median_ncc, run_selection_study,
+                                       selection_cases)
+
+TINY = Path(__file__).parent / "data" / "tiny_impact.toml"
+GRID = dict(layers=[1, 2], laps=[1, 2], modes=[7, 13])
+
+
+def _table(out: Path, drop=("wall_time_s",)) -> list[dict]:
+    with open(out / "ncc.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    return [{k: v for k, v in r.items() if k not in drop} for r in rows]
+
+
+def _same_table(a: list[dict], b: list[dict], rtol: float = 1e-9) -> None:
+    assert [list(r) for r in a] == [list(r) for r in b]
+    assert len(a) == len(b) == 8
+    for ra, rb in zip(a, b):
+        for k in ra:
+            if k in ("layers", "laps", "nodes", "modes", "dof"):
+                assert ra[k] == rb[k]
+            else:
+                assert float(ra[k]) == pytest.approx(float(rb[k]), rel=rtol, abs=1e-12), k
+
+
+def _copy_reference(src: Path, dst: Path, cases: bool = False) -> None:
+    shutil.copytree(src / "reference", dst / "reference")
+    if cases:
+        shutil.copytree(src / "cases", dst / "cases")
+
+
+@pytest.fixture(scope="module")
+def brute(tmp_path_factory) -> tuple[Path, dict]:
+    out = tmp_path_factory.mktemp("brute")
+    res = run_selection_study(TINY, "b2", out, **GRID, target=Target(0.99), serial=True,
+                              progress=False, echo=lambda s: None)
+    return out, res
+
+
+def test_brute_force_writes_table_json_and_figures(brute):
+    out, res = brute
+    header = open(out / "ncc.csv").readline().strip()
+    assert header == ("layers,laps,nodes,modes,dof,ncc_force,ncc_b2_impact_end,ncc_b2_free_end,"
+                      "peak_err,impulse_err,duration_err,wall_time_s")
+    rows = _table(out, drop=())
+    assert [(int(r["layers"]), int(r["laps"]), int(r["modes"])) for r in rows] == \
+        [(i, j, m) for i in (1, 2) for j in (1, 2) for m in (7, 13)]
+    for r in rows:  # dof = 3 x nodes + modes (elastic coordinates, seed count)
+        assert int(r["dof"]) == 3 * int(r["nodes"]) + int(r["modes"])
+        assert 0.9 < float(r["ncc_force"]) <= 1.0
+    assert {r["nodes"] for r in rows if r["layers"] == "1" and r["laps"] == "1"} == {"1"}
+    assert res["runs"] == res["runs_made"] == 8 and res["runs_loaded"] == 0
+    assert res["reference_computed"] is True
+    assert (res["layers"], res["laps"], res["modes"], res["dof"]) == (1, 1, 7, 10)
+    assert res["dof_total"] == res["dof"] + 6
+    for fig in ("fig7_ncc_map.png", "fig8_ncc_modes.png"):
+        assert (out / fig).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_dask_local_cluster_gives_the_serial_table(brute, tmp_path):
+    out, _ = brute
+    _copy_reference(out, tmp_path)
+    res = run_selection_study(TINY, "b2", tmp_path, **GRID, target=Target(0.99), n_workers=2,
+                              progress=False, echo=lambda s: None)
+    assert res["runs_made"] == 8 and res["reference_computed"] is False
+    _same_table(_table(out), _table(tmp_path))
+
+
+def test_interrupted_sweep_resumes_only_missing_cases(brute, tmp_path):
+    out, _ = brute
+    _copy_reference(out, tmp_path, cases=True)
+    cases_dir = tmp_path / "cases"
+    missing = ["l1-j2-m13", "l2-j1-m7", "l2-j2-m13"]
+    for key in missing:
+        (cases_dir / f"{key}.json").unlink()
+    kept = {p.name: p.stat().st_mtime_ns for p in cases_dir.glob("*.json")}
+    assert len(kept) == 5
+    res = run_selection_study(TINY, "b2", tmp_path, **GRID, target=Target(0.99), serial=True,
+                              progress=False, echo=lambda s: None)
+    assert (res["runs_made"], res["runs_loaded"], res["runs"]) == (3, 5, 8)
+    assert {p.name: p.stat().st_mtime_ns for p in cases_dir.glob("*.json")
+            if p.name in kept} == kept
+    assert sorted(p.stem for p in cases_dir.glob("*.json") if p.name not in kept) == sorted(missing)
+    _same_table(_table(out), _table(tmp_path))
+
+
+def test_search_finds_the_brute_force_answer_with_fewer_runs(brute, tmp_path):
+    out, _ = brute
+    level = median_ncc(_table(out, drop=()) and [
+        {"ncc_force": float(r["ncc_force"])} for r in _table(out)])
+    target = Target(level)
+    passing = [r for r in _table(out) if float(r["ncc_force"]) >= level]
+    assert 0 < len(passing) < 8  # the target splits the grid
+    # brute force at this target from the stored cases (nothing recomputed)
+    bdir = tmp_path / "brute"
+    _copy_reference(out, bdir, cases=True)
+    b = run_selection_study(TINY, "b2", bdir, **GRID, target=target, serial=True,
+                            progress=False, echo=lambda s: None)
+    assert b["runs_made"] == 0 and b["runs"] == 8 and b["passed"]
+    sdir = tmp_path / "search"
+    _copy_reference(out, sdir)
+    s = run_selection_study(TINY, "b2", sdir, **GRID, target=target, search=True, serial=True,
+                            progress=False, echo=lambda s: None)
+    assert s["passed"] and s["search"] is True
+    for key in ("layers", "laps", "modes", "dof", "ncc_force"):
+        assert s[key] == b[key], key
+    assert s["runs"] == s["runs_made"] <= b["runs"]
+    assert len(_table(sdir)) == s["runs"]
+
+
+def test_a_priori_estimate_against_brute_force(brute):
+    out, _ = brute
+    sc = load_scenario(TINY)
+    est = estimate_selection(sc, "b2", Target(0.99), modes=GRID["modes"])
+    assert est["theory_law"] == "hertz"
+    assert 0 < est["theory_contact_radius_m"] < 0.5e-3
+    assert est["layers"] == 1 and est["modes"] in GRID["modes"]
+    assert est["dof"] == 3 * est["nodes"] + est["modes"]
+    rows = {(int(r["layers"]), int(r["laps"]), int(r["modes"])): r for r in _table(out)}
+    level = median_ncc([{"ncc_force": float(r["ncc_force"])} for r in rows.values()])
+    est_ncc = float(rows[(est["layers"], est["laps"], est["modes"])]["ncc_force"])
+    # the estimate is sufficient at the median-NCC target and no larger than the brute-force
+    # winner at that target (tiny case: both are 1-1 with 13 modes, 16 DOF)
+    assert est_ncc >= level
+    winner = min((int(r["dof"]), k) for k, r in rows.items() if float(r["ncc_force"]) >= level)
+    assert est["dof"] <= winner[0]
+
+
+def test_selection_cases_keys_and_limits():
+    sc = load_scenario(TINY)
+    cases = selection_cases(sc, "b2", [1, 2], [1], [7, 13])
+    assert [c.key for c in cases] == ["l1-j1-m7", "l1-j1-m13", "l2-j1-m7", "l2-j1-m13"]
+    assert cases[0].params["scenario"]["name"] == "tiny_impact"
+    with pytest.raises(InputError, match="maximum 5 laps"):
+        selection_cases(sc, "b2", [1], [6], [7])
+    with pytest.raises(InputError, match="no body 'b7'"):
+        selection_cases(sc, "b7", [1], [1], [7])
+
+
+def test_parse_range():
+    assert parse_range("1..4") == [1, 2, 3, 4]
+    assert parse_range("7:43:6") == [7, 13, 19, 25, 31, 37, 43]
+    assert parse_range("7:13:6") == [7, 13]
+    assert parse_range("3") == [3]
+    for bad in ("4..1", "1..x", "0..2", "7:43:0", "a", "1-4", ""):
+        with pytest.raises(InputError):
+            parse_range(bad)
+
+
+@pytest.mark.parametrize("args, message", [
+    (["--layers", "1..x"], "--layers '1..x'"),
+    (["--laps", "1..6"], "maximum 5 laps"),
+    (["--body", "b9"], "no body 'b9'"),
+])
+def test_cli_one_line_errors(tmp_path, args, message):
+    argv = ["select", str(TINY), "--out", str(tmp_path / "out")]
+    argv += args if "--body" in args else ["--body", "b2", *args]
+    p = subprocess.run([sys.executable, "-m", "flexmvm.cli.main", *argv],
+                       capture_output=True, text=True, timeout=120)
+    assert p.returncode == 2
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("flexmvm: error: ") and message in lines[0]
+    assert not (tmp_path / "out").exists()
+
+
+def test_materials_study_two_materials(tmp_path):
+    from flexmvm.studies.materials import run_materials_study
+
+    res = run_materials_study(TINY, tmp_path, materials=["W", "Al"], selections=[(1, 1)],
+                              modes=[7], serial=True, progress=False, echo=lambda s: None)
+    with open(tmp_path / "materials.csv", newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    assert [(r["material"], r["selection"], r["modes"]) for r in rows] == \
+        [("W", "1-1", "7"), ("Al", "1-1", "7")]
+    assert float(rows[0]["E_pa"]) == 344.70e9 and float(rows[1]["rho_kg_m3"]) == 2700.0
+    w, al = (res["materials"][m]["mean_ncc_force"] for m in ("W", "Al"))
+    assert w == pytest.approx(float(rows[0]["ncc_force"]))
+    assert res["seed_ordering_holds"] is (w > al)
+    assert (tmp_path / "fig9_materials.png").is_file()
+    assert (tmp_path / "W" / "reference" / "history.csv").is_file()
+
+
+@pytest.mark.skipif(not os.environ.get("FLEXMVM_SLOW"),
+                    reason="4-material study: not needed in tests (set FLEXMVM_SLOW=1)")
+def test_materials_study_all_four(tmp_path):
+    from flexmvm.studies.materials import run_materials_study
+
+    res = run_materials_study(TINY, tmp_path, selections=[(1, 1), (2, 2)], modes=[7, 13],
+                              n_workers=2, progress=False, echo=lambda s: None)
+    assert set(res["materials"]) == {"W", "Cu", "Al", "PA6"}
+    assert isinstance(res["seed_ordering_holds"], bool)
