@@ -24,7 +24,9 @@ from __future__ import annotations
 
 import csv
 import io
+import itertools
 from collections.abc import Callable, Iterable, Sequence
+from functools import partial
 from pathlib import Path
 from typing import Any
 
@@ -33,11 +35,17 @@ from flexmvm.materials import ALUMINIUM, COPPER, PA6, TUNGSTEN, Material
 from flexmvm.results.atomic import write_json_atomic, write_text_atomic
 from flexmvm.scenarios.schema import Scenario, load_scenario, scenario_from_dict
 from flexmvm.studies.runner import Case, run_cases
-from flexmvm.studies.selection import (_check_grid, cluster, reference_history, rod_of,
-                                       run_selection_case)
+from flexmvm.studies.selection import (
+    _check_grid,
+    cluster,
+    file_sha256,
+    reference_history,
+    rod_of,
+    run_selection_case,
+)
 
 __all__ = ["SEED_MATERIALS", "SEED_ORDER", "material_scenario", "parse_selections",
-           "run_materials_study", "run_reference_case"]
+           "run_material_case", "run_materials_study", "run_reference_case"]
 
 #: Seed table 2, in the seed's order of decreasing accuracy.
 SEED_MATERIALS: dict[str, Material] = {"W": TUNGSTEN, "Cu": COPPER, "Al": ALUMINIUM, "PA6": PA6}
@@ -68,12 +76,18 @@ def parse_selections(text: str | Sequence[tuple[int, int]]) -> list[tuple[int, i
     return out
 
 
-def run_reference_case(case: Case) -> dict:
-    """Case function: the full-FE reference of one material, written to params['dir']."""
+def run_reference_case(case: Case, out_dir: str) -> dict:
+    """Case function: the full-FE reference of one material, written to
+    ``out_dir/<material>/reference/history.csv``; returns its SHA-256."""
     p = case.params
     sc = scenario_from_dict(p["scenario"], source=f"case {case.key}")
-    path, made = reference_history(sc, p["body"], Path(p["dir"]))
-    return {"history": str(path), "computed": made}
+    path, made = reference_history(sc, p["body"], Path(out_dir) / p["material"])
+    return {"sha256": file_sha256(path), "computed": made}
+
+
+def run_material_case(case: Case, references: dict[str, str]) -> dict:
+    """Case function: an MVM run of one material against that material's reference."""
+    return run_selection_case(case, reference=references[case.params["material"]])
 
 
 def _mean(values: list[float]) -> float | None:
@@ -107,19 +121,20 @@ def run_materials_study(scenario_path: str | Path, out_dir: str | Path, body: st
                                  [s[1] for s in selections], modes)
     out.mkdir(parents=True, exist_ok=True)
     scen = {m: material_scenario(sc, body, m, SEED_MATERIALS[m]) for m in materials}
-    ref_cases = [Case(f"ref-{m}", {"body": body, "dir": str(out / m),
+    ref_cases = [Case(f"ref-{m}", {"body": body, "material": m,
                                    "scenario": scen[m].model_dump(mode="json")})
                  for m in materials]
+    ref_paths = {m: str(out / m / "reference" / "history.csv") for m in materials}
     kw: dict[str, Any]
     with cluster(scheduler, n_workers, serial) as address:
         kw = {"serial": True} if serial else {"scheduler": address}
-        refs = run_cases(ref_cases, run_reference_case, out, progress=progress, **kw)
+        refs = run_cases(ref_cases, partial(run_reference_case, out_dir=str(out)), out, progress=progress, **kw)
         cases = [Case(f"{m}-l{i}-j{j}-m{n}",
                       {"body": body, "layers": i, "laps": j, "modes": n, "material": m,
                        "scenario": scen[m].model_dump(mode="json"),
-                       "reference": refs[f"ref-{m}"]["history"]})
+                       "reference_sha256": refs[f"ref-{m}"]["sha256"]})
                  for m in materials for (i, j) in selections for n in modes]
-        results = run_cases(cases, run_selection_case, out, progress=progress, **kw)
+        results = run_cases(cases, partial(run_material_case, references=ref_paths), out, progress=progress, **kw)
     probes = [p.name for p in sc.probes]
     cols = (["material", "E_pa", "nu", "rho_kg_m3", "selection", "nodes", "modes", "dof",
              "ncc_force"] + [f"ncc_{p}" for p in probes]
@@ -147,7 +162,7 @@ def run_materials_study(scenario_path: str | Path, out_dir: str | Path, body: st
                   "E_pa": mat.E, "nu": mat.nu, "rho_kg_m3": mat.rho}
     ranked = [m for m in SEED_ORDER if m in materials]
     means = [per[m]["mean_ncc_force"] for m in ranked]
-    holds = all(v is not None for v in means) and all(a > b for a, b in zip(means, means[1:]))
+    holds = all(v is not None for v in means) and all(a > b for a, b in itertools.pairwise(means))
     observed = sorted((m for m in materials if per[m]["mean_ncc_force"] is not None),
                       key=lambda m: -per[m]["mean_ncc_force"])
     result = {"body": body, "selections": [f"{i}-{j}" for i, j in selections], "modes": modes,
@@ -156,7 +171,7 @@ def run_materials_study(scenario_path: str | Path, out_dir: str | Path, body: st
               "note": "seed_ordering_holds: mean NCC of the force over the same selections x "
                       "modes strictly decreasing in the seed's order W > Cu > Al > PA6 "
                       "(restricted to the materials run)",
-              "nodes": {f"{i}-{j}": int(len(rod.selection(i, j))) for i, j in selections}}
+              "nodes": {f"{i}-{j}": len(rod.selection(i, j)) for i, j in selections}}
     write_json_atomic(out / "materials.json", result)
     from flexmvm.plots.study_figures import plot_materials
 

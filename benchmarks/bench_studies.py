@@ -1,0 +1,70 @@
+"""Benchmark of the selection study on the seed scenario (scenarios/rod_impact.toml).
+
+Times (1) the brute-force selection study and (2) the --search for the same target, on a
+shortened window (``--t-end``, default 100 us: the full 2 ms run of a 25k-DOF striker takes
+minutes per case), and prints the number of MVM runs each needed, the time per run and the
+extrapolated time of the full 140-run grid.
+
+    python benchmarks/bench_studies.py [--t-end 1e-4] [--workers 2] [--subset]
+        [--target ncc>=0.99] [--out DIR]
+
+``--subset`` runs the brute force on layers 1..2 x laps 1..2 x modes 7:43:6 (28 runs) instead
+of the 140; the extrapolation uses the measured mean wall time per run. The search runs in
+a fresh directory that shares only the reference (copied), so its runs are all computed.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import shutil
+import tempfile
+import time
+from pathlib import Path
+
+from flexmvm.metrics.ncc import Target
+from flexmvm.studies.selection import run_selection_study
+
+SEED = Path(__file__).resolve().parents[1] / "scenarios" / "rod_impact.toml"
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--t-end", type=float, default=1e-4)
+    ap.add_argument("--workers", type=int, default=None)
+    ap.add_argument("--target", default="ncc>=0.99")
+    ap.add_argument("--subset", action="store_true")
+    ap.add_argument("--out", type=Path, default=None)
+    a = ap.parse_args()
+    out = a.out or Path(tempfile.mkdtemp(prefix="bench_studies_"))
+    layers, laps = ([1, 2], [1, 2]) if a.subset else (range(1, 5), range(1, 6))
+    modes = range(7, 44, 6)
+    target = Target.parse(a.target)
+    print(f"seed scenario, t_end = {a.t_end:g} s, target {a.target}, out {out}")
+    t0 = time.perf_counter()
+    brute = run_selection_study(SEED, "b2", out / "brute", layers, laps, modes, target,
+                                search=False, scheduler=None, n_workers=a.workers,
+                                progress=True, t_end_s=a.t_end)
+    t_brute = time.perf_counter() - t0
+    rows = (out / "brute" / "ncc.csv").read_text().splitlines()[1:]
+    per_run = sum(float(r.split(",")[-1]) for r in rows) / max(len(rows), 1)
+    print(f"brute force: {brute['runs']} runs ({brute['runs_made']} made) in {t_brute:.1f} s "
+          f"wall (incl. reference), {per_run:.2f} s per run (solver wall time); full grid of "
+          f"140 runs ~ {140 * per_run:.0f} s of run time")
+    (out / "search").mkdir(parents=True, exist_ok=True)
+    shutil.copytree(out / "brute" / "reference", out / "search" / "reference", dirs_exist_ok=True)
+    t0 = time.perf_counter()
+    found = run_selection_study(SEED, "b2", out / "search", layers, laps, modes, target,
+                                search=True, scheduler=None, n_workers=a.workers,
+                                progress=True, t_end_s=a.t_end)
+    t_search = time.perf_counter() - t0
+    print(f"search: {found['runs']} runs in {t_search:.1f} s wall")
+    keys = ("passed", "layers", "laps", "modes", "dof", "ncc_force")
+    print(json.dumps({"brute": {k: brute.get(k) for k in keys},
+                      "search": {k: found.get(k) for k in keys},
+                      "runs": {"brute": brute["runs"], "search": found["runs"]},
+                      "wall_s": {"brute": t_brute, "search": t_search}}, indent=1))
+
+
+if __name__ == "__main__":
+    main()
