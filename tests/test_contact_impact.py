@@ -15,7 +15,7 @@ import pytest
 
 from flexmvm.materials import ALUMINIUM, BRASS
 from flexmvm.scenarios.run import run_scenario
-from flexmvm.scenarios.schema import load_scenario
+from flexmvm.scenarios.schema import load_scenario, scenario_from_dict
 from flexmvm.theory.wave import Rod1D, st_venant_force
 
 CASE = Path(__file__).parent / "data" / "short_flat_impact.toml"
@@ -23,8 +23,12 @@ L, R, V0 = 0.05, 0.005, 0.21
 
 
 @functools.lru_cache(maxsize=None)
-def _run(dt: float = 0.25e-6):
+def _run(dt: float = 0.25e-6, theta: float | None = None):
     sc = load_scenario(CASE).with_overrides(dt_s=dt)
+    if theta is not None:
+        data = sc.model_dump(mode="json")
+        data["time"]["theta"] = theta
+        sc = scenario_from_dict(data)
     return run_scenario(sc)
 
 
@@ -59,11 +63,13 @@ def test_flat_plateau_matches_st_venant():
     assert abs(end / T2 - 1) < 0.10
 
 
-def test_energy_loss_converges_with_the_step():
-    """The scheme dissipates (theta > 1/2 and the e = 0 impact law at the contact nodes); the
-    energy lost over the impact falls when the step is halved (ratio < 0.75): the loss is
-    numerical and vanishes with h. At h = 0.25 us it is about 2 %."""
-    e1 = abs(_run(0.25e-6).summary["energy_rel_error"])
-    e2 = abs(_run(0.125e-6).summary["energy_rel_error"])
-    assert e1 < 0.05
-    assert e2 < 0.75 * e1
+def test_energy_error_converges_with_the_step():
+    """With theta = 1/2 (implicit midpoint) the elastic parts conserve energy exactly; what is
+    left is the e = 0 impact law at the contact nodes: |error| 0.24 % at h = 0.25 us and 0.11 %
+    at h/2 (measured). Required: below 1 %, and at least 40 % smaller on halving the step.
+    (theta > 1/2, the default of the seed scenarios, also damps the unresolved high-frequency
+    modes the impact excites: 1.3 % at theta = 0.52, 2.2 % at 0.55, not shrinking with h.)"""
+    e1 = abs(_run(0.25e-6, 0.5).summary["energy_rel_error"])
+    e2 = abs(_run(0.125e-6, 0.5).summary["energy_rel_error"])
+    assert e1 < 0.01
+    assert e2 < 0.6 * e1

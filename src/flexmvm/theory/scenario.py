@@ -1,6 +1,6 @@
 """The 1D wave solution of a two-rod scenario, in the history format of a simulation run.
 
-The striker is the contact's slave body, the target its master body. Flat striker end: rigid
+The striker is the faster of the contact's two bodies, the target the other. Flat striker end: rigid
 contact (St Venant); hemispherical striker end: Hertz law with R = the rod radius. The impact
 speed is the relative velocity of the two bodies along the striker's axis. Probes must sit at
 the centre of a rod end (node set end_a_centre / end_b_centre): near end = end A (contact end).
@@ -21,7 +21,9 @@ def theory_histories(sc, dt: float | None = None) -> tuple[np.ndarray, np.ndarra
     if len(sc.contacts) != 1:
         raise InputError(f"theory: needs exactly one contact between two rods, got {len(sc.contacts)}")
     c = sc.contacts[0]
-    striker, target = sc.body(c.slave_body), sc.body(c.master_body)
+    a, b = sc.body(c.slave_body), sc.body(c.master_body)
+    speed = lambda body: float(np.linalg.norm(body.placement.velocity_mps))  # noqa: E731
+    striker, target = (a, b) if speed(a) > speed(b) else (b, a)
     for b in (striker, target):
         if b.rod is None:
             raise InputError(f"theory: body {b.name!r} is not a rod ([bodies.rod])")
