@@ -89,6 +89,11 @@ def plot_ncc_modes(path_png: str | os.PathLike[str], rows: Sequence[Mapping[str,
             m, v = zip(*pts)
             ax.plot(m, v, linestyle=style, color=colour, marker="o", ms=3, lw=1.0,
                     label=f"{i}-{j}: {n} node{'s' if n != 1 else ''}")
+    _finish_ncc_axes(fig, ax, path_png, title, dpi)
+
+
+def _finish_ncc_axes(fig, ax, path_png, title: str, dpi: int) -> None:
+    """Labels, grid, legend and title of an NCC-against-modes panel; saves the figure."""
     ax.set_xlabel("modes")
     ax.set_ylabel("NCC of the contact force")
     ax.grid(True, lw=0.3)
@@ -119,11 +124,4 @@ def plot_materials(path_png: str | os.PathLike[str], rows: Sequence[Mapping[str,
                 m, v = zip(*pts)
                 ax.plot(m, v, linestyle=style[sel], color=colour[mat], marker="o", ms=3, lw=1.0,
                         label=f"{mat} {sel}")
-    ax.set_xlabel("modes")
-    ax.set_ylabel("NCC of the contact force")
-    ax.grid(True, lw=0.3)
-    if ax.get_legend_handles_labels()[0]:
-        ax.legend(fontsize="small")
-    if title:
-        ax.set_title(title)
-    _save(fig, path_png, dpi)
+    _finish_ncc_axes(fig, ax, path_png, title, dpi)
