@@ -77,6 +77,7 @@ class RunResult:
     frame_A: np.ndarray            # (n_out, n_bodies, 3, 3)
     contact_intervals: list[tuple[float, float]] = field(default_factory=list)
     max_penetration_m: float = 0.0
+    max_joint_drift: float = 0.0   # largest joint violation |phi| after any step (position level)
     n_steps: int = 0
     n_factorizations: int = 0
     wall_time_s: float = 0.0
@@ -158,7 +159,7 @@ def simulate(system: System, states: list[BodyState], grid: TimeGrid, probes=(),
     tick, level, calm = 0, 0, 0
     impulse, jimpulse = 0.0, np.zeros(integ.n_joint_rows)
     intervals: list[list[float]] = []
-    max_pen, n_steps = 0.0, 0
+    max_pen, n_steps, drift = 0.0, 0, 0.0
     wall0 = time.perf_counter()
     while tick < n_ticks:
         to_out = out_ticks - tick % out_ticks
@@ -171,6 +172,7 @@ def simulate(system: System, states: list[BodyState], grid: TimeGrid, probes=(),
         res = integ.step(t, states, h)
         states = res.states
         n_steps += 1
+        drift = max(drift, res.joint_drift)
         tick += span
         n_eq = res.contact.n_eq
         f = float(res.contact_impulses[n_eq:].sum()) if res.contact_impulses.size else 0.0
@@ -192,7 +194,7 @@ def simulate(system: System, states: list[BodyState], grid: TimeGrid, probes=(),
     wall = time.perf_counter() - wall0
     nfac = sum(s.n_factorizations for s in integ.solvers)
     return rec.result(contact_intervals=[tuple(iv) for iv in intervals],
-                      max_penetration_m=max(max_pen, 0.0), n_steps=n_steps,
+                      max_penetration_m=max(max_pen, 0.0), max_joint_drift=drift, n_steps=n_steps,
                       n_factorizations=nfac, wall_time_s=wall)
 
 

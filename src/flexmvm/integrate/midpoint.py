@@ -56,6 +56,7 @@ class StepResult:
     contact: ContactRows
     contact_impulses: np.ndarray
     iterations: int
+    joint_drift: float = 0.0   # max |phi| of the joints at the end of the step [m or -]
 
 
 class MidpointIntegrator:
@@ -222,7 +223,8 @@ class MidpointIntegrator:
         new_states = [e for e in ends]
         for st, vp in zip(new_states, v_plus):
             st.v = vp
-        return StepResult(new_states, lam[:n_j], crows, lam[n_j:], it)
+        drift = float(np.abs(phi).max()) if phi.size else 0.0
+        return StepResult(new_states, lam[:n_j], crows, lam[n_j:], it, drift)
 
     def _prepare(self, states, h, refresh_tol):
         """Frame blocks of W at `states`; M_wq refreshed when it drifted (always for small
