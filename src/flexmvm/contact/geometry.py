@@ -26,6 +26,7 @@ from flexmvm.mesh.mesh import FacetSet
 
 _NEWTON_MAX_ITER = 20  # quadratic convergence from the centre takes ~4; the rest fold outside
 _LINE_SEARCH_HALVINGS = 12
+_FAR_CHECK_ITER, _FAR_XI = 4, 2.0  # after 4 iterations, |xi| > 2 is far outside the facet
 _NEWTON_TOL = 1e-12  # on the local coordinates, which are O(1): a relative tolerance
 _XI_BOUND = 4.0  # Newton iterates kept in [-4, 4]^2: far outside the facet, still finite
 _QUAD_SIGNS = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
@@ -192,7 +193,9 @@ def _quad_newton(xs: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     done = np.zeros(len(xs), dtype=bool)
     stuck = np.zeros(len(xs), dtype=bool)
     r = residual(xi)
-    for _ in range(_NEWTON_MAX_ITER):
+    for it in range(_NEWTON_MAX_ITER):
+        if it == _FAR_CHECK_ITER:  # clearly outside the facet: stop (reported outside)
+            stuck |= ~done & (np.abs(xi).max(axis=1) > _FAR_XI)
         t1, t2 = c1 + c3 * xi[:, 1:], c2 + c3 * xi[:, :1]
         a11, a22, a12 = (t1 * t1).sum(1), (t2 * t2).sum(1), (t1 * t2).sum(1)
         rc = (r * c3).sum(1)
