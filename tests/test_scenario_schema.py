@@ -67,7 +67,7 @@ def test_shipped_scenarios_load(name: str) -> None:
     assert (b2.material_obj().E, b2.material_obj().rho) == (72.71e9, 2700.0)
     assert b1.model.kind is ModelKind.FULL
     assert b2.model.kind is ModelKind.MVM
-    assert (b2.model.selection_ij, b2.model.modes) == ((1, 1), 37)
+    assert (b2.model.selection_ij, b2.model.modes) == ((1, 3), 37)
     assert b2.rod is not None and (b2.rod.end_a, b2.rod.end_b) == (RodEnd.FLAT, RodEnd.FLAT)
     assert [
         (c.slave_body, c.slave_surface, c.master_body, c.master_surface, c.kind) for c in s.contacts
@@ -180,12 +180,12 @@ BAD = [
         id="preset",
     ),
     pytest.param(
-        ('selection = "1-1"', 'selection = "1x1"'),
+        ('selection = "1-3"', 'selection = "1x1"'),
         "bodies[1].model.selection: must be 'i-j' (layers-laps, both >= 1), got '1x1'",
         id="selection",
     ),
     pytest.param(
-        ('selection = "1-1"', 'selection = "0-2"'),
+        ('selection = "1-3"', 'selection = "0-2"'),
         "bodies[1].model.selection: must be 'i-j'",
         id="selection-zero",
     ),
@@ -328,7 +328,7 @@ def test_mesh_file_resolved_relative_to_the_scenario(tmp_path: Path) -> None:
         tmp_path,
         (B2_ROD, 'mesh_file = "meshes/target.msh"\n'),
         (
-            'selection = "1-1"',
+            'selection = "1-3"',
             "region = { ball = { centre_m = [0.0, 0.0, 0.0], radius_m = 0.002 } }",
         ),
         ('slave = "b2.end_a"', 'slave = "b2.impact_face"'),  # mesh sets: the builder checks

@@ -74,7 +74,7 @@ def seed_vs_theory(out: Path, t_end: float, dt: float | None) -> dict:
     full = _case(out, "seed_full", sc, "full")
     mvm = _case(out, "seed_mvm", sc, None)
     plot_run(out / "seed_fig5.png", {"FE": full[:3], "MVM": mvm[:3]}, theory=(tt, ft, pt),
-             title="seed case: full FE, MVM (b2 1-1 + 37 modes), 1D wave-Hertz")
+             title="seed case: full FE, MVM (b2 1-3 + 37 modes, 112 DOF), 1D wave-Hertz")
     return {"full_vs_theory": compare_runs(tt, ft, pt, *full[:3]),
             "mvm_vs_full": compare_runs(*full[:3], *mvm[:3]),
             "mvm_vs_theory": compare_runs(tt, ft, pt, *mvm[:3]),
