@@ -92,8 +92,8 @@ def test_rod_impact_seed_case() -> None:
     assert b2.placement.velocity_mps == (0.0, 0.0, 0.0)
     assert (s.time.t_end_s, s.time.dt_s, s.time.dt_max_s, s.time.output_dt_s) == (
         2e-3,
-        0.25e-6,
-        1e-6,
+        0.5e-6,
+        2e-6,
         2e-6,
     )
     assert s.gravity_mps2 == (0.0, 0.0, 0.0)
@@ -210,8 +210,8 @@ BAD = [
         id="probe-set",
     ),
     pytest.param(
-        ("dt_max_s = 1.0e-6 ", "dt_max_s = 1.0e-7 "),
-        "time.dt_max_s: must be >= dt_s = 2.5e-07, got 1e-07",
+        ("dt_max_s = 2.0e-6 ", "dt_max_s = 1.0e-7 "),
+        "time.dt_max_s: must be >= dt_s = 5e-07, got 1e-07",
         id="dt-max",
     ),
     pytest.param(
@@ -365,7 +365,7 @@ def test_model_override_leaves_rigid_bodies_alone(tmp_path: Path) -> None:
 def test_time_and_per_body_overrides() -> None:
     base = load_scenario(SCENARIOS / "rod_impact.toml")
     s = base.with_overrides(t_end_s=1e-3, dt_s=0.5e-6)
-    assert (s.time.t_end_s, s.time.dt_s, s.time.dt_max_s) == (1e-3, 0.5e-6, 1e-6)
+    assert (s.time.t_end_s, s.time.dt_s, s.time.dt_max_s) == (1e-3, 0.5e-6, 2e-6)
     assert base.with_overrides(dt_s=2e-6).time.dt_max_s == 2e-6  # lifted to the contact step
     s = base.with_overrides(body_models={"b2": ModelConfig(kind="mvm", selection="2-3", modes=13)})
     assert (s.body("b2").model.selection_ij, s.body("b2").model.modes) == ((2, 3), 13)
