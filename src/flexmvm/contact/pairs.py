@@ -190,7 +190,10 @@ class PointToSurfaceContact(ContactProvider):
         keys = eq_keys + ([(self.name, int(s), int(f)) for s, f in
                            zip(self.slave_nodes[proj.point], proj.facet)] if m_n else [])
         self._last = (proj, len(eq_keys))
-        return ContactRows(rows, np.concatenate([eq_lower, lower_n]), keys, gaps, len(eq_keys))
+        weight = np.ones(m)
+        if eq_keys:  # bond rows x, y, z: their compressive part is the component along the normal
+            weight[: len(eq_keys)] = [self._bond_normal[k[2]][k[3]] for k in eq_keys]
+        return ContactRows(rows, np.concatenate([eq_lower, lower_n]), keys, gaps, len(eq_keys), weight)
 
     def _bond_rows(self, kin):
         """Three equality rows per bonded pair (seed eq. 7): x_S - x_C -> 0."""

@@ -185,8 +185,7 @@ def _simulate(system, states, grid, probes, progress, t0) -> RunResult:
         n_steps += 1
         drift = max(drift, res.joint_drift)
         tick += span
-        n_eq = res.contact.n_eq
-        f = float(res.contact_impulses[n_eq:].sum()) if res.contact_impulses.size else 0.0
+        f = res.contact.normal_impulse(res.contact_impulses)
         if res.contact.gaps.size:
             max_pen = max(max_pen, float(-res.contact.gaps.min()))
         in_contact = f > 0.0

@@ -262,5 +262,8 @@ def _merge_contacts(a: ContactRows, b: ContactRows) -> ContactRows:
         return a
     if a.n_eq or b.n_eq:
         raise SolverError("several bonded contact definitions are not supported in one system")
+    wa = a.normal_weight if a.normal_weight is not None else np.ones(a.rows.m)
+    wb = b.normal_weight if b.normal_weight is not None else np.ones(b.rows.m)
     return ContactRows(stack([a.rows, b.rows]), np.concatenate([a.lower, b.lower]),
-                       a.keys + b.keys, np.concatenate([a.gaps, b.gaps]), 0)
+                       a.keys + b.keys, np.concatenate([a.gaps, b.gaps]), 0,
+                       np.concatenate([wa, wb]))

@@ -23,10 +23,18 @@ class ContactRows:
     keys: list
     gaps: np.ndarray
     n_eq: int = 0
+    normal_weight: np.ndarray | None = None  # (m,): row impulse -> compressive normal impulse
 
     @classmethod
     def empty(cls) -> "ContactRows":
         return cls(Rows.empty(), np.zeros(0), [], np.zeros(0), 0)
+
+    def normal_impulse(self, lam: np.ndarray) -> float:
+        """Total compressive normal impulse [N s] of the row impulses lam."""
+        if lam.size == 0:
+            return 0.0
+        w = self.normal_weight
+        return float(lam[self.n_eq:].sum() if w is None else w @ lam)
 
 
 class ContactProvider:
