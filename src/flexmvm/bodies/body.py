@@ -122,7 +122,7 @@ class FlexibleBody:
 
     def velocity_forces(self, A, q, v, terms=None) -> np.ndarray:
         """Quadratic-velocity vector Q_v (6 + nq,): centrifugal and Coriolis terms."""
-        S, J, M_wq, C = terms if terms is not None else self.inertia_terms(q)
+        S, J, _, C = terms if terms is not None else self.inertia_terms(q)
         w, qd = v[3:6], v[6:]
         W = skew(w)
         Om = W @ W

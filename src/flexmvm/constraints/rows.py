@@ -19,7 +19,7 @@ class Rows:
     blocks: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
 
     @classmethod
-    def empty(cls) -> "Rows":
+    def empty(cls) -> Rows:
         return cls(0, {})
 
     def add(self, row: int, body: int, frame: np.ndarray, elastic: np.ndarray, nq: int) -> None:

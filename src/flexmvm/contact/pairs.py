@@ -227,7 +227,6 @@ class PointToSurfaceContact(ContactProvider):
         released = []
         for i in range(0, n_eq, 3):
             s = crows.keys[i][2]
-            nodes, w = self._bonds[s]
             lam = impulses[i : i + 3]
             normal = self._bond_normal.get(s)
             if normal is not None and lam @ normal < 0.0:

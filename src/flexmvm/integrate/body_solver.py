@@ -71,7 +71,7 @@ class BodySolver:
                 raise SolverError(
                     f"body {b.name!r}: iteration matrix M + h^2/4 K is not positive definite"
                 ) from None
-            solve = lambda rhs, cho=cho: sla.cho_solve(cho, rhs)  # noqa: E731
+            solve = lambda rhs, cho=cho: sla.cho_solve(cho, rhs)
         self.n_factorizations += 1
         Zr = np.asarray(solve(np.ascontiguousarray(b.inv.S1.T)))
         Zw = np.asarray(solve(np.ascontiguousarray(self._Mw0.T)))

@@ -174,6 +174,7 @@ class MidpointIntegrator:
         n_j, m_c = self.n_joint_rows, crows.rows.m
         v_plus = [st.v.copy() for st in states]
         lam = np.zeros(n_j + m_c)
+        last_norm = last_rel = np.inf
         for it in range(self.max_iter + 1):
             R, mids, ends, scales = self._residuals(t, states, v_plus, h)
             phi, jrows = self._joint_rows(t, h, mids, ends)
@@ -187,8 +188,6 @@ class MidpointIntegrator:
                                                                or it >= self.max_iter))):
                     break
                 last_rel = rel
-            else:
-                last_rel = np.inf
             if it == SLOW_ITERATIONS or (it > 1 and res_norm > last_norm):
                 self._prepare(mids, h, refresh_tol=0.0)
             last_norm = res_norm

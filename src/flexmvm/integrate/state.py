@@ -18,10 +18,10 @@ class BodyState:
     q: np.ndarray
     v: np.ndarray
 
-    def copy(self) -> "BodyState":
+    def copy(self) -> BodyState:
         return BodyState(self.r.copy(), self.A.copy(), self.q.copy(), self.v.copy())
 
-    def advanced(self, v_mean: np.ndarray, dt: float) -> "BodyState":
+    def advanced(self, v_mean: np.ndarray, dt: float) -> BodyState:
         """Configuration after moving with velocity v_mean for dt (Lie-group update of A)."""
         return BodyState(
             self.r + dt * v_mean[:3],

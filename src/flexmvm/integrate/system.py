@@ -26,7 +26,7 @@ class ContactRows:
     normal_weight: np.ndarray | None = None  # (m,): row impulse -> compressive normal impulse
 
     @classmethod
-    def empty(cls) -> "ContactRows":
+    def empty(cls) -> ContactRows:
         return cls(Rows.empty(), np.zeros(0), [], np.zeros(0), 0)
 
     def normal_impulse(self, lam: np.ndarray) -> float:

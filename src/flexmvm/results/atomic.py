@@ -155,3 +155,18 @@ def write_json_atomic(path: str | os.PathLike[str], obj: Any) -> None:
         InputError: ``obj`` holds NaN/inf or a value JSON cannot represent; nothing is written.
     """
     write_text_atomic(path, canonical_json(obj, indent=2) + "\n")
+
+
+def write_table_csv(path, columns, rows) -> None:
+    """A CSV table atomically: header `columns`, one line per row mapping; floats in repr
+    form (exact), missing or None cells empty."""
+    import csv
+    import io
+
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow(columns)
+    for r in rows:
+        w.writerow(["" if r.get(c) is None else (repr(float(r[c])) if isinstance(r[c], float)
+                                                 else r[c]) for c in columns])
+    write_text_atomic(path, buf.getvalue())

@@ -4,8 +4,12 @@ from __future__ import annotations
 
 from pathlib import Path
 
-from flexmvm.results.writers import (write_history_csv, write_paraview_series, write_results_h5,
-                                     write_summary_json)
+from flexmvm.results.writers import (
+    write_history_csv,
+    write_paraview_series,
+    write_results_h5,
+    write_summary_json,
+)
 
 
 def write_run(out_dir: Path, srun, fields: bool = True) -> dict[str, Path]:

@@ -22,9 +22,9 @@ from flexmvm.bodies.body import FlexibleBody
 from flexmvm.errors import InputError
 from flexmvm.integrate.driver import RunResult
 from flexmvm.materials import Material
-from flexmvm.results.history import write_history
 from flexmvm.results.atomic import atomic_path, write_json_atomic, write_text_atomic
 from flexmvm.results.fields import body_geometry, elastic_rates, nodal_fields
+from flexmvm.results.history import write_history
 
 __all__ = [
     "MAX_PARAVIEW_STEPS",

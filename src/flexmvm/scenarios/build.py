@@ -13,8 +13,15 @@ import numpy as np
 
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.bodies.build import body_from_fe, rigid_body_from_fe
-from flexmvm.constraints.joints import (BodyPoint, DistanceJoint, PrescribedMotion, SphericalJoint,
-                                        fixed_joint, ground_joint, revolute_joint)
+from flexmvm.constraints.joints import (
+    BodyPoint,
+    DistanceJoint,
+    PrescribedMotion,
+    SphericalJoint,
+    fixed_joint,
+    ground_joint,
+    revolute_joint,
+)
 from flexmvm.contact.geometry import MasterSurface
 from flexmvm.contact.pairs import ContactKind, PointToSurfaceContact
 from flexmvm.errors import InputError, MeshError

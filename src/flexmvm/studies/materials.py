@@ -22,8 +22,6 @@ A material is set by rebuilding the scenario dict with an inline material table
 
 from __future__ import annotations
 
-import csv
-import io
 import itertools
 from collections.abc import Callable, Iterable, Sequence
 from functools import partial
@@ -32,7 +30,7 @@ from typing import Any
 
 from flexmvm.errors import InputError
 from flexmvm.materials import ALUMINIUM, COPPER, PA6, TUNGSTEN, Material
-from flexmvm.results.atomic import write_json_atomic, write_text_atomic
+from flexmvm.results.atomic import write_json_atomic, write_table_csv
 from flexmvm.scenarios.schema import Scenario, load_scenario, scenario_from_dict
 from flexmvm.studies.runner import Case, run_cases
 from flexmvm.studies.selection import (
@@ -146,13 +144,7 @@ def run_materials_study(scenario_path: str | Path, out_dir: str | Path, body: st
         r.update(material=c.params["material"], E_pa=mat.E, nu=mat.nu, rho_kg_m3=mat.rho,
                  selection=f"{r['layers']}-{r['laps']}")
         rows.append(r)
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(cols)
-    for r in rows:
-        w.writerow(["" if r.get(k) is None else (repr(float(r[k])) if isinstance(r[k], float)
-                                                 else r[k]) for k in cols])
-    write_text_atomic(out / "materials.csv", buf.getvalue())
+    write_table_csv(out / "materials.csv", cols, rows)
     per = {}
     for m in materials:
         vals = [r["ncc_force"] for r in rows if r["material"] == m and "ncc_force" in r]

@@ -50,9 +50,7 @@ no larger than the brute-force winner there).
 
 from __future__ import annotations
 
-import csv
 import functools
-import io
 import json
 import math
 import statistics
@@ -64,7 +62,11 @@ import numpy as np
 
 from flexmvm.errors import InputError, SolverError
 from flexmvm.metrics.ncc import Comparison, Target, contact_intervals
-from flexmvm.results.atomic import canonical_json, write_json_atomic, write_text_atomic
+from flexmvm.results.atomic import (
+    canonical_json,
+    write_json_atomic,
+    write_table_csv,
+)
 from flexmvm.results.history import read_history, write_history
 from flexmvm.scenarios.compare import compare_runs, run_curves
 from flexmvm.scenarios.schema import (
@@ -299,13 +301,7 @@ def ncc_columns(probes: Sequence[str]) -> list[str]:
 def write_ncc_csv(path: Path, rows: Iterable[dict], probes: Sequence[str]) -> list[dict]:
     cols = ncc_columns(probes)
     rows = sorted(rows, key=lambda r: (r["layers"], r["laps"], r["modes"]))
-    buf = io.StringIO()
-    w = csv.writer(buf, lineterminator="\n")
-    w.writerow(cols)
-    for r in rows:
-        w.writerow(["" if r.get(c) is None else (repr(float(r[c])) if isinstance(r[c], float)
-                                                 else r[c]) for c in cols])
-    write_text_atomic(path, buf.getvalue())
+    write_table_csv(path, cols, rows)
     return rows
 
 
