@@ -100,7 +100,7 @@ class MidpointIntegrator:
             if body.nq:
                 F[6:] += body.elastic_forces(mid.q, vm[6:])
             for load in self._loads.get(len(R), ()):
-                if t + 0.5 * h >= load.t_start_s:
+                if t + th * h >= load.t_start_s:
                     fvec = np.asarray(load.force_n, float)
                     fr, qp = body.point_jacobian(load.node, mid.A, mid.q, fvec)
                     F[:6] += fr
@@ -124,7 +124,7 @@ class MidpointIntegrator:
             parts.append(rows)
         return np.concatenate(phis), stack(parts)
 
-    def _apply_inverse(self, rows: Rows, keys=None, h=None):
+    def _apply_inverse(self, rows: Rows):
         """Y_b = W_b^-1 Phi_b^T for every body touched by rows."""
         Y = {}
         for b, (bf, bq) in rows.blocks.items():
