@@ -51,7 +51,8 @@ def run_main_job(path: Path, out_dir: Path, *, model=None, t_end=None, dt=None, 
     write_summary_json(out_dir / "summary.json", summary)
     plot_curves = {k: (t, f, p) for k, (t, f, p) in curves.items()}
     th = (theory[0], theory[1], theory[2]) if theory is not None else None
-    plot_run(out_dir / f"{sc.name}.png", plot_curves, theory=th, title=f"{sc.name}: contact force and axial velocities")
+    plot_run(out_dir / f"{sc.name}.png", plot_curves, theory=th,
+             title=f"{sc.name}: contact force and axial velocities")
     return summary
 
 
