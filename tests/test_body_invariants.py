@@ -62,7 +62,7 @@ def test_invariants_match_nodal_sums(sparse):
 
 
 def test_point_jacobian_gives_node_velocity():
-    body, X, Ms, psi, rng = _random_body(False, seed=3)
+    body, X, _, _, rng = _random_body(False, seed=3)
     A = expm_so3(rng.normal(size=3))
     q = 0.1 * rng.normal(size=body.nq)
     v = rng.normal(size=body.nv)

@@ -10,9 +10,6 @@ from __future__ import annotations
 import functools
 from pathlib import Path
 
-import numpy as np
-import pytest
-
 from flexmvm.materials import ALUMINIUM, BRASS
 from flexmvm.scenarios.run import run_scenario
 from flexmvm.scenarios.schema import load_scenario, scenario_from_dict
@@ -22,7 +19,7 @@ CASE = Path(__file__).parent / "data" / "short_flat_impact.toml"
 L, R, V0 = 0.05, 0.005, 0.21
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _run(dt: float = 0.25e-6, theta: float | None = None):
     sc = load_scenario(CASE).with_overrides(dt_s=dt)
     if theta is not None:

@@ -8,7 +8,6 @@ from __future__ import annotations
 import functools
 
 import numpy as np
-import pytest
 import scipy.sparse as sp
 from scipy.special import ellipk
 
@@ -30,7 +29,7 @@ SHORT_ROD = RodSpec(length_m=0.2, radius_m=0.01, core_elements=1, core_half_widt
                     n_rings=1, first_element_m=0.025, growth=1.0, max_element_m=0.025)
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _fe(E=ALUMINIUM.E):
     rod = rod_mesh(SHORT_ROD)
     mat = Material(E=E, nu=ALUMINIUM.nu, rho=ALUMINIUM.rho, name="al")
