@@ -18,11 +18,6 @@ class ScenarioRun:
     summary: dict
 
 
-def axial_index(built: BuiltScenario) -> int:
-    """Global axis of the probes' 'axial' velocity: the x axis for the seed rods."""
-    return 0
-
-
 def run_scenario(sc, label: str = "run", progress: bool = False) -> ScenarioRun:
     """Build and simulate scenario sc; returns the run with its summary."""
     built = build_scenario(sc)
