@@ -73,7 +73,16 @@ class FlexibleBody:
 
     def _C(self, q: np.ndarray) -> list[list[np.ndarray]]:
         """C[a][b] = s_a^T M_s P_b = G1[a][b] + G2[b][a] q, shape (nq,)."""
-        G1, G2 = self.inv.G1, self.inv.G2
+        inv = self.inv
+        G1 = inv.G1
+        if inv.Ms is not None:
+            # G2[b][a] q = P_b^T M_s (P_a q): one M_s product with 3 columns instead of nine
+            # products with the G2 blocks (each as large as M_s)
+            U = np.column_stack([inv.PT[a].T @ q for a in range(3)])
+            MU = inv.Ms @ U
+            PMU = [inv.PT[b] @ MU for b in range(3)]
+            return [[G1[a][b] + PMU[b][:, a] for b in range(3)] for a in range(3)]
+        G2 = inv.G2
         return [[G1[a][b] + G2[b][a] @ q for b in range(3)] for a in range(3)]
 
     def inertia_terms(self, q: np.ndarray):

@@ -35,6 +35,9 @@ class InertiaInvariants:
     G1: tuple[tuple[np.ndarray, ...], ...]
     G2: tuple[tuple[np.ndarray | sp.spmatrix, ...], ...]
     M_qq: np.ndarray | sp.spmatrix
+    # sparse bases only: M_s and P_a^T, so that the nine G2[b][a] q come from one M_s product
+    Ms: sp.csr_matrix | None = None
+    PT: tuple[sp.csr_matrix, ...] | None = None
 
     @property
     def nq(self) -> int:
@@ -71,7 +74,10 @@ def inertia_invariants(X: np.ndarray, M_scalar: sp.spmatrix, psi) -> InertiaInva
     M_qq = 0.5 * (M_qq + M_qq.T)
     if sp.issparse(M_qq):
         M_qq = sp.csr_matrix(M_qq)
-    return InertiaInvariants(float(msum.sum()), S0, S1, G0, G1, G2, M_qq)
+    extra = {}
+    if sp.issparse(psi):
+        extra = {"Ms": Ms, "PT": tuple(sp.csr_matrix(P[a].T) for a in range(3))}
+    return InertiaInvariants(float(msum.sum()), S0, S1, G0, G1, G2, M_qq, **extra)
 
 
 def _product(Pa, MsPb):

@@ -2,6 +2,9 @@
 
 A block of m rows holds, for each body it touches, a frame part (m, 6) acting on
 [r_dot, omega] and an elastic part (m, nq) acting on q_dot. Dense arrays: m is small.
+Rows built from nodal directions (contact) may also carry, per body, the sparse nodal
+selector N (m, 3 n_nodes) with elastic part = N psi: the integrator then applies W_qq^-1 to
+psi^T N^T through cached nodal columns instead of one back-substitution per row.
 """
 
 from __future__ import annotations
@@ -9,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.sparse as sp
 
 
 @dataclass
@@ -17,6 +21,7 @@ class Rows:
 
     m: int
     blocks: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
+    nodal: dict[int, sp.csr_matrix] = field(default_factory=dict)
 
     @classmethod
     def empty(cls) -> Rows:
@@ -61,4 +66,11 @@ def stack(parts: list[Rows]) -> Rows:
             out.blocks[b][0][start : start + p.m] = bf
             out.blocks[b][1][start : start + p.m] = bq
         start += p.m
+    # nodal selectors survive only if every part touching the body has one
+    for b in out.blocks:
+        sels = [p.nodal.get(b) for p in parts if b in p.blocks]
+        if all(s is not None for s in sels):
+            n = sels[0].shape[1]
+            blocks = [p.nodal[b] if b in p.blocks else sp.csr_matrix((p.m, n)) for p in parts]
+            out.nodal[b] = sp.vstack(blocks, format="csr")
     return out

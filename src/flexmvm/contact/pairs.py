@@ -44,7 +44,8 @@ class _Kinematics:
 def body_rows(body, st, nodes: np.ndarray, weights: np.ndarray, dirs: np.ndarray):
     """Rows d_i^T sum_k w_ik dx_{node_ik}/dv of one body (seed eq. 9), vectorised.
 
-    nodes, weights (m, k); dirs (m, 3) global. Returns frame (m, 6) and elastic (m, nq).
+    nodes, weights (m, k); dirs (m, 3) global. Returns frame (m, 6), elastic (m, nq) and the
+    nodal selector N (m, 3 n_nodes), elastic = N psi (None for a rigid body).
     """
     m, k = nodes.shape
     dl = dirs @ st.A  # rows: A^T d
@@ -54,14 +55,14 @@ def body_rows(body, st, nodes: np.ndarray, weights: np.ndarray, dirs: np.ndarray
     wsum = weights.sum(axis=1)
     frame = np.hstack([dirs * wsum[:, None], np.cross(sw, dl)])
     if not body.nq:
-        return frame, np.zeros((m, 0))
+        return frame, np.zeros((m, 0)), None
     cols = (3 * nodes[:, :, None] + np.arange(3)).reshape(m, -1)
     data = (weights[:, :, None] * dl[:, None, :]).reshape(m, -1)
     sel = sp.csr_matrix((data.ravel(), (np.repeat(np.arange(m), 3 * k), cols.ravel())),
                         shape=(m, 3 * len(body.X)))
     q = sel @ body.psi
     q = q.toarray() if sp.issparse(q) else np.asarray(q)
-    return frame, q
+    return frame, q, sel
 
 
 def _clamp(proj, out, x_slave, x_master, n_quads):
@@ -181,10 +182,15 @@ class PointToSurfaceContact(ContactProvider):
         dirs = np.vstack([eq_dirs, proj.normal if m_n else np.zeros((0, 3))])
         m = len(dirs)
         rows = Rows(m, {})
-        sf, sq = body_rows(bodies[self.slave], states[self.slave], slave_nodes[:, None], np.ones((m, 1)), dirs)
-        mf, mq = body_rows(bodies[self.master], states[self.master], master_nodes, master_w, dirs)
+        sf, sq, ssel = body_rows(bodies[self.slave], states[self.slave], slave_nodes[:, None],
+                                 np.ones((m, 1)), dirs)
+        mf, mq, msel = body_rows(bodies[self.master], states[self.master], master_nodes, master_w, dirs)
         rows.blocks[self.slave] = (sf, sq)
         rows.blocks[self.master] = (-mf, -mq)
+        if ssel is not None:
+            rows.nodal[self.slave] = ssel
+        if msel is not None:
+            rows.nodal[self.master] = -msel
         gaps = proj.gap if m_n else np.zeros(0)
         lower_n = PENETRATION_RECOVERY * np.maximum(0.0, -gaps) / h
         keys = eq_keys + ([(self.name, int(s), int(f)) for s, f in

@@ -150,3 +150,44 @@ class BodySolver:
 
     def _mw(self, f: _Factor) -> np.ndarray:
         return getattr(f, "Mw_used", self._Mw0)
+
+    def nodal_inverse(self, h: float, selector: sp.csr_matrix) -> np.ndarray:
+        """W_qq^-1 psi^T N^T (nq, m) for the nodal selector N (m, 3 n_nodes), exactly.
+
+        Contact rows are combinations of a few nodal directions that move from step to step;
+        the columns W_qq^-1 psi_j^T of the nodal DOFs j they touch are cached per h, so a new
+        row costs a small dense product and a back-substitution is needed only for a DOF
+        never touched before ("factor once, solve many")."""
+        f = self._factor(h)
+        cache = getattr(f, "nodal", None)
+        if cache is None:
+            cache = f.nodal = _NodalColumns(self.body.nq)
+        sel = selector.tocsc()
+        dofs = np.nonzero(np.diff(sel.indptr))[0]
+        new = [d for d in dofs if d not in cache.slot]
+        if new:
+            psi = self.body.psi
+            rhs = psi[np.asarray(new), :]
+            rhs = rhs.toarray().T if sp.issparse(rhs) else np.ascontiguousarray(np.asarray(rhs).T)
+            cache.add(new, np.asarray(f.solve(rhs)).reshape(self.body.nq, len(new)))
+        slots = np.fromiter((cache.slot[d] for d in dofs), dtype=np.int64, count=len(dofs))
+        return cache.cols[:, slots] @ sel[:, dofs].T.toarray()
+
+
+class _NodalColumns:
+    """Growing column store: slot[dof] -> column of cols (nq, capacity)."""
+
+    def __init__(self, nq: int):
+        self.slot: dict[int, int] = {}
+        self.cols = np.empty((nq, 0))
+
+    def add(self, dofs, cols: np.ndarray) -> None:
+        n = len(self.slot)
+        need = n + len(dofs)
+        if need > self.cols.shape[1]:
+            grown = np.empty((self.cols.shape[0], max(need, 2 * self.cols.shape[1], 16)))
+            grown[:, :n] = self.cols[:, :n]
+            self.cols = grown
+        self.cols[:, n:need] = cols
+        for i, d in enumerate(dofs):
+            self.slot[int(d)] = n + i

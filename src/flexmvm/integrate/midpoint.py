@@ -49,6 +49,7 @@ TRANSLATION_RTOL = 1e-13  # ...but the frame's translational rows (sums: no such
                           # converge to this, so linear momentum drifts < 1e-9 over an impact
 SMALL_BASIS = 400     # up to this many elastic coordinates: refresh every step (cheap)
 COUPLING_TOL = 1e-4   # larger bases: refresh when M_wq moved by this much (relative)
+NODAL_CACHE_MIN_NQ = 200  # from this many elastic coordinates, contact rows use nodal columns
 
 
 @dataclass
@@ -67,7 +68,7 @@ class MidpointIntegrator:
     order = 2
 
     def __init__(self, system: System, *, theta: float = 0.5, rtol: float = 1e-10,
-                 max_iter: int = 40, row_reuse_tol: float = 1e-4):
+                 max_iter: int = 40):
         if not 0.5 <= theta <= 1.0:
             raise SolverError(f"theta must be in [0.5, 1], got {theta!r}")
         self.system = system
@@ -75,8 +76,6 @@ class MidpointIntegrator:
         self.solvers = [BodySolver(b, theta) for b in system.bodies]
         self.rtol = rtol
         self.max_iter = max_iter
-        self.row_reuse_tol = row_reuse_tol
-        self._yq_cache: dict = {}
         self.n_joint_rows = sum(j.n_rows for j in system.joints)
         self._loads: dict[int, list] = {}
         for load in system.loads:
@@ -133,28 +132,17 @@ class MidpointIntegrator:
         return Y
 
     def _contact_inverse(self, crows: ContactRows, h: float):
-        """W^-1 Phi_c^T, reusing W_qq^-1 of rows that changed by less than row_reuse_tol."""
+        """W^-1 Phi_c^T per body. Large bodies with nodal rows (contact) go through the cached
+        nodal columns of W_qq^-1 (exact; see BodySolver.nodal_inverse)."""
         Y = {}
         for b, (bf, bq) in crows.rows.blocks.items():
             solver = self.solvers[b]
-            if not bq.shape[1] or self.system.bodies[b].nq < 200:
+            sel = crows.rows.nodal.get(b)
+            if sel is None or not bq.shape[1] or self.system.bodies[b].nq < NODAL_CACHE_MIN_NQ:
                 Y[b] = solver.solve(np.hstack([bf, bq]).T)
                 continue
-            yq = np.empty((bq.shape[1], crows.rows.m))
-            used_rows = bq.copy()
-            for i, key in enumerate(crows.keys):
-                ck = (b, key, h)
-                hit = self._yq_cache.get(ck)
-                g = bq[i]
-                if hit is not None and np.linalg.norm(g - hit[0]) <= self.row_reuse_tol * np.linalg.norm(g):
-                    used_rows[i] = hit[0]
-                    yq[:, i] = hit[1]
-                    continue
-                y = np.asarray(solver._factor(h).solve(g))
-                self._yq_cache[ck] = (g.copy(), y)
-                yq[:, i] = y
-            crows.rows.blocks[b] = (bf, used_rows)
-            Y[b] = solver.solve_with_yq(np.hstack([bf, used_rows]).T, yq)
+            yq = solver.nodal_inverse(h, sel)
+            Y[b] = solver.solve_with_yq(np.hstack([bf, bq]).T, yq)
         return Y
 
     # ----------------------------------------------------------------------------------------
