@@ -52,11 +52,16 @@ def parse_range(text: str, name: str = "range") -> list[int]:
 @click.option("--workers", type=int, default=None, help="Local worker processes.")
 @click.option("--serial", is_flag=True, help="Run in this process, no Dask.")
 @click.option("--t-end", "t_end", type=float, default=None, help="End time [s].")
+@click.option("--dt", "dt", type=float, default=None,
+              help="Contact time step [s] (reference and candidates alike).")
+@click.option("--other", "other", default="scenario", show_default=True,
+              help="Model of the other bodies: 'scenario' (as in the file: the seed's b1 is "
+                   "full FE), 'full', or 'mvm:I-J:M', shared by the reference and every run.")
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
               help="Study directory (a rerun resumes).")
 @click.option("--progress/--no-progress", default=True, show_default=True)
 def command(scenario, body, layers, laps, modes, target, search, scheduler, workers, serial,
-            t_end, out_dir, progress) -> None:
+            t_end, dt, other, out_dir, progress) -> None:
     """Selection study: node selections x mode counts of BODY against the full-FE force;
     writes ncc.csv, selection.json, fig7_ncc_map.png, fig8_ncc_modes.png."""
     from flexmvm.metrics.ncc import Target
@@ -68,5 +73,6 @@ def command(scenario, body, layers, laps, modes, target, search, scheduler, work
         raise InputError(f"--workers {workers}: expected a positive integer")
     run_selection_study(scenario, body, out_dir, *grid, target=tgt, search=search,
                         scheduler=scheduler, n_workers=workers, progress=progress, t_end_s=t_end,
+                        dt_s=dt, other=other,
                         serial=serial, echo=click.echo)
     click.echo(f"wrote {out_dir}")

@@ -28,9 +28,14 @@ def command() -> None:
 @click.option("--workers", type=int, default=None, help="Local worker processes.")
 @click.option("--serial", is_flag=True, help="Run in this process, no Dask.")
 @click.option("--t-end", "t_end", type=float, default=None, help="End time [s].")
+@click.option("--dt", "dt", type=float, default=None,
+              help="Contact time step [s] (reference and candidates alike).")
+@click.option("--other", "other", default="scenario", show_default=True,
+              help="Model of the other bodies: 'scenario' (as in the file: the seed's b1 is "
+                   "full FE), 'full', or 'mvm:I-J:M', shared by the reference and every run.")
 @click.option("--progress/--no-progress", default=True, show_default=True)
 def materials(scenario, out_dir, body, materials, selections, modes, scheduler, workers, serial,
-              t_end, progress) -> None:
+              t_end, dt, other, progress) -> None:
     """Body BODY of W, Cu, Al, PA6 (seed table 2): MVM runs against each full-FE reference;
     writes materials.csv, materials.json, fig9_materials.png."""
     from flexmvm.cli.select_cmd import parse_range
@@ -42,5 +47,6 @@ def materials(scenario, out_dir, body, materials, selections, modes, scheduler, 
     run_materials_study(scenario, out_dir, body=body, materials=names,
                         selections=parse_selections(selections), modes=parse_range(modes, "modes"),
                         scheduler=scheduler, n_workers=workers, progress=progress, t_end_s=t_end,
+                        dt_s=dt, other=other,
                         serial=serial, echo=click.echo)
     click.echo(f"wrote {out_dir}")

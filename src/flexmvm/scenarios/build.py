@@ -6,6 +6,8 @@ that runs many variants of one scenario assembles each body once.
 
 from __future__ import annotations
 
+import contextlib
+import dataclasses
 import functools
 from dataclasses import dataclass
 
@@ -91,8 +93,36 @@ def reference_condition(key, mesh: Mesh, ref_set: str):
     return three_two_one(mesh, mesh.node_set(ref_set))
 
 
-@functools.lru_cache(maxsize=64)
+_MODE_FLOOR = [0]
+
+
+@contextlib.contextmanager
+def craig_bampton_mode_floor(n_modes: int):
+    """Within this block a Craig-Bampton basis of k < n_modes modes is the first k columns of
+    the n_modes one (cached): a study over mode counts computes one eigen solve per node
+    selection. Exact up to the eigensolver tolerance; within a degenerate pair (a rod's two
+    bending planes) the cut may keep a different vector of the same eigenspace."""
+    old = _MODE_FLOOR[0]
+    _MODE_FLOOR[0] = int(n_modes)
+    try:
+        yield
+    finally:
+        _MODE_FLOOR[0] = old
+
+
 def _basis(key, material: Material, kind: BasisKind, retained: tuple, modes: int, ref_set: str) -> Basis:
+    floor = _MODE_FLOOR[0]
+    if kind is not BasisKind.CRAIG_BAMPTON or modes >= floor:
+        return _basis_cached(key, material, kind, retained, modes, ref_set)
+    big = _basis_cached(key, material, kind, retained, floor, ref_set)
+    nb = 3 * len(big.retained_nodes)
+    return dataclasses.replace(big, psi=np.ascontiguousarray(big.psi[:, : nb + modes]),
+                               n_modes=modes, mode_freqs_hz=big.mode_freqs_hz[:modes].copy())
+
+
+@functools.lru_cache(maxsize=64)
+def _basis_cached(key, material: Material, kind: BasisKind, retained: tuple, modes: int,
+                  ref_set: str) -> Basis:
     fe = _fe(key, material)
     ref = reference_condition(key, fe.mesh, ref_set)
     return build_basis(fe, kind, ref, retained_nodes=np.array(retained, dtype=np.int64), n_modes=modes)

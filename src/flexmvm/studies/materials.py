@@ -40,6 +40,7 @@ from flexmvm.studies.selection import (
     reference_history,
     rod_of,
     run_selection_case,
+    study_scenario,
 )
 
 __all__ = ["SEED_MATERIALS", "SEED_ORDER", "material_scenario", "parse_selections",
@@ -97,17 +98,18 @@ def run_materials_study(scenario_path: str | Path, out_dir: str | Path, body: st
                         selections: Sequence[tuple[int, int]] = ((1, 1), (2, 2)),
                         modes: Iterable[int] = range(7, 44, 12), scheduler: str | None = None,
                         n_workers: int | None = None, progress: bool = True, *,
-                        t_end_s: float | None = None, serial: bool = False,
+                        t_end_s: float | None = None, dt_s: float | None = None,
+                        other: str | None = None, serial: bool = False,
                         echo: Callable[[str], Any] = print) -> dict:
-    """The material study (module doc). Returns the materials.json content.
+    """The material study (module doc). Returns the materials.json content. ``t_end_s``,
+    ``dt_s`` and ``other`` as in studies.selection.study_scenario.
 
     Raises InputError for an unknown material name (keys of SEED_MATERIALS), a bad body or a
     selection beyond the mesh; SolverError if a reference or a case fails to run.
     """
     out = Path(out_dir).resolve()
-    sc = load_scenario(scenario_path)
-    if t_end_s is not None:
-        sc = sc.with_overrides(t_end_s=t_end_s)
+    sc = study_scenario(load_scenario(scenario_path), body, t_end_s=t_end_s, dt_s=dt_s,
+                        other=other)
     materials = list(materials)
     unknown = [m for m in materials if m not in SEED_MATERIALS]
     if unknown or not materials:
@@ -129,7 +131,7 @@ def run_materials_study(scenario_path: str | Path, out_dir: str | Path, body: st
         refs = run_cases(ref_cases, partial(run_reference_case, out_dir=str(out)), out, progress=progress, **kw)
         cases = [Case(f"{m}-l{i}-j{j}-m{n}",
                       {"body": body, "layers": i, "laps": j, "modes": n, "material": m,
-                       "scenario": scen[m].model_dump(mode="json"),
+                       "modes_max": max(modes), "scenario": scen[m].model_dump(mode="json"),
                        "reference_sha256": refs[f"ref-{m}"]["sha256"]})
                  for m in materials for (i, j) in selections for n in modes]
         results = run_cases(cases, partial(run_material_case, references=ref_paths), out, progress=progress, **kw)

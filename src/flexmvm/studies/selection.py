@@ -3,7 +3,10 @@
 One body of a scenario (the *study body*, b2 in the seed) is modelled by the MVM
 (Craig-Bampton: the retained "region II" nodes of the seed's ``i-j`` selection + ``m``
 fixed-interface modes) for every ``(i, j, m)`` of a grid; every other body keeps its model
-from the scenario (b1 stays full FE, as in the seed). Each run is compared with a reference
+from the scenario (b1 stays full FE, as in the seed) unless ``other`` replaces it (e.g. a
+converged MVM model of the striker, ``mvm:3-5:40``, to make a seed-scale sweep affordable:
+the reference and every candidate then share that model, so the comparison still isolates
+the study body's reduction). Each run is compared with a reference
 run in which the study body is full FE (the other bodies unchanged), computed once before the
 sweep and stored in ``DIR/reference/history.csv``.
 
@@ -135,7 +138,9 @@ def selection_cases(sc: Scenario, body: str, layers: Iterable[int] = range(1, 5)
                     reference: str | Path | None = None) -> list[Case]:
     """The cases of the grid layers x laps x modes for body ``body`` of scenario ``sc``.
 
-    Keys ``l<i>-j<j>-m<m>``; params {body, layers, laps, modes, scenario (sc.model_dump(json)),
+    Keys ``l<i>-j<j>-m<m>``; params {body, layers, laps, modes, modes_max (the grid's largest
+    mode count: each selection's Craig-Bampton basis is solved once with it and cut,
+    scenarios.build.craig_bampton_mode_floor), scenario (sc.model_dump(json)),
     reference_sha256 (of the reference history CSV ``reference``, or None)}. The path itself is
     not a parameter, so a study directory can be moved; it is given to the case function as
     ``functools.partial(run_selection_case, reference=path)``. Raises InputError for an
@@ -144,8 +149,9 @@ def selection_cases(sc: Scenario, body: str, layers: Iterable[int] = range(1, 5)
     _, layers, laps, modes = _check_grid(sc, body, layers, laps, modes)
     data = sc.model_dump(mode="json")
     sha = file_sha256(reference) if reference is not None else None
+    top = max(modes)
     return [Case(case_key(i, j, m), {"body": body, "layers": i, "laps": j, "modes": m,
-                                     "scenario": data, "reference_sha256": sha})
+                                     "modes_max": top, "scenario": data, "reference_sha256": sha})
             for i in layers for j in laps for m in modes]
 
 
@@ -153,6 +159,42 @@ def file_sha256(path: str | Path) -> str:
     import hashlib
 
     return hashlib.sha256(Path(path).read_bytes()).hexdigest()
+
+
+def parse_model(text: str) -> ModelConfig | None:
+    """'scenario' -> None (keep); 'full'; 'mvm:I-J:M' (Craig-Bampton, selection I-J, M modes).
+    The reference condition is the rod default (end_b). InputError (one line) otherwise."""
+    t = text.strip().lower()
+    if t == "scenario":
+        return None
+    if t == "full":
+        return ModelConfig(kind=ModelKind.FULL, reference="end_b")
+    bits = t.split(":")
+    if len(bits) == 3 and bits[0] == "mvm" and bits[2].isdigit():
+        try:
+            return ModelConfig(kind=ModelKind.MVM, selection=bits[1], modes=int(bits[2]),
+                               reference="end_b")
+        except ValueError:
+            pass
+    raise InputError(f"model {text!r}: expected 'scenario', 'full' or 'mvm:I-J:M' "
+                     "(e.g. mvm:3-5:40)")
+
+
+def study_scenario(sc: Scenario, body: str, *, t_end_s: float | None = None,
+                   dt_s: float | None = None, other: str | ModelConfig | None = None) -> Scenario:
+    """The scenario a study runs: end time and contact step overridden, and the model of
+    every body other than ``body`` (rigid ones excepted) replaced by ``other`` (a
+    ModelConfig or parse_model text; None keeps the scenario's)."""
+    sc.body(body)
+    if isinstance(other, str):
+        other = parse_model(other)
+    models = {}
+    if other is not None:
+        models = {b.name: other for b in sc.bodies
+                  if b.name != body and b.model.kind is not ModelKind.RIGID}
+    if t_end_s is None and dt_s is None and not models:
+        return sc
+    return sc.with_overrides(t_end_s=t_end_s, dt_s=dt_s, body_models=models or None)
 
 
 def _mvm_scenario(sc: Scenario, body: str, layers: int, laps: int, modes: int) -> Scenario:
@@ -190,8 +232,11 @@ def run_selection_case(case: Case, reference: str | Path | None = None) -> dict:
     nodes = len(rod_of(sc, body).selection(i, j))
     row: dict[str, Any] = {"layers": i, "laps": j, "nodes": nodes, "modes": m,
                            "dof": 3 * nodes + m, "dof_total": 3 * nodes + m + 6}
+    from flexmvm.scenarios.build import craig_bampton_mode_floor
+
     try:
-        run = run_scenario(_mvm_scenario(sc, body, i, j, m))
+        with craig_bampton_mode_floor(int(p.get("modes_max", m))):
+            run = run_scenario(_mvm_scenario(sc, body, i, j, m))
     except SolverError as exc:
         return row | {"failed": str(exc).splitlines()[0]}
     info = next(b for b in run.built.info if b.name == body)
@@ -319,7 +364,8 @@ def run_selection_study(scenario_path: str | Path, body: str, out_dir: str | Pat
                         modes: Iterable[int] = range(7, 44, 6), target: Target | None = None,
                         search: bool = False, scheduler: str | None = None,
                         n_workers: int | None = None, progress: bool = True, *,
-                        t_end_s: float | None = None, serial: bool = False,
+                        t_end_s: float | None = None, dt_s: float | None = None,
+                        other: str | None = None, serial: bool = False,
                         echo: Callable[[str], Any] = print) -> dict:
     """The selection study of ``body`` in ``scenario_path`` (module doc), written to out_dir.
 
@@ -327,15 +373,16 @@ def run_selection_study(scenario_path: str | Path, body: str, out_dir: str | Pat
     studies.search.smallest_passing, each round's batch through run_cases (parallel,
     resumable). ``scheduler``: address of a Dask scheduler; otherwise one LocalCluster of
     ``n_workers`` processes for the whole study, or in-process with ``serial=True``.
-    ``t_end_s`` overrides the scenario's end time. Returns the selection.json content.
+    ``t_end_s``, ``dt_s`` override the scenario's end time and contact step, ``other`` the
+    model of the other bodies (study_scenario). Returns the selection.json content.
 
     Raises InputError for a bad body / grid / options, SolverError if the reference fails.
     """
     target = Target(0.99) if target is None else target
     out = Path(out_dir).resolve()
     sc = load_scenario(scenario_path)
-    if t_end_s is not None:
-        sc = sc.with_overrides(t_end_s=t_end_s)
+    _check_grid(sc, body, layers, laps, modes)
+    sc = study_scenario(sc, body, t_end_s=t_end_s, dt_s=dt_s, other=other)
     rod, layers, laps, modes = _check_grid(sc, body, layers, laps, modes)
     if serial and (scheduler is not None or n_workers is not None):
         raise InputError("serial=True received with scheduler/workers; expected one")
