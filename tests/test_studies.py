@@ -213,3 +213,50 @@ def test_materials_study_all_four(tmp_path):
                               n_workers=2, progress=False, echo=lambda s: None)
     assert set(res["materials"]) == {"W", "Cu", "Al", "PA6"}
     assert isinstance(res["seed_ordering_holds"], bool)
+
+
+# ----------------------------------------------------------------------------------------------
+# study overrides (no time integration)
+def test_parse_model_and_study_scenario():
+    from flexmvm.scenarios.schema import ModelKind
+    from flexmvm.studies.selection import parse_model, study_scenario
+
+    assert parse_model("scenario") is None
+    assert parse_model("full").kind is ModelKind.FULL
+    m = parse_model("mvm:3-5:40")
+    assert (m.kind, m.selection_ij, m.modes) == (ModelKind.MVM, (3, 5), 40)
+    for bad in ("mvm:3-5", "mvm:x-5:4", "rigid", "mvm:3-5:-1", ""):
+        with pytest.raises(InputError):
+            parse_model(bad)
+    sc = load_scenario(TINY)
+    out = study_scenario(sc, "b2", t_end_s=2e-5, dt_s=0.5e-6, other="mvm:1-1:7")
+    b1, b2 = out.body("b1").model, out.body("b2").model
+    assert (b1.kind, b1.selection_ij, b1.modes) == (ModelKind.MVM, (1, 1), 7)
+    assert b2 == sc.body("b2").model  # the study body is untouched
+    assert (out.time.t_end_s, out.time.dt_s) == (2e-5, 0.5e-6)
+    assert study_scenario(sc, "b2") is sc
+    with pytest.raises(InputError):
+        study_scenario(sc, "nobody")
+
+
+def test_mode_floor_cuts_the_larger_craig_bampton_basis():
+    """A 7-mode basis cut from the 13-mode one spans the same space as a 7-mode solve: the
+    same fixed-interface frequencies (eigsh tolerance: 1e-8 relative) and, column by column,
+    the same constraint modes (exact: same factor and right-hand sides)."""
+    import numpy as np
+
+    from flexmvm.reduction.basis import BasisKind
+    from flexmvm.scenarios.build import _basis, craig_bampton_mode_floor, rod_spec
+
+    cfg = load_scenario(TINY).body("b2")
+    spec, mat = rod_spec(cfg.rod), cfg.material_obj()
+    from flexmvm.mesh.rod import rod_mesh
+
+    sel = tuple(int(n) for n in rod_mesh(spec).selection(1, 1))
+    fresh = _basis(spec, mat, BasisKind.CRAIG_BAMPTON, sel, 7, "end_b")
+    with craig_bampton_mode_floor(13):
+        cut = _basis(spec, mat, BasisKind.CRAIG_BAMPTON, sel, 7, "end_b")
+    assert cut.n_modes == 7 and cut.psi.shape == fresh.psi.shape
+    np.testing.assert_allclose(cut.mode_freqs_hz, fresh.mode_freqs_hz, rtol=1e-8)
+    nb = 3 * len(sel)
+    np.testing.assert_allclose(cut.psi[:, :nb], fresh.psi[:, :nb], rtol=0, atol=1e-12)
