@@ -189,3 +189,15 @@ def test_atomic_write_failure_leaves_old_file(tmp_path):
         raise RuntimeError("mid-write")
     assert json.loads(path.read_text()) == {"a": [1.5, 2], "b": 1}
     assert sorted(p.name for p in tmp_path.iterdir()) == ["x.json"]
+
+
+def test_local_cluster_sends_one_case_per_single_threaded_worker():
+    """With Dask's default worker-saturation (1.1) a one-thread worker is sent two cases, and
+    with long cases one worker can idle while another holds two (seen in the material study)."""
+    from flexmvm.studies.runner import local_cluster
+
+    cluster = local_cluster(1)
+    try:
+        assert cluster.scheduler.WORKER_SATURATION == 1.0
+    finally:
+        cluster.close()

@@ -243,6 +243,19 @@ def _check_picklable(fn: Callable[[Case], Any]) -> None:
         ) from None
 
 
+def local_cluster(n_workers: int):
+    """A LocalCluster of n_workers single-threaded processes that hands each worker one case
+    at a time (worker-saturation 1.0: with the default 1.1 a one-thread worker is sent two
+    cases, and with long cases one worker can sit idle while another holds two), no
+    dashboard."""
+    import dask
+    from distributed import LocalCluster
+
+    with dask.config.set({"distributed.scheduler.worker-saturation": 1.0}):
+        return LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
+                            dashboard_address=None)
+
+
 def _run_dask(
     pending: Sequence[Case],
     fn: Callable[[Case], Any],
@@ -250,17 +263,12 @@ def _run_dask(
     scheduler: str | None,
     n_workers: int | None,
 ) -> None:
-    from distributed import Client, LocalCluster, as_completed
+    from distributed import Client, as_completed
 
     _check_picklable(fn)
     cluster = None
     if scheduler is None:
-        cluster = LocalCluster(
-            n_workers=n_workers or os.cpu_count() or 1,
-            threads_per_worker=1,
-            processes=True,
-            dashboard_address=None,
-        )
+        cluster = local_cluster(n_workers or os.cpu_count() or 1)
         try:
             client = Client(cluster, set_as_default=False)
         except BaseException:

@@ -302,13 +302,12 @@ class cluster:
             return self.scheduler
         import os
 
-        from distributed import LocalCluster
+        from flexmvm.studies.runner import local_cluster
 
         n = self.n_workers or os.cpu_count() or 1
         if n < 1:
             raise InputError(f"workers: expected a positive integer, got {n}")
-        self._cluster = LocalCluster(n_workers=n, threads_per_worker=1, processes=True,
-                                     dashboard_address=None)
+        self._cluster = local_cluster(n)
         return self._cluster.scheduler_address
 
     def __exit__(self, *exc) -> None:
