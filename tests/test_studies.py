@@ -202,6 +202,12 @@ def test_materials_study_two_materials(tmp_path):
     assert res["seed_ordering_holds"] is (w > al)
     assert (tmp_path / "fig9_materials.png").is_file()
     assert (tmp_path / "W" / "reference" / "history.csv").is_file()
+    # the 1D wave-Hertz contact radius and duration are reported beside each material, and
+    # the radius of the outermost retained node of each selection (1-1: the axis node)
+    for m in ("W", "Al"):
+        assert res["materials"][m]["theory_contact_radius_m"] > 0
+        assert res["materials"][m]["theory_contact_duration_s"] > 0
+    assert res["selection_radius_m"] == {"1-1": 0.0}
 
 
 @pytest.mark.skipif(not os.environ.get("FLEXMVM_SLOW"),
