@@ -21,6 +21,7 @@ import scipy.sparse.linalg as spla
 
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.errors import SolverError
+from flexmvm.fe.modes import SPD_LU
 
 
 @dataclass
@@ -60,7 +61,7 @@ class BodySolver:
             W = W + (th * h) * b.c_hat
         if sp.issparse(W):
             try:
-                lu = spla.splu(sp.csc_matrix(W))
+                lu = spla.splu(sp.csc_matrix(W), **SPD_LU)  # W is SPD
             except RuntimeError as exc:
                 raise SolverError(f"body {b.name!r}: iteration matrix is singular ({exc})") from None
             solve = lu.solve
