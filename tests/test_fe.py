@@ -277,3 +277,21 @@ def test_constrained_modes_zero_at_fixed_dofs():
                    eigvals_only=True)[:5]
     assert np.allclose((2 * np.pi * freqs) ** 2, lam, rtol=1e-9)
     assert np.allclose(np.diag(modes.T @ fe.M @ modes), 1.0, rtol=1e-10)
+
+
+def test_sparse_lu_spd_ordering_and_general_path():
+    """fe.modes.factor: the SPD path (symmetric minimum-degree ordering, diagonal pivots) and
+    SuperLU's general path solve the same SPD system to round-off (tolerance 1e-12 relative:
+    the matrix is well conditioned, cond < 1e3); an exactly singular matrix is a SolverError,
+    not a RuntimeError."""
+    from flexmvm.fe.modes import factor
+
+    rng = np.random.default_rng(3)
+    B = sp.random(200, 200, density=0.02, random_state=rng, format="csr")
+    A = (B.T @ B + 10.0 * sp.eye(200)).tocsc()
+    b = rng.standard_normal((200, 3))
+    for spd in (True, False):
+        x = factor(A, spd=spd)(b)
+        assert np.linalg.norm(A @ x - b) <= 1e-12 * np.linalg.norm(b)
+    with pytest.raises(SolverError, match="failed"):
+        factor(sp.csc_matrix((4, 4)))
