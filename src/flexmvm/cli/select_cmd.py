@@ -7,6 +7,7 @@ from pathlib import Path
 
 import click
 
+from flexmvm.cli.study_options import check_workers, study_run_options
 from flexmvm.errors import InputError
 
 _DOTS = re.compile(r"^\s*(\d+)\s*\.\.\s*(\d+)\s*$")
@@ -48,15 +49,7 @@ def parse_range(text: str, name: str = "range") -> list[int]:
               help="Accuracy target, e.g. 'ncc>=0.99,peak<=0.02'.")
 @click.option("--search", is_flag=True,
               help="Bisect the mode counts per selection instead of running the whole grid.")
-@click.option("--scheduler", default=None, help="Address of a Dask scheduler (tcp://host:port).")
-@click.option("--workers", type=int, default=None, help="Local worker processes.")
-@click.option("--serial", is_flag=True, help="Run in this process, no Dask.")
-@click.option("--t-end", "t_end", type=float, default=None, help="End time [s].")
-@click.option("--dt", "dt", type=float, default=None,
-              help="Contact time step [s] (reference and candidates alike).")
-@click.option("--other", "other", default="scenario", show_default=True,
-              help="Model of the other bodies: 'scenario' (as in the file: the seed's b1 is "
-                   "full FE), 'full', or 'mvm:I-J:M', shared by the reference and every run.")
+@study_run_options
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
               help="Study directory (a rerun resumes).")
 @click.option("--progress/--no-progress", default=True, show_default=True)
@@ -69,8 +62,7 @@ def command(scenario, body, layers, laps, modes, target, search, scheduler, work
 
     grid = (parse_range(layers, "layers"), parse_range(laps, "laps"), parse_range(modes, "modes"))
     tgt = Target.parse(target)
-    if workers is not None and workers < 1:
-        raise InputError(f"--workers {workers}: expected a positive integer")
+    check_workers(workers)
     run_selection_study(scenario, body, out_dir, *grid, target=tgt, search=search,
                         scheduler=scheduler, n_workers=workers, progress=progress, t_end_s=t_end,
                         dt_s=dt, other=other,

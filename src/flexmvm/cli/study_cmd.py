@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from flexmvm.errors import InputError
+from flexmvm.cli.study_options import check_workers, study_run_options
 
 
 @click.group("study")
@@ -24,15 +24,7 @@ def command() -> None:
 @click.option("--selections", default="1-1,2-2", show_default=True, help="i-j selections.")
 @click.option("--modes", default="7:43:12", show_default=True,
               help="Mode counts: start:stop:step, stop included.")
-@click.option("--scheduler", default=None, help="Address of a Dask scheduler (tcp://host:port).")
-@click.option("--workers", type=int, default=None, help="Local worker processes.")
-@click.option("--serial", is_flag=True, help="Run in this process, no Dask.")
-@click.option("--t-end", "t_end", type=float, default=None, help="End time [s].")
-@click.option("--dt", "dt", type=float, default=None,
-              help="Contact time step [s] (reference and candidates alike).")
-@click.option("--other", "other", default="scenario", show_default=True,
-              help="Model of the other bodies: 'scenario' (as in the file: the seed's b1 is "
-                   "full FE), 'full', or 'mvm:I-J:M', shared by the reference and every run.")
+@study_run_options
 @click.option("--progress/--no-progress", default=True, show_default=True)
 def materials(scenario, out_dir, body, materials, selections, modes, scheduler, workers, serial,
               t_end, dt, other, progress) -> None:
@@ -41,8 +33,7 @@ def materials(scenario, out_dir, body, materials, selections, modes, scheduler, 
     from flexmvm.cli.select_cmd import parse_range
     from flexmvm.studies.materials import parse_selections, run_materials_study
 
-    if workers is not None and workers < 1:
-        raise InputError(f"--workers {workers}: expected a positive integer")
+    check_workers(workers)
     names = [m.strip() for m in materials.split(",") if m.strip()]
     run_materials_study(scenario, out_dir, body=body, materials=names,
                         selections=parse_selections(selections), modes=parse_range(modes, "modes"),
