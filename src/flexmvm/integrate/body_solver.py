@@ -17,11 +17,10 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.errors import SolverError
-from flexmvm.fe.modes import SPD_LU
+from flexmvm.fe.modes import factor
 
 
 @dataclass
@@ -61,10 +60,9 @@ class BodySolver:
             W = W + (th * h) * b.c_hat
         if sp.issparse(W):
             try:
-                lu = spla.splu(sp.csc_matrix(W), **SPD_LU)  # W is SPD
-            except RuntimeError as exc:
+                solve = factor(W)  # W is SPD
+            except SolverError as exc:
                 raise SolverError(f"body {b.name!r}: iteration matrix is singular ({exc})") from None
-            solve = lu.solve
         else:
             try:
                 cho = sla.cho_factor(np.asarray(W))
