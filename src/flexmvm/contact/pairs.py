@@ -22,10 +22,17 @@ import numpy as np
 import scipy.sparse as sp
 
 from flexmvm.constraints.rows import Rows
-from flexmvm.contact.geometry import BroadPhase, MasterSurface, closest_facets, project_points
-from flexmvm.errors import InputError
+from flexmvm.contact import kernels
+from flexmvm.contact.geometry import BroadPhase, MasterSurface
+from flexmvm.contact.nodes import ContactNodes
+from flexmvm.contact.reference import body_rows
+from flexmvm.errors import InputError, SolverError
 from flexmvm.integrate.midpoint import PENETRATION_RECOVERY
 from flexmvm.integrate.system import ContactProvider, ContactRows
+
+__all__ = ["ContactKind", "PointToSurfaceContact", "body_rows"]
+
+_LIST_CAP = 256  # candidate supersets longer than this fall back to a scan of all facets
 
 
 class ContactKind(Enum):
@@ -34,61 +41,37 @@ class ContactKind(Enum):
 
 
 @dataclass
-class _Kinematics:
-    x_slave: np.ndarray        # (ns, 3)
-    v_slave: np.ndarray        # (ns, 3)
-    x_master: np.ndarray       # (n_master_nodes_total, 3), filled on the surface nodes
-    v_master: np.ndarray
+class _Active:
+    """The active pairs of the last candidate_rows: point (m,) slave index, nodes (m, 4)
+    master node ids, weights (m, 4), normal (m, 3)."""
+
+    point: np.ndarray
+    nodes: np.ndarray
+    weights: np.ndarray
+    normal: np.ndarray
 
 
-def body_rows(body, st, nodes: np.ndarray, weights: np.ndarray, dirs: np.ndarray):
-    """Rows d_i^T sum_k w_ik dx_{node_ik}/dv of one body (seed eq. 9), vectorised.
-
-    nodes, weights (m, k); dirs (m, 3) global. Returns frame (m, 6), elastic (m, nq) and the
-    nodal selector N (m, 3 n_nodes), elastic = N psi (None for a rigid body).
-    """
-    m, k = nodes.shape
-    dl = dirs @ st.A  # rows: A^T d
-    u = body.local_displacements(nodes.ravel(), st.q).reshape(m, k, 3)
-    s = body.X[nodes] + u
-    sw = np.einsum("mk,mki->mi", weights, s)
-    wsum = weights.sum(axis=1)
-    frame = np.hstack([dirs * wsum[:, None], np.cross(sw, dl)])
-    if not body.nq:
-        return frame, np.zeros((m, 0)), None
-    cols = (3 * nodes[:, :, None] + np.arange(3)).reshape(m, -1)
-    data = (weights[:, :, None] * dl[:, None, :]).reshape(m, -1)
-    sel = sp.csr_matrix((data.ravel(), (np.repeat(np.arange(m), 3 * k), cols.ravel())),
-                        shape=(m, 3 * len(body.X)))
-    q = sel @ body.psi
-    q = q.toarray() if sp.issparse(q) else np.asarray(q)
-    return frame, q, sel
-
-
-def _clamp(proj, out, x_slave, x_master, n_quads):
-    """Replace the projections flagged `out` by the closest point of their facet: local
-    coordinates clamped to the facet, shape functions and gap recomputed there."""
-    xi = proj.xi.copy()
-    w = proj.weights.copy()
-    quad = out & (proj.facet < n_quads)
-    tri = out & ~(proj.facet < n_quads)
-    if quad.any():
-        e, h = np.clip(xi[quad, 0], -1, 1), np.clip(xi[quad, 1], -1, 1)
-        w[quad] = 0.25 * np.column_stack([(1 - e) * (1 - h), (1 + e) * (1 - h), (1 + e) * (1 + h), (1 - e) * (1 + h)])
-        xi[quad] = np.column_stack([e, h])
-    if tri.any():
-        bary = np.clip(np.column_stack([1 - xi[tri, 0] - xi[tri, 1], xi[tri, 0], xi[tri, 1]]), 0, None)
-        bary /= bary.sum(axis=1, keepdims=True)
-        w[tri] = np.column_stack([bary, np.zeros(len(bary))])
-        xi[tri] = bary[:, 1:]
-    xc = np.einsum("mk,mki->mi", w, x_master[proj.nodes])
-    gap = np.einsum("mi,mi->m", proj.normal, x_slave[proj.point] - xc)
-    return type(proj)(proj.point, proj.facet, proj.nodes, w, xi, proj.normal,
-                      np.where(out, gap, proj.gap), np.ones_like(proj.inside), proj.distance)
+def facet_adjacency(connectivity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Facets sharing a node with each facet (itself excluded), CSR (indptr, indices)."""
+    nf = len(connectivity)
+    inc = sp.csr_matrix((np.ones(connectivity.size), (np.repeat(np.arange(nf), 4),
+                                                      connectivity.ravel())))
+    adj = (inc @ inc.T).tocsr()
+    adj.setdiag(0)
+    adj.eliminate_zeros()
+    adj.sort_indices()
+    return adj.indptr.astype(np.int64), adj.indices.astype(np.int64)
 
 
 class PointToSurfaceContact(ContactProvider):
-    """Contact of slave nodes (body `slave`) with master facets (body `master`)."""
+    """Contact of slave nodes (body `slave`) with master facets (body `master`).
+
+    Per call the contact-node kinematics, the search and the rows run in compiled kernels
+    (contact.kernels) on arrays kept here; the result equals the numpy reference
+    (contact.reference) to round-off. Search state kept between calls, which never changes a
+    result: per slave node a superset of its broad-phase candidates, rebuilt once the node
+    has moved far enough to leave it, and the facet chosen last time, tried first.
+    """
 
     def __init__(self, bodies, slave: int, slave_nodes, master: int, surface: MasterSurface,
                  kind: ContactKind = ContactKind.FRICTIONLESS, search_radius_m: float = 1e-3,
@@ -112,74 +95,107 @@ class PointToSurfaceContact(ContactProvider):
         self.gap_tol = float(gap_tol_m)
         self.name = name
         self._bonds: dict[int, tuple[np.ndarray, np.ndarray]] = {}
+        self._setup(bodies)
+
+    def _setup(self, bodies) -> None:
+        """Gathered node data, facet geometry and the search state (see kernels.scan_nodes)."""
+        self._s = ContactNodes(bodies[self.slave], self.slave_nodes)
+        self._m = ContactNodes(bodies[self.master], self.master_nodes)
+        self._conn = np.searchsorted(self.master_nodes, self.surface.connectivity).astype(np.int64)
+        self._geo = np.column_stack([self.broad.centroids, self.broad.circumradius])
+        self._adj = facet_adjacency(self.surface.connectivity)
+        self._box2 = np.vstack(self._box).astype(np.float64)
+        self._rho = max(self.search_radius, 0.5 * float(np.median(self.broad.circumradius)))
+        self._params = kernels.projection_params()
+        ns, nf = len(self.slave_nodes), self.surface.n_facets
+        self._lists = np.zeros((ns, min(nf, _LIST_CAP) + 1), dtype=np.int64)
+        self._ref = np.full((ns, 4), -1.0)
+        self._prev = np.full(ns, -1, dtype=np.int64)
+        self._mark = np.zeros(nf, dtype=np.int64)
+        self._counter = np.zeros(1, dtype=np.int64)
+        self._cand = np.zeros(nf, dtype=np.int64)
+        self._lb = np.zeros(nf)
+        self._facet = np.full(ns, -1, dtype=np.int64)
+        self._out = np.zeros((ns, 11))
+        self._idx = np.zeros(ns, dtype=np.int64)
+        self._bonded = np.zeros(ns, dtype=np.bool_)
+        self._mlocal = np.full(len(bodies[self.master].X), -1, dtype=np.int64)
+        self._mlocal[self.master_nodes] = np.arange(len(self.master_nodes))
 
     # -- geometry -----------------------------------------------------------------------------
-    def _kinematics(self, bodies, states) -> _Kinematics:
-        bs, bm = bodies[self.slave], bodies[self.master]
-        ss, sm = states[self.slave], states[self.master]
-        xs = bs.node_positions(self.slave_nodes, ss.r, ss.A, ss.q)
-        vs = bs.node_velocities(self.slave_nodes, ss.A, ss.q, ss.v)
-        xm = np.zeros((len(bm.X), 3))
-        vm = np.zeros((len(bm.X), 3))
-        xm[self.master_nodes] = bm.node_positions(self.master_nodes, sm.r, sm.A, sm.q)
-        vm[self.master_nodes] = bm.node_velocities(self.master_nodes, sm.A, sm.q, sm.v)
-        return _Kinematics(xs, vs, xm, vm)
+    def _kinematics(self, states) -> float:
+        """Node positions / velocities of both bodies; returns the speed of the reach rule:
+        largest slave plus largest master velocity component [m/s]."""
+        vs, _ = self._s.update(states[self.slave])
+        vm, self._u_max = self._m.update(states[self.master])
+        return float(vs + vm)
 
-    def _projection(self, bodies, states, kin: _Kinematics, reach: float):
-        """Closest facet of every slave node within reach of the master surface. A node that
-        falls outside every candidate facet (above a vertex of a convex surface, or beside an
-        edge of a dented, locally concave one) is kept with its clamped projection, so a
-        penetration can never go unseen."""
+    def _scan(self, states, reach: float) -> int:
+        """Closest facet, gap and normal velocity of every slave node within reach (into
+        self._facet, self._out); returns the number of nodes with a facet."""
         sm = states[self.master]
-        local = (kin.x_slave - sm.r) @ sm.A
-        lo, hi = self._box
-        near = np.nonzero(np.all((local >= lo - reach) & (local <= hi + reach), axis=1))[0]
-        if near.size == 0:
-            return None
-        pt, fc = self.broad.query(local[near], reach)
-        if pt.size == 0:
-            return None
-        proj = closest_facets(project_points(kin.x_slave, kin.x_master, self.surface, (near[pt], fc)))
-        if not len(proj):
-            return None
-        out = ~proj.inside
-        if out.any():
-            proj = _clamp(proj, out, kin.x_slave, kin.x_master, self.surface.n_quads)
-        return proj
-
-    def _normal_velocity(self, kin, proj) -> np.ndarray:
-        vc = np.einsum("mk,mki->mi", proj.weights, kin.v_master[proj.nodes])
-        return np.einsum("mi,mi->m", proj.normal, kin.v_slave[proj.point] - vc)
+        m = self._m
+        status, facet, n = kernels.scan_nodes(
+            self._s.x, self._s.xd, m.x, m.xd, sm.r, sm.A, self._box2, reach, self._rho,
+            self._u_max, self._geo, self._conn, self.surface.n_quads, *self._adj, self._params,
+            self._lists, self._ref, self._prev, self._mark, self._counter, self._cand, self._lb,
+            self._facet, self._out)
+        if status:
+            raise SolverError(_failure(status, facet))
+        return n
 
     def min_gap_ahead(self, bodies, states, horizon_s: float) -> float:
-        kin = self._kinematics(bodies, states)
-        speed = float(np.abs(kin.v_slave).max() + np.abs(kin.v_master).max())
-        proj = self._projection(bodies, states, kin, self.search_radius + speed * horizon_s)
-        if proj is None:
+        speed = self._kinematics(states)
+        if self._scan(states, self.search_radius + speed * horizon_s) == 0:
             return np.inf
         if self._bonds:
             return -np.inf
-        u_n = self._normal_velocity(kin, proj)
-        return float(np.min(proj.gap + horizon_s * np.minimum(u_n, 0.0)))
+        return float(kernels.predicted_min_gap(self._facet, self._out, horizon_s))
 
     # -- constraint rows ----------------------------------------------------------------------
     def candidate_rows(self, bodies, states, h: float) -> ContactRows:
-        kin = self._kinematics(bodies, states)
-        speed = float(np.abs(kin.v_slave).max() + np.abs(kin.v_master).max())
-        proj = self._projection(bodies, states, kin, self.search_radius + 2 * speed * h)
-        eq_nodes, eq_w, eq_dirs, eq_lower, eq_keys = self._bond_rows(kin)
-        if proj is not None:
-            bonded = np.isin(self.slave_nodes[proj.point], list(self._bonds))
-            u_n = self._normal_velocity(kin, proj)
-            active = (proj.gap + h * u_n <= self.gap_tol) & ~bonded
-            proj = proj.take(active)
-        if (proj is None or len(proj) == 0) and not eq_keys:
+        speed = self._kinematics(states)
+        n = self._scan(states, self.search_radius + 2 * speed * h)
+        m_n = kernels.active_nodes(self._facet, self._out, h, self.gap_tol, self._bonded,
+                                   self._idx) if n else 0
+        eq = self._bond_rows() if self._bonds else None
+        if m_n == 0 and eq is None:
+            self._last = (None, 0)
             return ContactRows.empty()
-        m_n = 0 if proj is None else len(proj)
-        slave_nodes = np.concatenate([eq_nodes, self.slave_nodes[proj.point] if m_n else []]).astype(np.int64)
-        master_nodes = np.vstack([eq_w[1], proj.nodes if m_n else np.zeros((0, 4), np.int64)]).astype(np.int64)
-        master_w = np.vstack([eq_w[0], proj.weights if m_n else np.zeros((0, 4))])
-        dirs = np.vstack([eq_dirs, proj.normal if m_n else np.zeros((0, 3))])
+        idx = self._idx[:m_n].copy()
+        out = self._out[idx]
+        s_nodes, s_w, s_k = np.empty((m_n, 1), np.int64), np.empty((m_n, 1)), np.empty(m_n, np.int64)
+        m_nodes, m_w, m_k = np.empty((m_n, 4), np.int64), np.empty((m_n, 4)), np.empty(m_n, np.int64)
+        kernels.pair_nodes(idx, self._facet, self._out, self._conn, self.surface.n_quads,
+                           s_nodes, s_w, s_k, m_nodes, m_w, m_k)
+        normal, gaps = out[:, 6:9], out[:, 9]
+        self._last = (_Active(idx, self.master_nodes[m_nodes], m_w, normal), 0 if eq is None else len(eq[4]))
+        if eq is None:
+            rows = Rows(m_n, {})
+            self._fill_rows(rows, states, (s_nodes, s_w, s_k), (m_nodes, m_w, m_k), normal)
+            lower = PENETRATION_RECOVERY * np.maximum(0.0, -gaps) / h
+            keys = list(zip([self.name] * m_n, self.slave_nodes[idx].tolist(),
+                            self._facet[idx].tolist()))
+            return ContactRows(rows, lower, keys, gaps, 0, np.ones(m_n))
+        return self._rows_with_bonds(bodies, states, h, eq, idx, m_nodes, m_w, normal, gaps)
+
+    def _fill_rows(self, rows: Rows, states, slave_pairs, master_pairs, dirs) -> None:
+        """Rows of both bodies, compiled (slave +, master -), with their nodal selectors."""
+        for b, nodes, pairs, sign in ((self.slave, self._s, slave_pairs, 1.0),
+                                      (self.master, self._m, master_pairs, -1.0)):
+            frame, elastic, sel = nodes.rows(*pairs, dirs, states[b].A, sign)
+            rows.blocks[b] = (frame, elastic)
+            if sel is not None:
+                rows.nodal[b] = sel
+
+    def _rows_with_bonds(self, bodies, states, h, eq, idx, m_nodes, m_w, normal, gaps):
+        """Bonded path (rare): the bond equality rows, then the normal rows, built with the
+        numpy row builder."""
+        eq_nodes, eq_w, eq_dirs, eq_lower, eq_keys = eq
+        slave_nodes = np.concatenate([eq_nodes, self.slave_nodes[idx]]).astype(np.int64)
+        master_nodes = np.vstack([eq_w[1], self.master_nodes[m_nodes]]).astype(np.int64)
+        master_w = np.vstack([eq_w[0], m_w])
+        dirs = np.vstack([eq_dirs, normal])
         m = len(dirs)
         rows = Rows(m, {})
         sf, sq, ssel = body_rows(bodies[self.slave], states[self.slave], slave_nodes[:, None],
@@ -191,25 +207,21 @@ class PointToSurfaceContact(ContactProvider):
             rows.nodal[self.slave] = ssel
         if msel is not None:
             rows.nodal[self.master] = -msel
-        gaps = proj.gap if m_n else np.zeros(0)
         lower_n = PENETRATION_RECOVERY * np.maximum(0.0, -gaps) / h
-        keys = eq_keys + ([(self.name, int(s), int(f)) for s, f in
-                           zip(self.slave_nodes[proj.point], proj.facet)] if m_n else [])
-        self._last = (proj, len(eq_keys))
+        keys = eq_keys + list(zip([self.name] * len(idx), self.slave_nodes[idx].tolist(),
+                                  self._facet[idx].tolist()))
         weight = np.ones(m)
-        if eq_keys:  # bond rows x, y, z: their compressive part is the component along the normal
-            weight[: len(eq_keys)] = [self._bond_normal[k[2]][k[3]] for k in eq_keys]
+        # bond rows x, y, z: their compressive part is the component along the normal
+        weight[: len(eq_keys)] = [self._bond_normal[k[2]][k[3]] for k in eq_keys]
         return ContactRows(rows, np.concatenate([eq_lower, lower_n]), keys, gaps, len(eq_keys), weight)
 
-    def _bond_rows(self, kin):
-        """Three equality rows per bonded pair (seed eq. 7): x_S - x_C -> 0."""
-        if not self._bonds:
-            return (np.zeros(0, np.int64), (np.zeros((0, 4)), np.zeros((0, 4), np.int64)),
-                    np.zeros((0, 3)), np.zeros(0), [])
+    def _bond_rows(self):
+        """Three equality rows per bonded pair (seed eq. 7): x_S - x_C -> 0, at the node
+        positions of the last kinematics update."""
         s_nodes, w_rows, n_rows, dirs, lower, keys = [], [], [], [], [], []
         index = {int(n): i for i, n in enumerate(self.slave_nodes)}
         for s, (nodes, w) in self._bonds.items():
-            err = kin.x_slave[index[s]] - w @ kin.x_master[nodes]
+            err = self._s.x[index[s]] - w @ self._m.x[self._mlocal[nodes]]
             for d, e in enumerate(np.eye(3)):
                 s_nodes.append(s)
                 w_rows.append(w)
@@ -239,16 +251,25 @@ class PointToSurfaceContact(ContactProvider):
                 released.append(s)
         for s in released:
             self._bonds.pop(s, None)
-        if proj is None:
-            return
-        lam_n = impulses[n_eq:]
-        for j in np.nonzero(lam_n > 0.0)[0]:
-            s = int(self.slave_nodes[proj.point[j]])
-            self._bonds[s] = (proj.nodes[j].copy(), proj.weights[j].copy())
-            self._bond_normal[s] = proj.normal[j].copy()
+        if proj is not None:
+            lam_n = impulses[n_eq:]
+            for j in np.nonzero(lam_n > 0.0)[0]:
+                s = int(self.slave_nodes[proj.point[j]])
+                self._bonds[s] = (proj.nodes[j].copy(), proj.weights[j].copy())
+                self._bond_normal[s] = proj.normal[j].copy()
+        self._bonded[:] = np.isin(self.slave_nodes, list(self._bonds))
 
     @property
     def _bond_normal(self) -> dict:
         if not hasattr(self, "_bn"):
             self._bn = {}
         return self._bn
+
+
+def _failure(status: int, facet: int) -> str:
+    """Message of a kernel failure status (contact.kernels) on facet `facet`."""
+    if status == kernels.DEGENERATE_QUAD:
+        return f"quad facet {facet} degenerate (zero area at the centre) when deformed"
+    if status == kernels.DEGENERATE_TRI:
+        return f"triangle facet {facet} has zero area in the deformed state"
+    return f"facet {facet} is degenerate at the contact point (tangents parallel)"

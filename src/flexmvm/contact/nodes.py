@@ -1,0 +1,76 @@
+"""The contact nodes of one body: psi rows gathered once, kinematics and rows per step.
+
+psi rows of the contact nodes are gathered at construction, dense (n_c, 3, nq) when they are
+mostly non-zero, else in CSR form (a full-FE body, or the retained nodes of a Craig-Bampton
+basis, whose rows select single q entries). Per step, body_kinematics fills the node
+positions and velocities and body_rows the constraint rows, both compiled (contact.kernels)
+and on arrays preallocated here.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+import scipy.sparse as sp
+
+from flexmvm.contact import kernels
+
+_DENSE_FILL = 0.25  # gathered rows with more non-zeros than this fraction are stored dense
+
+
+class ContactNodes:
+    """Contact nodes `nodes` (n_c,) of `body`, in the order given (their local indices)."""
+
+    def __init__(self, body, nodes: np.ndarray):
+        self.nodes = np.asarray(nodes, dtype=np.int64)
+        self.nq = body.nq
+        self.n_dofs = 3 * len(body.X)
+        n = len(self.nodes)
+        self.X = np.ascontiguousarray(body.X[self.nodes], dtype=np.float64)
+        self.gdof = 3 * self.nodes
+        self._gather(body, n)
+        self.u, self.ud, self.s, self.x, self.xd = (np.zeros((n, 3)) for _ in range(5))
+
+    def _gather(self, body, n: int) -> None:
+        self.psi_c = np.zeros((0, 3, 0))
+        self.indptr = np.zeros(3 * n + 1, dtype=np.int64)
+        self.indices = np.zeros(0, dtype=np.int64)
+        self.data = np.zeros(0)
+        self.dense = False
+        if not self.nq:
+            return
+        idx = (3 * self.nodes[:, None] + np.arange(3)).ravel()
+        rows = body.psi[idx]
+        if not sp.issparse(rows) and np.count_nonzero(rows) > _DENSE_FILL * rows.size:
+            self.psi_c = np.ascontiguousarray(np.asarray(rows, dtype=np.float64).reshape(n, 3, -1))
+            self.dense = True
+            return
+        rows = sp.csr_matrix(rows)
+        rows.eliminate_zeros()
+        rows.sort_indices()
+        self.indptr = rows.indptr.astype(np.int64)
+        self.indices = rows.indices.astype(np.int64)
+        self.data = rows.data.astype(np.float64)
+
+    def update(self, st) -> tuple[float, float]:
+        """Positions x, velocities xd (global), body-frame positions s at state st.
+        Returns (largest velocity component [m/s], largest displacement |u| [m])."""
+        return kernels.body_kinematics(self.X, self.psi_c, self.indptr, self.indices, self.data,
+                                       self.dense, st.q, st.v, st.r, st.A, self.u, self.ud,
+                                       self.s, self.x, self.xd)
+
+    def rows(self, nodes, w, kc, dirs, A, sign: float):
+        """sign * rows of the pairs (nodes, w (m, k) local ids / weights, kc (m,) nodes per
+        row, dirs (m, 3)), from the positions of the last update: frame (m, 6), elastic
+        (m, nq) and the nodal selector (csr (m, 3 n_nodes); None for a rigid body)."""
+        m, k = nodes.shape
+        frame, elastic = np.empty((m, 6)), np.empty((m, self.nq))
+        sel_data, sel_idx = np.empty(3 * k * m), np.empty(3 * k * m, dtype=np.int64)
+        sel_ptr = np.empty(m + 1, dtype=np.int64)
+        kernels.body_rows(nodes, w, kc, dirs, A, self.s, sign, self.psi_c, self.indptr,
+                          self.indices, self.data, self.dense, self.gdof, frame, elastic,
+                          sel_data, sel_idx, sel_ptr)
+        if not self.nq:
+            return frame, elastic, None
+        n = sel_ptr[m]
+        sel = sp.csr_matrix((sel_data[:n], sel_idx[:n], sel_ptr), shape=(m, self.n_dofs))
+        return frame, elastic, sel
