@@ -27,6 +27,12 @@ FREE_SHIFT_REL = 1e-9
 
 Solve = Callable[[np.ndarray], np.ndarray]
 
+#: Seed of the Lanczos start vector: ARPACK's own start is random, so two builds of one basis
+#: differed (signs, vectors within a degenerate pair); a fixed random start makes them
+#: repeatable (and a cached basis equal to a fresh one). Random, not ones: a symmetric start
+#: is orthogonal to the antisymmetric (bending) modes of a symmetric mesh.
+V0_SEED = 20140101
+
 
 #: SuperLU options for symmetric positive definite matrices (all this package factors: K_ii,
 #: K - sigma M with sigma <= 0, M + theta^2 h^2 K): minimum-degree ordering of A^T + A, no
@@ -60,6 +66,7 @@ def shift_invert_modes(M: sp.spmatrix, K: sp.spmatrix, n_modes: int, sigma: floa
 
     M, K: (m, m) sparse symmetric, M positive definite, K positive semi-definite.
     solve: x = (K - sigma M)^{-1} b if already factored (e.g. CB reuses its K_ii factor).
+    The Lanczos start vector is fixed (V0_SEED): the same input gives the same modes.
     Returns (lam (n_modes,) ascending [rad^2/s^2], phi (m, n_modes) M-normalised).
     Raises InputError if n_modes is not in 1..m-1, SolverError if ARPACK fails or an
     eigenvalue is negative beyond round-off.
@@ -70,9 +77,10 @@ def shift_invert_modes(M: sp.spmatrix, K: sp.spmatrix, n_modes: int, sigma: floa
     if solve is None:
         solve = factor(sp.csc_matrix(K - sigma * M), spd=sigma <= 0.0)
     op_inv = spla.LinearOperator((m, m), matvec=solve, dtype=np.float64)
+    v0 = np.random.default_rng(V0_SEED).standard_normal(m)
     try:
         lam, phi = spla.eigsh(sp.csr_matrix(K), k=n_modes, M=sp.csr_matrix(M), sigma=sigma,
-                              which="LM", OPinv=op_inv, tol=tol)
+                              which="LM", OPinv=op_inv, tol=tol, v0=v0)
     except (spla.ArpackNoConvergence, spla.ArpackError) as exc:
         raise SolverError(f"eigsh did not converge for {n_modes} modes (sigma={sigma:g}): {exc}"
                           ) from None
@@ -139,5 +147,5 @@ def constrained_modes(M: sp.spmatrix, K: sp.spmatrix, fixed_dofs: np.ndarray, n_
     return to_hz(lam), phi
 
 
-__all__ = ["NEG_RTOL", "SPD_LU", "constrained_modes", "factor", "free_modes", "shift_invert_modes",
-           "to_hz"]
+__all__ = ["NEG_RTOL", "SPD_LU", "V0_SEED", "constrained_modes", "factor", "free_modes",
+           "shift_invert_modes", "to_hz"]
