@@ -22,7 +22,7 @@ def cli() -> None:
 
 def _register() -> None:
     """Attach the sub-commands; each module defines one click command or group."""
-    for name in ("mesh_cmd", "run_cmd", "theory_cmd", "select_cmd", "study_cmd"):
+    for name in ("mesh_cmd", "run_cmd", "theory_cmd", "select_cmd", "study_cmd", "cache_cmd"):
         try:
             module = __import__(f"flexmvm.cli.{name}", fromlist=["command"])
         except ModuleNotFoundError as exc:

@@ -1,7 +1,8 @@
 """Turn a validated Scenario into a System, initial states, probes and a time grid.
 
 Meshes, FE models and bases are cached per process (keyed by their defining data), so a study
-that runs many variants of one scenario assembles each body once.
+that runs many variants of one scenario assembles each body once; FE models and bases are also
+cached on disk across processes (flexmvm.setup_cache), behind the per-process caches.
 """
 
 from __future__ import annotations
@@ -13,6 +14,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexmvm import setup_cache
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.bodies.build import body_from_fe, rigid_body_from_fe
 from flexmvm.constraints.joints import (
@@ -80,10 +82,17 @@ def _rod(spec: RodSpec) -> RodMesh:
     return rod_mesh(spec)
 
 
+def _mesh_source(key) -> dict | None:
+    """Disk-cache key inputs of a rod spec or a mesh file (None: file unreadable, no caching)."""
+    if isinstance(key, RodSpec):
+        return setup_cache.rod_source(key)
+    return setup_cache.file_source(key)
+
+
 @functools.lru_cache(maxsize=8)
 def _fe(key, material: Material) -> FEModel:
     mesh = _rod(key).mesh if isinstance(key, RodSpec) else read_mesh(key)
-    return assemble(mesh, material)
+    return setup_cache.cached_fe(_mesh_source(key), mesh, material, assemble)
 
 
 def reference_condition(key, mesh: Mesh, ref_set: str):
@@ -125,7 +134,10 @@ def _basis_cached(key, material: Material, kind: BasisKind, retained: tuple, mod
                   ref_set: str) -> Basis:
     fe = _fe(key, material)
     ref = reference_condition(key, fe.mesh, ref_set)
-    return build_basis(fe, kind, ref, retained_nodes=np.array(retained, dtype=np.int64), n_modes=modes)
+    nodes = np.array(retained, dtype=np.int64)
+    return setup_cache.cached_basis(
+        _mesh_source(key), material, kind, ref_set, ref, nodes, modes,
+        lambda: build_basis(fe, kind, ref, retained_nodes=nodes, n_modes=modes))
 
 
 def _retained_nodes(model, mesh: Mesh, rod: RodMesh | None, where: str) -> np.ndarray:

@@ -1,0 +1,267 @@
+"""Disk cache of what setup builds: FE models (M, K, M_scalar) and reduction bases (psi).
+
+An entry is one ``.npz`` file (``np.savez``, no pickles; sparse matrices as their CSR
+arrays) named ``<kind>-<key>.npz``. The key is a SHA-256 of the canonical JSON of every input
+the entry depends on (mesh: rod spec or mesh-file content hash; material E, nu, rho; basis
+kind, retained nodes, modes, reference set and DOFs) and of the code version, a hash of the
+source files that produce it (CODE_SOURCES). Entries are written atomically; an unreadable or
+malformed entry is ignored and rebuilt, an unwritable cache directory is ignored.
+
+Location: ``$FLEXMVM_CACHE_DIR`` if set, else the platform user cache directory
+(``~/.cache/flexmvm`` on Linux). ``FLEXMVM_NO_CACHE=1`` bypasses the cache (no read, no
+write). Rod meshes are not stored: generating one takes ~10 ms, no more than reading it back.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import functools
+import hashlib
+import os
+import sys
+import zipfile
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass
+from enum import Enum
+from pathlib import Path
+
+import numpy as np
+import scipy.sparse as sp
+
+import flexmvm
+from flexmvm.errors import InputError
+from flexmvm.fe.assembly import FEModel
+from flexmvm.materials import Material
+from flexmvm.mesh.mesh import Mesh
+from flexmvm.reduction.basis import Basis, BasisKind
+from flexmvm.reduction.reference import ReferenceCondition
+from flexmvm.results.atomic import atomic_path, canonical_json
+
+ENV_DIR = "FLEXMVM_CACHE_DIR"
+ENV_OFF = "FLEXMVM_NO_CACHE"
+SUFFIX = ".npz"
+
+#: Package modules whose source makes up the code version (paths relative to flexmvm/).
+CODE_SOURCES = ("mesh", "fe", "reduction", "materials.py")
+
+#: Format of the stored arrays; bump when the layout of an entry changes.
+FORMAT = 1
+
+#: What reading or decoding a corrupt, truncated or foreign entry raises (treated as a miss).
+_UNREADABLE = (OSError, EOFError, ValueError, KeyError, TypeError, IndexError,
+               zipfile.BadZipFile)
+
+
+@dataclass(frozen=True)
+class CacheInfo:
+    """Summary of the cache directory: path, number of entries, total size [MB]."""
+
+    path: Path
+    n_entries: int
+    size_mb: float
+
+
+def cache_dir() -> Path:
+    """The cache directory: $FLEXMVM_CACHE_DIR, else the platform user cache dir + flexmvm."""
+    env = os.environ.get(ENV_DIR, "").strip()
+    if env:
+        return Path(env).expanduser()
+    home = Path.home()
+    if sys.platform == "win32":
+        return Path(os.environ.get("LOCALAPPDATA") or home / "AppData" / "Local") / "flexmvm"
+    if sys.platform == "darwin":
+        return home / "Library" / "Caches" / "flexmvm"
+    return Path(os.environ.get("XDG_CACHE_HOME") or home / ".cache") / "flexmvm"
+
+
+def enabled() -> bool:
+    """False when $FLEXMVM_NO_CACHE is set to 1/true/yes/on."""
+    return os.environ.get(ENV_OFF, "").strip().lower() not in ("1", "true", "yes", "on")
+
+
+@functools.lru_cache(maxsize=1)
+def code_version() -> str:
+    """SHA-256 (16 hex digits) of the source files listed in CODE_SOURCES."""
+    root = Path(flexmvm.__file__).parent
+    digest = hashlib.sha256()
+    for name in CODE_SOURCES:
+        path = root / name
+        for f in sorted(path.rglob("*.py")) if path.is_dir() else [path]:
+            digest.update(f.relative_to(root).as_posix().encode() + b"\0")
+            digest.update(f.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def make_key(kind: str, inputs: Mapping, version: str | None = None) -> str:
+    """Entry name ``<kind>-<32 hex>`` of ``inputs`` (JSON-able) under a code version."""
+    doc = {"format": FORMAT, "kind": kind, "inputs": inputs,
+           "code": code_version() if version is None else version}
+    return f"{kind}-{hashlib.sha256(canonical_json(doc).encode()).hexdigest()[:32]}"
+
+
+def rod_source(spec) -> dict:
+    """Key inputs of a generated rod mesh: every RodSpec field (enums by value)."""
+    return {"rod": {k: (v.value if isinstance(v, Enum) else v)
+                    for k, v in dataclasses.asdict(spec).items()}}
+
+
+def file_source(path: str | os.PathLike[str]) -> dict | None:
+    """Key inputs of a mesh file: SHA-256 of its content; None if it cannot be read."""
+    try:
+        return {"file_sha256": hashlib.sha256(Path(path).read_bytes()).hexdigest()}
+    except OSError:
+        return None
+
+
+def material_inputs(material: Material) -> dict:
+    """Key inputs of a material: E [Pa], nu [-], rho [kg/m^3] (the name changes nothing)."""
+    return {"E": float(material.E), "nu": float(material.nu), "rho": float(material.rho)}
+
+
+def load(key: str) -> dict[str, np.ndarray] | None:
+    """The arrays of entry ``key``, or None if absent, disabled or unreadable."""
+    if not enabled():
+        return None
+    try:
+        with np.load(cache_dir() / (key + SUFFIX), allow_pickle=False) as z:
+            return {name: z[name] for name in z.files}
+    except _UNREADABLE:  # a corrupt or foreign file is a miss, rebuilt and overwritten
+        return None
+
+
+def save(key: str, arrays: Mapping[str, np.ndarray]) -> None:
+    """Write entry ``key`` atomically; silently skipped if disabled or unwritable."""
+    if not enabled():
+        return
+    directory = cache_dir()
+    try:
+        directory.mkdir(parents=True, exist_ok=True)
+        with atomic_path(directory / (key + SUFFIX)) as tmp, open(tmp, "wb") as f:
+            np.savez(f, **arrays)
+    except (OSError, InputError, ValueError):  # a read-only or full disk must not stop a run
+        return
+
+
+def _entries() -> list[Path]:
+    directory = cache_dir()
+    return sorted(directory.glob("*" + SUFFIX)) if directory.is_dir() else []
+
+
+def info() -> CacheInfo:
+    """Path, number of entries and total size [MB] of the cache directory."""
+    files = _entries()
+    size = sum(f.stat().st_size for f in files)
+    return CacheInfo(cache_dir(), len(files), size / 1e6)
+
+
+def clear() -> int:
+    """Delete every entry (and stray temporary files); returns the number of entries removed."""
+    files = _entries()
+    for f in files:
+        f.unlink(missing_ok=True)
+    directory = cache_dir()
+    if directory.is_dir():
+        for tmp in directory.glob(".*.tmp"):
+            tmp.unlink(missing_ok=True)
+    return len(files)
+
+
+def _decoded(key: str, decode: Callable[[Mapping[str, np.ndarray]], object]):
+    """decode(arrays of entry ``key``), or None if the entry is absent or malformed."""
+    arrays = load(key)
+    if arrays is None:
+        return None
+    try:
+        return decode(arrays)
+    except _UNREADABLE:
+        return None
+
+
+def _csr_arrays(prefix: str, a) -> dict[str, np.ndarray]:
+    a = sp.csr_matrix(a)
+    return {f"{prefix}_data": a.data, f"{prefix}_indices": a.indices,
+            f"{prefix}_indptr": a.indptr, f"{prefix}_shape": np.asarray(a.shape, np.int64)}
+
+
+def _csr(arrays: Mapping[str, np.ndarray], prefix: str) -> sp.csr_matrix:
+    shape = tuple(int(n) for n in arrays[f"{prefix}_shape"])
+    return sp.csr_matrix((arrays[f"{prefix}_data"], arrays[f"{prefix}_indices"],
+                          arrays[f"{prefix}_indptr"]), shape=shape)
+
+
+def fe_key(source: Mapping, material: Material) -> str:
+    """Entry name of the consistent-mass FE model of mesh ``source`` in ``material``."""
+    return make_key("fe", {"mesh": source, "material": material_inputs(material)})
+
+
+def _fe_from(arrays: Mapping[str, np.ndarray], mesh: Mesh, material: Material) -> FEModel:
+    M, K, Ms = _csr(arrays, "M"), _csr(arrays, "K"), _csr(arrays, "M_scalar")
+    n = 3 * mesh.n_nodes
+    if M.shape != (n, n) or K.shape != (n, n) or Ms.shape != (n // 3, n // 3):
+        raise ValueError("stored FE model does not match the mesh")
+    mass, volume = (float(x) for x in arrays["mass_volume"])
+    return FEModel(mesh, material, M, K, Ms, mass, volume)
+
+
+def cached_fe(source: Mapping | None, mesh: Mesh, material: Material,
+              build: Callable[[Mesh, Material], FEModel]) -> FEModel:
+    """The FE model of ``mesh`` (described by ``source``) from the cache, else built and stored.
+
+    source: rod_source(spec) or file_source(path); None disables caching for this model.
+    build: e.g. flexmvm.fe.assembly.assemble (consistent mass).
+    """
+    if source is None:
+        return build(mesh, material)
+    key = fe_key(source, material)
+    hit = _decoded(key, lambda arrays: _fe_from(arrays, mesh, material))
+    if hit is not None:
+        return hit
+    fe = build(mesh, material)
+    save(key, {**_csr_arrays("M", fe.M), **_csr_arrays("K", fe.K),
+               **_csr_arrays("M_scalar", fe.M_scalar),
+               "mass_volume": np.array([fe.mass, fe.volume])})
+    return fe
+
+
+def basis_key(source: Mapping, material: Material, kind: BasisKind, reference_set: str,
+              reference: ReferenceCondition, retained: np.ndarray, n_modes: int,
+              version: str | None = None) -> str:
+    """Entry name of a basis: its FE model's inputs, kind, reference, retained nodes, modes."""
+    inputs = {"mesh": source, "material": material_inputs(material), "kind": kind.value,
+              "reference": {"set": reference_set, "fixed_dofs": reference.fixed_dofs.tolist()},
+              "retained": [int(k) for k in retained], "n_modes": int(n_modes)}
+    return make_key("basis", inputs, version)
+
+
+def _basis_from(arrays: Mapping[str, np.ndarray], kind: BasisKind,
+                reference: ReferenceCondition, retained: np.ndarray, n_modes: int) -> Basis:
+    psi = _csr(arrays, "psi") if "psi_shape" in arrays else arrays["psi"]
+    nodes, freqs = arrays["retained_nodes"], arrays["mode_freqs_hz"]
+    if kind is not BasisKind.FULL and not np.array_equal(nodes, retained):
+        raise ValueError("stored retained nodes differ")
+    if freqs.shape != (n_modes,) or psi.ndim != 2:
+        raise ValueError("stored basis is malformed")
+    return Basis(kind, psi, nodes.astype(np.int64), n_modes, reference, freqs)
+
+
+def cached_basis(source: Mapping | None, material: Material, kind: BasisKind,
+                 reference_set: str, reference: ReferenceCondition, retained: np.ndarray,
+                 n_modes: int, build: Callable[[], Basis]) -> Basis:
+    """The basis from the cache, else ``build()`` stored; source None: build, no caching."""
+    if source is None:
+        return build()
+    key = basis_key(source, material, kind, reference_set, reference, retained, n_modes)
+    hit = _decoded(key, lambda arrays: _basis_from(arrays, kind, reference, retained, n_modes))
+    if hit is not None:
+        return hit
+    basis = build()
+    psi = (_csr_arrays("psi", basis.psi) if sp.issparse(basis.psi)
+           else {"psi": np.ascontiguousarray(basis.psi)})
+    save(key, {**psi, "retained_nodes": basis.retained_nodes,
+               "mode_freqs_hz": basis.mode_freqs_hz})
+    return basis
+
+
+__all__ = ["CODE_SOURCES", "ENV_DIR", "ENV_OFF", "CacheInfo", "basis_key", "cache_dir",
+           "cached_basis", "cached_fe", "clear", "code_version", "enabled", "fe_key",
+           "file_source", "info", "load", "make_key", "material_inputs", "rod_source", "save"]

@@ -1,0 +1,215 @@
+"""Disk cache of setup results (flexmvm.setup_cache): hits equal fresh builds, keys follow
+every input, bad entries are rebuilt, `cache clear`/`info` and FLEXMVM_NO_CACHE work."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import subprocess
+import sys
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from flexmvm import setup_cache
+from flexmvm.fe.assembly import assemble
+from flexmvm.materials import ALUMINIUM, Material
+from flexmvm.mesh.rod import RodSpec, rod_mesh
+from flexmvm.reduction.basis import BasisKind, build_basis
+from flexmvm.reduction.reference import three_two_one
+from flexmvm.reduction.rod_reference import rod_reference
+from flexmvm.scenarios import build
+
+SPEC = RodSpec(length_m=0.04, radius_m=0.005, n_rings=2, first_element_m=1e-3,
+               max_element_m=0.01)
+SOURCE = setup_cache.rod_source(SPEC)
+
+
+@pytest.fixture(autouse=True)
+def cache(tmp_path, monkeypatch):
+    """A fresh, enabled cache directory per test."""
+    monkeypatch.setenv(setup_cache.ENV_DIR, str(tmp_path / "cache"))
+    monkeypatch.delenv(setup_cache.ENV_OFF, raising=False)
+    return tmp_path / "cache"
+
+
+@pytest.fixture(scope="module")
+def rod():
+    return rod_mesh(SPEC)
+
+
+@pytest.fixture(scope="module")
+def fe(rod):
+    return assemble(rod.mesh, ALUMINIUM)
+
+
+class Counter:
+    """A builder that counts its calls."""
+
+    def __init__(self, build):
+        self.build, self.calls = build, 0
+
+    def __call__(self, *args):
+        self.calls += 1
+        return self.build(*args)
+
+
+def _same_csr(a, b) -> bool:
+    a, b = sp.csr_matrix(a), sp.csr_matrix(b)
+    return (a.shape == b.shape and np.array_equal(a.data, b.data)
+            and np.array_equal(a.indices, b.indices) and np.array_equal(a.indptr, b.indptr))
+
+
+def _cb(fe, rod, n_modes=5, selection=(1, 2)):
+    ref = rod_reference(rod)
+    nodes = rod.selection(*selection)
+    builder = Counter(lambda: build_basis(fe, BasisKind.CRAIG_BAMPTON, ref, nodes, n_modes))
+    basis = setup_cache.cached_basis(SOURCE, ALUMINIUM, BasisKind.CRAIG_BAMPTON, "end_b", ref,
+                                     nodes, n_modes, builder)
+    return basis, builder
+
+
+def test_fe_hit_equals_fresh_build(rod, fe):
+    builder = Counter(assemble)
+    first = setup_cache.cached_fe(SOURCE, rod.mesh, ALUMINIUM, builder)
+    second = setup_cache.cached_fe(SOURCE, rod.mesh, ALUMINIUM, builder)
+    assert builder.calls == 1
+    for name in ("M", "K", "M_scalar"):
+        assert _same_csr(getattr(second, name), getattr(fe, name))
+        assert _same_csr(getattr(first, name), getattr(fe, name))
+    assert (second.mass, second.volume) == (fe.mass, fe.volume)
+    assert second.mesh is rod.mesh and second.material == ALUMINIUM
+
+
+def test_basis_hit_equals_fresh_build(rod, fe):
+    fresh, builder = _cb(fe, rod)
+    hit, again = _cb(fe, rod)
+    assert builder.calls == 1 and again.calls == 0
+    assert np.array_equal(hit.psi, fresh.psi)
+    assert np.array_equal(hit.mode_freqs_hz, fresh.mode_freqs_hz)
+    assert np.array_equal(hit.retained_nodes, fresh.retained_nodes)
+    assert hit.kind is fresh.kind and hit.n_modes == fresh.n_modes
+    assert np.array_equal(hit.reference.fixed_dofs, fresh.reference.fixed_dofs)
+
+
+def test_full_basis_round_trip(rod, fe):
+    ref = rod_reference(rod)
+    make = Counter(lambda: build_basis(fe, BasisKind.FULL, ref))
+    args = (SOURCE, ALUMINIUM, BasisKind.FULL, "end_b", ref, np.zeros(0, np.int64), 0, make)
+    fresh, hit = setup_cache.cached_basis(*args), setup_cache.cached_basis(*args)
+    assert make.calls == 1 and sp.issparse(hit.psi) and _same_csr(hit.psi, fresh.psi)
+    assert np.array_equal(hit.retained_nodes, fresh.retained_nodes)
+
+
+def test_key_follows_every_input(rod):
+    ref = rod_reference(rod)
+    other_ref = three_two_one(rod.mesh, rod.mesh.node_set("end_b"))
+    nodes = rod.selection(1, 2)
+    base = {"source": SOURCE, "material": ALUMINIUM, "kind": BasisKind.CRAIG_BAMPTON,
+            "reference_set": "end_b", "reference": ref, "retained": nodes, "n_modes": 5}
+    key = setup_cache.basis_key(**base)
+    assert setup_cache.basis_key(**base) == key
+    stiffer = Material(ALUMINIUM.E * 1.01, ALUMINIUM.nu, ALUMINIUM.rho)
+    longer = setup_cache.rod_source(dataclasses.replace(SPEC, length_m=0.05))
+    changes = [{"material": stiffer}, {"retained": rod.selection(1, 1)}, {"n_modes": 6},
+               {"reference_set": "side"}, {"reference": other_ref}, {"source": longer},
+               {"kind": BasisKind.SEED_BLOCK}, {"version": "0" * 16}]
+    keys = {setup_cache.basis_key(**{**base, **change}) for change in changes}
+    assert key not in keys and len(keys) == len(changes)
+    renamed = dataclasses.replace(ALUMINIUM, name="another name")
+    assert setup_cache.basis_key(**{**base, "material": renamed}) == key
+    assert setup_cache.fe_key(SOURCE, stiffer) != setup_cache.fe_key(SOURCE, ALUMINIUM)
+
+
+def test_code_version_and_file_source(tmp_path):
+    version = setup_cache.code_version()
+    assert len(version) == 16 and version == setup_cache.code_version()
+    assert setup_cache.make_key("fe", {"a": 1}) != setup_cache.make_key("fe", {"a": 1}, "x")
+    a, b = tmp_path / "a.msh", tmp_path / "b.msh"
+    a.write_bytes(b"mesh one")
+    b.write_bytes(b"mesh two")
+    assert setup_cache.file_source(a) != setup_cache.file_source(b)
+    assert setup_cache.file_source(tmp_path / "missing.msh") is None
+
+
+@pytest.mark.parametrize("damage", [b"not a zip file", b"PK\x03\x04 truncated", b""])
+def test_corrupt_entry_is_rebuilt(rod, fe, cache, damage):
+    fresh, _ = _cb(fe, rod)
+    (entry,) = cache.glob("basis-*.npz")
+    entry.write_bytes(damage)
+    rebuilt, builder = _cb(fe, rod)
+    assert builder.calls == 1 and np.array_equal(rebuilt.psi, fresh.psi)
+    hit, again = _cb(fe, rod)
+    assert again.calls == 0 and np.array_equal(hit.psi, fresh.psi)
+
+
+def test_malformed_entry_is_rebuilt(rod, fe, cache):
+    fresh, _ = _cb(fe, rod)
+    (entry,) = cache.glob("basis-*.npz")
+    np.savez(entry, psi=np.zeros(3))
+    rebuilt, builder = _cb(fe, rod)
+    assert builder.calls == 1 and np.array_equal(rebuilt.psi, fresh.psi)
+
+
+def test_info_and_clear(rod, fe, cache):
+    assert setup_cache.info().n_entries == 0
+    setup_cache.cached_fe(SOURCE, rod.mesh, ALUMINIUM, assemble)
+    _cb(fe, rod)
+    found = setup_cache.info()
+    assert found.path == cache and found.n_entries == 2 and found.size_mb > 0
+    assert setup_cache.clear() == 2
+    assert setup_cache.info().n_entries == 0 and list(cache.iterdir()) == []
+
+
+def test_no_cache_bypasses(rod, fe, cache, monkeypatch):
+    monkeypatch.setenv(setup_cache.ENV_OFF, "1")
+    assert not setup_cache.enabled()
+    _, first = _cb(fe, rod)
+    _, second = _cb(fe, rod)
+    assert first.calls == 1 and second.calls == 1 and not cache.exists()
+
+
+def test_unwritable_cache_dir_is_ignored(rod, fe, tmp_path, monkeypatch):
+    blocker = tmp_path / "a file"
+    blocker.write_text("not a directory")
+    monkeypatch.setenv(setup_cache.ENV_DIR, str(blocker / "cache"))
+    basis, builder = _cb(fe, rod)
+    assert builder.calls == 1 and basis.n_modes == 5
+
+
+def test_scenario_builder_reads_the_disk_cache(cache, monkeypatch):
+    """A second process (here: cleared per-process caches) builds nothing, mode floor included."""
+    args = (SPEC, ALUMINIUM, BasisKind.CRAIG_BAMPTON, tuple(rod_mesh(SPEC).selection(1, 2)))
+    build._fe.cache_clear()
+    build._basis_cached.cache_clear()
+    with build.craig_bampton_mode_floor(6):
+        fresh = build._basis(*args, 4, "end_b")
+    assert setup_cache.info().n_entries == 2
+    build._fe.cache_clear()
+    build._basis_cached.cache_clear()
+
+    def refuse(*_args, **_kw):
+        raise AssertionError("rebuilt although cached")
+
+    monkeypatch.setattr(build, "build_basis", refuse)
+    monkeypatch.setattr(build, "assemble", refuse)
+    with build.craig_bampton_mode_floor(6):
+        hit = build._basis(*args, 4, "end_b")
+    assert np.array_equal(hit.psi, fresh.psi) and hit.n_modes == 4
+    build._fe.cache_clear()
+    build._basis_cached.cache_clear()
+
+
+def test_cli_info_and_clear(rod, cache):
+    setup_cache.cached_fe(SOURCE, rod.mesh, ALUMINIUM, assemble)
+    env = {**os.environ, setup_cache.ENV_DIR: str(cache)}
+
+    def run(*args):
+        return subprocess.run([sys.executable, "-m", "flexmvm.cli.main", "cache", *args],
+                              capture_output=True, text=True, env=env, timeout=120, check=True)
+
+    out = run("info").stdout
+    assert str(cache) in out and "entries: 1" in out and "MB" in out
+    assert "removed 1 entries" in run("clear").stdout
+    assert "entries: 0" in run("info").stdout
