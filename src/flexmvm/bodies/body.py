@@ -15,6 +15,7 @@ Q holds the elastic force -k_hat q, gravity, nodal loads and the quadratic-veloc
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -71,36 +72,80 @@ class FlexibleBody:
         """S = S0 + S1 q (body frame) [kg m]."""
         return self.inv.S0 + self.inv.S1 @ q
 
-    def _C(self, q: np.ndarray) -> list[list[np.ndarray]]:
-        """C[a][b] = s_a^T M_s P_b = G1[a][b] + G2[b][a] q, shape (nq,)."""
+    @functools.cached_property
+    def _dense_contractions(self) -> tuple[np.ndarray, np.ndarray] | None:
+        """Dense bases: G1 as one (3, 3, nq) array and the nine G2 blocks stacked as one
+        (9 nq, nq) array, block 3a + b = G2[b][a], so that all nine G2[b][a] q of C come
+        from one matrix-vector product (one pass over the blocks instead of nine)."""
+        if self.inv.Ms is not None or not self.nq:
+            return None
+        G1 = np.array([[self.inv.G1[a][b] for b in range(3)] for a in range(3)])
+        G2 = self.inv.G2
+        stack = np.vstack([np.asarray(G2[b][a]) for a in range(3) for b in range(3)])
+        return G1, np.ascontiguousarray(stack)
+
+    def _C(self, q: np.ndarray) -> np.ndarray:
+        """C[a][b] = s_a^T M_s P_b = G1[a][b] + G2[b][a] q, as a (3, 3, nq) array."""
         inv = self.inv
-        G1 = inv.G1
         if inv.Ms is not None:
             # G2[b][a] q = P_b^T M_s (P_a q): one M_s product with 3 columns instead of nine
             # products with the G2 blocks (each as large as M_s)
             U = np.column_stack([inv.PT[a].T @ q for a in range(3)])
             MU = inv.Ms @ U
             PMU = [inv.PT[b] @ MU for b in range(3)]
-            return [[G1[a][b] + PMU[b][:, a] for b in range(3)] for a in range(3)]
-        G2 = inv.G2
-        return [[G1[a][b] + G2[b][a] @ q for b in range(3)] for a in range(3)]
+            return np.array([[inv.G1[a][b] + PMU[b][:, a] for b in range(3)] for a in range(3)])
+        G1, stack = self._dense_contractions
+        return G1 + (stack @ q).reshape(3, 3, self.nq)
 
     def inertia_terms(self, q: np.ndarray):
         """(S, J, M_wq, C) at q: first moment, inertia about the frame origin, the omega-q
-        coupling (3, nq) and the C contractions reused by the velocity terms."""
+        coupling (3, nq) and the C contractions (3, 3, nq) reused by the velocity terms."""
         S = self.first_moment(q)
+        if not self.nq:
+            G = self.inv.G0
+            return S, np.trace(G) * np.eye(3) - G, np.zeros((3, 0)), np.zeros((3, 3, 0))
         C = self._C(q)
+        G1 = np.array([[self.inv.G1[a][b] for b in range(3)] for a in range(3)])
+        # G[a, b] = G0[a, b] + G1[b][a] q + C[a][b] q
+        G = self.inv.G0 + G1.transpose(1, 0, 2) @ q + C @ q
+        G = 0.5 * (G + G.T)
+        J = np.trace(G) * np.eye(3) - G
+        M_wq = np.array([C[a, b] - C[b, a] for _, a, b in _CYCLIC])
+        return S, J, M_wq, C
+
+    def frame_inertia_first_order(self, q: np.ndarray) -> np.ndarray:
+        """J(q) without its quadratic part q^T G2 q (relative size (|u|/L)^2): cheap, for
+        iteration matrices, never for residuals."""
         G = self.inv.G0.copy()
         if self.nq:
             for a in range(3):
                 for b in range(3):
-                    G[a, b] += self.inv.G1[b][a] @ q + C[a][b] @ q
+                    G[a, b] += (self.inv.G1[b][a] + self.inv.G1[a][b]) @ q
         G = 0.5 * (G + G.T)
-        J = np.trace(G) * np.eye(3) - G
-        M_wq = np.zeros((3, self.nq))
-        for c, a, b in _CYCLIC:
-            M_wq[c] = C[a][b] - C[b][a]
-        return S, J, M_wq, C
+        return np.trace(G) * np.eye(3) - G
+
+    @functools.cached_property
+    def _rotational_coupling(self) -> tuple[np.ndarray, np.ndarray | None]:
+        """M_wq(0) (3, nq) and, for dense bases, the stacked antisymmetric blocks
+        [G2[b][a] - G2[a][b]] over cyclic (c, a, b) as one (3 nq, nq) array, so that
+        M_wq(q) = M_wq(0) + (stack @ q).reshape(3, nq) is one matrix-vector product."""
+        G1, G2 = self.inv.G1, self.inv.G2
+        Mw0 = np.array([G1[a][b] - G1[b][a] for _, a, b in _CYCLIC]).reshape(3, self.nq)
+        if self.inv.Ms is not None or not self.nq:
+            return Mw0, None
+        stack = np.vstack([np.asarray(G2[b][a]) - np.asarray(G2[a][b]) for _, a, b in _CYCLIC])
+        return Mw0, np.ascontiguousarray(stack)
+
+    def rotational_coupling(self, q: np.ndarray) -> np.ndarray:
+        """M_wq(q) (3, nq), the omega-q inertia coupling, alone: 3 nq^2 operations for a dense
+        basis instead of the 9 nq^2 of inertia_terms (sparse bases: three M_s products)."""
+        Mw0, stack = self._rotational_coupling
+        if not self.nq:
+            return Mw0
+        if stack is not None:
+            return Mw0 + (stack @ q).reshape(3, self.nq)
+        C = self._C(q)
+        return np.array([C[a, b] - C[b, a] for _, a, b in _CYCLIC])
 
     def frame_mass(self, A: np.ndarray, S: np.ndarray, J: np.ndarray) -> np.ndarray:
         """6 x 6 frame block [[m I, -A S~], [S~ A^T, J]]."""
@@ -138,17 +183,21 @@ class FlexibleBody:
         out = np.zeros(self.nv)
         S1qd = self.inv.S1 @ qd if self.nq else np.zeros(3)
         out[:3] = -A @ (Om @ S + 2.0 * W @ S1qd)
-        H = np.array([[C[a][b] @ qd for b in range(3)] for a in range(3)]) if self.nq else np.zeros((3, 3))
+        H = C @ qd if self.nq else np.zeros((3, 3))  # H[a, b] = C[a][b] . q_dot
         out[3:6] = -(cross3(w, J @ w) + 2.0 * (np.trace(H) * w - H.T @ w))
-        if self.nq:
-            G2 = self.inv.G2
-            Qq = np.zeros(self.nq)
-            for a in range(3):
-                for b in range(3):
-                    if Om[a, b] != 0.0:
-                        Qq -= Om[a, b] * C[b][a]
-                    if W[a, b] != 0.0:
-                        Qq -= 2.0 * W[a, b] * (G2[a][b] @ qd)
+        if self.nq and np.any(w):
+            # sum_ab Om[a, b] C[b][a] and sum_ab W[a, b] G2[a][b] q_dot = sum_c w_c A_c q_dot
+            # with the antisymmetric blocks A_c = G2[b][a] - G2[a][b] of rotational_coupling
+            Qq = -np.einsum("ab,bak->k", Om, C)
+            _, anti = self._rotational_coupling
+            if anti is not None:
+                Qq -= 2.0 * (w @ (anti @ qd).reshape(3, self.nq))
+            else:
+                G2 = self.inv.G2
+                for a in range(3):
+                    for b in range(3):
+                        if W[a, b] != 0.0:
+                            Qq -= 2.0 * W[a, b] * (G2[a][b] @ qd)
             out[6:] = Qq
         return out
 

@@ -147,6 +147,43 @@ class BodySolver:
         Zx = f.Zr @ (A.T @ xf[:3]) + f.Zw @ xf[3:]
         return np.concatenate([xf, yq - Zx])
 
+    def prepare_translation(self, h: float, A: np.ndarray) -> None:
+        """Set up solves with the translational block of W only (frame rotation frozen):
+
+            W_t = [ m I       A S1 ]      Schur complement S_t = m I - A (S1 W_qq^-1 S1^T) A^T
+                  [ S1^T A^T  W_qq ]      (3 x 3; S1 W_qq^-1 S1^T is cached per h)
+
+        W_t is constant while A is: the non-rotating step is linear in v+ (see
+        integrate.nonrotating)."""
+        self._A = A
+        m = self.body.inv.mass
+        if not self.body.nq:
+            self._f = None
+            self._schur_t = np.full(3, m)
+            return
+        f = self._factor(h)
+        self._f = f
+        St = m * np.eye(3) - A @ f.S1Zr @ A.T
+        try:
+            self._schur_t = sla.cho_factor(0.5 * (St + St.T))
+        except np.linalg.LinAlgError:
+            raise SolverError(f"body {self.body.name!r}: translational Schur complement is not "
+                              "positive definite") from None
+
+    def solve_translation(self, b: np.ndarray, yq: np.ndarray | None = None) -> np.ndarray:
+        """x = W_t^-1 b for b of shape (3 + nq,) or (3 + nq, k); yq = W_qq^-1 b[3:] when
+        already known (contact columns from nodal_inverse; b may then be just its first three
+        rows). Needs prepare_translation."""
+        if self._f is None:
+            return b / self._schur_t[:, None] if b.ndim == 2 else b / self._schur_t
+        f, A = self._f, self._A
+        bt = b[:3]
+        y = np.asarray(f.solve(b[3:])) if yq is None else yq
+        if y.ndim == 1 and b.ndim == 2:
+            y = y[:, None]
+        xt = sla.cho_solve(self._schur_t, bt - A @ (self.body.inv.S1 @ y))
+        return np.concatenate([xt, y - f.Zr @ (A.T @ xt)])
+
     def _mw(self, f: _Factor) -> np.ndarray:
         return getattr(f, "Mw_used", self._Mw0)
 

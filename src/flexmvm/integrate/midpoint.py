@@ -32,6 +32,7 @@ import numpy as np
 
 from flexmvm.constraints.rows import Rows, stack
 from flexmvm.errors import SolverError
+from flexmvm.integrate import nonrotating
 from flexmvm.integrate.body_solver import BodySolver
 from flexmvm.integrate.lcp import solve_mixed_lcp
 from flexmvm.integrate.state import BodyState
@@ -68,7 +69,7 @@ class MidpointIntegrator:
     order = 2
 
     def __init__(self, system: System, *, theta: float = 0.5, rtol: float = 1e-10,
-                 max_iter: int = 40):
+                 max_iter: int = 40, exploit_nonrotating: bool = True):
         if not 0.5 <= theta <= 1.0:
             raise SolverError(f"theta must be in [0.5, 1], got {theta!r}")
         self.system = system
@@ -77,6 +78,8 @@ class MidpointIntegrator:
         self.rtol = rtol
         self.max_iter = max_iter
         self.n_joint_rows = sum(j.n_rows for j in system.joints)
+        self.exploit_nonrotating = exploit_nonrotating
+        self.n_nonrotating_steps = 0
         self._loads: dict[int, list] = {}
         for load in system.loads:
             self._loads.setdefault(load.body, []).append(load)
@@ -147,15 +150,38 @@ class MidpointIntegrator:
 
     # ----------------------------------------------------------------------------------------
     def step(self, t: float, states: list[BodyState], h: float) -> StepResult:
-        sysm = self.system
-        bodies = sysm.bodies
-        self._prepare(states, h, refresh_tol=None)
+        """One step from t to t + h. Frames that do not rotate (omega = 0, no joints) take the
+        linear step of integrate.nonrotating, verified against the rotational rows; any other
+        step, or one whose verification fails, the general modified-Newton step."""
+        crows, parts = self._candidate_rows(states, h)
+        if self.exploit_nonrotating and nonrotating.applies(self.system, states):
+            out = nonrotating.nonrotating_step(self.system, self.solvers, self.theta, self.rtol,
+                                               self._loads, t, states, h, crows)
+            if out is not None:
+                self.n_nonrotating_steps += 1
+                new_states, lam_c = out
+                self._after_step(parts, lam_c, h)
+                return StepResult(new_states, np.zeros(0), crows, lam_c, 1, 0.0)
+        return self._newton_step(t, states, h, crows, parts)
+
+    def _candidate_rows(self, states, h):
         crows = ContactRows.empty()
         parts = []
-        for provider in sysm.contacts:
-            part = provider.candidate_rows(bodies, states, h)
+        for provider in self.system.contacts:
+            part = provider.candidate_rows(self.system.bodies, states, h)
             parts.append((provider, part, crows.rows.m))
             crows = _merge_contacts(crows, part)
+        return crows, parts
+
+    @staticmethod
+    def _after_step(parts, lam_c, h):
+        for provider, part, offset in parts:
+            hook = getattr(provider, "after_step", None)
+            if hook is not None:
+                hook(part, lam_c[offset : offset + part.rows.m], h)
+
+    def _newton_step(self, t, states, h, crows, parts) -> StepResult:
+        self._prepare(states, h, refresh_tol=None)
         Yc = self._contact_inverse(crows, h) if crows.rows.m else {}
         Gc = {b: crows.rows.body_matrix(b) for b in crows.rows.blocks}
         Dcc = sum((Gc[b] @ Yc[b] for b in Yc), np.zeros((crows.rows.m, crows.rows.m)))
@@ -205,11 +231,7 @@ class MidpointIntegrator:
                 v_plus[b] = v_plus[b] + Yb @ lam[:n_j]
             for b, Yb in Yc.items():
                 v_plus[b] = v_plus[b] + Yb @ lam[n_j:]
-        lam_c = lam[n_j:]
-        for provider, part, offset in parts:
-            hook = getattr(provider, "after_step", None)
-            if hook is not None:
-                hook(part, lam_c[offset : offset + part.rows.m], h)
+        self._after_step(parts, lam[n_j:], h)
         new_states = [e for e in ends]
         for st, vp in zip(new_states, v_plus):
             st.v = vp
@@ -220,12 +242,14 @@ class MidpointIntegrator:
         """Frame blocks of W at `states`; M_wq refreshed when it drifted (always for small
         bases, by COUPLING_TOL for large ones, unconditionally when refresh_tol = 0)."""
         for body, solver, st in zip(self.system.bodies, self.solvers, states):
-            terms = body.inertia_terms(st.q)
+            # an iteration matrix: M_wq exact (thin rods' frame Schur complement depends on
+            # it), J to first order in q (its quadratic part is (|u|/L)^2 of it)
             if body.nq:
                 tol = refresh_tol if refresh_tol is not None else (
                     0.0 if body.nq <= SMALL_BASIS else COUPLING_TOL)
-                solver.refresh_coupling(h, terms[2], tol)
-            solver.prepare(h, st.A, body.frame_mass(st.A, terms[0], terms[1]))
+                solver.refresh_coupling(h, body.rotational_coupling(st.q), tol)
+            J = body.frame_inertia_first_order(st.q)
+            solver.prepare(h, st.A, body.frame_mass(st.A, body.first_moment(st.q), J))
 
     def _relative_residual(self, R, Gj, Gc, lam, n_j, scales) -> float:
         """Largest momentum residual (constraint impulses included) relative to each body's

@@ -1,0 +1,149 @@
+"""The Moreau-Jean step of bodies whose frames do not rotate: one solve per body.
+
+When every body enters the step with omega = 0 and no joint acts, take omega+ = 0. The
+quadratic-velocity forces vanish, A stays constant, and the translational and elastic rows of
+the scheme (see midpoint.py) are linear in dv = v+ - v- with constant coefficients:
+
+    [ m I       A S1 ] [dr_dot]   [ h (m g + f_r)                                      ]
+    [ S1^T A^T  W_qq ] [dq_dot] = [ h (S1^T A^T g + f_q - K (q + theta h q_dot) - C q_dot) ]
+                                  + Phi_t^T lambda
+
+with W_qq = M_qq + theta h C + theta^2 h^2 K (body_solver). So one back-substitution per body
+gives v_free, the columns W_t^-1 Phi^T of the contact rows come from the cached nodal
+columns, and the LCP on D = Phi W_t^-1 Phi^T gives lambda. No Newton iteration is needed.
+
+Then the rotational rows of the full scheme are evaluated at this solution (omega_m = 0,
+domega = 0):
+
+    res_w = S(q_m) x (A^T dr_dot) + M_wq(q_m) dq_dot - h S(q_m) x (A^T g) - h tau_loads
+            - Phi_w^T lambda
+
+If |res_w| <= rtol * scale for every body, omega+ = 0 satisfies every equation of the scheme
+to the Newton tolerance, so this IS the step of the full scheme. Otherwise the caller takes
+the general Newton step. An axial impact of rods is such a case (symmetric about the axis,
+so no moment acts on either frame).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from flexmvm.bodies.rotation import cross3
+from flexmvm.integrate.lcp import solve_mixed_lcp
+from flexmvm.integrate.state import BodyState
+from flexmvm.integrate.system import ContactRows
+
+
+def applies(system, states: list[BodyState]) -> bool:
+    """True when no joint acts and every frame enters the step with omega exactly 0."""
+    return not system.joints and all(not np.any(st.v[3:6]) for st in states)
+
+
+def nonrotating_step(system, solvers, theta: float, rtol: float, loads: dict, t: float,
+                     states: list[BodyState], h: float, crows: ContactRows):
+    """The step above. Returns (new states, contact impulses) or None when a rotational
+    residual exceeds rtol times the body's momentum scale (the frame would rotate)."""
+    g = system.gravity
+    v_free, rhs_scale = [], []
+    for b, (body, solver, st) in enumerate(zip(system.bodies, solvers, states)):
+        solver.prepare_translation(h, st.A)
+        rhs = _free_rhs(body, st, g, loads.get(b, ()), t + theta * h, theta, h)
+        dv = solver.solve_translation(rhs)
+        v = st.v.copy()
+        v[:3] += dv[:3]
+        v[6:] += dv[3:]
+        v_free.append(v)
+        rhs_scale.append(float(np.abs(rhs).max()) if rhs.size else 0.0)
+    v_plus = [v.copy() for v in v_free]
+    lam = np.zeros(crows.rows.m)
+    if crows.rows.m:
+        lam = _contact_impulses(system, solvers, h, crows, v_free, v_plus)
+    for b, (body, st, vp) in enumerate(zip(system.bodies, states, v_plus)):
+        tau = sum((_load_torque(body, load, st, vp, theta, h)
+                   for load in loads.get(b, ()) if t + theta * h >= load.t_start_s),
+                  np.zeros(3))
+        if not _rotation_balanced(body, st, vp, crows, lam, b, tau, g, theta, h, rtol,
+                                  rhs_scale[b]):
+            return None
+    new_states = []
+    for st, vp in zip(states, v_plus):
+        vm = theta * vp + (1.0 - theta) * st.v
+        new_states.append(BodyState(st.r + h * vm[:3], st.A.copy(), st.q + h * vm[6:], vp))
+    return new_states, lam
+
+
+def _free_rhs(body, st, g, loads, t_theta, theta, h) -> np.ndarray:
+    """Right-hand side [h (m g + f_r), h (S1^T A^T g + f_q - K q_pred - C q_dot)] (3 + nq,)."""
+    rhs = np.zeros(3 + body.nq)
+    if np.any(g):
+        rhs[:3] = h * body.inv.mass * g
+        if body.nq:
+            rhs[3:] = h * (body.inv.S1.T @ (st.A.T @ g))
+    if body.nq:
+        q_pred = st.q + (theta * h) * st.v[6:]
+        rhs[3:] += h * body.elastic_forces(q_pred, st.v[6:])
+    for load in loads:
+        if t_theta >= load.t_start_s:
+            f = np.asarray(load.force_n, float)
+            fr, fq = body.point_jacobian(load.node, st.A, st.q, f)
+            rhs[:3] += h * fr[:3]
+            rhs[3:] += h * fq
+    return rhs
+
+
+def _contact_impulses(system, solvers, h, crows: ContactRows, v_free, v_plus) -> np.ndarray:
+    """lambda of the LCP on D = Phi W_t^-1 Phi^T; adds W_t^-1 Phi^T lambda to v_plus."""
+    rows = crows.rows
+    m = rows.m
+    D = np.zeros((m, m))
+    c = -crows.lower.copy()
+    cols = {}
+    for b, (bf, bq) in rows.blocks.items():
+        solver, body = solvers[b], system.bodies[b]
+        sel = rows.nodal.get(b)
+        yq = solver.nodal_inverse(h, sel) if (sel is not None and body.nq) else None
+        phi_t = bf[:, :3]
+        Y = (solver.solve_translation(phi_t.T, yq) if yq is not None
+             else solver.solve_translation(np.vstack([phi_t.T, bq.T])))
+        phi_q = (sel @ body.psi) if (sel is not None and body.is_sparse) else bq
+        D += phi_t @ Y[:3]
+        c += phi_t @ v_free[b][:3]
+        if body.nq:
+            D += np.asarray(phi_q @ Y[3:])
+            c += np.asarray(phi_q @ v_free[b][6:]).ravel()
+        cols[b] = Y
+    lam = solve_mixed_lcp(D, c, crows.n_eq)
+    for b, Y in cols.items():
+        dv = Y @ lam
+        v_plus[b][:3] += dv[:3]
+        v_plus[b][6:] += dv[3:]
+    return lam
+
+
+def _load_torque(body, load, st, vp, theta, h) -> np.ndarray:
+    q_m = st.q + theta * h * (theta * vp[6:] + (1.0 - theta) * st.v[6:])
+    fr, _ = body.point_jacobian(load.node, st.A, q_m, np.asarray(load.force_n, float))
+    return fr[3:]
+
+
+def _rotation_balanced(body, st, vp, crows, lam, b, tau, g, theta, h, rtol, rhs_scale) -> bool:
+    """|res_w| <= rtol * scale at the step's solution (module docstring)."""
+    dv = vp - st.v
+    vm = st.v + theta * dv
+    q_m = st.q + theta * h * vm[6:]
+    S = body.first_moment(q_m) if body.nq else body.inv.S0
+    res = cross3(S, st.A.T @ dv[:3]) - h * tau
+    if np.any(g):
+        res -= h * cross3(S, st.A.T @ g)
+    if body.nq:
+        res += body.rotational_coupling(q_m) @ dv[6:]
+    blk = crows.rows.blocks.get(b)
+    contact = np.zeros(3 + body.nq)
+    if blk is not None:
+        res -= blk[0][:, 3:6].T @ lam
+        contact[:3] = blk[0][:, :3].T @ lam
+        if body.nq:
+            contact[3:] = blk[1].T @ lam
+    momentum = body.inv.mass * float(np.abs(vm[:3]).max())
+    scale = max(rhs_scale, float(np.abs(contact).max()) if contact.size else 0.0, momentum)
+    return float(np.abs(res).max()) <= rtol * max(scale, 1e-300)

@@ -1,0 +1,119 @@
+"""The time step's fast paths against the general one and against the code before them.
+
+- Histories unchanged: three short cases (tests/data) against histories made by commit 9bfd055,
+  the last commit before the speed work (2026-11-23: stored in tests/data/
+  step_regression_9bfd055.npz by the script in the module docstring of make_regression below).
+  Tolerance: force NCC >= 0.99999 and peak within 0.01 % (issue 10's acceptance); measured
+  differences are ~1e-10 relative, the Newton tolerance.
+- The non-rotating step (integrate.nonrotating) against the general Newton step on a case where
+  it applies (flat-on-flat: no moment on either frame): the same history to 1e-8 of the peak,
+  since both solve the same equations, one exactly, the other to rtol = 1e-10.
+- Its pieces: the translational bordered solve against a dense solve; M_wq(q) from the stacked
+  antisymmetric blocks against the full inertia terms.
+"""
+
+from __future__ import annotations
+
+import functools
+from pathlib import Path
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from flexmvm.bodies.body import FlexibleBody
+from flexmvm.integrate.body_solver import BodySolver
+from flexmvm.integrate.driver import simulate
+from flexmvm.metrics.ncc import ncc
+from flexmvm.scenarios.build import build_scenario
+from flexmvm.scenarios.run import run_scenario
+from flexmvm.scenarios.schema import load_scenario
+
+DATA = Path(__file__).parent / "data"
+REFERENCE = DATA / "step_regression_9bfd055.npz"
+CASES = {"tiny": ("tiny_impact.toml", None), "tiny_mvm": ("tiny_impact.toml", "mvm"),
+         "flat": ("short_flat_impact.toml", None)}
+
+
+@functools.cache
+def _run(key: str):
+    f, model = CASES[key]
+    return run_scenario(load_scenario(DATA / f).with_overrides(model=model)).result
+
+
+@pytest.mark.parametrize("key", sorted(CASES))
+def test_histories_unchanged_against_pre_speedup_code(key):
+    """Force NCC >= 0.99999, peak within 0.01 %, the same time grid and axial probe
+    velocities within 1e-6 of their range as commit 9bfd055 (see module docstring). Lateral
+    probe velocities within 1e-5 of the axial range: on the flat case they are round-off noise
+    of the LCP on redundant contact rows, 3e-6 of the axial speed in both codes (measured
+    8.7e-7 and 8.4e-7 m/s), which a different (equally exact) step draws differently."""
+    ref = np.load(REFERENCE)
+    res = _run(key)
+    assert np.array_equal(res.t, ref[key + "_t"])
+    F0, F1 = ref[key + "_F"], res.contact_force
+    assert ncc(res.t, F0, res.t, F1) >= 0.99999
+    assert abs(F1.max() / F0.max() - 1.0) < 1e-4
+    pv0 = ref[key + "_pv"]
+    axial = np.abs(pv0[..., 0]).max()
+    assert np.abs(res.probe_v[..., 0] - pv0[..., 0]).max() <= 1e-6 * axial
+    assert np.abs(res.probe_v[..., 1:] - pv0[..., 1:]).max() <= 1e-5 * axial
+
+
+def test_nonrotating_step_equals_newton_step():
+    """Flat-on-flat impact: the linear non-rotating step is taken (nearly every step) and its
+    history equals the general modified-Newton step's to 1e-8 of the peak force."""
+    built = build_scenario(load_scenario(DATA / "short_flat_impact.toml"))
+    fast_res, newton_res = (simulate(built.system, built.states, built.grid, built.probes,
+                                     exploit_nonrotating=fast) for fast in (True, False))
+    assert fast_res.n_nonrotating_steps >= 0.9 * fast_res.n_steps
+    assert newton_res.n_nonrotating_steps == 0
+    peak = newton_res.contact_force.max()
+    assert np.abs(fast_res.contact_force - newton_res.contact_force).max() <= 1e-8 * peak
+    p0 = fast_res.momentum[0]
+    assert np.abs(fast_res.momentum - p0).max() <= 1e-12 * np.linalg.norm(p0)
+
+
+def _random_body(sparse: bool, seed: int = 0) -> FlexibleBody:
+    rng = np.random.default_rng(seed)
+    n, nq = 30, 12
+    X = rng.normal(size=(n, 3))
+    Ms = sp.random(n, n, density=0.2, random_state=seed)
+    Ms = Ms @ Ms.T + sp.eye(n)
+    psi = rng.normal(size=(3 * n, nq))
+    K = rng.normal(size=(nq, nq))
+    K = K @ K.T + nq * np.eye(nq)
+    if sparse:
+        return FlexibleBody.build("s", X, Ms, sp.csr_matrix(psi * (np.abs(psi) > 1.0)),
+                                  sp.csr_matrix(K))
+    return FlexibleBody.build("d", X, Ms, psi, K)
+
+
+@pytest.mark.parametrize("sparse", [False, True])
+def test_rotational_coupling_equals_inertia_terms(sparse):
+    """M_wq(q) alone (3 nq^2 work) equals the one of the full inertia terms to round-off."""
+    body = _random_body(sparse)
+    q = np.random.default_rng(1).normal(size=body.nq)
+    ref = body.inertia_terms(q)[2]
+    assert np.abs(body.rotational_coupling(q) - ref).max() <= 1e-12 * np.abs(ref).max()
+
+
+@pytest.mark.parametrize("sparse", [False, True])
+def test_translation_solve_equals_dense_solve(sparse):
+    """W_t = [[m I, A S1], [S1^T A^T, M_qq + theta^2 h^2 K]] solved by the 3 x 3 Schur
+    complement equals a dense solve to 1e-10 (condition number of W_t ~ 1e3)."""
+    body = _random_body(sparse)
+    rng = np.random.default_rng(2)
+    A = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    h, theta = 1e-2, 0.55
+    solver = BodySolver(body, theta)
+    solver.prepare_translation(h, A)
+    Mqq = body.inv.M_qq.toarray() if sp.issparse(body.inv.M_qq) else body.inv.M_qq
+    K = body.k_hat.toarray() if sp.issparse(body.k_hat) else body.k_hat
+    B = A @ body.inv.S1
+    W = np.block([[body.inv.mass * np.eye(3), B], [B.T, Mqq + (theta * h) ** 2 * K]])
+    b = rng.normal(size=(3 + body.nq, 4))
+    x = solver.solve_translation(b)
+    assert np.abs(x - np.linalg.solve(W, b)).max() <= 1e-10 * np.abs(x).max()
+    yq = np.linalg.solve(W[3:, 3:], b[3:])
+    assert np.abs(solver.solve_translation(b[:3], yq) - x).max() <= 1e-10 * np.abs(x).max()
