@@ -73,41 +73,44 @@ class FlexibleBody:
         return self.inv.S0 + self.inv.S1 @ q
 
     @functools.cached_property
-    def _dense_contractions(self) -> tuple[np.ndarray, np.ndarray] | None:
-        """Dense bases: G1 as one (3, 3, nq) array and the nine G2 blocks stacked as one
-        (9 nq, nq) array, block 3a + b = G2[b][a], so that all nine G2[b][a] q of C come
-        from one matrix-vector product (one pass over the blocks instead of nine)."""
-        if self.inv.Ms is not None or not self.nq:
-            return None
-        G1 = np.array([[self.inv.G1[a][b] for b in range(3)] for a in range(3)])
+    def _dense_contractions(self) -> tuple[None, np.ndarray]:
+        """Dense bases: the nine G2 blocks stacked as one (9 nq, nq) array, block 3a + b =
+        G2[b][a], so that all nine G2[b][a] x come from one matrix-vector product."""
         G2 = self.inv.G2
         stack = np.vstack([np.asarray(G2[b][a]) for a in range(3) for b in range(3)])
-        return G1, np.ascontiguousarray(stack)
+        return None, np.ascontiguousarray(stack)
 
-    def _C(self, q: np.ndarray) -> np.ndarray:
-        """C[a][b] = s_a^T M_s P_b = G1[a][b] + G2[b][a] q, as a (3, 3, nq) array."""
+    def contractions(self, x: np.ndarray) -> np.ndarray:
+        """L(x)[a, b] = G2[b][a] x, shape (3, 3, nq): every G2 contraction of the equations of
+        motion is one of these, and L is linear, so an integrator can carry L(q) and
+        L(q_dot) along with the state (integrate.midpoint). One pass over the G2 blocks."""
         inv = self.inv
         if inv.Ms is not None:
-            # G2[b][a] q = P_b^T M_s (P_a q): one M_s product with 3 columns instead of nine
+            # G2[b][a] x = P_b^T M_s (P_a x): one M_s product with 3 columns instead of nine
             # products with the G2 blocks (each as large as M_s)
-            U = np.column_stack([inv.PT[a].T @ q for a in range(3)])
+            U = np.column_stack([inv.PT[a].T @ x for a in range(3)])
             MU = inv.Ms @ U
             PMU = [inv.PT[b] @ MU for b in range(3)]
-            return np.array([[inv.G1[a][b] + PMU[b][:, a] for b in range(3)] for a in range(3)])
-        G1, stack = self._dense_contractions
-        return G1 + (stack @ q).reshape(3, 3, self.nq)
+            return np.array([[PMU[b][:, a] for b in range(3)] for a in range(3)])
+        _, stack = self._dense_contractions
+        return (stack @ x).reshape(3, 3, self.nq)
 
-    def inertia_terms(self, q: np.ndarray):
+    @functools.cached_property
+    def _G1(self) -> np.ndarray:
+        """G1 as one (3, 3, nq) array."""
+        return np.array([[self.inv.G1[a][b] for b in range(3)] for a in range(3)])
+
+    def inertia_terms(self, q: np.ndarray, Lq: np.ndarray | None = None):
         """(S, J, M_wq, C) at q: first moment, inertia about the frame origin, the omega-q
-        coupling (3, nq) and the C contractions (3, 3, nq) reused by the velocity terms."""
+        coupling (3, nq) and C[a][b] = s_a^T M_s P_b = G1[a][b] + G2[b][a] q (3, 3, nq),
+        reused by the velocity terms. Lq = contractions(q) when already known."""
         S = self.first_moment(q)
         if not self.nq:
             G = self.inv.G0
             return S, np.trace(G) * np.eye(3) - G, np.zeros((3, 0)), np.zeros((3, 3, 0))
-        C = self._C(q)
-        G1 = np.array([[self.inv.G1[a][b] for b in range(3)] for a in range(3)])
+        C = self._G1 + (self.contractions(q) if Lq is None else Lq)
         # G[a, b] = G0[a, b] + G1[b][a] q + C[a][b] q
-        G = self.inv.G0 + G1.transpose(1, 0, 2) @ q + C @ q
+        G = self.inv.G0 + self._G1.transpose(1, 0, 2) @ q + C @ q
         G = 0.5 * (G + G.T)
         J = np.trace(G) * np.eye(3) - G
         M_wq = np.array([C[a, b] - C[b, a] for _, a, b in _CYCLIC])
@@ -118,9 +121,8 @@ class FlexibleBody:
         iteration matrices, never for residuals."""
         G = self.inv.G0.copy()
         if self.nq:
-            for a in range(3):
-                for b in range(3):
-                    G[a, b] += (self.inv.G1[b][a] + self.inv.G1[a][b]) @ q
+            Gq = self._G1 @ q  # Gq[a, b] = G1[a][b] q
+            G += Gq + Gq.T
         G = 0.5 * (G + G.T)
         return np.trace(G) * np.eye(3) - G
 
@@ -136,16 +138,17 @@ class FlexibleBody:
         stack = np.vstack([np.asarray(G2[b][a]) - np.asarray(G2[a][b]) for _, a, b in _CYCLIC])
         return Mw0, np.ascontiguousarray(stack)
 
-    def rotational_coupling(self, q: np.ndarray) -> np.ndarray:
+    def rotational_coupling(self, q: np.ndarray, Lq: np.ndarray | None = None) -> np.ndarray:
         """M_wq(q) (3, nq), the omega-q inertia coupling, alone: 3 nq^2 operations for a dense
-        basis instead of the 9 nq^2 of inertia_terms (sparse bases: three M_s products)."""
+        basis instead of the 9 nq^2 of inertia_terms (sparse bases: three M_s products);
+        free when Lq = contractions(q) is known."""
         Mw0, stack = self._rotational_coupling
         if not self.nq:
             return Mw0
-        if stack is not None:
+        if Lq is None and stack is not None:
             return Mw0 + (stack @ q).reshape(3, self.nq)
-        C = self._C(q)
-        return np.array([C[a, b] - C[b, a] for _, a, b in _CYCLIC])
+        L = self.contractions(q) if Lq is None else Lq
+        return Mw0 + np.array([L[a, b] - L[b, a] for _, a, b in _CYCLIC])
 
     def frame_mass(self, A: np.ndarray, S: np.ndarray, J: np.ndarray) -> np.ndarray:
         """6 x 6 frame block [[m I, -A S~], [S~ A^T, J]]."""
@@ -161,8 +164,10 @@ class FlexibleBody:
         """6 x nq frame-elastic block [[A S1], [M_wq]]."""
         return np.vstack([A @ self.inv.S1, M_wq])
 
-    def mass_times(self, A, q, a_vec: np.ndarray, terms=None) -> np.ndarray:
-        """M(A, q) @ a_vec without forming the full matrix (a_vec: (6 + nq,))."""
+    def mass_times(self, A, q, a_vec: np.ndarray, terms=None,
+                   mqq_a: np.ndarray | None = None) -> np.ndarray:
+        """M(A, q) @ a_vec without forming the full matrix (a_vec: (6 + nq,)); mqq_a =
+        M_qq @ a_vec[6:] when already known (the only nq^2 part)."""
         S, J, M_wq, _ = terms if terms is not None else self.inertia_terms(q)
         Mff = self.frame_mass(A, S, J)
         out = np.empty(self.nv)
@@ -171,11 +176,12 @@ class FlexibleBody:
         if self.nq:
             Mfq = self.coupling_mass(A, M_wq)
             out[:6] += Mfq @ aq
-            out[6:] = Mfq.T @ af + self.inv.M_qq @ aq
+            out[6:] = Mfq.T @ af + (self.inv.M_qq @ aq if mqq_a is None else mqq_a)
         return out
 
-    def velocity_forces(self, A, q, v, terms=None) -> np.ndarray:
-        """Quadratic-velocity vector Q_v (6 + nq,): centrifugal and Coriolis terms."""
+    def velocity_forces(self, A, q, v, terms=None, Lqd: np.ndarray | None = None) -> np.ndarray:
+        """Quadratic-velocity vector Q_v (6 + nq,): centrifugal and Coriolis terms.
+        Lqd = contractions(v[6:]) when already known."""
         S, J, _, C = terms if terms is not None else self.inertia_terms(q)
         w, qd = v[3:6], v[6:]
         W = skew(w)
@@ -190,7 +196,9 @@ class FlexibleBody:
             # with the antisymmetric blocks A_c = G2[b][a] - G2[a][b] of rotational_coupling
             Qq = -np.einsum("ab,bak->k", Om, C)
             _, anti = self._rotational_coupling
-            if anti is not None:
+            if Lqd is not None:
+                Qq -= 2.0 * (w @ np.array([Lqd[a, b] - Lqd[b, a] for _, a, b in _CYCLIC]))
+            elif anti is not None:
                 Qq -= 2.0 * (w @ (anti @ qd).reshape(3, self.nq))
             else:
                 G2 = self.inv.G2

@@ -97,14 +97,16 @@ class _Recorder:
         self.n_joint_rows = n_joint_rows
         self.shape = (nb, npb)
 
-    def record(self, t, states, force, jforce):
+    def record(self, t, states, force, jforce, carried=None):
+        """carried(b, state) -> (L(q), L(q_dot)): the integrator's carried contractions."""
         sysm = self.system
         rec = {"t": t, "force": force, "jforce": jforce}
         kin = strain = pot = 0.0
         p = np.zeros(3)
         h = np.zeros(3)
-        for body, st in zip(sysm.bodies, states):
-            terms = body.inertia_terms(st.q)
+        for b, (body, st) in enumerate(zip(sysm.bodies, states)):
+            Lq = carried(b, st)[0] if (carried is not None and body.nq) else None
+            terms = body.inertia_terms(st.q, Lq)
             kin += body.kinetic_energy(st.A, st.q, st.v, terms)
             strain += body.strain_energy(st.q)
             pot -= float(sysm.gravity @ (body.inv.mass * st.r + st.A @ terms[0]))
@@ -201,7 +203,7 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating) -
         jimpulse += res.joint_impulses
         if tick % out_ticks == 0 or tick >= n_ticks:
             span_t = (tick - (len(rec.rows) - 1) * out_ticks) * dt
-            rec.record(t0 + tick * dt, states, impulse / span_t, jimpulse / span_t)
+            rec.record(t0 + tick * dt, states, impulse / span_t, jimpulse / span_t, integ.carried)
             impulse, jimpulse = 0.0, np.zeros_like(jimpulse)
             if bar is not None:
                 bar.update(min(out_ticks, n_ticks - bar.n))

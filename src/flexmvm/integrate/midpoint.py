@@ -53,6 +53,22 @@ COUPLING_TOL = 1e-4   # larger bases: refresh when M_wq moved by this much (rela
 NODAL_CACHE_MIN_NQ = 200  # from this many elastic coordinates, contact rows use nodal columns
 
 
+RESYNC_STEPS = 256  # carried contractions are recomputed from the state this often
+
+
+@dataclass
+class _Carried:
+    """L(q) and L(q_dot) (body.contractions) of the state (q, v) they were made for."""
+
+    q: np.ndarray
+    v: np.ndarray
+    Lq: np.ndarray
+    Lqd: np.ndarray
+    Kq: np.ndarray     # k_hat q and k_hat q_dot: the elastic force is linear too
+    Kqd: np.ndarray
+    age: int = 0
+
+
 @dataclass
 class StepResult:
     states: list[BodyState]
@@ -80,6 +96,12 @@ class MidpointIntegrator:
         self.n_joint_rows = sum(j.n_rows for j in system.joints)
         self.exploit_nonrotating = exploit_nonrotating
         self.n_nonrotating_steps = 0
+        # every G2 contraction is linear in q or q_dot: carried along with the states, a step
+        # needs one new contraction L(dq_dot) per residual instead of L(q_m), L(q_dot_m) and
+        # M_wq(q) (one pass over b1's 22 MB of G2 blocks instead of ~3 on the seed case)
+        self._carried: list[_Carried | None] = [None] * len(system.bodies)
+        self._pending: list[tuple | None] = [None] * len(system.bodies)
+        self._mqq_cache: list[tuple] = [(None, None)] * len(system.bodies)
         self._loads: dict[int, list] = {}
         for load in system.loads:
             self._loads.setdefault(load.body, []).append(load)
@@ -90,17 +112,27 @@ class MidpointIntegrator:
         sysm = self.system
         R, mids, ends, scales = [], [], [], []
         th = self.theta
-        for body, st, vp in zip(sysm.bodies, states, v_plus):
+        for b, (body, st, vp) in enumerate(zip(sysm.bodies, states, v_plus)):
             vm = th * vp + (1.0 - th) * st.v
             mid = st.advanced(vm, th * h)
             end = st.advanced(vm, h)
-            terms = body.inertia_terms(mid.q)
-            inertia = body.mass_times(mid.A, mid.q, vp - st.v, terms)
-            F = body.velocity_forces(mid.A, mid.q, vm, terms)
+            Lq_m = Lqd_m = Kq_m = None
+            if body.nq:
+                Lq_m, Lqd_m, Kq_m = self._mid_contractions(b, st, vp, th, h)
+            terms = body.inertia_terms(mid.q, Lq_m)
+            dv = vp - st.v
+            # M is linear: M v_m = M v- + th M dv, and M_qq v- is the same for every iterate
+            mqq_dv = None
+            if body.nq:
+                mqq_dv = _times(body.inv.M_qq, dv[6:]) if np.any(dv[6:]) else np.zeros(body.nq)
+            inertia = body.mass_times(mid.A, mid.q, dv, terms, mqq_dv)
+            F = body.velocity_forces(mid.A, mid.q, vm, terms, Lqd_m)
             if np.any(sysm.gravity):
                 F += body.gravity_forces(mid.A, mid.q, sysm.gravity, terms[0])
             if body.nq:
-                F[6:] += body.elastic_forces(mid.q, vm[6:])
+                F[6:] -= Kq_m  # -k_hat q_m (carried), then damping if any
+                if body.c_hat is not None:
+                    F[6:] -= _times(body.c_hat, vm[6:])
             for load in self._loads.get(len(R), ()):
                 if t + th * h >= load.t_start_s:
                     fvec = np.asarray(load.force_n, float)
@@ -108,11 +140,63 @@ class MidpointIntegrator:
                     F[:6] += fr
                     F[6:] += qp
             R.append(inertia - h * F)
-            momentum = body.mass_times(mid.A, mid.q, vm, terms)
+            mqq_vm = self._mqq_v(b, st) + th * mqq_dv if body.nq else None
+            momentum = body.mass_times(mid.A, mid.q, vm, terms, mqq_vm)
             scales.append(max(np.abs(inertia).max(), h * np.abs(F).max(), np.abs(momentum).max()))
             mids.append(mid)
             ends.append(end)
         return R, mids, ends, scales
+
+    def _mqq_v(self, b: int, st: BodyState) -> np.ndarray:
+        """M_qq q_dot of the step's initial state (cached for the step's iterates)."""
+        key, val = self._mqq_cache[b]
+        if key is not st.v:
+            val = np.asarray(self.system.bodies[b].inv.M_qq @ st.v[6:]).ravel()
+            self._mqq_cache[b] = (st.v, val)
+        return val
+
+    def carried(self, b: int, st: BodyState) -> tuple[np.ndarray, np.ndarray]:
+        """(L(q), L(q_dot)) of body b at state st: the carried ones if st is the state this
+        integrator produced (and they are younger than RESYNC_STEPS), else computed."""
+        c = self._carried_at(b, st)
+        return c.Lq, c.Lqd
+
+    def _carried_at(self, b: int, st: BodyState) -> _Carried:
+        c = self._carried[b]
+        if c is None or c.q is not st.q or c.v is not st.v or c.age >= RESYNC_STEPS:
+            body = self.system.bodies[b]
+            qd = st.v[6:]
+            c = _Carried(st.q, st.v, body.contractions(st.q), body.contractions(qd),
+                         _times(body.k_hat, st.q), _times(body.k_hat, qd))
+            self._carried[b] = c
+        return c
+
+    def _mid_contractions(self, b, st, vp, th, h):
+        """L(q_m), L(q_dot_m) and k_hat q_m at the midpoint of the iterate vp: q_dot_m =
+        q_dot + th dq_dot and q_m = q + th h q_dot_m, so one contraction L(dq_dot) and one
+        k_hat dq_dot per iterate (none on the first, where dq_dot = 0)."""
+        c = self._carried_at(b, st)
+        body = self.system.bodies[b]
+        dqd = vp[6:] - st.v[6:]
+        if np.any(dqd):
+            LD, KD = body.contractions(dqd), _times(body.k_hat, dqd)
+        else:
+            LD, KD = np.zeros_like(c.Lqd), np.zeros_like(c.Kqd)
+        Lqd_m, Kqd_m = c.Lqd + th * LD, c.Kqd + th * KD
+        self._pending[b] = (LD, Lqd_m, KD, Kqd_m)
+        return c.Lq + (th * h) * Lqd_m, Lqd_m, c.Kq + (th * h) * Kqd_m
+
+    def _carry(self, states, new_states, h):
+        """Advance the carried contractions to the accepted step's end states."""
+        for b, (st, new) in enumerate(zip(states, new_states)):
+            c, p = self._carried[b], self._pending[b]
+            self._pending[b] = None
+            if c is None or p is None or c.q is not st.q or c.v is not st.v:
+                self._carried[b] = None
+                continue
+            LD, Lqd_m, KD, Kqd_m = p
+            self._carried[b] = _Carried(new.q, new.v, c.Lq + h * Lqd_m, c.Lqd + LD,
+                                        c.Kq + h * Kqd_m, c.Kqd + KD, c.age + 1)
 
     def _joint_rows(self, t, h, mids, ends):
         if not self.system.joints:
@@ -235,19 +319,22 @@ class MidpointIntegrator:
         new_states = [e for e in ends]
         for st, vp in zip(new_states, v_plus):
             st.v = vp
+        self._carry(states, new_states, h)
         drift = float(np.abs(phi).max()) if phi.size else 0.0
         return StepResult(new_states, lam[:n_j], crows, lam[n_j:], it, drift)
 
     def _prepare(self, states, h, refresh_tol):
         """Frame blocks of W at `states`; M_wq refreshed when it drifted (always for small
         bases, by COUPLING_TOL for large ones, unconditionally when refresh_tol = 0)."""
-        for body, solver, st in zip(self.system.bodies, self.solvers, states):
+        for b, (body, solver, st) in enumerate(zip(self.system.bodies, self.solvers, states)):
             # an iteration matrix: M_wq exact (thin rods' frame Schur complement depends on
             # it), J to first order in q (its quadratic part is (|u|/L)^2 of it)
             if body.nq:
                 tol = refresh_tol if refresh_tol is not None else (
                     0.0 if body.nq <= SMALL_BASIS else COUPLING_TOL)
-                solver.refresh_coupling(h, body.rotational_coupling(st.q), tol)
+                c = self._carried[b]
+                Lq = c.Lq if (c is not None and c.q is st.q) else None
+                solver.refresh_coupling(h, body.rotational_coupling(st.q, Lq), tol)
             J = body.frame_inertia_first_order(st.q)
             solver.prepare(h, st.A, body.frame_mass(st.A, body.first_moment(st.q), J))
 
@@ -264,6 +351,11 @@ class MidpointIntegrator:
             worst = max(worst, float(np.abs(res).max()) / max(sc, 1e-300))
             worst_r = max(worst_r, float(np.abs(res[:3]).max()) / max(sc, 1e-300))
         return worst, worst_r
+
+
+def _times(matrix, x: np.ndarray) -> np.ndarray:
+    """matrix @ x as a flat (n,) array, for dense or sparse matrices."""
+    return np.asarray(matrix @ x).ravel()
 
 
 def _merge_contacts(a: ContactRows, b: ContactRows) -> ContactRows:
