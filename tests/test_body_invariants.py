@@ -1,7 +1,8 @@
 """The invariant contractions of FlexibleBody against brute-force nodal sums.
 
 Exact identities (kinetic energy, momenta, quadratic-velocity vector of the virtual-work
-formulation), so the tolerance is round-off: 1e-10 relative.
+formulation), so the tolerance is round-off: 1e-10 relative. The invariants themselves are also
+checked against their definitions, cut bases and the reduced stiffness.
 """
 
 import numpy as np
@@ -9,6 +10,8 @@ import pytest
 import scipy.sparse as sp
 
 from flexmvm.bodies.body import FlexibleBody
+from flexmvm.bodies.build import reduced_stiffness
+from flexmvm.bodies.invariants import inertia_invariants, leading_columns
 from flexmvm.bodies.rotation import expm_so3, skew
 
 
@@ -86,3 +89,75 @@ def test_gravity_matches_nodal_loads():
     Q = np.concatenate([f.sum(0), np.cross(s, fl).sum(0), psi.T @ fl.ravel()])
     np.testing.assert_allclose(body.gravity_forces(A, q, g), Q, rtol=1e-10, atol=1e-12)
     assert skew(np.ones(3)).trace() == 0.0
+
+
+def _definition(X, Ms, psi):
+    """The invariants straight from the module docstring's definitions (dense arrays)."""
+    M = Ms.toarray()
+    P = [np.asarray(psi[a::3, :].todense() if sp.issparse(psi) else psi[a::3, :]) for a in range(3)]
+    one = np.ones(len(X))
+    return {"mass": one @ M @ one, "S0": one @ M @ X, "G0": X.T @ M @ X,
+            "S1": np.array([one @ M @ P[a] for a in range(3)]),
+            "G1": [[X[:, a] @ M @ P[b] for b in range(3)] for a in range(3)],
+            "G2": [[P[a].T @ M @ P[b] for b in range(3)] for a in range(3)]}
+
+
+def _dense(a):
+    return a.toarray() if sp.issparse(a) else np.asarray(a)
+
+
+@pytest.mark.parametrize("sparse", [False, True])
+def test_invariants_match_their_definitions(sparse):
+    body, X, Ms, psi, _ = _random_body(sparse, seed=7)
+    ref, inv = _definition(X, Ms, psi), body.inv
+    assert inv.mass == pytest.approx(ref["mass"], rel=1e-13)
+    for name in ("S0", "G0", "S1"):
+        np.testing.assert_allclose(getattr(inv, name), ref[name], rtol=1e-12, atol=1e-12)
+    for a in range(3):
+        for b in range(3):
+            np.testing.assert_allclose(inv.G1[a][b], ref["G1"][a][b], rtol=1e-12, atol=1e-12)
+            np.testing.assert_allclose(_dense(inv.G2[a][b]), ref["G2"][a][b], atol=1e-12)
+            assert sp.issparse(inv.G2[a][b]) == sparse
+    M_qq = sum(ref["G2"][a][a] for a in range(3))
+    np.testing.assert_allclose(_dense(inv.M_qq), M_qq, atol=1e-12)
+    assert (inv.Ms is not None) == sparse and (inv.PT is not None) == sparse
+
+
+def test_rigid_invariants():
+    body, X, Ms, _, _ = _random_body(False, seed=2)
+    inv = inertia_invariants(X, Ms, np.zeros((3 * len(X), 0)))
+    assert inv.nq == 0 and inv.M_qq.shape == (0, 0) and inv.G2[1][2].shape == (0, 0)
+    assert inv.mass == pytest.approx(body.inv.mass, rel=1e-14)
+    np.testing.assert_array_equal(inv.G0, body.inv.G0)
+
+
+def test_leading_columns_equal_the_cut_basis():
+    body, X, Ms, psi, _ = _random_body(False, seed=4)
+    cut, fresh = leading_columns(body.inv, 3), inertia_invariants(X, Ms, psi[:, :3])
+    for name in ("S0", "S1", "G0", "M_qq"):
+        np.testing.assert_allclose(getattr(cut, name), getattr(fresh, name), rtol=1e-13)
+    for a in range(3):
+        for b in range(3):
+            np.testing.assert_allclose(cut.G1[a][b], fresh.G1[a][b], rtol=1e-13)
+            np.testing.assert_allclose(cut.G2[a][b], fresh.G2[a][b], rtol=1e-13, atol=1e-14)
+    with pytest.raises(ValueError):
+        leading_columns(body.inv, body.nq + 1)
+    sparse_body = _random_body(True)[0]
+    with pytest.raises(ValueError):
+        leading_columns(sparse_body.inv, 1)
+
+
+@pytest.mark.parametrize("selection", [True, False])
+def test_reduced_stiffness_sparse(selection):
+    rng = np.random.default_rng(9)
+    B = sp.random(12, 12, density=0.4, random_state=1)
+    K = sp.csr_matrix(B @ B.T + sp.eye(12))
+    cols = np.eye(12)[:, [0, 2, 3, 7, 11]]
+    if not selection:
+        cols = cols * rng.uniform(0.5, 2.0, size=5)
+    psi = sp.csr_matrix(cols)
+    k_hat = reduced_stiffness(K, psi)
+    assert sp.isspmatrix_csr(k_hat)
+    np.testing.assert_allclose(k_hat.toarray(), cols.T @ K.toarray() @ cols, rtol=1e-14)
+    dense = reduced_stiffness(K, cols)
+    np.testing.assert_allclose(dense, cols.T @ K.toarray() @ cols, rtol=1e-14)

@@ -1,5 +1,6 @@
-"""Disk cache of setup results (flexmvm.setup_cache): hits equal fresh builds, keys follow
-every input, bad entries are rebuilt, `cache clear`/`info` and FLEXMVM_NO_CACHE work."""
+"""Disk cache of setup results (flexmvm.setup_cache): hits (FE models, bases, body parts) equal
+fresh builds, keys follow every input, bad entries are rebuilt, `cache clear`/`info` and
+FLEXMVM_NO_CACHE work, a warm scenario build computes nothing."""
 
 from __future__ import annotations
 
@@ -13,6 +14,7 @@ import pytest
 import scipy.sparse as sp
 
 from flexmvm import setup_cache
+from flexmvm.bodies.build import body_from_fe, body_from_parts, body_parts
 from flexmvm.fe.assembly import assemble
 from flexmvm.materials import ALUMINIUM, Material
 from flexmvm.mesh.rod import RodSpec, rod_mesh
@@ -199,6 +201,113 @@ def test_scenario_builder_reads_the_disk_cache(cache, monkeypatch):
     assert np.array_equal(hit.psi, fresh.psi) and hit.n_modes == 4
     build._fe.cache_clear()
     build._basis_cached.cache_clear()
+
+
+def _clear_process_caches():
+    for f in (build._fe, build._basis_cached, build._parts_cached):
+        f.cache_clear()
+
+
+def _assert_same_parts(a, b):
+    """Body parts equal array by array (bit for bit)."""
+    assert a.inv.mass == b.inv.mass and a.inv.nq == b.inv.nq
+    for name in ("S0", "S1", "G0", "M_qq"):
+        assert np.array_equal(getattr(a.inv, name), getattr(b.inv, name)), name
+    for i in range(3):
+        for j in range(3):
+            assert np.array_equal(a.inv.G1[i][j], b.inv.G1[i][j])
+            assert np.array_equal(a.inv.G2[i][j], b.inv.G2[i][j])
+    assert np.array_equal(a.k_hat, b.k_hat)
+
+
+def _cached_parts(basis, rod, fe):
+    builder = Counter(lambda: body_parts(fe, basis))
+    parts = setup_cache.cached_body(SOURCE, ALUMINIUM, basis.kind, "end_b", basis.reference,
+                                    basis.retained_nodes, basis.n_modes, basis.psi.shape[1],
+                                    builder)
+    return parts, builder
+
+
+def test_body_hit_equals_fresh_build(rod, fe, cache):
+    basis, _ = _cb(fe, rod)
+    first, builder = _cached_parts(basis, rod, fe)
+    hit, again = _cached_parts(basis, rod, fe)
+    assert builder.calls == 1 and again.calls == 0 and len(list(cache.glob("body-*.npz"))) == 1
+    fresh = body_from_fe("b", fe, basis)
+    _assert_same_parts(hit, first)
+    _assert_same_parts(hit, body_parts(fe, basis))
+    body = body_from_parts("b", rod.mesh, basis, hit)
+    assert np.array_equal(body.X, fresh.X) and np.array_equal(body.psi, fresh.psi)
+    assert body.label == fresh.label and body.nv == fresh.nv and body.mesh is fresh.mesh
+    for name in ("S0", "S1", "G0", "M_qq"):
+        assert np.array_equal(getattr(body.inv, name), getattr(fresh.inv, name))
+    assert np.array_equal(body.k_hat, fresh.k_hat)
+    assert np.array_equal(body.contractions(np.arange(body.nq) * 1e-6),
+                          fresh.contractions(np.arange(body.nq) * 1e-6))
+
+
+@pytest.mark.parametrize("damage", [b"not a zip file", b""])
+def test_corrupt_or_malformed_body_entry_is_rebuilt(rod, fe, cache, damage):
+    basis, _ = _cb(fe, rod)
+    fresh, _ = _cached_parts(basis, rod, fe)
+    (entry,) = cache.glob("body-*.npz")
+    entry.write_bytes(damage)
+    rebuilt, builder = _cached_parts(basis, rod, fe)
+    assert builder.calls == 1
+    _assert_same_parts(rebuilt, fresh)
+    arrays = dict(np.load(entry))
+    np.savez(entry, **{**arrays, "G2": arrays["G2"][:, :, :1]})
+    rebuilt, builder = _cached_parts(basis, rod, fe)
+    assert builder.calls == 1
+    _assert_same_parts(rebuilt, fresh)
+
+
+def test_body_key_and_full_bodies(rod, fe, cache):
+    ref = rod_reference(rod)
+    base = (SOURCE, ALUMINIUM, BasisKind.CRAIG_BAMPTON, "end_b", ref, rod.selection(1, 2), 5)
+    assert "bodies/invariants.py" in setup_cache.BODY_SOURCES
+    assert "bodies/build.py" in setup_cache.BODY_SOURCES
+    assert setup_cache.code_version(setup_cache.BODY_SOURCES) != setup_cache.code_version()
+    key = setup_cache.body_key(*base)
+    assert key.startswith("body-") and key[5:] != setup_cache.basis_key(*base)[6:]
+    assert setup_cache.body_key(*base, version="0" * 16) != key
+    full = build_basis(fe, BasisKind.FULL, ref)
+    builder = Counter(lambda: body_parts(fe, full))
+    args = (SOURCE, ALUMINIUM, BasisKind.FULL, "end_b", ref, full.retained_nodes, 0,
+            full.psi.shape[1], builder)
+    parts = setup_cache.cached_body(*args)
+    setup_cache.cached_body(*args)
+    assert builder.calls == 2 and sp.issparse(parts.k_hat) and not cache.exists()
+
+
+def test_warm_scenario_build_computes_nothing(cache, monkeypatch):
+    """A second process (cleared per-process caches) reads bases and body parts and neither
+    assembles nor loads an FE model; under a mode floor the parts are cut like the basis."""
+    nodes = tuple(rod_mesh(SPEC).selection(1, 2))
+    args = (SPEC, ALUMINIUM, BasisKind.CRAIG_BAMPTON, nodes)
+    _clear_process_caches()
+    fresh = build._parts(*args, 6, "end_b")
+    with build.craig_bampton_mode_floor(6):
+        cut_basis, cut = build._basis(*args, 4, "end_b"), build._parts(*args, 4, "end_b")
+    _clear_process_caches()
+
+    def refuse(*_args, **_kw):
+        raise AssertionError("computed although cached")
+
+    for name in ("build_basis", "assemble", "body_parts", "_fe"):
+        monkeypatch.setattr(build, name, refuse)
+    hit = build._parts(*args, 6, "end_b")
+    _assert_same_parts(hit, fresh)
+    with build.craig_bampton_mode_floor(6):
+        cut_hit = build._parts(*args, 4, "end_b")
+    _assert_same_parts(cut_hit, cut)
+    assert cut.inv.nq == cut_basis.psi.shape[1] == 3 * len(nodes) + 4
+    monkeypatch.undo()
+    own = body_parts(build._fe(SPEC, ALUMINIUM), cut_basis)
+    np.testing.assert_allclose(cut.k_hat, own.k_hat, rtol=1e-12, atol=1e-9 * abs(own.k_hat).max())
+    np.testing.assert_allclose(cut.inv.M_qq, own.inv.M_qq, rtol=1e-12,
+                               atol=1e-12 * abs(own.inv.M_qq).max())
+    _clear_process_caches()
 
 
 def test_cli_info_and_clear(rod, cache):

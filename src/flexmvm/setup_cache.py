@@ -1,10 +1,12 @@
-"""Disk cache of what setup builds: FE models (M, K, M_scalar) and reduction bases (psi).
+"""Disk cache of what setup builds: FE models (M, K, M_scalar), reduction bases (psi) and the
+parts of bodies with dense bases (inertia invariants and k_hat, flexmvm.bodies.build.BodyParts).
 
 An entry is one ``.npz`` file (``np.savez``, no pickles; sparse matrices as their CSR
 arrays) named ``<kind>-<key>.npz``. The key is a SHA-256 of the canonical JSON of every input
 the entry depends on (mesh: rod spec or mesh-file content hash; material E, nu, rho; basis
 kind, retained nodes, modes, reference set and DOFs) and of the code version, a hash of the
-source files that produce it (CODE_SOURCES). Entries are written atomically; an unreadable or
+source files that produce it (CODE_SOURCES; body parts: BODY_SOURCES, which adds the body
+modules, so editing them rebuilds only body entries). Entries are written atomically; an unreadable or
 malformed entry is ignored and rebuilt, an unwritable cache directory is ignored.
 
 Location: ``$FLEXMVM_CACHE_DIR`` if set, else the platform user cache directory
@@ -29,6 +31,8 @@ import numpy as np
 import scipy.sparse as sp
 
 import flexmvm
+from flexmvm.bodies.build import BodyParts
+from flexmvm.bodies.invariants import InertiaInvariants
 from flexmvm.errors import InputError
 from flexmvm.fe.assembly import FEModel
 from flexmvm.materials import Material
@@ -43,6 +47,9 @@ SUFFIX = ".npz"
 
 #: Package modules whose source makes up the code version (paths relative to flexmvm/).
 CODE_SOURCES = ("mesh", "fe", "reduction", "materials.py")
+
+#: Code version of body entries: what produces the basis, plus the body modules.
+BODY_SOURCES = CODE_SOURCES + ("bodies/invariants.py", "bodies/build.py")
 
 #: Format of the stored arrays; bump when the layout of an entry changes.
 FORMAT = 1
@@ -79,12 +86,12 @@ def enabled() -> bool:
     return os.environ.get(ENV_OFF, "").strip().lower() not in ("1", "true", "yes", "on")
 
 
-@functools.lru_cache(maxsize=1)
-def code_version() -> str:
-    """SHA-256 (16 hex digits) of the source files listed in CODE_SOURCES."""
+@functools.lru_cache(maxsize=4)
+def code_version(sources: tuple[str, ...] = CODE_SOURCES) -> str:
+    """SHA-256 (16 hex digits) of the package source files ``sources`` (default CODE_SOURCES)."""
     root = Path(flexmvm.__file__).parent
     digest = hashlib.sha256()
-    for name in CODE_SOURCES:
+    for name in sources:
         path = root / name
         for f in sorted(path.rglob("*.py")) if path.is_dir() else [path]:
             digest.update(f.relative_to(root).as_posix().encode() + b"\0")
@@ -223,14 +230,27 @@ def cached_fe(source: Mapping | None, mesh: Mesh, material: Material,
     return fe
 
 
+def _basis_inputs(source: Mapping, material: Material, kind: BasisKind, reference_set: str,
+                  reference: ReferenceCondition, retained: np.ndarray, n_modes: int) -> dict:
+    return {"mesh": source, "material": material_inputs(material), "kind": kind.value,
+            "reference": {"set": reference_set, "fixed_dofs": reference.fixed_dofs.tolist()},
+            "retained": [int(k) for k in retained], "n_modes": int(n_modes)}
+
+
 def basis_key(source: Mapping, material: Material, kind: BasisKind, reference_set: str,
               reference: ReferenceCondition, retained: np.ndarray, n_modes: int,
               version: str | None = None) -> str:
     """Entry name of a basis: its FE model's inputs, kind, reference, retained nodes, modes."""
-    inputs = {"mesh": source, "material": material_inputs(material), "kind": kind.value,
-              "reference": {"set": reference_set, "fixed_dofs": reference.fixed_dofs.tolist()},
-              "retained": [int(k) for k in retained], "n_modes": int(n_modes)}
+    inputs = _basis_inputs(source, material, kind, reference_set, reference, retained, n_modes)
     return make_key("basis", inputs, version)
+
+
+def body_key(source: Mapping, material: Material, kind: BasisKind, reference_set: str,
+             reference: ReferenceCondition, retained: np.ndarray, n_modes: int,
+             version: str | None = None) -> str:
+    """Entry name of a body's parts: the inputs of its basis, under the BODY_SOURCES version."""
+    inputs = _basis_inputs(source, material, kind, reference_set, reference, retained, n_modes)
+    return make_key("body", inputs, code_version(BODY_SOURCES) if version is None else version)
 
 
 def _basis_from(arrays: Mapping[str, np.ndarray], kind: BasisKind,
@@ -262,6 +282,51 @@ def cached_basis(source: Mapping | None, material: Material, kind: BasisKind,
     return basis
 
 
-__all__ = ["CODE_SOURCES", "ENV_DIR", "ENV_OFF", "CacheInfo", "basis_key", "cache_dir",
-           "cached_basis", "cached_fe", "clear", "code_version", "enabled", "fe_key",
+
+def _parts_arrays(parts: BodyParts) -> dict[str, np.ndarray]:
+    """Arrays of an entry: mass (1,), S0, S1, G0, G1 (3, 3, nq), G2 (3, 3, nq, nq), M_qq, k_hat."""
+    inv, nq = parts.inv, parts.inv.nq
+    G1 = np.array([[inv.G1[a][b] for b in range(3)] for a in range(3)]).reshape(3, 3, nq)
+    G2 = np.array([[inv.G2[a][b] for b in range(3)] for a in range(3)]).reshape(3, 3, nq, nq)
+    return {"mass": np.array([inv.mass]), "S0": inv.S0, "S1": inv.S1, "G0": inv.G0, "G1": G1,
+            "G2": G2, "M_qq": inv.M_qq, "k_hat": parts.k_hat}
+
+
+def _parts_from(arrays: Mapping[str, np.ndarray], nq: int) -> BodyParts:
+    a = arrays
+    shapes = {"mass": (1,), "S0": (3,), "S1": (3, nq), "G0": (3, 3), "G1": (3, 3, nq),
+              "G2": (3, 3, nq, nq), "M_qq": (nq, nq), "k_hat": (nq, nq)}
+    if any(a[name].shape != shape or a[name].dtype != np.float64
+           for name, shape in shapes.items()):
+        raise ValueError("stored body parts are malformed")
+    G1 = tuple(tuple(a["G1"][i, j] for j in range(3)) for i in range(3))
+    G2 = tuple(tuple(a["G2"][i, j] for j in range(3)) for i in range(3))
+    inv = InertiaInvariants(float(a["mass"][0]), a["S0"], a["S1"], a["G0"], G1, G2, a["M_qq"])
+    return BodyParts(inv, a["k_hat"])
+
+
+def cached_body(source: Mapping | None, material: Material, kind: BasisKind,
+                reference_set: str, reference: ReferenceCondition, retained: np.ndarray,
+                n_modes: int, nq: int, build: Callable[[], BodyParts]) -> BodyParts:
+    """A body's parts (invariants, k_hat) from the cache, else ``build()`` stored.
+
+    The arguments up to n_modes are those of its basis (cached_basis); nq: its number of
+    columns. Only dense parts are stored: a full-FE body (sparse parts, ~0.3 s to compute, as
+    long as reading them back) and source None are built, not cached.
+    """
+    if source is None or kind is BasisKind.FULL:
+        return build()
+    key = body_key(source, material, kind, reference_set, reference, retained, n_modes)
+    hit = _decoded(key, lambda arrays: _parts_from(arrays, nq))
+    if hit is not None:
+        return hit
+    parts = build()
+    if parts.inv.Ms is None and not sp.issparse(parts.k_hat):
+        save(key, _parts_arrays(parts))
+    return parts
+
+
+__all__ = ["BODY_SOURCES", "CODE_SOURCES", "ENV_DIR", "ENV_OFF", "CacheInfo", "basis_key",
+           "body_key", "cache_dir", "cached_basis", "cached_body", "cached_fe", "clear",
+           "code_version", "enabled", "fe_key",
            "file_source", "info", "load", "make_key", "material_inputs", "rod_source", "save"]

@@ -14,6 +14,10 @@ contraction of the constants below with q and q_dot: no loop over nodes in the t
     G2[a][b]   = P_a^T M_s P_b                  (nq, nq), dense for reduced bases, sparse for full FE
 
 G2[b][a] = G2[a][b]^T, and M_qq = psi^T M psi = sum_a G2[a][a].
+
+Cost: a dense psi (3n, nq) is viewed as the (n, 3 nq) array [P_x, P_y, P_z] (no copy), so
+M_s P comes from one sparse product and the six blocks G2[a][b], b >= a, from three matrix
+products; G2[b][a] is the transpose. A sparse psi takes the same route with sparse products.
 """
 
 from __future__ import annotations
@@ -53,33 +57,78 @@ def direction_blocks(psi: np.ndarray | sp.spmatrix) -> list:
 
 
 def inertia_invariants(X: np.ndarray, M_scalar: sp.spmatrix, psi) -> InertiaInvariants:
-    """Compute the invariants of (X (n,3) [m], M_scalar (n,n) [kg], psi (3n, nq)).
+    """Compute the invariants of (X (n,3) [m], M_scalar (n,n) [kg], psi (3n, nq) [-]).
 
-    Sparse psi (full FE) gives sparse G2 blocks; dense psi gives dense ones.
+    Sparse psi (full FE) gives sparse (csr) G2 blocks and M_qq and sets Ms, PT; dense psi
+    gives dense ones. Units: mass [kg], S [kg m], G0 [kg m^2], G1 [kg m], G2 [kg].
     """
     X = np.asarray(X, dtype=float)
     Ms = sp.csr_matrix(M_scalar)
     msum = np.asarray(Ms.sum(axis=1)).ravel()
-    P = direction_blocks(psi)
-    nq = P[0].shape[1]
     MsX = Ms @ X
     S0 = msum @ X
-    S1 = np.vstack([np.asarray(P[a].T @ msum).ravel() for a in range(3)]).reshape(3, nq)
     G0 = X.T @ MsX
     G0 = 0.5 * (G0 + G0.T)
-    G1 = tuple(tuple(np.asarray(P[b].T @ MsX[:, a]).ravel() for b in range(3)) for a in range(3))
-    MsP = [Ms @ P[b] for b in range(3)]
-    G2 = tuple(tuple(_product(P[a], MsP[b]) for b in range(3)) for a in range(3))
+    if sp.issparse(psi):
+        S1, G1, G2, extra = _sparse_terms(Ms, msum, MsX, sp.csr_matrix(psi))
+    else:
+        S1, G1, G2 = _dense_terms(Ms, msum, MsX, np.asarray(psi, dtype=float))
+        extra = {}
     M_qq = G2[0][0] + G2[1][1] + G2[2][2]
     M_qq = 0.5 * (M_qq + M_qq.T)
     if sp.issparse(M_qq):
         M_qq = sp.csr_matrix(M_qq)
-    extra = {}
-    if sp.issparse(psi):
-        extra = {"Ms": Ms, "PT": tuple(sp.csr_matrix(P[a].T) for a in range(3))}
     return InertiaInvariants(float(msum.sum()), S0, S1, G0, G1, G2, M_qq, **extra)
 
 
-def _product(Pa, MsPb):
-    out = Pa.T @ MsPb
-    return sp.csr_matrix(out) if sp.issparse(out) else np.asarray(out)
+def _dense_terms(Ms: sp.csr_matrix, msum: np.ndarray, MsX: np.ndarray, psi: np.ndarray):
+    """S1 (3, nq), G1 and G2 (nested 3 x 3 tuples) of a dense psi (3n, nq).
+
+    psi is viewed as P = [P_x, P_y, P_z] (n, 3 nq); M_s P is one sparse product and the block
+    row a of G2 (b >= a) one matrix product P_a^T (M_s P)[:, a nq:].
+    """
+    n, nq = Ms.shape[0], psi.shape[1]
+    P = np.ascontiguousarray(psi).reshape(n, 3 * nq)
+    S1 = (msum @ P).reshape(3, nq)
+    G1x = (MsX.T @ P).reshape(3, 3, nq)  # G1x[a, b] = X_a^T M_s P_b
+    G1 = tuple(tuple(G1x[a, b].copy() for b in range(3)) for a in range(3))
+    MsP = Ms @ P
+    G2: list[list] = [[None] * 3 for _ in range(3)]
+    for a in range(3):
+        row = P[:, a * nq:(a + 1) * nq].T @ MsP[:, a * nq:]
+        for b in range(a, 3):
+            G2[a][b] = np.ascontiguousarray(row[:, (b - a) * nq:(b - a + 1) * nq])
+            if b > a:
+                G2[b][a] = np.ascontiguousarray(G2[a][b].T)
+    return S1, G1, tuple(tuple(r) for r in G2)
+
+
+def _sparse_terms(Ms: sp.csr_matrix, msum: np.ndarray, MsX: np.ndarray, psi: sp.csr_matrix):
+    """S1 (3, nq), G1, G2 (csr blocks) and the extra fields {Ms, PT} of a sparse psi (3n, nq)."""
+    P = direction_blocks(psi)
+    PT = tuple(sp.csr_matrix(P[a].T) for a in range(3))
+    nq = psi.shape[1]
+    S1 = np.vstack([PT[a] @ msum for a in range(3)]).reshape(3, nq)
+    G1 = tuple(tuple(np.asarray(PT[b] @ MsX[:, a]).ravel() for b in range(3)) for a in range(3))
+    MsP = [sp.csr_matrix(Ms @ P[b]) for b in range(3)]
+    G2: list[list] = [[None] * 3 for _ in range(3)]
+    for a in range(3):
+        for b in range(a, 3):
+            G2[a][b] = sp.csr_matrix(PT[a] @ MsP[b])
+            if b > a:
+                G2[b][a] = sp.csr_matrix(G2[a][b].T)
+    return S1, G1, tuple(tuple(r) for r in G2), {"Ms": Ms, "PT": PT}
+
+
+def leading_columns(inv: InertiaInvariants, m: int) -> InertiaInvariants:
+    """The invariants of the basis psi[:, :m] (dense bases only): every q-indexed array cut to
+    its first m entries, exactly what inertia_invariants gives for the cut basis up to round-off.
+    """
+    if inv.Ms is not None:
+        raise ValueError("leading_columns: sparse (full FE) invariants cannot be cut")
+    if not 0 <= m <= inv.nq:
+        raise ValueError(f"leading_columns: m = {m} outside 0..{inv.nq}")
+    G1 = tuple(tuple(g[:m].copy() for g in row) for row in inv.G1)
+    G2 = tuple(tuple(np.ascontiguousarray(g[:m, :m]) for g in row) for row in inv.G2)
+    return InertiaInvariants(inv.mass, inv.S0, np.ascontiguousarray(inv.S1[:, :m]), inv.G0, G1,
+                             G2, np.ascontiguousarray(inv.M_qq[:m, :m]))

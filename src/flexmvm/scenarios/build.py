@@ -1,8 +1,10 @@
 """Turn a validated Scenario into a System, initial states, probes and a time grid.
 
-Meshes, FE models and bases are cached per process (keyed by their defining data), so a study
-that runs many variants of one scenario assembles each body once; FE models and bases are also
-cached on disk across processes (flexmvm.setup_cache), behind the per-process caches.
+Meshes, FE models, bases and body parts (inertia invariants, k_hat) are cached per process
+(keyed by their defining data), so a study that runs many variants of one scenario builds each
+body once; FE models, bases and dense body parts are also cached on disk across processes
+(flexmvm.setup_cache), behind the per-process caches. An FE model is only loaded or assembled
+when a basis or body part has to be computed: a warm run reads bases and parts, not M and K.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ import numpy as np
 
 from flexmvm import setup_cache
 from flexmvm.bodies.body import FlexibleBody
-from flexmvm.bodies.build import body_from_fe, rigid_body_from_fe
+from flexmvm.bodies.build import BodyParts, body_from_parts, body_parts, rigid_body_from_fe
 from flexmvm.constraints.joints import (
     BodyPoint,
     DistanceJoint,
@@ -90,9 +92,14 @@ def _mesh_source(key) -> dict | None:
 
 
 @functools.lru_cache(maxsize=8)
+def _mesh(key) -> Mesh:
+    """The mesh of a rod spec (generated) or of a mesh file path."""
+    return _rod(key).mesh if isinstance(key, RodSpec) else read_mesh(key)
+
+
+@functools.lru_cache(maxsize=8)
 def _fe(key, material: Material) -> FEModel:
-    mesh = _rod(key).mesh if isinstance(key, RodSpec) else read_mesh(key)
-    return setup_cache.cached_fe(_mesh_source(key), mesh, material, assemble)
+    return setup_cache.cached_fe(_mesh_source(key), _mesh(key), material, assemble)
 
 
 def reference_condition(key, mesh: Mesh, ref_set: str):
@@ -132,12 +139,32 @@ def _basis(key, material: Material, kind: BasisKind, retained: tuple, modes: int
 @functools.lru_cache(maxsize=64)
 def _basis_cached(key, material: Material, kind: BasisKind, retained: tuple, modes: int,
                   ref_set: str) -> Basis:
-    fe = _fe(key, material)
-    ref = reference_condition(key, fe.mesh, ref_set)
+    ref = reference_condition(key, _mesh(key), ref_set)
     nodes = np.array(retained, dtype=np.int64)
     return setup_cache.cached_basis(
         _mesh_source(key), material, kind, ref_set, ref, nodes, modes,
-        lambda: build_basis(fe, kind, ref, retained_nodes=nodes, n_modes=modes))
+        lambda: build_basis(_fe(key, material), kind, ref, retained_nodes=nodes, n_modes=modes))
+
+
+def _parts(key, material: Material, kind: BasisKind, retained: tuple, modes: int,
+           ref_set: str) -> BodyParts:
+    """Invariants and k_hat of the body whose basis is _basis(same arguments); under a
+    Craig-Bampton mode floor cut from the floor's parts, as the basis is cut."""
+    floor = _MODE_FLOOR[0]
+    if kind is not BasisKind.CRAIG_BAMPTON or modes >= floor:
+        return _parts_cached(key, material, kind, retained, modes, ref_set)
+    big = _parts_cached(key, material, kind, retained, floor, ref_set)
+    return big.leading(3 * len(retained) + modes)
+
+
+@functools.lru_cache(maxsize=16)
+def _parts_cached(key, material: Material, kind: BasisKind, retained: tuple, modes: int,
+                  ref_set: str) -> BodyParts:
+    basis = _basis_cached(key, material, kind, retained, modes, ref_set)
+    return setup_cache.cached_body(
+        _mesh_source(key), material, kind, ref_set, basis.reference,
+        np.array(retained, dtype=np.int64), modes, basis.psi.shape[1],
+        lambda: body_parts(_fe(key, material), basis))
 
 
 def _retained_nodes(model, mesh: Mesh, rod: RodMesh | None, where: str) -> np.ndarray:
@@ -175,22 +202,21 @@ def _build_body(cfg) -> tuple[FlexibleBody, BodyInfo]:
         rod = _rod(key)
     else:
         key = str(cfg.mesh_file)
-    fe = _fe(key, material)
-    mesh = fe.mesh
+    mesh = _mesh(key)
     kind = cfg.model.kind.value
     try:
         mesh.node_set(cfg.model.reference)
     except MeshError as exc:
         raise InputError(f"{where}.model.reference: {exc}") from None
     if kind == "rigid":
-        body = rigid_body_from_fe(cfg.name, fe)
+        body = rigid_body_from_fe(cfg.name, _fe(key, material))
         return body, BodyInfo(cfg.name, kind, mesh, material, 6, 0, 0, rod)
     retained: tuple = ()
     if kind in ("mvm", "mvm-seed"):
         retained = tuple(int(i) for i in _retained_nodes(cfg.model, mesh, rod, f"{where}.model"))
     modes = cfg.model.modes if kind != "full" else 0
-    basis = _basis(key, material, _KIND[kind], retained, modes, cfg.model.reference)
-    body = body_from_fe(cfg.name, fe, basis)
+    args = (key, material, _KIND[kind], retained, modes, cfg.model.reference)
+    body = body_from_parts(cfg.name, mesh, _basis(*args), _parts(*args))
     n_ret = len(retained) if kind != "full" else mesh.n_nodes
     return body, BodyInfo(cfg.name, kind, mesh, material, body.nv, n_ret, modes, rod)
 
