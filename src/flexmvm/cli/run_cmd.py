@@ -20,12 +20,16 @@ MODELS = ["full", "mvm", "mvm-seed", "modal", "rigid"]
 @click.option("--dt", type=float, default=None, help="Time step near contact [s].")
 @click.option("--no-fields", is_flag=True, help="Skip results.h5 and the ParaView series.")
 @click.option("--progress/--no-progress", default=True, show_default=True)
-def command(scenario, out_dir, model, t_end, dt, no_fields, progress) -> None:
+@click.option("--jobs", type=click.IntRange(1, 2), default=2, show_default=True,
+              help="Processes for the scenario's run and its full-FE reference (2: side by "
+                   "side, one per core).")
+def command(scenario, out_dir, model, t_end, dt, no_fields, progress, jobs) -> None:
     """Simulate SCENARIO; write history.csv, summary.json, results.h5, ParaView series, PNG."""
     from flexmvm.scenarios.main_job import run_main_job
 
     summary = run_main_job(scenario, out_dir, model=model, t_end=t_end, dt=dt,
-                           fields=not no_fields, progress=progress, echo=click.echo)
+                           fields=not no_fields, progress=progress, echo=click.echo,
+                           jobs=jobs)
     keys = ("max_contact_force_N", "momentum_rel_error", "energy_rel_error", "max_penetration_m",
             "wall_time_s")
     click.echo("  ".join(f"{k} = {summary[k]:.4g}" for k in keys if summary.get(k) is not None))
