@@ -232,6 +232,7 @@ def cached_fe(source: Mapping | None, mesh: Mesh, material: Material,
 
 def _basis_inputs(source: Mapping, material: Material, kind: BasisKind, reference_set: str,
                   reference: ReferenceCondition, retained: np.ndarray, n_modes: int) -> dict:
+    """Key inputs shared by a basis and the body parts built on it."""
     return {"mesh": source, "material": material_inputs(material), "kind": kind.value,
             "reference": {"set": reference_set, "fixed_dofs": reference.fixed_dofs.tolist()},
             "retained": [int(k) for k in retained], "n_modes": int(n_modes)}

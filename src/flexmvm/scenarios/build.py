@@ -160,6 +160,8 @@ def _parts(key, material: Material, kind: BasisKind, retained: tuple, modes: int
 @functools.lru_cache(maxsize=16)
 def _parts_cached(key, material: Material, kind: BasisKind, retained: tuple, modes: int,
                   ref_set: str) -> BodyParts:
+    """Parts of the basis _basis_cached(same arguments): disk cache, else computed from the FE
+    model (loaded only then)."""
     basis = _basis_cached(key, material, kind, retained, modes, ref_set)
     return setup_cache.cached_body(
         _mesh_source(key), material, kind, ref_set, basis.reference,
