@@ -12,7 +12,6 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 from flexmvm.errors import InputError
-from flexmvm.plots.figures import plot_run
 from flexmvm.results.output import write_run
 from flexmvm.results.writers import write_summary_json
 from flexmvm.scenarios.compare import compare_runs, run_curves
@@ -76,6 +75,8 @@ def run_main_job(path: Path, out_dir: Path, *, model=None, t_end=None, dt=None, 
         curves = {"FE": ref_curves, **curves}
     write_summary_json(out_dir / "summary.json", summary)
     th = (theory[0], theory[1], theory[2]) if theory is not None else None
+    from flexmvm.plots.figures import plot_run  # matplotlib: 2 s of import, only here
+
     plot_run(out_dir / f"{sc.name}.png", curves, theory=th,
              title=f"{sc.name}: contact force and axial velocities")
     return summary
