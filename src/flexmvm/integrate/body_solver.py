@@ -21,6 +21,7 @@ import scipy.sparse as sp
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.errors import SolverError
 from flexmvm.fe.modes import factor
+from flexmvm.integrate.compliance import NodalColumns, NodalCompliance, nodal_compliance
 
 
 @dataclass
@@ -138,15 +139,6 @@ class BodySolver:
         Zx = f.Zr @ (A.T @ xf[:3]) + f.Zw @ xf[3:]
         return np.concatenate([xf, y - Zx])
 
-    def solve_with_yq(self, b: np.ndarray, yq: np.ndarray) -> np.ndarray:
-        """As solve(b) for b (nv, k), given yq = W_qq^-1 b[6:] already computed."""
-        f, A = self._f, self._A
-        bf = b[:6]
-        My = np.concatenate([A @ (self.body.inv.S1 @ yq), self._mw(f) @ yq])
-        xf = sla.lu_solve(self._schur, bf - My, check_finite=False)
-        Zx = f.Zr @ (A.T @ xf[:3]) + f.Zw @ xf[3:]
-        return np.concatenate([xf, yq - Zx])
-
     def prepare_translation(self, h: float, A: np.ndarray) -> None:
         """Set up solves with the translational block of W only (frame rotation frozen):
 
@@ -187,43 +179,40 @@ class BodySolver:
     def _mw(self, f: _Factor) -> np.ndarray:
         return getattr(f, "Mw_used", self._Mw0)
 
+    def _nodal(self, f: _Factor) -> NodalColumns:
+        """The nodal column cache of factor f (made on first use)."""
+        cache = getattr(f, "nodal", None)
+        if cache is None:
+            cache = f.nodal = NodalColumns(self.body.psi, self.body.inv.S1, f.Zr, f.Zw,
+                                           self._mw(f))
+        return cache
+
     def nodal_inverse(self, h: float, selector: sp.csr_matrix) -> np.ndarray:
         """W_qq^-1 psi^T N^T (nq, m) for the nodal selector N (m, 3 n_nodes), exactly.
 
         Contact rows are combinations of a few nodal directions that move from step to step;
         the columns W_qq^-1 psi_j^T of the nodal DOFs j they touch are cached per h, so a new
         row costs a small dense product and a back-substitution is needed only for a DOF
-        never touched before ("factor once, solve many")."""
+        never touched before ("factor once, solve many"). The step itself never forms this
+        (nq, m) block: see contact_compliance."""
         f = self._factor(h)
-        cache = getattr(f, "nodal", None)
-        if cache is None:
-            cache = f.nodal = _NodalColumns(self.body.nq)
-        sel = selector.tocsc()
-        dofs = np.nonzero(np.diff(sel.indptr))[0]
-        new = [d for d in dofs if d not in cache.slot]
-        if new:
-            psi = self.body.psi
-            rhs = psi[np.asarray(new), :]
-            rhs = rhs.toarray().T if sp.issparse(rhs) else np.ascontiguousarray(np.asarray(rhs).T)
-            cache.add(new, np.asarray(f.solve(rhs)).reshape(self.body.nq, len(new)))
-        slots = np.fromiter((cache.slot[d] for d in dofs), dtype=np.int64, count=len(dofs))
-        return cache.cols[:, slots] @ sel[:, dofs].T.toarray()
+        cache = self._nodal(f)
+        slots, Nd = cache.touch(selector, f.solve)
+        return cache.cols[slots].T @ Nd.T
 
+    def contact_compliance(self, h: float, bf: np.ndarray, selector: sp.csr_matrix
+                           ) -> NodalCompliance:
+        """D = Phi W^-1 Phi^T (m, m) and the velocity correction W^-1 Phi^T lambda of the
+        rows Phi = [bf (m, 6), N psi] (N = selector (m, 3 n_nodes)) from the cached nodal
+        columns (integrate.compliance), with the frame block of the last prepare()."""
+        f = self._factor(h)
+        return nodal_compliance(self._nodal(f), f.solve, bf, selector,
+                                (self._A, self._schur, f.Zr, f.Zw, self._mw(f)))
 
-class _NodalColumns:
-    """Growing column store: slot[dof] -> column of cols (nq, capacity)."""
-
-    def __init__(self, nq: int):
-        self.slot: dict[int, int] = {}
-        self.cols = np.empty((nq, 0))
-
-    def add(self, dofs, cols: np.ndarray) -> None:
-        n = len(self.slot)
-        need = n + len(dofs)
-        if need > self.cols.shape[1]:
-            grown = np.empty((self.cols.shape[0], max(need, 2 * self.cols.shape[1], 16)))
-            grown[:, :n] = self.cols[:, :n]
-            self.cols = grown
-        self.cols[:, n:need] = cols
-        for i, d in enumerate(dofs):
-            self.slot[int(d)] = n + i
+    def translation_compliance(self, h: float, bf: np.ndarray, selector: sp.csr_matrix
+                               ) -> NodalCompliance:
+        """As contact_compliance for W_t (prepare_translation): D (m, m) and the velocity
+        correction (3 + nq,) = [dr_dot, dq_dot] of the rows [bf[:, :3], N psi]."""
+        f = self._factor(h)
+        return nodal_compliance(self._nodal(f), f.solve, bf, selector,
+                                (self._A, self._schur_t, f.Zr, None, None))

@@ -34,6 +34,7 @@ from flexmvm.constraints.rows import Rows, stack
 from flexmvm.errors import SolverError
 from flexmvm.integrate import nonrotating
 from flexmvm.integrate.body_solver import BodySolver
+from flexmvm.integrate.compliance import DenseCompliance
 from flexmvm.integrate.lcp import solve_mixed_lcp
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import ContactRows, System
@@ -218,19 +219,21 @@ class MidpointIntegrator:
             Y[b] = solver.solve(np.hstack([bf, bq]).T)
         return Y
 
-    def _contact_inverse(self, crows: ContactRows, h: float):
-        """W^-1 Phi_c^T per body. Large bodies with nodal rows (contact) go through the cached
-        nodal columns of W_qq^-1 (exact; see BodySolver.nodal_inverse)."""
-        Y = {}
+    def _contact_inverse(self, crows: ContactRows, h: float) -> dict:
+        """Per body touched by the contact rows: its D = Phi_b W_b^-1 Phi_b^T (m, m) and its
+        velocity correction W_b^-1 Phi_b^T lambda (integrate.compliance). Large bodies with
+        nodal rows go through the cached nodal columns of W_qq^-1 (exact; no (nq, m) block),
+        others through explicit columns W^-1 Phi^T."""
+        out = {}
         for b, (bf, bq) in crows.rows.blocks.items():
             solver = self.solvers[b]
             sel = crows.rows.nodal.get(b)
             if sel is None or not bq.shape[1] or self.system.bodies[b].nq < NODAL_CACHE_MIN_NQ:
-                Y[b] = solver.solve(np.hstack([bf, bq]).T)
-                continue
-            yq = solver.nodal_inverse(h, sel)
-            Y[b] = solver.solve_with_yq(np.hstack([bf, bq]).T, yq)
-        return Y
+                Phi = np.hstack([bf, bq])
+                out[b] = DenseCompliance(Phi, solver.solve(Phi.T))
+            else:
+                out[b] = solver.contact_compliance(h, bf, sel)
+        return out
 
     # ----------------------------------------------------------------------------------------
     def step(self, t: float, states: list[BodyState], h: float) -> StepResult:
@@ -266,9 +269,9 @@ class MidpointIntegrator:
 
     def _newton_step(self, t, states, h, crows, parts) -> StepResult:
         self._prepare(states, h, refresh_tol=None)
-        Yc = self._contact_inverse(crows, h) if crows.rows.m else {}
+        Cc = self._contact_inverse(crows, h) if crows.rows.m else {}
         Gc = {b: crows.rows.body_matrix(b) for b in crows.rows.blocks}
-        Dcc = sum((Gc[b] @ Yc[b] for b in Yc), np.zeros((crows.rows.m, crows.rows.m)))
+        Dcc = sum((c.D for c in Cc.values()), np.zeros((crows.rows.m, crows.rows.m)))
         n_j, m_c = self.n_joint_rows, crows.rows.m
         v_plus = [st.v.copy() for st in states]
         lam = np.zeros(n_j + m_c)
@@ -313,8 +316,8 @@ class MidpointIntegrator:
             v_plus = list(v_free)
             for b, Yb in Yj.items():
                 v_plus[b] = v_plus[b] + Yb @ lam[:n_j]
-            for b, Yb in Yc.items():
-                v_plus[b] = v_plus[b] + Yb @ lam[n_j:]
+            for b, cb in Cc.items():
+                v_plus[b] = v_plus[b] + cb.velocity(lam[n_j:])
         self._after_step(parts, lam[n_j:], h)
         new_states = [e for e in ends]
         for st, vp in zip(new_states, v_plus):

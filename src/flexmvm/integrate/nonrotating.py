@@ -9,8 +9,8 @@ the scheme (see midpoint.py) are linear in dv = v+ - v- with constant coefficien
                                   + Phi_t^T lambda
 
 with W_qq = M_qq + theta h C + theta^2 h^2 K (body_solver). So one back-substitution per body
-gives v_free, the columns W_t^-1 Phi^T of the contact rows come from the cached nodal
-columns, and the LCP on D = Phi W_t^-1 Phi^T gives lambda. No Newton iteration is needed.
+gives v_free, D = Phi W_t^-1 Phi^T and W_t^-1 Phi^T lambda come from the cached nodal
+columns (integrate.compliance), and the LCP on D gives lambda. No Newton iteration is needed.
 
 Then the rotational rows of the full scheme are evaluated at this solution (omega_m = 0,
 domega = 0):
@@ -29,6 +29,7 @@ from __future__ import annotations
 import numpy as np
 
 from flexmvm.bodies.rotation import cross3
+from flexmvm.integrate.compliance import DenseCompliance
 from flexmvm.integrate.lcp import solve_mixed_lcp
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import ContactRows
@@ -92,29 +93,27 @@ def _free_rhs(body, st, g, loads, t_theta, theta, h) -> np.ndarray:
 
 
 def _contact_impulses(system, solvers, h, crows: ContactRows, v_free, v_plus) -> np.ndarray:
-    """lambda of the LCP on D = Phi W_t^-1 Phi^T; adds W_t^-1 Phi^T lambda to v_plus."""
+    """lambda (m,) of the LCP on D = Phi W_t^-1 Phi^T; adds W_t^-1 Phi^T lambda to v_plus.
+    Bodies with nodal rows go through the cached nodal columns (integrate.compliance)."""
     rows = crows.rows
-    m = rows.m
-    D = np.zeros((m, m))
+    D = np.zeros((rows.m, rows.m))
     c = -crows.lower.copy()
-    cols = {}
+    comps = {}
     for b, (bf, bq) in rows.blocks.items():
-        solver, body = solvers[b], system.bodies[b]
+        solver, body, v = solvers[b], system.bodies[b], v_free[b]
         sel = rows.nodal.get(b)
-        yq = solver.nodal_inverse(h, sel) if (sel is not None and body.nq) else None
-        phi_t = bf[:, :3]
-        Y = (solver.solve_translation(phi_t.T, yq) if yq is not None
-             else solver.solve_translation(np.vstack([phi_t.T, bq.T])))
-        phi_q = (sel @ body.psi) if (sel is not None and body.is_sparse) else bq
-        D += phi_t @ Y[:3]
-        c += phi_t @ v_free[b][:3]
-        if body.nq:
-            D += np.asarray(phi_q @ Y[3:])
-            c += np.asarray(phi_q @ v_free[b][6:]).ravel()
-        cols[b] = Y
+        if sel is not None and body.nq:
+            comps[b] = solver.translation_compliance(h, bf, sel)
+            phi_q_v = sel @ (body.psi @ v[6:]) if body.is_sparse else bq @ v[6:]
+        else:
+            phi = np.hstack([bf[:, :3], bq])
+            comps[b] = DenseCompliance(phi, solver.solve_translation(phi.T))
+            phi_q_v = bq @ v[6:] if body.nq else 0.0
+        D += comps[b].D
+        c += bf[:, :3] @ v[:3] + phi_q_v
     lam = solve_mixed_lcp(D, c, crows.n_eq)
-    for b, Y in cols.items():
-        dv = Y @ lam
+    for b, comp in comps.items():
+        dv = comp.velocity(lam)
         v_plus[b][:3] += dv[:3]
         v_plus[b][6:] += dv[3:]
     return lam
