@@ -32,22 +32,18 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-_CHUNK = 2048  # entries of the output kept in L1 while the columns stream past
-
 
 @numba.njit(cache=True)
 def add_weighted_rows(cols, slots, w, out):  # pragma: no cover - compiled
     """out += sum_i w[i] cols[slots[i]] (cols (capacity, nq) C-ordered, out (nq,)); rows with
-    w[i] = 0 are not read. Chunked so that out stays in cache: one pass over the rows read."""
-    nq = out.shape[0]
-    for lo in range(0, nq, _CHUNK):
-        hi = min(lo + _CHUNK, nq)
-        for i in range(slots.shape[0]):
-            wi = w[i]
-            if wi != 0.0:
-                row = cols[slots[i]]
-                for j in range(lo, hi):
-                    out[j] += wi * row[j]
+    w[i] = 0 are not read. One sequential stream per row (measured 2x faster than chunking
+    out over the rows: the hardware prefetcher follows one stream, not fifty)."""
+    for i in range(slots.shape[0]):
+        wi = w[i]
+        if wi != 0.0:
+            row = cols[slots[i]]
+            for j in range(out.shape[0]):
+                out[j] += wi * row[j]
 
 
 def _psi_times(psi_rows, X: np.ndarray) -> np.ndarray:
