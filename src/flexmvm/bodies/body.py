@@ -73,12 +73,12 @@ class FlexibleBody:
         return self.inv.S0 + self.inv.S1 @ q
 
     @functools.cached_property
-    def _dense_contractions(self) -> tuple[None, np.ndarray]:
+    def _g2_stack(self) -> np.ndarray:
         """Dense bases: the nine G2 blocks stacked as one (9 nq, nq) array, block 3a + b =
         G2[b][a], so that all nine G2[b][a] x come from one matrix-vector product."""
         G2 = self.inv.G2
         stack = np.vstack([np.asarray(G2[b][a]) for a in range(3) for b in range(3)])
-        return None, np.ascontiguousarray(stack)
+        return np.ascontiguousarray(stack)
 
     def contractions(self, x: np.ndarray) -> np.ndarray:
         """L(x)[a, b] = G2[b][a] x, shape (3, 3, nq): every G2 contraction of the equations of
@@ -92,8 +92,7 @@ class FlexibleBody:
             MU = inv.Ms @ U
             PMU = [inv.PT[b] @ MU for b in range(3)]
             return np.array([[PMU[b][:, a] for b in range(3)] for a in range(3)])
-        _, stack = self._dense_contractions
-        return (stack @ x).reshape(3, 3, self.nq)
+        return (self._g2_stack @ x).reshape(3, 3, self.nq)
 
     @functools.cached_property
     def _G1(self) -> np.ndarray:
