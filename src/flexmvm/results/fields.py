@@ -22,6 +22,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.errors import InputError, MeshError
@@ -31,6 +32,7 @@ from flexmvm.mesh.quality import HEX27_IJK, shape_gradients
 
 __all__ = [
     "NodalFields",
+    "StressOperator",
     "body_geometry",
     "displacement",
     "elastic_displacement",
@@ -134,28 +136,83 @@ def elastic_rates(t: np.ndarray, q: np.ndarray) -> np.ndarray:
     return np.gradient(q, t, axis=0)
 
 
-def _cell_stresses(X: np.ndarray, conn: np.ndarray, u: np.ndarray, cell_type: CellType,
-                   lam: float, mu: float) -> np.ndarray:
-    """Stress (n_cells, nodes_per_cell, 3, 3) [Pa] of each cell at its own nodes."""
-    grads = shape_gradients(cell_type, _NODE_POINTS[cell_type])  # (p, n, 3) dN/dxi
-    out = np.empty((len(conn), grads.shape[0], 3, 3))
-    eye = np.eye(3)
-    for lo in range(0, len(conn), _CHUNK):
-        c = conn[lo : lo + _CHUNK]
-        jac = np.einsum("cni,pnj->cpij", X[c], grads)  # dx_i/dxi_j
-        det = np.linalg.det(jac)
-        if np.any(det <= 0.0):
-            bad = lo + int(np.argwhere(det <= 0.0)[0, 0])
-            raise MeshError(
-                f"{cell_type.value} cell {bad} has a non-positive Jacobian at a node; "
-                "expected a valid mesh (see mesh.quality.check_quality)"
-            )
-        du = np.einsum("cna,pnj->cpaj", u[c], grads)  # du_a/dxi_j
-        h = du @ np.linalg.inv(jac)  # du_a/dx_i
-        eps = 0.5 * (h + np.swapaxes(h, -1, -2))
-        tr = np.trace(eps, axis1=-2, axis2=-1)
-        out[lo : lo + _CHUNK] = lam * tr[..., None, None] * eye + 2.0 * mu * eps
-    return out
+class StressOperator:
+    """The linear map u_local (n, 3) [m] -> node-averaged small-strain stress (n, 3, 3) [Pa] of
+    one mesh and material, built once (cell gradients, Jacobian inverses, averaging weights)
+    and applied to many displacement fields (one batched product and one sparse average each).
+
+    sigma = lambda tr(eps) I + 2 mu eps, eps = sym(grad u), grad u at each cell's own nodes from
+    the isoparametric shape functions: grad u (c, p) = u[conn[c]]^T G[c, p] with
+    G[c, p] = dN/dxi (p) (dx/dxi)^-1 (n_nodes_per_cell, 3). Raises InputError for an
+    unsupported cell type, MeshError for a cell with a non-positive Jacobian at a node.
+    """
+
+    def __init__(self, mesh: Mesh, material: Material):
+        self.n = n = mesh.n_nodes
+        self.lam, self.mu = material.lame
+        self._blocks = []   # (connectivity (c, k), G^T (c, p*3, k))
+        rows, cols = [], []
+        offset = 0
+        for block in mesh.cells:
+            if block.cell_type not in _NODE_POINTS:
+                raise InputError(
+                    f"von Mises: cell type {block.cell_type.value!r} is not supported; expected "
+                    f"one of {', '.join(ct.value for ct in _NODE_POINTS)}"
+                )
+            conn = np.asarray(block.connectivity)
+            if len(conn) == 0:
+                continue
+            grads = shape_gradients(block.cell_type, _NODE_POINTS[block.cell_type])  # (p, k, 3)
+            p, k = grads.shape[0], grads.shape[1]
+            Gt = np.empty((len(conn), p * 3, k))
+            for lo in range(0, len(conn), _CHUNK):
+                c = conn[lo : lo + _CHUNK]
+                jac = np.einsum("cni,pnj->cpij", mesh.nodes[c], grads)  # dx_i/dxi_j
+                det = np.linalg.det(jac)
+                if np.any(det <= 0.0):
+                    bad = lo + int(np.argwhere(det <= 0.0)[0, 0])
+                    raise MeshError(
+                        f"{block.cell_type.value} cell {bad} has a non-positive Jacobian at a "
+                        "node; expected a valid mesh (see mesh.quality.check_quality)"
+                    )
+                # G[c, p, n, i] = sum_j dN_n/dxi_j (J^-1)_ji, stored as (c, p, i, n)
+                G = np.einsum("pnj,cpji->cpin", grads, np.linalg.inv(jac))
+                Gt[lo : lo + _CHUNK] = G.reshape(len(c), p * 3, k)
+            self._blocks.append((conn, Gt))
+            rows.append(conn.ravel())
+            cols.append(offset + np.arange(conn.size))
+            offset += conn.size
+        rows = np.concatenate(rows) if rows else np.zeros(0, int)
+        cols = np.concatenate(cols) if cols else np.zeros(0, int)
+        count = np.bincount(rows, minlength=n).astype(float)
+        w = 1.0 / np.maximum(count, 1.0)[rows]
+        # average over the cells sharing a node (unweighted); nodes in no cell get zero
+        self._average = sp.csr_matrix((w, (rows, cols)), shape=(n, offset))
+
+    def nodal_stress(self, u_local: np.ndarray) -> np.ndarray:
+        """Node-averaged stress (n, 3, 3) [Pa] of u_local (n, 3) or (3 n,) [m]."""
+        n = self.n
+        u = np.asarray(u_local, dtype=float)
+        if u.shape == (3 * n,):
+            u = u.reshape(n, 3)
+        if u.shape != (n, 3):
+            raise InputError(f"u_local: expected shape ({n}, 3) or ({3 * n},), got {u.shape}")
+        parts = []
+        eye = np.eye(3)
+        for conn, Gt in self._blocks:
+            h = np.matmul(Gt, u[conn])  # (c, p*3, 3): h[c, p, i, a] = du_a/dx_i
+            h = h.reshape(len(conn), -1, 3, 3)
+            eps = 0.5 * (h + np.swapaxes(h, -1, -2))
+            tr = np.trace(eps, axis1=-2, axis2=-1)
+            sig = self.lam * tr[..., None, None] * eye + 2.0 * self.mu * eps
+            parts.append(sig.reshape(-1, 9))
+        if not parts:
+            return np.zeros((n, 3, 3))
+        return (self._average @ np.concatenate(parts)).reshape(n, 3, 3)
+
+    def von_mises(self, u_local: np.ndarray) -> np.ndarray:
+        """Nodal von Mises stress (n,) [Pa] of the node-averaged stress of u_local."""
+        return von_mises_of(self.nodal_stress(u_local))
 
 
 def nodal_stress(mesh: Mesh, material: Material, u_local: np.ndarray) -> np.ndarray:
@@ -166,32 +223,13 @@ def nodal_stress(mesh: Mesh, material: Material, u_local: np.ndarray) -> np.ndar
     and the values of all cells sharing a node are averaged. Nodes in no cell get zero. Supports
     every CellType (hexahedron, hexahedron27, tetra, tetra10, wedge). Raises InputError for a
     u_local of the wrong shape or an unsupported cell type, MeshError for a cell with a
-    non-positive Jacobian at a node.
+    non-positive Jacobian at a node. For many fields on one mesh use :class:`StressOperator`.
     """
     n = mesh.n_nodes
     u = np.asarray(u_local, dtype=float)
-    if u.shape == (3 * n,):
-        u = u.reshape(n, 3)
-    if u.shape != (n, 3):
+    if u.shape not in ((3 * n,), (n, 3)):
         raise InputError(f"u_local: expected shape ({n}, 3) or ({3 * n},), got {u.shape}")
-    lam, mu = material.lame
-    total = np.zeros((n, 9))
-    count = np.zeros(n)
-    for block in mesh.cells:
-        if block.cell_type not in _NODE_POINTS:
-            raise InputError(
-                f"von Mises: cell type {block.cell_type.value!r} is not supported; expected one "
-                f"of {', '.join(ct.value for ct in _NODE_POINTS)}"
-            )
-        conn = block.connectivity
-        if len(conn) == 0:
-            continue
-        sig = _cell_stresses(mesh.nodes, conn, u, block.cell_type, lam, mu)
-        flat = conn.ravel()
-        for k in range(9):
-            total[:, k] += np.bincount(flat, weights=sig.reshape(-1, 9)[:, k], minlength=n)
-        count += np.bincount(flat, minlength=n)
-    return (total / np.maximum(count, 1.0)[:, None]).reshape(n, 3, 3)
+    return StressOperator(mesh, material).nodal_stress(u)
 
 
 def von_mises_of(stress: np.ndarray) -> np.ndarray:
@@ -234,15 +272,29 @@ def body_geometry(body: FlexibleBody) -> Mesh:
 
 def nodal_fields(body: FlexibleBody, material: Material, r: np.ndarray, A: np.ndarray,
                  q: np.ndarray, frame_v: np.ndarray, q_dot: np.ndarray | None,
-                 r0: np.ndarray, A0: np.ndarray, geometry: Mesh | None = None) -> NodalFields:
+                 r0: np.ndarray, A0: np.ndarray, geometry: Mesh | None = None, *,
+                 stress: StressOperator | None = None, u: np.ndarray | None = None,
+                 u_dot: np.ndarray | None = None) -> NodalFields:
     """All nodal fields of `body` in state (r, A, q, [r_dot, omega], q_dot), displacement from
-    the undeformed body at (r0, A0). geometry: :func:`body_geometry` (pass it to reuse it)."""
+    the undeformed body at (r0, A0). geometry: :func:`body_geometry`, stress: its
+    :class:`StressOperator`, u / u_dot: :func:`elastic_displacement` of q / q_dot (pass them
+    to reuse them over many outputs)."""
     geometry = body_geometry(body) if geometry is None else geometry
+    stress = StressOperator(geometry, material) if stress is None else stress
+    r, A = _frame(r, A)
     r0, A0 = _frame(r0, A0)
+    fv = np.asarray(frame_v, dtype=float)
+    if fv.shape != (6,):
+        raise InputError(f"frame_v: expected [r_dot, omega] of shape (6,), got {fv.shape}")
+    u = elastic_displacement(body, q) if u is None else u
+    s = body.X + u
+    local = np.cross(fv[3:], s)
+    if q_dot is not None or u_dot is not None:
+        local = local + (elastic_displacement(body, q_dot) if u_dot is None else u_dot)
+    reference = r0 + body.X @ A0.T
     return NodalFields(
-        reference=r0 + body.X @ A0.T,
-        displacement=displacement(body, r, A, q, r0, A0),
-        velocity=node_velocities(body, A, q, frame_v, q_dot),
-        von_mises=von_mises(geometry, material, elastic_displacement(body, q)),
+        reference=reference,
+        displacement=r + s @ A.T - reference,
+        velocity=fv[:3] + local @ A.T,
+        von_mises=stress.von_mises(u),
     )
-
