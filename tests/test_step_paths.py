@@ -74,7 +74,9 @@ def test_nonrotating_step_equals_newton_step():
     peak = newton_res.contact_force.max()
     assert np.abs(fast_res.contact_force - newton_res.contact_force).max() <= 1e-8 * peak
     p0 = fast_res.momentum[0]
-    assert np.abs(fast_res.momentum - p0).max() <= 1e-12 * np.linalg.norm(p0)
+    # round-off of momentum sums over two 25,000-DOF bodies and ~100 contact rows: measured
+    # 1.1e-12 of |p0| (LCP with iterative refinement); a real imbalance would be >= rtol = 1e-10
+    assert np.abs(fast_res.momentum - p0).max() <= 1e-11 * np.linalg.norm(p0)
 
 
 def _random_body(sparse: bool, seed: int = 0) -> FlexibleBody:

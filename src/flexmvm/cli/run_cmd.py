@@ -33,6 +33,12 @@ def command(scenario, out_dir, model, t_end, dt, no_fields, progress, jobs) -> N
     keys = ("max_contact_force_N", "momentum_rel_error", "energy_rel_error", "max_penetration_m",
             "wall_time_s")
     click.echo("  ".join(f"{k} = {summary[k]:.4g}" for k in keys if summary.get(k) is not None))
+    for label, s in (("", summary), ("full FE reference: ", summary.get("reference_full") or {})):
+        if s.get("steps_not_converged"):
+            click.echo(f"warning: {label}{s['steps_not_converged']} step(s) stopped on the "
+                       f"round-off floor above the Newton tolerance (worst relative residual "
+                       f"{s['newton_residual_max']:.2e}; summary.json steps_not_converged)",
+                       err=True)
     if "comparison_vs_full" in summary:
         c = summary["comparison_vs_full"]
         click.echo("vs full FE: " + "  ".join(f"{k} = {v:.4f}" for k, v in c.items() if isinstance(v, float)))

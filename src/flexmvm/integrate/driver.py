@@ -82,6 +82,12 @@ class RunResult:
     n_steps: int = 0
     n_factorizations: int = 0
     n_nonrotating_steps: int = 0   # steps taken by the linear non-rotating step (nonrotating.py)
+    steps_not_converged: int = 0   # steps that stopped above the Newton rtol (round-off floor)
+    newton_residual_max: float = 0.0  # largest relative momentum residual at a step's exit
+    lcp_residual_max: float = 0.0  # largest complementarity residual of any LCP solve
+    momentum_residual: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    # sum over all steps of the translational momentum residuals of all bodies [N s]: the
+    # linear-momentum change the scheme's solves left unbalanced (a free system's error)
     wall_time_s: float = 0.0
 
     @property
@@ -179,6 +185,7 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating) -
     impulse, jimpulse = 0.0, np.zeros(integ.n_joint_rows)
     intervals: list[list[float]] = []
     max_pen, n_steps, drift = 0.0, 0, 0.0
+    n_loose, worst_res, worst_lcp, p_res = 0, 0.0, 0.0, np.zeros(3)
     wall0 = time.perf_counter()
     while tick < n_ticks:
         to_out = out_ticks - tick % out_ticks
@@ -192,6 +199,11 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating) -
         states = res.states
         n_steps += 1
         drift = max(drift, res.joint_drift)
+        n_loose += not res.converged
+        worst_res = max(worst_res, res.residual)
+        worst_lcp = max(worst_lcp, res.lcp_residual)
+        if res.translation_residual is not None:
+            p_res += res.translation_residual
         tick += span
         f = res.contact.normal_impulse(res.contact_impulses)
         if res.contact.gaps.size:
@@ -214,7 +226,8 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating) -
     return rec.result(contact_intervals=[tuple(iv) for iv in intervals],
                       max_penetration_m=max(max_pen, 0.0), max_joint_drift=drift, n_steps=n_steps,
                       n_factorizations=nfac, n_nonrotating_steps=integ.n_nonrotating_steps,
-                      wall_time_s=wall)
+                      steps_not_converged=n_loose, newton_residual_max=worst_res,
+                      lcp_residual_max=worst_lcp, momentum_residual=p_res, wall_time_s=wall)
 
 
 def _choose_level(system, states, level, calm, k_max, dt) -> int:

@@ -7,6 +7,11 @@ D = Phi W^-1 Phi^T is symmetric positive (semi-)definite. The equality rows are 
 a Schur complement; the remaining LCP is the convex QP min 1/2 l^T D' l + c'^T l, l >= 0,
 solved exactly (finite active-set termination) as NNLS on the Cholesky factor
 (Lawson & Hanson 1974): D' = L L^T, min |L^T l + L^-1 c'|.
+
+Every solve of a time step is checked (:func:`solve_checked`): the natural residual
+r_e = w_e (equality rows), r_u = min(d_u l_u, w_u) (unilateral rows; d = diag D turns an
+impulse into a velocity so both arguments are in m/s), relative to the problem's velocity
+scale max(|c|, |D l|). It is zero exactly at a solution; LCP_RTOL bounds it.
 """
 
 from __future__ import annotations
@@ -18,6 +23,9 @@ from scipy.optimize import nnls
 from flexmvm.errors import SolverError
 
 _REG = 1e-12
+# The regularisation above perturbs w by ~_REG D l, NNLS stops at its own round-off: both
+# ~1e-12 of the velocity scale; measured on the seed case <= ~1e-10 (docs/validation.md).
+LCP_RTOL = 1e-8
 
 
 def _regularised_cho(D: np.ndarray, what: str):
@@ -37,7 +45,7 @@ def solve_mixed_lcp(D: np.ndarray, c: np.ndarray, n_eq: int) -> np.ndarray:
         return np.zeros(0)
     D = 0.5 * (D + D.T)
     if n_eq == m:
-        return -sla.cho_solve(_regularised_cho(D, "joint"), c)
+        return _refine(D, c, n_eq, -sla.cho_solve(_regularised_cho(D, "joint"), c))
     e, u = slice(0, n_eq), slice(n_eq, m)
     if n_eq:
         cho_e = _regularised_cho(D[e, e], "joint")
@@ -52,6 +60,27 @@ def solve_mixed_lcp(D: np.ndarray, c: np.ndarray, n_eq: int) -> np.ndarray:
     out[u] = lu
     if n_eq:
         out[e] = -(De_inv_ce + De_inv_Deu @ lu)
+    return _refine(D, c, n_eq, out)
+
+
+def _refine(D: np.ndarray, c: np.ndarray, n_eq: int, lam: np.ndarray,
+            sweeps: int = 2) -> np.ndarray:
+    """Iterative refinement on the rows that hold as equalities at the solution (the joints
+    and the active contacts, l > 0): the regularisation _REG * mean(diag D) shifts l by
+    ~_REG cond(D) of itself, which for a joint with a stiff and a soft direction (cond ~1e4
+    and more) is far above round-off; two sweeps with the true D remove it. An active
+    impulse that a sweep would make negative keeps its unrefined value."""
+    S = np.concatenate([np.arange(n_eq), n_eq + np.flatnonzero(lam[n_eq:] > 0.0)])
+    if not len(S):
+        return lam
+    cho = _regularised_cho(D[np.ix_(S, S)], "active")
+    out = lam.copy()
+    for _ in range(sweeps):
+        trial = out.copy()
+        trial[S] -= sla.cho_solve(cho, D[S] @ out + c[S])
+        if np.any(trial[n_eq:] < 0.0):
+            break
+        out = trial
     return out
 
 
@@ -63,3 +92,34 @@ def _solve_lcp(D: np.ndarray, c: np.ndarray) -> np.ndarray:
     rhs = -sla.solve_triangular(L, c, lower=True)
     lam, _ = nnls(L.T, rhs, maxiter=50 * len(c) + 100)
     return lam
+
+
+def complementarity_residual(D: np.ndarray, c: np.ndarray, n_eq: int, lam: np.ndarray) -> float:
+    """Natural residual of l for the mixed LCP (D, c, n_eq), relative to the velocity scale
+    max(|c|, |D l|) (module docstring): 0 at a solution, ~1 for a wrong one."""
+    m = len(c)
+    if m == 0:
+        return 0.0
+    w = D @ lam + c
+    scale = max(float(np.abs(c).max()), float(np.abs(w - c).max()), 1e-300)
+    r = np.abs(w[:n_eq]).max() if n_eq else 0.0
+    if n_eq < m:
+        d = np.maximum(np.diag(D)[n_eq:], 0.0)
+        r = max(r, float(np.abs(np.minimum(d * lam[n_eq:], w[n_eq:])).max()),
+                float(np.maximum(-lam[n_eq:], 0.0).max() * d.max()))
+    return float(r) / scale
+
+
+def solve_checked(D: np.ndarray, c: np.ndarray, n_eq: int, rtol: float = LCP_RTOL,
+                  where: str = "") -> tuple[np.ndarray, float]:
+    """solve_mixed_lcp, then its complementarity residual; raises SolverError (naming
+    `where`, e.g. the time of the step) when the residual exceeds rtol or D, c are not finite."""
+    if not (np.all(np.isfinite(D)) and np.all(np.isfinite(c))):
+        raise SolverError(f"constraint impulses{where}: the Delassus matrix or the free "
+                          "velocities are not finite (the step diverged)")
+    lam = solve_mixed_lcp(D, c, n_eq)
+    res = complementarity_residual(0.5 * (D + D.T), c, n_eq, lam)
+    if not res <= rtol:
+        raise SolverError(f"constraint impulses{where}: complementarity residual {res:.2e} "
+                          f"exceeds {rtol:.0e} ({len(c)} rows, {n_eq} equalities)")
+    return lam, res

@@ -35,7 +35,7 @@ from flexmvm.errors import SolverError
 from flexmvm.integrate import nonrotating
 from flexmvm.integrate.body_solver import BodySolver
 from flexmvm.integrate.compliance import DenseCompliance
-from flexmvm.integrate.lcp import solve_mixed_lcp
+from flexmvm.integrate.lcp import solve_checked
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import ContactRows, System
 
@@ -78,6 +78,11 @@ class StepResult:
     contact_impulses: np.ndarray
     iterations: int
     joint_drift: float = 0.0   # max |phi| of the joints at the end of the step [m or -]
+    converged: bool = True     # False: stopped on the round-off floor above rtol
+    residual: float = 0.0      # largest momentum residual at exit, relative to the body's scale
+    translation_residual: np.ndarray | None = None  # (3,) sum over bodies of the exit
+                                                    # residual's translational rows [N s]
+    lcp_residual: float = 0.0  # largest complementarity residual of the step's LCP solves
 
 
 class MidpointIntegrator:
@@ -246,9 +251,10 @@ class MidpointIntegrator:
                                                self._loads, t, states, h, crows)
             if out is not None:
                 self.n_nonrotating_steps += 1
-                new_states, lam_c = out
+                new_states, lam_c, res_t, lcp_res = out
                 self._after_step(parts, lam_c, h)
-                return StepResult(new_states, np.zeros(0), crows, lam_c, 1, 0.0)
+                return StepResult(new_states, np.zeros(0), crows, lam_c, 1, 0.0,
+                                  translation_residual=res_t, lcp_residual=lcp_res)
         return self._newton_step(t, states, h, crows, parts)
 
     def _candidate_rows(self, states, h):
@@ -276,21 +282,31 @@ class MidpointIntegrator:
         v_plus = [st.v.copy() for st in states]
         lam = np.zeros(n_j + m_c)
         last_norm = last_rel = np.inf
+        lcp_max = 0.0
         for it in range(self.max_iter + 1):
             R, mids, ends, scales = self._residuals(t, states, v_plus, h)
             phi, jrows = self._joint_rows(t, h, mids, ends)
             Gj = {b: jrows.body_matrix(b) for b in jrows.blocks} if n_j else {}
             res_norm = max(float(np.abs(r).max()) for r in R) if it else np.inf
             if it > 0:
-                rel, rel_r = self._relative_residual(R, Gj, Gc, lam, n_j, scales)
+                rel, rel_r, res_t = self._relative_residual(R, Gj, Gc, lam, n_j, scales)
                 phi_ok = not (phi.size and np.abs(phi).max() > 1e-12)
-                floor = it > 2 and rel < ROUNDOFF_FLOOR and rel >= 0.5 * last_rel
+                # below ROUNDOFF_FLOOR a residual that stops decreasing (or still there at
+                # max_iter) is round-off: accepted, and counted as not converged (StepResult)
+                floor = it > 2 and rel < ROUNDOFF_FLOOR and (rel >= 0.5 * last_rel
+                                                             or it >= self.max_iter)
                 if phi_ok and (rel <= self.rtol or (floor and (rel_r <= TRANSLATION_RTOL
                                                                or it >= self.max_iter))):
                     break
                 last_rel = rel
             if it == SLOW_ITERATIONS or (it > 1 and res_norm > last_norm):
                 self._prepare(mids, h, refresh_tol=0.0)
+                if m_c:
+                    # the contact columns W^-1 Phi^T must be those of the W the free velocity
+                    # is solved with: with the old ones the iteration has a fixed point at
+                    # R = W_new W_old^-1 Phi^T lambda, a residual that never goes away
+                    Cc = self._contact_inverse(crows, h)
+                    Dcc = sum((c.D for c in Cc.values()), np.zeros((m_c, m_c)))
             last_norm = res_norm
             if it == self.max_iter:
                 raise SolverError(f"implicit midpoint step at t = {t:.6e} s (h = {h:.3e} s) did "
@@ -312,7 +328,8 @@ class MidpointIntegrator:
                 c[:n_j] = jrows.times(v_free) - jrows.times(v_plus) + phi / (self.theta * h)
             if m_c:
                 c[n_j:] = crows.rows.times(v_free) - crows.lower
-            lam = solve_mixed_lcp(D, c, n_j + crows.n_eq)
+            lam, lcp_res = solve_checked(D, c, n_j + crows.n_eq, where=f" at t = {t:.6e} s")
+            lcp_max = max(lcp_max, lcp_res)
             v_plus = list(v_free)
             for b, Yb in Yj.items():
                 v_plus[b] = v_plus[b] + Yb @ lam[:n_j]
@@ -324,7 +341,9 @@ class MidpointIntegrator:
             st.v = vp
         self._carry(states, new_states, h)
         drift = float(np.abs(phi).max()) if phi.size else 0.0
-        return StepResult(new_states, lam[:n_j], crows, lam[n_j:], it, drift)
+        return StepResult(new_states, lam[:n_j], crows, lam[n_j:], it, drift,
+                          converged=rel <= self.rtol, residual=rel, translation_residual=res_t,
+                          lcp_residual=lcp_max)
 
     def _prepare(self, states, h, refresh_tol):
         """Frame blocks of W at `states`; M_wq refreshed when it drifted (always for small
@@ -343,8 +362,11 @@ class MidpointIntegrator:
 
     def _relative_residual(self, R, Gj, Gc, lam, n_j, scales) -> float:
         """Largest momentum residual (constraint impulses included) relative to each body's
-        momentum scale."""
+        momentum scale; the same for the translational rows alone; and the sum over bodies of
+        the translational rows [N s] (the step's linear-momentum error: internal and constraint
+        forces cancel between bodies)."""
         worst, worst_r = 0.0, 0.0
+        res_t = np.zeros(3)
         for b, (r, sc) in enumerate(zip(R, scales)):
             res = r
             if b in Gj:
@@ -353,7 +375,8 @@ class MidpointIntegrator:
                 res = res - Gc[b].T @ lam[n_j:]
             worst = max(worst, float(np.abs(res).max()) / max(sc, 1e-300))
             worst_r = max(worst_r, float(np.abs(res[:3]).max()) / max(sc, 1e-300))
-        return worst, worst_r
+            res_t += res[:3]
+        return worst, worst_r, res_t
 
 
 def _times(matrix, x: np.ndarray) -> np.ndarray:

@@ -30,7 +30,7 @@ import numpy as np
 
 from flexmvm.bodies.rotation import cross3
 from flexmvm.integrate.compliance import DenseCompliance
-from flexmvm.integrate.lcp import solve_mixed_lcp
+from flexmvm.integrate.lcp import solve_checked
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import ContactRows
 
@@ -42,7 +42,8 @@ def applies(system, states: list[BodyState]) -> bool:
 
 def nonrotating_step(system, solvers, theta: float, rtol: float, loads: dict, t: float,
                      states: list[BodyState], h: float, crows: ContactRows):
-    """The step above. Returns (new states, contact impulses) or None when a rotational
+    """The step above. Returns (new states, contact impulses, translational residual summed
+    over the bodies (3,) [N s], complementarity residual of the LCP) or None when a rotational
     residual exceeds rtol times the body's momentum scale (the frame would rotate)."""
     g = system.gravity
     v_free, rhs_scale = [], []
@@ -56,9 +57,9 @@ def nonrotating_step(system, solvers, theta: float, rtol: float, loads: dict, t:
         v_free.append(v)
         rhs_scale.append(float(np.abs(rhs).max()) if rhs.size else 0.0)
     v_plus = [v.copy() for v in v_free]
-    lam = np.zeros(crows.rows.m)
+    lam, lcp_res = np.zeros(crows.rows.m), 0.0
     if crows.rows.m:
-        lam = _contact_impulses(system, solvers, h, crows, v_free, v_plus)
+        lam, lcp_res = _contact_impulses(system, solvers, h, crows, v_free, v_plus, t)
     for b, (body, st, vp) in enumerate(zip(system.bodies, states, v_plus)):
         tau = sum((_load_torque(body, load, st, vp, theta, h)
                    for load in loads.get(b, ()) if t + theta * h >= load.t_start_s),
@@ -66,11 +67,31 @@ def nonrotating_step(system, solvers, theta: float, rtol: float, loads: dict, t:
         if not _rotation_balanced(body, st, vp, crows, lam, b, tau, g, theta, h, rtol,
                                   rhs_scale[b]):
             return None
+    res_t = sum((_translation_residual(body, st, vp, crows, lam, b, g, loads.get(b, ()),
+                                       t + theta * h, h)
+                 for b, (body, st, vp) in enumerate(zip(system.bodies, states, v_plus))),
+                np.zeros(3))
     new_states = []
     for st, vp in zip(states, v_plus):
         vm = theta * vp + (1.0 - theta) * st.v
         new_states.append(BodyState(st.r + h * vm[:3], st.A.copy(), st.q + h * vm[6:], vp))
-    return new_states, lam
+    return new_states, lam, res_t, lcp_res
+
+
+def _translation_residual(body, st, vp, crows, lam, b, g, loads, t_theta, h) -> np.ndarray:
+    """Translational rows of the scheme at the step's solution [N s] (global frame):
+    m dr_dot + A S1 dq_dot - h (m g + f) - Phi_r^T lambda."""
+    dv = vp - st.v
+    res = body.inv.mass * dv[:3] - h * body.inv.mass * g
+    if body.nq:
+        res += st.A @ (body.inv.S1 @ dv[6:])
+    for load in loads:
+        if t_theta >= load.t_start_s:
+            res -= h * np.asarray(load.force_n, float)
+    blk = crows.rows.blocks.get(b)
+    if blk is not None:
+        res -= blk[0][:, :3].T @ lam
+    return res
 
 
 def _free_rhs(body, st, g, loads, t_theta, theta, h) -> np.ndarray:
@@ -92,8 +113,9 @@ def _free_rhs(body, st, g, loads, t_theta, theta, h) -> np.ndarray:
     return rhs
 
 
-def _contact_impulses(system, solvers, h, crows: ContactRows, v_free, v_plus) -> np.ndarray:
-    """lambda (m,) of the LCP on D = Phi W_t^-1 Phi^T; adds W_t^-1 Phi^T lambda to v_plus.
+def _contact_impulses(system, solvers, h, crows: ContactRows, v_free, v_plus, t
+                      ) -> tuple[np.ndarray, float]:
+    """(lambda (m,), complementarity residual) of the LCP on D = Phi W_t^-1 Phi^T; adds W_t^-1 Phi^T lambda to v_plus.
     Bodies with nodal rows go through the cached nodal columns (integrate.compliance)."""
     rows = crows.rows
     D = np.zeros((rows.m, rows.m))
@@ -111,12 +133,12 @@ def _contact_impulses(system, solvers, h, crows: ContactRows, v_free, v_plus) ->
             phi_q_v = bq @ v[6:] if body.nq else 0.0
         D += comps[b].D
         c += bf[:, :3] @ v[:3] + phi_q_v
-    lam = solve_mixed_lcp(D, c, crows.n_eq)
+    lam, res = solve_checked(D, c, crows.n_eq, where=f" at t = {t:.6e} s")
     for b, comp in comps.items():
         dv = comp.velocity(lam)
         v_plus[b][:3] += dv[:3]
         v_plus[b][6:] += dv[3:]
-    return lam
+    return lam, res
 
 
 def _load_torque(body, load, st, vp, theta, h) -> np.ndarray:

@@ -50,4 +50,11 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         "energy_rel_error_max": e_err_max,
         "max_penetration_m": float(res.max_penetration_m),
         "max_joint_drift": float(res.max_joint_drift),
+        "steps_not_converged": int(res.steps_not_converged),
+        "newton_residual_max": float(res.newton_residual_max),
+        "lcp_residual_max": float(res.lcp_residual_max),
+        # the momentum the solves left unbalanced, relative to the initial momentum: what
+        # momentum_rel_error can be at most, from the residuals themselves (free systems)
+        "momentum_residual_rel": (float(np.linalg.norm(res.momentum_residual) / scale)
+                                  if free else None),
     }
