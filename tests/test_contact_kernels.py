@@ -18,7 +18,7 @@ from flexmvm.contact import kernels
 from flexmvm.contact import reference as ref
 from flexmvm.contact.geometry import MasterSurface, project_points
 from flexmvm.contact.pairs import PointToSurfaceContact
-from flexmvm.integrate.midpoint import PENETRATION_RECOVERY
+from flexmvm.integrate.moreau_jean import PENETRATION_RECOVERY
 
 
 def _project_one(xs, P, quad):

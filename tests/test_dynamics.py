@@ -1,5 +1,8 @@
 """Flexible multibody dynamics (issue 3): floating-frame bodies, joints, implicit midpoint.
 
+theta = 1/2 is given explicitly: these tests check the midpoint rule's second order and exact
+energy balance (tests/test_theta_scheme.py covers the default theta = 0.55).
+
 Each test states the exact solution it is checked against and why its tolerance is right.
 """
 
@@ -60,7 +63,8 @@ def test_rigid_pendulum_period_at_60_degrees():
     I_y = body.inv.G0[0, 0] + body.inv.G0[2, 2]
     T_exact = 4 * np.sqrt(I_y / (1.0 * 9.81 * 1.0)) * ellipk(np.sin(th0 / 2) ** 2)
     sysm = System((body,), (SphericalJoint(BodyPoint(0, local=(0, 0, 0)), np.zeros(3)),), (), G)
-    res = simulate(sysm, [_state(body, A=axis_angle([0, 1, 0], th0))], TimeGrid(1.3 * T_exact, 2e-3))
+    res = simulate(sysm, [_state(body, A=axis_angle([0, 1, 0], th0))],
+                   TimeGrid(1.3 * T_exact, 2e-3, theta=0.5))
     ang = np.array([np.arctan2(A[0, 2], A[2, 2]) for A in res.frame_A[:, 0]])
     i = np.where(np.diff(np.sign(ang)) != 0)[0]
     tc = res.t[i] - ang[i] * (res.t[i + 1] - res.t[i]) / (ang[i + 1] - ang[i])
@@ -76,7 +80,7 @@ def _spin_run(body, dt, t_end, omega=(40.0, 0.0, 0.0), qd_scale=0.02, seed=0):
     v[3:6] = omega
     if body.nq:
         v[6:] = qd_scale * rng.normal(size=body.nq) / np.sqrt(body.nq)
-    return simulate(System((body,)), [_state(body, v=v)], TimeGrid(t_end, dt, dt, dt))
+    return simulate(System((body,)), [_state(body, v=v)], TimeGrid(t_end, dt, dt, dt, theta=0.5))
 
 
 def test_free_spinning_vibrating_body_conserves_momentum_and_energy():
@@ -121,7 +125,7 @@ def test_translation_only_full_fe_matches_plain_linear_fe():
     force = (-50.0, 0.0, 0.0)
     h, n_steps = 1e-6, 120
     sysm = System((body,), loads=(NodeLoad(0, node, force),))
-    res = simulate(sysm, [_state(body)], TimeGrid(n_steps * h, h, h, h))
+    res = simulate(sysm, [_state(body)], TimeGrid(n_steps * h, h, h, h, theta=0.5))
     st_q, st_r = res.q[0][-1], res.frame_r[-1, 0]
     A = res.frame_A[-1, 0]
     u_ffrf = (body.X + (body.psi @ st_q).reshape(-1, 3)) @ A.T + st_r - body.X
@@ -164,7 +168,8 @@ def test_bifilar_pendulum_swings_without_rotation_and_reaches_sqrt_2gh():
                    for k in (a, b))
     sysm = System((body,), joints, (), G)
     T_quarter = np.pi / 2 * np.sqrt(ell / 9.81)
-    res = simulate(sysm, [_state(body, r=offset)], TimeGrid(1.2 * T_quarter, 2e-4, 2e-4, 2e-4))
+    res = simulate(sysm, [_state(body, r=offset)],
+                   TimeGrid(1.2 * T_quarter, 2e-4, 2e-4, 2e-4, theta=0.5))
     speed = np.linalg.norm(res.momentum, axis=1) / body.inv.mass
     v_exact = np.sqrt(2 * 9.81 * ell * (1 - np.cos(th0)))
     assert abs(speed.max() / v_exact - 1) < 1e-3
@@ -190,7 +195,8 @@ def test_time_step_convergence_is_second_order():
         v = np.zeros(body.nv)
         v[3:6] = (40.0, 30.0, 0.0)
         v[6:] = 0.05 * rng.normal(size=body.nq) / np.sqrt(body.nq)
-        return simulate(System((body,)), [_state(body, v=v)], TimeGrid(1e-4, h, h, h), probes)
+        return simulate(System((body,)), [_state(body, v=v)], TimeGrid(1e-4, h, h, h, theta=0.5),
+                        probes)
 
     ref = run(1e-6 / 64)
     hs = [0.5e-6, 0.25e-6, 0.125e-6]

@@ -105,7 +105,7 @@ def test_contact_runs_check_every_lcp(monkeypatch):
     bodies modal with 4 modes, so 25 rows act on 2 x 10 coordinates (rank <= 20)."""
     from pathlib import Path
 
-    import flexmvm.integrate.midpoint as midpoint
+    import flexmvm.integrate.moreau_jean as moreau_jean
     import flexmvm.integrate.nonrotating as nonrotating
     from flexmvm.scenarios.run import run_scenario
     from flexmvm.scenarios.schema import ModelConfig, load_scenario
@@ -117,7 +117,7 @@ def test_contact_runs_check_every_lcp(monkeypatch):
         seen.append((D.copy(), out[1]))
         return out
 
-    monkeypatch.setattr(midpoint, "solve_checked", spy)
+    monkeypatch.setattr(moreau_jean, "solve_checked", spy)
     monkeypatch.setattr(nonrotating, "solve_checked", spy)
     sc = load_scenario(Path(__file__).parent / "data" / "short_flat_impact.toml")
     modal = ModelConfig(kind="modal", modes=4)

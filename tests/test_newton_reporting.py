@@ -14,7 +14,7 @@ from pathlib import Path
 import pytest
 
 import flexmvm.integrate.driver as driver
-from flexmvm.integrate.midpoint import MidpointIntegrator
+from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
 from flexmvm.scenarios.run import run_scenario
 from flexmvm.scenarios.schema import load_scenario
 
@@ -45,8 +45,8 @@ def test_steps_stopped_on_the_floor_are_counted(monkeypatch, tmp_path):
     """With an unreachable tolerance (1e-18, below double round-off of the momentum sums) every
     contact step stops on the round-off floor: each is counted, the worst residual is above the
     tolerance, and `flexmvm run` prints a warning naming the count."""
-    monkeypatch.setattr(driver, "MidpointIntegrator",
-                        functools.partial(MidpointIntegrator, rtol=1e-18))
+    monkeypatch.setattr(driver, "MoreauJeanIntegrator",
+                        functools.partial(MoreauJeanIntegrator, rtol=1e-18))
     s = run_scenario(load_scenario(TINY).with_overrides(t_end_s=3e-6)).summary
     assert s["steps_not_converged"] == s["n_steps"] == 12
     assert s["newton_residual_max"] > 1e-18

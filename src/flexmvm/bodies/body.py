@@ -83,7 +83,7 @@ class FlexibleBody:
     def contractions(self, x: np.ndarray) -> np.ndarray:
         """L(x)[a, b] = G2[b][a] x, shape (3, 3, nq): every G2 contraction of the equations of
         motion is one of these, and L is linear, so an integrator can carry L(q) and
-        L(q_dot) along with the state (integrate.midpoint). One pass over the G2 blocks."""
+        L(q_dot) along with the state (integrate.moreau_jean). One pass over the G2 blocks."""
         inv = self.inv
         if inv.Ms is not None:
             # G2[b][a] x = P_b^T M_s (P_a x): one M_s product with 3 columns instead of nine

@@ -7,7 +7,7 @@ within the step (g + h u_N <= gap_tol) become rows of Phi_c,
 
     Phi_c v = n . (x_dot_S - sum_P N^P x_dot_P)      (normal relative velocity u_N)
 
-with the Moreau condition u_N(v+) >= beta max(0, -g)/h, lambda >= 0 (see integrate.midpoint).
+with the Moreau condition u_N(v+) >= beta max(0, -g)/h, lambda >= 0 (see integrate.moreau_jean).
 Bonded contact (seed eq. 7, all three components) locks a pair once it has carried a
 compressive impulse: three equality rows x_S - x_C = 0 at the frozen shape functions, until
 the normal component of its impulse would turn tensile.
@@ -27,7 +27,7 @@ from flexmvm.contact.geometry import BroadPhase, MasterSurface
 from flexmvm.contact.nodes import ContactNodes
 from flexmvm.contact.reference import body_rows
 from flexmvm.errors import InputError, SolverError
-from flexmvm.integrate.midpoint import PENETRATION_RECOVERY
+from flexmvm.integrate.moreau_jean import PENETRATION_RECOVERY
 from flexmvm.integrate.system import ContactProvider, ContactRows
 
 __all__ = ["ContactKind", "PointToSurfaceContact", "body_rows"]

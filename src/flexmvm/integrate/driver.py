@@ -1,5 +1,5 @@
 """The time loop: step-size policy, outputs, contact bookkeeping. The scheme is separate
-(midpoint.py); this file decides which step to take and what to keep.
+(moreau_jean.py); this file decides which step to take and what to keep.
 
 Time runs on an integer grid of ticks of dt_s, so output times are hit exactly. Steps are
 dt * 2^k <= dt_max (a handful of step sizes, each factored once): the smallest near contact,
@@ -15,7 +15,8 @@ import numpy as np
 from threadpoolctl import threadpool_limits
 
 from flexmvm.errors import InputError
-from flexmvm.integrate.midpoint import MidpointIntegrator
+from flexmvm.integrate import DEFAULT_THETA
+from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import System
 
@@ -25,13 +26,13 @@ GROW_AFTER_STEPS = 4
 @dataclass(frozen=True)
 class TimeGrid:
     """t_end_s, dt_s (smallest step), dt_max_s (largest), output_dt_s; all [s]; theta of the
-    Moreau-Jean scheme (1/2: implicit midpoint)."""
+    Moreau-Jean scheme (1/2: implicit midpoint; default flexmvm.integrate.DEFAULT_THETA)."""
 
     t_end_s: float
     dt_s: float
     dt_max_s: float | None = None
     output_dt_s: float | None = None
-    theta: float = 0.5
+    theta: float = DEFAULT_THETA
 
     def ticks(self) -> tuple[int, int, int]:
         """(total ticks, output ticks, largest step level k with 2^k ticks <= dt_max)."""
@@ -175,7 +176,7 @@ def simulate(system: System, states: list[BodyState], grid: TimeGrid, probes=(),
 
 def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating) -> RunResult:
     n_ticks, out_ticks, k_max = grid.ticks()
-    integ = MidpointIntegrator(system, theta=grid.theta, exploit_nonrotating=exploit_nonrotating)
+    integ = MoreauJeanIntegrator(system, theta=grid.theta, exploit_nonrotating=exploit_nonrotating)
     dt = grid.dt_s
     rec = _Recorder(system, probes, n_ticks // out_ticks + 2, integ.n_joint_rows)
     states = [s.copy() for s in states]

@@ -2,7 +2,7 @@
 
 When every body enters the step with omega = 0 and no joint acts, take omega+ = 0. The
 quadratic-velocity forces vanish, A stays constant, and the translational and elastic rows of
-the scheme (see midpoint.py) are linear in dv = v+ - v- with constant coefficients:
+the scheme (see moreau_jean.py) are linear in dv = v+ - v- with constant coefficients:
 
     [ m I       A S1 ] [dr_dot]   [ h (m g + f_r)                                      ]
     [ S1^T A^T  W_qq ] [dq_dot] = [ h (S1^T A^T g + f_q - K (q + theta h q_dot) - C q_dot) ]

@@ -41,6 +41,7 @@ from pydantic import (
 from pydantic_core import PydanticCustomError
 
 from flexmvm.errors import InputError
+from flexmvm.integrate import DEFAULT_THETA
 from flexmvm.materials import PRESETS, Material
 
 ROD_NODE_SETS = ("end_a", "end_b", "end_a_centre", "end_b_centre", "side")
@@ -453,7 +454,7 @@ class TimeConfig(_Frozen):
     dt_s: Positive
     dt_max_s: Positive
     output_dt_s: Positive
-    theta: Annotated[float, Strict(), Ge(0.5), Le(1.0)] = 0.55
+    theta: Annotated[float, Strict(), Ge(0.5), Le(1.0)] = DEFAULT_THETA
 
     @model_validator(mode="before")
     @classmethod
