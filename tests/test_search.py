@@ -153,9 +153,11 @@ def test_invalid_input():
 # the seed-scale table (docs/studies.md): 140 real runs, replayed without simulating
 def test_search_finds_the_brute_force_answer_on_the_seed_table():
     """smallest_passing fed from the stored 140-run seed table (docs/studies/selection/ncc.csv)
-    gives the brute-force winner for several targets with far fewer runs. The table is not
-    exactly monotone in the modes (differences ~1e-4), so this checks the search's assumption
-    on real data, not only on synthetic monotone tables."""
+    gives the brute-force winner for several targets with far fewer runs. The expected answer
+    is an independent minimum over the table's rows written here (pass: force NCC >= the target
+    and |peak error| <= its bound; best: fewest DOF, then highest NCC, then fewest node DOF),
+    not the package's brute_force or a stored answer. The table is not exactly monotone in the
+    modes (differences ~1e-4), so this checks the search's assumption on real data."""
     import csv
     from pathlib import Path
 
@@ -171,9 +173,14 @@ def test_search_finds_the_brute_force_answer_on_the_seed_table():
         for k in ("ncc_force", "peak_err", "impulse_err", "duration_err"):
             r[k] = float(r[k])
         table[Candidate((int(r["layers"]), int(r["laps"])), int(r["modes"]), int(r["dof"]))] = r
-    expected = {"ncc>=0.99": ((1, 3), 25, 34), "ncc>=0.99,peak<=0.02": ((1, 3), 31, 47),
-                "ncc>=0.9999": ((1, 4), 43, 60)}
-    for text, (sel, modes, runs) in expected.items():
+    targets = {"ncc>=0.99": (0.99, None), "ncc>=0.99,peak<=0.02": (0.99, 0.02),
+               "ncc>=0.9999": (0.9999, None)}
+    for text, (ncc_min, peak_max) in targets.items():
+        ok = [r for r in rows if r["ncc_force"] >= ncc_min
+              and (peak_max is None or abs(r["peak_err"]) <= peak_max)]
+        best_row = min(ok, key=lambda r: (int(r["dof"]), -r["ncc_force"],
+                                          int(r["dof"]) - int(r["modes"])))
+        expected = ((int(best_row["layers"]), int(best_row["laps"])), int(best_row["modes"]))
         target = Target.parse(text)
 
         def evaluate(batch, target=target):
@@ -183,8 +190,5 @@ def test_search_finds_the_brute_force_answer_on_the_seed_table():
             return s >= target.ncc_min
 
         best, scores = smallest_passing(list(table), evaluate, passes)
-        brute = brute_force(list(table), evaluate, passes)
-        brute = brute[0] if isinstance(brute, tuple) else brute
-        assert best == brute
-        assert (best.selection, best.modes) == (sel, modes)
-        assert len(scores) == runs < 140
+        assert (best.selection, best.modes) == expected, text
+        assert len(scores) < 140

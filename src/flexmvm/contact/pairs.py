@@ -158,7 +158,7 @@ class PointToSurfaceContact(ContactProvider):
         n = self._scan(states, self.search_radius + 2 * speed * h)
         m_n = kernels.active_nodes(self._facet, self._out, h, self.gap_tol, self._bonded,
                                    self._idx) if n else 0
-        eq = self._bond_rows() if self._bonds else None
+        eq = self._bond_rows(h) if self._bonds else None
         if m_n == 0 and eq is None:
             self._last = (None, 0)
             return ContactRows.empty()
@@ -215,9 +215,10 @@ class PointToSurfaceContact(ContactProvider):
         weight[: len(eq_keys)] = [self._bond_normal[k[2]][k[3]] for k in eq_keys]
         return ContactRows(rows, np.concatenate([eq_lower, lower_n]), keys, gaps, len(eq_keys), weight)
 
-    def _bond_rows(self):
+    def _bond_rows(self, h: float):
         """Three equality rows per bonded pair (seed eq. 7): x_S - x_C -> 0, at the node
-        positions of the last kinematics update."""
+        positions of the last kinematics update; a drift err is pushed back by beta err over
+        the coming step h."""
         s_nodes, w_rows, n_rows, dirs, lower, keys = [], [], [], [], [], []
         index = {int(n): i for i, n in enumerate(self.slave_nodes)}
         for s, (nodes, w) in self._bonds.items():
@@ -227,17 +228,14 @@ class PointToSurfaceContact(ContactProvider):
                 w_rows.append(w)
                 n_rows.append(nodes)
                 dirs.append(e)
-                lower.append(-PENETRATION_RECOVERY * err[d] / self._h_last)
+                lower.append(-PENETRATION_RECOVERY * err[d] / h)
                 keys.append((self.name, "bond", s, d))
         return (np.array(s_nodes), (np.array(w_rows), np.array(n_rows)), np.array(dirs),
                 np.array(lower), keys)
 
-    _h_last = 1.0
-
     def after_step(self, crows: ContactRows, impulses: np.ndarray, h: float) -> None:
         """Bonded contact: lock pairs that carried a compressive impulse; release a bond
         whose normal impulse component turned tensile."""
-        self._h_last = h
         if self.kind is not ContactKind.BONDED:
             return
         proj, n_eq = getattr(self, "_last", (None, 0))
