@@ -8,7 +8,11 @@ as MVM 3-5 + 40 modes in the reference and in every run (``--other full`` keeps 
 full-FE striker: ~50 ms per step instead of ~14, see docs/studies.md).
 
     python benchmarks/bench_studies.py [--t-end 8e-4] [--dt 1e-6] [--other mvm:3-5:40]
-        [--workers 2] [--subset] [--target ncc>=0.99] [--out DIR]
+        [--workers 2] [--subset] [--target ncc>=0.99] [--out DIR] [--record DIR]
+
+The record (default benchmarks/results/studies_<commit>.json) holds the commit, the settings,
+the wall times and the machine's load average before and after (a loaded machine makes every
+time here longer: quote a record only with its load).
 
 ``--subset`` runs the brute force on layers 1..2 x laps 1..2 x modes 7:43:6 (28 runs) instead
 of the 140; the extrapolation uses the measured mean wall time per run. The search runs in
@@ -19,7 +23,9 @@ from __future__ import annotations
 
 import argparse
 import json
+import os
 import shutil
+import subprocess
 import tempfile
 import time
 from pathlib import Path
@@ -27,7 +33,16 @@ from pathlib import Path
 from flexmvm.metrics.ncc import Target
 from flexmvm.studies.selection import run_selection_study
 
-SEED = Path(__file__).resolve().parents[1] / "scenarios" / "rod_impact.toml"
+ROOT = Path(__file__).resolve().parents[1]
+SEED = ROOT / "scenarios" / "rod_impact.toml"
+
+
+def _commit() -> str:
+    out = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
+                         cwd=ROOT, check=False).stdout.strip() or "unknown"
+    dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
+                           capture_output=True, text=True, cwd=ROOT, check=False).stdout.strip()
+    return out + ("-dirty" if dirty else "")
 
 
 def main() -> None:
@@ -39,7 +54,9 @@ def main() -> None:
     ap.add_argument("--target", default="ncc>=0.99")
     ap.add_argument("--subset", action="store_true")
     ap.add_argument("--out", type=Path, default=None)
+    ap.add_argument("--record", type=Path, default=ROOT / "benchmarks" / "results")
     a = ap.parse_args()
+    load0 = os.getloadavg()
     out = a.out or Path(tempfile.mkdtemp(prefix="bench_studies_"))
     layers, laps = ([1, 2], [1, 2]) if a.subset else (range(1, 5), range(1, 6))
     modes = range(7, 44, 6)
@@ -68,10 +85,22 @@ def main() -> None:
     keys = ("passed", "layers", "laps", "modes", "dof", "ncc_force")
     ref = json.loads((out / "brute" / "reference" / "reference.json").read_text())["summary"]
     print(f"reference run (study body full FE): {ref['wall_time_s']:.1f} s solver wall time")
-    print(json.dumps({"brute": {k: brute.get(k) for k in keys},
-                      "search": {k: found.get(k) for k in keys},
-                      "runs": {"brute": brute["runs"], "search": found["runs"]},
-                      "wall_s": {"brute": t_brute, "search": t_search}}, indent=1))
+    record = {"commit": _commit(), "settings": {"t_end_s": a.t_end, "dt_s": a.dt,
+                                                "other": a.other, "workers": a.workers,
+                                                "target": a.target, "subset": a.subset},
+              "brute": {k: brute.get(k) for k in keys},
+              "search": {k: found.get(k) for k in keys},
+              "runs": {"brute": brute["runs"], "search": found["runs"]},
+              "wall_s": {"brute": t_brute, "search": t_search},
+              "solver_s_per_run": per_run,
+              "reference_solver_s": ref["wall_time_s"],
+              "load_average_1_5_15": {"start": load0, "end": os.getloadavg()},
+              "cpus": os.cpu_count()}
+    print(json.dumps(record, indent=1))
+    a.record.mkdir(parents=True, exist_ok=True)
+    path = a.record / f"studies_{record['commit']}.json"
+    path.write_text(json.dumps(record, indent=1))
+    print(f"wrote {path}")
 
 
 if __name__ == "__main__":
