@@ -35,6 +35,10 @@ def solve_mixed_lcp(D: np.ndarray, c: np.ndarray, n_eq: int) -> np.ndarray:
     m = len(c)
     if m == 0:
         return np.zeros(0)
+    if not (np.isfinite(D).all() and np.isfinite(c).all()):
+        what = "matrix" if not np.isfinite(D).all() else "right-hand side"
+        raise SolverError(f"constraint LCP ({m} rows): non-finite number (NaN/inf) in its "
+                          f"{what}; the state diverged before this step")
     D = 0.5 * (D + D.T)
     if n_eq == m:
         return -sla.cho_solve(_regularised_cho(D, "joint"), c)
