@@ -67,11 +67,15 @@ def test_mesh_rod_write_into_a_missing_directory(tmp_path):
     assert list(tmp_path.iterdir()) == []
 
 
-@pytest.mark.parametrize("command", ["run", "theory"])
+STUDY_FAST = ["--serial", "--no-progress", "--t-end", "3e-6", "--modes", "7"]
+
+
+@pytest.mark.parametrize("command", [["run"], ["theory"], ["select"], ["study", "materials"]])
 def test_out_dir_under_a_file_cannot_be_created(tmp_path, command):
     (tmp_path / "afile").write_text("user data\n")
-    extra = RUN_FAST if command == "run" else []
-    p = _flexmvm(command, TINY, "--out", "afile/sub", *extra, cwd=tmp_path)
+    extra = {"run": RUN_FAST, "theory": [], "select": ["--body", "b2", *STUDY_FAST],
+             "study": STUDY_FAST}[command[0]]
+    p = _flexmvm(*command, TINY, "--out", "afile/sub", *extra, cwd=tmp_path)
     _one_line(p.stderr, 2, p.returncode, "--out", "afile/sub", "is a file")
     assert [x.name for x in tmp_path.iterdir()] == ["afile"]
     assert (tmp_path / "afile").read_text() == "user data\n"
