@@ -280,6 +280,25 @@ def test_reference_failure_leaves_the_output_directory_as_it_was(tmp_path, capsy
     assert [x.name for x in tmp_path.iterdir()] == ["out"]
 
 
+@pytest.mark.parametrize("hook", ["reference_fails", "reference_fails_while_own_runs_long"])
+def test_reference_failure_in_the_second_process(tmp_path, capsys, monkeypatch, hook):
+    """--jobs 2: the reference fails in its worker process; the job stops (the other worker is
+    terminated, not waited for) and DIR gets nothing."""
+    import _main_job_hooks
+
+    from flexmvm.scenarios import main_job
+
+    marker = tmp_path / "not_stopped.txt"
+    monkeypatch.setenv("FLEXMVM_TEST_MARKER", str(marker))
+    monkeypatch.setattr(main_job, "_run_and_write", getattr(_main_job_hooks, hook))
+    fast = [a for a in RUN_FAST if a not in ("--jobs", "1")]
+    job = tmp_path / "job"
+    code, _, err = _in_process(["run", TINY, "--out", job / "out", *fast, "--jobs", "2"], capsys)
+    _one_line(err, 2, code, "full-FE reference", "did not converge")
+    assert not job.exists()
+    assert not marker.exists()
+
+
 def test_theory_failure_mid_write_leaves_nothing(tmp_path, capsys, monkeypatch):
     import flexmvm.results.history as history
 

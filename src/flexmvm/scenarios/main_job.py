@@ -16,8 +16,9 @@ listed in ``summary["failures"]`` as ``{"item", "reason"}`` and echoed. (A run w
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import FIRST_EXCEPTION, ProcessPoolExecutor, wait
 from pathlib import Path
 
 from flexmvm.errors import FlexmvmError, InputError
@@ -85,11 +86,11 @@ def run_main_job(path: Path, out_dir: Path, *, model=None, t_end=None, dt=None, 
     return summary
 
 
-def _result(future, label: str):
-    try:
-        return future.result()
-    except Exception as exc:
-        raise _labelled(label, exc) from exc
+def _stop_workers(pool: ProcessPoolExecutor) -> None:
+    """Terminate the pool's worker processes (the still-running run of a failed job)."""
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        with contextlib.suppress(Exception):
+            proc.terminate()
 
 
 def _run_into(out_dir: Path, sc, ref_sc, own_label: str, fields: bool, progress: bool, echo,
@@ -104,7 +105,15 @@ def _run_into(out_dir: Path, sc, ref_sc, own_label: str, fields: bool, progress:
             ref_future = pool.submit(_run_and_write, ref_sc, "full", out_dir / "full", fields,
                                      progress)
             own_future = pool.submit(_run_and_write, sc, own_label, out_dir, fields, False)
-            own, ref = _result(own_future, own_what), _result(ref_future, ref_what)
+            wait([own_future, ref_future], return_when=FIRST_EXCEPTION)
+            failed = [(f, what) for f, what in ((own_future, own_what), (ref_future, ref_what))
+                      if f.done() and f.exception() is not None]
+            if failed:
+                if not (own_future.done() and ref_future.done()):
+                    _stop_workers(pool)  # the job has failed: do not wait for the other run
+                future, what = failed[0]
+                raise _labelled(what, future.exception()) from future.exception()
+            own, ref = own_future.result(), ref_future.result()
     else:
         try:
             own = _run_and_write(sc, own_label, out_dir, fields, progress)
