@@ -337,6 +337,33 @@ def test_staged_dir_replaces_an_earlier_output_as_a_whole(tmp_path):
     assert [x.name for x in tmp_path.iterdir()] == ["out"]
 
 
+def test_staged_dir_through_a_symlink_keeps_the_link(tmp_path):
+    from flexmvm.results.outdir import staged_dir
+
+    (tmp_path / "scratch").mkdir()
+    (tmp_path / "link").symlink_to(tmp_path / "scratch")
+    for text in ("1", "2"):
+        with staged_dir(tmp_path / "link", "flexmvm test") as tmp:
+            (tmp / "a.txt").write_text(text)
+    assert (tmp_path / "link").is_symlink()
+    assert (tmp_path / "scratch" / "a.txt").read_text() == "2"
+    assert sorted(x.name for x in tmp_path.iterdir()) == ["link", "scratch"]
+
+
+def test_interrupt_is_one_line_exit_130_and_leaves_nothing(tmp_path, capsys, monkeypatch):
+    import flexmvm.theory.scenario as theory
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(theory, "theory_histories", interrupted)
+    code, _, err = _in_process(["theory", TINY, "--out", tmp_path / "th"], capsys)
+    assert code == 130 and "Traceback" not in err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("flexmvm: interrupted"), err
+    assert list(tmp_path.iterdir()) == []
+
+
 # ----------------------------------------------------------------------------------------------
 # item 12: comparisons that cannot be made are listed
 def test_comparisons_that_cannot_be_made_are_listed(tmp_path, capsys, monkeypatch):

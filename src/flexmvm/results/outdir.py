@@ -96,6 +96,8 @@ def staged_dir(path: str | os.PathLike[str], command: str, option: str = "--out"
             neither empty nor an earlier output of ``command`` (checked before the block runs).
     """
     final = Path(path)
+    if final.is_symlink():  # --out pointing elsewhere (a scratch disk): keep the link
+        final = final.resolve()
     check_creatable(final, option)
     legacy = tuple(legacy)
     if final.exists() and not _replaceable(final, command, legacy):
