@@ -245,7 +245,7 @@ def test_read_mesh_refuses_out_of_range_node_sets(tmp_path):
 # ----------------------------------------------------------------------------------------------
 # item 11: no partial output
 def _run_ok(out: Path, capsys) -> dict:
-    code, stdout, err = _in_process(["run", TINY, "--out", out, *RUN_FAST], capsys)
+    code, _, err = _in_process(["run", TINY, "--out", out, *RUN_FAST], capsys)
     assert code == 0, err
     return json.loads((out / "summary.json").read_text())
 
@@ -300,7 +300,7 @@ def test_reference_failure_in_the_second_process(tmp_path, capsys, monkeypatch, 
 
 
 def test_theory_failure_mid_write_leaves_nothing(tmp_path, capsys, monkeypatch):
-    import flexmvm.results.history as history
+    from flexmvm.results import history
 
     real = history.write_history
 
@@ -327,9 +327,9 @@ def test_staged_dir_replaces_an_earlier_output_as_a_whole(tmp_path):
         (tmp / "a.txt").write_text("2")
         assert (out / "a.txt").read_text() == "1"
     assert _tree(out) == {MARKER: b"flexmvm test\n", "a.txt": b"2"}
-    with pytest.raises(InputError, match="not written by flexmvm other"):
-        with staged_dir(out, "flexmvm other"):
-            pass
+    with pytest.raises(InputError, match="not written by flexmvm other"), \
+            staged_dir(out, "flexmvm other"):
+        pass
     with pytest.raises(RuntimeError), staged_dir(out, "flexmvm test") as tmp:
         (tmp / "a.txt").write_text("3")
         raise RuntimeError("boom")

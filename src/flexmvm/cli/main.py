@@ -110,7 +110,7 @@ def main(argv: list[str] | None = None) -> None:
             raise
         click.echo(f"flexmvm: error: {one_line(str(exc))}", err=True)
         sys.exit(2)
-    except Exception as exc:  # noqa: BLE001 - the last line of defence: no traceback
+    except Exception as exc:  # the last line of defence: no traceback
         if debug:
             raise
         click.echo(describe(exc, command_path(args)), err=True)
