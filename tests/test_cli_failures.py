@@ -213,6 +213,21 @@ def test_body_solver_refuses_a_non_finite_iteration_matrix(sparse):
         BodySolver(body).prepare(1e-6, np.eye(3), np.eye(6))
 
 
+def test_driver_names_the_body_whose_state_became_non_finite():
+    from types import SimpleNamespace
+
+    from flexmvm.integrate.driver import _check_finite
+
+    system = SimpleNamespace(bodies=[SimpleNamespace(name="b1"), SimpleNamespace(name="b2")])
+    row = {"kin": 1.0, "strain": 0.5, "force": 0.0, "v": np.zeros((2, 6)),
+           "q": [np.zeros(3), np.zeros(4)]}
+    _check_finite(row, system, 1e-6)
+    row["q"][1][2] = np.nan
+    row["strain"] = np.nan
+    with pytest.raises(SolverError, match=r"at t = 2e-06 s: .*non-finite.*'b2'"):
+        _check_finite(row, system, 2e-6)
+
+
 def test_sparse_factor_refuses_non_finite():
     from flexmvm.fe.modes import factor
 
