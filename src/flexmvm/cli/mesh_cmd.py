@@ -42,6 +42,9 @@ def rod(length_m, radius_m, end_a, end_b, material, E, nu, rho, n_rings, first_e
     from flexmvm.mesh.io import write_mesh
     from flexmvm.mesh.rod import EndShape, RodSpec, rod_mesh
 
+    if write_path is not None and not write_path.absolute().parent.is_dir():
+        raise InputError(f"--write {write_path}: directory {write_path.parent} does "
+                         "not exist; expected a path in an existing directory")
     if material not in PRESETS:
         raise InputError(f"--material: unknown preset {material!r}; known: {', '.join(sorted(PRESETS))}")
     base = PRESETS[material]

@@ -12,7 +12,8 @@ MODELS = ["full", "mvm", "mvm-seed", "modal", "rigid"]
 @click.command("run")
 @click.argument("scenario", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
-              help="Output directory.")
+              help="Output directory (created; an earlier run's output there is replaced at "
+                   "the end).")
 @click.option("--model", type=click.Choice(MODELS), default=None,
               help="Model of every non-rigid body. Default: the scenario's models AND a full-FE "
                    "reference, plotted together (seed fig. 5).")
@@ -24,7 +25,13 @@ MODELS = ["full", "mvm", "mvm-seed", "modal", "rigid"]
               help="Processes for the scenario's run and its full-FE reference (2: side by "
                    "side, one per core).")
 def command(scenario, out_dir, model, t_end, dt, no_fields, progress, jobs) -> None:
-    """Simulate SCENARIO; write history.csv, summary.json, results.h5, ParaView series, PNG."""
+    """Simulate SCENARIO; write history.csv, summary.json, results.h5, ParaView series, PNG.
+
+    Everything is written into a temporary DIR.partial-<pid> beside DIR and renamed to DIR
+    at the end: a run that fails (the scenario's run or its full-FE reference) leaves DIR as
+    it was. An existing DIR is replaced as a whole, and only if it is empty or an earlier
+    output of `flexmvm run`. Comparisons that cannot be made are printed and listed in
+    summary.json under "failures"."""
     from flexmvm.scenarios.main_job import run_main_job
 
     summary = run_main_job(scenario, out_dir, model=model, t_end=t_end, dt=dt,

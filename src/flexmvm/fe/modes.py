@@ -48,8 +48,12 @@ def factor(a: sp.spmatrix, spd: bool = True) -> Solve:
 
     spd: the matrix is symmetric positive definite (symmetric ordering, diagonal pivots,
     SPD_LU); False: SuperLU's general defaults.
-    Raises SolverError if the matrix is singular.
+    Raises SolverError if the matrix is singular or holds NaN/inf.
     """
+    data = a.data if sp.issparse(a) else np.asarray(a)
+    if not np.isfinite(data).all():
+        raise SolverError(f"sparse LU of a {a.shape[0]}x{a.shape[0]} matrix: it holds a "
+                          "non-finite number (NaN/inf)")
     try:
         lu = spla.splu(sp.csc_matrix(a), **(SPD_LU if spd else {}))
     except RuntimeError as exc:

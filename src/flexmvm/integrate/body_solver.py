@@ -59,6 +59,10 @@ class BodySolver:
         W = b.inv.M_qq + (th * th * h * h) * b.k_hat
         if b.c_hat is not None:
             W = W + (th * h) * b.c_hat
+        data = W.data if sp.issparse(W) else np.asarray(W)
+        if not np.isfinite(data).all():
+            raise SolverError(f"body {b.name!r}: iteration matrix M + h^2/4 K holds a non-finite "
+                              f"number (NaN/inf) at step size h = {h:.3g} s")
         if sp.issparse(W):
             try:
                 solve = factor(W)  # W is SPD
@@ -102,6 +106,9 @@ class BodySolver:
     def prepare(self, h: float, A: np.ndarray, Mff: np.ndarray) -> None:
         """Set the step size and the frame block for the coming solves."""
         self._A = A
+        if not (np.isfinite(A).all() and np.isfinite(Mff).all()):
+            raise SolverError(f"body {self.body.name!r}: non-finite number (NaN/inf) in the "
+                              "frame mass matrix or rotation; the state diverged")
         if not self.body.nq:
             self._f = None
             try:
@@ -148,6 +155,9 @@ class BodySolver:
         W_t is constant while A is: the non-rotating step is linear in v+ (see
         integrate.nonrotating)."""
         self._A = A
+        if not np.isfinite(A).all():
+            raise SolverError(f"body {self.body.name!r}: non-finite number (NaN/inf) in the "
+                              "frame rotation; the state diverged")
         m = self.body.inv.mass
         if not self.body.nq:
             self._f = None

@@ -14,7 +14,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from flexmvm.errors import InputError
+from flexmvm.errors import InputError, SolverError
 from flexmvm.integrate import DEFAULT_THETA
 from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
 from flexmvm.integrate.state import BodyState
@@ -196,7 +196,11 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating) -
             span >>= 1
         h = span * dt
         t = t0 + tick * dt
-        res = integ.step(t, states, h)
+        try:
+            res = integ.step(t, states, h)
+        except SolverError as exc:
+            raise SolverError(f"at t = {t:.6g} s (step {n_steps + 1}, h = {h:.3g} s): {exc}"
+                              ) from exc
         states = res.states
         n_steps += 1
         drift = max(drift, res.joint_drift)
@@ -217,6 +221,7 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating) -
         if tick % out_ticks == 0 or tick >= n_ticks:
             span_t = (tick - (len(rec.rows) - 1) * out_ticks) * dt
             rec.record(t0 + tick * dt, states, impulse / span_t, jimpulse / span_t, integ.carried)
+            _check_finite(rec.rows[-1], system, t0 + tick * dt)
             impulse, jimpulse = 0.0, np.zeros_like(jimpulse)
             if bar is not None:
                 bar.update(min(out_ticks, n_ticks - bar.n))
@@ -229,6 +234,16 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating) -
                       n_factorizations=nfac, n_nonrotating_steps=integ.n_nonrotating_steps,
                       steps_not_converged=n_loose, newton_residual_max=worst_res,
                       lcp_residual_max=worst_lcp, momentum_residual=p_res, wall_time_s=wall)
+
+
+def _check_finite(row: dict, system, t: float) -> None:
+    """SolverError naming the time and the first body whose recorded state is NaN/inf."""
+    if np.isfinite(row["kin"] + row["strain"] + row["force"]) and np.isfinite(row["v"]).all():
+        return
+    bad = [body.name for body, q, v in zip(system.bodies, row["q"], row["v"])
+           if not (np.isfinite(q).all() and np.isfinite(v).all())]
+    where = f"body {bad[0]!r}" if bad else "the contact force"
+    raise SolverError(f"at t = {t:.6g} s: the solution became non-finite (NaN/inf) in {where}")
 
 
 def _choose_level(system, states, level, calm, k_max, dt) -> int:

@@ -43,6 +43,10 @@ def solve_mixed_lcp(D: np.ndarray, c: np.ndarray, n_eq: int) -> np.ndarray:
     m = len(c)
     if m == 0:
         return np.zeros(0)
+    if not (np.isfinite(D).all() and np.isfinite(c).all()):
+        what = "matrix" if not np.isfinite(D).all() else "right-hand side"
+        raise SolverError(f"constraint LCP ({m} rows): non-finite number (NaN/inf) in its "
+                          f"{what}; the state diverged before this step")
     D = 0.5 * (D + D.T)
     if n_eq == m:
         return _refine(D, c, n_eq, -sla.cho_solve(_regularised_cho(D, "joint"), c))
@@ -113,10 +117,8 @@ def complementarity_residual(D: np.ndarray, c: np.ndarray, n_eq: int, lam: np.nd
 def solve_checked(D: np.ndarray, c: np.ndarray, n_eq: int, rtol: float = LCP_RTOL,
                   where: str = "") -> tuple[np.ndarray, float]:
     """solve_mixed_lcp, then its complementarity residual; raises SolverError (naming
-    `where`, e.g. the time of the step) when the residual exceeds rtol or D, c are not finite."""
-    if not (np.all(np.isfinite(D)) and np.all(np.isfinite(c))):
-        raise SolverError(f"constraint impulses{where}: the Delassus matrix or the free "
-                          "velocities are not finite (the step diverged)")
+    `where`, if given) when the residual exceeds rtol (and, from solve_mixed_lcp, when D or c
+    is not finite). The time loop adds the step's time to the message."""
     lam = solve_mixed_lcp(D, c, n_eq)
     res = complementarity_residual(0.5 * (D + D.T), c, n_eq, lam)
     if not res <= rtol:

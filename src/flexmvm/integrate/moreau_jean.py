@@ -331,7 +331,7 @@ class MoreauJeanIntegrator:
                 c[:n_j] = jrows.times(v_free) - jrows.times(v_plus) + phi / (self.theta * h)
             if m_c:
                 c[n_j:] = crows.rows.times(v_free) - crows.lower
-            lam, lcp_res = solve_checked(D, c, n_j + crows.n_eq, where=f" at t = {t:.6e} s")
+            lam, lcp_res = solve_checked(D, c, n_j + crows.n_eq)
             lcp_max = max(lcp_max, lcp_res)
             v_plus = list(v_free)
             for b, Yb in Yj.items():

@@ -59,7 +59,7 @@ def nonrotating_step(system, solvers, theta: float, rtol: float, loads: dict, t:
     v_plus = [v.copy() for v in v_free]
     lam, lcp_res = np.zeros(crows.rows.m), 0.0
     if crows.rows.m:
-        lam, lcp_res = _contact_impulses(system, solvers, h, crows, v_free, v_plus, t)
+        lam, lcp_res = _contact_impulses(system, solvers, h, crows, v_free, v_plus)
     for b, (body, st, vp) in enumerate(zip(system.bodies, states, v_plus)):
         tau = sum((_load_torque(body, load, st, vp, theta, h)
                    for load in loads.get(b, ()) if t + theta * h >= load.t_start_s),
@@ -113,7 +113,7 @@ def _free_rhs(body, st, g, loads, t_theta, theta, h) -> np.ndarray:
     return rhs
 
 
-def _contact_impulses(system, solvers, h, crows: ContactRows, v_free, v_plus, t
+def _contact_impulses(system, solvers, h, crows: ContactRows, v_free, v_plus
                       ) -> tuple[np.ndarray, float]:
     """(lambda (m,), complementarity residual) of the LCP on D = Phi W_t^-1 Phi^T; adds W_t^-1 Phi^T lambda to v_plus.
     Bodies with nodal rows go through the cached nodal columns (integrate.compliance)."""
@@ -133,7 +133,7 @@ def _contact_impulses(system, solvers, h, crows: ContactRows, v_free, v_plus, t
             phi_q_v = bq @ v[6:] if body.nq else 0.0
         D += comps[b].D
         c += bf[:, :3] @ v[:3] + phi_q_v
-    lam, res = solve_checked(D, c, crows.n_eq, where=f" at t = {t:.6e} s")
+    lam, res = solve_checked(D, c, crows.n_eq)
     for b, comp in comps.items():
         dv = comp.velocity(lam)
         v_plus[b][:3] += dv[:3]

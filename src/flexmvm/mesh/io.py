@@ -148,6 +148,13 @@ def read_mesh(path: str | os.PathLike, node_sets: Mapping[str, np.ndarray] | Non
     path = Path(path)
     m = _read(path)
     blocks = _volume_blocks(m, path)
+    n_points = len(m.points)
+    for b in blocks:
+        c = b.connectivity
+        if c.size and (c.min() < 0 or c.max() >= n_points):
+            bad = int(c.min()) if c.min() < 0 else int(c.max())
+            raise MeshError(f"mesh file {str(path)!r}: {b.cell_type.value} cells refer to node "
+                            f"{bad}; expected node ids 0..{n_points - 1}")
     used = np.unique(np.concatenate([b.connectivity.ravel() for b in blocks]))
     new_id = np.full(len(m.points), -1, dtype=np.int64)
     new_id[used] = np.arange(len(used))
@@ -173,7 +180,11 @@ def read_mesh(path: str | os.PathLike, node_sets: Mapping[str, np.ndarray] | Non
         if key.startswith(NODE_SET_PREFIX):
             sets[key[len(NODE_SET_PREFIX) :]] = new_id[np.flatnonzero(np.asarray(values) != 0)]
     for name, ids in (node_sets or {}).items():
-        sets[name] = new_id[np.asarray(ids, dtype=np.int64)]
+        ids = np.asarray(ids, dtype=np.int64)
+        if ids.size and (ids.min() < 0 or ids.max() >= n_points):
+            raise MeshError(f"node set {name!r} refers to nodes outside {str(path)!r} "
+                            f"(0..{n_points - 1})")
+        sets[name] = new_id[ids]
     sets = {k: v[v >= 0] for k, v in sets.items()}
     mesh = Mesh(nodes=nodes, cells=tuple(blocks), node_sets=sets, facet_sets=facet_sets)
     check_quality(mesh)
@@ -226,7 +237,11 @@ def write_mesh(
         point_data=pdata,
         cell_data=_cell_data_blocks(mesh, cell_data or {}),
     )
-    fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
+    try:
+        fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
+    except OSError as exc:
+        raise MeshError(f"cannot write mesh file {str(path)!r}: directory {str(path.parent)!r} "
+                        f"is not writable ({exc.strerror or type(exc).__name__})") from None
     os.close(fd)
     try:
         meshio.write(tmp, out)

@@ -100,9 +100,10 @@ class Mesh:
         for block in self.cells:
             c = block.connectivity
             if c.size and (c.min() < 0 or c.max() >= n):
+                bad = int(c.min()) if c.min() < 0 else int(c.max())
                 raise MeshError(
-                    f"{block.cell_type.value} connectivity refers to node {int(c.max())}, "
-                    f"mesh has {n} nodes"
+                    f"{block.cell_type.value} connectivity refers to node {bad}, "
+                    f"mesh has {n} nodes (ids 0..{n - 1})"
                 )
         sets = {}
         for name, ids in self.node_sets.items():

@@ -3,15 +3,26 @@
 The scenario's own run and the full-FE reference are independent single-threaded simulations:
 with jobs = 2 they run side by side in two processes (one per core), each writing its own
 files, so the job takes about as long as the longer of the two instead of their sum.
+
+No partial output: everything is written into a temporary sibling ``DIR.partial-<pid>`` that
+becomes ``DIR`` only when the job has finished (flexmvm.results.outdir.staged_dir). If the
+scenario's run or its full-FE reference fails, ``DIR`` is left as it was.
+
+Nothing is dropped quietly: a comparison that cannot be made (a
+theory that does not apply to the scenario, a probe or force that cannot be compared) is
+listed in ``summary["failures"]`` as ``{"item", "reason"}`` and echoed. (A run with
+``--model``, or of full-FE/rigid bodies only, has no full-FE reference by design: not listed.)
 """
 
 from __future__ import annotations
 
+import contextlib
 import multiprocessing
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import FIRST_EXCEPTION, ProcessPoolExecutor, wait
 from pathlib import Path
 
-from flexmvm.errors import InputError
+from flexmvm.errors import FlexmvmError, InputError
+from flexmvm.results.outdir import staged_dir
 from flexmvm.results.output import write_run
 from flexmvm.results.writers import write_summary_json
 from flexmvm.scenarios.compare import compare_runs, run_curves
@@ -19,14 +30,34 @@ from flexmvm.scenarios.run import run_scenario
 from flexmvm.scenarios.schema import load_scenario
 
 
-def _theory(sc):
+def _theory(sc, failures: list[dict]):
     from flexmvm.theory.scenario import theory_histories
 
     try:
         t, f, probes, info = theory_histories(sc)
-    except InputError:
+    except InputError as exc:
+        failures.append({"item": "comparison_vs_theory",
+                         "reason": f"the 1D theory does not apply: {exc}"})
         return None
     return t, f, probes, info
+
+
+def _comparison_failures(name: str, comparison: dict) -> list[dict]:
+    """The entries of compare_runs that could not be computed (keys ending in _error)."""
+    return [{"item": f"{name}.{key[:-len('_error')]}", "reason": str(value)}
+            for key, value in comparison.items() if key.endswith("_error")]
+
+
+def _labelled(label: str, exc: BaseException) -> BaseException:
+    """A FlexmvmError of the same class naming the run that failed; others unchanged."""
+    if isinstance(exc, FlexmvmError):
+        try:
+            new = type(exc)(f"{label}: {exc}")
+        except Exception:  # noqa: BLE001 - a subclass with another signature: keep it
+            return exc
+        new.__cause__ = exc
+        return new
+    return exc
 
 
 def _run_and_write(sc, label: str, out_dir: Path, fields: bool, progress: bool):
@@ -46,33 +77,73 @@ def run_main_job(path: Path, out_dir: Path, *, model=None, t_end=None, dt=None, 
     needs_ref = model is None and any(b.model.kind.value not in ("full", "rigid") for b in sc.bodies)
     ref_sc = sc.with_overrides(model="full") if needs_ref else None
     own_label = model or "scenario"
+    with staged_dir(out_dir, "flexmvm run", legacy=("summary.json",)) as tmp:
+        summary = _run_into(tmp, sc, ref_sc, own_label, fields, progress, echo, jobs)
+    failures = summary["failures"]
+    if failures:
+        echo(f"not compared ({len(failures)}): "
+             + "; ".join(f"{f['item']}: {f['reason']}" for f in failures))
+    return summary
+
+
+def _stop_workers(pool: ProcessPoolExecutor) -> None:
+    """Terminate the pool's worker processes (the still-running run of a failed job)."""
+    for proc in list((getattr(pool, "_processes", None) or {}).values()):
+        with contextlib.suppress(Exception):
+            proc.terminate()
+
+
+def _run_into(out_dir: Path, sc, ref_sc, own_label: str, fields: bool, progress: bool, echo,
+              jobs: int) -> dict:
+    """The job proper, writing into out_dir (the staging directory)."""
+    needs_ref = ref_sc is not None
+    own_what = f"{own_label} run"
+    ref_what = "full-FE reference"
     if needs_ref and jobs > 1:
         ctx = multiprocessing.get_context("spawn")
         with ProcessPoolExecutor(max_workers=2, mp_context=ctx) as pool:
             ref_future = pool.submit(_run_and_write, ref_sc, "full", out_dir / "full", fields,
                                      progress)
             own_future = pool.submit(_run_and_write, sc, own_label, out_dir, fields, False)
+            wait([own_future, ref_future], return_when=FIRST_EXCEPTION)
+            failed = [(f, what) for f, what in ((own_future, own_what), (ref_future, ref_what))
+                      if f.done() and f.exception() is not None]
+            if failed:
+                if not (own_future.done() and ref_future.done()):
+                    _stop_workers(pool)  # the job has failed: do not wait for the other run
+                future, what = failed[0]
+                raise _labelled(what, future.exception()) from future.exception()
             own, ref = own_future.result(), ref_future.result()
     else:
-        own = _run_and_write(sc, own_label, out_dir, fields, progress)
-        ref = (_run_and_write(ref_sc, "full", out_dir / "full", fields, progress)
-               if needs_ref else None)
+        try:
+            own = _run_and_write(sc, own_label, out_dir, fields, progress)
+        except Exception as exc:
+            raise _labelled(own_what, exc) from exc
+        try:
+            ref = (_run_and_write(ref_sc, "full", out_dir / "full", fields, progress)
+                   if needs_ref else None)
+        except Exception as exc:
+            raise _labelled(ref_what, exc) from exc
     own_summary, own_curves, n_own, wall_own = own
     echo(f"{own_label}: {n_own} steps in {wall_own:.1f} s")
     summary = dict(own_summary)
+    failures: list[dict] = []
     curves = {_label(own_summary): own_curves}
-    theory = _theory(sc)
+    theory = _theory(sc, failures)
     if theory is not None:
         summary["comparison_vs_theory"] = compare_runs(theory[0], theory[1], theory[2],
                                                        *own_curves)
         summary["theory_law"] = theory[3]["law"]
+        failures += _comparison_failures("comparison_vs_theory", summary["comparison_vs_theory"])
     if ref is not None:
         ref_summary, ref_curves, n_ref, wall_ref = ref
         echo(f"full FE: {n_ref} steps in {wall_ref:.1f} s")
         summary["reference_full"] = ref_summary
         summary["comparison_vs_full"] = compare_runs(*ref_curves, *own_curves)
+        failures += _comparison_failures("comparison_vs_full", summary["comparison_vs_full"])
         summary["speedup_vs_full"] = wall_ref / max(wall_own, 1e-12)
         curves = {"FE": ref_curves, **curves}
+    summary["failures"] = failures
     write_summary_json(out_dir / "summary.json", summary)
     th = (theory[0], theory[1], theory[2]) if theory is not None else None
     from flexmvm.plots.figures import plot_run  # matplotlib: 2 s of import, only here

@@ -12,7 +12,9 @@ flexmvm.studies.runner (parallel on Dask, resumable):
 - ``DIR/materials.csv``: ``material,E_pa,nu,rho_kg_m3,selection,nodes,modes,dof,ncc_force,
   ncc_<probe>...,peak_err,impulse_err,duration_err,wall_time_s``;
 - ``DIR/materials.json``: per-material mean NCC of the force over the runs (the same
-  selections x modes for every material), ``seed_ordering_holds`` = the mean NCCs decrease in
+  selections x modes for every material; ``n_cases`` = the runs the mean covers, ``failed``
+  the runs without an NCC), ``failures`` (``{"case", "reason"}``: failed references, whose
+  material then has no MVM run, and failed runs; also printed), ``seed_ordering_holds`` = the mean NCCs decrease in
   the seed's order W > Cu > Al > PA6 (restricted to the materials run), and the observed order;
 - ``DIR/fig9_materials.png``: NCC against modes per material and selection.
 
@@ -30,14 +32,18 @@ from typing import Any
 
 import numpy as np
 
-from flexmvm.errors import InputError
+from flexmvm.errors import InputError, SolverError
 from flexmvm.materials import ALUMINIUM, COPPER, PA6, TUNGSTEN, Material
 from flexmvm.results.atomic import write_json_atomic, write_table_csv
+from flexmvm.results.outdir import make_out_dir
 from flexmvm.scenarios.schema import Scenario, load_scenario, scenario_from_dict
 from flexmvm.studies.runner import Case, run_cases
 from flexmvm.studies.selection import (
     _check_grid,
     cluster,
+    echo_failures,
+    failed_case_row,
+    failure_list,
     file_sha256,
     reference_history,
     rod_of,
@@ -125,7 +131,9 @@ def run_materials_study(scenario_path: str | Path, out_dir: str | Path, body: st
     ``dt_s`` and ``other`` as in studies.selection.study_scenario.
 
     Raises InputError for an unknown material name (keys of SEED_MATERIALS), a bad body or a
-    selection beyond the mesh; SolverError if a reference or a case fails to run.
+    selection beyond the mesh. A reference or a case that fails is listed in ``failures``
+    (and printed), not raised; SolverError, after everything is written, if no run at all
+    could be compared.
     """
     out = Path(out_dir).resolve()
     sc = study_scenario(load_scenario(scenario_path), body, t_end_s=t_end_s, dt_s=dt_s,
@@ -139,7 +147,7 @@ def run_materials_study(scenario_path: str | Path, out_dir: str | Path, body: st
     rod = rod_of(sc, body)
     _, _, _, modes = _check_grid(sc, body, [s[0] for s in selections],
                                  [s[1] for s in selections], modes)
-    out.mkdir(parents=True, exist_ok=True)
+    make_out_dir(out)
     scen = {m: material_scenario(sc, body, m, SEED_MATERIALS[m]) for m in materials}
     ref_cases = [Case(f"ref-{m}", {"body": body, "material": m,
                                    "scenario": scen[m].model_dump(mode="json")})
@@ -148,20 +156,29 @@ def run_materials_study(scenario_path: str | Path, out_dir: str | Path, body: st
     kw: dict[str, Any]
     with cluster(scheduler, n_workers, serial) as address:
         kw = {"serial": True} if serial else {"scheduler": address}
-        refs = run_cases(ref_cases, partial(run_reference_case, out_dir=str(out)), out, progress=progress, **kw)
+        ref_failed: dict[str, str] = {}
+        refs = run_cases(ref_cases, partial(run_reference_case, out_dir=str(out)), out,
+                         progress=progress, failures=ref_failed, **kw)
         cases = [Case(f"{m}-l{i}-j{j}-m{n}",
                       {"body": body, "layers": i, "laps": j, "modes": n, "material": m,
                        "modes_max": max(modes), "scenario": scen[m].model_dump(mode="json"),
                        "reference_sha256": refs[f"ref-{m}"]["sha256"]})
-                 for m in materials for (i, j) in selections for n in modes]
-        results = run_cases(cases, partial(run_material_case, references=ref_paths), out, progress=progress, **kw)
+                 for m in materials if f"ref-{m}" in refs
+                 for (i, j) in selections for n in modes]
+        case_failed: dict[str, str] = {}
+        results = run_cases(cases, partial(run_material_case, references=ref_paths), out,
+                            progress=progress, failures=case_failed, **kw)
     probes = [p.name for p in sc.probes]
     cols = (["material", "E_pa", "nu", "rho_kg_m3", "selection", "nodes", "modes", "dof",
              "ncc_force"] + [f"ncc_{p}" for p in probes]
             + ["peak_err", "impulse_err", "duration_err", "wall_time_s"])
     rows = []
     for c in cases:
-        r = dict(results[c.key])
+        if c.key in results:
+            r = dict(results[c.key])
+        else:
+            nodes = len(rod.selection(c.params["layers"], c.params["laps"]))
+            r = failed_case_row(c, case_failed.get(c.key, "failed"), nodes)
         mat = SEED_MATERIALS[c.params["material"]]
         r.update(material=c.params["material"], E_pa=mat.E, nu=mat.nu, rho_kg_m3=mat.rho,
                  selection=f"{r['layers']}-{r['laps']}")
@@ -171,9 +188,16 @@ def run_materials_study(scenario_path: str | Path, out_dir: str | Path, body: st
     for m in materials:
         vals = [r["ncc_force"] for r in rows if r["material"] == m and "ncc_force" in r]
         mat = SEED_MATERIALS[m]
-        per[m] = {"mean_ncc_force": _mean(vals), "runs": sum(r["material"] == m for r in rows),
+        per[m] = {"mean_ncc_force": _mean(vals), "n_cases": len(vals),
+                  "runs": sum(r["material"] == m for r in rows),
                   "failed": sum(r["material"] == m and "ncc_force" not in r for r in rows),
                   "E_pa": mat.E, "nu": mat.nu, "rho_kg_m3": mat.rho} | _theory(scen[m], body)
+        if f"ref-{m}" in ref_failed:
+            per[m]["reference_failed"] = ref_failed[f"ref-{m}"]
+    failures = ([{"case": k, "reason": f"full-FE reference failed, no MVM run of this "
+                                       f"material: {v}"} for k, v in sorted(ref_failed.items())]
+                + failure_list((f"{r['material']}-l{r['layers']}-j{r['laps']}-m{r['modes']}", r)
+                               for r in rows))
     ranked = [m for m in SEED_ORDER if m in materials]
     means = [per[m]["mean_ncc_force"] for m in ranked]
     holds = all(v is not None for v in means) and all(a > b for a, b in itertools.pairwise(means))
@@ -184,7 +208,9 @@ def run_materials_study(scenario_path: str | Path, out_dir: str | Path, body: st
               "seed_ordering_holds": bool(holds),
               "note": "seed_ordering_holds: mean NCC of the force over the same selections x "
                       "modes strictly decreasing in the seed's order W > Cu > Al > PA6 "
-                      "(restricted to the materials run)",
+                      "(restricted to the materials run; false if a material has no mean). "
+                      "n_cases: the runs the mean covers (runs - failed)",
+              "failures": failures,
               "nodes": {f"{i}-{j}": len(rod.selection(i, j)) for i, j in selections},
               "selection_radius_m": {f"{i}-{j}": _radius(rod, i, j) for i, j in selections},
               "radius_note": "theory_contact_radius_m (1D wave-Hertz, per material) against "
@@ -196,8 +222,15 @@ def run_materials_study(scenario_path: str | Path, out_dir: str | Path, body: st
 
     plot_materials(out / "fig9_materials.png", rows,
                    title=f"{sc.name}: body {body} of each material")
+    echo_failures(echo, failures, len(ref_cases) + len(materials) * len(selections) * len(modes),
+                  out / "materials.json")
     echo("mean NCC of the force: " + ", ".join(
-        f"{m} {per[m]['mean_ncc_force']:.6f}" if per[m]["mean_ncc_force"] is not None
-        else f"{m} (failed)" for m in materials)
+        f"{m} {per[m]['mean_ncc_force']:.6f} (over {per[m]['n_cases']} of "
+        f"{len(selections) * len(modes)} runs)" if per[m]["mean_ncc_force"] is not None
+        else f"{m} (no run compared)" for m in materials)
         + f"; seed ordering W > Cu > Al > PA6 {'holds' if holds else 'does not hold'}")
+    if not any(per[m]["n_cases"] for m in materials):
+        raise SolverError(f"material study: no run could be compared ({len(failures)} "
+                          f"failures, first: {failures[0]['case']}: {failures[0]['reason']}); "
+                          f"see {out / 'materials.json'}")
     return result

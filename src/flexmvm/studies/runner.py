@@ -316,6 +316,7 @@ def run_cases(
     n_workers: int | None = None,
     progress: bool = True,
     serial: bool = False,
+    failures: dict[str, str] | None = None,
 ) -> dict[str, dict]:
     """Run ``fn`` on every case not already stored in ``out_dir``; return all results.
 
@@ -338,7 +339,9 @@ def run_cases(
 
     Failures: an exception inside a case (or a non-mapping / non-finite result) is written
     to ``out_dir/cases/<key>.error.txt`` (one line, params, traceback) and the other cases
-    go on; a later successful run of that case removes the error file.
+    go on; a later successful run of that case removes the error file. With ``failures`` (a
+    dict) given, the failed cases are put there (key -> one line) and left out of the returned
+    results instead of raising; a rerun computes them again (they have no stored file).
 
     Args:
         cases: the cases, with unique keys.
@@ -348,15 +351,19 @@ def run_cases(
         n_workers: number of local worker processes (local cluster only).
         progress: show a tqdm bar (cases done / total, time left) on stderr.
         serial: run in this process without Dask.
+        failures: if given, filled with ``{key: one line}`` of the failed cases, which do not
+            raise (see Failures).
 
     Returns:
-        ``{key: result}`` for every case, loaded and computed.
+        ``{key: result}`` for every case, loaded and computed (without the failed ones when
+        ``failures`` is given).
 
     Raises:
         InputError: duplicate keys, conflicting options, an unpicklable ``fn``, or a stored
             case file with other params under the same key (refuses to mix studies).
-        SolverError: after all successful cases are stored, if any case failed (one line:
-            how many, the first failure, where the error files are).
+        SolverError: after all successful cases are stored, if any case failed and
+            ``failures`` is None (one line: how many, the first failure, where the error
+            files are).
     """
     _validate(cases)
     if serial and (scheduler is not None or n_workers is not None):
@@ -392,6 +399,9 @@ def run_cases(
         elif pending:
             _run_dask(pending, fn, rec, scheduler, n_workers)
 
+    if rec.failed and failures is not None:
+        failures.update(rec.failed)
+        return {case.key: results[case.key] for case in cases if case.key in results}
     if rec.failed:
         key, line = rec.failed[0]
         raise SolverError(

@@ -22,8 +22,10 @@ Files of a study directory ``DIR``:
   ``l<i>-j<j>-m<m>``;
 - ``ncc.csv``: ``layers,laps,nodes,modes,dof,ncc_force,ncc_<probe>...,peak_err,impulse_err,
   duration_err,wall_time_s``, one row per evaluated case sorted by (layers, laps, modes); empty
-  metric cells for a run that failed (solver did not converge);
-- ``selection.json``: the smallest-DOF model reaching the target, the run counts, the target;
+  metric cells for a run that failed (solver did not converge, the case raised: its
+  ``cases/<key>.error.txt`` holds the traceback and a rerun tries it again);
+- ``selection.json``: the smallest-DOF model reaching the target, the run counts, the target,
+  ``failures`` (``{"case", "reason"}`` of every run without a comparison; also printed);
 - ``fig7_ncc_map.png`` (NCC of the force over selection x modes, seed fig. 7) and
   ``fig8_ncc_modes.png`` (NCC against modes per selection, seed fig. 8).
 
@@ -71,6 +73,7 @@ from flexmvm.results.atomic import (
     write_table_csv,
 )
 from flexmvm.results.history import read_history, write_history
+from flexmvm.results.outdir import make_out_dir
 from flexmvm.scenarios.compare import compare_runs, run_curves
 from flexmvm.scenarios.schema import (
     ModelConfig,
@@ -316,12 +319,14 @@ class cluster:
 
 
 class _Batches:
-    """Runs batches of cases through run_cases (shared cluster) and counts made/loaded runs."""
+    """Runs batches of cases through run_cases (shared cluster) and counts made/loaded runs.
+    A case that raised (not stored; a rerun tries it again) gets the row failed_row(case,
+    one line), so it is listed, and scored as failed, like a run whose solver failed."""
 
     def __init__(self, out_dir: Path, address: str | None, serial: bool, progress: bool,
-                 fn: Callable[[Case], dict]) -> None:
+                 fn: Callable[[Case], dict], failed_row: Callable[[Case, str], dict]) -> None:
         self.out_dir, self.address, self.serial, self.progress = out_dir, address, serial, progress
-        self.fn = fn
+        self.fn, self.failed_row = fn, failed_row
         self.made: set[str] = set()
         self.loaded: set[str] = set()
         self.rows: dict[str, dict] = {}
@@ -329,11 +334,40 @@ class _Batches:
     def __call__(self, cases: Sequence[Case]) -> list[dict]:
         stored = {c.key for c in cases if case_path(self.out_dir, c.key).is_file()}
         kw: dict[str, Any] = {"serial": True} if self.serial else {"scheduler": self.address}
-        res = run_cases(cases, self.fn, self.out_dir, progress=self.progress, **kw)
+        failures: dict[str, str] = {}
+        res = run_cases(cases, self.fn, self.out_dir, progress=self.progress, failures=failures,
+                        **kw)
         for c in cases:
             (self.loaded if c.key in stored else self.made).add(c.key)
-            self.rows[c.key] = res[c.key]
-        return [res[c.key] for c in cases]
+            self.rows[c.key] = (res[c.key] if c.key in res
+                                else self.failed_row(c, failures.get(c.key, "failed")))
+        return [self.rows[c.key] for c in cases]
+
+
+def failed_case_row(case: Case, line: str, nodes: int) -> dict:
+    """The ncc.csv row of a case that raised: its grid fields and ``failed``, no metrics."""
+    p = case.params
+    i, j, m = int(p["layers"]), int(p["laps"]), int(p["modes"])
+    return {"layers": i, "laps": j, "nodes": nodes, "modes": m, "dof": 3 * nodes + m,
+            "dof_total": 3 * nodes + m + 6, "failed": line}
+
+
+def failure_list(keyed_rows: Iterable[tuple[str, dict]]) -> list[dict]:
+    """[{"case", "reason"}] of the rows that carry ``failed``, sorted by case key."""
+    return sorted(({"case": k, "reason": r["failed"]} for k, r in keyed_rows if "failed" in r),
+                  key=lambda f: f["case"])
+
+
+def echo_failures(echo: Callable[[str], Any], failures: Sequence[dict], n_runs: int,
+                  where: str, shown: int = 5) -> None:
+    """One console line per failed case (the first ``shown``), then where the rest are."""
+    if not failures:
+        return
+    echo(f"{len(failures)} of {n_runs} runs failed (listed in {where}):")
+    for f in failures[:shown]:
+        echo(f"  {f['case']}: {f['reason']}")
+    if len(failures) > shown:
+        echo(f"  ... and {len(failures) - shown} more")
 
 
 def ncc_columns(probes: Sequence[str]) -> list[str]:
@@ -375,7 +409,9 @@ def run_selection_study(scenario_path: str | Path, body: str, out_dir: str | Pat
     ``t_end_s``, ``dt_s`` override the scenario's end time and contact step, ``other`` the
     model of the other bodies (study_scenario). Returns the selection.json content.
 
-    Raises InputError for a bad body / grid / options, SolverError if the reference fails.
+    Raises InputError for a bad body / grid / options, SolverError if the reference fails or,
+    after everything is written, if every run failed. Failed runs are listed in the result's
+    ``failures`` and printed; they count as not reaching the target.
     """
     target = Target(0.99) if target is None else target
     out = Path(out_dir).resolve()
@@ -387,7 +423,7 @@ def run_selection_study(scenario_path: str | Path, body: str, out_dir: str | Pat
         raise InputError("serial=True received with scheduler/workers; expected one")
     if scheduler is not None and n_workers is not None:
         raise InputError("--workers applies to a local cluster; expected no --scheduler with it")
-    out.mkdir(parents=True, exist_ok=True)
+    make_out_dir(out)
     hist, ref_made = reference_history(sc, body, out, progress=progress)
     echo(f"reference (full FE {body}): {'computed' if ref_made else 'loaded'} {hist}")
     cases = {(c.params["layers"], c.params["laps"], c.params["modes"]): c
@@ -397,7 +433,10 @@ def run_selection_study(scenario_path: str | Path, body: str, out_dir: str | Pat
     key_of = {v: k for k, v in cands.items()}
     with cluster(scheduler, n_workers, serial) as address:
         batches = _Batches(out, address, serial, progress,
-                           functools.partial(run_selection_case, reference=str(hist)))
+                           functools.partial(run_selection_case, reference=str(hist)),
+                           lambda c, line: failed_case_row(
+                               c, line, len(rod.selection(c.params["layers"],
+                                                          c.params["laps"]))))
 
         def evaluate(batch: Sequence[Candidate]) -> list[float]:
             rows = batches([cases[key_of[c]] for c in batch])
@@ -428,12 +467,18 @@ def run_selection_study(scenario_path: str | Path, body: str, out_dir: str | Pat
                     "dof_total adds the 6 floating-frame coordinates",
         "failed_cases": sorted(case_key(r["layers"], r["laps"], r["modes"])
                                for r in table if "failed" in r),
+        "failures": failure_list((case_key(r["layers"], r["laps"], r["modes"]), r)
+                                 for r in table),
+        "failures_note": "failures: the runs that gave no comparison (the solver failed, the "
+                         "case raised: see cases/<key>.error.txt, a rerun tries it again; or a "
+                         "metric could not be computed); they count as not reaching the target",
     }
     write_json_atomic(out / "selection.json", result)
     from flexmvm.plots.study_figures import plot_ncc_map, plot_ncc_modes
 
     plot_ncc_map(out / "fig7_ncc_map.png", table, title=f"{sc.name}: NCC of the contact force")
     plot_ncc_modes(out / "fig8_ncc_modes.png", table, title=f"{sc.name}: NCC against modes")
+    echo_failures(echo, result["failures"], result["runs"], out / "selection.json")
     if result["passed"]:
         echo(f"smallest model reaching {_target_text(target)}: {result['layers']}-{result['laps']}"
              f" with {result['modes']} modes, {result['dof']} DOF ({result['nodes']} nodes), "
@@ -442,6 +487,10 @@ def run_selection_study(scenario_path: str | Path, body: str, out_dir: str | Pat
     else:
         echo(f"no model of the grid reaches {_target_text(target)}; {result['runs']} runs "
              f"({result['runs_made']} made, {result['runs_loaded']} loaded)")
+    if result["failures"] and len(result["failures"]) == result["runs"]:
+        first = result["failures"][0]
+        raise SolverError(f"selection study: every run failed ({first['case']}: "
+                          f"{first['reason']}); see {out / 'selection.json'}")
     return result
 
 
