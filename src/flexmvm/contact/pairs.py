@@ -11,6 +11,9 @@ with the Moreau condition u_N(v+) >= beta max(0, -g)/h, lambda >= 0 (see integra
 Bonded contact (seed eq. 7, all three components) locks a pair once it has carried a
 compressive impulse: three equality rows x_S - x_C = 0 at the frozen shape functions, until
 the normal component of its impulse would turn tensile.
+
+Only slave nodes are held; `penetration` measures both ways (contact.penetration), master
+surface nodes against the slave facets too (given `slave_surface`).
 """
 
 from __future__ import annotations
