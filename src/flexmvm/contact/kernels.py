@@ -650,11 +650,17 @@ def penetration_scan(xs, xm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_quad
     negative normal gap; its depth is -gap [m]. Nodes beyond reach of every facet are not
     seen: reach bounds the depth that can be measured.
 
-    floor [m]: only depths above it are sought. A node whose last facet (prev) still holds an
-    inside projection with |gap| <= floor is skipped without a search: any facet that could
-    beat it has an inside projection with a smaller |gap|, hence a depth below floor. So the
-    result is exact when deeper than floor, else (0, -1). Returns (status, facet of a
-    failure, depth [m], node (-1 when none), facet of the deepest node)."""
+    floor [m]: only depths above it are sought (0, -1 when none). Warm start: a node whose
+    last facet (prev) still holds an inside projection with gap >= -depth (depth: the floor,
+    or the deepest found so far in this call) is taken at that reading, without a search.
+    With gap <= 0 that is exact: a facet that beats it in the search has an inside
+    projection with a smaller |gap|, no deeper. With gap = g0 > 0 (in front of the facet),
+    another facet could only win with an inside projection behind it at a distance < g0,
+    i.e. if the other surface folded back over the facet within g0 of the node (a sheet
+    thinner than the node's gap); at a ridge (convex edge) of plane facets the projection
+    on the far facet is outside it. Contact surfaces do not fold so: the search is skipped.
+    Returns (status, facet of a failure, depth [m], node (-1 when none), facet of the
+    deepest node)."""
     C, t, r = np.empty((4, 3)), np.empty((2, 3)), np.empty(3)
     P, rec, best = np.empty((4, 3)), np.empty(REC_LEN), np.empty(REC_LEN)
     work = (C, t, r, P, rec)
@@ -666,7 +672,7 @@ def penetration_scan(xs, xm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_quad
             status, g = _try(f0, xs[i], xm, conn, n_quads, params, work, best, -1)
             if status:
                 return status, f0, 0.0, -1, -1
-            if best[REC_IN] == 1.0 and abs(best[REC_GAP]) <= depth:
+            if best[REC_IN] == 1.0 and best[REC_GAP] >= -depth:
                 continue
         inside_box = True
         for j in range(3):
