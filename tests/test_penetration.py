@@ -162,3 +162,21 @@ def test_summary_reports_where_and_when():
     assert {at["body"], at["against"]} == {"b1", "b2"} and at["node"] >= 0
     assert 0.0 < at["t_s"] <= 10e-6 + 1e-15
     json.dumps(s)
+
+
+def test_simulate_refuses_an_overlap_unless_continuing():
+    """In process: the same 1 mm overlap (rigid rods) is an InputError from simulate; with
+    check_overlap=False (a continuation) the run goes on and reports the depth at t = 0."""
+    from flexmvm.errors import InputError
+    from flexmvm.integrate.driver import simulate
+    from flexmvm.scenarios.build import build_scenario
+
+    sc = load_scenario(SHORT).with_overrides(model="rigid", t_end_s=1e-6)
+    built = build_scenario(sc)
+    states = [s.copy() for s in built.states]
+    states[1].r = states[1].r + np.array([-0.001, 0.0, 0.0])
+    with pytest.raises(InputError, match=r"'b\d' and 'b\d' overlap at t = 0 s by 0\.001 m"):
+        simulate(built.system, states, built.grid)
+    res = simulate(built.system, states, built.grid, check_overlap=False)
+    assert abs(res.max_penetration_m - 0.001) < 1e-9
+    assert res.max_penetration_at["t_s"] == 0.0
