@@ -41,8 +41,13 @@ def test_seed_full_fe_and_mvm_against_theory_and_each_other():
     for key in ("full", "mvm"):
         assert r[key]["momentum_rel_error"] < 1e-9
         assert r[key]["min_contact_force_N"] >= 0.0
-        # penetration tolerance: 2 % of the peak Hertz approach (21.3 um in the 1D solution)
-        assert r[key]["max_penetration_m"] < 0.02 * 21.3e-6
+        # penetration, of the peak Hertz approach (21.3 um in the 1D solution): b2's slave nodes
+        # into b1 (held by the constraint) within 2 %; either way within 10 % (b1's nodes sit
+        # in b2's facets by their chord error, 1.8 um measured: docs/validation.md)
+        assert r[key]["max_penetration_m"] < 0.10 * 21.3e-6
+        by = r[key]["max_penetration_by_direction_m"]
+        if by is not None:  # None: a cached run from before the two-way measure
+            assert by["b2 nodes into b1"] < 0.02 * 21.3e-6
 
 
 def test_seed_force_converges_with_the_step():

@@ -65,6 +65,7 @@ def flat_vs_st_venant(out: Path, t_end: float, dt: float | None) -> dict:
 
 def _cons(s: dict) -> dict:
     return {k: s.get(k) for k in ("momentum_rel_error", "energy_rel_error", "max_penetration_m",
+                                  "max_penetration_at", "max_penetration_by_direction_m",
                                   "min_contact_force_N", "wall_time_s", "n_steps")}
 
 

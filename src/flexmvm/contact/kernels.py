@@ -634,3 +634,72 @@ def _sort_row(idx, val, lo, hi):
             idx[b + 1], val[b + 1] = idx[b], val[b]
             b -= 1
         idx[b + 1], val[b + 1] = ki, kv
+
+
+# -- penetration measure --------------------------------------------------------------------------
+@numba.njit(cache=True)
+def penetration_scan(xs, xm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_quads, adj_ptr,
+                     adj_idx, params, edge_tol, floor, lists, ref, prev, mark, counter, cand, lb):
+    """Deepest penetration of the nodes xs (ns, 3) [m] into the facet surface xm (nm, 3) (local
+    node ids in conn), searched as scan_nodes does (box test in the facet body's frame r_m,
+    A_m; candidate supersets, warm start, pruning; same state arrays and meaning).
+
+    A node counts when the closest facet's projection is inside it (params[6], the local
+    coordinate tolerance of the constraint pass) or outside it by a lateral offset
+    sqrt(distance^2 - gap^2) <= edge_tol * R_g (R_g the facet's circumradius), with a
+    negative normal gap; its depth is -gap [m]. Nodes beyond reach of every facet are not
+    seen: reach bounds the depth that can be measured.
+
+    floor [m]: only depths above it are sought (0, -1 when none). Warm start: a node whose
+    last facet (prev) still holds an inside projection with gap >= -depth (depth: the floor,
+    or the deepest found so far in this call) is taken at that reading, without a search.
+    With gap <= 0 that is exact: a facet that beats it in the search has an inside
+    projection with a smaller |gap|, no deeper. With gap = g0 > 0 (in front of the facet),
+    another facet could only win with an inside projection behind it at a distance < g0,
+    i.e. if the other surface folded back over the facet within g0 of the node (a sheet
+    thinner than the node's gap); at a ridge (convex edge) of plane facets the projection
+    on the far facet is outside it. Contact surfaces do not fold so: the search is skipped.
+    Returns (status, facet of a failure, depth [m], node (-1 when none), facet of the
+    deepest node)."""
+    C, t, r = np.empty((4, 3)), np.empty((2, 3)), np.empty(3)
+    P, rec, best = np.empty((4, 3)), np.empty(REC_LEN), np.empty(REC_LEN)
+    work = (C, t, r, P, rec)
+    p = np.empty(3)
+    depth, node, at = floor, -1, -1
+    for i in range(xs.shape[0]):
+        f0 = prev[i]
+        if f0 >= 0:
+            status, g = _try(f0, xs[i], xm, conn, n_quads, params, work, best, -1)
+            if status:
+                return status, f0, 0.0, -1, -1
+            if best[REC_IN] == 1.0 and best[REC_GAP] >= -depth:
+                continue
+        inside_box = True
+        for j in range(3):
+            p[j] = ((xs[i, 0] - r_m[0]) * A_m[0, j] + (xs[i, 1] - r_m[1]) * A_m[1, j]) + (
+                xs[i, 2] - r_m[2]) * A_m[2, j]
+            inside_box = inside_box and box[0, j] - reach <= p[j] <= box[1, j] + reach
+        if not inside_box:
+            continue
+        counter[0] += 2
+        tag = counter[0]
+        n = _candidates(i, p, reach, rho, geo, lists, ref, mark, tag, cand, lb)
+        if n == 0:
+            continue
+        status, g = _closest(xs[i], n, cand, lb, mark, tag, prev[i], adj_ptr, adj_idx, geo,
+                             u_max, xm, conn, n_quads, params, work, best)
+        if status:
+            return status, g, 0.0, -1, -1
+        if g < 0:
+            continue
+        prev[i] = g
+        gap = best[REC_GAP]
+        if gap >= 0.0:
+            continue
+        if best[REC_IN] == 0.0:
+            lateral2 = best[REC_DIST] ** 2 - gap * gap
+            if lateral2 > (edge_tol * geo[g, 3]) ** 2:
+                continue
+        if -gap > depth:
+            depth, node, at = -gap, i, g
+    return 0, -1, depth if node >= 0 else 0.0, node, at

@@ -11,6 +11,9 @@ with the Moreau condition u_N(v+) >= beta max(0, -g)/h, lambda >= 0 (see integra
 Bonded contact (seed eq. 7, all three components) locks a pair once it has carried a
 compressive impulse: three equality rows x_S - x_C = 0 at the frozen shape functions, until
 the normal component of its impulse would turn tensile.
+
+Only slave nodes are held; `penetration` measures both ways (contact.penetration), master
+surface nodes against the slave facets too (given `slave_surface`).
 """
 
 from __future__ import annotations
@@ -25,6 +28,7 @@ from flexmvm.constraints.rows import Rows
 from flexmvm.contact import kernels
 from flexmvm.contact.geometry import BroadPhase, MasterSurface
 from flexmvm.contact.nodes import ContactNodes
+from flexmvm.contact.penetration import Penetration, SurfaceMeasure
 from flexmvm.contact.reference import body_rows
 from flexmvm.errors import InputError, SolverError
 from flexmvm.integrate.moreau_jean import PENETRATION_RECOVERY
@@ -75,7 +79,8 @@ class PointToSurfaceContact(ContactProvider):
 
     def __init__(self, bodies, slave: int, slave_nodes, master: int, surface: MasterSurface,
                  kind: ContactKind = ContactKind.FRICTIONLESS, search_radius_m: float = 1e-3,
-                 gap_tol_m: float = 1e-9, name: str = "contact"):
+                 gap_tol_m: float = 1e-9, name: str = "contact",
+                 slave_surface: MasterSurface | None = None):
         if slave == master:
             raise InputError(f"{name}: slave and master must be different bodies")
         self.slave, self.master = slave, master
@@ -96,6 +101,10 @@ class PointToSurfaceContact(ContactProvider):
         self.name = name
         self._bonds: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._setup(bodies)
+        if slave_surface is not None and slave_surface.connectivity.max() >= n_s:
+            raise InputError(f"{name}: slave facets refer to nodes outside body {bodies[slave].name!r}")
+        self._measure = SurfaceMeasure(bodies, slave, self.slave_nodes, slave_surface, master,
+                                       surface, self.search_radius)
 
     def _setup(self, bodies) -> None:
         """Gathered node data, facet geometry and the search state (see kernels.scan_nodes)."""
@@ -151,6 +160,19 @@ class PointToSurfaceContact(ContactProvider):
         if self._bonds:
             return -np.inf
         return float(kernels.predicted_min_gap(self._facet, self._out, horizon_s))
+
+    # -- penetration ----------------------------------------------------------------------------
+    def penetration(self, bodies, states, deep: bool = False, floors=None) -> list[Penetration]:
+        """Deepest penetration per direction at `states` (contact.penetration): slave nodes
+        into the master surface, then (with a slave_surface) master surface nodes into the
+        slave surface. deep: the start check's reach, over both surfaces' extent. floors (per
+        direction [m], default 0): only deeper penetrations are sought; shallower read 0."""
+        out = []
+        for status, facet, pen in self._measure.measure(states, deep, floors):
+            if status:
+                raise SolverError(f"{self.name}: " + _failure(status, facet))
+            out.append(pen)
+        return out
 
     # -- constraint rows ----------------------------------------------------------------------
     def candidate_rows(self, bodies, states, h: float) -> ContactRows:

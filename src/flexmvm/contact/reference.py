@@ -76,8 +76,9 @@ def projection(kin: Kinematics, master_state, surface: MasterSurface, broad: Bro
                box: tuple[np.ndarray, np.ndarray], reach: float) -> Projection | None:
     """Closest facet of every slave node within reach of the master surface. A node that
     falls outside every candidate facet (above a vertex of a convex surface, or beside an
-    edge of a dented, locally concave one) is kept with its clamped projection, so a
-    penetration can never go unseen. None when no node has a candidate."""
+    edge of a dented, locally concave one) is kept with its clamped projection, so no slave
+    node's penetration goes unseen by the constraint (master nodes are not held; the measure
+    of both directions is contact.penetration). None when no node has a candidate."""
     local = (kin.x_slave - master_state.r) @ master_state.A
     lo, hi = box
     near = np.nonzero(np.all((local >= lo - reach) & (local <= hi + reach), axis=1))[0]

@@ -21,6 +21,10 @@ from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import System
 
 GROW_AFTER_STEPS = 4
+# Start of a run: a node more than this inside the other contact surface is an overlap of the
+# bodies (InputError). 1e-9 m: the constraint pass's gap tolerance (contact.pairs gap_tol_m);
+# seven orders above the round-off of metre-scale coordinates, far below any physical overlap.
+OVERLAP_TOL_M = 1e-9
 
 
 @dataclass(frozen=True)
@@ -78,7 +82,11 @@ class RunResult:
     q: list[np.ndarray]            # per body: (n_out, nq) elastic coordinates
     frame_A: np.ndarray            # (n_out, n_bodies, 3, 3)
     contact_intervals: list[tuple[float, float]] = field(default_factory=list)
-    max_penetration_m: float = 0.0
+    max_penetration_m: float = 0.0  # deepest node penetration after any step, both directions
+    # where and when: {"t_s", "body", "node", "against"} (None: no penetration measured)
+    max_penetration_at: dict | None = None
+    # deepest per measured direction, "<body> nodes into <against>" -> depth [m]
+    max_penetration_by_direction_m: dict = field(default_factory=dict)
     max_joint_drift: float = 0.0   # largest joint violation |phi| after any step (position level)
     n_steps: int = 0
     n_factorizations: int = 0
@@ -158,9 +166,13 @@ class _Recorder:
 
 
 def simulate(system: System, states: list[BodyState], grid: TimeGrid, probes=(),
-             progress: bool = False, t0: float = 0.0, exploit_nonrotating: bool = True
-             ) -> RunResult:
+             progress: bool = False, t0: float = 0.0, exploit_nonrotating: bool = True,
+             check_overlap: bool = True) -> RunResult:
     """Integrate from t0 over grid.t_end_s; returns histories at every output time.
+
+    check_overlap: InputError when a node of a contact surface is more than OVERLAP_TOL_M
+    inside the other surface at t0 (bodies may touch, not overlap); False for a continuation
+    from a state in contact, whose penetration is then only measured.
 
     exploit_nonrotating: let steps whose frames do not rotate take the linear one-solve step
     (integrate.nonrotating; verified against the full equations). False forces the general
@@ -171,15 +183,19 @@ def simulate(system: System, states: list[BodyState], grid: TimeGrid, probes=(),
     25,000-long dot product 7.6 ms with two OpenBLAS threads on a loaded 2-core machine, 12 us
     with one)."""
     with threadpool_limits(limits=1, user_api="blas"):
-        return _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating)
+        return _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
+                         check_overlap)
 
 
-def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating) -> RunResult:
+def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
+              check_overlap) -> RunResult:
     n_ticks, out_ticks, k_max = grid.ticks()
     integ = MoreauJeanIntegrator(system, theta=grid.theta, exploit_nonrotating=exploit_nonrotating)
     dt = grid.dt_s
     rec = _Recorder(system, probes, n_ticks // out_ticks + 2, integ.n_joint_rows)
     states = [s.copy() for s in states]
+    pen = _Penetrations(system)
+    pen.start(states, t0, check_overlap)
     rec.record(t0, states, 0.0, np.zeros(integ.n_joint_rows))
     bar = _progress(progress, n_ticks)
     tick, level, calm = 0, 0, 0
@@ -211,8 +227,9 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating) -
             p_res += res.translation_residual
         tick += span
         f = res.contact.normal_impulse(res.contact_impulses)
-        if res.contact.gaps.size:
+        if not pen.measured and res.contact.gaps.size:
             max_pen = max(max_pen, float(-res.contact.gaps.min()))
+        pen.after_step(states, t0 + tick * dt)
         in_contact = f > 0.0
         calm = 0 if (in_contact or res.contact.rows.m) else calm + 1
         _track_intervals(intervals, in_contact, t, t + h)
@@ -229,8 +246,12 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating) -
         bar.close()
     wall = time.perf_counter() - wall0
     nfac = sum(s.n_factorizations for s in integ.solvers)
+    if pen.measured:
+        max_pen = pen.depth
     return rec.result(contact_intervals=[tuple(iv) for iv in intervals],
-                      max_penetration_m=max(max_pen, 0.0), max_joint_drift=drift, n_steps=n_steps,
+                      max_penetration_m=max(max_pen, 0.0), max_penetration_at=pen.at,
+                      max_penetration_by_direction_m=pen.by_direction,
+                      max_joint_drift=drift, n_steps=n_steps,
                       n_factorizations=nfac, n_nonrotating_steps=integ.n_nonrotating_steps,
                       steps_not_converged=n_loose, newton_residual_max=worst_res,
                       lcp_residual_max=worst_lcp, momentum_residual=p_res, wall_time_s=wall)
@@ -244,6 +265,60 @@ def _check_finite(row: dict, system, t: float) -> None:
            if not (np.isfinite(q).all() and np.isfinite(v).all())]
     where = f"body {bad[0]!r}" if bad else "the contact force"
     raise SolverError(f"at t = {t:.6g} s: the solution became non-finite (NaN/inf) in {where}")
+
+
+class _Penetrations:
+    """The deepest penetration over a run, from the contact providers' surface measure
+    (contact.penetration: both directions, every node of both surfaces) on the state after
+    every step; measured = False when no provider measures (then the driver keeps the gaps
+    of the candidate rows)."""
+
+    def __init__(self, system: System):
+        self.system = system
+        self.measured = bool(system.contacts)
+        self.depth, self.at, self.by_direction = 0.0, None, {}
+        self.floors: dict[int, list[float]] = {}  # per provider, per direction: deepest so far
+
+    def _measure(self, states, t, deep):
+        bodies = self.system.bodies
+        found = []
+        for k, provider in enumerate(self.system.contacts):
+            floors = None if deep else self.floors.get(k)
+            pens = provider.penetration(bodies, states, deep=deep, floors=floors)
+            if pens is None:
+                self.measured = False
+                return []
+            seen = self.floors.get(k, [0.0] * len(pens))
+            self.floors[k] = [max(f, p.depth_m) for f, p in zip(seen, pens)]
+            for p in pens:
+                key = f"{bodies[p.body].name} nodes into {bodies[p.against].name}"
+                self.by_direction[key] = max(self.by_direction.get(key, 0.0), p.depth_m)
+                if p.depth_m > self.depth:
+                    self.depth = p.depth_m
+                    self.at = {"t_s": float(t), "body": bodies[p.body].name, "node": p.node,
+                               "against": bodies[p.against].name}
+                found.append(p)
+        return found
+
+    def start(self, states, t0: float, check: bool = True) -> None:
+        """Measure the initial state; InputError when the bodies overlap (OVERLAP_TOL_M) and
+        check is set."""
+        if not self.measured:
+            return
+        bodies = self.system.bodies
+        found = self._measure(states, t0, deep=True)
+        if found:
+            p = max(found, key=lambda p: p.depth_m)
+            if check and p.depth_m > OVERLAP_TOL_M:
+                a, b = bodies[p.body].name, bodies[p.against].name
+                raise InputError(
+                    f"bodies {a!r} and {b!r} overlap at t = {t0:g} s by {p.depth_m:.4g} m (node "
+                    f"{p.node} of {a!r} inside the contact surface of {b!r}; tolerance "
+                    f"{OVERLAP_TOL_M:g} m): place them apart or touching")
+
+    def after_step(self, states, t: float) -> None:
+        if self.measured:
+            self._measure(states, t, deep=False)
 
 
 def _choose_level(system, states, level, calm, k_max, dt) -> int:

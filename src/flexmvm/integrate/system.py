@@ -47,6 +47,12 @@ class ContactProvider:
         """Smallest predicted gap [m] within horizon_s at current velocities (step policy)."""
         raise NotImplementedError
 
+    def penetration(self, bodies, states, deep: bool = False, floors=None):
+        """Deepest penetration per measured direction (contact.penetration.Penetration list) at
+        `states`; None when the provider does not measure it (the driver then falls back on
+        the gaps of its candidate rows). deep: the start-of-run check (larger reach); floors:
+        per direction, only deeper penetrations are sought (shallower ones read 0)."""
+
 
 @dataclass(frozen=True)
 class NodeLoad:

@@ -274,13 +274,15 @@ def _contact(c, k, bodies, infos, index):
     where = f"contacts[{k}]"
     s, m = index[c.slave_body], index[c.master_body]
     try:
-        slave_nodes = infos[s].mesh.facet_set(c.slave_surface).nodes
+        slave_facets = infos[s].mesh.facet_set(c.slave_surface)
+        slave_nodes = slave_facets.nodes
         master = MasterSurface.from_facet_set(infos[m].mesh.facet_set(c.master_surface))
     except MeshError as exc:
         raise InputError(f"{where}: {exc}") from None
     radius = c.search_radius_m if c.search_radius_m is not None else DEFAULT_SEARCH_RADIUS_M
     return PointToSurfaceContact(bodies, s, slave_nodes, m, master, ContactKind(c.kind.value),
-                                 radius, name=f"{c.slave}->{c.master}")
+                                 radius, name=f"{c.slave}->{c.master}",
+                                 slave_surface=MasterSurface.from_facet_set(slave_facets))
 
 
 def _probe(p, where, infos, index) -> Probe:

@@ -49,6 +49,8 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         "energy_rel_error": e_err,
         "energy_rel_error_max": e_err_max,
         "max_penetration_m": float(res.max_penetration_m),
+        "max_penetration_at": res.max_penetration_at,
+        "max_penetration_by_direction_m": dict(res.max_penetration_by_direction_m),
         "max_joint_drift": float(res.max_joint_drift),
         "steps_not_converged": int(res.steps_not_converged),
         "newton_residual_max": float(res.newton_residual_max),

@@ -1,0 +1,142 @@
+"""Penetration of one contact surface into the other, measured on the nodes of both surfaces.
+
+The constraint pass (contact.pairs) sees slave nodes against master facets, for the pairs it
+built rows for. The measure here looks both ways after every step: every slave node against
+the master facets, and every master surface node against the slave facets, with the compiled
+closest-point search of the constraint pass (contact.kernels.penetration_scan: cached
+candidate supersets, warm start from the last facet, pruning).
+
+Definition. A node penetrates the other surface by d = -g > 0 when its closest facet of that
+surface (within reach) has a projection that is inside the facet, to the constraint pass's
+tolerance on the local coordinates (1e-6), or outside it by a lateral offset of at most
+EDGE_TOL times the facet's circumradius, and the signed normal gap g there is negative. A node
+that projects outside every facet by more than that is beside the other surface, not in it:
+the free parts of a surface far from the contact, whose extended facet planes would give
+negative gaps, are not read as penetrations. Depths beyond the reach (the contact's search
+radius plus the facet body's largest nodal displacement, per step) are not seen; the start
+check (``deep=True``) reaches over both surfaces' extent.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from flexmvm.contact import kernels
+from flexmvm.contact.geometry import BroadPhase, MasterSurface
+from flexmvm.contact.nodes import ContactNodes
+
+EDGE_TOL = 0.01  # lateral offset beyond a facet edge, per facet circumradius, still counted:
+                 # covers the round-off and the differential Poisson expansion of two faces
+                 # with a common edge (both ~1e-7 m on facets of ~1e-4 m and more)
+RESOLUTION_M = 1e-12  # depths up to this read 0 and are not sought: the round-off of node
+                      # positions of metre-scale bodies (1e-16 m to 1e-14 m); touching faces
+                      # (gaps of round-off size) then cost one projection per node
+
+
+@dataclass(frozen=True)
+class Penetration:
+    """The deepest penetration of a node of body `body` (mesh node id `node`) into the surface
+    of body `against` (its facet `facet`), depth_m [m]; depth 0 and node -1 when none."""
+
+    depth_m: float
+    body: int
+    node: int
+    against: int
+    facet: int = -1
+
+
+class _Search:
+    """Search state of penetration_scan for n nodes against nf facets (see kernels.scan_nodes)."""
+
+    def __init__(self, n: int, nf: int, cap: int = 256):
+        self.lists = np.zeros((n, min(nf, cap) + 1), dtype=np.int64)
+        self.ref = np.full((n, 4), -1.0)
+        self.prev = np.full(n, -1, dtype=np.int64)
+        self.mark = np.zeros(nf, dtype=np.int64)
+        self.counter = np.zeros(1, dtype=np.int64)
+        self.cand = np.zeros(nf, dtype=np.int64)
+        self.lb = np.zeros(nf)
+
+    def arrays(self):
+        return self.lists, self.ref, self.prev, self.mark, self.counter, self.cand, self.lb
+
+
+class _Direction:
+    """Nodes `rows` (indices into node_set.nodes) of body `body` against the facets `surface` of
+    body `against`, whose nodes are facet_set.nodes."""
+
+    def __init__(self, bodies, body, node_set: ContactNodes, rows, against, facet_set: ContactNodes,
+                 surface: MasterSurface, search_radius: float):
+        self.body, self.against = body, against
+        self.node_set, self.facet_set = node_set, facet_set
+        self.rows = None if len(rows) == len(node_set.nodes) else np.asarray(rows, np.int64)
+        self.node_ids = node_set.nodes if self.rows is None else node_set.nodes[self.rows]
+        broad = BroadPhase(bodies[against].X, surface)
+        self.geo = np.column_stack([broad.centroids, broad.circumradius])
+        local = np.full(len(bodies[against].X), -1, dtype=np.int64)
+        local[facet_set.nodes] = np.arange(len(facet_set.nodes))
+        self.conn = local[surface.connectivity]
+        if self.conn.min() < 0:
+            raise ValueError("facet nodes missing from the facet node set")
+        self.n_quads = surface.n_quads
+        from flexmvm.contact.pairs import facet_adjacency
+
+        self.adj = facet_adjacency(surface.connectivity)
+        Xs = bodies[against].X[surface.nodes()]
+        self.box = np.vstack([Xs.min(axis=0), Xs.max(axis=0)]).astype(np.float64)
+        Xn = bodies[body].X[self.node_ids]
+        self.extent = float(np.linalg.norm(np.ptp(Xs, axis=0)) + np.linalg.norm(np.ptp(Xn, axis=0)))
+        self.search_radius = search_radius
+        self.rho = max(search_radius, 0.5 * float(np.median(broad.circumradius)))
+        self.params = kernels.projection_params()
+        self.search = _Search(len(self.node_ids), surface.n_facets)
+
+    def measure(self, states, u_max_facets: float, deep: bool, floor: float
+                ) -> tuple[int, int, Penetration]:
+        x = self.node_set.x if self.rows is None else self.node_set.x[self.rows]
+        st = states[self.against]
+        if deep:  # the start check: reach over both surfaces, a throwaway search state
+            reach, search = self.search_radius + u_max_facets + self.extent, _Search(len(x), len(self.geo))
+        else:
+            reach, search = self.search_radius + u_max_facets, self.search
+        status, bad, depth, i, g = kernels.penetration_scan(
+            x, self.facet_set.x, st.r, st.A, self.box, reach, self.rho, u_max_facets, self.geo,
+            self.conn, self.n_quads, *self.adj, self.params, EDGE_TOL, floor, *search.arrays())
+        node = int(self.node_ids[i]) if i >= 0 else -1
+        return status, bad, Penetration(float(depth), self.body, node, self.against, int(g))
+
+
+class SurfaceMeasure:
+    """Both directions of a contact between body `slave` (nodes slave_nodes, facets
+    slave_surface, optional) and body `master` (facets master_surface): slave nodes against
+    the master facets, and, when slave_surface is given, the master surface nodes against the
+    slave facets. Positions come from own ContactNodes (the constraint pass's are not touched)."""
+
+    def __init__(self, bodies, slave: int, slave_nodes, slave_surface: MasterSurface | None,
+                 master: int, master_surface: MasterSurface, search_radius: float):
+        s_ids = np.asarray(slave_nodes, dtype=np.int64)
+        if slave_surface is not None:
+            s_ids = np.union1d(s_ids, slave_surface.nodes())
+        self.slave, self.master = slave, master
+        self._s = ContactNodes(bodies[slave], s_ids)
+        self._m = ContactNodes(bodies[master], master_surface.nodes())
+        rows = np.searchsorted(s_ids, np.unique(np.asarray(slave_nodes, dtype=np.int64)))
+        self.directions = [_Direction(bodies, slave, self._s, rows, master, self._m,
+                                      master_surface, search_radius)]
+        if slave_surface is not None:
+            self.directions.append(_Direction(bodies, master, self._m, np.arange(len(self._m.nodes)),
+                                              slave, self._s, slave_surface, search_radius))
+
+    def measure(self, states, deep: bool = False, floors=None) -> list[tuple[int, int, Penetration]]:
+        """(status, failing facet, Penetration) per direction at the given states. floors
+        (per direction, [m]; default 0): only depths above are sought, a shallower one reads 0
+        (kernels.penetration_scan): the caller passes the deepest it has seen so far. Depths
+        up to RESOLUTION_M always read 0."""
+        _, u_s = self._s.update(states[self.slave])
+        _, u_m = self._m.update(states[self.master])
+        u = {self.slave: u_s, self.master: u_m}
+        floors = [0.0] * len(self.directions) if floors is None else floors
+        return [d.measure(states, u[d.against], deep, max(float(f), RESOLUTION_M))
+                for d, f in zip(self.directions, floors)]
