@@ -12,7 +12,8 @@ from pathlib import Path
 
 import numpy as np
 
-from flexmvm.integrate.moreau_jean import PENETRATION_RECOVERY, MoreauJeanIntegrator
+from flexmvm.contact.pairs import PENETRATION_RECOVERY
+from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
 from flexmvm.scenarios.build import build_scenario
 from flexmvm.scenarios.schema import load_scenario, scenario_from_dict
 

@@ -17,8 +17,7 @@ from flexmvm.bodies.body import FlexibleBody
 from flexmvm.contact import kernels
 from flexmvm.contact import reference as ref
 from flexmvm.contact.geometry import MasterSurface, project_points
-from flexmvm.contact.pairs import PointToSurfaceContact
-from flexmvm.integrate.moreau_jean import PENETRATION_RECOVERY
+from flexmvm.contact.pairs import PENETRATION_RECOVERY, PointToSurfaceContact
 
 
 def _project_one(xs, P, quad):

@@ -31,8 +31,7 @@ from flexmvm.contact.nodes import ContactNodes
 from flexmvm.contact.penetration import Penetration, SurfaceMeasure
 from flexmvm.contact.reference import body_rows
 from flexmvm.errors import InputError, SolverError
-from flexmvm.integrate.moreau_jean import PENETRATION_RECOVERY
-from flexmvm.integrate.system import ContactProvider, ContactRows
+from flexmvm.constraints.contact import ContactProvider, ContactRows
 
 __all__ = ["ContactKind", "PointToSurfaceContact", "body_rows"]
 
@@ -67,7 +66,12 @@ def facet_adjacency(connectivity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return adj.indptr.astype(np.int64), adj.indices.astype(np.int64)
 
 
-class PointToSurfaceContact(ContactProvider):
+#: beta: the fraction of a penetration (or a bond's drift) the rows push back per step,
+#: u_N(v+) >= beta max(0, -g) / h (Moreau-Jean with a Baumgarte-like position correction)
+PENETRATION_RECOVERY = 0.2
+
+
+class PointToSurfaceContact:
     """Contact of slave nodes (body `slave`) with master facets (body `master`).
 
     Per call the contact-node kinematics, the search and the rows run in compiled kernels
@@ -80,7 +84,8 @@ class PointToSurfaceContact(ContactProvider):
     def __init__(self, bodies, slave: int, slave_nodes, master: int, surface: MasterSurface,
                  kind: ContactKind = ContactKind.FRICTIONLESS, search_radius_m: float = 1e-3,
                  gap_tol_m: float = 1e-9, name: str = "contact",
-                 slave_surface: MasterSurface | None = None):
+                 slave_surface: MasterSurface | None = None,
+                 beta: float = PENETRATION_RECOVERY):
         if slave == master:
             raise InputError(f"{name}: slave and master must be different bodies")
         self.slave, self.master = slave, master
@@ -98,6 +103,9 @@ class PointToSurfaceContact(ContactProvider):
         self.kind = kind
         self.search_radius = float(search_radius_m)
         self.gap_tol = float(gap_tol_m)
+        if not 0.0 <= beta <= 1.0:
+            raise InputError(f"{name}: penetration recovery beta must be in [0, 1], got {beta!r}")
+        self.beta = float(beta)
         self.name = name
         self._bonds: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._setup(bodies)
@@ -195,7 +203,7 @@ class PointToSurfaceContact(ContactProvider):
         if eq is None:
             rows = Rows(m_n, {})
             self._fill_rows(rows, states, (s_nodes, s_w, s_k), (m_nodes, m_w, m_k), normal)
-            lower = PENETRATION_RECOVERY * np.maximum(0.0, -gaps) / h
+            lower = self.beta * np.maximum(0.0, -gaps) / h
             keys = list(zip([self.name] * m_n, self.slave_nodes[idx].tolist(),
                             self._facet[idx].tolist()))
             return ContactRows(rows, lower, keys, gaps, 0, np.ones(m_n))
@@ -229,7 +237,7 @@ class PointToSurfaceContact(ContactProvider):
             rows.nodal[self.slave] = ssel
         if msel is not None:
             rows.nodal[self.master] = -msel
-        lower_n = PENETRATION_RECOVERY * np.maximum(0.0, -gaps) / h
+        lower_n = self.beta * np.maximum(0.0, -gaps) / h
         keys = eq_keys + list(zip([self.name] * len(idx), self.slave_nodes[idx].tolist(),
                                   self._facet[idx].tolist()))
         weight = np.ones(m)
@@ -250,7 +258,7 @@ class PointToSurfaceContact(ContactProvider):
                 w_rows.append(w)
                 n_rows.append(nodes)
                 dirs.append(e)
-                lower.append(-PENETRATION_RECOVERY * err[d] / h)
+                lower.append(-self.beta * err[d] / h)
                 keys.append((self.name, "bond", s, d))
         return (np.array(s_nodes), (np.array(w_rows), np.array(n_rows)), np.array(dirs),
                 np.array(lower), keys)

@@ -58,7 +58,6 @@ from flexmvm.integrate.lcp import solve_checked
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import ContactRows, System
 
-PENETRATION_RECOVERY = 0.2  # beta: fraction of a penetration pushed back per step
 # The frame Schur complement S = M_ff - B W_qq^-1 B^T is small when the basis nearly spans
 # the rigid motions (full FE: S ~ the mass within c h of the reference nodes, ~1e-5 of the
 # body), so W's coupling B must be that of the current configuration: it is refreshed at the
@@ -289,9 +288,7 @@ class MoreauJeanIntegrator:
     @staticmethod
     def _after_step(parts, lam_c, h):
         for provider, part, offset in parts:
-            hook = getattr(provider, "after_step", None)
-            if hook is not None:
-                hook(part, lam_c[offset : offset + part.rows.m], h)
+            provider.after_step(part, lam_c[offset : offset + part.rows.m], h)
 
     def _newton_step(self, t, states, h, crows, parts) -> StepResult:
         self._prepare(states, h, refresh_tol=None)

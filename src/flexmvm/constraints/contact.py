@@ -1,0 +1,66 @@
+"""The interface between contact definitions (contact/) and the time step (integrate/): the
+rows a contact contributes to a step and the methods the step calls. It sits below both, so
+neither stage imports the other.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Protocol, runtime_checkable
+
+import numpy as np
+
+from flexmvm.constraints.rows import Rows
+
+__all__ = ["ContactProvider", "ContactRows"]
+
+
+@dataclass
+class ContactRows:
+    """Unilateral rows from contacts at the start of a step: Phi_c v+ >= lower.
+
+    keys identify the pairs (for reporting and for caching W^-1 Phi^T); gaps are the current
+    normal gaps [m]; eq_rows (leading rows) are equalities Phi v+ = lower (bonded contact).
+    """
+
+    rows: Rows
+    lower: np.ndarray
+    keys: list
+    gaps: np.ndarray
+    n_eq: int = 0
+    normal_weight: np.ndarray | None = None  # (m,): row impulse -> compressive normal impulse
+
+    @classmethod
+    def empty(cls) -> ContactRows:
+        return cls(Rows.empty(), np.zeros(0), [], np.zeros(0), 0)
+
+    def normal_impulse(self, lam: np.ndarray) -> float:
+        """Total compressive normal impulse [N s] of the row impulses lam."""
+        if lam.size == 0:
+            return 0.0
+        w = self.normal_weight
+        return float(lam[self.n_eq:].sum() if w is None else w @ lam)
+
+
+@runtime_checkable
+class ContactProvider(Protocol):
+    """Every method the time step and the time loop call on a contact definition."""
+
+    def candidate_rows(self, bodies, states, h: float) -> ContactRows:
+        """Rows of the pairs that may close within the coming step of size h [s]."""
+        ...
+
+    def after_step(self, crows: ContactRows, impulses: np.ndarray, h: float) -> None:
+        """The step with rows crows was accepted with these row impulses [N s]."""
+        ...
+
+    def min_gap_ahead(self, bodies, states, horizon_s: float) -> float:
+        """Smallest predicted gap [m] within horizon_s at current velocities (step policy)."""
+        ...
+
+    def penetration(self, bodies, states, deep: bool = False, floors=None):
+        """Deepest penetration per measured direction (contact.penetration.Penetration list) at
+        `states`; None when the provider does not measure it (the driver then falls back on
+        the gaps of its candidate rows). deep: the start-of-run check (larger reach); floors:
+        per direction, only deeper penetrations are sought (shallower ones read 0)."""
+        ...

@@ -1,0 +1,55 @@
+"""Stages point one way (docs/architecture.md): a module imports only from its own stage or the
+stages below it. Checked on the import statements of every module (top level and inside
+functions), so a lazy import cannot hide a cycle either."""
+
+from __future__ import annotations
+
+import ast
+from pathlib import Path
+
+PACKAGE = Path(__file__).resolve().parents[1] / "src" / "flexmvm"
+
+# lowest first; a stage may import itself and anything earlier in this list
+STAGES = ["errors", "materials", "mesh", "fe", "reduction", "bodies", "constraints", "contact",
+          "integrate", "metrics", "theory", "results", "setup_cache", "plots", "scenarios",
+          "studies", "validation", "cli"]
+
+
+def _stage(module: str) -> str | None:
+    parts = module.split(".")
+    if parts[0] != "flexmvm" or len(parts) < 2:
+        return None
+    return parts[1]
+
+
+def _imports(path: Path):
+    tree = ast.parse(path.read_text(encoding="utf-8"))
+    for node in ast.walk(tree):
+        if isinstance(node, ast.ImportFrom) and node.module and node.level == 0:
+            yield node.module, node.lineno
+        elif isinstance(node, ast.Import):
+            for alias in node.names:
+                yield alias.name, node.lineno
+
+
+def test_stages_point_one_way():
+    wrong = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        rel = path.relative_to(PACKAGE)
+        own = rel.parts[0].removesuffix(".py")
+        if own not in STAGES:
+            continue  # the package's __init__: the public surface, above every stage
+        for module, line in _imports(path):
+            other = _stage(module)
+            if other is None or other not in STAGES:
+                continue
+            if STAGES.index(other) > STAGES.index(own):
+                wrong.append(f"{rel}:{line} ({own}) imports {module} ({other})")
+    assert not wrong, "\n".join(wrong)
+
+
+def test_every_stage_is_listed():
+    names = {p.name.removesuffix(".py") for p in PACKAGE.iterdir()
+             if (p.is_dir() and (p / "__init__.py").exists()) or
+             (p.suffix == ".py" and p.name != "__init__.py")}
+    assert names <= set(STAGES), names - set(STAGES)
