@@ -1,9 +1,11 @@
 """Long physics validation (issue 4 acceptance), not in the default run:
 
-    python -m pytest -m validation          (results cached in docs/validation/, reruns reuse them)
-    python -m flexmvm.validation --out docs/validation    (the same cases, and the report numbers)
+    python -m pytest -m validation   (cases stored in docs/validation/, reused when their key
+                                      matches: the package source hash and every run setting)
+    python -m flexmvm.validation      (the same cases; writes docs/validation.md)
 
-Full-FE runs of the seed rods (two 25,000-DOF bodies) take tens of minutes each.
+Full-FE runs of the seed rods (two 25,000-DOF bodies) take several minutes each. The short
+version of the seed case is checked live in the default run (tests/test_validation_live.py).
 """
 
 from __future__ import annotations
@@ -48,6 +50,6 @@ def test_seed_full_fe_and_mvm_against_theory_and_each_other():
 def test_seed_force_converges_with_the_step():
     """Halving the step changes the contact force history little: NCC(h/2 vs h) >= 0.999 and
     peak within 1 % over the first 0.2 ms."""
-    r = validation.step_convergence(OUT, 2e-4, 0.5e-6)["h_half_vs_h"]
+    r = validation.step_convergence(OUT, 2e-4, 0.5e-6, t_end_h=validation.T_SEED)["h_half_vs_h"]
     assert r["ncc_force"] >= 0.999
     assert abs(r["peak_err"]) < 0.01
