@@ -304,7 +304,8 @@ def _cons_table(cols: dict[str, dict]) -> str:
             ("min contact force", lambda s: f"{s['min_contact_force_N']:.3g} N"),
             ("contact intervals", lambda s: ", ".join(f"{1e6 * a:.1f}..{1e6 * b:.1f} us"
                                                        for a, b in s["contact_intervals_s"])),
-            ("DOF (b1, b2)", lambda s: f"{s['dof']['b1']:,}, {s['dof']['b2']:,}"),
+            ("DOF (b1, b2), incl. 6 frame DOF each",
+             lambda s: f"{s['dof']['b1']:,}, {s['dof']['b2']:,}"),
             ("steps, wall time", lambda s: f"{s['n_steps']:,}, {s['wall_time_s']:.0f} s"))
     for label, fmt in rows:
         lines.append(f"| {label} | " + " | ".join(fmt(cols[n]) for n in names) + " |")
@@ -334,7 +335,9 @@ A stored case is reused only when its key matches: a hash of the package source 
 but the report writer) and of the whole resolved scenario (meshes, models, contacts, probes,
 t_end, dt, theta). Full-FE runs of the 1 m rods are two 25,000-DOF bodies (minutes each).
 Seed runs: Moreau-Jean theta = {report['theta']}, h = {_us(DT)}, output every 2 us, default
-meshes (Hex27, first axial element 0.3 mm at the contact end, growth 1.6).
+meshes (Hex27, first axial element 0.3 mm at the contact end, growth 1.6). Wall times are those
+of this report's runs on a machine shared with other jobs: indicative only (docs/performance.md
+has the benchmarks).
 
 ## Seed case (`scenarios/rod_impact.toml`): full FE, MVM, 1D wave-Hertz theory
 
@@ -342,7 +345,7 @@ meshes (Hex27, first axial element 0.3 mm at the contact end, growth 1.6).
 
 {_HEAD}
 {_row(f"full FE vs wave-Hertz theory ({1e3 * T_SEED:g} ms)", fv)}
-{_row(f"MVM (b2 {seed['mvm_model']}, {seed['mvm_dof']['b2']} DOF) vs full FE", seed['mvm_vs_full'])}
+{_row(f"MVM (b2 {seed['mvm_model']}, {seed['mvm_dof']['b2']} DOF incl. 6 of the frame) vs full FE", seed['mvm_vs_full'])}
 {_row("MVM vs theory", seed['mvm_vs_theory'])}
 """
     if "mvm11_vs_full" in seed:
