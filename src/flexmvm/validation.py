@@ -1,54 +1,168 @@
-"""Physics validation report: `python -m flexmvm.validation --out docs/validation`.
+"""Physics validation report: `python -m flexmvm.validation` writes docs/validation.md and
+docs/validation/ from runs of the current code.
 
-Runs (long: the full-FE seed runs are two 25,000-DOF rods) and writes docs/validation.md-style
-numbers and figures:
+Cases (the full-FE seed runs are two 25,000-DOF rods, several minutes each):
 1. flat variant, full FE, against St Venant: plateau mean force, free-end velocity jump time;
-2. seed case, full FE, against the 1D wave-Hertz solution: NCC of force and of the free-end
-   velocity, peak force and contact-end errors;
-3. seed case, MVM (b2 1-1 + 37 modes) against full FE: NCC, peak/impulse/duration errors;
+2. seed case, full FE, against the 1D wave-Hertz solution: NCC of force and probes, peak,
+   impulse and contact-duration errors;
+3. seed case, the scenario's MVM (b2 1-3 + 37 modes) and the seed's 1-1 + 37 against full FE;
 4. time-step convergence of the seed full-FE force (h and h/2);
-5. conservation: momentum and energy errors, penetration, no tensile force.
-Each finished run is stored (DIR/<case>/history.csv + summary.json) and reused on a rerun.
+5. the short seed case (0.1 m rods, scenarios/rod_impact_short.toml) that the default test run
+   checks live: full FE and MVM against theory, and its mesh and step convergence;
+6. conservation of every run: momentum and energy errors, penetration, no tensile force.
+
+A finished case is stored in DIR/<case>/ (history.csv, summary.json, key.json) and reused only
+if its key matches: a SHA-256 of the code version (a hash of every source file of the package
+but this report writer, flexmvm.setup_cache.code_version) and of the whole resolved scenario
+(every body, mesh parameter, model, contact, joint, probe and time setting, t_end, dt, theta;
+mesh files by content hash). ``--recompute`` ignores stored cases. The report states the git
+commit it was made at ("-dirty" if the package source or the scenarios had uncommitted changes).
 """
 
 from __future__ import annotations
 
 import argparse
+import datetime as _dt
+import hashlib
 import json
+import subprocess
+from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
 
+import flexmvm
+from flexmvm.errors import InputError
 from flexmvm.materials import ALUMINIUM, BRASS
-from flexmvm.plots.figures import plot_run
-from flexmvm.results.atomic import write_json_atomic, write_text_atomic
+from flexmvm.results.atomic import canonical_json, write_json_atomic, write_text_atomic
 from flexmvm.results.history import read_history, write_history
 from flexmvm.scenarios.compare import compare_runs, run_curves
-from flexmvm.scenarios.run import run_scenario
-from flexmvm.scenarios.schema import load_scenario
+from flexmvm.scenarios.schema import ModelConfig, Scenario, load_scenario, scenario_from_dict
+from flexmvm.setup_cache import code_version
 from flexmvm.theory.scenario import theory_histories
 from flexmvm.theory.wave import Rod1D, st_venant_force
 
 ROOT = Path(__file__).resolve().parents[2]
+SCENARIOS = ROOT / "scenarios"
+#: What the runs depend on: a change here (uncommitted) marks the commit stamp "-dirty".
+RUN_INPUTS = ("src", "scenarios", "pyproject.toml")
+#: Format of a stored case; bump when what is stored changes.
+CASE_FORMAT = 1
+
+#: The seed runs' settings (docs/validation.md): contact step, seed window, flat window.
+DT = 0.5e-6
+T_SEED = 1.0e-3
+T_FLAT = 0.5e-3
+T_STEP = 2.0e-4
+#: The short case: its own file's t_end covers the contact (0..185 us) and the release.
+SHORT_FINE_MESH = {"first_element_m": 0.15e-3, "core_elements": 4}
 
 
-def _case(out: Path, name: str, sc, model: str | None):
-    """Run (or load) one case; returns (t, force, probes, summary)."""
+def run_code_version() -> str:
+    """Hash (16 hex) of every package source file except this report writer: what a run's
+    numbers depend on."""
+    root = Path(flexmvm.__file__).parent
+    names = tuple(sorted(p.name for p in root.iterdir()
+                         if p.name != "validation.py" and p.name != "__pycache__"
+                         and (p.is_dir() or p.suffix == ".py")))
+    return code_version(names)
+
+
+def git_commit(root: Path = ROOT) -> str:
+    """Short commit of ``root`` plus "-dirty" if tracked or untracked files under RUN_INPUTS
+    (the package source, the scenarios) differ from it; "unknown" outside a git checkout."""
+    try:
+        head = subprocess.run(["git", "-C", str(root), "rev-parse", "--short=12", "HEAD"],
+                              capture_output=True, text=True, check=True).stdout.strip()
+        status = subprocess.run(["git", "-C", str(root), "status", "--porcelain", "--",
+                                 *RUN_INPUTS], capture_output=True, text=True, check=True).stdout
+    except (OSError, subprocess.CalledProcessError):
+        return "unknown"
+    return head + ("-dirty" if status.strip() else "")
+
+
+def case_inputs(sc: Scenario) -> dict:
+    """Everything a run depends on: the code version, the resolved scenario, mesh file hashes."""
+    data = sc.model_dump(mode="json")
+    files = {}
+    for b in sc.bodies:
+        if b.mesh_file is not None:
+            files[b.name] = hashlib.sha256(Path(b.mesh_file).read_bytes()).hexdigest()
+    return {"format": CASE_FORMAT, "code": run_code_version(), "scenario": data,
+            "mesh_files": files}
+
+
+def case_key(sc: Scenario) -> str:
+    return hashlib.sha256(canonical_json(case_inputs(sc)).encode()).hexdigest()[:32]
+
+
+@dataclass
+class Case:
+    t: np.ndarray
+    force: np.ndarray
+    probes: dict
+    summary: dict
+    meta: dict
+
+    @property
+    def curves(self):
+        return self.t, self.force, self.probes
+
+
+def run_case(out: Path, name: str, sc: Scenario, recompute: bool = False,
+             progress: bool = True) -> Case:
+    """Run scenario ``sc`` as case ``name`` under ``out``, or load it if a stored case has the
+    same key (code version + every setting of the run)."""
     d = out / name
-    if (d / "summary.json").exists() and (d / "history.csv").exists():
-        t, f, p = read_history(d / "history.csv")
-        return t, f, p, json.loads((d / "summary.json").read_text())
-    r = run_scenario(sc.with_overrides(model=model) if model else sc, progress=True)
-    d.mkdir(parents=True, exist_ok=True)
+    key = case_key(sc)
+    if not recompute:
+        try:
+            meta = json.loads((d / "key.json").read_text())
+            if meta.get("key") == key:
+                t, f, p = read_history(d / "history.csv")
+                return Case(t, f, p, json.loads((d / "summary.json").read_text()), meta)
+        except (OSError, ValueError, InputError):
+            pass  # absent, stale or unreadable: recompute
+    from flexmvm.scenarios.run import run_scenario
+    r = run_scenario(sc, progress=progress)
     t, f, p = run_curves(r.result)
+    meta = {"key": key, "code_version": run_code_version(), "commit": git_commit(),
+            "computed_utc": _now(), "inputs": case_inputs(sc)}
+    d.mkdir(parents=True, exist_ok=True)
+    (d / "key.json").unlink(missing_ok=True)  # a half-rewritten case never matches a key
     write_history(d / "history.csv", t, f, p)
     write_json_atomic(d / "summary.json", r.summary)
-    return t, f, p, r.summary
+    write_json_atomic(d / "key.json", meta)
+    return Case(t, f, p, r.summary, meta)
 
 
-def flat_vs_st_venant(out: Path, t_end: float, dt: float | None) -> dict:
-    sc = load_scenario(ROOT / "scenarios" / "rod_impact_flat.toml").with_overrides(t_end_s=t_end, dt_s=dt)
-    t, f, p, s = _case(out, "flat_full", sc, "full")
+def _now() -> str:
+    return _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
+
+
+def _cons(s: dict) -> dict:
+    return {k: s.get(k) for k in ("momentum_rel_error", "momentum_residual_rel",
+                                  "energy_rel_error", "max_penetration_m", "max_penetration_at",
+                                  "max_penetration_by_direction_m", "lcp_residual_max",
+                                  "steps_not_converged", "newton_residual_max",
+                                  "min_contact_force_N", "max_contact_force_N", "wall_time_s",
+                                  "n_steps", "dof", "contact_intervals_s")}
+
+
+def _with_rod(sc: Scenario, **rod) -> Scenario:
+    """A copy with the given [bodies.rod] keys set on every body."""
+    data = sc.model_dump(mode="json")
+    for b in data["bodies"]:
+        b["rod"].update(rod)
+    return scenario_from_dict(data, f"{sc._source} (rod {rod})")
+
+
+def flat_vs_st_venant(out: Path, t_end: float = T_FLAT, dt: float | None = DT,
+                      recompute: bool = False) -> dict:
+    sc = load_scenario(SCENARIOS / "rod_impact_flat.toml").with_overrides(
+        model="full", t_end_s=t_end, dt_s=dt)
+    c = run_case(out, "flat_full", sc, recompute)
+    t, f, p = c.curves
     b1, b2 = sc.body("b1"), sc.body("b2")
     r1 = Rod1D.from_material(BRASS, b1.rod.length_m, b1.rod.radius_m)
     r2 = Rod1D.from_material(ALUMINIUM, b2.rod.length_m, b2.rod.radius_m)
@@ -60,49 +174,318 @@ def flat_vs_st_venant(out: Path, t_end: float, dt: float | None) -> dict:
     jump = float(t[np.argmax(v > 0.5 * vp)])
     return {"F0_N": F0, "plateau_mean_N": float(f[mid].mean()),
             "plateau_err": float(f[mid].mean() / F0 - 1), "free_end_jump_s": jump,
-            "L_over_c_s": r2.length_m / r2.c, "jump_err": jump / (r2.length_m / r2.c) - 1, **_cons(s)}
+            "L_over_c_s": r2.length_m / r2.c, "jump_err": jump / (r2.length_m / r2.c) - 1,
+            **_cons(c.summary), "case": _case_meta(c)}
 
 
-def _cons(s: dict) -> dict:
-    return {k: s.get(k) for k in ("momentum_rel_error", "energy_rel_error", "max_penetration_m",
-                                  "max_penetration_at", "max_penetration_by_direction_m",
-                                  "min_contact_force_N", "wall_time_s", "n_steps")}
+def _case_meta(c: Case) -> dict:
+    return {k: c.meta.get(k) for k in ("commit", "computed_utc", "code_version", "key")}
 
 
-def seed_vs_theory(out: Path, t_end: float, dt: float | None) -> dict:
-    sc = load_scenario(ROOT / "scenarios" / "rod_impact.toml").with_overrides(t_end_s=t_end, dt_s=dt)
+def seed_vs_theory(out: Path, t_end: float = T_SEED, dt: float | None = DT,
+                   recompute: bool = False, with_1_1: bool = False, plot: bool = False) -> dict:
+    sc = load_scenario(SCENARIOS / "rod_impact.toml").with_overrides(t_end_s=t_end, dt_s=dt)
     tt, ft, pt, _ = theory_histories(sc)
-    full = _case(out, "seed_full", sc, "full")
-    mvm = _case(out, "seed_mvm", sc, None)
-    plot_run(out / "seed_fig5.png", {"FE": full[:3], "MVM": mvm[:3]}, theory=(tt, ft, pt),
-             title="seed case: full FE, MVM (b2 1-3 + 37 modes, 112 DOF), 1D wave-Hertz")
-    return {"full_vs_theory": compare_runs(tt, ft, pt, *full[:3]),
-            "mvm_vs_full": compare_runs(*full[:3], *mvm[:3]),
-            "mvm_vs_theory": compare_runs(tt, ft, pt, *mvm[:3]),
-            "full": _cons(full[3]), "mvm": _cons(mvm[3]), "mvm_dof": mvm[3]["dof"]}
+    full = run_case(out, "seed_full", sc.with_overrides(model="full"), recompute)
+    mvm = run_case(out, "seed_mvm", sc, recompute)
+    b2 = sc.body("b2").model
+    rep = {"full_vs_theory": compare_runs(tt, ft, pt, *full.curves),
+           "mvm_vs_full": compare_runs(*full.curves, *mvm.curves),
+           "mvm_vs_theory": compare_runs(tt, ft, pt, *mvm.curves),
+           "full": _cons(full.summary), "mvm": _cons(mvm.summary),
+           "mvm_dof": mvm.summary["dof"], "mvm_model": f"{b2.selection} + {b2.modes} modes",
+           "cases": {"full": _case_meta(full), "mvm": _case_meta(mvm)}}
+    runs = {"FE": full.curves, f"MVM {b2.selection} + {b2.modes}": mvm.curves}
+    if with_1_1:
+        m11 = ModelConfig(kind="mvm", selection="1-1", modes=b2.modes, reference=b2.reference)
+        s11 = run_case(out, "seed_mvm_1-1", sc.with_overrides(body_models={"b2": m11}), recompute)
+        rep["mvm11_vs_full"] = compare_runs(*full.curves, *s11.curves)
+        rep["mvm11"] = _cons(s11.summary)
+        rep["cases"]["mvm11"] = _case_meta(s11)
+        runs[f"MVM 1-1 + {b2.modes}"] = s11.curves
+    if plot:  # the report's figure; the pytest checks leave docs/validation/ as it is
+        _plot(out / "seed_fig5.png", runs, (tt, ft, pt),
+              f"seed case: full FE, MVM (b2 {b2.selection} + {b2.modes} modes, "
+              f"{mvm.summary['dof']['b2']} DOF), 1D wave-Hertz")
+    return rep
 
 
-def step_convergence(out: Path, t_end: float, dt: float) -> dict:
-    sc = load_scenario(ROOT / "scenarios" / "rod_impact.toml").with_overrides(t_end_s=t_end)
-    a = _case(out, f"seed_full_dt{dt:g}", sc.with_overrides(dt_s=dt), "full")
-    b = _case(out, f"seed_full_dt{dt / 2:g}", sc.with_overrides(dt_s=dt / 2), "full")
-    return {"h": dt, "h_half_vs_h": compare_runs(*b[:3], *a[:3])}
+def _plot(path: Path, runs: dict, theory, title: str) -> None:
+    from flexmvm.plots.figures import plot_run
+    plot_run(path, runs, theory=theory, title=title)
+
+
+def _truncate(c: Case, t_end: float) -> tuple:
+    keep = c.t <= t_end * (1 + 1e-9)
+    return c.t[keep], c.force[keep], {k: v[keep] for k, v in c.probes.items()}
+
+
+def step_convergence(out: Path, t_end: float = T_STEP, dt: float = DT,
+                     t_end_h: float | None = None, recompute: bool = False) -> dict:
+    """Full-FE seed force at h = dt and h/2 over [0, t_end]. The h run may be a longer one
+    (``t_end_h``, e.g. the seed_full case: the same steps up to t_end), truncated to t_end."""
+    sc = load_scenario(SCENARIOS / "rod_impact.toml").with_overrides(model="full")
+    t_h = t_end if t_end_h is None else t_end_h
+    a = run_case(out, "seed_full" if t_h == T_SEED and dt == DT else f"seed_full_dt{dt:g}",
+                 sc.with_overrides(t_end_s=t_h, dt_s=dt), recompute)
+    b = run_case(out, f"seed_full_dt{dt / 2:g}", sc.with_overrides(t_end_s=t_end, dt_s=dt / 2),
+                 recompute)
+    return {"h": dt, "t_end": t_end, "h_half_vs_h": compare_runs(*b.curves, *_truncate(a, t_end)),
+            "cases": {"h": _case_meta(a), "h_half": _case_meta(b)}}
+
+
+def short_scenario() -> Scenario:
+    """The short seed case (0.1 m rods): scenarios/rod_impact_short.toml."""
+    return load_scenario(SCENARIOS / "rod_impact_short.toml")
+
+
+def short_case(out: Path, recompute: bool = False, plot: bool = False) -> dict:
+    """Short seed case: full FE and the scenario's MVM against theory and each other; the full
+    FE with the contact zone refined (SHORT_FINE_MESH) and with h/2 against full FE at h."""
+    sc = short_scenario()
+    tt, ft, pt, _ = theory_histories(sc)
+    full = run_case(out, "short_full", sc.with_overrides(model="full"), recompute)
+    mvm = run_case(out, "short_mvm", sc, recompute)
+    fine = run_case(out, "short_full_fine", _with_rod(sc.with_overrides(model="full"),
+                                                      **SHORT_FINE_MESH), recompute)
+    half = run_case(out, "short_full_dt_half",
+                    sc.with_overrides(model="full", dt_s=sc.time.dt_s / 2), recompute)
+    b2 = sc.body("b2").model
+    if plot:
+        _plot(out / "short_fig.png", {"FE": full.curves, "FE fine": fine.curves,
+                                      f"MVM {b2.selection} + {b2.modes}": mvm.curves},
+              (tt, ft, pt), "short case (0.1 m rods): full FE, refined FE, MVM, 1D wave-Hertz")
+    return {"full_vs_theory": compare_runs(tt, ft, pt, *full.curves),
+            "fine_vs_theory": compare_runs(tt, ft, pt, *fine.curves),
+            "mvm_vs_theory": compare_runs(tt, ft, pt, *mvm.curves),
+            "mvm_vs_full": compare_runs(*full.curves, *mvm.curves),
+            "full_vs_fine": compare_runs(*fine.curves, *full.curves),
+            "full_vs_dt_half": compare_runs(*half.curves, *full.curves),
+            "theory_peak_N": float(ft.max()), "theory_end_s": float(tt[ft > 0].max()),
+            "full": _cons(full.summary), "mvm": _cons(mvm.summary), "fine": _cons(fine.summary),
+            "dt_half": _cons(half.summary), "mvm_model": f"{b2.selection} + {b2.modes} modes",
+            "fine_mesh": SHORT_FINE_MESH, "dt": sc.time.dt_s, "t_end": sc.time.t_end_s,
+            "cases": {k: _case_meta(c) for k, c in
+                      (("full", full), ("mvm", mvm), ("fine", fine), ("dt_half", half))}}
+
+
+# ---------------------------------------------------------------------------------------------
+# The report: docs/validation.md is written from these numbers, never edited by hand.
+
+def _p(x: float | None, digits: int = 2) -> str:
+    return "n/a" if x is None else f"{100 * x:+.{digits}f} %"
+
+
+def _e(x: float | None) -> str:
+    return "n/a" if x is None else f"{x:.1e}"
+
+
+def _n(x: float | None, digits: int = 4) -> str:
+    if x is None:
+        return "n/a"
+    # show NCCs close to 1 with enough nines
+    if 0.99 <= x < 1.0:
+        nines = int(np.floor(-np.log10(1.0 - x)))
+        return f"{x:.{max(digits, nines + 2)}f}"
+    return f"{x:.{digits}f}"
+
+
+def _row(label: str, c: dict) -> str:
+    return (f"| {label} | {_n(c.get('ncc_force'))} | {_p(c.get('peak_err'))} | "
+            f"{_p(c.get('impulse_err'))} | {_p(c.get('duration_err'))} | "
+            f"{_n(c.get('ncc_b2_free_end'))} | {_n(c.get('ncc_b2_impact_end'), 3)} |")
+
+
+_HEAD = ("| comparison | force NCC | peak | impulse | contact duration | b2 free-end NCC "
+         "| b2 impact-end NCC |\n|---|---|---|---|---|---|---|")
+
+
+def _cons_table(cols: dict[str, dict]) -> str:
+    names = list(cols)
+    lines = ["| conservation | " + " | ".join(names) + " |", "|---|" + "---|" * len(names)]
+    rows = (("linear momentum, relative", lambda s: _e(s["momentum_rel_error"])),
+            ("energy (end vs start)", lambda s: _p(s["energy_rel_error"], 3)),
+            ("momentum left unbalanced by the solves (residuals)",
+             lambda s: _e(s.get("momentum_residual_rel"))),
+            ("max penetration (both surfaces, every step)",
+             lambda s: f"{s['max_penetration_m']:.1e} m"),
+            ("... per direction", lambda s: ", ".join(
+                f"{k}: {v:.1e} m" for k, v in (s.get("max_penetration_by_direction_m") or {}).items())),
+            ("LCP complementarity residual, max", lambda s: _e(s.get("lcp_residual_max"))),
+            ("Newton steps not converged (worst residual)",
+             lambda s: f"{s.get('steps_not_converged')} ({_e(s.get('newton_residual_max'))})"),
+            ("contact intervals", lambda s: ", ".join(f"{1e6 * a:.1f}..{1e6 * b:.1f} us"
+                                                       for a, b in s["contact_intervals_s"])),
+            ("DOF (b1, b2), incl. 6 frame DOF each",
+             lambda s: f"{s['dof']['b1']:,}, {s['dof']['b2']:,}"),
+            ("steps, wall time", lambda s: f"{s['n_steps']:,}, {s['wall_time_s']:.0f} s"))
+    for label, fmt in rows:
+        lines.append(f"| {label} | " + " | ".join(fmt(cols[n]) for n in names) + " |")
+    return "\n".join(lines)
+
+
+def write_report_md(path: Path, report: dict) -> None:
+    """docs/validation.md from the report dict (validation.json)."""
+    meta, seed, flat = report["meta"], report["seed"], report["flat_vs_st_venant"]
+    step, short = report["step_convergence"], report["short"]
+    fv = seed["full_vs_theory"]
+    sf = short["full"]
+    txt = f"""# Validation
+
+**Generated** by `python -m flexmvm.validation` at commit `{meta['commit']}` (package source
+hash `{meta['code_version']}`), {meta['date']}, on {meta['machine']}. Do not edit by hand: rerun
+the command. Numbers: `docs/validation/validation.json`; each case's history, summary and key in
+`docs/validation/<case>/`.
+
+```bash
+python -m flexmvm.validation            # runs what is not stored for this code, writes this page
+python -m flexmvm.validation --recompute   # ignores every stored case
+python -m pytest -m validation          # the acceptance checks on the same (stored) cases
+```
+
+A stored case is reused only when its key matches: a hash of the package source (every module
+but the report writer) and of the whole resolved scenario (meshes, models, contacts, probes,
+t_end, dt, theta). Full-FE runs of the 1 m rods are two 25,000-DOF bodies (minutes each).
+Seed runs: Moreau-Jean theta = {report['theta']}, h = {_us(DT)}, output every 2 us, default
+meshes (Hex27, first axial element 0.3 mm at the contact end, growth 1.6). Wall times are those
+of this report's runs on a machine shared with other jobs: indicative only (docs/performance.md
+has the benchmarks).
+
+## Seed case (`scenarios/rod_impact.toml`): full FE, MVM, 1D wave-Hertz theory
+
+![seed fig. 5](validation/seed_fig5.png)
+
+{_HEAD}
+{_row(f"full FE vs wave-Hertz theory ({1e3 * T_SEED:g} ms)", fv)}
+{_row(f"MVM (b2 {seed['mvm_model']}, {seed['mvm_dof']['b2']} DOF incl. 6 of the frame) vs full FE", seed['mvm_vs_full'])}
+{_row("MVM vs theory", seed['mvm_vs_theory'])}
+"""
+    if "mvm11_vs_full" in seed:
+        txt += _row(f"MVM, the seed's 1-1 + 37 modes ({seed['mvm11']['dof']['b2']} DOF), "
+                    "vs full FE", seed["mvm11_vs_full"]) + "\n"
+    ok_th = (fv["ncc_force"] >= 0.98 and fv["ncc_b2_free_end"] >= 0.99
+             and abs(fv["peak_err"]) < 0.03 and abs(fv["duration_err"]) < 0.05)
+    ok_mvm = seed["mvm_vs_full"]["ncc_force"] >= 0.99 and seed["mvm_dof"]["b2"] <= 156
+    txt += f"""
+Acceptance (issue 4): full FE vs theory NCC >= 0.98 (force) and >= 0.99 (free end), peak within
+3 %, end of contact within 5 %: **{'met' if ok_th else 'NOT met'}**. MVM vs full FE NCC >= 0.99
+with <= 150 DOF (+6 frame) in b2: **{'met' if ok_mvm else 'NOT met'}**."""
+    if "mvm11_vs_full" in seed:
+        m11 = seed["mvm11_vs_full"]["ncc_force"]
+        txt += f""" The seed's 1-1 + 37 model: force
+NCC {_n(m11)} against this full-FE mesh, """
+        txt += ("which meets 0.99." if m11 >= 0.99 else
+                "short of 0.99: one retained node cannot carry the Hertz pressure over the "
+                "resolved contact patch (the seed's NCC 0.99 for 1-1 was against its own "
+                "coarser full-FE mesh).")
+    txt += """ The impact-end velocity is a single node under the contact patch;
+the 1D theory has no contact patch, so its NCC is lower and not a criterion.
+
+"""
+    txt += _cons_table({"full FE": seed["full"], f"MVM {seed['mvm_model']}": seed["mvm"],
+                        **({"MVM 1-1 + 37": seed["mvm11"]} if "mvm11" in seed else {})})
+    txt += f"""
+
+## Flat variant (`scenarios/rod_impact_flat.toml`), full FE, against St Venant
+
+| quantity | full FE | St Venant | error |
+|---|---|---|---|
+| mean contact force over the first plateau (0.2..0.8 of 2L/c2) | {flat['plateau_mean_N']:.2f} N | v0 Z1 Z2/(Z1+Z2) = {flat['F0_N']:.2f} N | {_p(flat['plateau_err'], 3)} |
+| free end of b2 reaches half of 2 v_p | {1e6 * flat['free_end_jump_s']:.1f} us | L/c2 = {1e6 * flat['L_over_c_s']:.1f} us | {_p(flat['jump_err'])} |
+| linear momentum, relative | {_e(flat['momentum_rel_error'])} | | |
+| energy (end vs start) | {_p(flat['energy_rel_error'], 3)} | | |
+| max penetration | {flat['max_penetration_m']:.1e} m | | |
+
+Acceptance: plateau within 3 %, jump within 2 %: **{'met' if abs(flat['plateau_err']) < 0.03 and abs(flat['jump_err']) < 0.02 else 'NOT met'}**.
+
+## Time step (seed case, full FE)
+
+Halving the step (h = {_us(step['h'])} vs {_us(step['h'] / 2)}, first {1e3 * step['t_end']:g} ms): force NCC
+{_n(step['h_half_vs_h']['ncc_force'])}, peak {_p(step['h_half_vs_h']['peak_err'], 4)}, impulse
+{_p(step['h_half_vs_h']['impulse_err'], 4)}, contact duration {_p(step['h_half_vs_h'].get('duration_err'), 4)};
+impact-end velocity NCC {_n(step['h_half_vs_h'].get('ncc_b2_impact_end'), 3)} (a single node under the
+contact patch). Acceptance (NCC >= 0.999, peak within 1 %): **{'met' if step['h_half_vs_h']['ncc_force'] >= 0.999 and abs(step['h_half_vs_h']['peak_err']) < 0.01 else 'NOT met'}**.
+
+## Short seed case (`scenarios/rod_impact_short.toml`, 0.1 m rods), checked live in the default test run
+
+The seed case with both rods 0.1 m long (same materials, radius, speed, contact-zone mesh
+grading and models): `tests/test_validation_live.py` runs it in the default test run. 1D
+wave-Hertz: peak {short['theory_peak_N']:.1f} N, contact over 0..{1e6 * short['theory_end_s']:.1f} us. Fine mesh:
+the contact zone refined ({', '.join(f'{k} = {v:g}' for k, v in short['fine_mesh'].items())};
+DOF {short['fine']['dof']['b1']:,} + {short['fine']['dof']['b2']:,}).
+
+![short case](validation/short_fig.png)
+
+{_HEAD}
+{_row("full FE vs theory", short['full_vs_theory'])}
+{_row("full FE, fine mesh, vs theory", short['fine_vs_theory'])}
+{_row("full FE vs fine mesh", short['full_vs_fine'])}
+{_row(f"full FE at h vs h/2 (h = {_us(short['dt'])})", short['full_vs_dt_half'])}
+{_row(f"MVM (b2 {short['mvm_model']}) vs full FE", short['mvm_vs_full'])}
+{_row("MVM vs theory", short['mvm_vs_theory'])}
+
+"""
+    txt += _cons_table({"full FE": sf, "fine mesh": short["fine"], "h/2": short["dt_half"],
+                        f"MVM {short['mvm_model']}": short["mvm"]})
+    txt += """
+
+The other live checks of the default run (an `mvm-seed`, a `modal` and a `rigid` body in
+contact; the pendulum with gravity and strings, started just before impact) state their
+measured values and tolerances in `tests/test_validation_live.py`; the dynamics checks
+(pendulum period, free spinning body, bifilar pendulum, step order) in `tests/test_dynamics.py`.
+
+## Cases
+
+| case | computed at commit | date | code hash |
+|---|---|---|---|
+"""
+    for name, m in sorted(report["cases"].items()):
+        txt += f"| {name} | `{m['commit']}` | {m['computed_utc']} | `{m['code_version']}` |\n"
+    write_text_atomic(path, txt)
+
+
+def _us(x: float) -> str:
+    return f"{1e6 * x:g} us"
+
+
+def _collect_cases(report: dict) -> dict:
+    out = {"flat_full": report["flat_vs_st_venant"]["case"]}
+    s = report["seed"]["cases"]
+    out.update({"seed_full": s["full"], "seed_mvm": s["mvm"]})
+    if "mvm11" in s:
+        out["seed_mvm_1-1"] = s["mvm11"]
+    out["seed_full_dt_half"] = report["step_convergence"]["cases"]["h_half"]
+    out.update({f"short_{k}": v for k, v in report["short"]["cases"].items()})
+    return out
 
 
 def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description="Run the physics validation and write its report.")
-    ap.add_argument("--out", type=Path, default=ROOT / "docs" / "validation")
-    ap.add_argument("--t-end", type=float, default=1.0e-3)
-    ap.add_argument("--dt", type=float, default=0.5e-6)
+    ap = argparse.ArgumentParser(description="Run the physics validation and write its report "
+                                             "(docs/validation.md and docs/validation/).")
+    ap.add_argument("--out", type=Path, default=ROOT / "docs" / "validation",
+                    help="case folder and figures (default docs/validation)")
+    ap.add_argument("--md", type=Path, default=ROOT / "docs" / "validation.md",
+                    help="report page (default docs/validation.md)")
+    ap.add_argument("--recompute", action="store_true", help="ignore stored cases")
     args = ap.parse_args(argv)
+    commit = git_commit()
     args.out.mkdir(parents=True, exist_ok=True)
-    report = {"flat_vs_st_venant": flat_vs_st_venant(args.out, 0.5e-3, args.dt),
-              "seed": seed_vs_theory(args.out, args.t_end, args.dt),
-              "step_convergence": step_convergence(args.out, 2e-4, args.dt)}
+    rc = args.recompute
+    report = {"flat_vs_st_venant": flat_vs_st_venant(args.out, recompute=rc),
+              "seed": seed_vs_theory(args.out, recompute=rc, with_1_1=True, plot=True),
+              "step_convergence": step_convergence(args.out, t_end_h=T_SEED, recompute=rc),
+              "short": short_case(args.out, recompute=rc, plot=True)}
+    import os
+    import platform
+    report["theta"] = load_scenario(SCENARIOS / "rod_impact.toml").time.theta
+    report["cases"] = _collect_cases(report)
+    report["meta"] = {"commit": commit, "code_version": run_code_version(), "date": _now(),
+                      "machine": f"{platform.machine()}, {os.cpu_count()} cores"}
     write_json_atomic(args.out / "validation.json", report)
-    write_text_atomic(args.out / "validation_numbers.md",
-                      "```json\n" + json.dumps(report, indent=2, sort_keys=True) + "\n```\n")
-    print(json.dumps(report, indent=2, sort_keys=True))
+    stale = args.out / "validation_numbers.md"
+    stale.unlink(missing_ok=True)  # superseded by the generated docs/validation.md
+    write_report_md(args.md, report)
+    print(f"wrote {args.md} and {args.out}/validation.json (commit {commit})")
 
 
 if __name__ == "__main__":

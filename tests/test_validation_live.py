@@ -1,0 +1,373 @@
+"""The headline physics, live in the default test run (issue 11).
+
+1. The seed case on short rods (scenarios/rod_impact_short.toml: both rods 0.1 m, the seed's
+   materials, radius, speed, contact-zone mesh grading and models; full FE 9,801 + 9,075 DOF)
+   against the 1D wave-Hertz solution (`flexmvm theory`), and the scenario's MVM model (b2 1-3 +
+   37 modes) against its full FE.
+2. An `mvm-seed` (seed eq. 4) body, a `modal` body and a `rigid` body in contact, on the same
+   short rods (striker: the scenario's b1 mvm model, 3-5 + 40 modes, to keep them cheap).
+3. Contact with gravity and joints together: scenarios/pendulum_release.toml started 20 us
+   before impact.
+
+Tolerances come from the short case's measured convergence (docs/validation.md, "Short seed
+case", made by `python -m flexmvm.validation`): halving the step changes the force by NCC
+1 - 2e-7 and the peak by 0.015 %; refining the contact zone (first element 0.15 mm, 4 core
+elements: 23,751 + 22,113 DOF) moves the peak by 1.0 % and the contact end by 3 %, and brings
+the force NCC against theory from 0.9972 to 0.9994 (peak +3.7 % -> +2.8 %). So at this mesh
+the contact-patch discretisation is the dominant numerical error, and the remaining ~3 %
+peak excess over the 1D theory is its own limit (1D rods + Hertz half-space compliance). The
+1D striker is a cylinder of length L: 3.5 % heavier than the FE striker, whose hemispherical
+end has volume pi r^2 (L - r/3); that alone makes the theory's momentum transfer (impulse)
+1 % larger (-0.14 % with the mass-equivalent length L - r/3, measured).
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from flexmvm import validation
+from flexmvm.integrate.driver import Probe, simulate
+from flexmvm.integrate.midpoint import PENETRATION_RECOVERY
+from flexmvm.materials import ALUMINIUM, BRASS, Material
+from flexmvm.scenarios.build import build_scenario
+from flexmvm.scenarios.compare import compare_runs, run_curves
+from flexmvm.scenarios.run import run_scenario, summarize
+from flexmvm.scenarios.schema import ModelConfig, load_scenario, scenario_from_dict
+from flexmvm.theory.scenario import theory_histories
+from flexmvm.theory.wave import ContactLaw, Rod1D, two_rod_impact
+
+ROOT = Path(__file__).resolve().parents[1]
+V0, L, R = 0.21, 0.1, 0.01
+#: The striker of the body-type runs: rod_impact_short.toml's b1 mvm model (3-5 + 40 modes).
+STRIKER = ModelConfig(kind="mvm", selection="3-5", modes=40)
+TARGET_CB = ModelConfig(kind="mvm", selection="1-3", modes=37)
+#: Penetration bound of the short case: 2 % of the 1D solution's peak Hertz approach
+#: (F/k)^(2/3) = 12.3 um (k = 4/3 E* sqrt(R)), as for the seed case.
+PEN_MAX = 0.02 * 12.3e-6
+
+
+@functools.cache
+def _short(which: str):
+    sc = validation.short_scenario()
+    models = {
+        "full": None,
+        "mvm": None,
+        "mvm-seed": {"b1": STRIKER, "b2": ModelConfig(kind="mvm-seed", selection="1-3", modes=37)},
+        "modal": {"b1": STRIKER, "b2": ModelConfig(kind="modal", modes=20)},
+        "rigid-striker": {"b1": ModelConfig(kind="rigid"), "b2": TARGET_CB},
+        "rigid-both": {"b1": ModelConfig(kind="rigid"), "b2": ModelConfig(kind="rigid")},
+    }[which]
+    if which == "full":
+        sc = sc.with_overrides(model="full")
+    elif models is not None:
+        sc = sc.with_overrides(body_models=models)
+    return run_scenario(sc)
+
+
+@functools.cache
+def _theory():
+    return theory_histories(validation.short_scenario())
+
+
+def _masses(run) -> tuple[float, float]:
+    return tuple(float(b.inv.mass) for b in run.built.system.bodies)
+
+
+def _impulse(run) -> float:
+    """Exact contact impulse [N s]: the output force is the impulse over the interval ending at
+    each output time, divided by its length."""
+    res = run.result
+    return float(np.sum(res.contact_force[1:] * np.diff(res.t)))
+
+
+def _restitution(run) -> float:
+    """Effective coefficient of restitution of the two free bodies: the impulse relative to the
+    perfectly plastic one, e = J / (m1 m2 v0 / (m1 + m2)) - 1 (0 plastic, 1 elastic)."""
+    m1, m2 = _masses(run)
+    return _impulse(run) / (m1 * m2 * V0 / (m1 + m2)) - 1.0
+
+
+def _check_sane(run, e_min: float = 0.99) -> None:
+    """What every free two-body impact must satisfy, whatever the body models:
+    - total linear momentum conserved to 1e-9 relative (the translational equations are linear
+      and the impulses act in equal and opposite pairs; the solver converges the frame's
+      translational rows to 1e-13, TRANSLATION_RTOL);
+    - contact force never tensile, positive during the impact, released before t_end;
+    - energy: the end value at most the initial (theta = 0.55 and the e = 0 impact law only
+      remove energy; measured -0.04 % to -0.08 %); during the contact it may rise by at most
+      2e-3 of the initial: the penetration recovery (beta = 0.2 of a penetration per step) does
+      positive work, ~ theta beta F g per step, more for stiffer contacts (measured transient
+      rise: full FE 1.4e-5, mvm-seed 2.6e-4, rigid striker 4.4e-4, modal 8.3e-4);
+    - the impulse lies between the perfectly plastic and the perfectly elastic one, and near
+      the elastic one: these Hertz contacts last 5-6 striker transits, so the rods come apart
+      nearly free of vibration. 1D wave-Hertz: e = 0.99978; the 3D runs measured 0.9973
+      (mvm-seed) to 0.9992 (rigid striker): e >= 0.99 with room for the unresolved modes
+      theta damps; e <= 1 + 1e-6 (an impulse above the elastic one would create energy);
+    - rebound direction: after the impact both move in +x and the target faster than the
+      striker (m1 = 0.255 kg > m2 = 0.085 kg: the striker follows, slower)."""
+    s, res = run.summary, run.result
+    assert s["momentum_rel_error"] < 1e-9
+    assert s["max_contact_force_N"] > 0.0
+    # every LCP met its complementarity tolerance (a tensile impulse reads ~1) and every step
+    # converged to the Newton tolerance
+    assert s["lcp_residual_max"] <= 1e-8 and s["steps_not_converged"] == 0
+    assert s["contact_intervals_s"] and s["contact_intervals_s"][0][0] < 2e-6
+    assert s["contact_intervals_s"][-1][1] < res.t[-1] - 10e-6
+    E = res.total_energy
+    assert E[-1] <= E[0] and E.max() <= E[0] * (1 + 2e-3)
+    e = _restitution(run)
+    assert e_min <= e <= 1.0 + 1e-6, e
+    m1, m2 = _masses(run)
+    J = _impulse(run)
+    v1, v2 = V0 - J / m1, J / m2  # centre-of-mass velocities after the impact
+    assert 0.0 < v1 < v2
+    # the frames (tied to end B) agree with the centre-of-mass velocities up to the rods'
+    # residual vibration: within 5 % of v0
+    assert abs(res.frame_v[-1, 1, 0] - v2) < 0.05 * V0
+
+
+# --- 1. the short seed case ------------------------------------------------------------------
+
+def test_short_full_fe_against_wave_hertz_theory():
+    """Full FE vs 1D wave-Hertz on the short case (measured at 3315d09: NCC 0.99719, peak
+    +3.74 %, impulse -0.97 %, contact duration +0.51 %, b2 free-end NCC 0.99984):
+    - force NCC >= 0.995: the gap to 1 is the contact-patch discretisation (coarse vs refined
+      mesh NCC 0.9973; refined vs theory 0.9994);
+    - peak within 6 %: +2.8 % 1D/3D limit (refined mesh) + 1.0 % mesh, 1.5x margin;
+    - impulse within 2 %: -1 % from the striker's mass (1D cylinder 3.5 % heavier);
+    - contact duration within 5 %: the mesh moves it by 3 % (coarse +0.5 %, refined -2.6 %);
+    - b2 free-end velocity NCC >= 0.999 (measured 0.99984; 0.99978 refined).
+    Conservation: momentum 1e-9; no tensile force; penetration below 2 % of the peak Hertz
+    approach (measured 1.5e-7 m vs 2.5e-7 m); energy error within 0.2 % (measured -0.062 %,
+    the theta = 0.55 damping of the unresolved modes; -0.037 % at h/2)."""
+    run = _short("full")
+    tt, ft, pt, _ = _theory()
+    c = compare_runs(tt, ft, pt, *run_curves(run.result))
+    assert c["ncc_force"] >= 0.995
+    assert abs(c["peak_err"]) < 0.06
+    assert abs(c["impulse_err"]) < 0.02
+    assert abs(c["duration_err"]) < 0.05
+    assert c["ncc_b2_free_end"] >= 0.999
+    s = run.summary
+    assert s["model"] == {"b1": "full", "b2": "full"} and s["dof"]["b2"] > 9000
+    assert s["max_penetration_m"] < PEN_MAX
+    assert abs(s["energy_rel_error"]) < 0.002
+    _check_sane(run)
+
+
+def test_short_mvm_matches_its_full_fe():
+    """The scenario's MVM model (b1 full FE, b2 1-3 + 37 modes, 118 DOF) against its full FE on
+    the short case: force NCC >= 0.999 (the issue's target; measured 1 - 1.1e-7), peak,
+    impulse and contact duration within 0.5 % (measured 0.009 %, 0.003 %, 0.002 %: the
+    step-halving change is 0.015-0.025 %, so 0.5 % is still far below the 1-3 % mesh error),
+    b2 free-end NCC >= 0.999 (measured 0.99996)."""
+    full, mvm = _short("full"), _short("mvm")
+    assert mvm.summary["dof"]["b2"] == 3 * 25 + 37 + 6
+    c = compare_runs(*run_curves(full.result), *run_curves(mvm.result))
+    assert c["ncc_force"] >= 0.999
+    for key in ("peak_err", "impulse_err", "duration_err"):
+        assert abs(c[key]) < 0.005, (key, c[key])
+    assert c["ncc_b2_free_end"] >= 0.999
+    assert mvm.summary["max_penetration_m"] < PEN_MAX
+    _check_sane(mvm)
+
+
+# --- 2. body models in contact ---------------------------------------------------------------
+
+def test_mvm_seed_body_in_contact():
+    """b2 as seed eq. (4), diag(Psi_I, I_II) with the 1-3 region II and 37 modes of region I.
+    Sane (see _check_sane; measured e = 0.9973) and it transfers the same momentum as the full
+    FE (impulse within 0.5 %, measured -0.07 %), but it is much stiffer at the contact than the
+    Craig-Bampton model with the same nodes and modes: region II is joined to region I only
+    through fixed-interface modes, with no static (constraint) modes, so measured against the
+    full FE: force NCC 0.836, peak +28 %, contact 20 % shorter (CB: NCC 1 - 1e-7). Required:
+    NCC >= 0.7 and a peak above the full FE's (a regression to the CB form or a broken basis
+    would show)."""
+    full, run = _short("full"), _short("mvm-seed")
+    assert run.summary["model"]["b2"] == "mvm-seed"
+    _check_sane(run)
+    c = compare_runs(*run_curves(full.result), *run_curves(run.result))
+    assert abs(c["impulse_err"]) < 0.005
+    assert c["ncc_force"] >= 0.7
+    assert 0.0 < c["peak_err"] < 0.5
+    # its stiffer contact field makes the contact nodes' impacts harder: penetration measured
+    # 2.9e-7 m, 2.4 % of the peak Hertz approach; allowed 3 % (full FE: 1.5e-7 m within 2 %)
+    assert run.summary["max_penetration_m"] < 1.5 * PEN_MAX
+
+
+def test_modal_body_in_contact():
+    """b2 as 20 free-interface modes of the end-B-supported rod (26 DOF): its end face cannot
+    take the local Hertz indentation, so only the striker's side is compliant: vs full FE peak
+    +44 %, contact 26 % shorter, NCC 0.71 (measured). What must hold: sane impact (measured
+    e = 0.9985), the same momentum transfer as full FE (impulse within 0.5 %, measured
+    -0.007 %), a stiffer contact than full FE (peak above it), and the free-end velocity
+    following the wave (NCC >= 0.9, measured 0.945)."""
+    full, run = _short("full"), _short("modal")
+    assert run.summary["model"]["b2"] == "modal" and run.summary["dof"]["b2"] == 26
+    _check_sane(run)
+    c = compare_runs(*run_curves(full.result), *run_curves(run.result))
+    assert abs(c["impulse_err"]) < 0.005
+    assert 0.0 < c["peak_err"] < 1.0
+    assert c["ncc_b2_free_end"] >= 0.9
+    assert run.summary["max_penetration_m"] < PEN_MAX
+
+
+def _stiff(m: Material) -> Material:
+    return Material(E=m.E * 1e4, nu=m.nu, rho=m.rho, name="rigid-limit")
+
+
+def test_rigid_striker_against_rigid_limit_theory():
+    """b1 rigid (6 DOF) onto b2 (CB 1-3 + 37). The 1D solution with the striker 1e4 times
+    stiffer (same mass; its Hertz term (1 - nu^2)/E vanishes, c x 100) is the rigid-striker
+    theory: the measured force NCC 0.9952, peak +1.8 %, contact +1.7 %, impulse -0.95 % (the
+    1D striker's extra 3.5 % mass) (E x 100 gives the same to 0.3 %). Required: NCC >= 0.99,
+    peak within 5 %, duration within 5 %, impulse within 2 % (as for the flexible short case,
+    whose mesh error these share), and a sane impact (measured e = 0.9992)."""
+    run = _short("rigid-striker")
+    assert run.summary["dof"]["b1"] == 6
+    _check_sane(run)
+    r1, r2 = Rod1D.from_material(_stiff(BRASS), L, R), Rod1D.from_material(ALUMINIUM, L, R)
+    th = two_rod_impact(r1, r2, V0, 0.25e-3, ContactLaw.HERTZ, sphere_radius_m=R,
+                        dt=min(r1.round_trip_s, r2.round_trip_s) / 200)
+    c = compare_runs(th.t, th.contact_force, {}, *run_curves(run.result))
+    assert c["ncc_force"] >= 0.99
+    assert abs(c["peak_err"]) < 0.05
+    assert abs(c["duration_err"]) < 0.05
+    assert abs(c["impulse_err"]) < 0.02
+    assert run.summary["max_penetration_m"] < PEN_MAX
+
+
+def test_two_rigid_bodies_impact_conserves_momentum_and_loses_energy():
+    """Both rods rigid: one impulse at t = 0 brings the contact point to rest (Newton e = 0),
+    the exact outcome is the plastic impact, v = m1 v0 / (m1 + m2), losing m2 / (m1 + m2) =
+    25.0 % of the energy. What must hold whatever the stabilisation: momentum to 1e-9, the
+    impulse between plastic and elastic, the energy loss within 1 % of the plastic one
+    (measured 24.75 %: see the xfail below), a single short contact (<= 2 output steps)."""
+    run = _short("rigid-both")
+    s = run.summary
+    m1, m2 = _masses(run)
+    assert s["momentum_rel_error"] < 1e-9 and s["lcp_residual_max"] <= 1e-8
+    assert 0.0 <= _restitution(run) <= 1.0
+    assert abs(-s["energy_rel_error"] - m2 / (m1 + m2)) < 0.01
+    assert len(s["contact_intervals_s"]) == 1
+    assert s["contact_intervals_s"][0][1] <= 2 * 2e-6
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "penetration recovery (integrate/midpoint.py, PENETRATION_RECOVERY beta = 0.2) turns the "
+    "Moreau-Jean impact penetration h (1 - theta) v0 into a separation velocity "
+    "beta (1 - theta) v0: rigid bodies rebound with e = 0.09 instead of the e = 0 impact law "
+    "(measured e = 0.0886, separation 0.0186 m/s); the contact code is being changed by others"))
+def test_two_rigid_bodies_impact_is_plastic():
+    """Newton e = 0 between two rigid bodies: the relative velocity after the impact is 0, so
+    e < 0.01 (round-off and the output-averaged impulse allow far less)."""
+    run = _short("rigid-both")
+    assert _restitution(run) < 0.01
+    assert PENETRATION_RECOVERY * (1 - 0.55) > 0.01  # the mechanism named in the reason
+
+
+# --- 3. the pendulum, started just before impact -----------------------------------------------
+
+PENDULUM = ROOT / "scenarios" / "pendulum_release.toml"
+T0 = 20e-6  # the striker starts this long before its apex reaches b2 (gap 4.2 um)
+
+
+def _pendulum_short(dt_s: float, b1_model: ModelConfig | None = STRIKER):
+    """pendulum_release.toml with b1 placed on its swing arc T0 before the bottom, at the
+    speed it has there (sqrt(v0^2 - 2 g dz), v0 = 0.21 m/s at the bottom), the strings at the
+    same lengths as in the scenario's geometry; b1 as its mvm model (3-5 + 40) unless given;
+    outputs every 2 us to 0.72 ms (the 1 m rods' contact lasts 659 us). Extra probes at the
+    four string attachment nodes give the string directions."""
+    data = load_scenario(PENDULUM).model_dump(mode="json")
+    ell, g = 0.5, 9.81
+    phi = V0 * T0 / ell
+    dz = ell * (1 - math.cos(phi))
+    v = math.sqrt(V0**2 - 2 * g * dz)
+    b1 = data["bodies"][0]
+    b1["placement"]["position_m"] = [-ell * math.sin(phi), 0.0, dz]
+    b1["placement"]["velocity_mps"] = [v * math.cos(phi), 0.0, -v * math.sin(phi)]
+    if b1_model is not None:
+        b1["model"] = b1_model.model_dump(mode="json")
+    data["time"].update(t_end_s=0.72e-3, dt_s=dt_s, dt_max_s=dt_s, output_dt_s=2e-6)
+    sc = scenario_from_dict(data, "pendulum_release.toml (started 20 us before impact)")
+    built = build_scenario(sc)
+    probes = list(built.probes) + [Probe(f"string{k}", j.p1.body, j.p1.node)
+                                   for k, j in enumerate(built.system.joints)]
+    res = simulate(built.system, built.states, built.grid, probes)
+    return built, res, summarize(res, built)
+
+
+@functools.cache
+def _pendulum():
+    return _pendulum_short(0.5e-6)
+
+
+def test_pendulum_impact_with_gravity_and_strings():
+    """Contact with gravity and joints together (b1 MVM 3-5 + 40, b2 MVM 1-3 + 37, four
+    distance joints, contact step 0.5 us, the seed's validated step). Over 0.72 ms the strings
+    barely act along x (pendulum period 1.4 s), so the impact is the free seed case's, shifted
+    by T0. Measured (3315d09 + tests): first contact 19.5 us, force vs the seed's 1D wave-Hertz
+    solution shifted by T0: NCC 0.99924, peak +1.9 %, impulse -0.6 %, contact end 677 vs 679 us;
+    string drift 1.3e-13 m; momentum balance error 1.4e-9 of p0. Required:
+    - contact begins at T0 (within 2 us, one output step; measured 19.5 us: the interval of
+      the 0.5 us step that closes the gap, ending at T0) and is never tensile;
+    - NCC >= 0.99, peak within 3 %, contact end within 3 % of the contact duration (the free
+      seed case's acceptance of docs/validation.md);
+    - the joints hold: position-level string rows, drift < 1e-9 m;
+    - momentum balance: the change of total momentum equals the string impulses (lambda along
+      each string, direction from the attachment probes, midpoint over each 2 us output
+      interval) plus M g t, to 1e-7 of the initial momentum in each component (the direction
+      turns by v dt / l ~ 1e-6 rad per interval). The contact forces are internal and drop
+      out; the x-momentum does change, by 3.0e-4 kg m/s (0.05 % of p0) over 0.72 ms: the tilt
+      of the strings (see the xfail below) pulls b1 and b2 along x with 0.5 N and 0.17 N."""
+    built, res, s = _pendulum()
+    t, f = res.t, res.contact_force
+    first = s["contact_intervals_s"][0][0]
+    assert abs(first - T0) <= 2e-6
+    assert s["lcp_residual_max"] <= 1e-8 and s["steps_not_converged"] == 0
+    sc_seed = load_scenario(ROOT / "scenarios" / "rod_impact.toml").with_overrides(t_end_s=0.72e-3)
+    tt, ft, _, _ = theory_histories(sc_seed)
+    c = compare_runs(tt + T0, ft, {}, t, f, {})
+    assert c["ncc_force"] >= 0.99
+    assert abs(c["peak_err"]) < 0.03
+    end, end_th = s["contact_intervals_s"][-1][1], T0 + tt[ft > 0].max()
+    assert abs(end - end_th) < 0.03 * (end_th - T0)
+    assert s["max_joint_drift"] < 1e-9
+    # momentum balance
+    names = res.probe_names
+    joints = built.system.joints
+    idx = [names.index(f"string{k}") for k in range(len(joints))]
+    ground = np.array([j.p2 for j in joints], float)
+    e = res.probe_x[:, idx, :] - ground[None]
+    e /= np.linalg.norm(e, axis=2)[:, :, None]
+    mid = 0.5 * (e[1:] + e[:-1])  # string directions over each output interval
+    dt = np.diff(t)[:, None]
+    J = np.vstack([np.zeros(3), np.cumsum((res.joint_force[1:, :, None] * mid).sum(1) * dt, 0)])
+    M = sum(float(b.inv.mass) for b in built.system.bodies)
+    dp = res.momentum - res.momentum[0]
+    err = dp - J - M * built.system.gravity[None] * (t - t[0])[:, None]
+    assert np.abs(err).max() < 1e-7 * np.linalg.norm(res.momentum[0]), np.abs(err).max(0)
+    # and the impact moved b2 forward (its frame) while b1 slowed
+    assert res.frame_v[-1, 1, 0] > 0.1 and res.frame_v[-1, 0, 0] < V0
+
+
+@pytest.mark.xfail(strict=True, reason=(
+    "pendulum_release.toml attaches the strings at body points 0.25 and 0.75 m, 0.01 m from the "
+    "nearest nodes (axial stations 0.24/0.26, 0.74/0.76; the nearest node is taken): every "
+    "string starts tilted by 0.02 rad, b2 accelerates at 0.2 m/s^2 in +x from t = 0 and b1 "
+    "swings about a point 0.01 m off the contact; the scenario is being fixed by another "
+    "engineer"))
+def test_pendulum_strings_start_vertical_at_the_bottom():
+    """At the bottom of the swing (the state the scenario is built around) every string
+    attachment node is directly below its ground point: horizontal offset < 1 um."""
+    built = build_scenario(load_scenario(PENDULUM))
+    for j in built.system.joints:
+        off = j.p1.position(built.system.bodies, built.states) - np.asarray(j.p2)
+        if j.p1.body == 0:  # b1 starts displaced along its arc: compare at the bottom
+            off[0] -= float(load_scenario(PENDULUM).body("b1").placement.position_m[0])
+        assert abs(off[0]) < 1e-6 and abs(off[1]) < 1e-6
