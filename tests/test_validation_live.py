@@ -32,7 +32,7 @@ import pytest
 
 from flexmvm import validation
 from flexmvm.integrate.driver import Probe, simulate
-from flexmvm.integrate.midpoint import PENETRATION_RECOVERY
+from flexmvm.contact.pairs import PENETRATION_RECOVERY
 from flexmvm.materials import ALUMINIUM, BRASS, Material
 from flexmvm.scenarios.build import build_scenario
 from flexmvm.scenarios.compare import compare_runs, run_curves
@@ -259,7 +259,7 @@ def test_two_rigid_bodies_impact_conserves_momentum_and_loses_energy():
 
 
 @pytest.mark.xfail(strict=True, reason=(
-    "penetration recovery (integrate/midpoint.py, PENETRATION_RECOVERY beta = 0.2) turns the "
+    "penetration recovery (contact/pairs.py, PENETRATION_RECOVERY beta = 0.2) turns the "
     "Moreau-Jean impact penetration h (1 - theta) v0 into a separation velocity "
     "beta (1 - theta) v0: rigid bodies rebound with e = 0.09 instead of the e = 0 impact law "
     "(measured e = 0.0886, separation 0.0186 m/s); the contact code is being changed by others"))
