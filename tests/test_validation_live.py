@@ -46,9 +46,20 @@ V0, L, R = 0.21, 0.1, 0.01
 #: The striker of the body-type runs: rod_impact_short.toml's b1 mvm model (3-5 + 40 modes).
 STRIKER = ModelConfig(kind="mvm", selection="3-5", modes=40)
 TARGET_CB = ModelConfig(kind="mvm", selection="1-3", modes=37)
-#: Penetration bound of the short case: 2 % of the 1D solution's peak Hertz approach
-#: (F/k)^(2/3) = 12.3 um (k = 4/3 E* sqrt(R)), as for the seed case.
+#: Penetration bounds of the short case, of the 1D solution's peak Hertz approach
+#: (F/k)^(2/3) = 12.3 um (k = 4/3 E* sqrt(R)), as for the seed case: b2's contact nodes (the
+#: constrained slave nodes) into b1 within 2 %; any node of either surface into the other
+#: (measured after every step, contact.penetration) within 12 %: b1's cap nodes are not
+#: constrained and sit inside b2's flat facets by the facets' chord error over the dent,
+#: measured 0.8-1.26 um here (7-10 %), 1.8 um of 21.3 um on the seed case.
 PEN_MAX = 0.02 * 12.3e-6
+PEN_ANY = 0.12 * 12.3e-6
+
+
+def _penetration_ok(summary: dict, slave_factor: float = 1.0) -> None:
+    by = summary["max_penetration_by_direction_m"]
+    assert by["b2 nodes into b1"] < slave_factor * PEN_MAX, by
+    assert summary["max_penetration_m"] < PEN_ANY, by
 
 
 @functools.cache
@@ -155,7 +166,7 @@ def test_short_full_fe_against_wave_hertz_theory():
     assert c["ncc_b2_free_end"] >= 0.999
     s = run.summary
     assert s["model"] == {"b1": "full", "b2": "full"} and s["dof"]["b2"] > 9000
-    assert s["max_penetration_m"] < PEN_MAX
+    _penetration_ok(s)
     assert abs(s["energy_rel_error"]) < 0.002
     _check_sane(run)
 
@@ -173,7 +184,7 @@ def test_short_mvm_matches_its_full_fe():
     for key in ("peak_err", "impulse_err", "duration_err"):
         assert abs(c[key]) < 0.005, (key, c[key])
     assert c["ncc_b2_free_end"] >= 0.999
-    assert mvm.summary["max_penetration_m"] < PEN_MAX
+    _penetration_ok(mvm.summary)
     _check_sane(mvm)
 
 
@@ -197,7 +208,7 @@ def test_mvm_seed_body_in_contact():
     assert 0.0 < c["peak_err"] < 0.5
     # its stiffer contact field makes the contact nodes' impacts harder: penetration measured
     # 2.9e-7 m, 2.4 % of the peak Hertz approach; allowed 3 % (full FE: 1.5e-7 m within 2 %)
-    assert run.summary["max_penetration_m"] < 1.5 * PEN_MAX
+    _penetration_ok(run.summary, 1.5)
 
 
 def test_modal_body_in_contact():
@@ -214,7 +225,7 @@ def test_modal_body_in_contact():
     assert abs(c["impulse_err"]) < 0.005
     assert 0.0 < c["peak_err"] < 1.0
     assert c["ncc_b2_free_end"] >= 0.9
-    assert run.summary["max_penetration_m"] < PEN_MAX
+    _penetration_ok(run.summary)
 
 
 def _stiff(m: Material) -> Material:
@@ -239,7 +250,7 @@ def test_rigid_striker_against_rigid_limit_theory():
     assert abs(c["peak_err"]) < 0.05
     assert abs(c["duration_err"]) < 0.05
     assert abs(c["impulse_err"]) < 0.02
-    assert run.summary["max_penetration_m"] < PEN_MAX
+    _penetration_ok(run.summary)
 
 
 def test_two_rigid_bodies_impact_conserves_momentum_and_loses_energy():
