@@ -4,7 +4,6 @@ Tolerance: 1e-9 relative to |D| |l| + |c|; the solver adds a 1e-12 relative regu
 """
 
 import numpy as np
-import pytest
 
 from flexmvm.integrate.lcp import solve_mixed_lcp
 
@@ -31,9 +30,9 @@ def test_separating_rows_get_no_impulse():
 
 
 # -- positive semidefinite Delassus matrices, as contact produces them ----------------------
-from scipy.optimize import minimize  # noqa: E402
+from scipy.optimize import minimize
 
-from flexmvm.integrate.lcp import LCP_RTOL, complementarity_residual, solve_checked  # noqa: E402
+from flexmvm.integrate.lcp import LCP_RTOL, complementarity_residual, solve_checked
 
 
 def _two_reduced_bodies_delassus(rng, m: int, n1: int, n2: int):
@@ -105,8 +104,7 @@ def test_contact_runs_check_every_lcp(monkeypatch):
     bodies modal with 4 modes, so 25 rows act on 2 x 10 coordinates (rank <= 20)."""
     from pathlib import Path
 
-    import flexmvm.integrate.moreau_jean as moreau_jean
-    import flexmvm.integrate.nonrotating as nonrotating
+    from flexmvm.integrate import moreau_jean, nonrotating
     from flexmvm.scenarios.run import run_scenario
     from flexmvm.scenarios.schema import ModelConfig, load_scenario
 

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import pytest
 
-import flexmvm.integrate.driver as driver
+from flexmvm.integrate import driver
 from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
 from flexmvm.scenarios.run import run_scenario
 from flexmvm.scenarios.schema import load_scenario
@@ -53,7 +53,7 @@ def test_steps_stopped_on_the_floor_are_counted(monkeypatch, tmp_path):
 
     from click.testing import CliRunner
 
-    from flexmvm.cli.main import cli, _register
+    from flexmvm.cli.main import _register, cli
 
     _register()
     res = CliRunner().invoke(cli, ["run", str(TINY), "--t-end", "3e-6", "--no-fields",

@@ -186,7 +186,7 @@ def test_scenario_builder_reads_the_disk_cache(cache, monkeypatch):
     build._fe.cache_clear()
     build._basis_cached.cache_clear()
     with build.craig_bampton_mode_floor(6):
-        fresh = build._basis(*args, 4, "end_b")
+        fresh = build.basis_for(*args, 4, "end_b")
     assert setup_cache.info().n_entries == 2
     build._fe.cache_clear()
     build._basis_cached.cache_clear()
@@ -197,7 +197,7 @@ def test_scenario_builder_reads_the_disk_cache(cache, monkeypatch):
     monkeypatch.setattr(build, "build_basis", refuse)
     monkeypatch.setattr(build, "assemble", refuse)
     with build.craig_bampton_mode_floor(6):
-        hit = build._basis(*args, 4, "end_b")
+        hit = build.basis_for(*args, 4, "end_b")
     assert np.array_equal(hit.psi, fresh.psi) and hit.n_modes == 4
     build._fe.cache_clear()
     build._basis_cached.cache_clear()
@@ -288,7 +288,7 @@ def test_warm_scenario_build_computes_nothing(cache, monkeypatch):
     _clear_process_caches()
     fresh = build._parts(*args, 6, "end_b")
     with build.craig_bampton_mode_floor(6):
-        cut_basis, cut = build._basis(*args, 4, "end_b"), build._parts(*args, 4, "end_b")
+        cut_basis, cut = build.basis_for(*args, 4, "end_b"), build._parts(*args, 4, "end_b")
     _clear_process_caches()
 
     def refuse(*_args, **_kw):

@@ -1,6 +1,7 @@
 """Stages point one way (docs/architecture.md): a module imports only from its own stage or the
-stages below it. Checked on the import statements of every module (top level and inside
-functions), so a lazy import cannot hide a cycle either."""
+stages below it, and never another module's private (underscored) names. Checked on the
+import statements of every module (top level and inside functions), so a lazy import cannot
+hide a cycle either."""
 
 from __future__ import annotations
 
@@ -53,3 +54,19 @@ def test_every_stage_is_listed():
              if (p.is_dir() and (p / "__init__.py").exists()) or
              (p.suffix == ".py" and p.name != "__init__.py")}
     assert names <= set(STAGES), names - set(STAGES)
+
+
+def test_no_private_names_across_modules():
+    """`from flexmvm.x import _name` reaches into another module's internals: what a module
+    shares it names without an underscore (dunders such as __version__ excepted)."""
+    wrong = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if isinstance(node, ast.ImportFrom) and node.module and node.level == 0 \
+                    and node.module.split(".")[0] == "flexmvm":
+                for alias in node.names:
+                    if alias.name.startswith("_") and not alias.name.startswith("__"):
+                        wrong.append(f"{path.relative_to(PACKAGE)}:{node.lineno} imports "
+                                     f"{node.module}.{alias.name}")
+    assert not wrong, "\n".join(wrong)

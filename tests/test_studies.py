@@ -252,16 +252,16 @@ def test_mode_floor_cuts_the_larger_craig_bampton_basis():
     import numpy as np
 
     from flexmvm.reduction.basis import BasisKind
-    from flexmvm.scenarios.build import _basis, craig_bampton_mode_floor, rod_spec
+    from flexmvm.scenarios.build import basis_for, craig_bampton_mode_floor, rod_spec
 
     cfg = load_scenario(TINY).body("b2")
     spec, mat = rod_spec(cfg.rod), cfg.material_obj()
     from flexmvm.mesh.rod import rod_mesh
 
     sel = tuple(int(n) for n in rod_mesh(spec).selection(1, 1))
-    fresh = _basis(spec, mat, BasisKind.CRAIG_BAMPTON, sel, 7, "end_b")
+    fresh = basis_for(spec, mat, BasisKind.CRAIG_BAMPTON, sel, 7, "end_b")
     with craig_bampton_mode_floor(13):
-        cut = _basis(spec, mat, BasisKind.CRAIG_BAMPTON, sel, 7, "end_b")
+        cut = basis_for(spec, mat, BasisKind.CRAIG_BAMPTON, sel, 7, "end_b")
     assert cut.n_modes == 7 and cut.psi.shape == fresh.psi.shape
     np.testing.assert_allclose(cut.mode_freqs_hz, fresh.mode_freqs_hz, rtol=1e-8)
     nb = 3 * len(sel)

@@ -31,8 +31,8 @@ import numpy as np
 import pytest
 
 from flexmvm import validation
-from flexmvm.integrate.driver import Probe, simulate
 from flexmvm.contact.pairs import PENETRATION_RECOVERY
+from flexmvm.integrate.driver import Probe, simulate
 from flexmvm.materials import ALUMINIUM, BRASS, Material
 from flexmvm.scenarios.build import build_scenario
 from flexmvm.scenarios.compare import compare_runs, run_curves

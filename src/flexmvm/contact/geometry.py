@@ -24,11 +24,11 @@ from scipy.spatial import cKDTree
 from flexmvm.errors import InputError, SolverError
 from flexmvm.mesh.mesh import FacetSet
 
-_NEWTON_MAX_ITER = 20  # quadratic convergence from the centre takes ~4; the rest fold outside
-_LINE_SEARCH_HALVINGS = 12
-_FAR_CHECK_ITER, _FAR_XI = 4, 2.0  # after 4 iterations, |xi| > 2 is far outside the facet
-_NEWTON_TOL = 1e-12  # on the local coordinates, which are O(1): a relative tolerance
-_XI_BOUND = 4.0  # Newton iterates kept in [-4, 4]^2: far outside the facet, still finite
+NEWTON_MAX_ITER = 20  # quadratic convergence from the centre takes ~4; the rest fold outside
+LINE_SEARCH_HALVINGS = 12
+FAR_CHECK_ITER, FAR_XI = 4, 2.0  # after 4 iterations, |xi| > 2 is far outside the facet
+NEWTON_TOL = 1e-12  # on the local coordinates, which are O(1): a relative tolerance
+XI_BOUND = 4.0  # Newton iterates kept in [-4, 4]^2: far outside the facet, still finite
 _QUAD_SIGNS = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
 
 
@@ -193,9 +193,9 @@ def _quad_newton(xs: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]
     done = np.zeros(len(xs), dtype=bool)
     stuck = np.zeros(len(xs), dtype=bool)
     r = residual(xi)
-    for it in range(_NEWTON_MAX_ITER):
-        if it == _FAR_CHECK_ITER:  # clearly outside the facet: stop (reported outside)
-            stuck |= ~done & (np.abs(xi).max(axis=1) > _FAR_XI)
+    for it in range(NEWTON_MAX_ITER):
+        if it == FAR_CHECK_ITER:  # clearly outside the facet: stop (reported outside)
+            stuck |= ~done & (np.abs(xi).max(axis=1) > FAR_XI)
         t1, t2 = c1 + c3 * xi[:, 1:], c2 + c3 * xi[:, :1]
         a11, a22, a12 = (t1 * t1).sum(1), (t2 * t2).sum(1), (t1 * t2).sum(1)
         rc = (r * c3).sum(1)
@@ -215,14 +215,14 @@ def _quad_newton(xs: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]
         f0 = (r * r).sum(1)
         scale = np.sqrt(f0 / np.maximum(np.minimum(a11, a22), 1e-300))
         done |= ~stuck & (
-            np.abs(step).max(axis=1) <= _NEWTON_TOL + 64 * np.finfo(float).eps * scale
+            np.abs(step).max(axis=1) <= NEWTON_TOL + 64 * np.finfo(float).eps * scale
         )
-        for _ in range(_LINE_SEARCH_HALVINGS):
-            trial = np.clip(xi + step, -_XI_BOUND, _XI_BOUND)
+        for _ in range(LINE_SEARCH_HALVINGS):
+            trial = np.clip(xi + step, -XI_BOUND, XI_BOUND)
             r_trial = residual(trial)
             # growth beyond round-off of f, on pairs still iterating
             worse = ((r_trial * r_trial).sum(1) > f0 * (1.0 + 1e-9) + 1e-30) & ~(done | stuck)
-            tiny = worse & (np.abs(step).max(axis=1) <= _NEWTON_TOL)
+            tiny = worse & (np.abs(step).max(axis=1) <= NEWTON_TOL)
             if tiny.any():  # no descent left within the tolerance: converged as far as it goes
                 done |= tiny
                 step[tiny] = 0.0

@@ -20,12 +20,12 @@ import numba
 import numpy as np
 
 from flexmvm.contact.geometry import (
-    _FAR_CHECK_ITER,
-    _FAR_XI,
-    _LINE_SEARCH_HALVINGS,
-    _NEWTON_MAX_ITER,
-    _NEWTON_TOL,
-    _XI_BOUND,
+    FAR_CHECK_ITER,
+    FAR_XI,
+    LINE_SEARCH_HALVINGS,
+    NEWTON_MAX_ITER,
+    NEWTON_TOL,
+    XI_BOUND,
 )
 
 # status codes returned by the kernels (0 = ok); the caller raises SolverError
@@ -40,8 +40,8 @@ REC_XI, REC_W, REC_N, REC_GAP, REC_IN, REC_DIST, REC_LEN = 0, 2, 6, 9, 10, 11, 1
 def projection_params(inside_tol: float = 1e-6) -> np.ndarray:
     """(7,) float64: max Newton iterations, line-search halvings, far-check iteration, far
     |xi|, Newton tolerance, xi bound, inside tolerance (the constants of contact.geometry)."""
-    return np.array([_NEWTON_MAX_ITER, _LINE_SEARCH_HALVINGS, _FAR_CHECK_ITER, _FAR_XI,
-                     _NEWTON_TOL, _XI_BOUND, inside_tol], dtype=np.float64)
+    return np.array([NEWTON_MAX_ITER, LINE_SEARCH_HALVINGS, FAR_CHECK_ITER, FAR_XI,
+                     NEWTON_TOL, XI_BOUND, inside_tol], dtype=np.float64)
 
 
 # -- kinematics of the contact nodes --------------------------------------------------------------

@@ -24,6 +24,7 @@ from enum import Enum
 import numpy as np
 import scipy.sparse as sp
 
+from flexmvm.constraints.contact import ContactRows
 from flexmvm.constraints.rows import Rows
 from flexmvm.contact import kernels
 from flexmvm.contact.geometry import BroadPhase, MasterSurface
@@ -31,7 +32,6 @@ from flexmvm.contact.nodes import ContactNodes
 from flexmvm.contact.penetration import Penetration, SurfaceMeasure
 from flexmvm.contact.reference import body_rows
 from flexmvm.errors import InputError, SolverError
-from flexmvm.constraints.contact import ContactProvider, ContactRows
 
 __all__ = ["ContactKind", "PointToSurfaceContact", "body_rows"]
 

@@ -26,8 +26,8 @@ __all__ = ["curves_from_run", "plot_force_comparison", "plot_run"]
 #: One (t [s], contact force [N] or None, {probe name: velocity [m/s]}) per run label.
 Curves = tuple[Any, Any, Mapping[str, Any]]
 
-_STYLES = ("-", "--", "-.", ":", (0, (5, 1, 1, 1, 1, 1)), (0, (1, 3)))
-_COLOURS = ("C0", "C1", "C2", "C3", "C4", "C5", "C6", "C7")
+STYLES = ("-", "--", "-.", ":", (0, (5, 1, 1, 1, 1, 1)), (0, (1, 3)))
+COLOURS = ("C0", "C1", "C2", "C3", "C4", "C5", "C6", "C7")
 _THEORY = "theory"
 
 
@@ -66,7 +66,7 @@ def _checked(runs: Mapping[str, Curves]) -> list[tuple[str, np.ndarray, np.ndarr
     return out
 
 
-def _save(fig: Figure, path: str | os.PathLike[str], dpi: int) -> None:
+def save_figure(fig: Figure, path: str | os.PathLike[str], dpi: int) -> None:
     FigureCanvasAgg(fig)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, format="png", dpi=dpi)
@@ -88,11 +88,11 @@ def plot_run(path_png: str | os.PathLike[str], runs: Mapping[str, Curves],
     if not checked:
         raise InputError("plot_run: expected at least one run, got none")
     probes = list(dict.fromkeys(p for *_, v in checked for p in v))
-    probe_colour = dict(zip(probes, itertools.cycle(_COLOURS)))
+    probe_colour = dict(zip(probes, itertools.cycle(COLOURS)))
     fig = Figure(figsize=(7.0, 6.5), layout="constrained")
     ax_f, ax_v = fig.subplots(2, 1, sharex=True)
-    for (label, t, f, v), style, colour in zip(checked, itertools.cycle(_STYLES),
-                                               itertools.cycle(_COLOURS)):
+    for (label, t, f, v), style, colour in zip(checked, itertools.cycle(STYLES),
+                                               itertools.cycle(COLOURS)):
         theo = label == _THEORY
         lw = 1.2 if theo else 1.0
         if f is not None:
@@ -110,7 +110,7 @@ def plot_run(path_png: str | os.PathLike[str], runs: Mapping[str, Curves],
             ax.legend(fontsize="small")
     if title:
         fig.suptitle(title)
-    _save(fig, path_png, dpi)
+    save_figure(fig, path_png, dpi)
 
 
 def plot_force_comparison(path_png: str | os.PathLike[str], reference: tuple[Any, Any],
@@ -127,9 +127,9 @@ def plot_force_comparison(path_png: str | os.PathLike[str], reference: tuple[Any
     fig = Figure(figsize=(7.0, 4.0), layout="constrained")
     ax = fig.subplots()
     ax.plot(t_ref * 1e3, f_ref, "k-", lw=1.4, label=reference_label)
-    styles: Sequence = _STYLES[1:] + _STYLES[:1]
+    styles: Sequence = STYLES[1:] + STYLES[:1]
     for (label, (t, f)), style, colour in zip(candidates.items(), itertools.cycle(styles),
-                                              itertools.cycle(_COLOURS)):
+                                              itertools.cycle(COLOURS)):
         t, f = np.asarray(t, dtype=float), np.asarray(f, dtype=float)
         c = compare_force(t_ref, f_ref, t, f)
         results[label] = c
@@ -140,5 +140,5 @@ def plot_force_comparison(path_png: str | os.PathLike[str], reference: tuple[Any
     ax.set_ylabel("contact force [N]")
     ax.grid(True, lw=0.3)
     ax.legend(fontsize="small")
-    _save(fig, path_png, dpi)
+    save_figure(fig, path_png, dpi)
     return results

@@ -18,7 +18,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from flexmvm.errors import InputError
-from flexmvm.plots.figures import _COLOURS, _STYLES, _save
+from flexmvm.plots.figures import COLOURS, STYLES, save_figure
 
 __all__ = ["plot_materials", "plot_ncc_map", "plot_ncc_modes"]
 
@@ -68,7 +68,7 @@ def plot_ncc_map(path_png: str | os.PathLike[str], rows: Sequence[Mapping[str, A
     fig.colorbar(im, ax=ax, label="NCC of the contact force")
     if title:
         ax.set_title(title)
-    _save(fig, path_png, dpi)
+    save_figure(fig, path_png, dpi)
 
 
 def plot_ncc_modes(path_png: str | os.PathLike[str], rows: Sequence[Mapping[str, Any]], *,
@@ -82,7 +82,7 @@ def plot_ncc_modes(path_png: str | os.PathLike[str], rows: Sequence[Mapping[str,
         sels = [sels[k] for k in pick]
     fig = Figure(figsize=(7.0, 4.0), layout="constrained")
     ax = fig.subplots()
-    for (i, j, n), style, colour in zip(sels, itertools.cycle(_STYLES), itertools.cycle(_COLOURS)):
+    for (i, j, n), style, colour in zip(sels, itertools.cycle(STYLES), itertools.cycle(COLOURS)):
         pts = sorted((int(r["modes"]), float(r["ncc_force"])) for r in rows
                      if (int(r["layers"]), int(r["laps"])) == (i, j) and r.get("ncc_force") is not None)
         if pts:
@@ -101,7 +101,7 @@ def _finish_ncc_axes(fig, ax, path_png, title: str, dpi: int) -> None:
         ax.legend(fontsize="small")
     if title:
         ax.set_title(title)
-    _save(fig, path_png, dpi)
+    save_figure(fig, path_png, dpi)
 
 
 def plot_materials(path_png: str | os.PathLike[str], rows: Sequence[Mapping[str, Any]], *,
@@ -111,8 +111,8 @@ def plot_materials(path_png: str | os.PathLike[str], rows: Sequence[Mapping[str,
     _check(rows, "plot_materials")
     materials = list(dict.fromkeys(str(r["material"]) for r in rows))
     selections = list(dict.fromkeys(str(r["selection"]) for r in rows))
-    colour = dict(zip(materials, itertools.cycle(_COLOURS)))
-    style = dict(zip(selections, itertools.cycle(_STYLES)))
+    colour = dict(zip(materials, itertools.cycle(COLOURS)))
+    style = dict(zip(selections, itertools.cycle(STYLES)))
     fig = Figure(figsize=(7.0, 4.0), layout="constrained")
     ax = fig.subplots()
     for mat in materials:

@@ -7,10 +7,10 @@ complete new one. Units are SI and named in CSV headers and HDF5 ``units`` attri
 from __future__ import annotations
 
 import math
-from concurrent.futures import ThreadPoolExecutor
 import os
 import re
 from collections.abc import Mapping, Sequence
+from concurrent.futures import ThreadPoolExecutor
 from pathlib import Path
 from typing import Any
 from xml.sax.saxutils import quoteattr

@@ -80,7 +80,7 @@ def rod_spec(cfg) -> RodSpec:
 
 
 @functools.lru_cache(maxsize=8)
-def _rod(spec: RodSpec) -> RodMesh:
+def cached_rod_mesh(spec: RodSpec) -> RodMesh:
     return rod_mesh(spec)
 
 
@@ -94,7 +94,7 @@ def _mesh_source(key) -> dict | None:
 @functools.lru_cache(maxsize=8)
 def _mesh(key) -> Mesh:
     """The mesh of a rod spec (generated) or of a mesh file path."""
-    return _rod(key).mesh if isinstance(key, RodSpec) else read_mesh(key)
+    return cached_rod_mesh(key).mesh if isinstance(key, RodSpec) else read_mesh(key)
 
 
 @functools.lru_cache(maxsize=8)
@@ -105,7 +105,7 @@ def _fe(key, material: Material) -> FEModel:
 def reference_condition(key, mesh: Mesh, ref_set: str):
     """A rod's default (end_b) reference is rod_reference; otherwise a 3-2-1 on the set."""
     if isinstance(key, RodSpec) and ref_set == "end_b":
-        return rod_reference(_rod(key))
+        return rod_reference(cached_rod_mesh(key))
     return three_two_one(mesh, mesh.node_set(ref_set))
 
 
@@ -126,7 +126,7 @@ def craig_bampton_mode_floor(n_modes: int):
         _MODE_FLOOR[0] = old
 
 
-def _basis(key, material: Material, kind: BasisKind, retained: tuple, modes: int, ref_set: str) -> Basis:
+def basis_for(key, material: Material, kind: BasisKind, retained: tuple, modes: int, ref_set: str) -> Basis:
     floor = _MODE_FLOOR[0]
     if kind is not BasisKind.CRAIG_BAMPTON or modes >= floor:
         return _basis_cached(key, material, kind, retained, modes, ref_set)
@@ -148,7 +148,7 @@ def _basis_cached(key, material: Material, kind: BasisKind, retained: tuple, mod
 
 def _parts(key, material: Material, kind: BasisKind, retained: tuple, modes: int,
            ref_set: str) -> BodyParts:
-    """Invariants and k_hat of the body whose basis is _basis(same arguments); under a
+    """Invariants and k_hat of the body whose basis is basis_for(same arguments); under a
     Craig-Bampton mode floor cut from the floor's parts, as the basis is cut."""
     floor = _MODE_FLOOR[0]
     if kind is not BasisKind.CRAIG_BAMPTON or modes >= floor:
@@ -201,7 +201,7 @@ def _build_body(cfg) -> tuple[FlexibleBody, BodyInfo]:
     rod = None
     if cfg.rod is not None:
         key = rod_spec(cfg.rod)
-        rod = _rod(key)
+        rod = cached_rod_mesh(key)
     else:
         key = str(cfg.mesh_file)
     mesh = _mesh(key)
@@ -218,7 +218,7 @@ def _build_body(cfg) -> tuple[FlexibleBody, BodyInfo]:
         retained = tuple(int(i) for i in _retained_nodes(cfg.model, mesh, rod, f"{where}.model"))
     modes = cfg.model.modes if kind != "full" else 0
     args = (key, material, _KIND[kind], retained, modes, cfg.model.reference)
-    body = body_from_parts(cfg.name, mesh, _basis(*args), _parts(*args))
+    body = body_from_parts(cfg.name, mesh, basis_for(*args), _parts(*args))
     n_ret = len(retained) if kind != "full" else mesh.n_nodes
     return body, BodyInfo(cfg.name, kind, mesh, material, body.nv, n_ret, modes, rod)
 

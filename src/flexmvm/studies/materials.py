@@ -39,7 +39,7 @@ from flexmvm.results.outdir import make_out_dir
 from flexmvm.scenarios.schema import Scenario, load_scenario, scenario_from_dict
 from flexmvm.studies.runner import Case, run_cases
 from flexmvm.studies.selection import (
-    _check_grid,
+    check_grid,
     cluster,
     echo_failures,
     failed_case_row,
@@ -145,7 +145,7 @@ def run_materials_study(scenario_path: str | Path, out_dir: str | Path, body: st
                          f"{', '.join(SEED_MATERIALS)}")
     selections = parse_selections(selections)
     rod = rod_of(sc, body)
-    _, _, _, modes = _check_grid(sc, body, [s[0] for s in selections],
+    _, _, _, modes = check_grid(sc, body, [s[0] for s in selections],
                                  [s[1] for s in selections], modes)
     make_out_dir(out)
     scen = {m: material_scenario(sc, body, m, SEED_MATERIALS[m]) for m in materials}

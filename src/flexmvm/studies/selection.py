@@ -107,12 +107,12 @@ _METRICS = ("ncc_force", "peak_err", "impulse_err", "duration_err")
 # grid and cases
 def rod_of(sc: Scenario, body: str):
     """The (cached) RodMesh of rod body ``body``; InputError if there is no such rod body."""
-    from flexmvm.scenarios.build import _rod, rod_spec
+    from flexmvm.scenarios.build import cached_rod_mesh, rod_spec
 
     cfg = sc.body(body)
     if cfg.rod is None:
         raise InputError(f"body {body!r} is not a rod ([bodies.rod]); the i-j selection needs one")
-    return _rod(rod_spec(cfg.rod))
+    return cached_rod_mesh(rod_spec(cfg.rod))
 
 
 def _ints(name: str, values: Iterable[int]) -> list[int]:
@@ -122,7 +122,7 @@ def _ints(name: str, values: Iterable[int]) -> list[int]:
     return out
 
 
-def _check_grid(sc: Scenario, body: str, layers, laps, modes):
+def check_grid(sc: Scenario, body: str, layers, laps, modes):
     rod = rod_of(sc, body)
     layers, laps, modes = _ints("layers", layers), _ints("laps", laps), _ints("modes", modes)
     for name, vals, top in (("layers", layers, rod.n_layers), ("laps", laps, rod.n_laps)):
@@ -149,7 +149,7 @@ def selection_cases(sc: Scenario, body: str, layers: Iterable[int] = range(1, 5)
     ``functools.partial(run_selection_case, reference=path)``. Raises InputError for an
     unknown or non-rod body, or layers/laps beyond the rod mesh (naming the maximum).
     """
-    _, layers, laps, modes = _check_grid(sc, body, layers, laps, modes)
+    _, layers, laps, modes = check_grid(sc, body, layers, laps, modes)
     data = sc.model_dump(mode="json")
     sha = file_sha256(reference) if reference is not None else None
     top = max(modes)
@@ -416,9 +416,9 @@ def run_selection_study(scenario_path: str | Path, body: str, out_dir: str | Pat
     target = Target(0.99) if target is None else target
     out = Path(out_dir).resolve()
     sc = load_scenario(scenario_path)
-    _check_grid(sc, body, layers, laps, modes)
+    check_grid(sc, body, layers, laps, modes)
     sc = study_scenario(sc, body, t_end_s=t_end_s, dt_s=dt_s, other=other)
-    rod, layers, laps, modes = _check_grid(sc, body, layers, laps, modes)
+    rod, layers, laps, modes = check_grid(sc, body, layers, laps, modes)
     if serial and (scheduler is not None or n_workers is not None):
         raise InputError("serial=True received with scheduler/workers; expected one")
     if scheduler is not None and n_workers is not None:
@@ -564,7 +564,7 @@ def estimate_selection(sc: Scenario, body: str, target: Target | None = None, *,
     not depend on the NCC level (k sets the bandwidth).
     """
     from flexmvm.reduction.basis import BasisKind
-    from flexmvm.scenarios.build import _basis, rod_spec
+    from flexmvm.scenarios.build import basis_for, rod_spec
 
     if not k > 0:
         raise InputError(f"k: expected a number > 0, got {k!r}")
@@ -584,7 +584,7 @@ def estimate_selection(sc: Scenario, body: str, target: Target | None = None, *,
     sel = tuple(int(i) for i in rod.selection(1, laps))
     cfg = sc.body(body)
     grid = sorted(int(m) for m in modes)
-    basis = _basis(rod_spec(cfg.rod), cfg.material_obj(), BasisKind.CRAIG_BAMPTON, sel,
+    basis = basis_for(rod_spec(cfg.rod), cfg.material_obj(), BasisKind.CRAIG_BAMPTON, sel,
                    grid[-1], cfg.model.reference)
     n_below = int(np.count_nonzero(basis.mode_freqs_hz < f_max))
     m = next((g for g in grid if g >= n_below), grid[-1])
