@@ -490,6 +490,29 @@ def _finish(i, g, best, xs, vs, xm, vm, conn, n_quads, out):
 
 
 @numba.njit(cache=True)
+def _search_node(i, xs, xm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_quads, adj_ptr,
+                 adj_idx, params, lists, ref, prev, mark, counter, cand, lb, work, best, p):
+    """Closest facet of node i of xs, shared by scan_nodes and penetration_scan: the box test
+    in the facet body's frame (r_m, A_m), the candidate superset, the closest projection.
+    Returns (searched: False when outside the box or without candidates, status, facet)."""
+    inside_box = True
+    for j in range(3):
+        p[j] = ((xs[i, 0] - r_m[0]) * A_m[0, j] + (xs[i, 1] - r_m[1]) * A_m[1, j]) + (
+            xs[i, 2] - r_m[2]) * A_m[2, j]
+        inside_box = inside_box and box[0, j] - reach <= p[j] <= box[1, j] + reach
+    if not inside_box:
+        return False, 0, -1
+    counter[0] += 2
+    tag = counter[0]
+    n = _candidates(i, p, reach, rho, geo, lists, ref, mark, tag, cand, lb)
+    if n == 0:
+        return False, 0, -1
+    status, g = _closest(xs[i], n, cand, lb, mark, tag, prev[i], adj_ptr, adj_idx, geo,
+                         u_max, xm, conn, n_quads, params, work, best)
+    return True, status, g
+
+
+@numba.njit(cache=True)
 def scan_nodes(xs, vs, xm, vm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_quads, adj_ptr,
                adj_idx, params, lists, ref, prev, mark, counter, cand, lb, facet, out):
     """Closest facet of every slave node within reach, as PointToSurfaceContact's numpy path
@@ -511,20 +534,11 @@ def scan_nodes(xs, vs, xm, vm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_qu
     n_pairs = 0
     for i in range(xs.shape[0]):
         facet[i] = -1
-        inside_box = True
-        for j in range(3):
-            p[j] = ((xs[i, 0] - r_m[0]) * A_m[0, j] + (xs[i, 1] - r_m[1]) * A_m[1, j]) + (
-                xs[i, 2] - r_m[2]) * A_m[2, j]
-            inside_box = inside_box and box[0, j] - reach <= p[j] <= box[1, j] + reach
-        if not inside_box:
+        searched, status, g = _search_node(i, xs, xm, r_m, A_m, box, reach, rho, u_max, geo,
+                                           conn, n_quads, adj_ptr, adj_idx, params, lists, ref,
+                                           prev, mark, counter, cand, lb, work, best, p)
+        if not searched:
             continue
-        counter[0] += 2
-        tag = counter[0]
-        n = _candidates(i, p, reach, rho, geo, lists, ref, mark, tag, cand, lb)
-        if n == 0:
-            continue
-        status, g = _closest(xs[i], n, cand, lb, mark, tag, prev[i], adj_ptr, adj_idx, geo,
-                             u_max, xm, conn, n_quads, params, work, best)
         if status:
             return status, g, n_pairs
         facet[i] = g
@@ -674,20 +688,11 @@ def penetration_scan(xs, xm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_quad
                 return status, f0, 0.0, -1, -1
             if best[REC_IN] == 1.0 and best[REC_GAP] >= -depth:
                 continue
-        inside_box = True
-        for j in range(3):
-            p[j] = ((xs[i, 0] - r_m[0]) * A_m[0, j] + (xs[i, 1] - r_m[1]) * A_m[1, j]) + (
-                xs[i, 2] - r_m[2]) * A_m[2, j]
-            inside_box = inside_box and box[0, j] - reach <= p[j] <= box[1, j] + reach
-        if not inside_box:
+        searched, status, g = _search_node(i, xs, xm, r_m, A_m, box, reach, rho, u_max, geo,
+                                           conn, n_quads, adj_ptr, adj_idx, params, lists, ref,
+                                           prev, mark, counter, cand, lb, work, best, p)
+        if not searched:
             continue
-        counter[0] += 2
-        tag = counter[0]
-        n = _candidates(i, p, reach, rho, geo, lists, ref, mark, tag, cand, lb)
-        if n == 0:
-            continue
-        status, g = _closest(xs[i], n, cand, lb, mark, tag, prev[i], adj_ptr, adj_idx, geo,
-                             u_max, xm, conn, n_quads, params, work, best)
         if status:
             return status, g, 0.0, -1, -1
         if g < 0:

@@ -74,3 +74,21 @@ class ContactNodes:
         n = sel_ptr[m]
         sel = sp.csr_matrix((sel_data[:n], sel_idx[:n], sel_ptr), shape=(m, self.n_dofs))
         return frame, elastic, sel
+
+
+class SearchState:
+    """Search state of kernels.scan_nodes / kernels.penetration_scan for n nodes against nf
+    facets: per node its candidate superset (lists, ref) and last facet (prev); work arrays
+    (mark, counter, cand, lb)."""
+
+    def __init__(self, n: int, nf: int, cap: int = 256):
+        self.lists = np.zeros((n, min(nf, cap) + 1), dtype=np.int64)
+        self.ref = np.full((n, 4), -1.0)
+        self.prev = np.full(n, -1, dtype=np.int64)
+        self.mark = np.zeros(nf, dtype=np.int64)
+        self.counter = np.zeros(1, dtype=np.int64)
+        self.cand = np.zeros(nf, dtype=np.int64)
+        self.lb = np.zeros(nf)
+
+    def arrays(self):
+        return self.lists, self.ref, self.prev, self.mark, self.counter, self.cand, self.lb

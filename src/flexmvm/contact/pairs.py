@@ -28,7 +28,7 @@ from flexmvm.constraints.contact import ContactRows
 from flexmvm.constraints.rows import Rows
 from flexmvm.contact import kernels
 from flexmvm.contact.geometry import BroadPhase, MasterSurface
-from flexmvm.contact.nodes import ContactNodes
+from flexmvm.contact.nodes import ContactNodes, SearchState
 from flexmvm.contact.penetration import Penetration, SurfaceMeasure
 from flexmvm.contact.reference import body_rows
 from flexmvm.errors import InputError, SolverError
@@ -125,13 +125,7 @@ class PointToSurfaceContact:
         self._rho = max(self.search_radius, 0.5 * float(np.median(self.broad.circumradius)))
         self._params = kernels.projection_params()
         ns, nf = len(self.slave_nodes), self.surface.n_facets
-        self._lists = np.zeros((ns, min(nf, _LIST_CAP) + 1), dtype=np.int64)
-        self._ref = np.full((ns, 4), -1.0)
-        self._prev = np.full(ns, -1, dtype=np.int64)
-        self._mark = np.zeros(nf, dtype=np.int64)
-        self._counter = np.zeros(1, dtype=np.int64)
-        self._cand = np.zeros(nf, dtype=np.int64)
-        self._lb = np.zeros(nf)
+        self._search = SearchState(ns, nf, _LIST_CAP)
         self._facet = np.full(ns, -1, dtype=np.int64)
         self._out = np.zeros((ns, 11))
         self._idx = np.zeros(ns, dtype=np.int64)
@@ -155,7 +149,7 @@ class PointToSurfaceContact:
         status, facet, n = kernels.scan_nodes(
             self._s.x, self._s.xd, m.x, m.xd, sm.r, sm.A, self._box2, reach, self._rho,
             self._u_max, self._geo, self._conn, self.surface.n_quads, *self._adj, self._params,
-            self._lists, self._ref, self._prev, self._mark, self._counter, self._cand, self._lb,
+            *self._search.arrays(),
             self._facet, self._out)
         if status:
             raise SolverError(_failure(status, facet))

@@ -25,7 +25,7 @@ import numpy as np
 
 from flexmvm.contact import kernels
 from flexmvm.contact.geometry import BroadPhase, MasterSurface
-from flexmvm.contact.nodes import ContactNodes
+from flexmvm.contact.nodes import ContactNodes, SearchState
 
 EDGE_TOL = 0.01  # lateral offset beyond a facet edge, per facet circumradius, still counted:
                  # covers the round-off and the differential Poisson expansion of two faces
@@ -45,22 +45,6 @@ class Penetration:
     node: int
     against: int
     facet: int = -1
-
-
-class _Search:
-    """Search state of penetration_scan for n nodes against nf facets (see kernels.scan_nodes)."""
-
-    def __init__(self, n: int, nf: int, cap: int = 256):
-        self.lists = np.zeros((n, min(nf, cap) + 1), dtype=np.int64)
-        self.ref = np.full((n, 4), -1.0)
-        self.prev = np.full(n, -1, dtype=np.int64)
-        self.mark = np.zeros(nf, dtype=np.int64)
-        self.counter = np.zeros(1, dtype=np.int64)
-        self.cand = np.zeros(nf, dtype=np.int64)
-        self.lb = np.zeros(nf)
-
-    def arrays(self):
-        return self.lists, self.ref, self.prev, self.mark, self.counter, self.cand, self.lb
 
 
 class _Direction:
@@ -91,14 +75,14 @@ class _Direction:
         self.search_radius = search_radius
         self.rho = max(search_radius, 0.5 * float(np.median(broad.circumradius)))
         self.params = kernels.projection_params()
-        self.search = _Search(len(self.node_ids), surface.n_facets)
+        self.search = SearchState(len(self.node_ids), surface.n_facets)
 
     def measure(self, states, u_max_facets: float, deep: bool, floor: float
                 ) -> tuple[int, int, Penetration]:
         x = self.node_set.x if self.rows is None else self.node_set.x[self.rows]
         st = states[self.against]
         if deep:  # the start check: reach over both surfaces, a throwaway search state
-            reach, search = self.search_radius + u_max_facets + self.extent, _Search(len(x), len(self.geo))
+            reach, search = self.search_radius + u_max_facets + self.extent, SearchState(len(x), len(self.geo))
         else:
             reach, search = self.search_radius + u_max_facets, self.search
         status, bad, depth, i, g = kernels.penetration_scan(
