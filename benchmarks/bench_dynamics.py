@@ -15,7 +15,8 @@ import numpy as np
 
 from flexmvm.bodies.build import body_from_fe
 from flexmvm.fe.assembly import assemble
-from flexmvm.integrate.driver import TimeGrid, simulate
+from flexmvm.integrate.driver import simulate
+from flexmvm.integrate.run_result import TimeGrid
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import NodeLoad, System
 from flexmvm.materials import ALUMINIUM

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import argparse
 
-from flexmvm.scenarios.compare import compare_runs, run_curves
+from flexmvm.scenarios import load_scenario
+from flexmvm.scenarios.compare import compare_runs
 from flexmvm.scenarios.run import run_scenario
-from flexmvm.scenarios.schema import load_scenario
 
 
 def main() -> None:
@@ -24,7 +24,7 @@ def main() -> None:
     sc = load_scenario(args.scenario).with_overrides(t_end_s=args.t_end, dt_s=args.dt)
     full = run_scenario(sc.with_overrides(model="full"))
     mvm = run_scenario(sc.with_overrides(model="mvm"))
-    c = compare_runs(*run_curves(full.result), *run_curves(mvm.result))
+    c = compare_runs(*full.result.curves(), *mvm.result.curves())
     tf, tm = full.result.wall_time_s, mvm.result.wall_time_s
     print(f"window {args.t_end * 1e3:.3f} ms, {full.result.n_steps} steps")
     print(f"full FE: {tf:.1f} s ({sum(full.summary['dof'].values())} DOF); "

@@ -38,7 +38,7 @@ SCENARIO = ROOT / "scenarios" / "rod_impact.toml"
 # run in a child process: build a scenario variant, simulate, print one JSON line
 _SIM = r"""
 import json, sys, time
-from flexmvm.scenarios.schema import load_scenario
+from flexmvm.scenarios import load_scenario
 from flexmvm.scenarios.build import build_scenario
 from flexmvm.integrate.driver import simulate
 path, model, t_end = sys.argv[1], sys.argv[2], float(sys.argv[3])

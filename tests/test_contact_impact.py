@@ -11,8 +11,8 @@ import functools
 from pathlib import Path
 
 from flexmvm.materials import ALUMINIUM, BRASS
+from flexmvm.scenarios import load_scenario, scenario_from_dict
 from flexmvm.scenarios.run import run_scenario
-from flexmvm.scenarios.schema import load_scenario, scenario_from_dict
 from flexmvm.theory.wave import Rod1D, st_venant_force
 
 CASE = Path(__file__).parent / "data" / "short_flat_impact.toml"

@@ -19,7 +19,8 @@ from flexmvm.bodies.build import body_from_fe, rigid_body_from_fe
 from flexmvm.bodies.rotation import axis_angle
 from flexmvm.constraints.joints import BodyPoint, DistanceJoint, SphericalJoint
 from flexmvm.fe.assembly import assemble
-from flexmvm.integrate.driver import Probe, TimeGrid, simulate
+from flexmvm.integrate.driver import simulate
+from flexmvm.integrate.run_result import Probe, TimeGrid
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import NodeLoad, System
 from flexmvm.materials import ALUMINIUM, Material

@@ -105,8 +105,8 @@ def test_contact_runs_check_every_lcp(monkeypatch):
     from pathlib import Path
 
     from flexmvm.integrate import moreau_jean, nonrotating
+    from flexmvm.scenarios import ModelConfig, load_scenario
     from flexmvm.scenarios.run import run_scenario
-    from flexmvm.scenarios.schema import ModelConfig, load_scenario
 
     seen = []
 

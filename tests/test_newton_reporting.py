@@ -15,8 +15,8 @@ import pytest
 
 from flexmvm.integrate import driver
 from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
+from flexmvm.scenarios import load_scenario
 from flexmvm.scenarios.run import run_scenario
-from flexmvm.scenarios.schema import load_scenario
 
 TINY = Path(__file__).parent / "data" / "tiny_impact.toml"
 RTOL = 1e-10  # the integrator's Newton tolerance (relative momentum residual)

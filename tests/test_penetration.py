@@ -24,8 +24,8 @@ from flexmvm.bodies.body import FlexibleBody
 from flexmvm.contact.geometry import MasterSurface
 from flexmvm.contact.pairs import PointToSurfaceContact
 from flexmvm.contact.penetration import EDGE_TOL
+from flexmvm.scenarios import load_scenario
 from flexmvm.scenarios.run import run_scenario
-from flexmvm.scenarios.schema import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 SHORT = ROOT / "tests" / "data" / "short_flat_impact.toml"

@@ -2,10 +2,9 @@
 
 The run is built by hand from two real rod bodies (dense and csr psi) moving with a known
 motion: r(t) = r0 + v t, A(t) = rotation about z by w t (omega = (0, 0, w) in the body frame),
-q(t) = q0 + qd t. q is linear in t, so the finite-difference q_dot of the writers is exact and
-q(t) = q0 + qd t + qa t^2: the writers estimate q_dot by finite differences of q between
-outputs (RunResult keeps no q_dot), so the written nodal velocities must equal
-FlexibleBody.node_velocities with q_dot = numpy.gradient(q, t) (exact inside for qa = 0).
+q(t) = q0 + qd t + qa t^2. The RunResult carries the exact q_dot, which the writers use as
+it is, so the written nodal velocities must equal FlexibleBody.node_velocities with the exact
+q_dot (to round-off).
 """
 
 from __future__ import annotations
@@ -22,7 +21,7 @@ import scipy.sparse as sp
 
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.errors import InputError
-from flexmvm.integrate.driver import RunResult
+from flexmvm.integrate.run_result import RunResult
 from flexmvm.materials import ALUMINIUM, BRASS
 from flexmvm.mesh.mesh import CellBlock, CellType, Mesh
 from flexmvm.mesh.quality import HEX27_IJK
@@ -30,7 +29,6 @@ from flexmvm.mesh.rod import RodSpec, rod_mesh
 from flexmvm.plots.figures import curves_from_run, plot_force_comparison, plot_run
 from flexmvm.results.fields import (
     displacement,
-    elastic_rates,
     nodal_stress,
     node_positions,
     node_velocities,
@@ -100,10 +98,11 @@ def run(rod, bodies, motion):
     n_out, nb = len(t), len(bodies)
     r, A, fv = np.zeros((n_out, nb, 3)), np.zeros((n_out, nb, 3, 3)), np.zeros((n_out, nb, 6))
     qs = [np.zeros((n_out, NQ)) for _ in bodies]
+    qds = [np.zeros((n_out, NQ)) for _ in bodies]
     px, pv = np.zeros((n_out, 2, 3)), np.zeros((n_out, 2, 3))
     for i, ti in enumerate(t):
         for b, body in enumerate(bodies):
-            r[i, b], A[i, b], qs[b][i], fv[i, b], qd = _state(ti, *per_body[b])
+            r[i, b], A[i, b], qs[b][i], fv[i, b], qds[b][i] = _state(ti, *per_body[b])
         for p, (b, node) in enumerate(probes):
             rb, Ab, qb, fvb, qd = _state(ti, *per_body[b])
             vb = np.concatenate([fvb, qd])
@@ -116,7 +115,7 @@ def run(rod, bodies, motion):
         contact_force=force, joint_force=np.zeros((n_out, 0)),
         kinetic=np.linspace(1.0, 2.0, n_out), strain=np.linspace(0.0, 0.1, n_out),
         potential=np.zeros(n_out), momentum=np.ones((n_out, 3)),
-        angular_momentum=np.full((n_out, 3), 2.0), q=qs, frame_A=A,
+        angular_momentum=np.full((n_out, 3), 2.0), q=qs, q_dot=qds, frame_A=A,
         contact_intervals=[(1e-4, 3.5e-4)], n_steps=40, n_factorizations=2, wall_time_s=0.5,
     )
 
@@ -218,8 +217,7 @@ def test_paraview_series_files_and_point_data(tmp_path, run, bodies, motion):
             np.testing.assert_allclose(m.points, r0 + body.X @ A0.T, rtol=0, atol=1e-15)
             assert m.cells[0].type == "hexahedron27"
             np.testing.assert_array_equal(m.cells[0].data, body.mesh.cells[0].connectivity)
-            r, A, q, fv, _ = _state(t[i], *per_body[b])
-            qd = np.gradient(run.q[b], t, axis=0)[i]
+            r, A, q, fv, qd = _state(t[i], *per_body[b])
             x = body.node_positions(np.arange(len(body.X)), r, A, q)
             np.testing.assert_allclose(m.point_data["displacement"], x - m.points, atol=1e-15)
             v_exact = body.node_velocities(np.arange(len(body.X)), A, q, np.concatenate([fv, qd]))
@@ -257,19 +255,6 @@ def test_fields_match_body_kinematics(bodies, motion):
     u = displacement(body, r, A, q, per_body[1][0], np.eye(3))
     np.testing.assert_allclose(u, node_positions(body, r, A, q) - (per_body[1][0] + body.X),
                                atol=1e-15)
-
-
-def test_elastic_rates_exact_for_linear_and_quadratic_order():
-    """q = a + b t is differentiated exactly; q = t^2 on a uniform grid has O(h) end error
-    (one-sided) and exact interior values (central differences)."""
-    t = np.array([0.0, 0.1, 0.25, 0.3])
-    q = np.column_stack([2.0 + 3.0 * t, -t])
-    np.testing.assert_allclose(elastic_rates(t, q), [[3.0, -1.0]] * 4, atol=1e-12)
-    tu = np.linspace(0, 1, 11)
-    qd = elastic_rates(tu, (tu**2)[:, None])[:, 0]
-    np.testing.assert_allclose(qd[1:-1], 2 * tu[1:-1], atol=1e-12)
-    with pytest.raises(InputError, match="increasing"):
-        elastic_rates(np.array([0.0, 0.0, 1.0]), np.zeros((3, 1)))
 
 
 def _uniaxial(nodes: np.ndarray, sigma: float, material) -> np.ndarray:

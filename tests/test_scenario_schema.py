@@ -14,9 +14,9 @@ from flexmvm.errors import InputError
 from flexmvm.materials import PRESETS
 from flexmvm.scenarios import (
     ContactKind,
+    EndShape,
     ModelConfig,
     ModelKind,
-    RodEnd,
     Rotation,
     ScenarioError,
     load_scenario,
@@ -68,7 +68,7 @@ def test_shipped_scenarios_load(name: str) -> None:
     assert b1.model.kind is ModelKind.FULL
     assert b2.model.kind is ModelKind.MVM
     assert (b2.model.selection_ij, b2.model.modes) == ((1, 3), 37)
-    assert b2.rod is not None and (b2.rod.end_a, b2.rod.end_b) == (RodEnd.FLAT, RodEnd.FLAT)
+    assert b2.rod is not None and (b2.rod.end_a, b2.rod.end_b) == (EndShape.FLAT, EndShape.FLAT)
     assert [
         (c.slave_body, c.slave_surface, c.master_body, c.master_surface, c.kind) for c in s.contacts
     ] == [("b2", "end_a", "b1", "end_a", ContactKind.FRICTIONLESS)]
@@ -83,7 +83,7 @@ def test_rod_impact_seed_case() -> None:
     [0, 1] at rest: they touch at t = 0."""
     s = load_scenario(SCENARIOS / "rod_impact.toml")
     b1, b2 = s.body("b1"), s.body("b2")
-    assert b1.rod is not None and b1.rod.end_a is RodEnd.HEMISPHERE
+    assert b1.rod is not None and b1.rod.end_a is EndShape.HEMISPHERE
     assert (b1.rod.length_m, b1.rod.radius_m) == (1.0, 0.01)
     np.testing.assert_allclose(b1.placement.to_global((0.0, 0.0, 0.0)), [0, 0, 0], atol=1e-15)
     np.testing.assert_allclose(b1.placement.to_global((1.0, 0.0, 0.0)), [-1, 0, 0], atol=1e-15)
@@ -102,7 +102,7 @@ def test_rod_impact_seed_case() -> None:
 def test_flat_variant_differs_only_in_the_striker_end() -> None:
     hemi = load_scenario(SCENARIOS / "rod_impact.toml").model_dump()
     flat = load_scenario(SCENARIOS / "rod_impact_flat.toml").model_dump()
-    assert flat["bodies"][0]["rod"]["end_a"] is RodEnd.FLAT
+    assert flat["bodies"][0]["rod"]["end_a"] is EndShape.FLAT
     for d in (hemi, flat):
         d.pop("name"), d.pop("description")
         d["bodies"][0]["rod"].pop("end_a")
@@ -377,7 +377,7 @@ def test_time_and_per_body_overrides() -> None:
     [
         ({"t_end_s": 0.0}, "time.t_end_s: must be > 0"),
         ({"dt_s": 1e-5}, "time.output_dt_s: must be >= dt_s = 1e-05"),
-        ({"model": "fem"}, "bodies[0].model.kind: input should be"),
+        ({"model": "fem"}, "model kind 'fem'; expected one of full, mvm"),
         ({"body_models": {"b7": ModelConfig()}}, "no body 'b7'"),
     ],
 )
@@ -416,7 +416,7 @@ def test_docs_example_loads(tmp_path: Path) -> None:
     path.write_text(example)
     s = load_scenario(path)
     assert s.body("b2").material_obj().E == 72.71e9
-    assert s.body("b2").rod is not None and s.body("b2").rod.end_a is RodEnd.FLAT
+    assert s.body("b2").rod is not None and s.body("b2").rod.end_a is EndShape.FLAT
     assert s.time.dt_max_s == 1e-6
 
 

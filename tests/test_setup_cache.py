@@ -183,13 +183,11 @@ def test_unwritable_cache_dir_is_ignored(rod, fe, tmp_path, monkeypatch):
 def test_scenario_builder_reads_the_disk_cache(cache, monkeypatch):
     """A second process (here: cleared per-process caches) builds nothing, mode floor included."""
     args = (SPEC, ALUMINIUM, BasisKind.CRAIG_BAMPTON, tuple(rod_mesh(SPEC).selection(1, 2)))
-    build._fe.cache_clear()
-    build._basis_cached.cache_clear()
+    build.clear_caches()
     with build.craig_bampton_mode_floor(6):
         fresh = build.basis_for(*args, 4, "end_b")
     assert setup_cache.info().n_entries == 2
-    build._fe.cache_clear()
-    build._basis_cached.cache_clear()
+    build.clear_caches()
 
     def refuse(*_args, **_kw):
         raise AssertionError("rebuilt although cached")
@@ -199,13 +197,11 @@ def test_scenario_builder_reads_the_disk_cache(cache, monkeypatch):
     with build.craig_bampton_mode_floor(6):
         hit = build.basis_for(*args, 4, "end_b")
     assert np.array_equal(hit.psi, fresh.psi) and hit.n_modes == 4
-    build._fe.cache_clear()
-    build._basis_cached.cache_clear()
+    build.clear_caches()
 
 
 def _clear_process_caches():
-    for f in (build._fe, build._basis_cached, build._parts_cached):
-        f.cache_clear()
+    build.clear_caches()
 
 
 def _assert_same_parts(a, b):
@@ -286,9 +282,9 @@ def test_warm_scenario_build_computes_nothing(cache, monkeypatch):
     nodes = tuple(rod_mesh(SPEC).selection(1, 2))
     args = (SPEC, ALUMINIUM, BasisKind.CRAIG_BAMPTON, nodes)
     _clear_process_caches()
-    fresh = build._parts(*args, 6, "end_b")
+    fresh = build.body_parts_for(*args, 6, "end_b")
     with build.craig_bampton_mode_floor(6):
-        cut_basis, cut = build.basis_for(*args, 4, "end_b"), build._parts(*args, 4, "end_b")
+        cut_basis, cut = build.basis_for(*args, 4, "end_b"), build.body_parts_for(*args, 4, "end_b")
     _clear_process_caches()
 
     def refuse(*_args, **_kw):
@@ -296,10 +292,10 @@ def test_warm_scenario_build_computes_nothing(cache, monkeypatch):
 
     for name in ("build_basis", "assemble", "body_parts", "_fe"):
         monkeypatch.setattr(build, name, refuse)
-    hit = build._parts(*args, 6, "end_b")
+    hit = build.body_parts_for(*args, 6, "end_b")
     _assert_same_parts(hit, fresh)
     with build.craig_bampton_mode_floor(6):
-        cut_hit = build._parts(*args, 4, "end_b")
+        cut_hit = build.body_parts_for(*args, 4, "end_b")
     _assert_same_parts(cut_hit, cut)
     assert cut.inv.nq == cut_basis.psi.shape[1] == 3 * len(nodes) + 4
     monkeypatch.undo()

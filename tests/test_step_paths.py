@@ -25,9 +25,9 @@ from flexmvm.bodies.body import FlexibleBody
 from flexmvm.integrate.body_solver import BodySolver
 from flexmvm.integrate.driver import simulate
 from flexmvm.metrics.ncc import ncc
+from flexmvm.scenarios import load_scenario
 from flexmvm.scenarios.build import build_scenario
 from flexmvm.scenarios.run import run_scenario
-from flexmvm.scenarios.schema import load_scenario
 
 DATA = Path(__file__).parent / "data"
 REFERENCE = DATA / "step_regression_9bfd055.npz"

@@ -19,13 +19,10 @@ import pytest
 from flexmvm.cli.select_cmd import parse_range
 from flexmvm.errors import InputError
 from flexmvm.metrics.ncc import Target
-from flexmvm.scenarios.schema import load_scenario
-from flexmvm.studies.selection import (
-    estimate_selection,
-    median_ncc,
-    run_selection_study,
-    selection_cases,
-)
+from flexmvm.scenarios import load_scenario
+from flexmvm.studies.estimate import estimate_selection, median_ncc
+from flexmvm.studies.grid import selection_cases
+from flexmvm.studies.selection import run_selection_study
 
 TINY = Path(__file__).parent / "data" / "tiny_impact.toml"
 GRID = {"layers": [1, 2], "laps": [1, 2], "modes": [7, 13]}
@@ -224,8 +221,8 @@ def test_materials_study_all_four(tmp_path):
 # ----------------------------------------------------------------------------------------------
 # study overrides (no time integration)
 def test_parse_model_and_study_scenario():
-    from flexmvm.scenarios.schema import ModelKind
-    from flexmvm.studies.selection import parse_model, study_scenario
+    from flexmvm.scenarios import ModelKind
+    from flexmvm.studies.grid import parse_model, study_scenario
 
     assert parse_model("scenario") is None
     assert parse_model("full").kind is ModelKind.FULL
@@ -252,10 +249,10 @@ def test_mode_floor_cuts_the_larger_craig_bampton_basis():
     import numpy as np
 
     from flexmvm.reduction.basis import BasisKind
-    from flexmvm.scenarios.build import basis_for, craig_bampton_mode_floor, rod_spec
+    from flexmvm.scenarios.build import basis_for, craig_bampton_mode_floor
 
     cfg = load_scenario(TINY).body("b2")
-    spec, mat = rod_spec(cfg.rod), cfg.material_obj()
+    spec, mat = cfg.rod.spec(), cfg.material_obj()
     from flexmvm.mesh.rod import rod_mesh
 
     sel = tuple(int(n) for n in rod_mesh(spec).selection(1, 1))

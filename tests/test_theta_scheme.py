@@ -17,11 +17,12 @@ import scipy.sparse as sp
 
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.integrate import DEFAULT_THETA
-from flexmvm.integrate.driver import TimeGrid, simulate
+from flexmvm.integrate.driver import simulate
 from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
+from flexmvm.integrate.run_result import TimeGrid
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import System
-from flexmvm.scenarios.schema import TimeConfig
+from flexmvm.scenarios import TimeConfig
 
 OMEGA = 2 * np.pi * 1000.0  # [rad/s]: period 1 ms
 PERIOD = 2 * np.pi / OMEGA

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import flexmvm.scenarios.run as run_module
 from flexmvm import validation
-from flexmvm.scenarios.schema import ModelConfig, load_scenario, scenario_from_dict
+from flexmvm.scenarios import ModelConfig, load_scenario, scenario_from_dict
 
 TINY = Path(__file__).parent / "data" / "tiny_impact.toml"
 

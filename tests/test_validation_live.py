@@ -32,12 +32,13 @@ import pytest
 
 from flexmvm import validation
 from flexmvm.contact.pairs import PENETRATION_RECOVERY
-from flexmvm.integrate.driver import Probe, simulate
+from flexmvm.integrate.driver import simulate
+from flexmvm.integrate.run_result import Probe
 from flexmvm.materials import ALUMINIUM, BRASS, Material
+from flexmvm.scenarios import ModelConfig, load_scenario, scenario_from_dict
 from flexmvm.scenarios.build import build_scenario
-from flexmvm.scenarios.compare import compare_runs, run_curves
+from flexmvm.scenarios.compare import compare_runs
 from flexmvm.scenarios.run import run_scenario, summarize
-from flexmvm.scenarios.schema import ModelConfig, load_scenario, scenario_from_dict
 from flexmvm.theory.scenario import theory_histories
 from flexmvm.theory.wave import ContactLaw, Rod1D, two_rod_impact
 
@@ -158,7 +159,7 @@ def test_short_full_fe_against_wave_hertz_theory():
     the theta = 0.55 damping of the unresolved modes; -0.037 % at h/2)."""
     run = _short("full")
     tt, ft, pt, _ = _theory()
-    c = compare_runs(tt, ft, pt, *run_curves(run.result))
+    c = compare_runs(tt, ft, pt, *run.result.curves())
     assert c["ncc_force"] >= 0.995
     assert abs(c["peak_err"]) < 0.06
     assert abs(c["impulse_err"]) < 0.02
@@ -179,7 +180,7 @@ def test_short_mvm_matches_its_full_fe():
     b2 free-end NCC >= 0.999 (measured 0.99996)."""
     full, mvm = _short("full"), _short("mvm")
     assert mvm.summary["dof"]["b2"] == 3 * 25 + 37 + 6
-    c = compare_runs(*run_curves(full.result), *run_curves(mvm.result))
+    c = compare_runs(*full.result.curves(), *mvm.result.curves())
     assert c["ncc_force"] >= 0.999
     for key in ("peak_err", "impulse_err", "duration_err"):
         assert abs(c[key]) < 0.005, (key, c[key])
@@ -202,7 +203,7 @@ def test_mvm_seed_body_in_contact():
     full, run = _short("full"), _short("mvm-seed")
     assert run.summary["model"]["b2"] == "mvm-seed"
     _check_sane(run)
-    c = compare_runs(*run_curves(full.result), *run_curves(run.result))
+    c = compare_runs(*full.result.curves(), *run.result.curves())
     assert abs(c["impulse_err"]) < 0.005
     assert c["ncc_force"] >= 0.7
     assert 0.0 < c["peak_err"] < 0.5
@@ -221,7 +222,7 @@ def test_modal_body_in_contact():
     full, run = _short("full"), _short("modal")
     assert run.summary["model"]["b2"] == "modal" and run.summary["dof"]["b2"] == 26
     _check_sane(run)
-    c = compare_runs(*run_curves(full.result), *run_curves(run.result))
+    c = compare_runs(*full.result.curves(), *run.result.curves())
     assert abs(c["impulse_err"]) < 0.005
     assert 0.0 < c["peak_err"] < 1.0
     assert c["ncc_b2_free_end"] >= 0.9
@@ -245,7 +246,7 @@ def test_rigid_striker_against_rigid_limit_theory():
     r1, r2 = Rod1D.from_material(_stiff(BRASS), L, R), Rod1D.from_material(ALUMINIUM, L, R)
     th = two_rod_impact(r1, r2, V0, 0.25e-3, ContactLaw.HERTZ, sphere_radius_m=R,
                         dt=min(r1.round_trip_s, r2.round_trip_s) / 200)
-    c = compare_runs(th.t, th.contact_force, {}, *run_curves(run.result))
+    c = compare_runs(th.t, th.contact_force, {}, *run.result.curves())
     assert c["ncc_force"] >= 0.99
     assert abs(c["peak_err"]) < 0.05
     assert abs(c["duration_err"]) < 0.05

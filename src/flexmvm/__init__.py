@@ -3,6 +3,100 @@
 Stages follow the data flow (docs/architecture.md):
 mesh -> fe -> reduction -> bodies -> constraints/contact -> integrate -> results
 -> metrics -> studies -> plots / cli.
+
+The names below are the library's surface (docs/api.md); they are imported on first use, so
+``import flexmvm`` stays cheap::
+
+    import flexmvm as fm
+    sc = fm.load_scenario("scenarios/rod_impact.toml").with_model("b2", fm.mvm("1-3", 25))
+    res = fm.run(sc, t_end_s=8e-4)
+    ref = fm.run(sc.with_model("b2", fm.full()), t_end_s=8e-4)
+    fm.compare(res, ref).ncc_force
 """
 
+from __future__ import annotations
+
+import importlib
+
 __version__ = "0.1.0"
+
+#: public name -> module that defines it
+_API = {
+    # scenarios: read, build, change
+    "load_scenario": "flexmvm.scenarios.load",
+    "scenario_from_dict": "flexmvm.scenarios.load",
+    "Scenario": "flexmvm.scenarios.schema",
+    "ModelConfig": "flexmvm.scenarios.schema",
+    "ScenarioError": "flexmvm.scenarios.problems",
+    "full": "flexmvm.scenarios.schema",
+    "mvm": "flexmvm.scenarios.schema",
+    "modal": "flexmvm.scenarios.schema",
+    "rigid": "flexmvm.scenarios.schema",
+    "ModelKind": "flexmvm.bodies.build",
+    "Material": "flexmvm.materials",
+    # runs and comparisons
+    "run": "flexmvm.scenarios.run",
+    "ScenarioRun": "flexmvm.scenarios.run",
+    "RunResult": "flexmvm.integrate.run_result",
+    "compare": "flexmvm.scenarios.compare",
+    "RunComparison": "flexmvm.scenarios.compare",
+    "theory_histories": "flexmvm.theory.scenario",
+    "write_run": "flexmvm.results.output",
+    "Target": "flexmvm.metrics.ncc",
+    # studies
+    "select": "flexmvm.studies.api",
+    "material_study": "flexmvm.studies.api",
+    "estimate_selection": "flexmvm.studies.estimate",
+    # per-process caches
+    "clear_caches": "flexmvm.scenarios.build",
+    "set_cache_sizes": "flexmvm.scenarios.build",
+    "cache_sizes": "flexmvm.scenarios.build",
+    # errors
+    "FlexmvmError": "flexmvm.errors",
+    "InputError": "flexmvm.errors",
+    "SolverError": "flexmvm.errors",
+}
+
+__all__ = [
+    "FlexmvmError",
+    "InputError",
+    "Material",
+    "ModelConfig",
+    "ModelKind",
+    "RunComparison",
+    "RunResult",
+    "Scenario",
+    "ScenarioError",
+    "ScenarioRun",
+    "SolverError",
+    "Target",
+    "cache_sizes",
+    "clear_caches",
+    "compare",
+    "estimate_selection",
+    "full",
+    "load_scenario",
+    "material_study",
+    "modal",
+    "mvm",
+    "rigid",
+    "run",
+    "scenario_from_dict",
+    "select",
+    "set_cache_sizes",
+    "theory_histories",
+    "write_run",
+]
+
+
+def __getattr__(name: str):
+    module = _API.get(name)
+    if module is None:
+        raise AttributeError(f"module 'flexmvm' has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> list[str]:
+    return sorted(set(globals()) | set(_API))

@@ -36,8 +36,8 @@ from flexmvm.errors import InputError
 from flexmvm.materials import ALUMINIUM, BRASS
 from flexmvm.results.atomic import canonical_json, write_json_atomic, write_text_atomic
 from flexmvm.results.history import read_history, write_history
-from flexmvm.scenarios.compare import compare_runs, run_curves
-from flexmvm.scenarios.schema import ModelConfig, Scenario, load_scenario, scenario_from_dict
+from flexmvm.scenarios import ModelConfig, Scenario, load_scenario, scenario_from_dict
+from flexmvm.scenarios.compare import compare_runs
 from flexmvm.setup_cache import code_version
 from flexmvm.theory.scenario import theory_histories
 from flexmvm.theory.wave import Rod1D, st_venant_force
@@ -125,7 +125,7 @@ def run_case(out: Path, name: str, sc: Scenario, recompute: bool = False,
             pass  # absent, stale or unreadable: recompute
     from flexmvm.scenarios.run import run_scenario
     r = run_scenario(sc, progress=progress)
-    t, f, p = run_curves(r.result)
+    t, f, p = r.result.curves()
     meta = {"key": key, "code_version": run_code_version(), "commit": git_commit(),
             "computed_utc": _now(), "inputs": case_inputs(sc)}
     d.mkdir(parents=True, exist_ok=True)

@@ -8,12 +8,44 @@ recomputing, so a cache (flexmvm.setup_cache.cached_body) can hold them.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import StrEnum
 
 import numpy as np
 import scipy.sparse as sp
 
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.bodies.invariants import InertiaInvariants, inertia_invariants, leading_columns
+from flexmvm.reduction.basis import BasisKind
+
+
+class ModelKind(StrEnum):
+    """How a body's deformation is represented (DESIGN.md, Bodies); values: the scenario
+    file's ``model.kind`` and ``flexmvm run --model``."""
+
+    FULL = "full"  # all nodal DOFs (reference solution)
+    MVM = "mvm"  # Craig-Bampton: retained nodes + fixed-interface modes (default MVM)
+    MVM_SEED = "mvm-seed"  # seed eq. (4): modes on region I, nodal DOFs on region II
+    MODAL = "modal"  # first N modes of the reference-supported body
+    RIGID = "rigid"  # no elastic coordinates
+
+    @property
+    def basis(self) -> BasisKind | None:
+        """The reduction basis of this model (None: rigid, no elastic coordinates)."""
+        return _BASIS.get(self)
+
+    @property
+    def retains_nodes(self) -> bool:
+        """Keeps a node selection (region II) beside its modes: the two MVM kinds."""
+        return self in (ModelKind.MVM, ModelKind.MVM_SEED)
+
+    @property
+    def uses_modes(self) -> bool:
+        """Has a mode count (>= 1): the MVM kinds and the modal model."""
+        return self in (ModelKind.MVM, ModelKind.MVM_SEED, ModelKind.MODAL)
+
+
+_BASIS = {ModelKind.FULL: BasisKind.FULL, ModelKind.MVM: BasisKind.CRAIG_BAMPTON,
+          ModelKind.MVM_SEED: BasisKind.SEED_BLOCK, ModelKind.MODAL: BasisKind.MODAL}
 
 
 @dataclass(frozen=True)

@@ -20,7 +20,7 @@ def command(scenario: Path, out_dir: Path, dt: float | None) -> None:
     as it was. An existing DIR is replaced, if it is empty or an earlier theory output."""
     from flexmvm.results.history import write_history
     from flexmvm.results.outdir import check_creatable, staged_dir
-    from flexmvm.scenarios.schema import load_scenario
+    from flexmvm.scenarios import load_scenario
     from flexmvm.theory.scenario import theory_histories
 
     check_creatable(out_dir)

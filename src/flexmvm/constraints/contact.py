@@ -6,13 +6,21 @@ neither stage imports the other.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import StrEnum
 from typing import Protocol, runtime_checkable
 
 import numpy as np
 
 from flexmvm.constraints.rows import Rows
 
-__all__ = ["ContactProvider", "ContactRows"]
+__all__ = ["ContactKind", "ContactProvider", "ContactRows"]
+
+
+class ContactKind(StrEnum):
+    """What a contact constrains (values: the scenario file's ``kind``)."""
+
+    FRICTIONLESS = "frictionless"  # normal gap >= 0 (default)
+    BONDED = "bonded"  # seed eq. (7): all three relative components once closed
 
 
 @dataclass

@@ -8,12 +8,24 @@ coordinates); the ground is a fixed global point.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from enum import StrEnum
 
 import numpy as np
 
 from flexmvm.bodies.rotation import cross3
 from flexmvm.constraints.rows import Rows
 from flexmvm.errors import InputError
+
+
+class JointType(StrEnum):
+    """The joints a scenario can declare (values: the scenario file's ``type``)."""
+
+    GROUND = "ground"  # the body's floating frame fixed at its placement (6 constraints)
+    FIXED = "fixed"  # weld at a point: 6 constraints
+    SPHERICAL = "spherical"  # point coincidence: 3 constraints
+    REVOLUTE = "revolute"  # point coincidence + axis: 5 constraints
+    DISTANCE = "distance"  # constant distance between two points (a string): 1 constraint
+    PRESCRIBED = "prescribed"  # a point moves with a constant global velocity: 3 constraints
 
 
 @dataclass(frozen=True)

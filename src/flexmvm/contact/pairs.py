@@ -19,12 +19,11 @@ surface nodes against the slave facets too (given `slave_surface`).
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import Enum
 
 import numpy as np
 import scipy.sparse as sp
 
-from flexmvm.constraints.contact import ContactRows
+from flexmvm.constraints.contact import ContactKind, ContactRows
 from flexmvm.constraints.rows import Rows
 from flexmvm.contact import kernels
 from flexmvm.contact.geometry import BroadPhase, MasterSurface
@@ -33,14 +32,10 @@ from flexmvm.contact.penetration import Penetration, SurfaceMeasure
 from flexmvm.contact.reference import body_rows
 from flexmvm.errors import InputError, SolverError
 
-__all__ = ["ContactKind", "PointToSurfaceContact", "body_rows"]
+__all__ = ["PointToSurfaceContact", "body_rows"]
 
 _LIST_CAP = 256  # candidate supersets longer than this fall back to a scan of all facets
 
-
-class ContactKind(Enum):
-    FRICTIONLESS = "frictionless"
-    BONDED = "bonded"
 
 
 @dataclass

@@ -9,14 +9,13 @@ doubling every few steps in free flight, never past the next output time.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
 
 import numpy as np
 from threadpoolctl import threadpool_limits
 
 from flexmvm.errors import InputError, SolverError
-from flexmvm.integrate import DEFAULT_THETA
 from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
+from flexmvm.integrate.run_result import RunResult, StepHistory, TimeGrid
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import System
 
@@ -25,83 +24,6 @@ GROW_AFTER_STEPS = 4
 # bodies (InputError). 1e-9 m: the constraint pass's gap tolerance (contact.pairs gap_tol_m);
 # seven orders above the round-off of metre-scale coordinates, far below any physical overlap.
 OVERLAP_TOL_M = 1e-9
-
-
-@dataclass(frozen=True)
-class TimeGrid:
-    """t_end_s, dt_s (smallest step), dt_max_s (largest), output_dt_s; all [s]; theta of the
-    Moreau-Jean scheme (1/2: implicit midpoint; default flexmvm.integrate.DEFAULT_THETA)."""
-
-    t_end_s: float
-    dt_s: float
-    dt_max_s: float | None = None
-    output_dt_s: float | None = None
-    theta: float = DEFAULT_THETA
-
-    def ticks(self) -> tuple[int, int, int]:
-        """(total ticks, output ticks, largest step level k with 2^k ticks <= dt_max)."""
-        dt = self.dt_s
-        if not (dt > 0 and self.t_end_s > 0):
-            raise InputError(f"time: dt_s and t_end_s must be > 0, got {dt!r}, {self.t_end_s!r}")
-        out = self.output_dt_s or dt
-        n_out = round(out / dt)
-        if n_out < 1 or abs(n_out * dt - out) > 1e-9 * out:
-            raise InputError(f"time: output_dt_s = {out!r} must be a whole multiple of dt_s = {dt!r}")
-        dt_max = self.dt_max_s or dt
-        k_max = int(np.floor(np.log2(dt_max / dt) + 1e-9)) if dt_max >= dt else 0
-        return int(np.ceil(self.t_end_s / dt - 1e-9)), n_out, max(k_max, 0)
-
-
-@dataclass(frozen=True)
-class Probe:
-    """A named node of a body whose position and velocity are recorded."""
-
-    name: str
-    body: int
-    node: int
-
-
-@dataclass
-class RunResult:
-    """Histories at output times (arrays with their time axis t [s])."""
-
-    t: np.ndarray
-    body_names: list[str]
-    frame_r: np.ndarray            # (n_out, n_bodies, 3)
-    frame_v: np.ndarray            # (n_out, n_bodies, 6)
-    probe_names: list[str]
-    probe_x: np.ndarray            # (n_out, n_probes, 3)
-    probe_v: np.ndarray            # (n_out, n_probes, 3)
-    contact_force: np.ndarray      # (n_out,) normal force, impulse-averaged over the interval ending at t [N]
-    joint_force: np.ndarray        # (n_out, n_joint_rows) averaged constraint forces [N]
-    kinetic: np.ndarray
-    strain: np.ndarray
-    potential: np.ndarray
-    momentum: np.ndarray           # (n_out, 3) total linear momentum [kg m/s]
-    angular_momentum: np.ndarray   # (n_out, 3) about the origin [kg m^2/s]
-    q: list[np.ndarray]            # per body: (n_out, nq) elastic coordinates
-    frame_A: np.ndarray            # (n_out, n_bodies, 3, 3)
-    contact_intervals: list[tuple[float, float]] = field(default_factory=list)
-    max_penetration_m: float = 0.0  # deepest node penetration after any step, both directions
-    # where and when: {"t_s", "body", "node", "against"} (None: no penetration measured)
-    max_penetration_at: dict | None = None
-    # deepest per measured direction, "<body> nodes into <against>" -> depth [m]
-    max_penetration_by_direction_m: dict = field(default_factory=dict)
-    max_joint_drift: float = 0.0   # largest joint violation |phi| after any step (position level)
-    n_steps: int = 0
-    n_factorizations: int = 0
-    n_nonrotating_steps: int = 0   # steps taken by the linear non-rotating step (nonrotating.py)
-    steps_not_converged: int = 0   # steps that stopped above the Newton rtol (round-off floor)
-    newton_residual_max: float = 0.0  # largest relative momentum residual at a step's exit
-    lcp_residual_max: float = 0.0  # largest complementarity residual of any LCP solve
-    momentum_residual: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    # sum over all steps of the translational momentum residuals of all bodies [N s]: the
-    # linear-momentum change the scheme's solves left unbalanced (a free system's error)
-    wall_time_s: float = 0.0
-
-    @property
-    def total_energy(self) -> np.ndarray:
-        return self.kinetic + self.strain + self.potential
 
 
 class _Recorder:
@@ -132,6 +54,7 @@ class _Recorder:
         rec["A"] = np.array([st.A for st in states])
         rec["v"] = np.array([st.v[:6] for st in states])
         rec["q"] = [st.q.copy() for st in states]
+        rec["qd"] = [st.v[6:].copy() for st in states]
         px, pv = [], []
         for pr in self.probes:
             body, st = sysm.bodies[pr.body], states[pr.body]
@@ -160,6 +83,7 @@ class _Recorder:
             momentum=np.array([r["p"] for r in R]),
             angular_momentum=np.array([r["h"] for r in R]),
             q=[np.array([r["q"][b] for r in R]) for b in range(nb)],
+            q_dot=[np.array([r["qd"][b] for r in R]) for b in range(nb)],
             frame_A=np.array([r["A"] for r in R]),
             **extra,
         )
@@ -202,6 +126,7 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
     impulse, jimpulse = 0.0, np.zeros(integ.n_joint_rows)
     intervals: list[list[float]] = []
     max_pen, n_steps, drift = 0.0, 0, 0.0
+    step_t, step_h, step_impulse = [], [], []
     n_loose, worst_res, worst_lcp, p_res = 0, 0.0, 0.0, np.zeros(3)
     wall0 = time.perf_counter()
     while tick < n_ticks:
@@ -235,6 +160,9 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
         _track_intervals(intervals, in_contact, t, t + h)
         impulse += f
         jimpulse += res.joint_impulses
+        step_t.append(t0 + tick * dt)
+        step_h.append(h)
+        step_impulse.append(f)
         if tick % out_ticks == 0 or tick >= n_ticks:
             span_t = (tick - (len(rec.rows) - 1) * out_ticks) * dt
             rec.record(t0 + tick * dt, states, impulse / span_t, jimpulse / span_t, integ.carried)
@@ -254,7 +182,9 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
                       max_joint_drift=drift, n_steps=n_steps,
                       n_factorizations=nfac, n_nonrotating_steps=integ.n_nonrotating_steps,
                       steps_not_converged=n_loose, newton_residual_max=worst_res,
-                      lcp_residual_max=worst_lcp, momentum_residual=p_res, wall_time_s=wall)
+                      lcp_residual_max=worst_lcp, momentum_residual=p_res, wall_time_s=wall,
+                      steps=StepHistory(np.array(step_t), np.array(step_h),
+                                        np.array(step_impulse, dtype=float)))
 
 
 def _check_finite(row: dict, system, t: float) -> None:

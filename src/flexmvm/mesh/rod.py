@@ -16,7 +16,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from enum import Enum
+from enum import StrEnum
 from types import MappingProxyType
 
 import numpy as np
@@ -37,8 +37,8 @@ _SUB_U = np.array([[0, 1, 1, 0], [1, 2, 2, 1], [0, 1, 1, 0], [1, 2, 2, 1]])
 _SUB_V = np.array([[0, 0, 1, 1], [0, 0, 1, 1], [1, 1, 2, 2], [1, 1, 2, 2]])
 
 
-class EndShape(Enum):
-    """Shape of a rod end."""
+class EndShape(StrEnum):
+    """Shape of a rod end (values: the scenario file's ``end_a`` / ``end_b``)."""
 
     FLAT = "flat"
     HEMISPHERE = "hemisphere"

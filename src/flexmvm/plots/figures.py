@@ -17,7 +17,7 @@ from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.figure import Figure
 
 from flexmvm.errors import InputError
-from flexmvm.integrate.driver import RunResult
+from flexmvm.integrate.run_result import RunResult
 from flexmvm.metrics.ncc import Comparison, compare_force
 from flexmvm.results.atomic import atomic_path
 

@@ -5,11 +5,9 @@ Kinematics (seed eq. 1-3; docs/architecture.md "bodies"): node k of a body sits 
 x_k = r + A (X_k + psi_k q) and moves with x_dot_k = r_dot + A (omega x s_k + psi_k q_dot),
 s_k = X_k + psi_k q, omega in the body frame.
 
-A RunResult stores the frame velocity [r_dot, omega] (6,) at each output but not q_dot, so the
-elastic rates are estimated from the stored q by finite differences between output times
-(:func:`elastic_rates`: second-order central differences inside, one-sided at the ends; exact
-for q linear in t, error O(dt_out^2) otherwise). Nodal velocities written from a RunResult are
-therefore exact in their frame part and approximate in their elastic part.
+A RunResult stores the frame velocity [r_dot, omega] (6,) and the elastic rates q_dot at each
+output, as the scheme integrated them, so nodal velocities written from it are those of the
+simulation.
 
 Stress (:func:`von_mises`): small-strain isotropic linear elasticity in the body frame,
 sigma = lambda tr(eps) I + 2 mu eps, eps = sym(grad u), with grad u from the isoparametric
@@ -36,7 +34,6 @@ __all__ = [
     "body_geometry",
     "displacement",
     "elastic_displacement",
-    "elastic_rates",
     "nodal_fields",
     "nodal_stress",
     "node_positions",
@@ -116,24 +113,6 @@ def node_velocities(body: FlexibleBody, A: np.ndarray, q: np.ndarray, frame_v: n
     if q_dot is not None:
         local = local + elastic_displacement(body, q_dot)
     return fv[:3] + local @ A.T
-
-
-def elastic_rates(t: np.ndarray, q: np.ndarray) -> np.ndarray:
-    """Finite-difference q_dot (n_out, nq) of a history q (n_out, nq) at times t (n_out,) [s].
-
-    numpy.gradient on the (possibly non-uniform) output grid: second-order central differences
-    inside, first-order one-sided at both ends; zeros for a single output. Raises InputError
-    unless t is strictly increasing and matches q's first axis.
-    """
-    t = np.asarray(t, dtype=float)
-    q = np.asarray(q, dtype=float)
-    if t.ndim != 1 or q.ndim != 2 or len(q) != len(t):
-        raise InputError(f"elastic_rates: expected t (n,) and q (n, nq), got {t.shape} and {q.shape}")
-    if len(t) < 2 or q.shape[1] == 0:
-        return np.zeros_like(q)
-    if np.any(np.diff(t) <= 0):
-        raise InputError("elastic_rates: output times must be strictly increasing")
-    return np.gradient(q, t, axis=0)
 
 
 class StressOperator:

@@ -21,10 +21,10 @@ import numpy as np
 
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.errors import InputError
-from flexmvm.integrate.driver import RunResult
+from flexmvm.integrate.run_result import RunResult
 from flexmvm.materials import Material
 from flexmvm.results.atomic import atomic_path, write_json_atomic, write_text_atomic
-from flexmvm.results.fields import StressOperator, body_geometry, elastic_rates, nodal_fields
+from flexmvm.results.fields import StressOperator, body_geometry, nodal_fields
 from flexmvm.results.history import write_history
 
 __all__ = [
@@ -82,9 +82,9 @@ def write_history_csv(path: str | os.PathLike[str], run: RunResult, probe_axis: 
     if isinstance(probe_axis, bool) or probe_axis not in (0, 1, 2):
         raise InputError(f"probe_axis: expected 0, 1 or 2 (x, y, z), got {probe_axis!r}")
     _check_run(run)
-    v = np.asarray(run.probe_v, dtype=float)[:, :, probe_axis]
-    probes = {_safe_name("probe", p): v[:, k] for k, p in enumerate(run.probe_names)}
-    write_history(path, run.t, run.contact_force, probes, axis=_AXES[probe_axis])
+    t, force, curves = run.curves(probe_axis)
+    probes = {_safe_name("probe", p): np.asarray(v, dtype=float) for p, v in curves.items()}
+    write_history(path, t, force, probes, axis=_AXES[probe_axis])
 
 
 def write_summary_json(path: str | os.PathLike[str], summary: Mapping[str, Any]) -> None:
@@ -157,6 +157,9 @@ def _write_body(g: h5py.Group, run: RunResult, b: int, body: FlexibleBody, idx: 
              "[r_dot (global), omega (body frame)] (k, 6)")
     _dataset(g, "q", np.asarray(run.q[b])[idx], "basis units",
              "elastic coordinates (k, nq); nodal displacement u = psi q [m]")
+    if len(run.q_dot) > b:
+        _dataset(g, "q_dot", np.asarray(run.q_dot[b])[idx], "basis units / s",
+                 "rates of the elastic coordinates (k, nq)")
     _write_mesh(g, body)
 
 
@@ -168,8 +171,8 @@ def write_results_h5(path: str | os.PathLike[str], run: RunResult,
     (n_out,) [N], /joint_force (n_out, n_rows) [N], /contact_intervals (k, 2) [s],
     /probes/<name>/{position [m], velocity [m/s]} (n_out, 3), /energy/{kinetic, strain,
     potential} [J], /momentum/{linear [kg m/s], angular [kg m^2/s]} (n_out, 3), and per body
-    /bodies/<name>/{time_index, r (k, 3), A (k, 3, 3), frame_velocity (k, 6), q (k, nq)} at
-    every `fields_every`-th output (rows time_index of /time), /bodies/<name>/mesh/{nodes (n, 3),
+    /bodies/<name>/{time_index, r (k, 3), A (k, 3, 3), frame_velocity (k, 6), q (k, nq),
+    q_dot (k, nq)} at every `fields_every`-th output (rows time_index of /time), /bodies/<name>/mesh/{nodes (n, 3),
     cells_<meshio type> (n_cells, npc)}. Root attributes: run counters. `bodies` must be the
     run's bodies in order. Raises InputError on inconsistent inputs.
     """
@@ -230,8 +233,7 @@ def write_paraview_series(out_dir: str | os.PathLike[str], run: RunResult,
     Points are the undeformed body at the initial frame, r0 + A0 X (output 0); point data:
     ``displacement`` (n, 3) global [m] (Warp By Vector gives the deformed body),
     ``velocity`` (n, 3) global [m/s] and ``von_mises`` (n,) [Pa] (results/fields.py). The
-    elastic part of the velocity uses finite-difference q_dot between outputs (RunResult keeps
-    no q_dot; see fields.elastic_rates). every=None writes at most MAX_PARAVIEW_STEPS steps.
+    elastic part of the velocity uses the run's q_dot. every=None writes at most MAX_PARAVIEW_STEPS steps.
     `bodies` and `materials` follow run.body_names. Each file is written atomically, the .pvd
     last. Returns out_dir (created if missing). Raises InputError on inconsistent inputs or a
     body without a mesh.
@@ -251,7 +253,10 @@ def write_paraview_series(out_dir: str | os.PathLike[str], run: RunResult,
             q = np.asarray(run.q[b], dtype=float)
             if q.shape != (n, body.nq):
                 raise InputError(f"RunResult.q[{b}]: expected shape {(n, body.nq)}, got {q.shape}")
-            q_dot = elastic_rates(run.t, q)
+            q_dot = np.asarray(run.q_dot[b], dtype=float) if len(run.q_dot) > b else None
+            if q_dot is None or q_dot.shape != q.shape:
+                raise InputError(f"RunResult.q_dot[{b}]: expected shape {q.shape} (the rates "
+                                 f"of q), got {None if q_dot is None else q_dot.shape}")
             idx = np.arange(0, n, every)
             # psi q for all written outputs at once: one pass over psi instead of two per output
             U, Ud = _elastic_series(body, q[idx]), _elastic_series(body, q_dot[idx])

@@ -1,33 +1,37 @@
-"""Scenarios: the TOML schema (schema.py) shared by tests, examples and benchmarks.
+"""Scenarios: the schema (schema.py; value types fields.py, error lines problems.py), reading
+files and dicts (load.py), building a System from a scenario (build.py), running it (run.py),
+comparing runs (compare.py) and the main job (main_job.py).
 
 ``load_scenario(path)`` reads and validates a file (docs/scenario_format.md) and returns a frozen
 :class:`Scenario`; every problem is one :class:`ScenarioError` line (file, key path, problem).
 """
 
+from flexmvm.bodies.build import ModelKind
+from flexmvm.constraints.contact import ContactKind
+from flexmvm.constraints.joints import JointType
+from flexmvm.mesh.rod import EndShape
+from flexmvm.scenarios.fields import ROD_FACET_SETS, ROD_NODE_SETS
+from flexmvm.scenarios.load import load_scenario, scenario_from_dict
+from flexmvm.scenarios.problems import ScenarioError
 from flexmvm.scenarios.schema import (
-    ROD_FACET_SETS,
-    ROD_NODE_SETS,
     Ball,
     BodyConfig,
     Box,
     ContactConfig,
-    ContactKind,
     JointConfig,
-    JointType,
     MaterialSpec,
     ModelConfig,
-    ModelKind,
     Placement,
     ProbeConfig,
     RegionSpec,
     RodConfig,
-    RodEnd,
     Rotation,
     Scenario,
-    ScenarioError,
     TimeConfig,
-    load_scenario,
-    scenario_from_dict,
+    full,
+    modal,
+    mvm,
+    rigid,
 )
 
 __all__ = [
@@ -38,6 +42,7 @@ __all__ = [
     "Box",
     "ContactConfig",
     "ContactKind",
+    "EndShape",
     "JointConfig",
     "JointType",
     "MaterialSpec",
@@ -47,11 +52,14 @@ __all__ = [
     "ProbeConfig",
     "RegionSpec",
     "RodConfig",
-    "RodEnd",
     "Rotation",
     "Scenario",
     "ScenarioError",
     "TimeConfig",
+    "full",
     "load_scenario",
+    "modal",
+    "mvm",
+    "rigid",
     "scenario_from_dict",
 ]

@@ -18,10 +18,17 @@ import numpy as np
 
 from flexmvm import setup_cache
 from flexmvm.bodies.body import FlexibleBody
-from flexmvm.bodies.build import BodyParts, body_from_parts, body_parts, rigid_body_from_fe
+from flexmvm.bodies.build import (
+    BodyParts,
+    ModelKind,
+    body_from_parts,
+    body_parts,
+    rigid_body_from_fe,
+)
 from flexmvm.constraints.joints import (
     BodyPoint,
     DistanceJoint,
+    JointType,
     PrescribedMotion,
     SphericalJoint,
     fixed_joint,
@@ -29,24 +36,21 @@ from flexmvm.constraints.joints import (
     revolute_joint,
 )
 from flexmvm.contact.geometry import MasterSurface
-from flexmvm.contact.pairs import ContactKind, PointToSurfaceContact
+from flexmvm.contact.pairs import PointToSurfaceContact
 from flexmvm.errors import InputError, MeshError
 from flexmvm.fe.assembly import FEModel, assemble
-from flexmvm.integrate.driver import Probe, TimeGrid
+from flexmvm.integrate.run_result import Probe, TimeGrid
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import System
 from flexmvm.materials import Material
 from flexmvm.mesh.io import read_mesh
 from flexmvm.mesh.mesh import Mesh
-from flexmvm.mesh.rod import EndShape, RodMesh, RodSpec, rod_mesh
+from flexmvm.mesh.rod import RodMesh, RodSpec, rod_mesh
 from flexmvm.reduction.basis import Basis, BasisKind, build_basis
 from flexmvm.reduction.reference import three_two_one
 from flexmvm.reduction.rod_reference import rod_reference
 
 DEFAULT_SEARCH_RADIUS_M = 2e-4  # broad-phase margin beyond the distance closed in one step
-
-_KIND = {"full": BasisKind.FULL, "mvm": BasisKind.CRAIG_BAMPTON,
-         "mvm-seed": BasisKind.SEED_BLOCK, "modal": BasisKind.MODAL}
 
 
 @dataclass(frozen=True)
@@ -54,7 +58,7 @@ class BodyInfo:
     """What was built for one body (for summaries and outputs)."""
 
     name: str
-    model: str
+    model: ModelKind
     mesh: Mesh
     material: Material
     dof: int                 # generalized coordinates: 6 frame + nq
@@ -70,13 +74,6 @@ class BuiltScenario:
     probes: list[Probe]
     grid: TimeGrid
     info: list[BodyInfo]
-
-
-def rod_spec(cfg) -> RodSpec:
-    kw = cfg.spec_kwargs()
-    kw["end_a"] = EndShape(str(kw["end_a"].value if hasattr(kw["end_a"], "value") else kw["end_a"]))
-    kw["end_b"] = EndShape(str(kw["end_b"].value if hasattr(kw["end_b"], "value") else kw["end_b"]))
-    return RodSpec(**kw)
 
 
 @functools.lru_cache(maxsize=8)
@@ -146,7 +143,7 @@ def _basis_cached(key, material: Material, kind: BasisKind, retained: tuple, mod
         lambda: build_basis(_fe(key, material), kind, ref, retained_nodes=nodes, n_modes=modes))
 
 
-def _parts(key, material: Material, kind: BasisKind, retained: tuple, modes: int,
+def body_parts_for(key, material: Material, kind: BasisKind, retained: tuple, modes: int,
            ref_set: str) -> BodyParts:
     """Invariants and k_hat of the body whose basis is basis_for(same arguments); under a
     Craig-Bampton mode floor cut from the floor's parts, as the basis is cut."""
@@ -167,6 +164,58 @@ def _parts_cached(key, material: Material, kind: BasisKind, retained: tuple, mod
         _mesh_source(key), material, kind, ref_set, basis.reference,
         np.array(retained, dtype=np.int64), modes, basis.psi.shape[1],
         lambda: body_parts(_fe(key, material), basis))
+
+
+#: The per-process caches by what they hold, with their default bounds (entries).
+_CACHE_SIZES = {"meshes": 8, "fe_models": 8, "bases": 64, "body_parts": 16}
+
+
+def _caches() -> dict[str, list]:
+    return {"meshes": [cached_rod_mesh, _mesh], "fe_models": [_fe], "bases": [_basis_cached],
+            "body_parts": [_parts_cached]}
+
+
+def clear_caches(disk: bool = False) -> None:
+    """Empty this process's caches of meshes, FE models, bases and body parts (a notebook that
+    has run many models frees their memory); ``disk`` also empties the setup cache on disk
+    (flexmvm.setup_cache: what ``flexmvm cache clear`` removes)."""
+    for fns in _caches().values():
+        for fn in fns:
+            fn.cache_clear()
+    if disk:
+        setup_cache.clear()
+
+
+def cache_sizes() -> dict[str, int]:
+    """The bound (entries) of each per-process cache: meshes, fe_models, bases, body_parts."""
+    return dict(_CACHE_SIZES)
+
+
+def set_cache_sizes(**sizes: int) -> None:
+    """Bound the per-process caches: ``set_cache_sizes(fe_models=2, bases=8)``; 0 disables one.
+    The caches named are emptied. InputError for an unknown name or a negative bound."""
+    global cached_rod_mesh, _mesh, _fe, _basis_cached, _parts_cached
+    unknown = set(sizes) - set(_CACHE_SIZES)
+    if unknown:
+        raise InputError(f"cache sizes: unknown {sorted(unknown)}; expected some of "
+                         f"{', '.join(_CACHE_SIZES)}")
+    bad = {k: v for k, v in sizes.items() if not isinstance(v, int) or v < 0}
+    if bad:
+        raise InputError(f"cache sizes: expected integers >= 0, got {bad}")
+    _CACHE_SIZES.update(sizes)
+
+    def rewrap(fn, name):
+        fn.cache_clear()
+        return functools.lru_cache(maxsize=_CACHE_SIZES[name])(fn.__wrapped__)
+
+    if "meshes" in sizes:
+        cached_rod_mesh, _mesh = rewrap(cached_rod_mesh, "meshes"), rewrap(_mesh, "meshes")
+    if "fe_models" in sizes:
+        _fe = rewrap(_fe, "fe_models")
+    if "bases" in sizes:
+        _basis_cached = rewrap(_basis_cached, "bases")
+    if "body_parts" in sizes:
+        _parts_cached = rewrap(_parts_cached, "body_parts")
 
 
 def _retained_nodes(model, mesh: Mesh, rod: RodMesh | None, where: str) -> np.ndarray:
@@ -200,26 +249,27 @@ def _build_body(cfg) -> tuple[FlexibleBody, BodyInfo]:
     material = cfg.material_obj()
     rod = None
     if cfg.rod is not None:
-        key = rod_spec(cfg.rod)
+        key = cfg.rod.spec()
         rod = cached_rod_mesh(key)
     else:
         key = str(cfg.mesh_file)
     mesh = _mesh(key)
-    kind = cfg.model.kind.value
+    kind = cfg.model.kind
     try:
         mesh.node_set(cfg.model.reference)
     except MeshError as exc:
         raise InputError(f"{where}.model.reference: {exc}") from None
-    if kind == "rigid":
+    if kind.basis is None:
         body = rigid_body_from_fe(cfg.name, _fe(key, material))
         return body, BodyInfo(cfg.name, kind, mesh, material, 6, 0, 0, rod)
     retained: tuple = ()
-    if kind in ("mvm", "mvm-seed"):
+    if kind.retains_nodes:
         retained = tuple(int(i) for i in _retained_nodes(cfg.model, mesh, rod, f"{where}.model"))
-    modes = cfg.model.modes if kind != "full" else 0
-    args = (key, material, _KIND[kind], retained, modes, cfg.model.reference)
-    body = body_from_parts(cfg.name, mesh, basis_for(*args), _parts(*args))
-    n_ret = len(retained) if kind != "full" else mesh.n_nodes
+    modes = cfg.model.modes if kind.uses_modes else 0
+    args = (key, material, kind.basis, retained, modes, cfg.model.reference)
+    body = body_from_parts(cfg.name, mesh, basis_for(*args), body_parts_for(*args))
+    n_ret = len(retained) if kind.retains_nodes else (mesh.n_nodes if kind is ModelKind.FULL
+                                                      else 0)
     return body, BodyInfo(cfg.name, kind, mesh, material, body.nv, n_ret, modes, rod)
 
 
@@ -280,7 +330,7 @@ def _contact(c, k, bodies, infos, index):
     except MeshError as exc:
         raise InputError(f"{where}: {exc}") from None
     radius = c.search_radius_m if c.search_radius_m is not None else DEFAULT_SEARCH_RADIUS_M
-    return PointToSurfaceContact(bodies, s, slave_nodes, m, master, ContactKind(c.kind.value),
+    return PointToSurfaceContact(bodies, s, slave_nodes, m, master, c.kind,
                                  radius, name=f"{c.slave}->{c.master}",
                                  slave_surface=MasterSurface.from_facet_set(slave_facets))
 
@@ -300,11 +350,11 @@ def _probe(p, where, infos, index) -> Probe:
 
 def _joint(j, where, bodies, infos, index, states):
     b = index[j.body]
-    t = j.type.value
-    if t == "ground":
+    t = j.type
+    if t is JointType.GROUND:
         return ground_joint(b, states)
     p1 = _body_point(b, bodies[b], infos[b], j.point_m, f"{where}.point_m")
-    if t == "prescribed":
+    if t is JointType.PRESCRIBED:
         x0 = p1.position(bodies, states)
         return [PrescribedMotion(p1, tuple(x0), tuple(j.velocity_mps))]
     if j.body2 is not None:
@@ -312,13 +362,13 @@ def _joint(j, where, bodies, infos, index, states):
         p2 = _body_point(b2, bodies[b2], infos[b2], j.point2_m, f"{where}.point2_m")
     else:
         p2 = np.asarray(j.ground_m, float)
-    if t == "distance":
+    if t is JointType.DISTANCE:
         x1 = p1.position(bodies, states)
         x2 = p2.position(bodies, states) if isinstance(p2, BodyPoint) else p2
         length = j.length_m if j.length_m is not None else float(np.linalg.norm(x1 - x2))
         return [DistanceJoint(p1, p2, length)]
-    if t == "spherical":
+    if t is JointType.SPHERICAL:
         return [SphericalJoint(p1, p2)]
-    if t == "revolute":
+    if t is JointType.REVOLUTE:
         return revolute_joint(p1, p2, j.axis, states)
     return fixed_joint(p1, p2, states)

@@ -3,10 +3,12 @@ contact-duration errors (seed section 3.1; NCC alone is blind to scale and offse
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
+
 import numpy as np
 
 from flexmvm.errors import InputError
-from flexmvm.metrics.ncc import compare, compare_force
+from flexmvm.metrics.ncc import compare_force, ncc
 
 
 def compare_runs(t_ref, f_ref, probes_ref: dict, t, f, probes: dict) -> dict:
@@ -22,12 +24,50 @@ def compare_runs(t_ref, f_ref, probes_ref: dict, t, f, probes: dict) -> dict:
     for name, y_ref in probes_ref.items():
         if name in probes:
             try:
-                out[f"ncc_{name}"] = compare(t_ref, y_ref, t, probes[name])
+                out[f"ncc_{name}"] = ncc(t_ref, y_ref, t, probes[name])
             except InputError as exc:
                 out[f"ncc_{name}_error"] = str(exc)
     return {k: (float(v) if isinstance(v, (float, np.floating)) else v) for k, v in out.items()}
 
 
-def run_curves(res) -> tuple[np.ndarray, np.ndarray, dict]:
-    """(t, contact force, {probe: axial velocity}) of a RunResult."""
-    return res.t, res.contact_force, {n: res.probe_v[:, i, 0] for i, n in enumerate(res.probe_names)}
+
+@dataclass(frozen=True)
+class RunComparison:
+    """A run against a reference: force NCC and relative errors of peak, impulse and contact
+    duration (candidate - reference) / reference, NCC of every probe both runs have, and the
+    comparisons that could not be made (name -> reason)."""
+
+    ncc_force: float | None
+    peak_err: float | None
+    impulse_err: float | None
+    duration_err: float | None
+    ncc_probes: dict[str, float] = field(default_factory=dict)
+    not_compared: dict[str, str] = field(default_factory=dict)
+
+    def as_dict(self) -> dict:
+        """The flat form summary.json uses (ncc_force, ..., ncc_<probe>, <item>_error)."""
+        out = {k: getattr(self, k) for k in ("ncc_force", "peak_err", "impulse_err",
+                                             "duration_err") if getattr(self, k) is not None}
+        out.update({f"ncc_{k}": v for k, v in self.ncc_probes.items()})
+        out.update({f"{k}_error": v for k, v in self.not_compared.items()})
+        return out
+
+
+def _curves(run) -> tuple:
+    if isinstance(run, tuple) and len(run) == 3:
+        return run
+    if hasattr(run, "curves"):
+        return run.curves()
+    raise InputError(f"compare: received {type(run).__name__}, expected a run (flexmvm.run), "
+                     "a RunResult or a (t, force, {probe: v}) tuple")
+
+
+def compare(candidate, reference) -> RunComparison:
+    """``candidate`` against ``reference``: each a run (flexmvm.run), a RunResult or a
+    (t [s], force [N], {probe: axial velocity [m/s]}) tuple such as theory_histories gives."""
+    flat = compare_runs(*_curves(reference), *_curves(candidate))
+    probes = {k[4:]: v for k, v in flat.items()
+              if k.startswith("ncc_") and k != "ncc_force" and not k.endswith("_error")}
+    errors = {k[: -len("_error")]: v for k, v in flat.items() if k.endswith("_error")}
+    return RunComparison(flat.get("ncc_force"), flat.get("peak_err"), flat.get("impulse_err"),
+                         flat.get("duration_err"), probes, errors)

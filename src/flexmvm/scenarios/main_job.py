@@ -21,13 +21,15 @@ import multiprocessing
 from concurrent.futures import FIRST_EXCEPTION, ProcessPoolExecutor, wait
 from pathlib import Path
 
+from flexmvm.bodies.build import ModelKind
 from flexmvm.errors import FlexmvmError, InputError
 from flexmvm.results.outdir import staged_dir
 from flexmvm.results.output import write_run
 from flexmvm.results.writers import write_summary_json
-from flexmvm.scenarios.compare import compare_runs, run_curves
+from flexmvm.scenarios.compare import compare_runs
+from flexmvm.scenarios.load import load_scenario
 from flexmvm.scenarios.run import run_scenario
-from flexmvm.scenarios.schema import load_scenario
+from flexmvm.scenarios.schema import Scenario
 
 
 def _theory(sc, failures: list[dict]):
@@ -64,19 +66,22 @@ def _run_and_write(sc, label: str, out_dir: Path, fields: bool, progress: bool):
     """Run sc, write its files into out_dir; returns (summary, curves, n_steps, wall [s])."""
     run = run_scenario(sc, label=label, progress=progress)
     write_run(out_dir, run, fields=fields)
-    return run.summary, run_curves(run.result), run.result.n_steps, run.result.wall_time_s
+    return run.summary, run.result.curves(), run.result.n_steps, run.result.wall_time_s
 
 
-def run_main_job(path: Path, out_dir: Path, *, model=None, t_end=None, dt=None, fields=True,
-                 progress=True, echo=print, jobs: int = 2) -> dict:
-    """Run `path`; with no model also a full-FE reference (jobs = 2: in a second process, at
-    the same time); returns the top-level summary."""
+def run_main_job(scenario: Path | str | Scenario, out_dir: Path, *, model=None, t_end=None,
+                 dt=None, fields=True, progress=True, echo=print, jobs: int = 2) -> dict:
+    """Run ``scenario`` (a Scenario or a scenario file) and write its files into out_dir; with
+    no model also a full-FE reference (jobs = 2: in a second process, at the same time);
+    returns the top-level summary. ``model`` (a ModelKind or its value) sets every non-rigid
+    body's kind, ``t_end``, ``dt`` [s] the end time and contact step."""
     out_dir = Path(out_dir)
-    sc = load_scenario(path)
+    sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     sc = sc.with_overrides(model=model, t_end_s=t_end, dt_s=dt)
-    needs_ref = model is None and any(b.model.kind.value not in ("full", "rigid") for b in sc.bodies)
-    ref_sc = sc.with_overrides(model="full") if needs_ref else None
-    own_label = model or "scenario"
+    needs_ref = model is None and any(b.model.kind not in (ModelKind.FULL, ModelKind.RIGID)
+                                      for b in sc.bodies)
+    ref_sc = sc.with_kind(ModelKind.FULL) if needs_ref else None
+    own_label = ModelKind(model).value if model is not None else "scenario"
     with staged_dir(out_dir, "flexmvm run", legacy=("summary.json",)) as tmp:
         summary = _run_into(tmp, sc, ref_sc, own_label, fields, progress, echo, jobs)
     failures = summary["failures"]
@@ -154,7 +159,9 @@ def _run_into(out_dir: Path, sc, ref_sc, own_label: str, fields: bool, progress:
 
 
 def _label(summary: dict) -> str:
-    kinds = set(summary["model"].values())
-    if kinds <= {"full", "rigid"}:
+    kinds = {ModelKind(k) for k in summary["model"].values()}
+    if kinds <= {ModelKind.FULL, ModelKind.RIGID}:
         return "FE"
-    return "MVM" if "mvm" in kinds or "mvm-seed" in kinds else "/".join(sorted(kinds))
+    if any(k.retains_nodes for k in kinds):
+        return "MVM"
+    return "/".join(sorted(k.value for k in kinds))

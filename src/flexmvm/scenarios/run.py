@@ -3,19 +3,57 @@
 from __future__ import annotations
 
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
-from flexmvm.integrate.driver import RunResult, simulate
+from flexmvm.integrate.driver import simulate
+from flexmvm.integrate.run_result import ProbeHistory, RunResult, StepHistory
 from flexmvm.scenarios.build import BuiltScenario, build_scenario
+from flexmvm.scenarios.load import load_scenario
+from flexmvm.scenarios.schema import Scenario
 
 
 @dataclass
 class ScenarioRun:
+    """A finished run of a scenario: what was built (``built``: system, bodies' info), the
+    histories (``result``: a RunResult) and the numbers every run reports (``summary``)."""
+
     label: str
     built: BuiltScenario
     result: RunResult
     summary: dict
+
+    @property
+    def t(self) -> np.ndarray:
+        """Output times [s]."""
+        return self.result.t
+
+    @property
+    def contact_force(self) -> np.ndarray:
+        """Normal contact force at the output times [N] (impulse over the output interval)."""
+        return self.result.contact_force
+
+    @property
+    def steps(self) -> StepHistory | None:
+        """Every step's end time, size and normal contact impulse."""
+        return self.result.steps
+
+    def probe(self, name: str) -> ProbeHistory:
+        """Position and velocity history of probe ``name``."""
+        return self.result.probe(name)
+
+    def elastic(self, body: str) -> tuple[np.ndarray, np.ndarray]:
+        """(q, q_dot) of body ``body`` at the output times."""
+        return self.result.elastic(body)
+
+    def curves(self, axis: int = 0) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        """(t, contact force, {probe: velocity component ``axis``})."""
+        return self.result.curves(axis)
+
+    def dof(self, body: str) -> int:
+        """Generalized coordinates of body ``body``: 6 frame + elastic."""
+        return int(self.summary["dof"][body])
 
 
 def run_scenario(sc, label: str = "run", progress: bool = False) -> ScenarioRun:
@@ -23,6 +61,18 @@ def run_scenario(sc, label: str = "run", progress: bool = False) -> ScenarioRun:
     built = build_scenario(sc)
     res = simulate(built.system, built.states, built.grid, built.probes, progress=progress)
     return ScenarioRun(label, built, res, summarize(res, built))
+
+
+def run(scenario: Scenario | str | Path, *, t_end_s: float | None = None,
+        dt_s: float | None = None, progress: bool = False, label: str = "run") -> ScenarioRun:
+    """Simulate ``scenario`` (a Scenario, or the path of a scenario file), optionally over
+    another end time or contact step [s]; nothing is written. The run's result has the
+    histories by name (``probe``, ``elastic``, ``curves``), its ``summary`` the numbers the
+    command line writes to summary.json."""
+    sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
+    if t_end_s is not None or dt_s is not None:
+        sc = sc.with_time(t_end_s=t_end_s, dt_s=dt_s)
+    return run_scenario(sc, label=label, progress=progress)
 
 
 def summarize(res: RunResult, built: BuiltScenario) -> dict:
@@ -39,7 +89,7 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         "min_contact_force_N": float(res.contact_force.min()) if res.contact_force.size else 0.0,
         "contact_intervals_s": [[float(a), float(b)] for a, b in res.contact_intervals],
         "dof": {i.name: int(i.dof) for i in built.info},
-        "model": {i.name: i.model for i in built.info},
+        "model": {i.name: i.model.value for i in built.info},
         "retained_nodes": {i.name: int(i.n_retained_nodes) for i in built.info},
         "modes": {i.name: int(i.n_modes) for i in built.info},
         "wall_time_s": float(res.wall_time_s),
@@ -52,6 +102,8 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         "max_penetration_at": res.max_penetration_at,
         "max_penetration_by_direction_m": dict(res.max_penetration_by_direction_m),
         "max_joint_drift": float(res.max_joint_drift),
+        "step_sizes_s": ({f"{h:.6g}": n for h, n in res.steps.size_counts().items()}
+                         if res.steps is not None else {}),
         "steps_not_converged": int(res.steps_not_converged),
         "newton_residual_max": float(res.newton_residual_max),
         "lcp_residual_max": float(res.lcp_residual_max),

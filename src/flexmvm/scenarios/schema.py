@@ -1,32 +1,33 @@
-"""Scenario files: the TOML schema (pydantic v2) and its loader.
+"""The scenario schema (pydantic v2): the tables of a scenario and their cross-references.
 
 A scenario names the bodies (geometry, material, model kind, placement), the contacts between
 them, the joints, the probes and the time settings; docs/scenario_format.md lists every key.
 Everything is validated here that can be checked without meshing: types, ranges, units,
 cross-references between sections, and the rod node sets / facet sets named in
 docs/architecture.md. Node sets and surfaces of a ``mesh_file`` body are checked by the builder
-after reading the mesh.
+after reading the mesh. Files and dicts are read by scenarios/load.py; problems are reported
+as one ScenarioError line (scenarios/problems.py).
 
-Every problem reaches the user as one :class:`ScenarioError` line naming the file, the key path
-and the problem, e.g. ``rod_impact.toml: contacts[0].master: unknown body 'b3' (bodies: b1, b2)``.
+The option enums are the code's own, shared with the stages that act on them: ModelKind
+(bodies.build), EndShape (mesh.rod), ContactKind (constraints.contact), JointType
+(constraints.joints).
+
+A Scenario is changed by typed copies, each validated again: ``with_model(body, model)``,
+``with_models(model)``, ``with_kind(kind)``, ``with_time(...)``, ``with_material(body, m)``;
+:func:`full`, :func:`mvm`, :func:`modal`, :func:`rigid` build the model blocks.
 """
 
 from __future__ import annotations
 
 import math
 import re
-import tomllib
 from collections.abc import Mapping
-from enum import StrEnum
 from pathlib import Path
 from typing import Annotated, Any
 
 import numpy as np
-from annotated_types import Ge, Gt, Le
+from annotated_types import Ge, Le
 from pydantic import (
-    BaseModel,
-    BeforeValidator,
-    ConfigDict,
     Discriminator,
     Field,
     PrivateAttr,
@@ -38,80 +39,34 @@ from pydantic import (
     field_validator,
     model_validator,
 )
-from pydantic_core import PydanticCustomError
 
+from flexmvm.bodies.build import ModelKind
+from flexmvm.bodies.rotation import axis_angle
+from flexmvm.constraints.contact import ContactKind
+from flexmvm.constraints.joints import JointType
 from flexmvm.errors import InputError
 from flexmvm.integrate import DEFAULT_THETA
 from flexmvm.materials import PRESETS, Material
+from flexmvm.mesh.rod import EndShape, RodSpec
+from flexmvm.scenarios.fields import (
+    ROD_FACET_SETS,
+    ROD_NODE_SETS,
+    ZERO3,
+    Count,
+    Frozen,
+    Name,
+    Num,
+    Positive,
+    SetName,
+    Vec3,
+    check_rod_set,
+)
+from flexmvm.scenarios.problems import ScenarioError, format_error, problem
 
-ROD_NODE_SETS = ("end_a", "end_b", "end_a_centre", "end_b_centre", "side")
-ROD_FACET_SETS = ("end_a", "end_b", "side")
-_ERROR_TYPE = "flexmvm_scenario"
 _SELECTION_RE = re.compile(r"^(\d+)-(\d+)$")
 
 
-class ScenarioError(InputError):
-    """A scenario file that cannot be used: one line with file, key path and problem."""
-
-
-def _fail(problem: str, key: str = "") -> PydanticCustomError:
-    """Error for a validator; ``key`` is appended to the location pydantic reports."""
-    return PydanticCustomError(_ERROR_TYPE, "{problem}", {"problem": problem, "key": key})
-
-
-def _vec3(value: Any) -> tuple[float, float, float]:
-    ok = isinstance(value, (list, tuple)) and len(value) == 3
-    ok = ok and all(isinstance(c, (int, float)) and not isinstance(c, bool) for c in value)
-    if not ok or not all(math.isfinite(c) for c in value):
-        raise _fail(f"must be 3 finite numbers [x, y, z], got {value!r}")
-    return (float(value[0]), float(value[1]), float(value[2]))
-
-
-Num = Annotated[float, Strict()]
-Positive = Annotated[float, Strict(), Gt(0)]
-Count = Annotated[int, Strict(), Ge(1)]
-Vec3 = Annotated[tuple[float, float, float], BeforeValidator(_vec3)]
-Name = Annotated[str, StringConstraints(pattern=r"^[A-Za-z0-9_]+$")]
-SetName = Annotated[str, StringConstraints(pattern=r"^[A-Za-z0-9_]+$")]
-_ZERO3 = (0.0, 0.0, 0.0)
-
-
-class _Frozen(BaseModel):
-    model_config = ConfigDict(extra="forbid", frozen=True, allow_inf_nan=False)
-
-
-class RodEnd(StrEnum):
-    """Shape of a rod end (mesh/rod.py EndShape by value)."""
-
-    FLAT = "flat"
-    HEMISPHERE = "hemisphere"
-
-
-class ModelKind(StrEnum):
-    """How a body's deformation is represented (DESIGN.md, Bodies)."""
-
-    FULL = "full"  # all nodal DOFs (reference solution)
-    MVM = "mvm"  # Craig-Bampton: retained nodes + fixed-interface modes (default MVM)
-    MVM_SEED = "mvm-seed"  # seed eq. (4): modes on region I, nodal DOFs on region II
-    MODAL = "modal"  # first N modes of the reference-supported body
-    RIGID = "rigid"  # no elastic coordinates
-
-
-class ContactKind(StrEnum):
-    FRICTIONLESS = "frictionless"  # normal gap >= 0 (default)
-    BONDED = "bonded"  # seed eq. (7): all three relative components once closed
-
-
-class JointType(StrEnum):
-    GROUND = "ground"  # the body's floating frame fixed at its placement (6 constraints)
-    FIXED = "fixed"  # weld at a point: 6 constraints
-    SPHERICAL = "spherical"  # point coincidence: 3 constraints
-    REVOLUTE = "revolute"  # point coincidence + axis: 5 constraints
-    DISTANCE = "distance"  # constant distance between two points (a string): 1 constraint
-    PRESCRIBED = "prescribed"  # a point moves with a constant global velocity: 3 constraints
-
-
-class MaterialSpec(_Frozen):
+class MaterialSpec(Frozen):
     """Inline material table; ranges checked by :class:`flexmvm.materials.Material`."""
 
     E_pa: Num
@@ -127,7 +82,7 @@ class MaterialSpec(_Frozen):
             try:
                 Material(**(good | {key: val}), name="inline")
             except InputError as err:
-                raise _fail(str(err).split(": ", 1)[-1], toml_key) from None
+                raise problem(str(err).split(": ", 1)[-1], toml_key) from None
         return self
 
 
@@ -147,13 +102,13 @@ MaterialRef = Annotated[
 ]
 
 
-class RodConfig(_Frozen):
+class RodConfig(Frozen):
     """Rod along local +x, end A at x = 0 (docs/architecture.md); None = the RodSpec default."""
 
     length_m: Positive
     radius_m: Positive
-    end_a: RodEnd = RodEnd.FLAT
-    end_b: RodEnd = RodEnd.FLAT
+    end_a: EndShape = EndShape.FLAT
+    end_b: EndShape = EndShape.FLAT
     core_elements: Count | None = None
     core_half_width_m: Positive | None = None
     n_rings: Count | None = None
@@ -164,15 +119,15 @@ class RodConfig(_Frozen):
 
     @model_validator(mode="after")
     def _check(self) -> RodConfig:
-        n_caps = (self.end_a is RodEnd.HEMISPHERE) + (self.end_b is RodEnd.HEMISPHERE)
+        n_caps = (self.end_a is EndShape.HEMISPHERE) + (self.end_b is EndShape.HEMISPHERE)
         if self.length_m <= n_caps * self.radius_m:
-            raise _fail(
+            raise problem(
                 f"must exceed {n_caps} x radius_m = {n_caps * self.radius_m!r} for "
                 f"{n_caps} hemispherical end(s), got {self.length_m!r}",
                 "length_m",
             )
         if self.core_half_width_m is not None and self.core_half_width_m >= self.radius_m:
-            raise _fail(
+            raise problem(
                 f"must be < radius_m = {self.radius_m!r}, got {self.core_half_width_m!r}",
                 "core_half_width_m",
             )
@@ -181,38 +136,39 @@ class RodConfig(_Frozen):
             and self.max_element_m is not None
             and self.max_element_m < self.first_element_m
         ):
-            raise _fail(
+            raise problem(
                 f"must be >= first_element_m = {self.first_element_m!r}, "
                 f"got {self.max_element_m!r}",
                 "max_element_m",
             )
         return self
 
-    def spec_kwargs(self) -> dict[str, Any]:
-        """Keyword arguments for mesh.rod.RodSpec: the fields that are set; ends as strings."""
-        return self.model_dump(exclude_none=True, mode="json")
+    def spec(self) -> RodSpec:
+        """The mesh.rod.RodSpec of this rod: the fields that are set, RodSpec's defaults for
+        the others."""
+        return RodSpec(**{k: v for k, v in self if v is not None})
 
 
-class Ball(_Frozen):
+class Ball(Frozen):
     centre_m: Vec3
     radius_m: Positive
 
 
-class Box(_Frozen):
+class Box(Frozen):
     min_m: Vec3
     max_m: Vec3
 
     @model_validator(mode="after")
     def _check(self) -> Box:
         if any(lo >= hi for lo, hi in zip(self.min_m, self.max_m, strict=True)):
-            raise _fail(
+            raise problem(
                 f"must exceed min_m {list(self.min_m)} in every component, got {list(self.max_m)}",
                 "max_m",
             )
         return self
 
 
-class RegionSpec(_Frozen):
+class RegionSpec(Frozen):
     """Retained nodes by node set, ball or box (body-local coordinates) or ids: exactly one."""
 
     node_set: SetName | None = None
@@ -224,17 +180,17 @@ class RegionSpec(_Frozen):
     def _check(self) -> RegionSpec:
         given = [k for k in ("node_set", "ball", "box", "node_ids") if getattr(self, k) is not None]
         if len(given) != 1:
-            raise _fail(
+            raise problem(
                 f"needs exactly one of node_set, ball, box, node_ids, got {given or 'none'}"
             )
         if self.node_ids is not None and (
             not self.node_ids or len(set(self.node_ids)) != len(self.node_ids)
         ):
-            raise _fail("must be a non-empty list of distinct node ids", "node_ids")
+            raise problem("must be a non-empty list of distinct node ids", "node_ids")
         return self
 
 
-class ModelConfig(_Frozen):
+class ModelConfig(Frozen):
     """Model of one body. ``selection``/``region``/``modes`` are ignored by kinds that do not
     use them (full, rigid; modal ignores selection/region) so that a kind override stays valid."""
 
@@ -249,19 +205,29 @@ class ModelConfig(_Frozen):
     def _check_selection(cls, value: str | None) -> str | None:
         match = _SELECTION_RE.match(value) if value is not None else None
         if value is not None and (match is None or min(map(int, match.groups())) < 1):
-            raise _fail(f"must be 'i-j' (layers-laps, both >= 1), got {value!r}")
+            raise problem(f"must be 'i-j' (layers-laps, both >= 1), got {value!r}")
         return value
 
     @model_validator(mode="after")
     def _check(self) -> ModelConfig:
         if self.selection is not None and self.region is not None:
-            raise _fail("give selection or region, not both", "region")
+            raise problem("give selection or region, not both", "region")
         kind = self.kind.value
-        if self.kind in (ModelKind.MVM, ModelKind.MVM_SEED) and self.retained is None:
-            raise _fail(f"kind {kind!r} needs selection = 'i-j' or a region", "selection")
-        if self.kind in (ModelKind.MVM, ModelKind.MVM_SEED, ModelKind.MODAL) and self.modes < 1:
-            raise _fail(f"must be >= 1 for kind {kind!r}, got {self.modes}", "modes")
+        if self.kind.retains_nodes and self.retained is None:
+            raise problem(f"kind {kind!r} needs selection = 'i-j' or a region", "selection")
+        if self.kind.uses_modes and self.modes < 1:
+            raise problem(f"must be >= 1 for kind {kind!r}, got {self.modes}", "modes")
         return self
+
+    @property
+    def label(self) -> str:
+        """Short description: 'full', 'rigid', 'modal 20', 'mvm 1-3 + 25', 'mvm-seed 1-1 + 37'."""
+        if not self.kind.uses_modes:
+            return self.kind.value
+        if not self.kind.retains_nodes:
+            return f"{self.kind.value} {self.modes}"
+        where = self.selection if self.selection is not None else "region"
+        return f"{self.kind.value} {where} + {self.modes}"
 
     @property
     def retained(self) -> str | RegionSpec | None:
@@ -276,7 +242,7 @@ class ModelConfig(_Frozen):
         return int(i), int(j)
 
 
-class Rotation(_Frozen):
+class Rotation(Frozen):
     axis: Vec3 = (0.0, 0.0, 1.0)
     angle_deg: Num = 0.0
 
@@ -284,29 +250,26 @@ class Rotation(_Frozen):
     @classmethod
     def _nonzero(cls, axis: tuple[float, float, float]) -> tuple[float, float, float]:
         if math.hypot(*axis) == 0.0:
-            raise _fail(f"must be non-zero, got {list(axis)}")
+            raise problem(f"must be non-zero, got {list(axis)}")
         return axis
 
     def matrix(self) -> np.ndarray:
-        """Rotation matrix (3, 3), body -> global (Rodrigues' formula)."""
-        n = np.asarray(self.axis) / np.linalg.norm(self.axis)
-        a = math.radians(self.angle_deg)
-        nx = np.array([[0.0, -n[2], n[1]], [n[2], 0.0, -n[0]], [-n[1], n[0], 0.0]])
-        return np.eye(3) + math.sin(a) * nx + (1.0 - math.cos(a)) * (nx @ nx)
+        """Rotation matrix (3, 3), body -> global."""
+        return axis_angle(self.axis, math.radians(self.angle_deg))
 
 
-class Placement(_Frozen):
-    position_m: Vec3 = _ZERO3
+class Placement(Frozen):
+    position_m: Vec3 = ZERO3
     rotation: Rotation = Rotation()
-    velocity_mps: Vec3 = _ZERO3
-    angular_velocity_radps: Vec3 = _ZERO3
+    velocity_mps: Vec3 = ZERO3
+    angular_velocity_radps: Vec3 = ZERO3
 
     def to_global(self, point_m: tuple[float, float, float]) -> np.ndarray:
         """Initial global position (3,) of a body-local point [m]."""
         return np.asarray(self.position_m) + self.rotation.matrix() @ np.asarray(point_m)
 
 
-class BodyConfig(_Frozen):
+class BodyConfig(Frozen):
     name: Name
     material: MaterialRef
     rod: RodConfig | None = None
@@ -318,7 +281,7 @@ class BodyConfig(_Frozen):
     @classmethod
     def _known_preset(cls, value: str | MaterialSpec) -> str | MaterialSpec:
         if isinstance(value, str) and value not in PRESETS:
-            raise _fail(
+            raise problem(
                 f"unknown material preset {value!r} (presets: {', '.join(sorted(PRESETS))})"
             )
         return value
@@ -331,23 +294,23 @@ class BodyConfig(_Frozen):
         base = Path((info.context or {}).get("base_dir", "."))
         path = (base / value).resolve()
         if not path.is_file():
-            raise _fail(f"no such mesh file {str(path)!r}")
+            raise problem(f"no such mesh file {str(path)!r}")
         return path
 
     @model_validator(mode="after")
     def _check(self) -> BodyConfig:
         if (self.rod is None) == (self.mesh_file is None):
-            raise _fail("needs exactly one of [bodies.rod] or mesh_file", "rod")
+            raise problem("needs exactly one of [bodies.rod] or mesh_file", "rod")
         if self.rod is None and self.model.selection is not None:
-            raise _fail(
+            raise problem(
                 "the i-j selection needs a [bodies.rod] body; use region for a mesh_file",
                 "model.selection",
             )
         if self.rod is not None:
             region = self.model.region
             if region is not None and region.node_set is not None:
-                _check_rod_set(region.node_set, ROD_NODE_SETS, "model.region.node_set")
-            _check_rod_set(self.model.reference, ROD_NODE_SETS, "model.reference")
+                check_rod_set(region.node_set, ROD_NODE_SETS, "model.region.node_set")
+            check_rod_set(self.model.reference, ROD_NODE_SETS, "model.reference")
         return self
 
     def material_obj(self) -> Material:
@@ -358,12 +321,7 @@ class BodyConfig(_Frozen):
         return Material(E=m.E_pa, nu=m.nu, rho=m.rho_kg_m3, name=m.name or self.name)
 
 
-def _check_rod_set(name: str, known: tuple[str, ...], key: str) -> None:
-    if name not in known:
-        raise _fail(f"rods have no set {name!r} (rod sets: {', '.join(known)})", key)
-
-
-class ContactConfig(_Frozen):
+class ContactConfig(Frozen):
     """Slave nodes of ``slave`` ('body.surface') against the master facets of ``master``."""
 
     slave: Annotated[str, StringConstraints(pattern=r"^[A-Za-z0-9_]+\.[A-Za-z0-9_]+$")]
@@ -391,7 +349,7 @@ class ContactConfig(_Frozen):
 _JOINT_FIELDS = ("point_m", "ground_m", "body2", "point2_m", "axis", "length_m", "velocity_mps")
 
 
-class JointConfig(_Frozen):
+class JointConfig(Frozen):
     """A joint; points are body-local (the nearest node is used), ``ground_m`` is global."""
 
     type: JointType
@@ -418,23 +376,23 @@ class JointConfig(_Frozen):
         for key in _JOINT_FIELDS:
             given = getattr(self, key) is not None
             if key in need and not given:
-                raise _fail(
+                raise problem(
                     f"required by a {t.value!r} joint"
                     + (" to ground" if key == "ground_m" else ""),
                     key,
                 )
             if given and key not in allowed:
                 between = key == "ground_m" and self.body2 is not None
-                raise _fail(
+                raise problem(
                     f"not used by a {t.value!r} joint" + (" between two bodies" if between else ""),
                     key,
                 )
         if self.axis is not None and math.hypot(*self.axis) == 0.0:
-            raise _fail(f"must be non-zero, got {list(self.axis)}", "axis")
+            raise problem(f"must be non-zero, got {list(self.axis)}", "axis")
         return self
 
 
-class ProbeConfig(_Frozen):
+class ProbeConfig(Frozen):
     name: Name
     body: Name
     node_set: SetName | None = None
@@ -443,11 +401,11 @@ class ProbeConfig(_Frozen):
     @model_validator(mode="after")
     def _check(self) -> ProbeConfig:
         if (self.node_set is None) == (self.point_m is None):
-            raise _fail("needs exactly one of node_set or point_m", "node_set")
+            raise problem("needs exactly one of node_set or point_m", "node_set")
         return self
 
 
-class TimeConfig(_Frozen):
+class TimeConfig(Frozen):
     """Step ``dt_s`` while a contact is active or near, up to ``dt_max_s`` in free flight."""
 
     t_end_s: Positive
@@ -466,24 +424,24 @@ class TimeConfig(_Frozen):
     @model_validator(mode="after")
     def _check(self) -> TimeConfig:
         if self.dt_max_s < self.dt_s:
-            raise _fail(f"must be >= dt_s = {self.dt_s!r}, got {self.dt_max_s!r}", "dt_max_s")
+            raise problem(f"must be >= dt_s = {self.dt_s!r}, got {self.dt_max_s!r}", "dt_max_s")
         if self.output_dt_s < self.dt_s:
-            raise _fail(f"must be >= dt_s = {self.dt_s!r}, got {self.output_dt_s!r}", "output_dt_s")
+            raise problem(f"must be >= dt_s = {self.dt_s!r}, got {self.output_dt_s!r}", "output_dt_s")
         if self.dt_s > self.t_end_s:
-            raise _fail(f"must be <= t_end_s = {self.t_end_s!r}, got {self.dt_s!r}", "dt_s")
+            raise problem(f"must be <= t_end_s = {self.t_end_s!r}, got {self.dt_s!r}", "dt_s")
         if self.output_dt_s > self.t_end_s:
-            raise _fail(
+            raise problem(
                 f"must be <= t_end_s = {self.t_end_s!r}, got {self.output_dt_s!r}", "output_dt_s"
             )
         return self
 
 
-class Scenario(_Frozen):
+class Scenario(Frozen):
     """A validated scenario (docs/scenario_format.md). Build one with :func:`load_scenario`."""
 
     name: Annotated[str, StringConstraints(pattern=r"^[A-Za-z0-9_.-]+$")]
     description: str = ""
-    gravity_mps2: Vec3 = _ZERO3
+    gravity_mps2: Vec3 = ZERO3
     time: TimeConfig
     bodies: tuple[BodyConfig, ...] = Field(min_length=1)
     contacts: tuple[ContactConfig, ...] = ()
@@ -502,9 +460,9 @@ class Scenario(_Frozen):
                 key = f"contacts[{i}].{role}"
                 _known_body(bodies, body_name, key)
                 if bodies[body_name].rod is not None:
-                    _check_rod_set(surface, ROD_FACET_SETS, key)
+                    check_rod_set(surface, ROD_FACET_SETS, key)
             if c.slave_body == c.master_body:
-                raise _fail(
+                raise problem(
                     f"slave and master are both on body {c.slave_body!r}", f"contacts[{i}].master"
                 )
         seen = [(c.slave, c.master) for c in self.contacts]
@@ -514,13 +472,13 @@ class Scenario(_Frozen):
             if j.body2 is not None:
                 _known_body(bodies, j.body2, f"joints[{i}].body2")
                 if j.body2 == j.body:
-                    raise _fail(f"must differ from body {j.body!r}", f"joints[{i}].body2")
+                    raise problem(f"must differ from body {j.body!r}", f"joints[{i}].body2")
             if j.type is JointType.DISTANCE and j.length_m is None:
                 _check_string_length(j, bodies, f"joints[{i}]")
         for i, p in enumerate(self.probes):
             _known_body(bodies, p.body, f"probes[{i}].body")
             if p.node_set is not None and bodies[p.body].rod is not None:
-                _check_rod_set(p.node_set, ROD_NODE_SETS, f"probes[{i}].node_set")
+                check_rod_set(p.node_set, ROD_NODE_SETS, f"probes[{i}].node_set")
         return self
 
     def body(self, name: str) -> BodyConfig:
@@ -532,42 +490,133 @@ class Scenario(_Frozen):
             f"{self._source}: no body {name!r} (bodies: {', '.join(b.name for b in self.bodies)})"
         )
 
-    def with_overrides(
-        self,
-        model: ModelKind | str | None = None,
-        t_end_s: float | None = None,
-        dt_s: float | None = None,
-        body_models: Mapping[str, ModelConfig] | None = None,
-    ) -> Scenario:
-        """A copy with the model kind of every non-rigid body set to ``model``, whole model
-        blocks replaced per body by ``body_models`` (applied after ``model``), and the end time
-        or contact step replaced. A ``dt_s`` above ``dt_max_s`` lifts ``dt_max_s`` to it.
-        Everything is validated again; ScenarioError names the override on failure."""
-        data = self.model_dump(mode="json")
-        if model is not None:
-            kind = model.value if isinstance(model, ModelKind) else model
-            for b in data["bodies"]:
-                if b["model"]["kind"] != ModelKind.RIGID.value:
-                    b["model"]["kind"] = kind
-        for name, cfg in (body_models or {}).items():
+    @property
+    def source(self) -> str:
+        """Where the scenario came from (a file path, or what made it): named in errors."""
+        return self._source
+
+    def _copy(self, what: str, **fields: Any) -> Scenario:
+        """A copy with top-level ``fields`` replaced (model instances, not dumps), validated
+        again as a whole: every cross-reference is checked; ScenarioError names ``what``."""
+        source = f"{self._source} ({what})"
+        return validate_scenario({**dict(self), **fields}, source, None, keep_source=self._source)
+
+    def _replace_bodies(self, what: str, change: Mapping[str, Mapping[str, Any]]) -> Scenario:
+        """Bodies named in ``change`` with their fields replaced, each body validated again."""
+        for name in change:
             self.body(name)
-            for b in data["bodies"]:
-                if b["name"] == name:
-                    b["model"] = cfg.model_dump(mode="json")
-        if t_end_s is not None:
-            data["time"]["t_end_s"] = t_end_s
-        if dt_s is not None:
-            data["time"]["dt_s"] = dt_s
-            data["time"]["dt_max_s"] = max(data["time"]["dt_max_s"], dt_s)
-        given = {"model": model, "t_end_s": t_end_s, "dt_s": dt_s, "body_models": body_models}
-        what = ", ".join(f"{k}={v!r}" for k, v in given.items() if v is not None)
-        return _validate(data, f"{self._source} (with overrides {what})", None)
+        source = f"{self._source} ({what})"
+        bodies = tuple(validate_part(BodyConfig, {**dict(b), **change[b.name]}, source,
+                                     f"bodies[{k}]")
+                       if b.name in change else b for k, b in enumerate(self.bodies))
+        return self._copy(what, bodies=bodies)
+
+    def with_model(self, body: str, model: ModelConfig) -> Scenario:
+        """A copy with body ``body`` modelled by ``model`` (see :func:`mvm`, :func:`full`,
+        :func:`modal`, :func:`rigid`)."""
+        if not isinstance(model, ModelConfig):
+            raise ScenarioError(f"{self._source}: with_model({body!r}, ...) received "
+                                f"{type(model).__name__}, expected a ModelConfig (flexmvm.mvm(), "
+                                "flexmvm.full(), ...)")
+        return self._replace_bodies(f"body {body} as {model.label}", {body: {"model": model}})
+
+    def with_models(self, model: ModelConfig, *, keep_rigid: bool = True) -> Scenario:
+        """A copy with every body (rigid ones kept, unless ``keep_rigid`` is False) modelled
+        by ``model``."""
+        names = [b.name for b in self.bodies
+                 if not (keep_rigid and b.model.kind is ModelKind.RIGID)]
+        return self._replace_bodies(f"every body as {model.label}",
+                                    {n: {"model": model} for n in names})
+
+    def with_kind(self, kind: ModelKind | str) -> Scenario:
+        """A copy with the model kind of every non-rigid body set to ``kind``, each keeping
+        its selection, region, modes and reference (``flexmvm run --model``)."""
+        try:
+            kind = ModelKind(kind)
+        except ValueError:
+            raise ScenarioError(f"{self._source}: model kind {kind!r}; expected one of "
+                                f"{', '.join(k.value for k in ModelKind)}") from None
+        what = f"model kind {kind.value}"
+        source = f"{self._source} ({what})"
+        change = {b.name: {"model": validate_part(ModelConfig, {**dict(b.model), "kind": kind},
+                                                  source, f"bodies[{k}].model")}
+                  for k, b in enumerate(self.bodies) if b.model.kind is not ModelKind.RIGID}
+        return self._replace_bodies(what, change)
+
+    def with_time(self, *, t_end_s: float | None = None, dt_s: float | None = None,
+                  dt_max_s: float | None = None, output_dt_s: float | None = None,
+                  theta: float | None = None) -> Scenario:
+        """A copy with the given time settings replaced [s]. A ``dt_s`` above ``dt_max_s``
+        (and no ``dt_max_s`` given) lifts ``dt_max_s`` to it."""
+        given = {"t_end_s": t_end_s, "dt_s": dt_s, "dt_max_s": dt_max_s,
+                 "output_dt_s": output_dt_s, "theta": theta}
+        given = {k: v for k, v in given.items() if v is not None}
+        if dt_s is not None and dt_max_s is None:
+            given["dt_max_s"] = max(self.time.dt_max_s, dt_s)
+        what = ", ".join(f"{k}={v!r}" for k, v in given.items())
+        time = validate_part(TimeConfig, {**dict(self.time), **given},
+                             f"{self._source} ({what})", "time")
+        return self._copy(what, time=time)
+
+    def with_material(self, body: str, material: Material | str) -> Scenario:
+        """A copy with body ``body`` made of ``material`` (a Material, or a preset name)."""
+        if isinstance(material, Material):
+            spec = MaterialSpec(E_pa=float(material.E), nu=float(material.nu),
+                                rho_kg_m3=float(material.rho), name=material.name)
+            label = material.name
+        else:
+            spec = label = material
+        return self._replace_bodies(f"body {body} of {label}", {body: {"material": spec}})
+
+    def with_overrides(self, model: ModelKind | str | None = None, t_end_s: float | None = None,
+                       dt_s: float | None = None,
+                       body_models: Mapping[str, ModelConfig] | None = None) -> Scenario:
+        """The command line's overrides in one call: :meth:`with_kind` ``model``, then
+        :meth:`with_model` for each of ``body_models``, then :meth:`with_time`."""
+        sc = self
+        if model is not None:
+            sc = sc.with_kind(model)
+        for name, cfg in (body_models or {}).items():
+            sc = sc.with_model(name, cfg)
+        if t_end_s is not None or dt_s is not None:
+            sc = sc.with_time(t_end_s=t_end_s, dt_s=dt_s)
+        return sc
+
+
+def full(reference: str = "end_b") -> ModelConfig:
+    """Full FE model: every nodal DOF but the reference condition's six."""
+    return validate_part(ModelConfig, {"kind": ModelKind.FULL, "reference": reference}, "full()")
+
+
+def rigid() -> ModelConfig:
+    """Rigid body: no elastic coordinates."""
+    return validate_part(ModelConfig, {"kind": ModelKind.RIGID}, "rigid()")
+
+
+def modal(modes: int, reference: str = "end_b") -> ModelConfig:
+    """The first ``modes`` modes of the body supported by its reference condition."""
+    return validate_part(ModelConfig, {"kind": ModelKind.MODAL, "modes": modes,
+                                       "reference": reference}, f"modal({modes!r})")
+
+
+def mvm(selection: str | tuple[int, int] | None = None, modes: int = 0, *,
+        region: RegionSpec | None = None, reference: str = "end_b",
+        seed_eq4: bool = False) -> ModelConfig:
+    """MVM model: the nodes of ``selection`` (the seed's layers-laps 'i-j' or (i, j)) or of
+    ``region`` kept as nodal coordinates, plus ``modes`` modes: Craig-Bampton fixed-interface
+    modes, or with ``seed_eq4`` the seed's eq. (4) block basis."""
+    if isinstance(selection, tuple):
+        selection = "-".join(str(int(v)) for v in selection)
+    kind = ModelKind.MVM_SEED if seed_eq4 else ModelKind.MVM
+    data = {"kind": kind, "selection": selection, "region": region, "modes": modes,
+            "reference": reference}
+    return validate_part(ModelConfig, data, f"mvm({selection!r}, modes={modes!r})")
 
 
 def _unique(names: list[str], section: str, what: str, suffix: str) -> None:
     for i, name in enumerate(names):
         if name in names[:i]:
-            raise _fail(
+            raise problem(
                 f"duplicate {what} {name!r} (also {section}[{names.index(name)}])",
                 f"{section}[{i}]{suffix}",
             )
@@ -582,100 +631,41 @@ def _check_string_length(j: JointConfig, bodies: Mapping[str, BodyConfig], key: 
     else:
         b = np.asarray(j.ground_m)
     if np.linalg.norm(a - b) == 0.0:
-        raise _fail("the two points coincide at t = 0; give length_m or move a point", key)
+        raise problem("the two points coincide at t = 0; give length_m or move a point", key)
 
 
 def _known_body(bodies: Mapping[str, BodyConfig], name: str, key: str) -> None:
     if name not in bodies:
-        raise _fail(f"unknown body {name!r} (bodies: {', '.join(bodies)})", key)
+        raise problem(f"unknown body {name!r} (bodies: {', '.join(bodies)})", key)
 
 
-def _format_loc(loc: tuple[int | str, ...], extra: str) -> str:
-    out = ""
-    for k, part in enumerate(loc):
-        if isinstance(part, int):
-            out += f"[{part}]"
-        elif part in ("preset", "inline") and k > 0 and loc[k - 1] == "material":
-            continue
-        else:
-            out += f".{part}" if out else str(part)
-    if extra:
-        out += extra if extra.startswith("[") or not out else f".{extra}"
-    return out or "(top level)"
+def validate_part(cls: type[Frozen], data: Mapping[str, Any], source: str, key: str = ""):
+    """``cls`` validated from ``data`` (values or model instances); ScenarioError (one line:
+    source, key path, problem) otherwise."""
+    try:
+        return cls.model_validate(dict(data))
+    except ValidationError as exc:
+        errors = exc.errors()
+        more = f" (and {len(errors) - 1} more problem(s))" if len(errors) > 1 else ""
+        line = format_error(errors[0])
+        if key:
+            top = "(top level)"
+            line = key + (line[len(top):] if line.startswith(top) else f".{line}")
+        raise ScenarioError(f"{source}: {line}{more}") from None
 
 
-_BOUNDS = {
-    "greater_than": ("gt", ">"),
-    "greater_than_equal": ("ge", ">="),
-    "less_than": ("lt", "<"),
-    "less_than_equal": ("le", "<="),
-}
-
-
-def _format_error(err: Any) -> str:
-    """One line 'key.path: problem' from one pydantic error dict."""
-    ctx = err.get("ctx") or {}
-    if err["type"] == _ERROR_TYPE:
-        return f"{_format_loc(err['loc'], ctx.get('key', ''))}: {ctx['problem']}"
-    where = _format_loc(err["loc"], "")
-    if err["type"] == "extra_forbidden":
-        return f"{where}: unknown key"
-    if err["type"] == "missing":
-        return f"{where}: missing required key"
-    if err["type"] in _BOUNDS:
-        name, op = _BOUNDS[err["type"]]
-        bound = ctx[name]
-        msg = (
-            f"must be {op} {bound:g}"
-            if isinstance(bound, (int, float))
-            else f"must be {op} {bound}"
-        )
-    elif err["type"] == "too_short":
-        msg = f"needs at least {ctx.get('min_length', 1)} entry"
-    else:
-        msg = err["msg"][:1].lower() + err["msg"][1:]
-    shown = repr(err["input"])
-    shown = shown if len(shown) <= 60 else shown[:57] + "..."
-    return f"{where}: {msg}, got {shown}".replace("\n", " ")
-
-
-def scenario_from_dict(
-    data: Mapping[str, Any], source: str = "scenario", base_dir: str | Path | None = None
-) -> Scenario:
-    """Validate a scenario given as the dict a TOML file parses to (docs/scenario_format.md).
-
-    ``source`` names it in errors; ``mesh_file`` paths are resolved against ``base_dir``
-    (default: the working directory). Raises ScenarioError (one line: source, key path, problem).
-    """
-    return _validate(data, source, Path(base_dir) if base_dir is not None else None)
-
-
-def _validate(data: Any, source: str, base_dir: Path | None) -> Scenario:
+def validate_scenario(data: Any, source: str, base_dir: Path | None, *,
+                      keep_source: str | None = None) -> Scenario:
+    """Validate ``data`` (a dict, or field values that may be model instances) as a Scenario;
+    ScenarioError names ``source``. The scenario remembers ``keep_source`` (default
+    ``source``) as where it came from. ``mesh_file`` paths resolve against ``base_dir``."""
     try:
         scenario = Scenario.model_validate(data, context={"base_dir": base_dir or Path(".")})
     except ValidationError as exc:
         errors = exc.errors()
         more = f" (and {len(errors) - 1} more problem(s))" if len(errors) > 1 else ""
-        raise ScenarioError(f"{source}: {_format_error(errors[0])}{more}") from None
-    scenario._source = source
+        raise ScenarioError(f"{source}: {format_error(errors[0])}{more}") from None
+    scenario._source = keep_source or source
     return scenario
 
 
-def load_scenario(path: str | Path) -> Scenario:
-    """Read and validate a scenario TOML file (docs/scenario_format.md).
-
-    ``mesh_file`` paths are resolved relative to the file. Raises ScenarioError (one line:
-    file, key path, problem) for a missing file, a TOML syntax error or any invalid value.
-    """
-    path = Path(path)
-    try:
-        raw = path.read_bytes()
-    except OSError as exc:
-        raise ScenarioError(f"{path}: cannot read scenario file ({exc.strerror})") from None
-    try:
-        data = tomllib.loads(raw.decode("utf-8"))
-    except UnicodeDecodeError as exc:
-        raise ScenarioError(f"{path}: not UTF-8 text (byte {exc.start})") from None
-    except tomllib.TOMLDecodeError as exc:
-        raise ScenarioError(f"{path}: invalid TOML: {exc}") from None
-    return _validate(data, str(path), path.parent)

@@ -26,6 +26,7 @@ from __future__ import annotations
 
 import itertools
 from collections.abc import Callable, Iterable, Sequence
+from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 from typing import Any
@@ -36,23 +37,15 @@ from flexmvm.errors import InputError, SolverError
 from flexmvm.materials import ALUMINIUM, COPPER, PA6, TUNGSTEN, Material
 from flexmvm.results.atomic import write_json_atomic, write_table_csv
 from flexmvm.results.outdir import make_out_dir
-from flexmvm.scenarios.schema import Scenario, load_scenario, scenario_from_dict
-from flexmvm.studies.runner import Case, run_cases
-from flexmvm.studies.selection import (
-    check_grid,
-    cluster,
-    echo_failures,
-    failed_case_row,
-    failure_list,
-    file_sha256,
-    reference_history,
-    rod_of,
-    run_selection_case,
-    study_scenario,
-)
+from flexmvm.scenarios import Scenario, load_scenario, scenario_from_dict
+from flexmvm.studies.grid import check_grid, rod_of, study_scenario
+from flexmvm.studies.reference import file_sha256, reference_history
+from flexmvm.studies.report import echo_failures, failed_case_row, failure_list
+from flexmvm.studies.runner import Case, check_cluster_options, run_cases, study_cluster
+from flexmvm.studies.selection import run_selection_case
 
-__all__ = ["SEED_MATERIALS", "SEED_ORDER", "material_scenario", "parse_selections",
-           "run_material_case", "run_materials_study", "run_reference_case"]
+__all__ = ["SEED_MATERIALS", "SEED_ORDER", "MaterialStudy", "material_scenario", "material_study",
+           "parse_selections", "run_material_case", "run_materials_study", "run_reference_case"]
 
 #: Seed table 2, in the seed's order of decreasing accuracy.
 SEED_MATERIALS: dict[str, Material] = {"W": TUNGSTEN, "Cu": COPPER, "Al": ALUMINIUM, "PA6": PA6}
@@ -60,14 +53,9 @@ SEED_ORDER = ("W", "Cu", "Al", "PA6")
 
 
 def material_scenario(sc: Scenario, body: str, name: str, material: Material) -> Scenario:
-    """``sc`` with body ``body`` made of ``material`` (inline table), validated again."""
-    sc.body(body)
-    data = sc.model_dump(mode="json")
-    for b in data["bodies"]:
-        if b["name"] == body:
-            b["material"] = {"E_pa": float(material.E), "nu": float(material.nu),
-                             "rho_kg_m3": float(material.rho), "name": name}
-    return scenario_from_dict(data, source=f"{sc.name} (body {body} of {name})")
+    """``sc`` with body ``body`` made of ``material`` (inline table named ``name``)."""
+    return sc.with_material(body, Material(E=material.E, nu=material.nu, rho=material.rho,
+                                           name=name))
 
 
 def parse_selections(text: str | Sequence[tuple[int, int]]) -> list[tuple[int, int]]:
@@ -99,7 +87,7 @@ def run_material_case(case: Case, references: dict[str, str]) -> dict:
 
 def _theory(sc: Scenario, body: str) -> dict:
     """1D wave-Hertz contact radius and duration of the material's scenario (no FE run)."""
-    from flexmvm.studies.selection import theory_pulse
+    from flexmvm.theory.scenario import theory_pulse
 
     try:
         p = theory_pulse(sc, body)
@@ -119,25 +107,31 @@ def _mean(values: list[float]) -> float | None:
     return sum(values) / len(values) if values else None
 
 
-def run_materials_study(scenario_path: str | Path, out_dir: str | Path, body: str = "b2",
-                        materials: Iterable[str] = SEED_ORDER,
-                        selections: Sequence[tuple[int, int]] = ((1, 1), (2, 2)),
-                        modes: Iterable[int] = range(7, 44, 12), scheduler: str | None = None,
-                        n_workers: int | None = None, progress: bool = True, *,
-                        t_end_s: float | None = None, dt_s: float | None = None,
-                        other: str | None = None, serial: bool = False,
-                        echo: Callable[[str], Any] = print) -> dict:
-    """The material study (module doc). Returns the materials.json content. ``t_end_s``,
-    ``dt_s`` and ``other`` as in studies.selection.study_scenario.
+@dataclass(frozen=True)
+class MaterialStudy:
+    """The outcome of a material study: ``rows`` (materials.csv's rows), ``summary``
+    (materials.json's content), ``columns`` (materials.csv's columns)."""
+
+    rows: list[dict]
+    summary: dict
+    columns: list[str]
+
+
+def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
+                   materials: Iterable[str] = SEED_ORDER,
+                   selections: Sequence[tuple[int, int]] | str = ((1, 1), (2, 2)),
+                   modes: Iterable[int] = range(7, 44, 12), scheduler: str | None = None,
+                   n_workers: int | None = None, progress: bool = False, *,
+                   serial: bool = False) -> MaterialStudy:
+    """The material study of ``body`` in scenario ``sc`` (module doc), its cases and references
+    stored in ``out_dir`` (a rerun resumes); no table, figure or console output (see
+    :func:`run_materials_study`).
 
     Raises InputError for an unknown material name (keys of SEED_MATERIALS), a bad body or a
-    selection beyond the mesh. A reference or a case that fails is listed in ``failures``
-    (and printed), not raised; SolverError, after everything is written, if no run at all
-    could be compared.
+    selection beyond the mesh. A reference or a case that fails is listed in ``failures``,
+    not raised.
     """
     out = Path(out_dir).resolve()
-    sc = study_scenario(load_scenario(scenario_path), body, t_end_s=t_end_s, dt_s=dt_s,
-                        other=other)
     materials = list(materials)
     unknown = [m for m in materials if m not in SEED_MATERIALS]
     if unknown or not materials:
@@ -147,6 +141,7 @@ def run_materials_study(scenario_path: str | Path, out_dir: str | Path, body: st
     rod = rod_of(sc, body)
     _, _, _, modes = check_grid(sc, body, [s[0] for s in selections],
                                  [s[1] for s in selections], modes)
+    check_cluster_options(scheduler, n_workers, serial)
     make_out_dir(out)
     scen = {m: material_scenario(sc, body, m, SEED_MATERIALS[m]) for m in materials}
     ref_cases = [Case(f"ref-{m}", {"body": body, "material": m,
@@ -154,7 +149,7 @@ def run_materials_study(scenario_path: str | Path, out_dir: str | Path, body: st
                  for m in materials]
     ref_paths = {m: str(out / m / "reference" / "history.csv") for m in materials}
     kw: dict[str, Any]
-    with cluster(scheduler, n_workers, serial) as address:
+    with study_cluster(scheduler, n_workers, serial) as address:
         kw = {"serial": True} if serial else {"scheduler": address}
         ref_failed: dict[str, str] = {}
         refs = run_cases(ref_cases, partial(run_reference_case, out_dir=str(out)), out,
@@ -183,7 +178,6 @@ def run_materials_study(scenario_path: str | Path, out_dir: str | Path, body: st
         r.update(material=c.params["material"], E_pa=mat.E, nu=mat.nu, rho_kg_m3=mat.rho,
                  selection=f"{r['layers']}-{r['laps']}")
         rows.append(r)
-    write_table_csv(out / "materials.csv", cols, rows)
     per = {}
     for m in materials:
         vals = [r["ncc_force"] for r in rows if r["material"] == m and "ncc_force" in r]
@@ -217,16 +211,44 @@ def run_materials_study(scenario_path: str | Path, out_dir: str | Path, body: st
                              "selection_radius_m (outermost retained node from the axis): a "
                              "contact patch wider than the retained nodes puts contact rows on "
                              "nodes the reduced basis holds stiff"}
+    return MaterialStudy(rows, result, cols)
+
+
+def run_materials_study(scenario: str | Path | Scenario, out_dir: str | Path, body: str = "b2",
+                        materials: Iterable[str] = SEED_ORDER,
+                        selections: Sequence[tuple[int, int]] | str = ((1, 1), (2, 2)),
+                        modes: Iterable[int] = range(7, 44, 12), scheduler: str | None = None,
+                        n_workers: int | None = None, progress: bool = True, *,
+                        t_end_s: float | None = None, dt_s: float | None = None,
+                        other: str | None = None, serial: bool = False,
+                        echo: Callable[[str], Any] = print) -> dict:
+    """The material study of ``body`` in ``scenario`` (a Scenario or a scenario file) with its
+    files and console lines (module doc): :func:`material_study`, then materials.csv,
+    materials.json, the figure and the summary line. ``t_end_s``, ``dt_s`` and ``other`` as in
+    studies.grid.study_scenario. Returns the materials.json content.
+
+    Raises as :func:`material_study`, and SolverError, after everything is written, if no run
+    at all could be compared.
+    """
+    out = Path(out_dir).resolve()
+    sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
+    sc = study_scenario(sc, body, t_end_s=t_end_s, dt_s=dt_s, other=other)
+    study = material_study(sc, out, body, materials, selections, modes, scheduler, n_workers,
+                           progress, serial=serial)
+    rows, result = study.rows, study.summary
+    materials, per, failures = list(result["materials"]), result["materials"], result["failures"]
+    n_per = len(result["selections"]) * len(result["modes"])
+    holds = result["seed_ordering_holds"]
+    write_table_csv(out / "materials.csv", study.columns, rows)
     write_json_atomic(out / "materials.json", result)
     from flexmvm.plots.study_figures import plot_materials
 
     plot_materials(out / "fig9_materials.png", rows,
                    title=f"{sc.name}: body {body} of each material")
-    echo_failures(echo, failures, len(ref_cases) + len(materials) * len(selections) * len(modes),
-                  out / "materials.json")
+    echo_failures(echo, failures, len(materials) * (1 + n_per), out / "materials.json")
     echo("mean NCC of the force: " + ", ".join(
         f"{m} {per[m]['mean_ncc_force']:.6f} (over {per[m]['n_cases']} of "
-        f"{len(selections) * len(modes)} runs)" if per[m]["mean_ncc_force"] is not None
+        f"{n_per} runs)" if per[m]["mean_ncc_force"] is not None
         else f"{m} (no run compared)" for m in materials)
         + f"; seed ordering W > Cu > Al > PA6 {'holds' if holds else 'does not hold'}")
     if not any(per[m]["n_cases"] for m in materials):

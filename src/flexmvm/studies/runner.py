@@ -10,6 +10,7 @@ a scheduler address is given, or in-process with ``serial=True``.
 
 from __future__ import annotations
 
+import contextlib
 import json
 import os
 import re
@@ -27,7 +28,8 @@ from tqdm import tqdm
 from flexmvm.errors import InputError, SolverError
 from flexmvm.results.atomic import canonical_json, write_json_atomic, write_text_atomic
 
-__all__ = ["Case", "Params", "case_path", "collect", "error_path", "run_cases"]
+__all__ = ["Case", "Params", "case_path", "check_cluster_options", "collect", "error_path",
+           "local_cluster", "run_cases", "study_cluster"]
 
 _KEY_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,199}")
 _CASES_DIR = "cases"
@@ -254,6 +256,34 @@ def local_cluster(n_workers: int):
     with dask.config.set({"distributed.scheduler.worker-saturation": 1.0}):
         return LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
                             dashboard_address=None)
+
+
+def check_cluster_options(scheduler: str | None, n_workers: int | None, serial: bool) -> None:
+    """InputError unless at most one of ``serial``, ``scheduler``, ``n_workers`` is given and
+    ``n_workers`` (if given) is >= 1."""
+    if serial and (scheduler is not None or n_workers is not None):
+        raise InputError("serial=True received with scheduler/workers; expected one")
+    if scheduler is not None and n_workers is not None:
+        raise InputError("--workers applies to a local cluster; expected no --scheduler with it")
+    if n_workers is not None and n_workers < 1:
+        raise InputError(f"workers: expected a positive integer, got {n_workers}")
+
+
+@contextlib.contextmanager
+def study_cluster(scheduler: str | None, n_workers: int | None, serial: bool
+                  ) -> Iterator[str | None]:
+    """The scheduler address a whole study gives run_cases: ``scheduler`` itself, None with
+    ``serial`` (in-process), else a LocalCluster of ``n_workers`` (default: one per core)
+    processes started here and closed at exit. Options as :func:`check_cluster_options`."""
+    check_cluster_options(scheduler, n_workers, serial)
+    if serial or scheduler is not None:
+        yield scheduler
+        return
+    cluster = local_cluster(n_workers or os.cpu_count() or 1)
+    try:
+        yield cluster.scheduler_address
+    finally:
+        cluster.close()
 
 
 def _run_dask(

@@ -1,52 +1,142 @@
 """The 1D wave solution of a two-rod scenario, in the history format of a simulation run.
 
-The striker is the faster of the contact's two bodies, the target the other. Flat striker end: rigid
-contact (St Venant); hemispherical striker end: Hertz law with R = the rod radius. The impact
-speed is the relative velocity of the two bodies along the striker's axis. Probes must sit at
-the centre of a rod end (node set end_a_centre / end_b_centre): near end = end A (contact end).
+One mapping from a scenario to the 1D theory (:func:`rod_impact`), used by every caller (the
+main job's comparison, ``flexmvm theory``, the validation report and the a-priori estimate of
+the selection study):
+
+- the contact: the scenario's only contact, or the one of ``body`` when a body is named;
+  both of its bodies must be rods ([bodies.rod]);
+- the striker is the body moving faster (speed of its placement velocity), the target the
+  other; the contact end of each rod is the end its contact surface names (``end_a`` or
+  ``end_b``; a ``side`` surface is not an end impact: InputError);
+- the impact axis is the outward normal of the striker's contact end (-x local for end A, +x
+  for end B), and the impact speed the relative velocity along it; it must be > 0;
+- the law: Hertz when a contact end is a hemisphere (sphere radius = that rod's radius; two
+  hemispheres: R = R1 R2 / (R1 + R2)), St Venant (rigid) when both are flat;
+- probes must sit at the centre of a rod end (node sets ``end_a_centre`` / ``end_b_centre``):
+  the contact end's centre is the near end, the other the far end.
 """
 
 from __future__ import annotations
 
+import math
+from dataclasses import dataclass
+
 import numpy as np
 
 from flexmvm.errors import InputError
-from flexmvm.theory.wave import ContactLaw, Rod1D, two_rod_impact
+from flexmvm.mesh.rod import EndShape
+from flexmvm.metrics.ncc import contact_intervals
+from flexmvm.theory.wave import ContactLaw, Rod1D, WaveSolution, hertz_stiffness, two_rod_impact
 
-_END = {"end_a_centre": "near", "end_b_centre": "far"}
+_OUTWARD = {"end_a": -1.0, "end_b": 1.0}  # local x of an end's outward normal
 
 
-def theory_histories(sc, dt: float | None = None) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], dict]:
-    """(t, contact_force, {probe: axial velocity}, info) of the 1D solution of scenario sc."""
-    if len(sc.contacts) != 1:
-        raise InputError(f"theory: needs exactly one contact between two rods, got {len(sc.contacts)}")
-    c = sc.contacts[0]
+@dataclass(frozen=True)
+class RodImpact:
+    """A two-rod scenario as the 1D theory sees it (module doc)."""
+
+    striker: str                  # body names
+    target: str
+    rod1: Rod1D                   # striker
+    rod2: Rod1D                   # target
+    v0_mps: float                 # impact speed along the axis [m/s]
+    axis: np.ndarray              # (3,) impact direction, global
+    law: ContactLaw
+    sphere_radius_m: float | None  # Hertz radius [m] (None: St Venant)
+    ends: dict                    # body name -> its contact end ("end_a" / "end_b")
+
+    def solve(self, t_end_s: float, dt: float | None = None) -> WaveSolution:
+        return two_rod_impact(self.rod1, self.rod2, self.v0_mps, t_end_s, self.law,
+                              sphere_radius_m=self.sphere_radius_m, dt=dt)
+
+
+def _contact_of(sc, body: str | None):
+    if body is None:
+        if len(sc.contacts) != 1:
+            raise InputError("theory: needs exactly one contact between two rods, got "
+                             f"{len(sc.contacts)}")
+        return sc.contacts[0]
+    for c in sc.contacts:
+        if body in (c.slave_body, c.master_body):
+            return c
+    raise InputError(f"theory: body {body!r} is in no contact of the scenario")
+
+
+def rod_impact(sc, body: str | None = None) -> RodImpact:
+    """The 1D view of scenario ``sc`` (module doc); ``body`` picks the contact of that body."""
+    c = _contact_of(sc, body)
+    ends = {c.slave_body: c.slave_surface, c.master_body: c.master_surface}
     a, b = sc.body(c.slave_body), sc.body(c.master_body)
-    speed = lambda body: float(np.linalg.norm(body.placement.velocity_mps))
+    for cfg in (a, b):
+        if cfg.rod is None:
+            raise InputError(f"theory: body {cfg.name!r} is not a rod ([bodies.rod])")
+        if ends[cfg.name] not in _OUTWARD:
+            raise InputError(f"theory: the contact surface of {cfg.name!r} is "
+                             f"{ends[cfg.name]!r}, not a rod end (end_a or end_b)")
+    speed = lambda cfg: float(np.linalg.norm(cfg.placement.velocity_mps))
     striker, target = (a, b) if speed(a) > speed(b) else (b, a)
-    for b in (striker, target):
-        if b.rod is None:
-            raise InputError(f"theory: body {b.name!r} is not a rod ([bodies.rod])")
-    rod1 = Rod1D.from_material(striker.material_obj(), striker.rod.length_m, striker.rod.radius_m)
-    rod2 = Rod1D.from_material(target.material_obj(), target.rod.length_m, target.rod.radius_m)
-    axis = striker.placement.rotation.matrix() @ np.array([-1.0, 0.0, 0.0])
-    v0 = float(axis @ (np.asarray(striker.placement.velocity_mps) - np.asarray(target.placement.velocity_mps)))
+    local = np.array([_OUTWARD[ends[striker.name]], 0.0, 0.0])
+    axis = striker.placement.rotation.matrix() @ local
+    v0 = float(axis @ (np.asarray(striker.placement.velocity_mps)
+                       - np.asarray(target.placement.velocity_mps)))
     if not v0 > 0:
         raise InputError(f"theory: the striker {striker.name!r} does not approach the target "
                          f"(relative axial velocity {v0:.4g} m/s)")
-    hemi = str(getattr(striker.rod.end_a, "value", striker.rod.end_a)) == "hemisphere"
-    law = ContactLaw.HERTZ if hemi else ContactLaw.RIGID
-    sol = two_rod_impact(rod1, rod2, v0, sc.time.t_end_s, law,
-                         sphere_radius_m=striker.rod.radius_m if hemi else None, dt=dt)
+    shape = lambda cfg: cfg.rod.end_a if ends[cfg.name] == "end_a" else cfg.rod.end_b
+    radii = [cfg.rod.radius_m for cfg in (striker, target) if shape(cfg) is EndShape.HEMISPHERE]
+    sphere = 1.0 / sum(1.0 / r for r in radii) if radii else None
+    return RodImpact(
+        striker=striker.name, target=target.name,
+        rod1=Rod1D.from_material(striker.material_obj(), striker.rod.length_m,
+                                 striker.rod.radius_m),
+        rod2=Rod1D.from_material(target.material_obj(), target.rod.length_m,
+                                 target.rod.radius_m),
+        v0_mps=v0, axis=axis, law=ContactLaw.HERTZ if radii else ContactLaw.RIGID,
+        sphere_radius_m=sphere, ends=ends)
+
+
+def theory_histories(sc, dt: float | None = None
+                     ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], dict]:
+    """(t, contact_force, {probe: velocity along global x}, info) of the 1D solution of
+    scenario sc over its end time (module doc: the mapping)."""
+    imp = rod_impact(sc)
+    sol = imp.solve(sc.time.t_end_s, dt=dt)
     probes = {}
     for p in sc.probes:
-        where = _END.get(p.node_set or "")
-        if where is None or p.body not in (striker.name, target.name):
+        end = (p.node_set or "").removesuffix("_centre")
+        if end not in _OUTWARD or not p.node_set.endswith("_centre") \
+                or p.body not in (imp.striker, imp.target):
             raise InputError(f"theory: probe {p.name!r} is not at the centre of a rod end "
                              "(node_set end_a_centre or end_b_centre)")
-        rod = "1" if p.body == striker.name else "2"
+        rod = "1" if p.body == imp.striker else "2"
+        where = "near" if end == imp.ends[p.body] else "far"
         v = getattr(sol, f"v{rod}_{where}")
         # 1D velocities are along the impact axis; the probes report the global x component
-        probes[p.name] = v * float(axis[0] if abs(axis[0]) > 0.5 else 1.0)
-    info = {"law": law.value, "v0_mps": v0, "striker": striker.name, "target": target.name}
+        probes[p.name] = v * float(imp.axis[0] if abs(imp.axis[0]) > 0.5 else 1.0)
+    info = {"law": imp.law.value, "v0_mps": imp.v0_mps, "striker": imp.striker,
+            "target": imp.target}
     return sol.t, sol.contact_force, probes, info
+
+
+def theory_pulse(sc, body: str) -> dict:
+    """The 1D force pulse of the contact of ``body``: contact duration T_c [s] (first
+    interval above 1 % of the peak, solved over at least four round trips of either rod),
+    peak force [N] overall and within the scenario's end time, law, impact speed and the
+    Hertz contact radius a = (3 F R / 4 E*)^(1/3) [m] at the window's peak (0 for St Venant)."""
+    imp = rod_impact(sc, body)
+    t_end = max(4.0 * max(imp.rod1.round_trip_s, imp.rod2.round_trip_s), sc.time.t_end_s)
+    sol = imp.solve(t_end)
+    f = sol.contact_force
+    fmax = float(f.max())
+    first = contact_intervals(sol.t, f, 0.01 * fmax)[0]
+    fwin = float(f[sol.t <= sc.time.t_end_s].max())
+    a = 0.0
+    if imp.sphere_radius_m is not None:
+        radius = imp.sphere_radius_m
+        e_star = 3.0 * hertz_stiffness(imp.rod1, imp.rod2, radius) / (4.0 * math.sqrt(radius))
+        a = (3.0 * fwin * radius / (4.0 * e_star)) ** (1.0 / 3.0)
+    return {"law": imp.law.value, "v0_mps": imp.v0_mps,
+            "contact_duration_s": first[1] - first[0], "peak_force_N": fmax,
+            "peak_force_window_N": fwin, "contact_radius_m": a,
+            "sphere_radius_m": imp.sphere_radius_m}

@@ -1,0 +1,150 @@
+"""What the driver takes and gives: the time grid, the probes, and the run's histories.
+
+TimeGrid and Probe are the inputs of integrate.driver.simulate besides the system and its
+states; RunResult is its output, kept in memory (writers in flexmvm.results turn it into files).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from flexmvm.errors import InputError
+from flexmvm.integrate import DEFAULT_THETA
+
+
+@dataclass(frozen=True)
+class TimeGrid:
+    """t_end_s, dt_s (smallest step), dt_max_s (largest), output_dt_s; all [s]; theta of the
+    Moreau-Jean scheme (1/2: implicit midpoint; default flexmvm.integrate.DEFAULT_THETA)."""
+
+    t_end_s: float
+    dt_s: float
+    dt_max_s: float | None = None
+    output_dt_s: float | None = None
+    theta: float = DEFAULT_THETA
+
+    def ticks(self) -> tuple[int, int, int]:
+        """(total ticks, output ticks, largest step level k with 2^k ticks <= dt_max)."""
+        dt = self.dt_s
+        if not (dt > 0 and self.t_end_s > 0):
+            raise InputError(f"time: dt_s and t_end_s must be > 0, got {dt!r}, {self.t_end_s!r}")
+        out = self.output_dt_s or dt
+        n_out = round(out / dt)
+        if n_out < 1 or abs(n_out * dt - out) > 1e-9 * out:
+            raise InputError(f"time: output_dt_s = {out!r} must be a whole multiple of dt_s = {dt!r}")
+        dt_max = self.dt_max_s or dt
+        k_max = int(np.floor(np.log2(dt_max / dt) + 1e-9)) if dt_max >= dt else 0
+        return int(np.ceil(self.t_end_s / dt - 1e-9)), n_out, max(k_max, 0)
+
+
+@dataclass(frozen=True)
+class Probe:
+    """A named node of a body whose position and velocity are recorded."""
+
+    name: str
+    body: int
+    node: int
+
+
+@dataclass
+class RunResult:
+    """Histories at output times (arrays with their time axis t [s])."""
+
+    t: np.ndarray
+    body_names: list[str]
+    frame_r: np.ndarray            # (n_out, n_bodies, 3)
+    frame_v: np.ndarray            # (n_out, n_bodies, 6)
+    probe_names: list[str]
+    probe_x: np.ndarray            # (n_out, n_probes, 3)
+    probe_v: np.ndarray            # (n_out, n_probes, 3)
+    contact_force: np.ndarray      # (n_out,) normal force, impulse-averaged over the interval ending at t [N]
+    joint_force: np.ndarray        # (n_out, n_joint_rows) averaged constraint forces [N]
+    kinetic: np.ndarray
+    strain: np.ndarray
+    potential: np.ndarray
+    momentum: np.ndarray           # (n_out, 3) total linear momentum [kg m/s]
+    angular_momentum: np.ndarray   # (n_out, 3) about the origin [kg m^2/s]
+    q: list[np.ndarray]            # per body: (n_out, nq) elastic coordinates
+    frame_A: np.ndarray            # (n_out, n_bodies, 3, 3)
+    q_dot: list[np.ndarray] = field(default_factory=list)  # per body: (n_out, nq) their rates
+    steps: StepHistory | None = None  # every step: its end time, size and contact impulse
+    contact_intervals: list[tuple[float, float]] = field(default_factory=list)
+    max_penetration_m: float = 0.0  # deepest node penetration after any step, both directions
+    # where and when: {"t_s", "body", "node", "against"} (None: no penetration measured)
+    max_penetration_at: dict | None = None
+    # deepest per measured direction, "<body> nodes into <against>" -> depth [m]
+    max_penetration_by_direction_m: dict = field(default_factory=dict)
+    max_joint_drift: float = 0.0   # largest joint violation |phi| after any step (position level)
+    n_steps: int = 0
+    n_factorizations: int = 0
+    n_nonrotating_steps: int = 0   # steps taken by the linear non-rotating step (nonrotating.py)
+    steps_not_converged: int = 0   # steps that stopped above the Newton rtol (round-off floor)
+    newton_residual_max: float = 0.0  # largest relative momentum residual at a step's exit
+    lcp_residual_max: float = 0.0  # largest complementarity residual of any LCP solve
+    momentum_residual: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    # sum over all steps of the translational momentum residuals of all bodies [N s]: the
+    # linear-momentum change the scheme's solves left unbalanced (a free system's error)
+    wall_time_s: float = 0.0
+
+    @property
+    def total_energy(self) -> np.ndarray:
+        return self.kinetic + self.strain + self.potential
+
+    def body_index(self, name: str) -> int:
+        """Index of body ``name`` in the histories; InputError naming the bodies otherwise."""
+        try:
+            return self.body_names.index(name)
+        except ValueError:
+            raise InputError(f"no body {name!r} in this run (bodies: "
+                             f"{', '.join(self.body_names)})") from None
+
+    def probe(self, name: str) -> ProbeHistory:
+        """Position and velocity history of probe ``name`` (global, [m], [m/s])."""
+        try:
+            i = self.probe_names.index(name)
+        except ValueError:
+            raise InputError(f"no probe {name!r} in this run (probes: "
+                             f"{', '.join(self.probe_names) or 'none'})") from None
+        return ProbeHistory(name, self.t, self.probe_x[:, i], self.probe_v[:, i])
+
+    def elastic(self, body: str) -> tuple[np.ndarray, np.ndarray]:
+        """(q, q_dot) of body ``body`` at the output times, each (n_out, nq): its elastic
+        coordinates and their rates as the scheme integrated them (not differenced)."""
+        b = self.body_index(body)
+        return self.q[b], self.q_dot[b]
+
+    def curves(self, axis: int = 0) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        """(t, contact force, {probe: velocity component ``axis`` (0 = global x)}): the curves
+        that comparisons, history files and figures use."""
+        return self.t, self.contact_force, {n: self.probe_v[:, i, axis]
+                                            for i, n in enumerate(self.probe_names)}
+
+
+@dataclass(frozen=True)
+class ProbeHistory:
+    """One probe's histories: t [s] (n_out,), x [m] and v [m/s] (n_out, 3), global axes."""
+
+    name: str
+    t: np.ndarray
+    x: np.ndarray
+    v: np.ndarray
+
+
+@dataclass(frozen=True)
+class StepHistory:
+    """One entry per time step: t_s the step's end time [s], h_s its size [s],
+    contact_impulse_Ns the normal contact impulse of all contacts over the step [N s]
+    (the contact force at outputs is the sum of these over the output interval / interval)."""
+
+    t_s: np.ndarray
+    h_s: np.ndarray
+    contact_impulse_Ns: np.ndarray
+
+    def size_counts(self) -> dict[float, int]:
+        """{step size [s]: number of steps taken with it}, smallest first."""
+        sizes, counts = np.unique(self.h_s, return_counts=True)
+        return {float(h): int(n) for h, n in zip(sizes, counts, strict=True)}
+
+

@@ -1,0 +1,67 @@
+"""The studies as library calls: a Scenario (or a scenario file) in, a table out, nothing
+written unless a directory is given. The cases are stored as the command line stores them
+(``DIR/cases/<key>.json``, resumable); without ``out_dir`` they go to a temporary directory
+removed at the end."""
+
+from __future__ import annotations
+
+import contextlib
+import tempfile
+from collections.abc import Iterable, Iterator, Sequence
+from pathlib import Path
+
+from flexmvm.metrics.ncc import Target
+from flexmvm.scenarios import Scenario, load_scenario
+from flexmvm.studies import materials as material_studies
+from flexmvm.studies.materials import SEED_ORDER, MaterialStudy
+from flexmvm.studies.selection import SelectionStudy, select_models
+
+__all__ = ["material_study", "select"]
+
+
+@contextlib.contextmanager
+def _directory(out_dir: str | Path | None) -> Iterator[Path]:
+    if out_dir is not None:
+        yield Path(out_dir)
+        return
+    with tempfile.TemporaryDirectory(prefix="flexmvm-study-") as tmp:
+        yield Path(tmp)
+
+
+def _scenario(scenario: Scenario | str | Path) -> Scenario:
+    return scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
+
+
+def select(scenario: Scenario | str | Path, body: str, *, layers: Iterable[int] = range(1, 5),
+           laps: Iterable[int] = range(1, 6), modes: Iterable[int] = range(7, 44, 6),
+           target: Target | float = 0.99, search: bool = False,
+           out_dir: str | Path | None = None, workers: int | None = None,
+           scheduler: str | None = None, serial: bool = False,
+           progress: bool = False) -> SelectionStudy:
+    """Selection study of ``body`` (studies/selection.py): every ``layers`` x ``laps`` x
+    ``modes`` Craig-Bampton model of it against its full-FE reference, the other bodies as in
+    the scenario. ``target``: a Target or the force NCC to reach; ``search``: the pruned
+    search instead of the whole grid. Runs on a local Dask cluster of ``workers`` processes
+    (default: one per core), on ``scheduler``, or in this process with ``serial``. Returns the
+    table (``rows``), the smallest model reaching the target (``best``) and the summary."""
+    target = target if isinstance(target, Target) else Target(float(target))
+    with _directory(out_dir) as out:
+        return select_models(_scenario(scenario), body, out, layers, laps, modes, target,
+                             search=search, scheduler=scheduler, n_workers=workers,
+                             serial=serial, progress=progress)
+
+
+def material_study(scenario: Scenario | str | Path, body: str = "b2", *,
+                   materials: Iterable[str] = SEED_ORDER,
+                   selections: Sequence[tuple[int, int]] | str = ((1, 1), (2, 2)),
+                   modes: Iterable[int] = range(7, 44, 12), out_dir: str | Path | None = None,
+                   workers: int | None = None, scheduler: str | None = None,
+                   serial: bool = False, progress: bool = False) -> MaterialStudy:
+    """Material study (studies/materials.py): ``body`` made of each of ``materials`` (keys of
+    SEED_MATERIALS: W, Cu, Al, PA6), each MVM model of ``selections`` x ``modes`` against that
+    material's full-FE reference. Returns the rows and the summary (per-material mean NCC,
+    the seed's ordering)."""
+    with _directory(out_dir) as out:
+        return material_studies.material_study(
+            _scenario(scenario), out, body, materials, selections, modes, scheduler, workers,
+            progress, serial=serial)

@@ -1,0 +1,116 @@
+"""The case grid of a selection study: the study body's rod, the layers x laps x modes grid
+checked against its mesh, the scenario a study runs and the scenarios of one case and of
+the full-FE reference (studies/selection.py module doc)."""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from pathlib import Path
+
+from flexmvm.errors import InputError
+from flexmvm.scenarios import ModelConfig, ModelKind, Scenario, full, mvm
+from flexmvm.studies.reference import file_sha256
+from flexmvm.studies.runner import Case
+
+
+def rod_of(sc: Scenario, body: str):
+    """The (cached) RodMesh of rod body ``body``; InputError if there is no such rod body."""
+    from flexmvm.scenarios.build import cached_rod_mesh
+
+    cfg = sc.body(body)
+    if cfg.rod is None:
+        raise InputError(f"body {body!r} is not a rod ([bodies.rod]); the i-j selection needs one")
+    return cached_rod_mesh(cfg.rod.spec())
+
+
+def _ints(name: str, values: Iterable[int]) -> list[int]:
+    out = sorted({int(v) for v in values})
+    if not out or out[0] < 1:
+        raise InputError(f"{name}: expected integers >= 1, got {list(values)!r}")
+    return out
+
+
+def check_grid(sc: Scenario, body: str, layers, laps, modes):
+    rod = rod_of(sc, body)
+    layers, laps, modes = _ints("layers", layers), _ints("laps", laps), _ints("modes", modes)
+    for name, vals, top in (("layers", layers, rod.n_layers), ("laps", laps, rod.n_laps)):
+        if vals[-1] > top:
+            raise InputError(f"{name} up to {vals[-1]} exceeds the mesh of body {body!r}: "
+                             f"maximum {top} {name}")
+    return rod, layers, laps, modes
+
+
+def case_key(layers: int, laps: int, modes: int) -> str:
+    return f"l{layers}-j{laps}-m{modes}"
+
+
+def selection_cases(sc: Scenario, body: str, layers: Iterable[int] = range(1, 5),
+                    laps: Iterable[int] = range(1, 6), modes: Iterable[int] = range(7, 44, 6),
+                    reference: str | Path | None = None) -> list[Case]:
+    """The cases of the grid layers x laps x modes for body ``body`` of scenario ``sc``.
+
+    Keys ``l<i>-j<j>-m<m>``; params {body, layers, laps, modes, modes_max (the grid's largest
+    mode count: each selection's Craig-Bampton basis is solved once with it and cut,
+    scenarios.build.craig_bampton_mode_floor), scenario (sc.model_dump(json)),
+    reference_sha256 (of the reference history CSV ``reference``, or None)}. The path itself is
+    not a parameter, so a study directory can be moved; it is given to the case function as
+    ``functools.partial(run_selection_case, reference=path)``. Raises InputError for an
+    unknown or non-rod body, or layers/laps beyond the rod mesh (naming the maximum).
+    """
+    _, layers, laps, modes = check_grid(sc, body, layers, laps, modes)
+    data = sc.model_dump(mode="json")
+    sha = file_sha256(reference) if reference is not None else None
+    top = max(modes)
+    return [Case(case_key(i, j, m), {"body": body, "layers": i, "laps": j, "modes": m,
+                                     "modes_max": top, "scenario": data, "reference_sha256": sha})
+            for i in layers for j in laps for m in modes]
+
+
+def parse_model(text: str) -> ModelConfig | None:
+    """'scenario' -> None (keep); 'full'; 'mvm:I-J:M' (Craig-Bampton, selection I-J, M modes).
+    The reference condition is the rod default (end_b). InputError (one line) otherwise."""
+    t = text.strip().lower()
+    if t == "scenario":
+        return None
+    if t == ModelKind.FULL.value:
+        return full()
+    bits = t.split(":")
+    if len(bits) == 3 and bits[0] == ModelKind.MVM.value and bits[2].isdigit():
+        try:
+            return mvm(bits[1], int(bits[2]))
+        except InputError:
+            pass
+    raise InputError(f"model {text!r}: expected 'scenario', 'full' or 'mvm:I-J:M' "
+                     "(e.g. mvm:3-5:40)")
+
+
+def study_scenario(sc: Scenario, body: str, *, t_end_s: float | None = None,
+                   dt_s: float | None = None, other: str | ModelConfig | None = None) -> Scenario:
+    """The scenario a study runs: end time and contact step overridden, and the model of
+    every body other than ``body`` (rigid ones excepted) replaced by ``other`` (a
+    ModelConfig or parse_model text; None keeps the scenario's)."""
+    sc.body(body)
+    if isinstance(other, str):
+        other = parse_model(other)
+    models = {}
+    if other is not None:
+        models = {b.name: other for b in sc.bodies
+                  if b.name != body and b.model.kind is not ModelKind.RIGID}
+    for name, cfg in models.items():
+        sc = sc.with_model(name, cfg)
+    if t_end_s is not None or dt_s is not None:
+        sc = sc.with_time(t_end_s=t_end_s, dt_s=dt_s)
+    return sc
+
+
+def mvm_scenario(sc: Scenario, body: str, layers: int, laps: int, modes: int) -> Scenario:
+    """``sc`` with ``body`` as the Craig-Bampton model of selection layers-laps + modes."""
+    ref = sc.body(body).model.reference
+    return sc.with_model(body, mvm((layers, laps), modes, reference=ref))
+
+
+def reference_scenario(sc: Scenario, body: str) -> Scenario:
+    """``sc`` with ``body`` full FE: the study's reference."""
+    return sc.with_model(body, full(reference=sc.body(body).model.reference))
+
+
