@@ -80,3 +80,11 @@ def test_theory_writes_the_history(tmp_path):
     assert p.returncode == 0, p.stderr
     header = (tmp_path / "history.csv").read_text().splitlines()[0]
     assert header == "t_s,contact_force_N,b2_impact_end_vx_mps,b2_free_end_vx_mps"
+
+
+def test_run_model_choices_are_the_model_kinds():
+    """`flexmvm run --model` spells out the ModelKind values (so --help stays light)."""
+    from flexmvm.bodies.build import ModelKind
+    from flexmvm.cli.run_cmd import MODELS
+
+    assert MODELS == [k.value for k in ModelKind]

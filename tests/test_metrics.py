@@ -12,7 +12,6 @@ from flexmvm.errors import InputError
 from flexmvm.metrics import (
     Comparison,
     Target,
-    compare,
     compare_force,
     contact_intervals,
     impulse,
@@ -142,7 +141,7 @@ def test_duration_error_from_contact_intervals():
     assert c.peak_err == pytest.approx(0.0, abs=1e-6)
     assert c.impulse_err == pytest.approx(0.1, abs=1e-4)
     assert 0.9 < c.ncc < 0.999
-    assert compare(t, _pulse(t), t, _pulse(t)) == pytest.approx(1.0, abs=1e-12)
+    assert ncc(t, _pulse(t), t, _pulse(t)) == pytest.approx(1.0, abs=1e-12)
     two = compare_force(t, _pulse(t) + _pulse(t, 0.35, 0.45), t,
                         _pulse(t) + _pulse(t, 0.35, 0.49), threshold_fraction=0.0)
     assert two.duration_err == pytest.approx(0.04 / 0.3, abs=2 * (t[1] - t[0]) / 0.3)

@@ -290,7 +290,7 @@ def test_warm_scenario_build_computes_nothing(cache, monkeypatch):
     def refuse(*_args, **_kw):
         raise AssertionError("computed although cached")
 
-    for name in ("build_basis", "assemble", "body_parts", "_fe"):
+    for name in ("build_basis", "assemble", "body_parts", "fe_model_for"):
         monkeypatch.setattr(build, name, refuse)
     hit = build.body_parts_for(*args, 6, "end_b")
     _assert_same_parts(hit, fresh)
@@ -299,7 +299,7 @@ def test_warm_scenario_build_computes_nothing(cache, monkeypatch):
     _assert_same_parts(cut_hit, cut)
     assert cut.inv.nq == cut_basis.psi.shape[1] == 3 * len(nodes) + 4
     monkeypatch.undo()
-    own = body_parts(build._fe(SPEC, ALUMINIUM), cut_basis)
+    own = body_parts(build.fe_model_for(SPEC, ALUMINIUM), cut_basis)
     np.testing.assert_allclose(cut.k_hat, own.k_hat, rtol=1e-12, atol=1e-9 * abs(own.k_hat).max())
     np.testing.assert_allclose(cut.inv.M_qq, own.inv.M_qq, rtol=1e-12,
                                atol=1e-12 * abs(own.inv.M_qq).max())

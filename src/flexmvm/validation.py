@@ -36,7 +36,8 @@ from flexmvm.errors import InputError
 from flexmvm.materials import ALUMINIUM, BRASS
 from flexmvm.results.atomic import canonical_json, write_json_atomic, write_text_atomic
 from flexmvm.results.history import read_history, write_history
-from flexmvm.scenarios import ModelConfig, Scenario, load_scenario, scenario_from_dict
+from flexmvm.scenarios import ModelKind, Scenario, load_scenario
+from flexmvm.scenarios import mvm as mvm_model
 from flexmvm.scenarios.compare import compare_runs
 from flexmvm.setup_cache import code_version
 from flexmvm.theory.scenario import theory_histories
@@ -151,16 +152,15 @@ def _cons(s: dict) -> dict:
 
 def _with_rod(sc: Scenario, **rod) -> Scenario:
     """A copy with the given [bodies.rod] keys set on every body."""
-    data = sc.model_dump(mode="json")
-    for b in data["bodies"]:
-        b["rod"].update(rod)
-    return scenario_from_dict(data, f"{sc._source} (rod {rod})")
+    for b in sc.bodies:
+        sc = sc.with_rod(b.name, **rod)
+    return sc
 
 
 def flat_vs_st_venant(out: Path, t_end: float = T_FLAT, dt: float | None = DT,
                       recompute: bool = False) -> dict:
-    sc = load_scenario(SCENARIOS / "rod_impact_flat.toml").with_overrides(
-        model="full", t_end_s=t_end, dt_s=dt)
+    sc = load_scenario(SCENARIOS / "rod_impact_flat.toml").with_kind(
+        ModelKind.FULL).with_time(t_end_s=t_end, dt_s=dt)
     c = run_case(out, "flat_full", sc, recompute)
     t, f, p = c.curves
     b1, b2 = sc.body("b1"), sc.body("b2")
@@ -184,9 +184,9 @@ def _case_meta(c: Case) -> dict:
 
 def seed_vs_theory(out: Path, t_end: float = T_SEED, dt: float | None = DT,
                    recompute: bool = False, with_1_1: bool = False, plot: bool = False) -> dict:
-    sc = load_scenario(SCENARIOS / "rod_impact.toml").with_overrides(t_end_s=t_end, dt_s=dt)
+    sc = load_scenario(SCENARIOS / "rod_impact.toml").with_time(t_end_s=t_end, dt_s=dt)
     tt, ft, pt, _ = theory_histories(sc)
-    full = run_case(out, "seed_full", sc.with_overrides(model="full"), recompute)
+    full = run_case(out, "seed_full", sc.with_kind(ModelKind.FULL), recompute)
     mvm = run_case(out, "seed_mvm", sc, recompute)
     b2 = sc.body("b2").model
     rep = {"full_vs_theory": compare_runs(tt, ft, pt, *full.curves),
@@ -197,8 +197,8 @@ def seed_vs_theory(out: Path, t_end: float = T_SEED, dt: float | None = DT,
            "cases": {"full": _case_meta(full), "mvm": _case_meta(mvm)}}
     runs = {"FE": full.curves, f"MVM {b2.selection} + {b2.modes}": mvm.curves}
     if with_1_1:
-        m11 = ModelConfig(kind="mvm", selection="1-1", modes=b2.modes, reference=b2.reference)
-        s11 = run_case(out, "seed_mvm_1-1", sc.with_overrides(body_models={"b2": m11}), recompute)
+        m11 = mvm_model("1-1", b2.modes, reference=b2.reference)
+        s11 = run_case(out, "seed_mvm_1-1", sc.with_model("b2", m11), recompute)
         rep["mvm11_vs_full"] = compare_runs(*full.curves, *s11.curves)
         rep["mvm11"] = _cons(s11.summary)
         rep["cases"]["mvm11"] = _case_meta(s11)
@@ -224,11 +224,11 @@ def step_convergence(out: Path, t_end: float = T_STEP, dt: float = DT,
                      t_end_h: float | None = None, recompute: bool = False) -> dict:
     """Full-FE seed force at h = dt and h/2 over [0, t_end]. The h run may be a longer one
     (``t_end_h``, e.g. the seed_full case: the same steps up to t_end), truncated to t_end."""
-    sc = load_scenario(SCENARIOS / "rod_impact.toml").with_overrides(model="full")
+    sc = load_scenario(SCENARIOS / "rod_impact.toml").with_kind(ModelKind.FULL)
     t_h = t_end if t_end_h is None else t_end_h
     a = run_case(out, "seed_full" if t_h == T_SEED and dt == DT else f"seed_full_dt{dt:g}",
-                 sc.with_overrides(t_end_s=t_h, dt_s=dt), recompute)
-    b = run_case(out, f"seed_full_dt{dt / 2:g}", sc.with_overrides(t_end_s=t_end, dt_s=dt / 2),
+                 sc.with_time(t_end_s=t_h, dt_s=dt), recompute)
+    b = run_case(out, f"seed_full_dt{dt / 2:g}", sc.with_time(t_end_s=t_end, dt_s=dt / 2),
                  recompute)
     return {"h": dt, "t_end": t_end, "h_half_vs_h": compare_runs(*b.curves, *_truncate(a, t_end)),
             "cases": {"h": _case_meta(a), "h_half": _case_meta(b)}}
@@ -244,12 +244,12 @@ def short_case(out: Path, recompute: bool = False, plot: bool = False) -> dict:
     FE with the contact zone refined (SHORT_FINE_MESH) and with h/2 against full FE at h."""
     sc = short_scenario()
     tt, ft, pt, _ = theory_histories(sc)
-    full = run_case(out, "short_full", sc.with_overrides(model="full"), recompute)
+    full = run_case(out, "short_full", sc.with_kind(ModelKind.FULL), recompute)
     mvm = run_case(out, "short_mvm", sc, recompute)
-    fine = run_case(out, "short_full_fine", _with_rod(sc.with_overrides(model="full"),
+    fine = run_case(out, "short_full_fine", _with_rod(sc.with_kind(ModelKind.FULL),
                                                       **SHORT_FINE_MESH), recompute)
     half = run_case(out, "short_full_dt_half",
-                    sc.with_overrides(model="full", dt_s=sc.time.dt_s / 2), recompute)
+                    sc.with_kind(ModelKind.FULL).with_time(dt_s=sc.time.dt_s / 2), recompute)
     b2 = sc.body("b2").model
     if plot:
         _plot(out / "short_fig.png", {"FE": full.curves, "FE fine": fine.curves,

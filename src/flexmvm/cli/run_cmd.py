@@ -6,6 +6,8 @@ from pathlib import Path
 
 import click
 
+# the values of flexmvm.bodies.build.ModelKind, spelled out so that `--help` does not import
+# the numerical stages (tests/test_cli.py checks they agree)
 MODELS = ["full", "mvm", "mvm-seed", "modal", "rigid"]
 
 

@@ -3,7 +3,6 @@
 from flexmvm.metrics.ncc import (
     Comparison,
     Target,
-    compare,
     compare_force,
     contact_intervals,
     impulse,
@@ -15,7 +14,6 @@ from flexmvm.metrics.ncc import (
 __all__ = [
     "Comparison",
     "Target",
-    "compare",
     "compare_force",
     "contact_intervals",
     "impulse",

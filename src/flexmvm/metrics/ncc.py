@@ -103,11 +103,6 @@ def ncc(t_ref: object, y_ref: object, t: object, y: object, *,
     return pearson(yr, yc)
 
 
-def compare(t_ref: object, y_ref: object, t: object, y: object) -> float:
-    """NCC of a probe history (e.g. a velocity) against its reference; see :func:`ncc`."""
-    return ncc(t_ref, y_ref, t, y)
-
-
 def contact_intervals(t: object, force: object, threshold: float) -> list[tuple[float, float]]:
     """Time intervals [s] where force > threshold [N], the crossings located by linear
     interpolation between samples; an interval open at either end of the history is closed there.

@@ -1,4 +1,5 @@
-"""Scenarios: the schema (schema.py; value types fields.py, error lines problems.py), reading
+"""Scenarios: the schema (schema.py, a body's tables body_schema.py; value types fields.py,
+error lines problems.py), reading
 files and dicts (load.py), building a System from a scenario (build.py), running it (run.py),
 comparing runs (compare.py) and the main job (main_job.py).
 
@@ -10,29 +11,25 @@ from flexmvm.bodies.build import ModelKind
 from flexmvm.constraints.contact import ContactKind
 from flexmvm.constraints.joints import JointType
 from flexmvm.mesh.rod import EndShape
-from flexmvm.scenarios.fields import ROD_FACET_SETS, ROD_NODE_SETS
-from flexmvm.scenarios.load import load_scenario, scenario_from_dict
-from flexmvm.scenarios.problems import ScenarioError
-from flexmvm.scenarios.schema import (
+from flexmvm.scenarios.body_schema import (
     Ball,
     BodyConfig,
     Box,
-    ContactConfig,
-    JointConfig,
     MaterialSpec,
     ModelConfig,
     Placement,
-    ProbeConfig,
     RegionSpec,
     RodConfig,
     Rotation,
-    Scenario,
-    TimeConfig,
     full,
     modal,
     mvm,
     rigid,
 )
+from flexmvm.scenarios.fields import ROD_FACET_SETS, ROD_NODE_SETS
+from flexmvm.scenarios.load import load_scenario, scenario_from_dict
+from flexmvm.scenarios.problems import ScenarioError
+from flexmvm.scenarios.schema import ContactConfig, JointConfig, ProbeConfig, Scenario, TimeConfig
 
 __all__ = [
     "ROD_FACET_SETS",

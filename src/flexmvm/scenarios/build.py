@@ -95,7 +95,9 @@ def _mesh(key) -> Mesh:
 
 
 @functools.lru_cache(maxsize=8)
-def _fe(key, material: Material) -> FEModel:
+def fe_model_for(key, material: Material) -> FEModel:
+    """The FE model (M, K) of a rod spec or mesh file path ``key`` in ``material``: per-process
+    cache, then the disk cache, else assembled."""
     return setup_cache.cached_fe(_mesh_source(key), _mesh(key), material, assemble)
 
 
@@ -140,7 +142,7 @@ def _basis_cached(key, material: Material, kind: BasisKind, retained: tuple, mod
     nodes = np.array(retained, dtype=np.int64)
     return setup_cache.cached_basis(
         _mesh_source(key), material, kind, ref_set, ref, nodes, modes,
-        lambda: build_basis(_fe(key, material), kind, ref, retained_nodes=nodes, n_modes=modes))
+        lambda: build_basis(fe_model_for(key, material), kind, ref, retained_nodes=nodes, n_modes=modes))
 
 
 def body_parts_for(key, material: Material, kind: BasisKind, retained: tuple, modes: int,
@@ -163,7 +165,7 @@ def _parts_cached(key, material: Material, kind: BasisKind, retained: tuple, mod
     return setup_cache.cached_body(
         _mesh_source(key), material, kind, ref_set, basis.reference,
         np.array(retained, dtype=np.int64), modes, basis.psi.shape[1],
-        lambda: body_parts(_fe(key, material), basis))
+        lambda: body_parts(fe_model_for(key, material), basis))
 
 
 #: The per-process caches by what they hold, with their default bounds (entries).
@@ -171,7 +173,7 @@ _CACHE_SIZES = {"meshes": 8, "fe_models": 8, "bases": 64, "body_parts": 16}
 
 
 def _caches() -> dict[str, list]:
-    return {"meshes": [cached_rod_mesh, _mesh], "fe_models": [_fe], "bases": [_basis_cached],
+    return {"meshes": [cached_rod_mesh, _mesh], "fe_models": [fe_model_for], "bases": [_basis_cached],
             "body_parts": [_parts_cached]}
 
 
@@ -194,7 +196,7 @@ def cache_sizes() -> dict[str, int]:
 def set_cache_sizes(**sizes: int) -> None:
     """Bound the per-process caches: ``set_cache_sizes(fe_models=2, bases=8)``; 0 disables one.
     The caches named are emptied. InputError for an unknown name or a negative bound."""
-    global cached_rod_mesh, _mesh, _fe, _basis_cached, _parts_cached
+    global cached_rod_mesh, _mesh, fe_model_for, _basis_cached, _parts_cached
     unknown = set(sizes) - set(_CACHE_SIZES)
     if unknown:
         raise InputError(f"cache sizes: unknown {sorted(unknown)}; expected some of "
@@ -211,7 +213,7 @@ def set_cache_sizes(**sizes: int) -> None:
     if "meshes" in sizes:
         cached_rod_mesh, _mesh = rewrap(cached_rod_mesh, "meshes"), rewrap(_mesh, "meshes")
     if "fe_models" in sizes:
-        _fe = rewrap(_fe, "fe_models")
+        fe_model_for = rewrap(fe_model_for, "fe_models")
     if "bases" in sizes:
         _basis_cached = rewrap(_basis_cached, "bases")
     if "body_parts" in sizes:
@@ -260,7 +262,7 @@ def _build_body(cfg) -> tuple[FlexibleBody, BodyInfo]:
     except MeshError as exc:
         raise InputError(f"{where}.model.reference: {exc}") from None
     if kind.basis is None:
-        body = rigid_body_from_fe(cfg.name, _fe(key, material))
+        body = rigid_body_from_fe(cfg.name, fe_model_for(key, material))
         return body, BodyInfo(cfg.name, kind, mesh, material, 6, 0, 0, rod)
     retained: tuple = ()
     if kind.retains_nodes:

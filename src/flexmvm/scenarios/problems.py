@@ -6,8 +6,10 @@ error into the line's ``key.path: problem`` part.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from typing import Any
 
+from pydantic import BaseModel, ValidationError
 from pydantic_core import PydanticCustomError
 
 from flexmvm.errors import InputError
@@ -71,3 +73,18 @@ def format_error(err: Any) -> str:
     shown = repr(err["input"])
     shown = shown if len(shown) <= 60 else shown[:57] + "..."
     return f"{where}: {msg}, got {shown}".replace("\n", " ")
+
+
+def validate_part(cls: type[BaseModel], data: Mapping[str, Any], source: str, key: str = ""):
+    """``cls`` validated from ``data`` (values or model instances); ScenarioError (one line:
+    source, key path, problem) otherwise."""
+    try:
+        return cls.model_validate(dict(data))
+    except ValidationError as exc:
+        errors = exc.errors()
+        more = f" (and {len(errors) - 1} more problem(s))" if len(errors) > 1 else ""
+        line = format_error(errors[0])
+        if key:
+            top = "(top level)"
+            line = key + (line[len(top):] if line.startswith(top) else f".{line}")
+        raise ScenarioError(f"{source}: {line}{more}") from None

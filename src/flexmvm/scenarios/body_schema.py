@@ -1,0 +1,328 @@
+"""Scenario tables of one body: material, rod geometry, the model of its deformation (with
+the constructors :func:`full`, :func:`mvm`, :func:`modal`, :func:`rigid`), its retained region
+and its placement. The scenario as a whole, its contacts, joints, probes and time settings
+are in schema.py."""
+
+from __future__ import annotations
+
+import math
+import re
+from pathlib import Path
+from typing import Annotated, Any
+
+import numpy as np
+from annotated_types import Ge
+from pydantic import (
+    Discriminator,
+    Strict,
+    Tag,
+    ValidationInfo,
+    field_validator,
+    model_validator,
+)
+
+from flexmvm.bodies.build import ModelKind
+from flexmvm.bodies.rotation import axis_angle
+from flexmvm.errors import InputError
+from flexmvm.materials import PRESETS, Material
+from flexmvm.mesh.rod import EndShape, RodSpec
+from flexmvm.scenarios.fields import (
+    ROD_NODE_SETS,
+    ZERO3,
+    Count,
+    Frozen,
+    Name,
+    Num,
+    Positive,
+    SetName,
+    Vec3,
+    check_rod_set,
+)
+from flexmvm.scenarios.problems import problem, validate_part
+
+_SELECTION_RE = re.compile(r"^(\d+)-(\d+)$")
+
+
+class MaterialSpec(Frozen):
+    """Inline material table; ranges checked by :class:`flexmvm.materials.Material`."""
+
+    E_pa: Num
+    nu: Num
+    rho_kg_m3: Num
+    name: Name | None = None
+
+    @model_validator(mode="after")
+    def _check(self) -> MaterialSpec:
+        values = {"E": self.E_pa, "nu": self.nu, "rho": self.rho_kg_m3}
+        good = {"E": 1.0, "nu": 0.0, "rho": 1.0}
+        for (key, val), toml_key in zip(values.items(), ("E_pa", "nu", "rho_kg_m3"), strict=True):
+            try:
+                Material(**(good | {key: val}), name="inline")
+            except InputError as err:
+                raise problem(str(err).split(": ", 1)[-1], toml_key) from None
+        return self
+
+
+def _material_tag(value: Any) -> str | None:
+    if isinstance(value, str):
+        return "preset"
+    return "inline" if isinstance(value, (dict, MaterialSpec)) else None
+
+
+MaterialRef = Annotated[
+    Annotated[str, Tag("preset")] | Annotated[MaterialSpec, Tag("inline")],
+    Discriminator(
+        _material_tag,
+        custom_error_type="material_type",
+        custom_error_message="must be a preset name or a table {E_pa, nu, rho_kg_m3}",
+    ),
+]
+
+
+class RodConfig(Frozen):
+    """Rod along local +x, end A at x = 0 (docs/architecture.md); None = the RodSpec default."""
+
+    length_m: Positive
+    radius_m: Positive
+    end_a: EndShape = EndShape.FLAT
+    end_b: EndShape = EndShape.FLAT
+    core_elements: Count | None = None
+    core_half_width_m: Positive | None = None
+    n_rings: Count | None = None
+    first_element_m: Positive | None = None
+    growth: Annotated[float, Strict(), Ge(1.0)] | None = None
+    max_element_m: Positive | None = None
+    cap_depth_m: Positive | None = None
+
+    @model_validator(mode="after")
+    def _check(self) -> RodConfig:
+        n_caps = (self.end_a is EndShape.HEMISPHERE) + (self.end_b is EndShape.HEMISPHERE)
+        if self.length_m <= n_caps * self.radius_m:
+            raise problem(
+                f"must exceed {n_caps} x radius_m = {n_caps * self.radius_m!r} for "
+                f"{n_caps} hemispherical end(s), got {self.length_m!r}",
+                "length_m",
+            )
+        if self.core_half_width_m is not None and self.core_half_width_m >= self.radius_m:
+            raise problem(
+                f"must be < radius_m = {self.radius_m!r}, got {self.core_half_width_m!r}",
+                "core_half_width_m",
+            )
+        if (
+            self.first_element_m is not None
+            and self.max_element_m is not None
+            and self.max_element_m < self.first_element_m
+        ):
+            raise problem(
+                f"must be >= first_element_m = {self.first_element_m!r}, "
+                f"got {self.max_element_m!r}",
+                "max_element_m",
+            )
+        return self
+
+    def spec(self) -> RodSpec:
+        """The mesh.rod.RodSpec of this rod: the fields that are set, RodSpec's defaults for
+        the others."""
+        return RodSpec(**{k: v for k, v in self if v is not None})
+
+
+class Ball(Frozen):
+    centre_m: Vec3
+    radius_m: Positive
+
+
+class Box(Frozen):
+    min_m: Vec3
+    max_m: Vec3
+
+    @model_validator(mode="after")
+    def _check(self) -> Box:
+        if any(lo >= hi for lo, hi in zip(self.min_m, self.max_m, strict=True)):
+            raise problem(
+                f"must exceed min_m {list(self.min_m)} in every component, got {list(self.max_m)}",
+                "max_m",
+            )
+        return self
+
+
+class RegionSpec(Frozen):
+    """Retained nodes by node set, ball or box (body-local coordinates) or ids: exactly one."""
+
+    node_set: SetName | None = None
+    ball: Ball | None = None
+    box: Box | None = None
+    node_ids: tuple[Annotated[int, Strict(), Ge(0)], ...] | None = None
+
+    @model_validator(mode="after")
+    def _check(self) -> RegionSpec:
+        given = [k for k in ("node_set", "ball", "box", "node_ids") if getattr(self, k) is not None]
+        if len(given) != 1:
+            raise problem(
+                f"needs exactly one of node_set, ball, box, node_ids, got {given or 'none'}"
+            )
+        if self.node_ids is not None and (
+            not self.node_ids or len(set(self.node_ids)) != len(self.node_ids)
+        ):
+            raise problem("must be a non-empty list of distinct node ids", "node_ids")
+        return self
+
+
+class ModelConfig(Frozen):
+    """Model of one body. ``selection``/``region``/``modes`` are ignored by kinds that do not
+    use them (full, rigid; modal ignores selection/region) so that a kind override stays valid."""
+
+    kind: ModelKind = ModelKind.FULL
+    selection: str | None = None
+    region: RegionSpec | None = None
+    modes: Annotated[int, Strict(), Ge(0)] = 0
+    reference: SetName = "end_b"
+
+    @field_validator("selection")
+    @classmethod
+    def _check_selection(cls, value: str | None) -> str | None:
+        match = _SELECTION_RE.match(value) if value is not None else None
+        if value is not None and (match is None or min(map(int, match.groups())) < 1):
+            raise problem(f"must be 'i-j' (layers-laps, both >= 1), got {value!r}")
+        return value
+
+    @model_validator(mode="after")
+    def _check(self) -> ModelConfig:
+        if self.selection is not None and self.region is not None:
+            raise problem("give selection or region, not both", "region")
+        kind = self.kind.value
+        if self.kind.retains_nodes and self.retained is None:
+            raise problem(f"kind {kind!r} needs selection = 'i-j' or a region", "selection")
+        if self.kind.uses_modes and self.modes < 1:
+            raise problem(f"must be >= 1 for kind {kind!r}, got {self.modes}", "modes")
+        return self
+
+    @property
+    def label(self) -> str:
+        """Short description: 'full', 'rigid', 'modal 20', 'mvm 1-3 + 25', 'mvm-seed 1-1 + 37'."""
+        if not self.kind.uses_modes:
+            return self.kind.value
+        if not self.kind.retains_nodes:
+            return f"{self.kind.value} {self.modes}"
+        where = self.selection if self.selection is not None else "region"
+        return f"{self.kind.value} {where} + {self.modes}"
+
+    @property
+    def retained(self) -> str | RegionSpec | None:
+        return self.selection if self.selection is not None else self.region
+
+    @property
+    def selection_ij(self) -> tuple[int, int] | None:
+        """(layers i, laps j) of the seed's i-j selection, or None."""
+        if self.selection is None:
+            return None
+        i, j = self.selection.split("-")
+        return int(i), int(j)
+
+
+class Rotation(Frozen):
+    axis: Vec3 = (0.0, 0.0, 1.0)
+    angle_deg: Num = 0.0
+
+    @field_validator("axis")
+    @classmethod
+    def _nonzero(cls, axis: tuple[float, float, float]) -> tuple[float, float, float]:
+        if math.hypot(*axis) == 0.0:
+            raise problem(f"must be non-zero, got {list(axis)}")
+        return axis
+
+    def matrix(self) -> np.ndarray:
+        """Rotation matrix (3, 3), body -> global."""
+        return axis_angle(self.axis, math.radians(self.angle_deg))
+
+
+class Placement(Frozen):
+    position_m: Vec3 = ZERO3
+    rotation: Rotation = Rotation()
+    velocity_mps: Vec3 = ZERO3
+    angular_velocity_radps: Vec3 = ZERO3
+
+    def to_global(self, point_m: tuple[float, float, float]) -> np.ndarray:
+        """Initial global position (3,) of a body-local point [m]."""
+        return np.asarray(self.position_m) + self.rotation.matrix() @ np.asarray(point_m)
+
+
+class BodyConfig(Frozen):
+    name: Name
+    material: MaterialRef
+    rod: RodConfig | None = None
+    mesh_file: Path | None = None
+    model: ModelConfig = ModelConfig()
+    placement: Placement = Placement()
+
+    @field_validator("material")
+    @classmethod
+    def _known_preset(cls, value: str | MaterialSpec) -> str | MaterialSpec:
+        if isinstance(value, str) and value not in PRESETS:
+            raise problem(
+                f"unknown material preset {value!r} (presets: {', '.join(sorted(PRESETS))})"
+            )
+        return value
+
+    @field_validator("mesh_file")
+    @classmethod
+    def _resolve(cls, value: Path | None, info: ValidationInfo) -> Path | None:
+        if value is None:
+            return None
+        base = Path((info.context or {}).get("base_dir", "."))
+        path = (base / value).resolve()
+        if not path.is_file():
+            raise problem(f"no such mesh file {str(path)!r}")
+        return path
+
+    @model_validator(mode="after")
+    def _check(self) -> BodyConfig:
+        if (self.rod is None) == (self.mesh_file is None):
+            raise problem("needs exactly one of [bodies.rod] or mesh_file", "rod")
+        if self.rod is None and self.model.selection is not None:
+            raise problem(
+                "the i-j selection needs a [bodies.rod] body; use region for a mesh_file",
+                "model.selection",
+            )
+        if self.rod is not None:
+            region = self.model.region
+            if region is not None and region.node_set is not None:
+                check_rod_set(region.node_set, ROD_NODE_SETS, "model.region.node_set")
+            check_rod_set(self.model.reference, ROD_NODE_SETS, "model.reference")
+        return self
+
+    def material_obj(self) -> Material:
+        """The material as a flexmvm.materials.Material."""
+        if isinstance(self.material, str):
+            return PRESETS[self.material]
+        m = self.material
+        return Material(E=m.E_pa, nu=m.nu, rho=m.rho_kg_m3, name=m.name or self.name)
+
+
+def full(reference: str = "end_b") -> ModelConfig:
+    """Full FE model: every nodal DOF but the reference condition's six."""
+    return validate_part(ModelConfig, {"kind": ModelKind.FULL, "reference": reference}, "full()")
+
+
+def rigid() -> ModelConfig:
+    """Rigid body: no elastic coordinates."""
+    return validate_part(ModelConfig, {"kind": ModelKind.RIGID}, "rigid()")
+
+
+def modal(modes: int, reference: str = "end_b") -> ModelConfig:
+    """The first ``modes`` modes of the body supported by its reference condition."""
+    return validate_part(ModelConfig, {"kind": ModelKind.MODAL, "modes": modes,
+                                       "reference": reference}, f"modal({modes!r})")
+
+
+def mvm(selection: str | tuple[int, int] | None = None, modes: int = 0, *,
+        region: RegionSpec | None = None, reference: str = "end_b",
+        seed_eq4: bool = False) -> ModelConfig:
+    """MVM model: the nodes of ``selection`` (the seed's layers-laps 'i-j' or (i, j)) or of
+    ``region`` kept as nodal coordinates, plus ``modes`` modes: Craig-Bampton fixed-interface
+    modes, or with ``seed_eq4`` the seed's eq. (4) block basis."""
+    if isinstance(selection, tuple):
+        selection = "-".join(str(int(v)) for v in selection)
+    kind = ModelKind.MVM_SEED if seed_eq4 else ModelKind.MVM
+    data = {"kind": kind, "selection": selection, "region": region, "modes": modes,
+            "reference": reference}
+    return validate_part(ModelConfig, data, f"mvm({selection!r}, modes={modes!r})")
