@@ -339,3 +339,17 @@ def test_plot_force_comparison(tmp_path, run):
     assert path.read_bytes()[:8] == PNG_MAGIC
     assert res["MVM"].ncc == pytest.approx(1.0, abs=1e-12)
     assert res["MVM"].peak_err == pytest.approx(0.1, rel=1e-9)
+
+
+def test_atomic_files_get_the_mode_open_would_give(tmp_path):
+    """mkstemp creates 0o600; a result file must be readable as a plain open() would make it
+    (0o666 minus the umask), e.g. by a colleague or a web server."""
+    import os
+
+    from flexmvm.results.atomic import write_text_atomic
+
+    umask = os.umask(0)
+    os.umask(umask)
+    path = tmp_path / "x.json"
+    write_text_atomic(path, "{}")
+    assert path.stat().st_mode & 0o777 == 0o666 & ~umask

@@ -20,6 +20,11 @@ from flexmvm.errors import InputError, MeshError
 from flexmvm.mesh.mesh import CellBlock, CellType, FacetSet, Mesh
 from flexmvm.mesh.quality import check_quality
 
+# The mode a plain open() gives a new file (0o666 minus the umask, read once at import).
+_UMASK = os.umask(0)
+os.umask(_UMASK)
+_FILE_MODE = 0o666 & ~_UMASK
+
 NODE_SET_PREFIX = "node_set:"
 
 _VOLUME_TYPES = {ct.value: ct for ct in CellType}
@@ -242,7 +247,10 @@ def write_mesh(
     except OSError as exc:
         raise MeshError(f"cannot write mesh file {str(path)!r}: directory {str(path.parent)!r} "
                         f"is not writable ({exc.strerror or type(exc).__name__})") from None
-    os.close(fd)
+    try:
+        os.fchmod(fd, _FILE_MODE)  # as open() would have created it, not mkstemp's 0o600
+    finally:
+        os.close(fd)
     try:
         meshio.write(tmp, out)
         os.replace(tmp, path)

@@ -53,6 +53,13 @@ def _fsync_dir(directory: Path) -> None:
         os.close(fd)
 
 
+# The mode a plain open() gives a new file, 0o666 minus the umask (read once, at import,
+# before any writer thread: os.umask can only be read by setting it). mkstemp creates 0o600.
+_UMASK = os.umask(0)
+os.umask(_UMASK)
+FILE_MODE = 0o666 & ~_UMASK
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; on success it replaces ``path`` atomically.
@@ -69,7 +76,10 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     if not parent.is_dir():
         raise InputError(f"cannot write {target}: directory {parent} does not exist")
     fd, tmp_name = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".tmp", dir=parent)
-    os.close(fd)
+    try:
+        os.fchmod(fd, FILE_MODE)  # as open() would have created it, not mkstemp's 0o600
+    finally:
+        os.close(fd)
     tmp = Path(tmp_name)
     try:
         yield tmp

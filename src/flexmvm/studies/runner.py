@@ -253,7 +253,11 @@ def local_cluster(n_workers: int):
     import dask
     from distributed import LocalCluster
 
-    with dask.config.set({"distributed.scheduler.worker-saturation": 1.0}):
+    with dask.config.set({"distributed.scheduler.worker-saturation": 1.0}), \
+            warnings.catch_warnings():
+        # the scheduler's HTTP routes (health, metrics) move to a free port when 8787 is taken
+        # (another cluster on the machine); nothing here uses them, so that is no news
+        warnings.filterwarnings("ignore", message="Port 8787 is already in use")
         return LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
                             dashboard_address=None)
 
