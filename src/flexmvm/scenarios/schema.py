@@ -68,9 +68,6 @@ class ContactConfig(Frozen):
     master: Annotated[str, StringConstraints(pattern=r"^[A-Za-z0-9_]+\.[A-Za-z0-9_]+$")]
     kind: ContactKind = ContactKind.FRICTIONLESS
     search_radius_m: Positive | None = None
-    # the contact nodes of both surfaces carry no mass (fe/mass_redistribution.py): no
-    # step-to-step ringing at theta = 1/2
-    redistribute_mass: bool = False
 
     @property
     def slave_body(self) -> str:
