@@ -46,7 +46,8 @@ from flexmvm.reduction.rod_reference import rod_reference
 DEFAULT_SEARCH_RADIUS_M = 2e-4  # broad-phase margin beyond the distance closed in one step
 
 _KIND = {"full": BasisKind.FULL, "mvm": BasisKind.CRAIG_BAMPTON,
-         "mvm-seed": BasisKind.SEED_BLOCK, "modal": BasisKind.MODAL}
+         "mvm-seed": BasisKind.SEED_BLOCK, "mvm-seed-fixed": BasisKind.SEED_FIXED,
+         "modal": BasisKind.MODAL}
 
 
 @dataclass(frozen=True)
@@ -214,7 +215,7 @@ def _build_body(cfg) -> tuple[FlexibleBody, BodyInfo]:
         body = rigid_body_from_fe(cfg.name, _fe(key, material))
         return body, BodyInfo(cfg.name, kind, mesh, material, 6, 0, 0, rod)
     retained: tuple = ()
-    if kind in ("mvm", "mvm-seed"):
+    if kind in ("mvm", "mvm-seed", "mvm-seed-fixed"):
         retained = tuple(int(i) for i in _retained_nodes(cfg.model, mesh, rod, f"{where}.model"))
     modes = cfg.model.modes if kind != "full" else 0
     args = (key, material, _KIND[kind], retained, modes, cfg.model.reference)

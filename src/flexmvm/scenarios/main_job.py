@@ -157,4 +157,4 @@ def _label(summary: dict) -> str:
     kinds = set(summary["model"].values())
     if kinds <= {"full", "rigid"}:
         return "FE"
-    return "MVM" if "mvm" in kinds or "mvm-seed" in kinds else "/".join(sorted(kinds))
+    return "MVM" if any(k.startswith("mvm") for k in kinds) else "/".join(sorted(kinds))

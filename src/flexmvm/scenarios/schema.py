@@ -93,8 +93,13 @@ class ModelKind(StrEnum):
     FULL = "full"  # all nodal DOFs (reference solution)
     MVM = "mvm"  # Craig-Bampton: retained nodes + fixed-interface modes (default MVM)
     MVM_SEED = "mvm-seed"  # seed eq. (4): modes on region I, nodal DOFs on region II
+    MVM_SEED_FIXED = "mvm-seed-fixed"  # seed eq. (4) with region-I modes of region II held
     MODAL = "modal"  # first N modes of the reference-supported body
     RIGID = "rigid"  # no elastic coordinates
+
+
+# The kinds that keep retained nodes (region II) beside their modes.
+_RETAINING = (ModelKind.MVM, ModelKind.MVM_SEED, ModelKind.MVM_SEED_FIXED)
 
 
 class ContactKind(StrEnum):
@@ -257,9 +262,9 @@ class ModelConfig(_Frozen):
         if self.selection is not None and self.region is not None:
             raise _fail("give selection or region, not both", "region")
         kind = self.kind.value
-        if self.kind in (ModelKind.MVM, ModelKind.MVM_SEED) and self.retained is None:
+        if self.kind in _RETAINING and self.retained is None:
             raise _fail(f"kind {kind!r} needs selection = 'i-j' or a region", "selection")
-        if self.kind in (ModelKind.MVM, ModelKind.MVM_SEED, ModelKind.MODAL) and self.modes < 1:
+        if (self.kind in _RETAINING or self.kind is ModelKind.MODAL) and self.modes < 1:
             raise _fail(f"must be >= 1 for kind {kind!r}, got {self.modes}", "modes")
         return self
 
