@@ -131,13 +131,20 @@ def _craig_bampton(fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray
     psi = np.zeros((fe.n_dof, b.size + n_modes))
     psi[b, np.arange(b.size)] = 1.0
     psi[interior, : b.size] = -solve(k_ib.toarray())
-    freqs = np.zeros(0)
-    if n_modes:
-        m_ii = fe.M[interior][:, interior]
-        lam, phi = shift_invert_modes(m_ii, k_ii, n_modes, 0.0, solve=solve)
-        psi[interior, b.size:] = phi
-        freqs = to_hz(lam)
+    psi[interior, b.size:], freqs = _fixed_interface_modes(fe, interior, k_ii, solve, n_modes)
     return Basis(BasisKind.CRAIG_BAMPTON, psi, nodes, n_modes, reference, freqs)
+
+
+def _fixed_interface_modes(fe: FEModel, interior: np.ndarray, k_ii, solve, n_modes: int
+                           ) -> tuple[np.ndarray, np.ndarray]:
+    """First n_modes modes of the interior DOFs with all others held: (phi (len(interior),
+    n_modes) M-normalised, frequencies (n_modes,) [Hz]); shift-invert about 0 with `solve`,
+    the factor of k_ii. n_modes = 0 gives empty arrays."""
+    if not n_modes:
+        return np.zeros((interior.size, 0)), np.zeros(0)
+    m_ii = fe.M[interior][:, interior]
+    lam, phi = shift_invert_modes(m_ii, k_ii, n_modes, 0.0, solve=solve)
+    return phi, to_hz(lam)
 
 
 def _seed_block(fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray,
@@ -173,12 +180,9 @@ def _seed_fixed(fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray,
     psi = np.zeros((fe.n_dof, n_modes + b.size))
     freqs = np.zeros(0)
     if n_modes:
-        k_rows = fe.K[interior]
-        k_ii = k_rows[:, interior]
-        m_ii = fe.M[interior][:, interior]
-        lam, phi = shift_invert_modes(m_ii, k_ii, n_modes, 0.0, solve=factor(k_ii))
-        psi[interior, :n_modes] = phi
-        freqs = to_hz(lam)
+        k_ii = fe.K[interior][:, interior]
+        psi[interior, :n_modes], freqs = _fixed_interface_modes(fe, interior, k_ii,
+                                                                factor(k_ii), n_modes)
     psi[b, n_modes + np.arange(b.size)] = 1.0
     return Basis(BasisKind.SEED_FIXED, psi, nodes, n_modes, reference, freqs)
 
