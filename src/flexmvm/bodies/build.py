@@ -25,6 +25,7 @@ class ModelKind(StrEnum):
     FULL = "full"  # all nodal DOFs (reference solution)
     MVM = "mvm"  # Craig-Bampton: retained nodes + fixed-interface modes (default MVM)
     MVM_SEED = "mvm-seed"  # seed eq. (4): modes on region I, nodal DOFs on region II
+    MVM_SEED_FIXED = "mvm-seed-fixed"  # seed eq. (4) with region-I modes of region II held
     MODAL = "modal"  # first N modes of the reference-supported body
     RIGID = "rigid"  # no elastic coordinates
 
@@ -36,16 +37,17 @@ class ModelKind(StrEnum):
     @property
     def retains_nodes(self) -> bool:
         """Keeps a node selection (region II) beside its modes: the two MVM kinds."""
-        return self in (ModelKind.MVM, ModelKind.MVM_SEED)
+        return self in (ModelKind.MVM, ModelKind.MVM_SEED, ModelKind.MVM_SEED_FIXED)
 
     @property
     def uses_modes(self) -> bool:
         """Has a mode count (>= 1): the MVM kinds and the modal model."""
-        return self in (ModelKind.MVM, ModelKind.MVM_SEED, ModelKind.MODAL)
+        return self.retains_nodes or self is ModelKind.MODAL
 
 
 _BASIS = {ModelKind.FULL: BasisKind.FULL, ModelKind.MVM: BasisKind.CRAIG_BAMPTON,
-          ModelKind.MVM_SEED: BasisKind.SEED_BLOCK, ModelKind.MODAL: BasisKind.MODAL}
+          ModelKind.MVM_SEED: BasisKind.SEED_BLOCK, ModelKind.MVM_SEED_FIXED: BasisKind.SEED_FIXED,
+          ModelKind.MODAL: BasisKind.MODAL}
 
 
 @dataclass(frozen=True)

@@ -8,7 +8,7 @@ import click
 
 # the values of flexmvm.bodies.build.ModelKind, spelled out so that `--help` does not import
 # the numerical stages (tests/test_cli.py checks they agree)
-MODELS = ["full", "mvm", "mvm-seed", "modal", "rigid"]
+MODELS = ["full", "mvm", "mvm-seed", "mvm-seed-fixed", "modal", "rigid"]
 
 
 @click.command("run")
@@ -42,6 +42,8 @@ def command(scenario, out_dir, model, t_end, dt, no_fields, progress, jobs) -> N
     keys = ("max_contact_force_N", "momentum_rel_error", "energy_rel_error", "max_penetration_m",
             "wall_time_s")
     click.echo("  ".join(f"{k} = {summary[k]:.4g}" for k in keys if summary.get(k) is not None))
+    click.echo("dof (6 frame + elastic): " + ", ".join(
+        f"{name} = {dof} ({summary['model'][name]})" for name, dof in summary["dof"].items()))
     for label, s in (("", summary), ("full FE reference: ", summary.get("reference_full") or {})):
         if s.get("steps_not_converged"):
             click.echo(f"warning: {label}{s['steps_not_converged']} step(s) stopped on the "

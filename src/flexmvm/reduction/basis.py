@@ -4,7 +4,11 @@
 |---------------|-------------------------------------------------|----------------------------|
 | FULL          | identity on every DOF but the reference ones    | nodal displacements        |
 | CRAIG_BAMPTON | [[I, 0], [-K_ii^-1 K_ib, Phi_in]] (default MVM) | u_b of retained nodes, eta |
-| SEED_BLOCK    | diag(Psi_I, I_II), seed eq. (4)                 | a_I, region-II u_II        |
+| SEED_BLOCK    | diag(Psi_I, I_II), seed eq. (4); Psi_I: whole-  | a_I, region-II u_II        |
+|               | body modes, region-II rows zeroed               |                            |
+| SEED_FIXED    | diag(Psi_I, I_II), seed eq. (4); Psi_I: modes   | a_I, region-II u_II        |
+|               | of region I with region II held (Craig-Bampton  |                            |
+|               | without its static constraint modes)            |                            |
 | MODAL         | first N modes of the reference-supported body   | modal coordinates          |
 
 Every Psi has zero rows at the reference DOFs (ReferenceCondition), so q carries no
@@ -33,6 +37,7 @@ class BasisKind(Enum):
     FULL = "full"                 # reference FE model: every free nodal DOF
     CRAIG_BAMPTON = "mvm"         # default MVM: retained nodes + fixed-interface modes
     SEED_BLOCK = "mvm-seed"       # seed eq. (4): whole-body modes on region I, nodes on II
+    SEED_FIXED = "mvm-seed-fixed"  # seed eq. (4): region-I modes with region II held, nodes on II
     MODAL = "modal"               # first N modes of the reference-supported body
 
 
@@ -62,14 +67,15 @@ class Basis:
         """Columns of psi holding the x, y, z displacement of each retained node, (nb, 3).
 
         For FULL, a reference node's clamped components have no column and do not appear
-        (such nodes are not retained). CRAIG_BAMPTON: 0..3nb-1; SEED_BLOCK: after the modes.
+        (such nodes are not retained). CRAIG_BAMPTON: 0..3nb-1; SEED_BLOCK and
+        SEED_FIXED: after the modes.
         """
         nb = len(self.retained_nodes)
         if self.kind is BasisKind.FULL:
             free = self.reference.free_dofs(self.psi.shape[0])
             dofs = 3 * self.retained_nodes[:, None] + np.arange(3)
             return np.searchsorted(free, dofs)
-        first = self.n_modes if self.kind is BasisKind.SEED_BLOCK else 0
+        first = self.n_modes if self.kind in (BasisKind.SEED_BLOCK, BasisKind.SEED_FIXED) else 0
         return first + np.arange(3 * nb).reshape(nb, 3)
 
 
@@ -125,13 +131,20 @@ def _craig_bampton(fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray
     psi = np.zeros((fe.n_dof, b.size + n_modes))
     psi[b, np.arange(b.size)] = 1.0
     psi[interior, : b.size] = -solve(k_ib.toarray())
-    freqs = np.zeros(0)
-    if n_modes:
-        m_ii = fe.M[interior][:, interior]
-        lam, phi = shift_invert_modes(m_ii, k_ii, n_modes, 0.0, solve=solve)
-        psi[interior, b.size:] = phi
-        freqs = to_hz(lam)
+    psi[interior, b.size:], freqs = _fixed_interface_modes(fe, interior, k_ii, solve, n_modes)
     return Basis(BasisKind.CRAIG_BAMPTON, psi, nodes, n_modes, reference, freqs)
+
+
+def _fixed_interface_modes(fe: FEModel, interior: np.ndarray, k_ii, solve, n_modes: int
+                           ) -> tuple[np.ndarray, np.ndarray]:
+    """First n_modes modes of the interior DOFs with all others held: (phi (len(interior),
+    n_modes) M-normalised, frequencies (n_modes,) [Hz]); shift-invert about 0 with `solve`,
+    the factor of k_ii. n_modes = 0 gives empty arrays."""
+    if not n_modes:
+        return np.zeros((interior.size, 0)), np.zeros(0)
+    m_ii = fe.M[interior][:, interior]
+    lam, phi = shift_invert_modes(m_ii, k_ii, n_modes, 0.0, solve=solve)
+    return phi, to_hz(lam)
 
 
 def _seed_block(fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray,
@@ -154,6 +167,26 @@ def _seed_block(fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray,
     return Basis(BasisKind.SEED_BLOCK, psi, nodes, n_modes, reference, freqs)
 
 
+def _seed_fixed(fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray,
+                n_modes: int) -> Basis:
+    """Seed eq. (4), T = diag(Psi_I, I_II), the other reading: Psi_I = the first n_modes
+    modes of region I with the region-II DOFs (and the reference DOFs) held, i.e. the
+    fixed-interface modes of Craig-Bampton without its static constraint modes. A region-II
+    node moving alone leaves its region-I neighbours in place (the modes vanish at it).
+    Columns: the modes, then the retained nodes' x, y, z (as SEED_BLOCK).
+    """
+    b = _node_dofs(nodes)
+    interior = np.setdiff1d(reference.free_dofs(fe.n_dof), b)
+    psi = np.zeros((fe.n_dof, n_modes + b.size))
+    freqs = np.zeros(0)
+    if n_modes:
+        k_ii = fe.K[interior][:, interior]
+        psi[interior, :n_modes], freqs = _fixed_interface_modes(fe, interior, k_ii,
+                                                                factor(k_ii), n_modes)
+    psi[b, n_modes + np.arange(b.size)] = 1.0
+    return Basis(BasisKind.SEED_FIXED, psi, nodes, n_modes, reference, freqs)
+
+
 def _modal(fe: FEModel, reference: ReferenceCondition, n_modes: int) -> Basis:
     freqs, phi = constrained_modes(fe.M, fe.K, reference.fixed_dofs, n_modes)
     return Basis(BasisKind.MODAL, phi, np.zeros(0, dtype=np.int64), n_modes, reference, freqs)
@@ -163,8 +196,8 @@ def build_basis(fe: FEModel, kind: BasisKind, reference: ReferenceCondition,
                 retained_nodes=(), n_modes: int = 0) -> Basis:
     """Build the basis ``kind`` of body ``fe`` (see the module table).
 
-    retained_nodes: region-II node ids (CRAIG_BAMPTON, SEED_BLOCK: at least one; FULL and
-    MODAL: none); n_modes: modal columns (MODAL: >= 1; FULL: 0).
+    retained_nodes: region-II node ids (CRAIG_BAMPTON, SEED_BLOCK, SEED_FIXED: at least one;
+    FULL and MODAL: none); n_modes: modal columns (MODAL: >= 1; FULL: 0).
     Raises InputError for a wrong kind, retained nodes that are reference nodes, repeated or
     outside the mesh, or n_modes negative or more than the free DOFs allow; SolverError if
     a factorisation or eigen solve fails.
@@ -178,7 +211,8 @@ def build_basis(fe: FEModel, kind: BasisKind, reference: ReferenceCondition,
     nodes = _retained(fe, reference, retained_nodes)
     if kind in (BasisKind.FULL, BasisKind.MODAL) and nodes.size:
         raise InputError(f"a {kind.value} basis takes no retained nodes, got {nodes.size}")
-    if kind in (BasisKind.CRAIG_BAMPTON, BasisKind.SEED_BLOCK) and not nodes.size:
+    if kind in (BasisKind.CRAIG_BAMPTON, BasisKind.SEED_BLOCK, BasisKind.SEED_FIXED) \
+            and not nodes.size:
         raise InputError(f"a {kind.value} basis needs at least one retained node, got none")
     if kind is BasisKind.FULL:
         if n_modes:
@@ -194,6 +228,8 @@ def build_basis(fe: FEModel, kind: BasisKind, reference: ReferenceCondition,
             return _modal(fe, reference, int(n_modes))
         if kind is BasisKind.CRAIG_BAMPTON:
             return _craig_bampton(fe, reference, nodes, int(n_modes))
+        if kind is BasisKind.SEED_FIXED:
+            return _seed_fixed(fe, reference, nodes, int(n_modes))
         return _seed_block(fe, reference, nodes, int(n_modes))
 
 
