@@ -348,3 +348,32 @@ def test_rod_oblique_first_microseconds():
     ft = res.friction.impulse_ns
     assert ft[2] < 0 and abs(ft[2]) > 2 * abs(ft[1]) and abs(ft[2]) > 10 * abs(ft[0])
     assert s["lcp_residual_max"] <= COULOMB_RTOL and s["steps_not_converged"] == 0
+
+
+def test_merged_contacts_keep_their_cones():
+    """Two contact definitions in one system: the second's cone indices shift by the first's
+    rows, a frictionless one contributes none (normal rows only), and the merged rows'
+    resultant tangential impulse is the sum of the parts'."""
+    from flexmvm.constraints.contact import ContactRows, FrictionRows
+    from flexmvm.constraints.rows import Rows
+    from flexmvm.integrate.moreau_jean import _merge_contacts
+
+    def rows(m, friction):
+        r = Rows(m, {0: (np.ones((m, 6)), np.zeros((m, 0)))})
+        w = np.zeros(m)
+        w[0 if friction is None else friction.normal] = 1.0
+        return ContactRows(r, np.zeros(m), [("c", i) for i in range(m)], np.zeros(1), 0, w,
+                           friction)
+
+    t = np.array([[[1.0, 0, 0], [0, 1.0, 0]]])
+    a = rows(3, FrictionRows(np.array([0]), np.array([[1, 2]]), np.array([0.2]), t))
+    b = rows(1, None)
+    c = rows(3, FrictionRows(np.array([0]), np.array([[1, 2]]), np.array([0.5]), t))
+    merged = _merge_contacts(_merge_contacts(a, b), c)
+    assert merged.rows.m == 7
+    np.testing.assert_array_equal(merged.friction.normal, [0, 4])
+    np.testing.assert_array_equal(merged.friction.tangent, [[1, 2], [5, 6]])
+    np.testing.assert_array_equal(merged.friction.mu, [0.2, 0.5])
+    lam = np.array([1.0, 0.1, 0.2, 3.0, 2.0, -0.3, 0.4])
+    np.testing.assert_allclose(merged.tangential_impulse(lam), [-0.2, 0.6, 0.0])
+    assert merged.normal_impulse(lam) == 6.0

@@ -43,7 +43,7 @@ import scipy.linalg as sla
 
 from flexmvm.constraints.contact import ContactRows
 from flexmvm.errors import SolverError
-from flexmvm.integrate.lcp import _regularised_cho
+from flexmvm.integrate.lcp import regularised_cho
 
 # the sweeps stop at this natural residual (relative to the velocity scale): the frictionless
 # LCP's bound (lcp.LCP_RTOL), so a frictional step is solved to the same relative accuracy
@@ -206,7 +206,7 @@ def solve_coulomb(D: np.ndarray, c: np.ndarray, n_eq: int, normal: np.ndarray,
                                np.asarray(mu, float), np.asarray(normal, np.int64))
     e, u = slice(0, n_eq), slice(n_eq, m)
     if n_eq:
-        cho_e = _regularised_cho(D[e, e], "joint")
+        cho_e = regularised_cho(D[e, e], "joint")
         De_inv_Deu = sla.cho_solve(cho_e, D[e, u])
         De_inv_ce = sla.cho_solve(cho_e, c[e])
         Dp = D[u, u] - D[u, e] @ De_inv_Deu

@@ -128,7 +128,8 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
     max_pen, n_steps, drift = 0.0, 0, 0.0
     step_t, step_h, step_impulse = [], [], []
     n_loose, worst_res, worst_lcp, p_res = 0, 0.0, 0.0, np.zeros(3)
-    friction = FrictionSummary() if any(getattr(c, "mu", 0.0) > 0 for c in system.contacts) else None
+    friction = (FrictionSummary() if any(getattr(c, "mu", 0.0) > 0 for c in system.contacts)
+                else None)   # runs with friction report it even if no contact closes
     wall0 = time.perf_counter()
     while tick < n_ticks:
         to_out = out_ticks - tick % out_ticks
@@ -154,7 +155,7 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
         tick += span
         f = res.contact.normal_impulse(res.contact_impulses)
         if res.contact.friction is not None:
-            friction = friction.add(res.contact, res.contact_impulses, h)
+            friction = (friction or FrictionSummary()).add(res.contact, res.contact_impulses, h)
         if not pen.measured and res.contact.gaps.size:
             max_pen = max(max_pen, float(-res.contact.gaps.min()))
         pen.after_step(states, t0 + tick * dt)
