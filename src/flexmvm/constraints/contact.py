@@ -13,7 +13,7 @@ import numpy as np
 
 from flexmvm.constraints.rows import Rows
 
-__all__ = ["ContactKind", "ContactProvider", "ContactRows"]
+__all__ = ["ContactKind", "ContactProvider", "ContactRows", "FrictionRows"]
 
 
 class ContactKind(StrEnum):
@@ -21,6 +21,22 @@ class ContactKind(StrEnum):
 
     FRICTIONLESS = "frictionless"  # normal gap >= 0 (default)
     BONDED = "bonded"  # seed eq. (7): all three relative components once closed
+
+
+@dataclass(frozen=True)
+class FrictionRows:
+    """The friction cones of a set of contact rows: contact i has its normal row normal[i],
+    its two tangent rows tangent[i] (indices into the contact rows), friction coefficient
+    mu[i] > 0 and the global unit tangents directions[i] (2, 3) of those rows."""
+
+    normal: np.ndarray      # (k,) int
+    tangent: np.ndarray     # (k, 2) int
+    mu: np.ndarray          # (k,)
+    directions: np.ndarray  # (k, 2, 3)
+
+    def shifted(self, offset: int) -> FrictionRows:
+        return FrictionRows(self.normal + offset, self.tangent + offset, self.mu,
+                            self.directions)
 
 
 @dataclass
@@ -37,6 +53,9 @@ class ContactRows:
     gaps: np.ndarray
     n_eq: int = 0
     normal_weight: np.ndarray | None = None  # (m,): row impulse -> compressive normal impulse
+    friction: FrictionRows | None = None     # None: no friction cone (the exact LCP path)
+    # (sticking, sliding) cones at the last solution of the step (set by integrate.coulomb)
+    stick_slip: tuple[int, int] = (0, 0)
 
     @classmethod
     def empty(cls) -> ContactRows:
@@ -48,6 +67,16 @@ class ContactRows:
             return 0.0
         w = self.normal_weight
         return float(lam[self.n_eq:].sum() if w is None else w @ lam)
+
+    def tangential_impulse(self, lam: np.ndarray) -> np.ndarray:
+        """Resultant tangential (friction) impulse (3,) [N s] of the row impulses lam: the sum
+        over the friction cones of l_T1 t1 + l_T2 t2 (global)."""
+        fr = self.friction
+        if fr is None or lam.size == 0:
+            return np.zeros(3)
+        return np.einsum("ik,ikj->j", lam[fr.tangent], fr.directions)
+
+
 
 
 @runtime_checkable

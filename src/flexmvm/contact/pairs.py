@@ -23,7 +23,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from flexmvm.constraints.contact import ContactKind, ContactRows
+from flexmvm.constraints.contact import ContactKind, ContactRows, FrictionRows
 from flexmvm.constraints.rows import Rows
 from flexmvm.contact import kernels
 from flexmvm.contact.geometry import BroadPhase, MasterSurface
@@ -32,7 +32,7 @@ from flexmvm.contact.penetration import Penetration, SurfaceMeasure
 from flexmvm.contact.reference import body_rows
 from flexmvm.errors import InputError, SolverError
 
-__all__ = ["PointToSurfaceContact", "body_rows"]
+__all__ = ["PointToSurfaceContact", "body_rows", "tangent_basis"]
 
 _LIST_CAP = 256  # candidate supersets longer than this fall back to a scan of all facets
 
@@ -80,9 +80,17 @@ class PointToSurfaceContact:
                  kind: ContactKind = ContactKind.FRICTIONLESS, search_radius_m: float = 1e-3,
                  gap_tol_m: float = 1e-9, name: str = "contact",
                  slave_surface: MasterSurface | None = None,
-                 beta: float = PENETRATION_RECOVERY):
+                 beta: float = PENETRATION_RECOVERY, friction_coefficient: float = 0.0):
         if slave == master:
             raise InputError(f"{name}: slave and master must be different bodies")
+        mu = float(friction_coefficient)
+        if not (np.isfinite(mu) and mu >= 0.0):
+            raise InputError(f"{name}: friction coefficient must be a finite number >= 0, "
+                             f"got {friction_coefficient!r}")
+        if mu > 0.0 and kind is ContactKind.BONDED:
+            raise InputError(f"{name}: bonded contact locks all three components and takes "
+                             f"no friction coefficient, got {mu!r}")
+        self.mu = mu
         self.slave, self.master = slave, master
         self.slave_nodes = np.unique(np.asarray(slave_nodes, dtype=np.int64))
         n_s, n_m = len(bodies[slave].X), len(bodies[master].X)
@@ -190,13 +198,34 @@ class PointToSurfaceContact:
         normal, gaps = out[:, 6:9], out[:, 9]
         self._last = (_Active(idx, self.master_nodes[m_nodes], m_w, normal), 0 if eq is None else len(eq[4]))
         if eq is None:
-            rows = Rows(m_n, {})
-            self._fill_rows(rows, states, (s_nodes, s_w, s_k), (m_nodes, m_w, m_k), normal)
             lower = self.beta * np.maximum(0.0, -gaps) / h
             keys = list(zip([self.name] * m_n, self.slave_nodes[idx].tolist(),
                             self._facet[idx].tolist()))
+            if self.mu > 0.0:
+                return self._friction_rows(states, (s_nodes, s_w, s_k), (m_nodes, m_w, m_k),
+                                           normal, lower, keys, gaps)
+            rows = Rows(m_n, {})
+            self._fill_rows(rows, states, (s_nodes, s_w, s_k), (m_nodes, m_w, m_k), normal)
             return ContactRows(rows, lower, keys, gaps, 0, np.ones(m_n))
         return self._rows_with_bonds(bodies, states, h, eq, idx, m_nodes, m_w, normal, gaps)
+
+    def _friction_rows(self, states, slave_pairs, master_pairs, normal, lower, keys, gaps):
+        """Rows [normal (m_n) | tangent 1 (m_n) | tangent 2 (m_n)] of the active pairs: the
+        tangent rows act on the same nodes and weights as the normal row, along two
+        orthonormal tangents of the master facet normal (tangent_basis)."""
+        m_n = len(normal)
+        t1, t2 = tangent_basis(normal)
+        rows = Rows(3 * m_n, {})
+        tile = lambda pairs: tuple(np.concatenate([p, p, p]) for p in pairs)  # noqa: E731
+        self._fill_rows(rows, states, tile(slave_pairs), tile(master_pairs),
+                        np.vstack([normal, t1, t2]))
+        ids = np.arange(m_n)
+        friction = FrictionRows(ids, np.column_stack([m_n + ids, 2 * m_n + ids]),
+                                np.full(m_n, self.mu), np.stack([t1, t2], axis=1))
+        keys = keys + [k + (f"t{j}",) for j in (1, 2) for k in keys]
+        weight = np.concatenate([np.ones(m_n), np.zeros(2 * m_n)])
+        return ContactRows(rows, np.concatenate([lower, np.zeros(2 * m_n)]), keys, gaps, 0,
+                           weight, friction)
 
     def _fill_rows(self, rows: Rows, states, slave_pairs, master_pairs, dirs) -> None:
         """Rows of both bodies, compiled (slave +, master -), with their nodal selectors."""
@@ -281,6 +310,15 @@ class PointToSurfaceContact:
         if not hasattr(self, "_bn"):
             self._bn = {}
         return self._bn
+
+
+def tangent_basis(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Two orthonormal tangents (m, 3) each of the unit normals (m, 3): t1 along the
+    projection of the global axis least aligned with n, t2 = n x t1."""
+    axis = np.eye(3)[np.argmin(np.abs(normal), axis=1)]
+    t1 = axis - np.einsum("ij,ij->i", axis, normal)[:, None] * normal
+    t1 /= np.linalg.norm(t1, axis=1)[:, None]
+    return t1, np.cross(normal, t1)
 
 
 def _failure(status: int, facet: int) -> str:

@@ -15,7 +15,7 @@ from threadpoolctl import threadpool_limits
 
 from flexmvm.errors import InputError, SolverError
 from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
-from flexmvm.integrate.run_result import RunResult, StepHistory, TimeGrid
+from flexmvm.integrate.run_result import FrictionSummary, RunResult, StepHistory, TimeGrid
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import System
 
@@ -128,6 +128,8 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
     max_pen, n_steps, drift = 0.0, 0, 0.0
     step_t, step_h, step_impulse = [], [], []
     n_loose, worst_res, worst_lcp, p_res = 0, 0.0, 0.0, np.zeros(3)
+    friction = (FrictionSummary() if any(getattr(c, "mu", 0.0) > 0 for c in system.contacts)
+                else None)   # runs with friction report it even if no contact closes
     wall0 = time.perf_counter()
     while tick < n_ticks:
         to_out = out_ticks - tick % out_ticks
@@ -152,6 +154,8 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
             p_res += res.translation_residual
         tick += span
         f = res.contact.normal_impulse(res.contact_impulses)
+        if res.contact.friction is not None:
+            friction = (friction or FrictionSummary()).add(res.contact, res.contact_impulses, h)
         if not pen.measured and res.contact.gaps.size:
             max_pen = max(max_pen, float(-res.contact.gaps.min()))
         pen.after_step(states, t0 + tick * dt)
@@ -183,6 +187,7 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
                       n_factorizations=nfac, n_nonrotating_steps=integ.n_nonrotating_steps,
                       steps_not_converged=n_loose, newton_residual_max=worst_res,
                       lcp_residual_max=worst_lcp, momentum_residual=p_res, wall_time_s=wall,
+                      friction=friction,
                       steps=StepHistory(np.array(step_t), np.array(step_h),
                                         np.array(step_impulse, dtype=float)))
 

@@ -28,7 +28,9 @@ _REG = 1e-12
 LCP_RTOL = 1e-8
 
 
-def _regularised_cho(D: np.ndarray, what: str):
+def regularised_cho(D: np.ndarray, what: str):
+    """Cholesky factor of D + _REG mean(diag D) I (scipy cho_factor, lower); SolverError
+    naming `what` if it is not positive definite (also used by integrate.coulomb)."""
     m = len(D)
     scale = max(float(np.trace(D)) / m, 1e-300)
     try:
@@ -49,10 +51,10 @@ def solve_mixed_lcp(D: np.ndarray, c: np.ndarray, n_eq: int) -> np.ndarray:
                           f"{what}; the state diverged before this step")
     D = 0.5 * (D + D.T)
     if n_eq == m:
-        return _refine(D, c, n_eq, -sla.cho_solve(_regularised_cho(D, "joint"), c))
+        return _refine(D, c, n_eq, -sla.cho_solve(regularised_cho(D, "joint"), c))
     e, u = slice(0, n_eq), slice(n_eq, m)
     if n_eq:
-        cho_e = _regularised_cho(D[e, e], "joint")
+        cho_e = regularised_cho(D[e, e], "joint")
         De_inv_Deu = sla.cho_solve(cho_e, D[e, u])
         De_inv_ce = sla.cho_solve(cho_e, c[e])
         Dp = D[u, u] - D[u, e] @ De_inv_Deu
@@ -77,7 +79,7 @@ def _refine(D: np.ndarray, c: np.ndarray, n_eq: int, lam: np.ndarray,
     S = np.concatenate([np.arange(n_eq), n_eq + np.flatnonzero(lam[n_eq:] > 0.0)])
     if not len(S):
         return lam
-    cho = _regularised_cho(D[np.ix_(S, S)], "active")
+    cho = regularised_cho(D[np.ix_(S, S)], "active")
     out = lam.copy()
     for _ in range(sweeps):
         trial = out.copy()
@@ -91,7 +93,7 @@ def _refine(D: np.ndarray, c: np.ndarray, n_eq: int, lam: np.ndarray,
 def _solve_lcp(D: np.ndarray, c: np.ndarray) -> np.ndarray:
     if np.all(c >= 0):
         return np.zeros_like(c)
-    L, _ = _regularised_cho(D, "contact")
+    L, _ = regularised_cho(D, "contact")
     L = np.tril(L)
     rhs = -sla.solve_triangular(L, c, lower=True)
     lam, _ = nnls(L.T, rhs, maxiter=50 * len(c) + 100)

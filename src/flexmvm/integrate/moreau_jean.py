@@ -49,11 +49,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexmvm.constraints.contact import FrictionRows
 from flexmvm.constraints.rows import Rows, stack
 from flexmvm.errors import SolverError
 from flexmvm.integrate import DEFAULT_THETA, nonrotating
 from flexmvm.integrate.body_solver import BodySolver
 from flexmvm.integrate.compliance import DenseCompliance
+from flexmvm.integrate.coulomb import solve_friction
 from flexmvm.integrate.lcp import solve_checked
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import ContactRows, System
@@ -345,7 +347,10 @@ class MoreauJeanIntegrator:
                 c[:n_j] = jrows.times(v_free) - jrows.times(v_plus) + phi / (self.theta * h)
             if m_c:
                 c[n_j:] = crows.rows.times(v_free) - crows.lower
-            lam, lcp_res = solve_checked(D, c, n_j + crows.n_eq)
+            if crows.friction is None:
+                lam, lcp_res = solve_checked(D, c, n_j + crows.n_eq)
+            else:
+                lam, lcp_res = solve_friction(D, c, n_j, crows, lam if it else None)
             lcp_max = max(lcp_max, lcp_res)
             v_plus = list(v_free)
             for b, Yb in Yj.items():
@@ -410,6 +415,12 @@ def _merge_contacts(a: ContactRows, b: ContactRows) -> ContactRows:
         raise SolverError("several bonded contact definitions are not supported in one system")
     wa = a.normal_weight if a.normal_weight is not None else np.ones(a.rows.m)
     wb = b.normal_weight if b.normal_weight is not None else np.ones(b.rows.m)
+    friction = None
+    if a.friction is not None or b.friction is not None:
+        parts = [f for f in (a.friction, b.friction.shifted(a.rows.m) if b.friction else None)
+                 if f is not None]
+        friction = FrictionRows(*(np.concatenate([getattr(f, k) for f in parts])
+                                  for k in ("normal", "tangent", "mu", "directions")))
     return ContactRows(stack([a.rows, b.rows]), np.concatenate([a.lower, b.lower]),
                        a.keys + b.keys, np.concatenate([a.gaps, b.gaps]), 0,
-                       np.concatenate([wa, wb]))
+                       np.concatenate([wa, wb]), friction)

@@ -48,6 +48,27 @@ class Probe:
     node: int
 
 
+@dataclass(frozen=True)
+class FrictionSummary:
+    """Friction over a run (contacts with friction_coefficient > 0): the resultant of all
+    tangential impulses [N s] (global, summed over steps), the largest per-step tangential
+    force |sum l_T t| / h [N], and the most cones sticking / sliding in one step (cones
+    carrying a compressive impulse; integrate.coulomb.stick_slip)."""
+
+    impulse_ns: np.ndarray = field(default_factory=lambda: np.zeros(3))
+    force_max_n: float = 0.0
+    max_sticking: int = 0
+    max_sliding: int = 0
+
+    def add(self, contact, impulses: np.ndarray, h: float) -> FrictionSummary:
+        """This summary with one more step (rows `contact`, impulses, size h [s])."""
+        ft = contact.tangential_impulse(impulses)
+        stick, slip = contact.stick_slip
+        return FrictionSummary(self.impulse_ns + ft,
+                               max(self.force_max_n, float(np.linalg.norm(ft)) / h),
+                               max(self.max_sticking, stick), max(self.max_sliding, slip))
+
+
 @dataclass
 class RunResult:
     """Histories at output times (arrays with their time axis t [s])."""
@@ -87,6 +108,7 @@ class RunResult:
     # sum over all steps of the translational momentum residuals of all bodies [N s]: the
     # linear-momentum change the scheme's solves left unbalanced (a free system's error)
     wall_time_s: float = 0.0
+    friction: FrictionSummary | None = None  # None: no contact with friction in the system
 
     @property
     def total_energy(self) -> np.ndarray:

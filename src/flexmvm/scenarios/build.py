@@ -334,7 +334,8 @@ def _contact(c, k, bodies, infos, index):
     radius = c.search_radius_m if c.search_radius_m is not None else DEFAULT_SEARCH_RADIUS_M
     return PointToSurfaceContact(bodies, s, slave_nodes, m, master, c.kind,
                                  radius, name=f"{c.slave}->{c.master}",
-                                 slave_surface=MasterSurface.from_facet_set(slave_facets))
+                                 slave_surface=MasterSurface.from_facet_set(slave_facets),
+                                 friction_coefficient=c.friction_coefficient)
 
 
 def _probe(p, where, infos, index) -> Probe:

@@ -111,4 +111,22 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         # momentum_rel_error can be at most, from the residuals themselves (free systems)
         "momentum_residual_rel": (float(np.linalg.norm(res.momentum_residual) / scale)
                                   if free else None),
+        **_friction_summary(res),
     }
+
+
+def _friction_summary(res) -> dict:
+    """Friction entries of the summary (none for a run without friction): the largest
+    per-step friction force, the resultant tangential impulse and its ratio to the total
+    normal impulse, the most cones sticking / sliding in a step."""
+    fr = res.friction
+    if fr is None:
+        return {}
+    normal = float(res.steps.contact_impulse_Ns.sum()) if res.steps is not None else 0.0
+    tangential = float(np.linalg.norm(fr.impulse_ns))
+    return {"max_friction_force_N": fr.force_max_n,
+            "friction_impulse_Ns": tangential,
+            "normal_impulse_Ns": normal,
+            "friction_to_normal_impulse": tangential / normal if normal > 0 else None,
+            "max_sticking_contacts": fr.max_sticking,
+            "max_sliding_contacts": fr.max_sliding}

@@ -33,6 +33,7 @@ from pydantic import (
     Strict,
     StringConstraints,
     ValidationError,
+    model_serializer,
     model_validator,
 )
 
@@ -68,6 +69,24 @@ class ContactConfig(Frozen):
     master: Annotated[str, StringConstraints(pattern=r"^[A-Za-z0-9_]+\.[A-Za-z0-9_]+$")]
     kind: ContactKind = ContactKind.FRICTIONLESS
     search_radius_m: Positive | None = None
+    # Coulomb friction coefficient [-] of the pair; 0: frictionless rows, the exact LCP
+    friction_coefficient: Annotated[float, Strict(), Ge(0.0)] = 0.0
+
+    @model_serializer(mode="wrap")
+    def _dump(self, handler):
+        # a frictionless contact dumps as before the key existed: study case keys and cache
+        # identities hash these dumps
+        data = handler(self)
+        if isinstance(data, dict) and data.get("friction_coefficient") == 0.0:
+            data.pop("friction_coefficient")
+        return data
+
+    @model_validator(mode="after")
+    def _check_friction(self) -> ContactConfig:
+        if self.friction_coefficient > 0.0 and self.kind is ContactKind.BONDED:
+            raise problem("a bonded contact locks all three components: friction_coefficient "
+                          f"must be 0, got {self.friction_coefficient!r}", "friction_coefficient")
+        return self
 
     @property
     def slave_body(self) -> str:
