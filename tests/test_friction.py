@@ -35,8 +35,8 @@ from flexmvm.scenarios.run import run_scenario
 
 G = 9.81
 ROT_UP = {"axis": [0.0, 1.0, 0.0], "angle_deg": -90.0}   # rod local +x -> global +z
-COARSE = dict(core_elements=1, core_half_width_m=0.003, n_rings=1, first_element_m=0.005,
-              growth=1.0, max_element_m=0.005)
+COARSE = {"core_elements": 1, "core_half_width_m": 0.003, "n_rings": 1, "first_element_m": 0.005,
+              "growth": 1.0, "max_element_m": 0.005}
 
 
 # -- the cone problem -----------------------------------------------------------------------

@@ -216,7 +216,7 @@ class PointToSurfaceContact:
         m_n = len(normal)
         t1, t2 = tangent_basis(normal)
         rows = Rows(3 * m_n, {})
-        tile = lambda pairs: tuple(np.concatenate([p, p, p]) for p in pairs)  # noqa: E731
+        tile = lambda pairs: tuple(np.concatenate([p, p, p]) for p in pairs)
         self._fill_rows(rows, states, tile(slave_pairs), tile(master_pairs),
                         np.vstack([normal, t1, t2]))
         ids = np.arange(m_n)
