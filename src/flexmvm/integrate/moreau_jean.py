@@ -328,7 +328,7 @@ class MoreauJeanIntegrator:
                     Dcc = sum((c.D for c in Cc.values()), np.zeros((m_c, m_c)))
             last_norm = res_norm
             if it == self.max_iter:
-                raise SolverError(f"implicit midpoint step at t = {t:.6e} s (h = {h:.3e} s) did "
+                raise SolverError(f"Moreau-Jean step at t = {t:.6e} s (h = {h:.3e} s) did "
                                   f"not converge in {self.max_iter} iterations")
             v_free = [vp - s.solve(r) for vp, s, r in zip(v_plus, self.solvers, R)]
             if n_j + m_c == 0:
@@ -384,17 +384,24 @@ class MoreauJeanIntegrator:
 
     def _relative_residual(self, R, Gj, Gc, lam, n_j, scales) -> float:
         """Largest momentum residual (constraint impulses included) relative to each body's
-        momentum scale; the same for the translational rows alone; and the sum over bodies of
+        momentum scale (the largest of its inertia, force, momentum and constraint impulse
+        terms); the same for the translational rows alone; and the sum over bodies of
         the translational rows [N s] (the step's linear-momentum error: internal and constraint
         forces cancel between bodies)."""
         worst, worst_r = 0.0, 0.0
         res_t = np.zeros(3)
         for b, (r, sc) in enumerate(zip(R, scales)):
             res = r
+            # the scale includes the constraint impulses on the body: a body held still by a
+            # joint (a grounded wall) balances them alone, with no momentum of its own
             if b in Gj:
-                res = res - Gj[b].T @ lam[:n_j]
+                imp = Gj[b].T @ lam[:n_j]
+                res = res - imp
+                sc = max(sc, float(np.abs(imp).max()))
             if b in Gc:
-                res = res - Gc[b].T @ lam[n_j:]
+                imp = Gc[b].T @ lam[n_j:]
+                res = res - imp
+                sc = max(sc, float(np.abs(imp).max()))
             worst = max(worst, float(np.abs(res).max()) / max(sc, 1e-300))
             worst_r = max(worst_r, float(np.abs(res[:3]).max()) / max(sc, 1e-300))
             res_t += res[:3]
