@@ -37,6 +37,22 @@ class TimeGrid:
     dt_max_s: float | None = None
     output_dt_s: float | None = None
     theta: float = DEFAULT_THETA
+    # outputs every output_contact_dt_s [s] (a whole multiple of dt_s) while the driver takes
+    # the contact step dt_s (a contact active or predicted within the step horizon), on top of
+    # the output_dt_s grid: a long approach recorded coarsely, the impact finely. None: off.
+    output_contact_dt_s: float | None = None
+
+    def contact_output_ticks(self) -> int | None:
+        """Ticks between the contact-phase outputs (None: none); InputError if not a whole
+        multiple of dt_s."""
+        if self.output_contact_dt_s is None:
+            return None
+        dt, out = self.dt_s, self.output_contact_dt_s
+        n = round(out / dt)
+        if n < 1 or abs(n * dt - out) > 1e-9 * out:
+            raise InputError(f"time: output_contact_dt_s = {out!r} must be a whole multiple of "
+                             f"dt_s = {dt!r}")
+        return n
 
     def ticks(self) -> tuple[int, int, int]:
         """(total ticks, output ticks, largest step level k with 2^k ticks <= dt_max)."""
@@ -89,6 +105,8 @@ class RunResult:
     max_penetration_by_direction_m: dict = field(default_factory=dict)
     max_joint_drift: float = 0.0   # largest joint violation |phi| after any step (position level)
     n_steps: int = 0
+    # steps taken per step size: {h [s]: count}, and the smallest / largest step taken [s]
+    step_counts: dict = field(default_factory=dict)
     n_factorizations: int = 0
     n_nonrotating_steps: int = 0   # steps taken by the linear non-rotating step (nonrotating.py)
     steps_not_converged: int = 0   # steps that stopped above the Newton rtol (round-off floor)
@@ -98,6 +116,8 @@ class RunResult:
     # sum over all steps of the translational momentum residuals of all bodies [N s]: the
     # linear-momentum change the scheme's solves left unbalanced (a free system's error)
     wall_time_s: float = 0.0
+    # (n_out, n_bodies, 3) linear momentum of each body [kg m/s] (None: not recorded)
+    body_momentum: np.ndarray | None = None
 
     @property
     def total_energy(self) -> np.ndarray:
@@ -119,15 +139,17 @@ class _Recorder:
         kin = strain = pot = 0.0
         p = np.zeros(3)
         h = np.zeros(3)
+        pb = []
         for b, (body, st) in enumerate(zip(sysm.bodies, states)):
             Lq = carried(b, st)[0] if (carried is not None and body.nq) else None
             terms = body.inertia_terms(st.q, Lq)
             kin += body.kinetic_energy(st.A, st.q, st.v, terms)
             strain += body.strain_energy(st.q)
             pot -= float(sysm.gravity @ (body.inv.mass * st.r + st.A @ terms[0]))
-            p += body.linear_momentum(st.A, st.q, st.v, terms)
+            pb.append(body.linear_momentum(st.A, st.q, st.v, terms))
+            p += pb[-1]
             h += body.angular_momentum(st.r, st.A, st.q, st.v, terms)
-        rec.update(kin=kin, strain=strain, pot=pot, p=p, h=h)
+        rec.update(kin=kin, strain=strain, pot=pot, p=p, h=h, pb=np.array(pb))
         rec["r"] = np.array([st.r for st in states])
         rec["A"] = np.array([st.A for st in states])
         rec["v"] = np.array([st.v[:6] for st in states])
@@ -161,6 +183,7 @@ class _Recorder:
             angular_momentum=np.array([r["h"] for r in R]),
             q=[np.array([r["q"][b] for r in R]) for b in range(nb)],
             frame_A=np.array([r["A"] for r in R]),
+            body_momentum=np.array([r["pb"] for r in R]),
             **extra,
         )
 
@@ -190,6 +213,7 @@ def simulate(system: System, states: list[BodyState], grid: TimeGrid, probes=(),
 def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
               check_overlap) -> RunResult:
     n_ticks, out_ticks, k_max = grid.ticks()
+    fine_ticks = grid.contact_output_ticks()
     integ = MoreauJeanIntegrator(system, theta=grid.theta, exploit_nonrotating=exploit_nonrotating)
     dt = grid.dt_s
     rec = _Recorder(system, probes, n_ticks // out_ticks + 2, integ.n_joint_rows)
@@ -198,7 +222,8 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
     pen.start(states, t0, check_overlap)
     rec.record(t0, states, 0.0, np.zeros(integ.n_joint_rows))
     bar = _progress(progress, n_ticks)
-    tick, level, calm = 0, 0, 0
+    tick, level, calm, last_out = 0, 0, 0, 0
+    spans: dict[int, int] = {}
     impulse, jimpulse = 0.0, np.zeros(integ.n_joint_rows)
     intervals: list[list[float]] = []
     max_pen, n_steps, drift = 0.0, 0, 0.0
@@ -212,6 +237,7 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
             span >>= 1
         h = span * dt
         t = t0 + tick * dt
+        spans[span] = spans.get(span, 0) + 1
         try:
             res = integ.step(t, states, h)
         except SolverError as exc:
@@ -235,13 +261,15 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
         _track_intervals(intervals, in_contact, t, t + h)
         impulse += f
         jimpulse += res.joint_impulses
-        if tick % out_ticks == 0 or tick >= n_ticks:
-            span_t = (tick - (len(rec.rows) - 1) * out_ticks) * dt
+        fine = fine_ticks is not None and level == 0 and tick % fine_ticks == 0
+        if tick % out_ticks == 0 or tick >= n_ticks or fine:
+            span_t = (tick - last_out) * dt
+            last_out = tick
             rec.record(t0 + tick * dt, states, impulse / span_t, jimpulse / span_t, integ.carried)
             _check_finite(rec.rows[-1], system, t0 + tick * dt)
             impulse, jimpulse = 0.0, np.zeros_like(jimpulse)
             if bar is not None:
-                bar.update(min(out_ticks, n_ticks - bar.n))
+                bar.update(min(tick, n_ticks) - bar.n)
     if bar is not None:
         bar.close()
     wall = time.perf_counter() - wall0
@@ -252,6 +280,7 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
                       max_penetration_m=max(max_pen, 0.0), max_penetration_at=pen.at,
                       max_penetration_by_direction_m=pen.by_direction,
                       max_joint_drift=drift, n_steps=n_steps,
+                      step_counts={k * dt: n for k, n in sorted(spans.items())},
                       n_factorizations=nfac, n_nonrotating_steps=integ.n_nonrotating_steps,
                       steps_not_converged=n_loose, newton_residual_max=worst_res,
                       lcp_residual_max=worst_lcp, momentum_residual=p_res, wall_time_s=wall)
@@ -322,17 +351,23 @@ class _Penetrations:
 
 
 def _choose_level(system, states, level, calm, k_max, dt) -> int:
+    """The step level k (step dt 2^k): one up after GROW_AFTER_STEPS steps without contact
+    rows, then down to the largest k whose horizon of 4 steps of 2^k dt is predicted free of
+    contact by every provider (min_gap_ahead > 0), so an approach comes down level by level and
+    reaches the contact at dt."""
     if k_max == 0:
         return 0
     if not system.contacts:
         return k_max
-    horizon = 4 * (1 << k_max) * dt
-    for provider in system.contacts:
-        if provider.min_gap_ahead(system.bodies, states, horizon) <= 0.0:
-            return 0
-    if calm >= GROW_AFTER_STEPS:
-        return min(level + 1, k_max)
-    return level if calm else 0
+    want = min(level + 1, k_max) if calm >= GROW_AFTER_STEPS else (level if calm else 0)
+    while want > 0 and not _clear_ahead(system, states, 4 * (1 << want) * dt):
+        want -= 1
+    return want
+
+
+def _clear_ahead(system, states, horizon: float) -> bool:
+    return all(provider.min_gap_ahead(system.bodies, states, horizon) > 0.0
+               for provider in system.contacts)
 
 
 def _track_intervals(intervals, in_contact, t0, t1):

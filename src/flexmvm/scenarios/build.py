@@ -264,8 +264,9 @@ def build_scenario(sc) -> BuiltScenario:
         joints.extend(_joint(j, f"joints[{k}]", bodies, infos, index, states))
     probes = [_probe(p, f"probes[{k}]", infos, index) for k, p in enumerate(sc.probes)]
     t = sc.time
-    grid = TimeGrid(t.t_end_s, t.dt_s, t.dt_max_s, t.output_dt_s, t.theta)
+    grid = TimeGrid(t.t_end_s, t.dt_s, t.dt_max_s, t.output_dt_s, t.theta, t.output_contact_dt_s)
     grid.ticks()
+    grid.contact_output_ticks()
     system = System(tuple(bodies), tuple(joints), contacts, np.asarray(sc.gravity_mps2, float))
     return BuiltScenario(system, states, probes, grid, infos)
 

@@ -44,6 +44,10 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         "modes": {i.name: int(i.n_modes) for i in built.info},
         "wall_time_s": float(res.wall_time_s),
         "n_steps": int(res.n_steps),
+        # steps per step size {"<h [s]>": count} and the smallest / largest step taken
+        "step_size_counts": {f"{h:.6g}": int(n) for h, n in res.step_counts.items()},
+        "dt_min_taken_s": float(min(res.step_counts)) if res.step_counts else None,
+        "dt_max_taken_s": float(max(res.step_counts)) if res.step_counts else None,
         "n_factorizations": int(res.n_factorizations),
         "momentum_rel_error": mom_err,
         "energy_rel_error": e_err,
