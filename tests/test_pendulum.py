@@ -197,3 +197,19 @@ def test_short_pendulum_after_separation_and_strings():
                              - np.array([j.p2 for j in js])[None], axis=2)
     np.testing.assert_allclose(lengths, ELL, rtol=0, atol=1e-9)
     assert isinstance(js[0], DistanceJoint)
+
+
+def test_event_figure(tmp_path):
+    """plot_event draws the three panels and the inset; arrays not like t are a one-line
+    InputError. (`flexmvm run` draws it as <scenario>_event.png for a pendulum scenario.)"""
+    from flexmvm.plots.pendulum import plot_event
+
+    t = np.linspace(0.0, 0.36, 400)
+    force = np.where((t > 0.3548) & (t < 0.3555), 600.0, 0.0)
+    path = tmp_path / "event.png"
+    plot_event(path, t, {"b1.1": -0.09 * np.cos(4.4 * t)}, 0.047 * np.cos(4.4 * t), force,
+               [(0.3548, 0.3555)], title="synthetic")
+    assert path.stat().st_size > 10_000
+    with pytest.raises(InputError) as info:
+        plot_event(path, t, {"b1.1": t[:-1]}, t, force)
+    assert "\n" not in str(info.value) and "angle_rad[b1.1]" in str(info.value)
