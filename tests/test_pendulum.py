@@ -84,8 +84,16 @@ def test_body_point_offset_row_is_the_points_velocity():
 def test_strings_attach_at_their_points_and_hang_vertically(model):
     """Every string's body point is where the scenario puts it (0.01 m from the nearest nodes
     at axial stations 0.24/0.26, 0.74/0.76, before issue 14) and 0.5 m from its ground point;
-    at the bottom of the swing (b1 shifted back along its arc) every string is vertical."""
-    sc = scenario_from_dict(_data(model), "pendulum_release.toml")
+    at the bottom of the swing (b1 shifted back along its arc) every string is vertical. (On
+    the undeformed rods; sagged, the frames move by the least change that keeps the strings at
+    their lengths: |phi| < 1e-9 m at t = 0, measured 6e-11.)"""
+    data = _data(model)
+    sagged = build_scenario(scenario_from_dict(data, "pendulum_release.toml"))
+    for j in sagged.system.joints:
+        assert abs(j.evaluate(sagged.system.bodies, sagged.states, 0.0)[0][0]) < 1e-9
+    for b in data["bodies"]:
+        b["placement"]["sagged"] = False
+    sc = scenario_from_dict(data, "pendulum_release.toml")
     built = build_scenario(sc)
     js = strings(built.system)
     assert len(js) == len(sc.joints) == 4
@@ -134,9 +142,9 @@ def _runs():
 
 def test_short_pendulum_event_steps_big_in_the_swing_and_dt_at_contact():
     """The step-size policy: steps of 2^k dt up to dt_max far from contact, coming down level
-    by level on the approach, dt through the contact, growing again after it. Measured: 1,335
-    steps at dt (0.67 ms: the contact, 0.656 ms, and a few steps each side), 25 at 256 us; the
-    outputs in contact every output_contact_dt_s (2 us)."""
+    by level on the approach, dt through the contact, growing again after it. Measured: 1,330
+    steps at dt (0.665 ms: the contact, 0.657 ms, and a few steps each side), 58 at 256 us;
+    the outputs in contact every output_contact_dt_s (2 us)."""
     own, _ = _runs()
     s, res = own.summary, own.result
     dt = own.built.grid.dt_s
@@ -153,35 +161,63 @@ def test_short_pendulum_event_steps_big_in_the_swing_and_dt_at_contact():
 def test_short_pendulum_impact_matches_the_seed_case():
     """Impact speed sqrt(2 g h) at the bottom (here: the arc start's speed plus its fall),
     and the impact phase against rod_impact.toml (the same MVM models, dt, output step),
-    aligned at first contact. Measured: speed error 1.0e-5 (the sag vibration's frame wobble
-    is not in it: centre-of-mass speed); force NCC 0.99988, peak +0.18 %, duration -0.2 %;
-    free end NCC 0.99991. Required: speed within 0.1 % (the issue asks 0.5 %; the swing
-    error of the theta scheme over 3 mm is ~1e-6), force NCC >= 0.995 (the issue's), peak
-    and duration within 1 % (what gravity, strings and the rods' sag vibration may change:
-    the strings act along x with m g x / l ~ 1e-3 N against a 600 N force), free-end NCC
-    >= 0.995. Not required: the impact-end velocity (one node under the contact patch, not a
-    criterion in docs/validation.md), NCC 0.84 here: the rods start undeformed, so their
-    ends vibrate vertically (apex +10 mm/s, b2's end -7 mm/s at the first contact), and the
-    Hertz patch slides ~10 um across that node during the contact."""
+    aligned at first contact (the force reaching 1 % of its peak; a single 0.5 us touch 2 us
+    before the contact proper is not it). Measured: centre-of-mass speed error -3.6e-6; force
+    NCC 0.99978, peak +0.37 %, impulse -0.004 %, duration -0.25 %; b2 free-end NCC 0.99972,
+    impact-end NCC 0.947. Required: speed within 0.1 % (the issue asks 0.5 %; the theta
+    scheme's swing error over 3 mm is ~1e-6), force NCC >= 0.995 (the issue's), peak and
+    duration within 1 % (what gravity, strings and the sag may change: the strings act along
+    x with m g x / l ~ 1e-3 N against a 600 N force; the sag puts the apex and b2's end centre
+    3.6 um apart vertically), free-end NCC >= 0.995, impact-end NCC >= 0.9 (one node under the
+    contact patch, not a criterion in docs/validation.md: the seed case against itself shifted
+    by 1 us gives 0.986; started undeformed, with the rods' ends vibrating vertically at
+    ~1 cm/s, it was 0.84)."""
     own, seed = _runs()
     v = impact_speed(own.built, own.result)["v_mps"]
     assert abs(v / V0 - 1) < 1e-3
     c = impact_comparison(own.result, seed.result)
     assert c["ncc_force"] >= 0.995
     assert abs(c["peak_err"]) < 0.01 and abs(c["duration_err"]) < 0.01
-    assert c["ncc_b2_free_end"] >= 0.995
+    assert c["ncc_b2_free_end"] >= 0.995 and c["ncc_b2_impact_end"] >= 0.9
+
+
+def test_sagged_rods_hang_still_until_the_impact():
+    """Both rods start in their quasi-static sag (placement.sagged): b2 hangs still and b1
+    swings without bending vibration. Measured before the contact: b2's end nodes |v| <= 5.5e-6
+    m/s (started undeformed: 7e-3 m/s, the rods' bending vibration under gravity), b1's apex
+    |v_z| 1.44e-3 m/s, its swing's own v sin(phi) = 1.26e-3 at the start. Required: b2 1e-4 m/s,
+    b1's apex 2e-3 m/s."""
+    own, _ = _runs()
+    res = own.result
+    before = res.t < own.summary["contact_intervals_s"][0][0]
+    for name in ("b2_impact_end", "b2_free_end"):
+        i = res.probe_names.index(name)
+        assert np.abs(res.probe_v[before, i]).max() < 1e-4, name
+    i = res.probe_names.index("b1_apex")
+    assert np.abs(res.probe_v[before, i, 2]).max() < 2e-3
+    assert np.linalg.norm(own.built.states[1].q) > 0  # b2 did start sagged
+
+
+def test_sag_needs_a_frame_that_does_not_turn():
+    data = _data("mvm")
+    data["bodies"][1]["placement"]["angular_velocity_radps"] = [0.0, 0.0, 0.1]
+    with pytest.raises(InputError) as info:
+        build_scenario(scenario_from_dict(data, "pendulum_release.toml"))
+    assert "\n" not in str(info.value)
+    assert str(info.value).startswith("bodies[b2].placement: sagged = true needs a body whose frame")
 
 
 def test_short_pendulum_after_separation_and_strings():
     """After the separation each rod swings on as a rigid pendulum: its x-momentum at the end
     against p_sep cos(w tau) - m w x_sep sin(w tau) (w = sqrt(g / l)); at the separation
     against the seed case's momenta after its contact (no gravity, no strings). Measured:
-    1e-6 and 1e-5 (rigid pendulum, b1, b2), 5e-5 and 1.2e-4 (seed case). Required 1e-4 and
+    1.7e-6 and -1.2e-6 (rigid pendulum, b1, b2), 3.5e-5 and -5.8e-5 (seed case). Required 1e-4 and
     1e-3 (the strings' pull over the 0.66 ms contact, m g x / l dt ~ 1e-6 kg m/s, and the rods'
     vibration, whose momentum is in the centre-of-mass momentum). b2 hangs still until the
-    impact: |p_x| < 1e-7 kg m/s (measured 3.7e-9: the sag vibration turns the sections under
-    the attachment points, 0.01 m above the axis, and so tilts the strings by ~1e-8 rad; with
-    the strings on the nodes 0.01 m off it was 0.017 m/s x 0.85 kg); the strings keep their length (drift < 1e-9 m) and stay on
+    impact: |p_x| < 1e-8 kg m/s (measured 3.7e-10; 3.7e-9 started undeformed, whose bending
+    vibration turns the sections under the attachment points, 0.01 m above the axis, and so
+    tilts the strings; with the strings on the nodes 0.01 m off it was 0.017 m/s x 0.85 kg,
+    test_pendulum's ancestor, the strict xfail in test_validation_live); the strings keep their length (drift < 1e-9 m) and stay on
     their points (length from the attachment positions)."""
     own, seed = _runs()
     m = momenta_after_separation(own.built, own.result, seed.result)
@@ -190,7 +226,7 @@ def test_short_pendulum_after_separation_and_strings():
         assert abs(m[name]["p_sep_rel_err_x_vs_seed_case"]) < 1e-3, m[name]
     res, s = own.result, own.summary
     before = res.t < s["contact_intervals_s"][0][0]
-    assert np.abs(res.body_momentum[before, 1, 0]).max() < 1e-7
+    assert np.abs(res.body_momentum[before, 1, 0]).max() < 1e-8
     assert s["max_joint_drift"] < 1e-9
     js = strings(own.built.system)
     lengths = np.linalg.norm(attachment_positions(own.built, res)

@@ -42,6 +42,7 @@ from flexmvm.mesh.rod import EndShape, RodMesh, RodSpec, rod_mesh
 from flexmvm.reduction.basis import Basis, BasisKind, build_basis
 from flexmvm.reduction.reference import three_two_one
 from flexmvm.reduction.rod_reference import rod_reference
+from flexmvm.scenarios.sag import quasi_static_sag
 
 DEFAULT_SEARCH_RADIUS_M = 2e-4  # broad-phase margin beyond the distance closed in one step
 
@@ -300,6 +301,9 @@ def build_scenario(sc) -> BuiltScenario:
     grid.ticks()
     grid.contact_output_ticks()
     system = System(tuple(bodies), tuple(joints), contacts, np.asarray(sc.gravity_mps2, float))
+    for k, cfg in enumerate(sc.bodies):  # joint lengths stay those of the undeformed placement
+        if cfg.placement.sagged:
+            states[k] = quasi_static_sag(system, states, k, f"bodies[{cfg.name}].placement")
     return BuiltScenario(system, states, probes, grid, infos)
 
 

@@ -17,6 +17,8 @@ from flexmvm.errors import InputError
 from flexmvm.integrate.state import BodyState
 from flexmvm.metrics.ncc import compare_force, ncc
 
+ONSET_FRACTION = 0.01  # the contact starts when the force reaches this fraction of its peak
+
 
 def _states_at(res, k: int, bodies) -> list[BodyState]:
     return [BodyState(res.frame_r[k, b], res.frame_A[k, b], res.q[b][k], np.zeros(body.nv))
@@ -82,16 +84,32 @@ def _fine_block(t: np.ndarray, start: float, step: float) -> float:
     return float(t[i])
 
 
+def force_onset(t, force, fraction: float = ONSET_FRACTION) -> float:
+    """The time the contact force first reaches `fraction` of its peak, interpolated linearly
+    between outputs [s]: the first contact, blind to a single-step touch just before it and
+    not rounded to the step."""
+    t, f = np.asarray(t, float), np.asarray(force, float)
+    level = fraction * float(f.max())
+    if not level > 0:
+        raise InputError("force onset: the contact force is never positive")
+    i = int(np.argmax(f >= level))
+    if i == 0:
+        return float(t[0])
+    return float(t[i - 1] + (level - f[i - 1]) / (f[i] - f[i - 1]) * (t[i] - t[i - 1]))
+
+
 def impact_comparison(res, ref, probes=("b2_impact_end", "b2_free_end")) -> dict:
     """The pendulum's impact phase (res) against the free seed case (ref), both shifted to
-    t = 0 at their first contact: force NCC, peak, impulse and duration errors, and the NCC of
-    the axial velocity of each named probe, over the pendulum's contiguous block of contact
-    outputs (output_contact_dt_s; the reference's output step) from the first contact."""
+    t = 0 at their first contact (force_onset: the force reaches 1 % of its peak): force NCC,
+    peak, impulse and duration errors, and the NCC of the axial velocity of each named probe,
+    over the pendulum's contiguous block of contact outputs (output_contact_dt_s; the
+    reference's output step) from the first contact."""
     if not res.contact_intervals or not ref.contact_intervals:
         raise InputError("impact comparison: a run has no contact (contact_intervals empty)")
-    t0, r0 = res.contact_intervals[0][0], ref.contact_intervals[0][0]
+    t0, r0 = force_onset(res.t, res.contact_force), force_onset(ref.t, ref.contact_force)
     step = float(np.median(np.diff(ref.t)))
-    end = _fine_block(res.t, t0, step)
+    start = float(res.t[max(int(np.searchsorted(res.t, t0)) - 1, 0)])
+    end = _fine_block(res.t, start, step)
     keep = (res.t >= t0 - 1e-12) & (res.t <= end + 1e-12)
     t = res.t[keep] - t0
     tr = ref.t - r0
