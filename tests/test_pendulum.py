@@ -4,7 +4,7 @@ through approach, impact, separation and the swing after, against the free seed 
 (rod_impact.toml) with the same models and against a rigid pendulum.
 
 The whole 0.36 s event is run by `flexmvm run scenarios/pendulum_release.toml` (numbers in
-docs/pendulum.md); here its last 15 ms, where every phase of it happens.
+docs/pendulum.md); here its last 17 ms, where every phase of it happens.
 """
 
 from __future__ import annotations
