@@ -41,15 +41,17 @@ class _Recorder:
         kin = strain = pot = 0.0
         p = np.zeros(3)
         h = np.zeros(3)
+        pb = []
         for b, (body, st) in enumerate(zip(sysm.bodies, states)):
             Lq = carried(b, st)[0] if (carried is not None and body.nq) else None
             terms = body.inertia_terms(st.q, Lq)
             kin += body.kinetic_energy(st.A, st.q, st.v, terms)
             strain += body.strain_energy(st.q)
             pot -= float(sysm.gravity @ (body.inv.mass * st.r + st.A @ terms[0]))
-            p += body.linear_momentum(st.A, st.q, st.v, terms)
+            pb.append(body.linear_momentum(st.A, st.q, st.v, terms))
+            p += pb[-1]
             h += body.angular_momentum(st.r, st.A, st.q, st.v, terms)
-        rec.update(kin=kin, strain=strain, pot=pot, p=p, h=h)
+        rec.update(kin=kin, strain=strain, pot=pot, p=p, h=h, pb=np.array(pb))
         rec["r"] = np.array([st.r for st in states])
         rec["A"] = np.array([st.A for st in states])
         rec["v"] = np.array([st.v[:6] for st in states])
@@ -85,6 +87,7 @@ class _Recorder:
             q=[np.array([r["q"][b] for r in R]) for b in range(nb)],
             q_dot=[np.array([r["qd"][b] for r in R]) for b in range(nb)],
             frame_A=np.array([r["A"] for r in R]),
+            body_momentum=np.array([r["pb"] for r in R]),
             **extra,
         )
 
@@ -114,6 +117,7 @@ def simulate(system: System, states: list[BodyState], grid: TimeGrid, probes=(),
 def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
               check_overlap) -> RunResult:
     n_ticks, out_ticks, k_max = grid.ticks()
+    fine_ticks = grid.contact_output_ticks()
     integ = MoreauJeanIntegrator(system, theta=grid.theta, exploit_nonrotating=exploit_nonrotating)
     dt = grid.dt_s
     rec = _Recorder(system, probes, n_ticks // out_ticks + 2, integ.n_joint_rows)
@@ -122,7 +126,7 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
     pen.start(states, t0, check_overlap)
     rec.record(t0, states, 0.0, np.zeros(integ.n_joint_rows))
     bar = _progress(progress, n_ticks)
-    tick, level, calm = 0, 0, 0
+    tick, level, calm, last_out = 0, 0, 0, 0
     impulse, jimpulse = 0.0, np.zeros(integ.n_joint_rows)
     intervals: list[list[float]] = []
     max_pen, n_steps, drift = 0.0, 0, 0.0
@@ -167,13 +171,15 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
         step_t.append(t0 + tick * dt)
         step_h.append(h)
         step_impulse.append(f)
-        if tick % out_ticks == 0 or tick >= n_ticks:
-            span_t = (tick - (len(rec.rows) - 1) * out_ticks) * dt
+        fine = fine_ticks is not None and level == 0 and tick % fine_ticks == 0
+        if tick % out_ticks == 0 or tick >= n_ticks or fine:
+            span_t = (tick - last_out) * dt
+            last_out = tick
             rec.record(t0 + tick * dt, states, impulse / span_t, jimpulse / span_t, integ.carried)
             _check_finite(rec.rows[-1], system, t0 + tick * dt)
             impulse, jimpulse = 0.0, np.zeros_like(jimpulse)
             if bar is not None:
-                bar.update(min(out_ticks, n_ticks - bar.n))
+                bar.update(min(tick, n_ticks) - bar.n)
     if bar is not None:
         bar.close()
     wall = time.perf_counter() - wall0
@@ -257,17 +263,23 @@ class _Penetrations:
 
 
 def _choose_level(system, states, level, calm, k_max, dt) -> int:
+    """The step level k (step dt 2^k): one up after GROW_AFTER_STEPS steps without contact
+    rows, then down to the largest k whose horizon of 4 steps of 2^k dt is predicted free of
+    contact by every provider (min_gap_ahead > 0), so an approach comes down level by level and
+    reaches the contact at dt."""
     if k_max == 0:
         return 0
     if not system.contacts:
         return k_max
-    horizon = 4 * (1 << k_max) * dt
-    for provider in system.contacts:
-        if provider.min_gap_ahead(system.bodies, states, horizon) <= 0.0:
-            return 0
-    if calm >= GROW_AFTER_STEPS:
-        return min(level + 1, k_max)
-    return level if calm else 0
+    want = min(level + 1, k_max) if calm >= GROW_AFTER_STEPS else (level if calm else 0)
+    while want > 0 and not _clear_ahead(system, states, 4 * (1 << want) * dt):
+        want -= 1
+    return want
+
+
+def _clear_ahead(system, states, horizon: float) -> bool:
+    return all(provider.min_gap_ahead(system.bodies, states, horizon) > 0.0
+               for provider in system.contacts)
 
 
 def _track_intervals(intervals, in_contact, t0, t1):

@@ -24,6 +24,22 @@ class TimeGrid:
     dt_max_s: float | None = None
     output_dt_s: float | None = None
     theta: float = DEFAULT_THETA
+    # outputs every output_contact_dt_s [s] (a whole multiple of dt_s) while the driver takes
+    # the contact step dt_s (a contact active or predicted within the step horizon), on top of
+    # the output_dt_s grid: a long approach recorded coarsely, the impact finely. None: off.
+    output_contact_dt_s: float | None = None
+
+    def contact_output_ticks(self) -> int | None:
+        """Ticks between the contact-phase outputs (None: none); InputError if not a whole
+        multiple of dt_s."""
+        if self.output_contact_dt_s is None:
+            return None
+        dt, out = self.dt_s, self.output_contact_dt_s
+        n = round(out / dt)
+        if n < 1 or abs(n * dt - out) > 1e-9 * out:
+            raise InputError(f"time: output_contact_dt_s = {out!r} must be a whole multiple of "
+                             f"dt_s = {dt!r}")
+        return n
 
     def ticks(self) -> tuple[int, int, int]:
         """(total ticks, output ticks, largest step level k with 2^k ticks <= dt_max)."""
@@ -91,6 +107,8 @@ class RunResult:
     frame_A: np.ndarray            # (n_out, n_bodies, 3, 3)
     q_dot: list[np.ndarray] = field(default_factory=list)  # per body: (n_out, nq) their rates
     steps: StepHistory | None = None  # every step: its end time, size and contact impulse
+    # (n_out, n_bodies, 3) linear momentum of each body [kg m/s] (None: not recorded)
+    body_momentum: np.ndarray | None = None
     contact_intervals: list[tuple[float, float]] = field(default_factory=list)
     max_penetration_m: float = 0.0  # deepest node penetration after any step, both directions
     # where and when: {"t_s", "body", "node", "against"} (None: no penetration measured)

@@ -240,6 +240,8 @@ class Placement(Frozen):
     rotation: Rotation = Rotation()
     velocity_mps: Vec3 = ZERO3
     angular_velocity_radps: Vec3 = ZERO3
+    # start in the quasi-static sag on the body's joints under gravity (at rest; scenarios/sag.py)
+    sagged: Annotated[bool, Strict()] = False
 
     def to_global(self, point_m: tuple[float, float, float]) -> np.ndarray:
         """Initial global position (3,) of a body-local point [m]."""

@@ -49,6 +49,7 @@ from flexmvm.mesh.rod import RodMesh, RodSpec, rod_mesh
 from flexmvm.reduction.basis import Basis, BasisKind, build_basis
 from flexmvm.reduction.reference import three_two_one
 from flexmvm.reduction.rod_reference import rod_reference
+from flexmvm.scenarios.sag import quasi_static_sag
 
 DEFAULT_SEARCH_RADIUS_M = 2e-4  # broad-phase margin beyond the distance closed in one step
 
@@ -293,12 +294,44 @@ def _nearest_node(mesh: Mesh, point, where: str, tol: float) -> int:
     return k
 
 
+# A joint point is on the body when it lies in a cell's node bounding box grown by this
+# fraction of the box's diagonal (curved cell faces bulge beyond their nodes' box).
+CELL_BOX_PAD = 0.05
+
+
+def _host_node(mesh: Mesh, point: np.ndarray, where: str) -> int:
+    """The node nearest `point` among the cells whose (padded) node box holds it; InputError
+    when no cell does (the point is off the body)."""
+    best, best_d = -1, np.inf
+    for block in mesh.cells:
+        xc = mesh.nodes[block.connectivity]                     # (cells, nodes per cell, 3)
+        lo, hi = xc.min(axis=1), xc.max(axis=1)
+        pad = CELL_BOX_PAD * np.linalg.norm(hi - lo, axis=1)[:, None]
+        inside = np.all((point >= lo - pad) & (point <= hi + pad), axis=1)
+        ids = np.unique(block.connectivity[inside])
+        if ids.size:
+            d = np.linalg.norm(mesh.nodes[ids] - point, axis=1)
+            if d.min() < best_d:
+                best, best_d = int(ids[np.argmin(d)]), float(d.min())
+    if best < 0:
+        d = float(np.linalg.norm(mesh.nodes - point, axis=1).min())
+        raise InputError(f"{where}: point {point.tolist()} m (body frame) is off the body: in no "
+                         f"cell, {d:.3g} m from the nearest node")
+    return best
+
+
 def _body_point(index, body: FlexibleBody, info: BodyInfo, point, where) -> BodyPoint:
-    tol = 0.25 * float(np.ptp(info.mesh.nodes, axis=0).max())
-    node = _nearest_node(info.mesh, point, where, tol)
+    """The body point at `point` (body frame, reference configuration) exactly: a rigid body's
+    frame point, else the nearest node of its cell with the offset to the point, carried by
+    that node's displacement and the frame's rotation (joints.BodyPoint)."""
+    p = np.asarray(point, float)
+    node = _host_node(info.mesh, p, where)
     if body.nq == 0:
-        return BodyPoint(index, local=tuple(float(x) for x in info.mesh.nodes[node]))
-    return BodyPoint(index, node=node)
+        return BodyPoint(index, local=tuple(float(x) for x in p))
+    off = p - info.mesh.nodes[node]
+    if not np.any(off):
+        return BodyPoint(index, node=node)
+    return BodyPoint(index, node=node, offset_m=tuple(float(x) for x in off))
 
 
 def build_scenario(sc) -> BuiltScenario:
@@ -316,9 +349,13 @@ def build_scenario(sc) -> BuiltScenario:
         joints.extend(_joint(j, f"joints[{k}]", bodies, infos, index, states))
     probes = [_probe(p, f"probes[{k}]", infos, index) for k, p in enumerate(sc.probes)]
     t = sc.time
-    grid = TimeGrid(t.t_end_s, t.dt_s, t.dt_max_s, t.output_dt_s, t.theta)
+    grid = TimeGrid(t.t_end_s, t.dt_s, t.dt_max_s, t.output_dt_s, t.theta, t.output_contact_dt_s)
     grid.ticks()
+    grid.contact_output_ticks()
     system = System(tuple(bodies), tuple(joints), contacts, np.asarray(sc.gravity_mps2, float))
+    for k, cfg in enumerate(sc.bodies):  # joint lengths stay those of the undeformed placement
+        if cfg.placement.sagged:
+            states[k] = quasi_static_sag(system, states, k, f"bodies[{cfg.name}].placement")
     return BuiltScenario(system, states, probes, grid, infos)
 
 

@@ -26,6 +26,7 @@ from flexmvm.errors import FlexmvmError, InputError
 from flexmvm.results.outdir import staged_dir
 from flexmvm.results.output import write_run
 from flexmvm.results.writers import write_summary_json
+from flexmvm.scenarios import pendulum
 from flexmvm.scenarios.compare import compare_runs
 from flexmvm.scenarios.load import load_scenario
 from flexmvm.scenarios.run import run_scenario
@@ -65,8 +66,21 @@ def _labelled(label: str, exc: BaseException) -> BaseException:
 def _run_and_write(sc, label: str, out_dir: Path, fields: bool, progress: bool):
     """Run sc, write its files into out_dir; returns (summary, curves, n_steps, wall [s])."""
     run = run_scenario(sc, label=label, progress=progress)
+    if pendulum.is_pendulum(run.built):
+        run.summary["pendulum"] = pendulum.event_summary(run.built, run.result)
     write_run(out_dir, run, fields=fields)
+    if pendulum.is_pendulum(run.built):
+        _plot_event(out_dir / f"{sc.name}_event.png", run, f"{sc.name} ({label})")
     return run.summary, run.result.curves(), run.result.n_steps, run.result.wall_time_s
+
+
+def _plot_event(path: Path, run, title: str) -> None:
+    """The whole event of a pendulum run: string angles, gap, force with a zoomed inset."""
+    from flexmvm.plots.pendulum import plot_event  # matplotlib: imported only here
+
+    ev = pendulum.event_histories(run.built, run.result)
+    plot_event(path, ev["t_s"], ev["angle_rad"], ev["gap_m"], ev["force_N"],
+               ev["contact_intervals_s"], title=title)
 
 
 def run_main_job(scenario: Path | str | Scenario, out_dir: Path, *, model=None, t_end=None,

@@ -82,6 +82,7 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
     scale = max(np.linalg.norm(p0), 1e-300)
     mom_err = float(np.abs(res.momentum - p0).max() / scale) if free else None
     E = res.total_energy
+    counts = res.steps.size_counts() if res.steps is not None else {}  # steps per size [s]
     e_err = float((E[-1] - E[0]) / E[0]) if E[0] != 0 else None
     e_err_max = float(np.abs(E - E[0]).max() / abs(E[0])) if E[0] != 0 else None
     return {
@@ -94,6 +95,10 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         "modes": {i.name: int(i.n_modes) for i in built.info},
         "wall_time_s": float(res.wall_time_s),
         "n_steps": int(res.n_steps),
+        # steps per step size {"<h [s]>": count} and the smallest / largest step taken
+        "step_size_counts": {f"{h:.6g}": int(n) for h, n in counts.items()},
+        "dt_min_taken_s": float(min(counts)) if counts else None,
+        "dt_max_taken_s": float(max(counts)) if counts else None,
         "n_factorizations": int(res.n_factorizations),
         "momentum_rel_error": mom_err,
         "energy_rel_error": e_err,
@@ -102,8 +107,6 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         "max_penetration_at": res.max_penetration_at,
         "max_penetration_by_direction_m": dict(res.max_penetration_by_direction_m),
         "max_joint_drift": float(res.max_joint_drift),
-        "step_sizes_s": ({f"{h:.6g}": n for h, n in res.steps.size_counts().items()}
-                         if res.steps is not None else {}),
         "steps_not_converged": int(res.steps_not_converged),
         "newton_residual_max": float(res.newton_residual_max),
         "lcp_residual_max": float(res.lcp_residual_max),

@@ -172,6 +172,8 @@ class TimeConfig(Frozen):
     dt_max_s: Positive
     output_dt_s: Positive
     theta: Annotated[float, Strict(), Ge(0.5), Le(1.0)] = DEFAULT_THETA
+    # extra outputs this often while the step is dt_s (contact active or near); None: none
+    output_contact_dt_s: Positive | None = None
 
     @model_validator(mode="before")
     @classmethod
@@ -186,6 +188,9 @@ class TimeConfig(Frozen):
             raise problem(f"must be >= dt_s = {self.dt_s!r}, got {self.dt_max_s!r}", "dt_max_s")
         if self.output_dt_s < self.dt_s:
             raise problem(f"must be >= dt_s = {self.dt_s!r}, got {self.output_dt_s!r}", "output_dt_s")
+        if self.output_contact_dt_s is not None and self.output_contact_dt_s < self.dt_s:
+            raise problem(f"must be >= dt_s = {self.dt_s!r}, got {self.output_contact_dt_s!r}",
+                          "output_contact_dt_s")
         if self.dt_s > self.t_end_s:
             raise problem(f"must be <= t_end_s = {self.t_end_s!r}, got {self.dt_s!r}", "dt_s")
         if self.output_dt_s > self.t_end_s:
