@@ -309,11 +309,13 @@ class Scenario(Frozen):
 
     def with_time(self, *, t_end_s: float | None = None, dt_s: float | None = None,
                   dt_max_s: float | None = None, output_dt_s: float | None = None,
-                  theta: float | None = None) -> Scenario:
+                  theta: float | None = None,
+                  output_contact_dt_s: float | None = None) -> Scenario:
         """A copy with the given time settings replaced [s]. A ``dt_s`` above ``dt_max_s``
         (and no ``dt_max_s`` given) lifts ``dt_max_s`` to it."""
         given = {"t_end_s": t_end_s, "dt_s": dt_s, "dt_max_s": dt_max_s,
-                 "output_dt_s": output_dt_s, "theta": theta}
+                 "output_dt_s": output_dt_s, "theta": theta,
+                 "output_contact_dt_s": output_contact_dt_s}
         given = {k: v for k, v in given.items() if v is not None}
         if dt_s is not None and dt_max_s is None:
             given["dt_max_s"] = max(self.time.dt_max_s, dt_s)
