@@ -43,7 +43,7 @@ import scipy.linalg as sla
 
 from flexmvm.constraints.contact import ContactRows
 from flexmvm.errors import SolverError
-from flexmvm.integrate.lcp import regularised_cho
+from flexmvm.integrate.lcp import eliminate_equalities
 
 # the sweeps stop at this natural residual (relative to the velocity scale): the frictionless
 # LCP's bound (lcp.LCP_RTOL), so a frictional step is solved to the same relative accuracy
@@ -205,15 +205,8 @@ def solve_coulomb(D: np.ndarray, c: np.ndarray, n_eq: int, normal: np.ndarray,
     nrm, t1, t2, mus = _blocks(m, n_eq, np.asarray(tangent, np.int64),
                                np.asarray(mu, float), np.asarray(normal, np.int64))
     e, u = slice(0, n_eq), slice(n_eq, m)
-    if n_eq:
-        cho_e = regularised_cho(D[e, e], "joint")
-        De_inv_Deu = sla.cho_solve(cho_e, D[e, u])
-        De_inv_ce = sla.cho_solve(cho_e, c[e])
-        Dp = D[u, u] - D[u, e] @ De_inv_Deu
-        Dp = 0.5 * (Dp + Dp.T)
-        cp = c[u] - D[u, e] @ De_inv_ce
-    else:
-        Dp, cp = D, c
+    el = eliminate_equalities(D, c, n_eq)
+    Dp, cp = (0.5 * (el.D + el.D.T), el.c) if n_eq else (D, c)
     lu = np.zeros(m - n_eq)
     if warm is not None and len(warm) == m and np.isfinite(warm).all():
         lu = np.array(warm[n_eq:], dtype=float)
@@ -223,10 +216,10 @@ def solve_coulomb(D: np.ndarray, c: np.ndarray, n_eq: int, normal: np.ndarray,
     out = np.zeros(m)
     out[u] = lu
     if n_eq:
-        out[e] = -(De_inv_ce + De_inv_Deu @ lu)
+        out[e] = el.equalities(lu)
         # two refinement sweeps of the equalities with the true D (see lcp._refine)
         for _ in range(2):
-            out[e] -= sla.cho_solve(cho_e, D[e] @ out + c[e])
+            out[e] -= sla.cho_solve(el.cho, D[e] @ out + c[e])
     return out, sweeps
 
 

@@ -16,6 +16,8 @@ scale max(|c|, |D l|). It is zero exactly at a solution; LCP_RTOL bounds it.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
+
 import numpy as np
 import scipy.linalg as sla
 from scipy.optimize import nnls
@@ -52,21 +54,39 @@ def solve_mixed_lcp(D: np.ndarray, c: np.ndarray, n_eq: int) -> np.ndarray:
     D = 0.5 * (D + D.T)
     if n_eq == m:
         return _refine(D, c, n_eq, -sla.cho_solve(regularised_cho(D, "joint"), c))
-    e, u = slice(0, n_eq), slice(n_eq, m)
-    if n_eq:
-        cho_e = regularised_cho(D[e, e], "joint")
-        De_inv_Deu = sla.cho_solve(cho_e, D[e, u])
-        De_inv_ce = sla.cho_solve(cho_e, c[e])
-        Dp = D[u, u] - D[u, e] @ De_inv_Deu
-        cp = c[u] - D[u, e] @ De_inv_ce
-    else:
-        Dp, cp = D, c
-    lu = _solve_lcp(0.5 * (Dp + Dp.T), cp)
-    out = np.zeros(m)
-    out[u] = lu
-    if n_eq:
-        out[e] = -(De_inv_ce + De_inv_Deu @ lu)
-    return _refine(D, c, n_eq, out)
+    el = eliminate_equalities(D, c, n_eq)
+    lu = _solve_lcp(0.5 * (el.D + el.D.T), el.c)
+    return _refine(D, c, n_eq, np.concatenate([el.equalities(lu), lu]))
+
+
+@dataclass(frozen=True)
+class Elimination:
+    """The Schur complement of the first n_eq (equality) rows of w = D l + c: the unilateral
+    rows' w is D' l_u + c' once the equalities hold, with l_e = equalities(l_u). cho: the
+    factor of D_ee (None without equalities)."""
+
+    D: np.ndarray
+    c: np.ndarray
+    cho: tuple | None
+    De_inv_Deu: np.ndarray
+    De_inv_ce: np.ndarray
+
+    def equalities(self, lu: np.ndarray) -> np.ndarray:
+        if self.cho is None:
+            return np.zeros(0)
+        return -(self.De_inv_ce + self.De_inv_Deu @ lu)
+
+
+def eliminate_equalities(D: np.ndarray, c: np.ndarray, n_eq: int) -> Elimination:
+    """Elimination of the first n_eq rows of (D, c); n_eq = 0 leaves D and c as they are."""
+    e, u = slice(0, n_eq), slice(n_eq, len(c))
+    if not n_eq:
+        return Elimination(D, c, None, np.zeros((0, len(c))), np.zeros(0))
+    cho_e = regularised_cho(D[e, e], "joint")
+    De_inv_Deu = sla.cho_solve(cho_e, D[e, u])
+    De_inv_ce = sla.cho_solve(cho_e, c[e])
+    return Elimination(D[u, u] - D[u, e] @ De_inv_Deu, c[u] - D[u, e] @ De_inv_ce, cho_e,
+                       De_inv_Deu, De_inv_ce)
 
 
 def _refine(D: np.ndarray, c: np.ndarray, n_eq: int, lam: np.ndarray,
