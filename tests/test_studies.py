@@ -8,6 +8,7 @@ recomputing what does not matter for the test.
 from __future__ import annotations
 
 import csv
+import json
 import os
 import shutil
 import subprocess
@@ -263,3 +264,26 @@ def test_mode_floor_cuts_the_larger_craig_bampton_basis():
     np.testing.assert_allclose(cut.mode_freqs_hz, fresh.mode_freqs_hz, rtol=1e-8)
     nb = 3 * len(sel)
     np.testing.assert_allclose(cut.psi[:, :nb], fresh.psi[:, :nb], rtol=0, atol=1e-12)
+
+
+def test_selection_study_of_the_seed_eq4_kind(tmp_path):
+    """kind = mvm-seed sweeps the seed's eq. (4) models: the cases carry the kind (the
+    Craig-Bampton cases do not, so studies stored before keep their keys), each run is that
+    model (its DOF count is 3 x nodes + modes like Craig-Bampton's), and every NCC is a real
+    comparison (0 < NCC <= 1). A kind without a node selection is refused."""
+    import flexmvm as fm
+    from flexmvm.studies.grid import selection_cases
+
+    sc = load_scenario(TINY)
+    assert all("kind" not in c.params for c in selection_cases(sc, "b2", [1], [1], [7]))
+    assert {c.params["kind"] for c in selection_cases(sc, "b2", [1], [1], [7],
+                                                      kind="mvm-seed")} == {"mvm-seed"}
+    study = fm.select(sc, "b2", layers=[1], laps=[1, 2], modes=[7], serial=True,
+                      kind="mvm-seed", out_dir=tmp_path)
+    assert study.summary["kind"] == "mvm-seed" and len(study.rows) == 2
+    for r in study.rows:
+        assert 0.0 < r["ncc_force"] <= 1.0 and r["dof"] == 3 * r["nodes"] + r["modes"]
+    stored = json.loads(next((tmp_path / "cases").glob("*.json")).read_text())
+    assert stored["params"]["kind"] == "mvm-seed"
+    with pytest.raises(InputError, match="expected one of mvm, mvm-seed, mvm-seed-fixed"):
+        fm.select(sc, "b2", layers=[1], laps=[1], modes=[7], serial=True, kind="modal")

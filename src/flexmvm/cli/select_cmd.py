@@ -47,14 +47,17 @@ def parse_range(text: str, name: str = "range") -> list[int]:
               help="Mode counts: start:stop:step, stop included.")
 @click.option("--target", default="ncc>=0.99", show_default=True,
               help="Accuracy target, e.g. 'ncc>=0.99,peak<=0.02'.")
+@click.option("--kind", type=click.Choice(["mvm", "mvm-seed", "mvm-seed-fixed"]), default="mvm",
+              show_default=True,
+              help="Model of the candidates: Craig-Bampton (mvm) or the seed's eq. (4) readings.")
 @click.option("--search", is_flag=True,
               help="Bisect the mode counts per selection instead of running the whole grid.")
 @study_run_options
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
               help="Study directory (a rerun resumes).")
 @click.option("--progress/--no-progress", default=True, show_default=True)
-def command(scenario, body, layers, laps, modes, target, search, scheduler, workers, serial,
-            t_end, dt, other, out_dir, progress) -> None:
+def command(scenario, body, layers, laps, modes, target, kind, search, scheduler, workers,
+            serial, t_end, dt, other, out_dir, progress) -> None:
     """Selection study: node selections x mode counts of BODY against the full-FE force;
     writes ncc.csv, selection.json, fig7_ncc_map.png, fig8_ncc_modes.png."""
     from flexmvm.metrics.ncc import Target
@@ -66,5 +69,5 @@ def command(scenario, body, layers, laps, modes, target, search, scheduler, work
     run_selection_study(scenario, body, out_dir, *grid, target=tgt, search=search,
                         scheduler=scheduler, n_workers=workers, progress=progress, t_end_s=t_end,
                         dt_s=dt, other=other,
-                        serial=serial, echo=click.echo)
+                        serial=serial, echo=click.echo, kind=kind)
     click.echo(f"wrote {out_dir}")

@@ -318,13 +318,15 @@ def modal(modes: int, reference: str = "end_b") -> ModelConfig:
 
 def mvm(selection: str | tuple[int, int] | None = None, modes: int = 0, *,
         region: RegionSpec | None = None, reference: str = "end_b",
-        seed_eq4: bool = False) -> ModelConfig:
+        seed_eq4: bool = False, kind: ModelKind | None = None) -> ModelConfig:
     """MVM model: the nodes of ``selection`` (the seed's layers-laps 'i-j' or (i, j)) or of
     ``region`` kept as nodal coordinates, plus ``modes`` modes: Craig-Bampton fixed-interface
-    modes, or with ``seed_eq4`` the seed's eq. (4) block basis."""
+    modes, or with ``seed_eq4`` the seed's eq. (4) block basis; ``kind`` names any model kind
+    that retains nodes (mvm, mvm-seed, mvm-seed-fixed) instead."""
     if isinstance(selection, tuple):
         selection = "-".join(str(int(v)) for v in selection)
-    kind = ModelKind.MVM_SEED if seed_eq4 else ModelKind.MVM
+    if kind is None:
+        kind = ModelKind.MVM_SEED if seed_eq4 else ModelKind.MVM
     data = {"kind": kind, "selection": selection, "region": region, "modes": modes,
             "reference": reference}
     return validate_part(ModelConfig, data, f"mvm({selection!r}, modes={modes!r})")

@@ -11,7 +11,7 @@ from collections.abc import Iterable, Iterator, Sequence
 from pathlib import Path
 
 from flexmvm.metrics.ncc import Target
-from flexmvm.scenarios import Scenario, load_scenario
+from flexmvm.scenarios import ModelKind, Scenario, load_scenario
 from flexmvm.studies import materials as material_studies
 from flexmvm.studies.materials import SEED_ORDER, MaterialStudy
 from flexmvm.studies.selection import SelectionStudy, select_models
@@ -37,10 +37,11 @@ def select(scenario: Scenario | str | Path, body: str, *, layers: Iterable[int] 
            target: Target | float = 0.99, search: bool = False,
            out_dir: str | Path | None = None, workers: int | None = None,
            scheduler: str | None = None, serial: bool = False,
-           progress: bool = False) -> SelectionStudy:
+           progress: bool = False, kind: ModelKind | str = ModelKind.MVM) -> SelectionStudy:
     """Selection study of ``body`` (studies/selection.py): every ``layers`` x ``laps`` x
     ``modes`` Craig-Bampton model of it against its full-FE reference, the other bodies as in
-    the scenario. ``target``: a Target or the force NCC to reach; ``search``: the pruned
+    the scenario (``kind``: the candidates' model, Craig-Bampton by default, or the seed's
+    eq. (4) readings mvm-seed / mvm-seed-fixed). ``target``: a Target or the force NCC to reach; ``search``: the pruned
     search instead of the whole grid. Runs on a local Dask cluster of ``workers`` processes
     (default: one per core), on ``scheduler``, or in this process with ``serial``. Returns the
     table (``rows``), the smallest model reaching the target (``best``) and the summary."""
@@ -48,7 +49,7 @@ def select(scenario: Scenario | str | Path, body: str, *, layers: Iterable[int] 
     with _directory(out_dir) as out:
         return select_models(_scenario(scenario), body, out, layers, laps, modes, target,
                              search=search, scheduler=scheduler, n_workers=workers,
-                             serial=serial, progress=progress)
+                             serial=serial, progress=progress, kind=kind)
 
 
 def material_study(scenario: Scenario | str | Path, body: str = "b2", *,

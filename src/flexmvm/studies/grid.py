@@ -46,8 +46,12 @@ def case_key(layers: int, laps: int, modes: int) -> str:
 
 def selection_cases(sc: Scenario, body: str, layers: Iterable[int] = range(1, 5),
                     laps: Iterable[int] = range(1, 6), modes: Iterable[int] = range(7, 44, 6),
-                    reference: str | Path | None = None) -> list[Case]:
-    """The cases of the grid layers x laps x modes for body ``body`` of scenario ``sc``.
+                    reference: str | Path | None = None,
+                    kind: ModelKind = ModelKind.MVM) -> list[Case]:
+    """The cases of the grid layers x laps x modes for body ``body`` of scenario ``sc``, the
+    body modelled by ``kind`` (a kind that retains nodes: mvm, the default, mvm-seed or
+    mvm-seed-fixed; params carry ``kind`` only when it is not mvm, so that the keys of the
+    Craig-Bampton studies stored before stay valid).
 
     Keys ``l<i>-j<j>-m<m>``; params {body, layers, laps, modes, modes_max (the grid's largest
     mode count: each selection's Craig-Bampton basis is solved once with it and cut,
@@ -58,12 +62,29 @@ def selection_cases(sc: Scenario, body: str, layers: Iterable[int] = range(1, 5)
     unknown or non-rod body, or layers/laps beyond the rod mesh (naming the maximum).
     """
     _, layers, laps, modes = check_grid(sc, body, layers, laps, modes)
+    kind = study_kind(kind)
     data = sc.model_dump(mode="json")
     sha = file_sha256(reference) if reference is not None else None
     top = max(modes)
+    extra = {} if kind is ModelKind.MVM else {"kind": kind.value}
     return [Case(case_key(i, j, m), {"body": body, "layers": i, "laps": j, "modes": m,
-                                     "modes_max": top, "scenario": data, "reference_sha256": sha})
+                                     "modes_max": top, "scenario": data, "reference_sha256": sha}
+                 | extra)
             for i in layers for j in laps for m in modes]
+
+
+def study_kind(kind: ModelKind | str) -> ModelKind:
+    """The model kind of a selection study's candidates: one that retains an i-j node
+    selection beside its modes; InputError otherwise."""
+    try:
+        kind = ModelKind(kind)
+    except ValueError:
+        kind = None
+    if kind is None or not kind.retains_nodes:
+        options = ", ".join(k.value for k in ModelKind if k.retains_nodes)
+        raise InputError(f"kind: a selection study varies node selections; expected one of "
+                         f"{options}")
+    return kind
 
 
 def parse_model(text: str) -> ModelConfig | None:
@@ -103,10 +124,12 @@ def study_scenario(sc: Scenario, body: str, *, t_end_s: float | None = None,
     return sc
 
 
-def mvm_scenario(sc: Scenario, body: str, layers: int, laps: int, modes: int) -> Scenario:
-    """``sc`` with ``body`` as the Craig-Bampton model of selection layers-laps + modes."""
+def mvm_scenario(sc: Scenario, body: str, layers: int, laps: int, modes: int,
+                 kind: ModelKind = ModelKind.MVM) -> Scenario:
+    """``sc`` with ``body`` as the ``kind`` model (default Craig-Bampton) of selection
+    layers-laps + modes."""
     ref = sc.body(body).model.reference
-    return sc.with_model(body, mvm((layers, laps), modes, reference=ref))
+    return sc.with_model(body, mvm((layers, laps), modes, reference=ref, kind=kind))
 
 
 def reference_scenario(sc: Scenario, body: str) -> Scenario:

@@ -66,7 +66,7 @@ from flexmvm.metrics.ncc import Comparison, Target
 from flexmvm.results.atomic import write_json_atomic
 from flexmvm.results.history import read_history
 from flexmvm.results.outdir import make_out_dir
-from flexmvm.scenarios import Scenario, load_scenario, scenario_from_dict
+from flexmvm.scenarios import ModelKind, Scenario, load_scenario, scenario_from_dict
 from flexmvm.scenarios.compare import compare_runs
 from flexmvm.studies.grid import (
     case_key,
@@ -74,6 +74,7 @@ from flexmvm.studies.grid import (
     mvm_scenario,
     rod_of,
     selection_cases,
+    study_kind,
     study_scenario,
 )
 from flexmvm.studies.reference import file_sha256, reference_history
@@ -131,7 +132,7 @@ def run_selection_case(case: Case, reference: str | Path | None = None) -> dict:
 
     try:
         with craig_bampton_mode_floor(int(p.get("modes_max", m))):
-            run = run_scenario(mvm_scenario(sc, body, i, j, m))
+            run = run_scenario(mvm_scenario(sc, body, i, j, m, ModelKind(p.get("kind", "mvm"))))
     except SolverError as exc:
         return row | {"failed": str(exc).splitlines()[0]}
     info = next(b for b in run.built.info if b.name == body)
@@ -206,7 +207,8 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
                   modes: Iterable[int] = range(7, 44, 6), target: Target | None = None, *,
                   search: bool = False, scheduler: str | None = None,
                   n_workers: int | None = None, serial: bool = False, progress: bool = False,
-                  echo: Callable[[str], Any] = lambda _line: None) -> SelectionStudy:
+                  echo: Callable[[str], Any] = lambda _line: None,
+                  kind: ModelKind | str = ModelKind.MVM) -> SelectionStudy:
     """The selection study of ``body`` in scenario ``sc`` (module doc), its cases and reference
     stored in ``out_dir`` (a rerun resumes); no table, figure or console output (see
     :func:`run_selection_study`).
@@ -214,19 +216,21 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     Brute force runs every case of the grid; ``search=True`` runs
     studies.search.smallest_passing, each round's batch through run_cases (parallel,
     resumable). ``scheduler``: address of a Dask scheduler; otherwise one LocalCluster of
-    ``n_workers`` processes for the whole study, or in-process with ``serial=True``.
+    ``n_workers`` processes for the whole study, or in-process with ``serial=True``. ``kind``:
+    the candidates' model (grid.study_kind: mvm, the default, mvm-seed or mvm-seed-fixed).
     Raises InputError for a bad body / grid / options, SolverError if the reference fails.
     Failed runs are listed in ``summary["failures"]``; they count as not reaching the target.
     """
     target = Target(0.99) if target is None else target
     out = Path(out_dir).resolve()
     rod, layers, laps, modes = check_grid(sc, body, layers, laps, modes)
+    kind = study_kind(kind)
     check_cluster_options(scheduler, n_workers, serial)
     make_out_dir(out)
     hist, ref_made = reference_history(sc, body, out, progress=progress)
     echo(f"reference (full FE {body}): {'computed' if ref_made else 'loaded'} {hist}")
     cases = {(c.params["layers"], c.params["laps"], c.params["modes"]): c
-             for c in selection_cases(sc, body, layers, laps, modes, reference=hist)}
+             for c in selection_cases(sc, body, layers, laps, modes, reference=hist, kind=kind)}
     cands = {k: Candidate((k[0], k[1]), k[2], 3 * len(rod.selection(k[0], k[1])) + k[2])
              for k in cases}
     key_of = {v: k for k, v in cands.items()}
@@ -255,7 +259,8 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     rows = {(r["layers"], r["laps"], r["modes"]): r for r in batches.rows.values()}
     table = sorted(rows.values(), key=lambda r: (r["layers"], r["laps"], r["modes"]))
     summary = winner_dict(best, rows) | {
-        "body": body, "search": bool(search), "target": target_dict(target),
+        "body": body, "kind": kind.value, "search": bool(search),
+        "target": target_dict(target),
         "runs": len(scores), "runs_made": len(batches.made), "runs_loaded": len(batches.loaded),
         "runs_note": "runs = MVM cases evaluated for this answer = runs_made (computed in this "
                      "invocation) + runs_loaded (found stored in cases/); the full-FE reference "
@@ -281,7 +286,8 @@ def run_selection_study(scenario: str | Path | Scenario, body: str, out_dir: str
                         n_workers: int | None = None, progress: bool = True, *,
                         t_end_s: float | None = None, dt_s: float | None = None,
                         other: str | None = None, serial: bool = False,
-                        echo: Callable[[str], Any] = print) -> dict:
+                        echo: Callable[[str], Any] = print,
+                        kind: ModelKind | str = ModelKind.MVM) -> dict:
     """The selection study of ``body`` in ``scenario`` (a Scenario or a scenario file) with
     its files and console lines (module doc): :func:`select_models`, then ncc.csv,
     selection.json, the two figures and the summary line. ``t_end_s``, ``dt_s`` override the
@@ -298,7 +304,7 @@ def run_selection_study(scenario: str | Path | Scenario, body: str, out_dir: str
     sc = study_scenario(sc, body, t_end_s=t_end_s, dt_s=dt_s, other=other)
     study = select_models(sc, body, out, layers, laps, modes, target, search=search,
                           scheduler=scheduler, n_workers=n_workers, serial=serial,
-                          progress=progress, echo=echo)
+                          progress=progress, echo=echo, kind=kind)
     result = study.summary
     write_ncc_csv(out / "ncc.csv", study.rows, study.probes)
     write_json_atomic(out / "selection.json", result)
