@@ -127,13 +127,13 @@ def test_out_of_range_mesh_connectivity(tmp_path):
 def test_nan_reaching_the_lcp_names_the_time(tmp_path, capsys, monkeypatch):
     """A NaN in the contact LCP: SolverError at its source, the step's time added by the
     driver; one line, exit 2, no output directory."""
-    from flexmvm.integrate import lcp, moreau_jean, nonrotating
+    from flexmvm.integrate import coulomb, lcp
 
     def poisoned(D, c, n_eq, *args, **kwargs):
         return lcp.solve_checked(D, np.full_like(c, np.nan), n_eq, *args, **kwargs)
 
-    monkeypatch.setattr(moreau_jean, "solve_checked", poisoned)
-    monkeypatch.setattr(nonrotating, "solve_checked", poisoned)
+    # both steps (general and non-rotating) solve through coulomb.solve_contact_impulses
+    monkeypatch.setattr(coulomb, "solve_checked", poisoned)
     code, _, err = _in_process(["run", TINY, "--out", tmp_path / "out", *RUN_FAST], capsys)
     _one_line(err, 2, code, "at t = ", "non-finite", "LCP")
     assert list(tmp_path.iterdir()) == []

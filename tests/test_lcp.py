@@ -104,7 +104,7 @@ def test_contact_runs_check_every_lcp(monkeypatch):
     bodies modal with 4 modes, so 25 rows act on 2 x 10 coordinates (rank <= 20)."""
     from pathlib import Path
 
-    from flexmvm.integrate import moreau_jean, nonrotating
+    from flexmvm.integrate import coulomb
     from flexmvm.scenarios import ModelConfig, load_scenario
     from flexmvm.scenarios.run import run_scenario
 
@@ -115,8 +115,8 @@ def test_contact_runs_check_every_lcp(monkeypatch):
         seen.append((D.copy(), out[1]))
         return out
 
-    monkeypatch.setattr(moreau_jean, "solve_checked", spy)
-    monkeypatch.setattr(nonrotating, "solve_checked", spy)
+    # both steps (general and non-rotating) solve through coulomb.solve_contact_impulses
+    monkeypatch.setattr(coulomb, "solve_checked", spy)
     sc = load_scenario(Path(__file__).parent / "data" / "short_flat_impact.toml")
     modal = ModelConfig(kind="modal", modes=4)
     run = run_scenario(sc.with_overrides(body_models={"b1": modal, "b2": modal}))

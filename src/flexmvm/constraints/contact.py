@@ -83,6 +83,8 @@ class ContactRows:
 class ContactProvider(Protocol):
     """Every method the time step and the time loop call on a contact definition."""
 
+    mu: float  # Coulomb friction coefficient of the contact (0: frictionless)
+
     def candidate_rows(self, bodies, states, h: float) -> ContactRows:
         """Rows of the pairs that may close within the coming step of size h [s]."""
         ...

@@ -91,6 +91,8 @@ class PointToSurfaceContact:
             raise InputError(f"{name}: bonded contact locks all three components and takes "
                              f"no friction coefficient, got {mu!r}")
         self.mu = mu
+        self._last = (None, 0)      # the last candidate rows' pairs and bond-row count
+        self._bond_normal: dict = {}  # bonded slave node -> the normal it was locked with
         self.slave, self.master = slave, master
         self.slave_nodes = np.unique(np.asarray(slave_nodes, dtype=np.int64))
         n_s, n_m = len(bodies[slave].X), len(bodies[master].X)
@@ -286,7 +288,7 @@ class PointToSurfaceContact:
         whose normal impulse component turned tensile."""
         if self.kind is not ContactKind.BONDED:
             return
-        proj, n_eq = getattr(self, "_last", (None, 0))
+        proj, n_eq = self._last
         # release: normal component of the bond impulse (bond rows come in x, y, z triples)
         released = []
         for i in range(0, n_eq, 3):
@@ -304,12 +306,6 @@ class PointToSurfaceContact:
                 self._bonds[s] = (proj.nodes[j].copy(), proj.weights[j].copy())
                 self._bond_normal[s] = proj.normal[j].copy()
         self._bonded[:] = np.isin(self.slave_nodes, list(self._bonds))
-
-    @property
-    def _bond_normal(self) -> dict:
-        if not hasattr(self, "_bn"):
-            self._bn = {}
-        return self._bn
 
 
 def tangent_basis(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -43,7 +43,7 @@ import scipy.linalg as sla
 
 from flexmvm.constraints.contact import ContactRows
 from flexmvm.errors import SolverError
-from flexmvm.integrate.lcp import eliminate_equalities
+from flexmvm.integrate.lcp import eliminate_equalities, solve_checked
 
 # the sweeps stop at this natural residual (relative to the velocity scale): the frictionless
 # LCP's bound (lcp.LCP_RTOL), so a frictional step is solved to the same relative accuracy
@@ -266,6 +266,15 @@ def solve_coulomb_checked(D: np.ndarray, c: np.ndarray, n_eq: int, normal: np.nd
                           f"({len(c)} rows, {n_eq} equalities, {len(mu)} friction cones)")
     return lam, res
 
+
+
+def solve_contact_impulses(D: np.ndarray, c: np.ndarray, n_joint: int, crows: ContactRows,
+                           warm: np.ndarray | None = None) -> tuple[np.ndarray, float]:
+    """The impulses of one step's constraint problem (joint rows first, then crows) and their
+    residual: lcp.solve_checked (exact NNLS) without friction, solve_friction with it."""
+    if crows.friction is None:
+        return solve_checked(D, c, n_joint + crows.n_eq)
+    return solve_friction(D, c, n_joint, crows, warm)
 
 
 def solve_friction(D: np.ndarray, c: np.ndarray, n_joint: int, crows: ContactRows,

@@ -132,7 +132,7 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
     max_pen, n_steps, drift = 0.0, 0, 0.0
     step_t, step_h, step_impulse = [], [], []
     n_loose, worst_res, worst_lcp, p_res = 0, 0.0, 0.0, np.zeros(3)
-    friction = (FrictionSummary() if any(getattr(c, "mu", 0.0) > 0 for c in system.contacts)
+    friction = (FrictionSummary() if any(c.mu > 0 for c in system.contacts)
                 else None)   # runs with friction report it even if no contact closes
     wall0 = time.perf_counter()
     while tick < n_ticks:

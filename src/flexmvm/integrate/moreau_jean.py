@@ -55,8 +55,7 @@ from flexmvm.errors import SolverError
 from flexmvm.integrate import DEFAULT_THETA, nonrotating
 from flexmvm.integrate.body_solver import BodySolver
 from flexmvm.integrate.compliance import DenseCompliance
-from flexmvm.integrate.coulomb import solve_friction
-from flexmvm.integrate.lcp import solve_checked
+from flexmvm.integrate.coulomb import solve_contact_impulses
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import ContactRows, System
 
@@ -347,10 +346,7 @@ class MoreauJeanIntegrator:
                 c[:n_j] = jrows.times(v_free) - jrows.times(v_plus) + phi / (self.theta * h)
             if m_c:
                 c[n_j:] = crows.rows.times(v_free) - crows.lower
-            if crows.friction is None:
-                lam, lcp_res = solve_checked(D, c, n_j + crows.n_eq)
-            else:
-                lam, lcp_res = solve_friction(D, c, n_j, crows, lam if it else None)
+            lam, lcp_res = solve_contact_impulses(D, c, n_j, crows, lam if it else None)
             lcp_max = max(lcp_max, lcp_res)
             v_plus = list(v_free)
             for b, Yb in Yj.items():

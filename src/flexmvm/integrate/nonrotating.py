@@ -30,8 +30,7 @@ import numpy as np
 
 from flexmvm.bodies.rotation import cross3
 from flexmvm.integrate.compliance import DenseCompliance
-from flexmvm.integrate.coulomb import solve_friction
-from flexmvm.integrate.lcp import solve_checked
+from flexmvm.integrate.coulomb import solve_contact_impulses
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import ContactRows
 
@@ -134,10 +133,7 @@ def _contact_impulses(system, solvers, h, crows: ContactRows, v_free, v_plus
             phi_q_v = bq @ v[6:] if body.nq else 0.0
         D += comps[b].D
         c += bf[:, :3] @ v[:3] + phi_q_v
-    if crows.friction is None:
-        lam, res = solve_checked(D, c, crows.n_eq)
-    else:
-        lam, res = solve_friction(D, c, 0, crows)
+    lam, res = solve_contact_impulses(D, c, 0, crows)
     for b, comp in comps.items():
         dv = comp.velocity(lam)
         v_plus[b][:3] += dv[:3]

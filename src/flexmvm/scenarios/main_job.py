@@ -66,10 +66,11 @@ def _labelled(label: str, exc: BaseException) -> BaseException:
 def _run_and_write(sc, label: str, out_dir: Path, fields: bool, progress: bool):
     """Run sc, write its files into out_dir; returns (summary, curves, n_steps, wall [s])."""
     run = run_scenario(sc, label=label, progress=progress)
-    if pendulum.is_pendulum(run.built):
+    swing = pendulum.is_pendulum(run.built)
+    if swing:
         run.summary["pendulum"] = pendulum.event_summary(run.built, run.result)
     write_run(out_dir, run, fields=fields)
-    if pendulum.is_pendulum(run.built):
+    if swing:
         _plot_event(out_dir / f"{sc.name}_event.png", run, f"{sc.name} ({label})")
     return run.summary, run.result.curves(), run.result.n_steps, run.result.wall_time_s
 

@@ -15,7 +15,7 @@ from flexmvm.constraints.joints import BodyPoint, DistanceJoint
 from flexmvm.contact.pairs import PointToSurfaceContact
 from flexmvm.errors import InputError
 from flexmvm.integrate.state import BodyState
-from flexmvm.metrics.ncc import compare_force, ncc
+from flexmvm.metrics.ncc import compare_force, contact_intervals, ncc
 
 ONSET_FRACTION = 0.01  # the contact starts when the force reaches this fraction of its peak
 
@@ -85,17 +85,14 @@ def _fine_block(t: np.ndarray, start: float, step: float) -> float:
 
 
 def force_onset(t, force, fraction: float = ONSET_FRACTION) -> float:
-    """The time the contact force first reaches `fraction` of its peak, interpolated linearly
-    between outputs [s]: the first contact, blind to a single-step touch just before it and
-    not rounded to the step."""
-    t, f = np.asarray(t, float), np.asarray(force, float)
+    """The time the contact force first exceeds `fraction` of its peak, interpolated linearly
+    between outputs [s] (metrics.contact_intervals): the first contact, blind to a single-step
+    touch just before it and not rounded to the step."""
+    f = np.asarray(force, float)
     level = fraction * float(f.max())
     if not level > 0:
         raise InputError("force onset: the contact force is never positive")
-    i = int(np.argmax(f >= level))
-    if i == 0:
-        return float(t[0])
-    return float(t[i - 1] + (level - f[i - 1]) / (f[i] - f[i - 1]) * (t[i] - t[i - 1]))
+    return contact_intervals(t, f, level)[0][0]
 
 
 def impact_comparison(res, ref, probes=("b2_impact_end", "b2_free_end")) -> dict:

@@ -400,12 +400,7 @@ def run_cases(
             files are).
     """
     _validate(cases)
-    if serial and (scheduler is not None or n_workers is not None):
-        raise InputError("run_cases: serial=True received with scheduler/n_workers; expected one")
-    if scheduler is not None and n_workers is not None:
-        raise InputError("run_cases: n_workers applies to a local cluster; expected no scheduler")
-    if n_workers is not None and n_workers < 1:
-        raise InputError(f"run_cases: n_workers={n_workers}; expected a positive integer")
+    check_cluster_options(scheduler, n_workers, serial)
     out = Path(out_dir)
     (out / _CASES_DIR).mkdir(parents=True, exist_ok=True)
 
