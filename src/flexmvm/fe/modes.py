@@ -50,17 +50,26 @@ def factor(a: sp.spmatrix, spd: bool = True) -> Solve:
     SPD_LU); False: SuperLU's general defaults.
     Raises SolverError if the matrix is singular or holds NaN/inf.
     """
+    return _superlu(a, SPD_LU if spd else {}).solve
+
+
+def superlu_spd(a: sp.spmatrix):
+    """SuperLU's factor object of the SPD matrix a with the symmetric ordering SPD_LU
+    (fe.ldl solves with its L and D). Raises SolverError as factor does."""
+    return _superlu(a, SPD_LU)
+
+
+def _superlu(a: sp.spmatrix, options: dict):
     data = a.data if sp.issparse(a) else np.asarray(a)
     if not np.isfinite(data).all():
         raise SolverError(f"sparse LU of a {a.shape[0]}x{a.shape[0]} matrix: it holds a "
                           "non-finite number (NaN/inf)")
     try:
-        lu = spla.splu(sp.csc_matrix(a), **(SPD_LU if spd else {}))
+        return spla.splu(sp.csc_matrix(a), **options)
     except RuntimeError as exc:
         raise SolverError(
             f"sparse LU of a {a.shape[0]}x{a.shape[0]} matrix failed: {exc}"
         ) from None
-    return lu.solve
 
 
 def shift_invert_modes(M: sp.spmatrix, K: sp.spmatrix, n_modes: int, sigma: float,

@@ -20,7 +20,7 @@ import scipy.sparse as sp
 
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.errors import SolverError
-from flexmvm.fe.modes import factor
+from flexmvm.fe.ldl import ldl_factor
 from flexmvm.integrate.compliance import NodalColumns, NodalCompliance, nodal_compliance
 
 
@@ -65,7 +65,7 @@ class BodySolver:
                               f"number (NaN/inf) at step size h = {h:.3g} s")
         if sp.issparse(W):
             try:
-                solve = factor(W)  # W is SPD
+                solve = ldl_factor(W)  # W is SPD: L D L^T, GIL released
             except SolverError as exc:
                 raise SolverError(f"body {b.name!r}: iteration matrix is singular ({exc})") from None
         else:

@@ -45,6 +45,8 @@ body_solver); constraint impulses by the mixed LCP on D = Phi W^-1 Phi^T.
 
 from __future__ import annotations
 
+import os
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
 import numpy as np
@@ -86,6 +88,7 @@ class _Carried:
     Lqd: np.ndarray
     Kq: np.ndarray     # k_hat q and k_hat q_dot: the elastic force is linear too
     Kqd: np.ndarray
+    Mqd: np.ndarray    # M_qq q_dot (M_qq v_m = M_qq q_dot + theta M_qq dq_dot)
     age: int = 0
 
 
@@ -127,7 +130,6 @@ class MoreauJeanIntegrator:
         # M_wq(q) (one pass over b1's 22 MB of G2 blocks instead of ~3 on the seed case)
         self._carried: list[_Carried | None] = [None] * len(system.bodies)
         self._pending: list[tuple | None] = [None] * len(system.bodies)
-        self._mqq_cache: list[tuple] = [(None, None)] * len(system.bodies)
         self._loads: dict[int, list] = {}
         for load in system.loads:
             self._loads.setdefault(load.body, []).append(load)
@@ -166,20 +168,15 @@ class MoreauJeanIntegrator:
                     F[:6] += fr
                     F[6:] += qp
             R.append(inertia - h * F)
-            mqq_vm = self._mqq_v(b, st) + th * mqq_dv if body.nq else None
+            mqq_vm = None
+            if body.nq:
+                mqq_vm = self._carried_at(b, st).Mqd + th * mqq_dv
+                self._pending[b] = self._pending[b] + (mqq_dv,)
             momentum = body.mass_times(mid.A, mid.q, vm, terms, mqq_vm)
             scales.append(max(np.abs(inertia).max(), h * np.abs(F).max(), np.abs(momentum).max()))
             mids.append(mid)
             ends.append(end)
         return R, mids, ends, scales
-
-    def _mqq_v(self, b: int, st: BodyState) -> np.ndarray:
-        """M_qq q_dot of the step's initial state (cached for the step's iterates)."""
-        key, val = self._mqq_cache[b]
-        if key is not st.v:
-            val = np.asarray(self.system.bodies[b].inv.M_qq @ st.v[6:]).ravel()
-            self._mqq_cache[b] = (st.v, val)
-        return val
 
     def carried(self, b: int, st: BodyState) -> tuple[np.ndarray, np.ndarray]:
         """(L(q), L(q_dot)) of body b at state st: the carried ones if st is the state this
@@ -193,7 +190,8 @@ class MoreauJeanIntegrator:
             body = self.system.bodies[b]
             qd = st.v[6:]
             c = _Carried(st.q, st.v, body.contractions(st.q), body.contractions(qd),
-                         _times(body.k_hat, st.q), _times(body.k_hat, qd))
+                         _times(body.k_hat, st.q), _times(body.k_hat, qd),
+                         _times(body.inv.M_qq, qd))
             self._carried[b] = c
         return c
 
@@ -220,9 +218,9 @@ class MoreauJeanIntegrator:
             if c is None or p is None or c.q is not st.q or c.v is not st.v:
                 self._carried[b] = None
                 continue
-            LD, Lqd_m, KD, Kqd_m = p
+            LD, Lqd_m, KD, Kqd_m, MD = p
             self._carried[b] = _Carried(new.q, new.v, c.Lq + h * Lqd_m, c.Lqd + LD,
-                                        c.Kq + h * Kqd_m, c.Kqd + KD, c.age + 1)
+                                        c.Kq + h * Kqd_m, c.Kqd + KD, c.Mqd + MD, c.age + 1)
 
     def _joint_rows(self, t, h, mids, ends):
         if not self.system.joints:
@@ -249,16 +247,16 @@ class MoreauJeanIntegrator:
         velocity correction W_b^-1 Phi_b^T lambda (integrate.compliance). Large bodies with
         nodal rows go through the cached nodal columns of W_qq^-1 (exact; no (nq, m) block),
         others through explicit columns W^-1 Phi^T."""
-        out = {}
-        for b, (bf, bq) in crows.rows.blocks.items():
+        def one(b):
+            bf, bq = crows.rows.blocks[b]
             solver = self.solvers[b]
             sel = crows.rows.nodal.get(b)
             if sel is None or not bq.shape[1] or self.system.bodies[b].nq < NODAL_CACHE_MIN_NQ:
                 Phi = np.hstack([bf, bq])
-                out[b] = DenseCompliance(Phi, solver.solve(Phi.T))
-            else:
-                out[b] = solver.contact_compliance(h, bf, sel)
-        return out
+                return DenseCompliance(Phi, solver.solve(Phi.T))
+            return solver.contact_compliance(h, bf, sel)
+
+        return self._each_body(one, crows.rows.blocks)
 
     # ----------------------------------------------------------------------------------------
     def step(self, t: float, states: list[BodyState], h: float) -> StepResult:
@@ -329,7 +327,7 @@ class MoreauJeanIntegrator:
             if it == self.max_iter:
                 raise SolverError(f"Moreau-Jean step at t = {t:.6e} s (h = {h:.3e} s) did "
                                   f"not converge in {self.max_iter} iterations")
-            v_free = [vp - s.solve(r) for vp, s, r in zip(v_plus, self.solvers, R)]
+            v_free = [vp - x for vp, x in zip(v_plus, self._solve_each(R))]
             if n_j + m_c == 0:
                 v_plus = v_free
                 continue
@@ -363,20 +361,43 @@ class MoreauJeanIntegrator:
                           converged=rel <= self.rtol, residual=rel, translation_residual=res_t,
                           lcp_residual=lcp_max)
 
+    def _each_body(self, fn, bodies) -> dict:
+        """{b: fn(b)} for b in bodies. The back-substitutions of sparse (full-FE) bodies
+        release the GIL (fe.ldl): with two or more of them, each body's work runs on a thread
+        of its own (results as serial: the work of one body touches nothing of another)."""
+        bodies = list(bodies)
+        sysb = self.system.bodies
+        sparse = [b for b in bodies if sysb[b].nq and sysb[b].is_sparse]
+        if len(sparse) < 2:
+            return {b: fn(b) for b in bodies}
+        pool = _thread_pool()
+        futures = {b: pool.submit(fn, b) for b in sparse[1:]}
+        done = {b: fn(b) for b in bodies if b not in futures}
+        return {b: done[b] if b in done else futures[b].result() for b in bodies}
+
+    def _solve_each(self, R: list[np.ndarray]) -> list[np.ndarray]:
+        """W_b^-1 R_b for every body b."""
+        x = self._each_body(lambda b: self.solvers[b].solve(R[b]), range(len(R)))
+        return [x[b] for b in range(len(R))]
+
     def _prepare(self, states, h, refresh_tol):
         """Frame blocks of W at `states`; M_wq refreshed when it drifted (always for small
         bases, by COUPLING_TOL for large ones, unconditionally when refresh_tol = 0)."""
-        for b, (body, solver, st) in enumerate(zip(self.system.bodies, self.solvers, states)):
-            # an iteration matrix: M_wq exact (thin rods' frame Schur complement depends on
-            # it), J to first order in q (its quadratic part is (|u|/L)^2 of it)
-            if body.nq:
-                tol = refresh_tol if refresh_tol is not None else (
-                    0.0 if body.nq <= SMALL_BASIS else COUPLING_TOL)
-                c = self._carried[b]
-                Lq = c.Lq if (c is not None and c.q is st.q) else None
-                solver.refresh_coupling(h, body.rotational_coupling(st.q, Lq), tol)
-            J = body.frame_inertia_first_order(st.q)
-            solver.prepare(h, st.A, body.frame_mass(st.A, body.first_moment(st.q), J))
+        self._each_body(lambda b: self._prepare_body(b, states[b], h, refresh_tol),
+                        range(len(states)))
+
+    def _prepare_body(self, b, st, h, refresh_tol):
+        body, solver = self.system.bodies[b], self.solvers[b]
+        # an iteration matrix: M_wq exact (thin rods' frame Schur complement depends on
+        # it), J to first order in q (its quadratic part is (|u|/L)^2 of it)
+        if body.nq:
+            tol = refresh_tol if refresh_tol is not None else (
+                0.0 if body.nq <= SMALL_BASIS else COUPLING_TOL)
+            c = self._carried[b]
+            Lq = c.Lq if (c is not None and c.q is st.q) else None
+            solver.refresh_coupling(h, body.rotational_coupling(st.q, Lq), tol)
+        J = body.frame_inertia_first_order(st.q)
+        solver.prepare(h, st.A, body.frame_mass(st.A, body.first_moment(st.q), J))
 
     def _relative_residual(self, R, Gj, Gc, lam, n_j, scales) -> float:
         """Largest momentum residual (constraint impulses included) relative to each body's
@@ -402,6 +423,18 @@ class MoreauJeanIntegrator:
             worst_r = max(worst_r, float(np.abs(res[:3]).max()) / max(sc, 1e-300))
             res_t += res[:3]
         return worst, worst_r, res_t
+
+
+_POOL: ThreadPoolExecutor | None = None
+
+
+def _thread_pool() -> ThreadPoolExecutor:
+    """One pool for the process (studies make many integrators), as many threads as cores."""
+    global _POOL
+    if _POOL is None:
+        _POOL = ThreadPoolExecutor(max_workers=max(2, os.cpu_count() or 2),
+                                   thread_name_prefix="flexmvm-solve")
+    return _POOL
 
 
 def _times(matrix, x: np.ndarray) -> np.ndarray:

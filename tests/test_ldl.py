@@ -1,0 +1,76 @@
+"""fe.ldl: the supernodal L D L^T solve from SuperLU's factor equals SuperLU's own solve.
+
+Both solve the same factorization (U = D L^T to round-off), so they agree to round-off: the
+tolerance 1e-12 relative is ~1e3 machine epsilons, the growth of rounding through a
+triangular solve of a well-conditioned matrix. A residual check (|A x - b| / |b| < 1e-10 for
+a matrix of condition ~1e3) guards against an agreement of two wrong answers.
+"""
+
+import threading
+
+import numpy as np
+import pytest
+import scipy.sparse as sp
+
+from flexmvm.errors import SolverError
+from flexmvm.fe import assemble
+from flexmvm.fe.ldl import SupernodalLDL, ldl_factor
+from flexmvm.fe.modes import superlu_spd
+from flexmvm.materials import ALUMINIUM
+from test_fe import tube_hex27
+
+
+@pytest.fixture(scope="module")
+def iteration_matrix():
+    """W = M + (theta h)^2 K of a free Hex27 tube (SPD: M is), as the integrator makes it."""
+    fe = assemble(tube_hex27(n_theta=12, n_r=2, n_x=6), ALUMINIUM)
+    th_h = 0.55 * 2e-6
+    return sp.csc_matrix(fe.M + th_h**2 * fe.K)
+
+
+def test_supernodes_found(iteration_matrix):
+    ldl = SupernodalLDL(superlu_spd(iteration_matrix))
+    assert 1 <= ldl.n_supernodes < ldl.n  # Hex27 nodes couple 3 DOFs: runs of >= 3 columns
+
+
+@pytest.mark.parametrize("k", [0, 1, 3, 8])
+def test_equals_superlu_solve(iteration_matrix, k):
+    A = iteration_matrix
+    lu = superlu_spd(A)
+    solve = SupernodalLDL(lu).solve
+    rng = np.random.default_rng(k)
+    b = rng.standard_normal(A.shape[0]) if k == 0 else rng.standard_normal((A.shape[0], k))
+    x = solve(b)
+    assert x.shape == b.shape
+    want = lu.solve(b)
+    np.testing.assert_allclose(x, want, rtol=0, atol=1e-12 * np.abs(want).max())
+    res = np.abs(A @ x - b).max() / np.abs(b).max()
+    assert res < 1e-10
+
+
+def test_threads_give_the_serial_answer(iteration_matrix):
+    """The kernel releases the GIL; two threads solving at once get the serial results."""
+    solve = ldl_factor(iteration_matrix)
+    rng = np.random.default_rng(5)
+    bs = [rng.standard_normal(iteration_matrix.shape[0]) for _ in range(4)]
+    serial = [solve(b) for b in bs]
+    got = [None] * 4
+
+    def work(i):
+        got[i] = solve(bs[i])
+
+    threads = [threading.Thread(target=work, args=(i,)) for i in range(4)]
+    for t in threads:
+        t.start()
+    for t in threads:
+        t.join()
+    for a, b in zip(got, serial):
+        np.testing.assert_array_equal(a, b)
+
+
+def test_zero_pivot_is_a_solver_error():
+    """Without pivoting (the symmetric ordering) a zero diagonal pivot cannot be factored:
+    a clear SolverError, not a division by zero inside the kernel."""
+    A = sp.csc_matrix(np.array([[0.0, 1.0], [1.0, 0.0]]))
+    with pytest.raises(SolverError):
+        ldl_factor(A)
