@@ -136,47 +136,50 @@ class MoreauJeanIntegrator:
 
     # ----------------------------------------------------------------------------------------
     def _residuals(self, t, states, v_plus, h):
-        """Momentum residuals without constraint forces, midpoint and end configurations."""
-        sysm = self.system
-        R, mids, ends, scales = [], [], [], []
+        """Momentum residuals without constraint forces, midpoint and end configurations
+        (per body, on threads when several bodies are full FE: see _each_body)."""
+        out = self._each_body(lambda b: self._residual(b, t, states[b], v_plus[b], h),
+                              range(len(states)))
+        R, mids, ends, scales = zip(*(out[b] for b in range(len(states))))
+        return list(R), list(mids), list(ends), list(scales)
+
+    def _residual(self, b, t, st, vp, h):
+        """Body b's residual, its midpoint and end states and its momentum scale."""
+        body, g = self.system.bodies[b], self.system.gravity
         th = self.theta
-        for b, (body, st, vp) in enumerate(zip(sysm.bodies, states, v_plus)):
-            vm = th * vp + (1.0 - th) * st.v
-            mid = st.advanced(vm, th * h)
-            end = st.advanced(vm, h)
-            Lq_m = Lqd_m = Kq_m = None
-            if body.nq:
-                Lq_m, Lqd_m, Kq_m = self._mid_contractions(b, st, vp, th, h)
-            terms = body.inertia_terms(mid.q, Lq_m)
-            dv = vp - st.v
-            # M is linear: M v_m = M v- + th M dv, and M_qq v- is the same for every iterate
-            mqq_dv = None
-            if body.nq:
-                mqq_dv = _times(body.inv.M_qq, dv[6:]) if np.any(dv[6:]) else np.zeros(body.nq)
-            inertia = body.mass_times(mid.A, mid.q, dv, terms, mqq_dv)
-            F = body.velocity_forces(mid.A, mid.q, vm, terms, Lqd_m)
-            if np.any(sysm.gravity):
-                F += body.gravity_forces(mid.A, mid.q, sysm.gravity, terms[0])
-            if body.nq:
-                F[6:] -= Kq_m  # -k_hat q_m (carried), then damping if any
-                if body.c_hat is not None:
-                    F[6:] -= _times(body.c_hat, vm[6:])
-            for load in self._loads.get(len(R), ()):
-                if t + th * h >= load.t_start_s:
-                    fvec = np.asarray(load.force_n, float)
-                    fr, qp = body.point_jacobian(load.node, mid.A, mid.q, fvec)
-                    F[:6] += fr
-                    F[6:] += qp
-            R.append(inertia - h * F)
-            mqq_vm = None
-            if body.nq:
-                mqq_vm = self._carried_at(b, st).Mqd + th * mqq_dv
-                self._pending[b] = self._pending[b] + (mqq_dv,)
-            momentum = body.mass_times(mid.A, mid.q, vm, terms, mqq_vm)
-            scales.append(max(np.abs(inertia).max(), h * np.abs(F).max(), np.abs(momentum).max()))
-            mids.append(mid)
-            ends.append(end)
-        return R, mids, ends, scales
+        vm = th * vp + (1.0 - th) * st.v
+        mid = st.advanced(vm, th * h)
+        end = st.advanced(vm, h)
+        Lq_m = Lqd_m = Kq_m = None
+        if body.nq:
+            Lq_m, Lqd_m, Kq_m = self._mid_contractions(b, st, vp, th, h)
+        terms = body.inertia_terms(mid.q, Lq_m)
+        dv = vp - st.v
+        # M is linear: M v_m = M v- + th M dv, and M_qq v- is the same for every iterate
+        mqq_dv = None
+        if body.nq:
+            mqq_dv = _times(body.inv.M_qq, dv[6:]) if np.any(dv[6:]) else np.zeros(body.nq)
+        inertia = body.mass_times(mid.A, mid.q, dv, terms, mqq_dv)
+        F = body.velocity_forces(mid.A, mid.q, vm, terms, Lqd_m)
+        if np.any(g):
+            F += body.gravity_forces(mid.A, mid.q, g, terms[0])
+        if body.nq:
+            F[6:] -= Kq_m  # -k_hat q_m (carried), then damping if any
+            if body.c_hat is not None:
+                F[6:] -= _times(body.c_hat, vm[6:])
+        for load in self._loads.get(b, ()):
+            if t + th * h >= load.t_start_s:
+                fvec = np.asarray(load.force_n, float)
+                fr, qp = body.point_jacobian(load.node, mid.A, mid.q, fvec)
+                F[:6] += fr
+                F[6:] += qp
+        mqq_vm = None
+        if body.nq:
+            mqq_vm = self._carried_at(b, st).Mqd + th * mqq_dv
+            self._pending[b] = self._pending[b] + (mqq_dv,)
+        momentum = body.mass_times(mid.A, mid.q, vm, terms, mqq_vm)
+        scale = max(np.abs(inertia).max(), h * np.abs(F).max(), np.abs(momentum).max())
+        return inertia - h * F, mid, end, scale
 
     def carried(self, b: int, st: BodyState) -> tuple[np.ndarray, np.ndarray]:
         """(L(q), L(q_dot)) of body b at state st: the carried ones if st is the state this
