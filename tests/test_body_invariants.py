@@ -161,3 +161,27 @@ def test_reduced_stiffness_sparse(selection):
     np.testing.assert_allclose(k_hat.toarray(), cols.T @ K.toarray() @ cols, rtol=1e-14)
     dense = reduced_stiffness(K, cols)
     np.testing.assert_allclose(dense, cols.T @ K.toarray() @ cols, rtol=1e-14)
+
+
+@pytest.mark.parametrize("nq", [1, 5, 37])
+def test_packed_g2_contraction_equals_the_nine_products(nq):
+    """bodies.contraction reads the six distinct G2 blocks once (four rows at a time, the
+    rest one by one: nq = 1, 5, 37 cover both); it must give G2[b][a] x for all nine (a, b)
+    to round-off (1e-13 relative: sums of nq products in another order)."""
+    from flexmvm.bodies.contraction import G2Contraction
+
+    rng = np.random.default_rng(nq)
+    G2 = [[None] * 3 for _ in range(3)]
+    for a in range(3):
+        g = rng.standard_normal((nq, nq))
+        G2[a][a] = g + g.T
+        for b in range(a + 1, 3):
+            G2[a][b] = rng.standard_normal((nq, nq))
+            G2[b][a] = G2[a][b].T.copy()
+    x = rng.standard_normal(nq)
+    got = G2Contraction(G2)(x)
+    for a in range(3):
+        for b in range(3):
+            want = G2[b][a] @ x
+            np.testing.assert_allclose(got[a, b], want, rtol=0,
+                                       atol=1e-13 * max(np.abs(want).max(), 1.0))

@@ -21,11 +21,16 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 
+from flexmvm.bodies.contraction import G2Contraction
 from flexmvm.bodies.invariants import InertiaInvariants, inertia_invariants
 from flexmvm.bodies.rotation import cross3, skew
 from flexmvm.mesh.mesh import Mesh
 
 _CYCLIC = ((0, 1, 2), (1, 2, 0), (2, 0, 1))
+# From this many coordinates the packed one-pass G2 contraction beats the stacked product
+# (one BLAS thread, seed case: nq = 553 0.47 ms against 0.81 ms; nq = 112 0.024 against
+# 0.011 ms)
+PACKED_MIN_NQ = 300
 
 
 @dataclass(frozen=True)
@@ -80,11 +85,22 @@ class FlexibleBody:
         stack = np.vstack([np.asarray(G2[b][a]) for a in range(3) for b in range(3)])
         return np.ascontiguousarray(stack)
 
+    @functools.cached_property
+    def _g2_packed(self) -> G2Contraction | None:
+        """Dense bases from PACKED_MIN_NQ coordinates: the six distinct G2 blocks, read once
+        per contraction (bodies.contraction)."""
+        if self.inv.Ms is not None or self.nq < PACKED_MIN_NQ:
+            return None
+        return G2Contraction(self.inv.G2)
+
     def contractions(self, x: np.ndarray) -> np.ndarray:
         """L(x)[a, b] = G2[b][a] x, shape (3, 3, nq): every G2 contraction of the equations of
         motion is one of these, and L is linear, so an integrator can carry L(q) and
         L(q_dot) along with the state (integrate.moreau_jean). One pass over the G2 blocks."""
         inv = self.inv
+        packed = self._g2_packed
+        if packed is not None:
+            return packed(x)
         if inv.Ms is not None:
             # G2[b][a] x = P_b^T M_s (P_a x): one M_s product with 3 columns instead of nine
             # products with the G2 blocks (each as large as M_s)
