@@ -111,9 +111,10 @@ class FlexibleBody:
         return (self._g2_stack @ x).reshape(3, 3, self.nq)
 
     @functools.cached_property
-    def _G1(self) -> np.ndarray:
-        """G1 as one (3, 3, nq) array."""
-        return np.array([[self.inv.G1[a][b] for b in range(3)] for a in range(3)])
+    def G1_array(self) -> np.ndarray:
+        """G1 as one C-ordered (3, 3, nq) array, [a, b] = inv.G1[a][b]."""
+        return np.ascontiguousarray(
+            np.array([[self.inv.G1[a][b] for b in range(3)] for a in range(3)], dtype=float))
 
     def inertia_terms(self, q: np.ndarray, Lq: np.ndarray | None = None):
         """(S, J, M_wq, C) at q: first moment, inertia about the frame origin, the omega-q
@@ -123,9 +124,9 @@ class FlexibleBody:
         if not self.nq:
             G = self.inv.G0
             return S, np.trace(G) * np.eye(3) - G, np.zeros((3, 0)), np.zeros((3, 3, 0))
-        C = self._G1 + (self.contractions(q) if Lq is None else Lq)
+        C = self.G1_array + (self.contractions(q) if Lq is None else Lq)
         # G[a, b] = G0[a, b] + G1[b][a] q + C[a][b] q
-        G = self.inv.G0 + self._G1.transpose(1, 0, 2) @ q + C @ q
+        G = self.inv.G0 + self.G1_array.transpose(1, 0, 2) @ q + C @ q
         G = 0.5 * (G + G.T)
         J = np.trace(G) * np.eye(3) - G
         M_wq = np.array([C[a, b] - C[b, a] for _, a, b in _CYCLIC])
@@ -136,7 +137,7 @@ class FlexibleBody:
         iteration matrices, never for residuals."""
         G = self.inv.G0.copy()
         if self.nq:
-            Gq = self._G1 @ q  # Gq[a, b] = G1[a][b] q
+            Gq = self.G1_array @ q  # Gq[a, b] = G1[a][b] q
             G += Gq + Gq.T
         G = 0.5 * (G + G.T)
         return np.trace(G) * np.eye(3) - G

@@ -22,6 +22,7 @@ from flexmvm.bodies.body import FlexibleBody
 from flexmvm.errors import SolverError
 from flexmvm.fe.ldl import ldl_factor
 from flexmvm.integrate.compliance import NodalColumns, NodalCompliance, nodal_compliance
+from flexmvm.integrate.dense_solve import cho_solve, lu_solve
 
 
 @dataclass
@@ -75,7 +76,7 @@ class BodySolver:
                 raise SolverError(
                     f"body {b.name!r}: iteration matrix M + h^2/4 K is not positive definite"
                 ) from None
-            solve = lambda rhs, cho=cho: sla.cho_solve(cho, rhs, check_finite=False)
+            solve = lambda rhs, cho=cho: cho_solve(cho, rhs)
         self.n_factorizations += 1
         Zr = np.asarray(solve(np.ascontiguousarray(b.inv.S1.T)))
         Zw = np.asarray(solve(np.ascontiguousarray(self._Mw0.T)))
@@ -134,7 +135,7 @@ class BodySolver:
     def solve(self, b: np.ndarray) -> np.ndarray:
         """x = W^-1 b for b of shape (nv,) or (nv, k)."""
         if self._f is None:
-            return sla.cho_solve(self._schur, b, check_finite=False)
+            return cho_solve(self._schur, b)
         f, A = self._f, self._A
         bf, bq = b[:6], b[6:]
         y = np.asarray(f.solve(bq))
@@ -142,7 +143,7 @@ class BodySolver:
             y = y[:, None]
         # M_fq~ y
         My = np.concatenate([A @ (self.body.inv.S1 @ y), self._mw(f) @ y])
-        xf = sla.lu_solve(self._schur, bf - My, check_finite=False)
+        xf = lu_solve(self._schur, bf - My)
         Zx = f.Zr @ (A.T @ xf[:3]) + f.Zw @ xf[3:]
         return np.concatenate([xf, y - Zx])
 
@@ -183,7 +184,7 @@ class BodySolver:
         y = np.asarray(f.solve(b[3:])) if yq is None else yq
         if y.ndim == 1 and b.ndim == 2:
             y = y[:, None]
-        xt = sla.cho_solve(self._schur_t, bt - A @ (self.body.inv.S1 @ y), check_finite=False)
+        xt = cho_solve(self._schur_t, bt - A @ (self.body.inv.S1 @ y))
         return np.concatenate([xt, y - f.Zr @ (A.T @ xt)])
 
     def _mw(self, f: _Factor) -> np.ndarray:

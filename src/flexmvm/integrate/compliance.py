@@ -29,8 +29,9 @@ from __future__ import annotations
 
 import numba
 import numpy as np
-import scipy.linalg as sla
 import scipy.sparse as sp
+
+from flexmvm.integrate.dense_solve import cho_solve, lu_solve
 
 
 @numba.njit(cache=True)
@@ -192,11 +193,11 @@ def nodal_compliance(cache: NodalColumns, solve, bf: np.ndarray, selector, frame
     ar = A @ (F[:, 0:3].T @ NdT)                            # A S1 y, (3, m)
     if zw is None:
         phi_f = bf[:, :3]
-        xf = sla.cho_solve(schur, phi_f.T - ar, check_finite=False)
+        xf = cho_solve(schur, phi_f.T - ar)
         zq = F[:, 6:9] @ (A.T @ xf)                         # psi_d Z x_f, (n_d, m)
     else:
         phi_f = bf
-        xf = sla.lu_solve(schur, bf.T - np.vstack([ar, F[:, 3:6].T @ NdT]), check_finite=False)
+        xf = lu_solve(schur, bf.T - np.vstack([ar, F[:, 3:6].T @ NdT]))
         zq = F[:, 6:9] @ (A.T @ xf[:3]) + F[:, 9:12] @ xf[3:]
     D = phi_f @ xf + K - Nd @ zq
     return NodalCompliance(D, xf, cache.cols, slots, Nd, zr, zw, A)

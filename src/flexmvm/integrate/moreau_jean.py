@@ -51,6 +51,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexmvm.bodies.momentum import momentum_terms
 from flexmvm.constraints.contact import FrictionRows
 from flexmvm.constraints.rows import Rows, stack
 from flexmvm.errors import SolverError
@@ -150,34 +151,34 @@ class MoreauJeanIntegrator:
         vm = th * vp + (1.0 - th) * st.v
         mid = st.advanced(vm, th * h)
         end = st.advanced(vm, h)
-        Lq_m = Lqd_m = Kq_m = None
+        dv = vp - st.v
         if body.nq:
             Lq_m, Lqd_m, Kq_m = self._mid_contractions(b, st, vp, th, h)
-        terms = body.inertia_terms(mid.q, Lq_m)
-        dv = vp - st.v
-        # M is linear: M v_m = M v- + th M dv, and M_qq v- is the same for every iterate
-        mqq_dv = None
-        if body.nq:
-            mqq_dv = _times(body.inv.M_qq, dv[6:]) if np.any(dv[6:]) else np.zeros(body.nq)
-        inertia = body.mass_times(mid.A, mid.q, dv, terms, mqq_dv)
-        F = body.velocity_forces(mid.A, mid.q, vm, terms, Lqd_m)
-        if np.any(g):
-            F += body.gravity_forces(mid.A, mid.q, g, terms[0])
-        if body.nq:
-            F[6:] -= Kq_m  # -k_hat q_m (carried), then damping if any
+            # M is linear: M v_m = M v- + th M dv, and M_qq v- is carried with the state
+            mqq_dv = (_times(body.inv.M_qq, dv[6:]) if np.any(dv[6:])
+                      else np.zeros(body.nq))
+            mqq_vm = self._carried_at(b, st).Mqd + th * mqq_dv
+            self._pending[b] = self._pending[b] + (mqq_dv,)
+            inertia, F, momentum = (np.empty(body.nv) for _ in range(3))
+            inv = body.inv
+            momentum_terms(mid.A, mid.q, dv, vm, Lq_m, Lqd_m, Kq_m, mqq_dv, mqq_vm,
+                           inv.mass, inv.S0, inv.S1, inv.G0, body.G1_array,
+                           np.asarray(g, float), inertia, F, momentum)
             if body.c_hat is not None:
                 F[6:] -= _times(body.c_hat, vm[6:])
+        else:
+            terms = body.inertia_terms(mid.q)
+            inertia = body.mass_times(mid.A, mid.q, dv, terms)
+            F = body.velocity_forces(mid.A, mid.q, vm, terms)
+            if np.any(g):
+                F += body.gravity_forces(mid.A, mid.q, g, terms[0])
+            momentum = body.mass_times(mid.A, mid.q, vm, terms)
         for load in self._loads.get(b, ()):
             if t + th * h >= load.t_start_s:
                 fvec = np.asarray(load.force_n, float)
                 fr, qp = body.point_jacobian(load.node, mid.A, mid.q, fvec)
                 F[:6] += fr
                 F[6:] += qp
-        mqq_vm = None
-        if body.nq:
-            mqq_vm = self._carried_at(b, st).Mqd + th * mqq_dv
-            self._pending[b] = self._pending[b] + (mqq_dv,)
-        momentum = body.mass_times(mid.A, mid.q, vm, terms, mqq_vm)
         scale = max(np.abs(inertia).max(), h * np.abs(F).max(), np.abs(momentum).max())
         return inertia - h * F, mid, end, scale
 

@@ -1,0 +1,132 @@
+"""The impulse-momentum terms of a flexible body in one compiled kernel.
+
+For the Moreau-Jean residual (integrate.moreau_jean) of a body with elastic coordinates, at the
+midpoint configuration (A, q_m) with the carried contractions L(q_m), L(q_dot_m) and k_hat q_m:
+
+    inertia  = M(A, q_m) dv                                   (Shabana ch. 5; bodies.body)
+    force    = Q_v(A, q_m, v_m) + gravity - k_hat q_m         (quadratic-velocity terms)
+    momentum = M(A, q_m) v_m
+
+exactly as FlexibleBody.inertia_terms, mass_times, velocity_forces and gravity_forces compute
+them in numpy (tests/test_momentum_kernel.py holds them to round-off on random inputs), but
+without forming the (3, 3, nq) array C = G1 + L(q_m) or any 6 x nq block: a step of a reduced
+body is a few hundred small numpy calls otherwise (~0.5 ms per body and iterate on the seed
+case), and the arithmetic is O(9 nq).
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+_CYC = np.array([[0, 1, 2], [1, 2, 0], [2, 0, 1]], dtype=np.int64)
+
+
+@numba.njit(cache=True)
+def _skew(v):  # pragma: no cover - compiled
+    out = np.zeros((3, 3))
+    out[0, 1] = -v[2]
+    out[0, 2] = v[1]
+    out[1, 0] = v[2]
+    out[1, 2] = -v[0]
+    out[2, 0] = -v[1]
+    out[2, 1] = v[0]
+    return out
+
+
+@numba.njit(cache=True)
+def momentum_terms(A, q, dv, vm, Lq, Lqd, Kq, mqq_dv, mqq_vm, mass, S0, S1, G0, G1, g,
+                   inertia, force, momentum):  # pragma: no cover - compiled
+    """Fill inertia, force, momentum (each (6 + nq,)) as described in the module docstring.
+
+    A (3, 3); q (nq,) = q_m; dv, vm (6 + nq,); Lq, Lqd (3, 3, nq) = L(q_m), L(q_dot_m); Kq =
+    k_hat q_m; mqq_dv, mqq_vm = M_qq dv_q, M_qq vm_q; S0 (3,), S1 (3, nq), G0 (3, 3), G1
+    (3, 3, nq) with G1[a, b] = inv.G1[a][b]; g (3,) gravity [m/s^2] (zeros: none)."""
+    nq = q.shape[0]
+    # S = S0 + S1 q;  G[a, b] = G0[a, b] + G1[b][a] q + C[a][b] q,  C = G1 + L(q)
+    S = S0.copy()
+    G = G0.copy()
+    for a in range(3):
+        for k in range(nq):
+            S[a] += S1[a, k] * q[k]
+    for a in range(3):
+        for b in range(3):
+            acc = 0.0
+            for k in range(nq):
+                acc += (G1[b, a, k] + G1[a, b, k] + Lq[a, b, k]) * q[k]
+            G[a, b] += acc
+    Gs = 0.5 * (G + G.T)
+    tr = Gs[0, 0] + Gs[1, 1] + Gs[2, 2]
+    J = -Gs
+    for a in range(3):
+        J[a, a] += tr
+    # M_wq[c] = C[a][b] - C[b][a] over cyclic (c, a, b), applied without forming it
+    ASt = A @ _skew(S)
+    w = vm[3:6]
+    # --- inertia = M dv and momentum = M vm (M_fq = [A S1; M_wq]) -------------------------
+    for out, x, mqq_x in ((inertia, dv, mqq_dv), (momentum, vm, mqq_vm)):
+        xr, xw = x[:3], x[3:6]
+        out[:3] = mass * xr - ASt @ xw
+        out[3:6] = -(ASt.T @ xr) + J @ xw
+        # + M_fq x_q
+        s1x = np.zeros(3)
+        mw = np.zeros(3)
+        for k in range(nq):
+            xk = x[6 + k]
+            for a in range(3):
+                s1x[a] += S1[a, k] * xk
+            for c in range(3):
+                a = _CYC[c, 1]
+                b = _CYC[c, 2]
+                mw[c] += (G1[a, b, k] + Lq[a, b, k] - G1[b, a, k] - Lq[b, a, k]) * xk
+        out[:3] += A @ s1x
+        out[3:6] += mw
+        # q rows: M_fq^T x_f + M_qq x_q
+        At_xr = A.T @ xr
+        for k in range(nq):
+            acc = mqq_x[k]
+            for a in range(3):
+                acc += S1[a, k] * At_xr[a]
+            for c in range(3):
+                a = _CYC[c, 1]
+                b = _CYC[c, 2]
+                acc += (G1[a, b, k] + Lq[a, b, k] - G1[b, a, k] - Lq[b, a, k]) * xw[c]
+            out[6 + k] = acc
+    # --- quadratic-velocity forces (FlexibleBody.velocity_forces) ---------------------------
+    W = _skew(w)
+    Om = W @ W
+    qd = vm[6:]
+    S1qd = np.zeros(3)
+    H = np.zeros((3, 3))     # H[a, b] = C[a][b] . q_dot
+    for k in range(nq):
+        for a in range(3):
+            S1qd[a] += S1[a, k] * qd[k]
+            for b in range(3):
+                H[a, b] += (G1[a, b, k] + Lq[a, b, k]) * qd[k]
+    force[:3] = -(A @ (Om @ S + 2.0 * (W @ S1qd)))
+    Jw = J @ w
+    cwJw = np.array([w[1] * Jw[2] - w[2] * Jw[1], w[2] * Jw[0] - w[0] * Jw[2],
+                     w[0] * Jw[1] - w[1] * Jw[0]])
+    trH = H[0, 0] + H[1, 1] + H[2, 2]
+    force[3:6] = -(cwJw + 2.0 * (trH * w - H.T @ w))
+    any_w = w[0] != 0.0 or w[1] != 0.0 or w[2] != 0.0
+    for k in range(nq):
+        f = 0.0
+        if any_w:
+            for a in range(3):
+                for b in range(3):
+                    f -= Om[a, b] * (G1[b, a, k] + Lq[b, a, k])
+            for c in range(3):
+                a = _CYC[c, 1]
+                b = _CYC[c, 2]
+                f -= 2.0 * w[c] * (Lqd[a, b, k] - Lqd[b, a, k])
+        force[6 + k] = f - Kq[k]
+    # --- gravity (FlexibleBody.gravity_forces) -----------------------------------------------
+    if g[0] != 0.0 or g[1] != 0.0 or g[2] != 0.0:
+        gb = A.T @ g
+        force[:3] += mass * g
+        force[3] += S[1] * gb[2] - S[2] * gb[1]
+        force[4] += S[2] * gb[0] - S[0] * gb[2]
+        force[5] += S[0] * gb[1] - S[1] * gb[0]
+        for k in range(nq):
+            force[6 + k] += S1[0, k] * gb[0] + S1[1, k] * gb[1] + S1[2, k] * gb[2]
