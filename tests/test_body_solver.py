@@ -49,3 +49,24 @@ def test_nodal_inverse_equals_direct_solve(sparse):
         rhs = rhs.toarray() if sp.issparse(rhs) else np.asarray(rhs)
         want = np.asarray(solver._factor(h).solve(np.ascontiguousarray(rhs.T)))
         np.testing.assert_allclose(got, want, rtol=1e-10, atol=1e-10 * np.abs(want).max())
+
+
+@pytest.mark.parametrize("sparse", [True, False])
+def test_solve_nodal_equals_bordered_solve(sparse):
+    """W^-1 Phi^T for rows Phi = [frame part, N psi] through the cached nodal columns equals
+    the back-substitution of the explicit rows (joint rows of large bodies take this path):
+    linear algebra, so round-off (1e-10 relative; the frame Schur complement is well
+    conditioned for this random body)."""
+    body, rng = _body(sparse)
+    solver = BodySolver(body, theta=0.55)
+    h = 1e-3
+    solver.prepare(h, np.eye(3), body.frame_mass(np.eye(3), body.first_moment(np.zeros(body.nq)),
+                                                  body.frame_inertia_first_order(np.zeros(body.nq))))
+    n = len(body.X)
+    N = _selector(rng, 5, n, np.arange(n))
+    bf = rng.normal(size=(5, 6))
+    bq = N @ body.psi
+    bq = bq.toarray() if sp.issparse(bq) else np.asarray(bq)
+    got = solver.solve_nodal(h, bf, N)
+    want = solver.solve(np.hstack([bf, bq]).T)
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-10 * np.abs(want).max())

@@ -11,13 +11,13 @@ import threading
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from test_fe import tube_hex27
 
 from flexmvm.errors import SolverError
 from flexmvm.fe import assemble
 from flexmvm.fe.ldl import SupernodalLDL, ldl_factor
 from flexmvm.fe.modes import superlu_spd
 from flexmvm.materials import ALUMINIUM
-from test_fe import tube_hex27
 
 
 @pytest.fixture(scope="module")

@@ -58,20 +58,24 @@ class BodyPoint:
         return st.r + st.A @ np.asarray(self.local)
 
     def add_row(self, rows: Rows, row: int, direction, sign: float, bodies, states) -> None:
-        """rows[row] += sign * d^T dx/dv for this point."""
+        """rows[row] += sign * d^T dx/dv for this point (with its nodal selector entries:
+        node k's DOFs times A^T d, none for a frame point)."""
         body = bodies[self.body]
         st = states[self.body]
         d = np.asarray(direction, float)
+        n_dofs = body.psi.shape[0] if body.nq else 0
         if self.node is not None:
             fr, qp = body.point_jacobian(self.node, st.A, st.q, d)
             if self.offset_m is not None:
                 fr = fr + np.concatenate([np.zeros(3),
                                           cross3(np.asarray(self.offset_m, float), st.A.T @ d)])
+            nodal = (3 * self.node + np.arange(3), sign * (st.A.T @ d), n_dofs)
         else:
             p = np.asarray(self.local, float)
             fr = np.concatenate([d, cross3(p, st.A.T @ d)])
             qp = np.zeros(body.nq)
-        rows.add(row, self.body, sign * fr, sign * qp, body.nq)
+            nodal = (np.zeros(0, np.int64), np.zeros(0), n_dofs)
+        rows.add(row, self.body, sign * fr, sign * qp, body.nq, nodal)
 
 
 Anchor = BodyPoint | np.ndarray
@@ -176,11 +180,18 @@ class OrientationLock(Joint):
             d1, d2 = A1 @ u, A2 @ w
             phi[i] = d1 @ d2
             fr = np.concatenate([np.zeros(3), cross3(u, A1.T @ d2)])
-            rows.add(i, self.body1, fr, np.zeros(bodies[self.body1].nq), bodies[self.body1].nq)
+            b1 = bodies[self.body1]
+            rows.add(i, self.body1, fr, np.zeros(b1.nq), b1.nq, _no_elastic(b1))
             if self.body2 is not None:
                 fr2 = np.concatenate([np.zeros(3), cross3(w, A2.T @ d1)])
-                rows.add(i, self.body2, fr2, np.zeros(bodies[self.body2].nq), bodies[self.body2].nq)
+                b2 = bodies[self.body2]
+                rows.add(i, self.body2, fr2, np.zeros(b2.nq), b2.nq, _no_elastic(b2))
         return phi, rows
+
+
+def _no_elastic(body) -> tuple[np.ndarray, np.ndarray, int]:
+    """Nodal selector entries of a row without elastic part: none."""
+    return np.zeros(0, np.int64), np.zeros(0), body.psi.shape[0] if body.nq else 0
 
 
 def _perpendicular_pair(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -22,19 +22,45 @@ class Rows:
     m: int
     blocks: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
     nodal: dict[int, sp.csr_matrix] = field(default_factory=dict)
+    # rows built by add(..., nodal=...): per body the selector's entries (row, dofs, values)
+    # and its column count, or None once an elastic part came without them
+    _entries: dict[int, tuple[list, int] | None] = field(default_factory=dict, repr=False)
 
     @classmethod
     def empty(cls) -> Rows:
         return cls(0, {})
 
-    def add(self, row: int, body: int, frame: np.ndarray, elastic: np.ndarray, nq: int) -> None:
-        """Add frame (6,) and elastic (nq,) contributions of one body to row `row`."""
+    def add(self, row: int, body: int, frame: np.ndarray, elastic: np.ndarray, nq: int,
+            nodal: tuple[np.ndarray, np.ndarray, int] | None = None) -> None:
+        """Add frame (6,) and elastic (nq,) contributions of one body to row `row`. nodal =
+        (dofs, values, n_dofs): the elastic part is values^T psi[dofs] (empty dofs: none);
+        rows whose every contribution to a body says so get its nodal selector (nodal_selector)."""
         if body not in self.blocks:
             self.blocks[body] = (np.zeros((self.m, 6)), np.zeros((self.m, nq)))
         bf, bq = self.blocks[body]
         bf[row] += frame
         if nq:
             bq[row] += elastic
+        known = self._entries.get(body, ([], 0))
+        if nodal is None or known is None:
+            self._entries[body] = None
+        else:
+            dofs, values, n_dofs = nodal
+            known[0].append((row, np.asarray(dofs, np.int64), np.asarray(values, float)))
+            self._entries[body] = (known[0], n_dofs)
+
+    def nodal_selector(self, b: int) -> sp.csr_matrix | None:
+        """The nodal selector N (m, n_dofs) of body b (elastic part = N psi), or None."""
+        sel = self.nodal.get(b)
+        if sel is None and self._entries.get(b) is not None and b in self.blocks:
+            entries, n_dofs = self._entries[b]
+            rows = np.concatenate([np.full(len(d), r) for r, d, _ in entries] or [[]])
+            cols = np.concatenate([d for _, d, _ in entries] or [[]]).astype(np.int64)
+            vals = np.concatenate([v for _, _, v in entries] or [[]])
+            sel = sp.csr_matrix((vals, (rows.astype(np.int64), cols)), shape=(self.m, n_dofs))
+            sel.sum_duplicates()
+            self.nodal[b] = sel
+        return sel
 
     def times(self, velocities: list[np.ndarray]) -> np.ndarray:
         """Phi_v v (m,) for the list of per-body velocity vectors."""
@@ -68,7 +94,7 @@ def stack(parts: list[Rows]) -> Rows:
         start += p.m
     # nodal selectors survive only if every part touching the body has one
     for b in out.blocks:
-        sels = [p.nodal.get(b) for p in parts if b in p.blocks]
+        sels = [p.nodal_selector(b) for p in parts if b in p.blocks]
         if all(s is not None for s in sels):
             n = sels[0].shape[1]
             blocks = [p.nodal[b] if b in p.blocks else sp.csr_matrix((p.m, n)) for p in parts]

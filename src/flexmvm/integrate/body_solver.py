@@ -24,6 +24,12 @@ from flexmvm.fe.ldl import ldl_factor
 from flexmvm.integrate.compliance import NodalColumns, NodalCompliance, nodal_compliance
 from flexmvm.integrate.dense_solve import cho_solve, lu_solve
 
+# Factors kept per body, least recently used dropped first: the variable step takes dt_s 2^k
+# for k = 0..9 (pendulum_release.toml: 0.5 us to 256 us), and a swing that comes down to the
+# contact step level by level and goes back up after the separation must not refactor
+# (~3 s per level for a 25,000-DOF rod; a full-FE factor holds ~100 MB).
+MAX_CACHED = 10
+
 
 @dataclass
 class _Factor:
@@ -39,7 +45,7 @@ class _Factor:
 class BodySolver:
     """Solves W x = b for one body; factorizations cached per step size."""
 
-    def __init__(self, body: FlexibleBody, theta: float = 0.5, max_cached: int = 6):
+    def __init__(self, body: FlexibleBody, theta: float = 0.5, max_cached: int = MAX_CACHED):
         self.body = body
         self.theta = theta
         self._cache: dict[float, _Factor] = {}
@@ -54,6 +60,9 @@ class BodySolver:
     def _factor(self, h: float) -> _Factor:
         f = self._cache.get(h)
         if f is not None:
+            if self._order[-1] != h:          # least recently used goes first
+                self._order.remove(h)
+                self._order.append(h)
             return f
         b = self.body
         th = self.theta
@@ -136,16 +145,28 @@ class BodySolver:
         """x = W^-1 b for b of shape (nv,) or (nv, k)."""
         if self._f is None:
             return cho_solve(self._schur, b)
-        f, A = self._f, self._A
-        bf, bq = b[:6], b[6:]
-        y = np.asarray(f.solve(bq))
+        f = self._f
+        y = np.asarray(f.solve(b[6:]))
         if y.ndim == 1 and b.ndim == 2:
             y = y[:, None]
+        return self._bordered(b[:6], y)
+
+    def _bordered(self, bf: np.ndarray, y: np.ndarray) -> np.ndarray:
+        """W^-1 [bf; bq] from y = W_qq^-1 bq (the frame Schur complement of prepare())."""
+        f, A = self._f, self._A
         # M_fq~ y
         My = np.concatenate([A @ (self.body.inv.S1 @ y), self._mw(f) @ y])
         xf = lu_solve(self._schur, bf - My)
         Zx = f.Zr @ (A.T @ xf[:3]) + f.Zw @ xf[3:]
         return np.concatenate([xf, y - Zx])
+
+    def solve_nodal(self, h: float, bf: np.ndarray, selector: sp.csr_matrix) -> np.ndarray:
+        """W^-1 Phi^T (6 + nq, m) for the rows Phi = [bf (m, 6), N psi] (N = selector (m,
+        3 n_nodes)), its elastic part through the cached nodal columns (nodal_inverse): no
+        back-substitution once the DOFs were touched at this h. Needs prepare(h, ...)."""
+        if self._f is None:
+            raise SolverError(f"body {self.body.name!r}: nodal solves need elastic coordinates")
+        return self._bordered(np.ascontiguousarray(bf.T), self.nodal_inverse(h, selector))
 
     def prepare_translation(self, h: float, A: np.ndarray) -> None:
         """Set up solves with the translational block of W only (frame rotation frozen):

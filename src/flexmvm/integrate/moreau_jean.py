@@ -238,13 +238,18 @@ class MoreauJeanIntegrator:
             parts.append(rows)
         return np.concatenate(phis), stack(parts)
 
-    def _apply_inverse(self, rows: Rows):
-        """Y_b = W_b^-1 Phi_b^T for every body touched by rows."""
-        Y = {}
-        for b, (bf, bq) in rows.blocks.items():
-            solver = self.solvers[b]
-            Y[b] = solver.solve(np.hstack([bf, bq]).T)
-        return Y
+    def _apply_inverse(self, rows: Rows, h: float):
+        """Y_b = W_b^-1 Phi_b^T for every body touched by rows: for large bodies with nodal
+        rows (joints at nodes or frame points) through the cached nodal columns, else by
+        back-substitution."""
+        def one(b):
+            bf, bq = rows.blocks[b]
+            sel = rows.nodal_selector(b)
+            if sel is not None and self.system.bodies[b].nq >= NODAL_CACHE_MIN_NQ:
+                return self.solvers[b].solve_nodal(h, bf, sel)
+            return self.solvers[b].solve(np.hstack([bf, bq]).T)
+
+        return self._each_body(one, rows.blocks)
 
     def _contact_inverse(self, crows: ContactRows, h: float) -> dict:
         """Per body touched by the contact rows: its D = Phi_b W_b^-1 Phi_b^T (m, m) and its
@@ -335,7 +340,7 @@ class MoreauJeanIntegrator:
             if n_j + m_c == 0:
                 v_plus = v_free
                 continue
-            Yj = self._apply_inverse(jrows) if n_j else {}
+            Yj = self._apply_inverse(jrows, h) if n_j else {}
             D = np.zeros((n_j + m_c, n_j + m_c))
             D[n_j:, n_j:] = Dcc
             for b, Yb in Yj.items():
