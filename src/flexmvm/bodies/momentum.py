@@ -22,7 +22,7 @@ import numpy as np
 _CYC = np.array([[0, 1, 2], [1, 2, 0], [2, 0, 1]], dtype=np.int64)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def _skew(v):  # pragma: no cover - compiled
     out = np.zeros((3, 3))
     out[0, 1] = -v[2]
@@ -34,7 +34,7 @@ def _skew(v):  # pragma: no cover - compiled
     return out
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, nogil=True)
 def momentum_terms(A, q, dv, vm, Lq, Lqd, Kq, mqq_dv, mqq_vm, mass, S0, S1, G0, G1, g,
                    inertia, force, momentum):  # pragma: no cover - compiled
     """Fill inertia, force, momentum (each (6 + nq,)) as described in the module docstring.
