@@ -122,3 +122,32 @@ def test_translation_solve_equals_dense_solve(sparse):
     assert np.abs(x - np.linalg.solve(W, b)).max() <= 1e-10 * np.abs(x).max()
     yq = np.linalg.solve(W[3:, 3:], b[3:])
     assert np.abs(solver.solve_translation(b[:3], yq) - x).max() <= 1e-10 * np.abs(x).max()
+
+
+def test_body_threads_setting(monkeypatch):
+    """FLEXMVM_THREADS: unset = the cores, 1 = no pool, junk = a clear SolverError."""
+    from flexmvm.errors import SolverError
+    from flexmvm.integrate import moreau_jean as mj
+
+    monkeypatch.setenv(mj.ENV_THREADS, "1")
+    assert mj._thread_pool() is None
+    monkeypatch.setenv(mj.ENV_THREADS, "2")
+    assert mj._thread_pool() is not None
+    for bad in ("two", "0"):
+        monkeypatch.setenv(mj.ENV_THREADS, bad)
+        with pytest.raises(SolverError, match="FLEXMVM_THREADS"):
+            mj._thread_pool()
+
+
+def test_threads_do_not_change_the_history(monkeypatch):
+    """Two full-FE bodies (the flat case) step with their per-body work on two threads by
+    default; on one thread the history is the same bit for bit (each body's work touches
+    nothing of the other's, and every sum over bodies is taken in body order)."""
+    threaded = _run("flat")
+    monkeypatch.setenv("FLEXMVM_THREADS", "1")
+    f, model = CASES["flat"]
+    serial = run_scenario(load_scenario(DATA / f).with_overrides(model=model)).result
+    assert np.array_equal(threaded.contact_force, serial.contact_force)
+    assert np.array_equal(threaded.probe_v, serial.probe_v)
+    for a, b in zip(threaded.q, serial.q):
+        assert np.array_equal(a, b)

@@ -373,13 +373,14 @@ class MoreauJeanIntegrator:
     def _each_body(self, fn, bodies) -> dict:
         """{b: fn(b)} for b in bodies. The back-substitutions of sparse (full-FE) bodies
         release the GIL (fe.ldl): with two or more of them, each body's work runs on a thread
-        of its own (results as serial: the work of one body touches nothing of another)."""
+        of its own (results as serial: the work of one body touches nothing of another), up
+        to $FLEXMVM_THREADS threads (default: the cores; 1: none)."""
         bodies = list(bodies)
         sysb = self.system.bodies
         sparse = [b for b in bodies if sysb[b].nq and sysb[b].is_sparse]
-        if len(sparse) < 2:
+        pool = _thread_pool() if len(sparse) >= 2 else None
+        if pool is None:
             return {b: fn(b) for b in bodies}
-        pool = _thread_pool()
         futures = {b: pool.submit(fn, b) for b in sparse[1:]}
         done = {b: fn(b) for b in bodies if b not in futures}
         return {b: done[b] if b in done else futures[b].result() for b in bodies}
@@ -434,16 +435,34 @@ class MoreauJeanIntegrator:
         return worst, worst_r, res_t
 
 
-_POOL: ThreadPoolExecutor | None = None
+#: Environment variable: threads for the per-body work of several full-FE bodies (default:
+#: the number of cores; 1: all on the calling thread, e.g. under a study's many workers).
+ENV_THREADS = "FLEXMVM_THREADS"
+_POOL: tuple[int, ThreadPoolExecutor] | None = None   # (threads, pool)
 
 
-def _thread_pool() -> ThreadPoolExecutor:
-    """One pool for the process (studies make many integrators), as many threads as cores."""
+def _body_threads() -> int:
+    value = os.environ.get(ENV_THREADS, "").strip()
+    if not value:
+        return os.cpu_count() or 1
+    try:
+        n = int(value)
+    except ValueError:
+        raise SolverError(f"{ENV_THREADS} must be a whole number of threads, got {value!r}") from None
+    if n < 1:
+        raise SolverError(f"{ENV_THREADS} must be >= 1, got {n}")
+    return n
+
+
+def _thread_pool() -> ThreadPoolExecutor | None:
+    """One pool for the process (studies make many integrators), or None for one thread."""
     global _POOL
-    if _POOL is None:
-        _POOL = ThreadPoolExecutor(max_workers=max(2, os.cpu_count() or 2),
-                                   thread_name_prefix="flexmvm-solve")
-    return _POOL
+    n = _body_threads()
+    if n < 2:
+        return None
+    if _POOL is None or _POOL[0] != n:
+        _POOL = (n, ThreadPoolExecutor(max_workers=n, thread_name_prefix="flexmvm-body"))
+    return _POOL[1]
 
 
 def _times(matrix, x: np.ndarray) -> np.ndarray:
