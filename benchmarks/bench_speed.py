@@ -16,8 +16,9 @@ speed_<commit>.json. Items:
 - --main-job: README command 1 after install (both runs, theory, files, figure);
 - --scaling: time per contact step against b2's retained nodes and modes, and a full-FE
   step against the mesh size;
-- --vs REV: the all-MVM and shipped-scenario runs (over --vs-t-end, default 0.2 ms) of another
-  commit, checked out in a temporary git worktree, next to this code's in the same run.
+- --vs REV: the all-MVM, shipped-scenario and full-FE runs (over --vs-t-end, default 0.2 ms)
+  of another commit, checked out in a temporary git worktree, next to this code's in the same
+  run; and this code's full-FE run on one thread (FLEXMVM_THREADS=1) against two.
 --quick shortens the 2 ms runs to 0.4 ms (for a look, not for the record).
 """
 
@@ -184,15 +185,22 @@ def _vs(rev: str, t_end: float, tmp: Path) -> dict:
                    check=True)
     try:
         env = {"PYTHONPATH": str(wt / "src"), "FLEXMVM_CACHE_DIR": str(tmp / "vs_cache")}
-        old = {"all_mvm": _sim("mvm", t_end, env), "shipped": _sim("scenario", t_end, env)}
+        old = {k: _sim(model, t_end, env) for k, model in _VS_CASES}
         old["commit"] = _commit(wt)
     finally:
         subprocess.run(["git", "worktree", "remove", "--force", str(wt)], cwd=ROOT, check=False)
     cache = {"FLEXMVM_CACHE_DIR": str(tmp / "vs_cache_new")}
-    new = {"all_mvm": _sim("mvm", t_end, cache), "shipped": _sim("scenario", t_end, cache)}
-    return {"t_end_s": t_end, "old": old, "new": new,
-            "speedup_all_mvm": old["all_mvm"]["wall_s"] / new["all_mvm"]["wall_s"],
-            "speedup_shipped": old["shipped"]["wall_s"] / new["shipped"]["wall_s"]}
+    new = {k: _sim(model, t_end, cache) for k, model in _VS_CASES}
+    # the two full-FE bodies' work on one thread (FLEXMVM_THREADS=1): what the threads give
+    new["full_one_thread"] = _sim("full", t_end, {**cache, "FLEXMVM_THREADS": "1"})
+    out = {"t_end_s": t_end, "old": old, "new": new}
+    for k, _ in _VS_CASES:
+        out[f"speedup_{k}"] = old[k]["wall_s"] / new[k]["wall_s"]
+    out["threads_gain_full"] = new["full_one_thread"]["wall_s"] / new["full"]["wall_s"]
+    return out
+
+
+_VS_CASES = (("all_mvm", "mvm"), ("shipped", "scenario"), ("full", "full"))
 
 
 def _print(res: dict) -> None:
@@ -215,10 +223,12 @@ def _print(res: dict) -> None:
             print(f"{label:58s} {res[key]:12.2f}")
     if "vs" in res:
         v = res["vs"]
-        print(f"vs {v['old']['commit']} over {v['t_end_s'] * 1e3:g} ms: all-MVM "
-              f"{v['old']['all_mvm']['wall_s']:.2f} s -> {v['new']['all_mvm']['wall_s']:.2f} s "
-              f"({v['speedup_all_mvm']:.1f}x); shipped {v['old']['shipped']['wall_s']:.2f} s -> "
-              f"{v['new']['shipped']['wall_s']:.2f} s ({v['speedup_shipped']:.1f}x)")
+        print(f"vs {v['old']['commit']} over {v['t_end_s'] * 1e3:g} ms (simulation walls):")
+        for k, _ in _VS_CASES:
+            print(f"  {k:10s} {v['old'][k]['wall_s']:8.2f} s -> {v['new'][k]['wall_s']:8.2f} s "
+                  f"({v[f'speedup_{k}']:.2f}x)")
+        print(f"  full FE on one thread {v['new']['full_one_thread']['wall_s']:.2f} s: two "
+              f"threads {v['threads_gain_full']:.2f}x")
     for row in res.get("scaling", {}).get("b2_selection_modes", []):
         print(f"  b2 {row['b2_selection']} + {row['b2_modes']:2d} modes, DOF {row['dof']}: "
               f"{row['ms_per_step']:.2f} ms/step")
