@@ -74,3 +74,23 @@ def test_zero_pivot_is_a_solver_error():
     A = sp.csc_matrix(np.array([[0.0, 1.0], [1.0, 0.0]]))
     with pytest.raises(SolverError):
         ldl_factor(A)
+
+
+@pytest.mark.parametrize("kind", ["diagonal", "dense", "tridiagonal"])
+def test_edge_structures(kind):
+    """Supernodes of width 1 with nothing below (diagonal), one supernode holding everything
+    (dense), and chains (tridiagonal): solves equal SuperLU's to round-off."""
+    n = 40
+    rng = np.random.default_rng(3)
+    if kind == "diagonal":
+        A = sp.diags(rng.uniform(1, 2, n))
+    elif kind == "dense":
+        B = rng.standard_normal((n, n))
+        A = sp.csc_matrix(B @ B.T + n * np.eye(n))
+    else:
+        A = sp.diags([-np.ones(n - 1), 2.5 * np.ones(n), -np.ones(n - 1)], [-1, 0, 1])
+    A = sp.csc_matrix(A)
+    lu = superlu_spd(A)
+    b = rng.standard_normal((n, 2))
+    np.testing.assert_allclose(SupernodalLDL(lu).solve(b), lu.solve(b), rtol=0,
+                               atol=1e-12 * np.abs(lu.solve(b)).max())
