@@ -71,6 +71,8 @@ class ContactConfig(Frozen):
     search_radius_m: Positive | None = None
     # Coulomb friction coefficient [-] of the pair; 0: frictionless rows, the exact LCP
     friction_coefficient: Annotated[float, Strict(), Ge(0.0)] = 0.0
+    # the contact nodes of both surfaces carry no mass (fe/mass_redistribution.py)
+    redistribute_mass: bool = False
 
     @model_serializer(mode="wrap")
     def _dump(self, handler):
