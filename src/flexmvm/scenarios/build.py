@@ -394,7 +394,8 @@ def build_scenario(sc) -> BuiltScenario:
         infos.append(info)
         states.append(_initial_state(body, cfg.placement))
     index = {cfg.name: i for i, cfg in enumerate(sc.bodies)}
-    contacts = tuple(_contact(c, k, bodies, infos, index) for k, c in enumerate(sc.contacts))
+    contacts = tuple(_contact(c, k, bodies, infos, index, sc.time.theta)
+                     for k, c in enumerate(sc.contacts))
     joints = []
     for k, j in enumerate(sc.joints):
         joints.extend(_joint(j, f"joints[{k}]", bodies, infos, index, states))
@@ -410,7 +411,9 @@ def build_scenario(sc) -> BuiltScenario:
     return BuiltScenario(system, states, probes, grid, infos)
 
 
-def _contact(c, k, bodies, infos, index):
+def _contact(c, k, bodies, infos, index, theta):
+    """The contact provider of contacts[k]; theta: the scheme's (time.theta), which the
+    position law's bound needs (the end gap is g + h (theta u_N+ + (1 - theta) u_N-))."""
     where = f"contacts[{k}]"
     s, m = index[c.slave_body], index[c.master_body]
     try:
@@ -423,7 +426,8 @@ def _contact(c, k, bodies, infos, index):
     return PointToSurfaceContact(bodies, s, slave_nodes, m, master, c.kind,
                                  radius, name=f"{c.slave}->{c.master}",
                                  slave_surface=MasterSurface.from_facet_set(slave_facets),
-                                 friction_coefficient=c.friction_coefficient)
+                                 friction_coefficient=c.friction_coefficient,
+                                 law=c.law, theta=theta)
 
 
 def _probe(p, where, infos, index) -> Probe:
