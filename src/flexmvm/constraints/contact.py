@@ -13,7 +13,7 @@ import numpy as np
 
 from flexmvm.constraints.rows import Rows
 
-__all__ = ["ContactKind", "ContactProvider", "ContactRows", "FrictionRows"]
+__all__ = ["ContactKind", "ContactLaw", "ContactProvider", "ContactRows", "FrictionRows"]
 
 
 class ContactKind(StrEnum):
@@ -21,6 +21,19 @@ class ContactKind(StrEnum):
 
     FRICTIONLESS = "frictionless"  # normal gap >= 0 (default)
     BONDED = "bonded"  # seed eq. (7): all three relative components once closed
+
+
+class ContactLaw(StrEnum):
+    """The lower bound of a frictionless normal row (values: the scenario file's ``law``).
+
+    velocity (default): u_N+ >= beta max(0, -g) / h (Moreau's impact law, restitution 0, with a
+    Baumgarte-like recovery of a penetration); position: the gap at the end of the step
+    g + h (theta u_N+ + (1 - theta) u_N-) >= 0 (Signorini at t + h), i.e.
+    u_N+ >= -(g + h (1 - theta) u_N-) / (theta h), for massless contact nodes (mass
+    redistribution, Khenous, Laborde and Renard 2008)."""
+
+    VELOCITY = "velocity"
+    POSITION = "position"
 
 
 @dataclass(frozen=True)

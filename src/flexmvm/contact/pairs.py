@@ -7,7 +7,17 @@ within the step (g + h u_N <= gap_tol) become rows of Phi_c,
 
     Phi_c v = n . (x_dot_S - sum_P N^P x_dot_P)      (normal relative velocity u_N)
 
-with the Moreau condition u_N(v+) >= beta max(0, -g)/h, lambda >= 0 (see integrate.moreau_jean).
+with the Moreau condition u_N(v+) >= beta max(0, -g)/h, lambda >= 0 (see integrate.moreau_jean),
+or, with law = "position", the gap at the end of the step held instead (Signorini at t + h):
+g + h (theta u_N+ + (1 - theta) u_N-) >= 0, i.e. u_N+ >= -(g + h (1 - theta) u_N-) / (theta h),
+with u_N- the pair's normal velocity at the start of the step (the law of mass-redistributed
+contact nodes: Khenous, Laborde and Renard 2008). Its rows are the pairs whose gap g is within
+gap_tol + POSITION_REACH h u_reach (u_reach: the largest slave plus master node speed
+component), whatever their u_N-: a massless node's end velocity flips sign from step to step
+and predicts nothing (on the runs of docs/contact_law.md this wider set changed no result
+against g + h u_N- <= gap_tol). An open gap gives a negative bound, which lets the node
+approach. An end gap g < 0 left by a step is closed within the next, which does work
+lambda |g| / h.
 Bonded contact (seed eq. 7, all three components) locks a pair once it has carried a
 compressive impulse: three equality rows x_S - x_C = 0 at the frozen shape functions, until
 the normal component of its impulse would turn tensile.
@@ -23,7 +33,7 @@ from dataclasses import dataclass
 import numpy as np
 import scipy.sparse as sp
 
-from flexmvm.constraints.contact import ContactKind, ContactRows, FrictionRows
+from flexmvm.constraints.contact import ContactKind, ContactLaw, ContactRows, FrictionRows
 from flexmvm.constraints.rows import Rows
 from flexmvm.contact import kernels
 from flexmvm.contact.geometry import BroadPhase, MasterSurface
@@ -65,6 +75,9 @@ def facet_adjacency(connectivity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 #: u_N(v+) >= beta max(0, -g) / h (Moreau-Jean with a Baumgarte-like position correction)
 PENETRATION_RECOVERY = 0.2
 
+#: law = "position": pairs are rows when g <= gap_tol + POSITION_REACH h u_reach
+POSITION_REACH = 2.0
+
 
 class PointToSurfaceContact:
     """Contact of slave nodes (body `slave`) with master facets (body `master`).
@@ -80,7 +93,8 @@ class PointToSurfaceContact:
                  kind: ContactKind = ContactKind.FRICTIONLESS, search_radius_m: float = 1e-3,
                  gap_tol_m: float = 1e-9, name: str = "contact",
                  slave_surface: MasterSurface | None = None,
-                 beta: float = PENETRATION_RECOVERY, friction_coefficient: float = 0.0):
+                 beta: float = PENETRATION_RECOVERY, friction_coefficient: float = 0.0,
+                 law: ContactLaw = ContactLaw.VELOCITY, theta: float | None = None):
         if slave == master:
             raise InputError(f"{name}: slave and master must be different bodies")
         mu = float(friction_coefficient)
@@ -111,6 +125,15 @@ class PointToSurfaceContact:
         if not 0.0 <= beta <= 1.0:
             raise InputError(f"{name}: penetration recovery beta must be in [0, 1], got {beta!r}")
         self.beta = float(beta)
+        # law = position: theta must be the integrator's (the end gap is g + h v_m . n)
+        self.law = ContactLaw(law)
+        if self.law is ContactLaw.POSITION:
+            if theta is None or not 0.5 <= theta <= 1.0:
+                raise InputError(f"{name}: the position law needs the scheme's theta in "
+                                 f"[0.5, 1], got {theta!r}")
+            if kind is ContactKind.BONDED:
+                raise InputError(f"{name}: the position law is not for bonded contact")
+        self.theta = None if theta is None else float(theta)
         self.name = name
         self._bonds: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._setup(bodies)
@@ -185,7 +208,12 @@ class PointToSurfaceContact:
     def candidate_rows(self, bodies, states, h: float) -> ContactRows:
         speed = self._kinematics(states)
         n = self._scan(states, self.search_radius + 2 * speed * h)
-        m_n = kernels.active_nodes(self._facet, self._out, h, self.gap_tol, self._bonded,
+        if self.law is ContactLaw.POSITION:
+            # g <= gap_tol + POSITION_REACH h u_reach, whatever u_N- (see the module doc)
+            hp, tol = 0.0, self.gap_tol + POSITION_REACH * h * speed
+        else:
+            hp, tol = h, self.gap_tol
+        m_n = kernels.active_nodes(self._facet, self._out, hp, tol, self._bonded,
                                    self._idx) if n else 0
         eq = self._bond_rows(h) if self._bonds else None
         if m_n == 0 and eq is None:
@@ -200,7 +228,7 @@ class PointToSurfaceContact:
         normal, gaps = out[:, 6:9], out[:, 9]
         self._last = (_Active(idx, self.master_nodes[m_nodes], m_w, normal), 0 if eq is None else len(eq[4]))
         if eq is None:
-            lower = self.beta * np.maximum(0.0, -gaps) / h
+            lower = self._lower(gaps, out[:, 10], h)
             keys = list(zip([self.name] * m_n, self.slave_nodes[idx].tolist(),
                             self._facet[idx].tolist()))
             if self.mu > 0.0:
@@ -210,6 +238,15 @@ class PointToSurfaceContact:
             self._fill_rows(rows, states, (s_nodes, s_w, s_k), (m_nodes, m_w, m_k), normal)
             return ContactRows(rows, lower, keys, gaps, 0, np.ones(m_n))
         return self._rows_with_bonds(bodies, states, h, eq, idx, m_nodes, m_w, normal, gaps)
+
+    def _lower(self, gaps: np.ndarray, u_n: np.ndarray, h: float) -> np.ndarray:
+        """Lower bounds of u_N+ of normal rows with gaps g and start normal velocities u_N-:
+        beta max(0, -g) / h (velocity law) or -(g + h (1 - theta) u_N-) / (theta h), the end
+        gap g + h (theta u_N+ + (1 - theta) u_N-) >= 0 (position law)."""
+        if self.law is ContactLaw.POSITION:
+            th = self.theta
+            return -(gaps + (h * (1.0 - th)) * u_n) / (th * h)
+        return self.beta * np.maximum(0.0, -gaps) / h
 
     def _friction_rows(self, states, slave_pairs, master_pairs, normal, lower, keys, gaps):
         """Rows [normal (m_n) | tangent 1 (m_n) | tangent 2 (m_n)] of the active pairs: the
@@ -257,7 +294,7 @@ class PointToSurfaceContact:
             rows.nodal[self.slave] = ssel
         if msel is not None:
             rows.nodal[self.master] = -msel
-        lower_n = self.beta * np.maximum(0.0, -gaps) / h
+        lower_n = self.beta * np.maximum(0.0, -gaps) / h   # bonded contact: velocity law
         keys = eq_keys + list(zip([self.name] * len(idx), self.slave_nodes[idx].tolist(),
                                   self._facet[idx].tolist()))
         weight = np.ones(m)

@@ -15,6 +15,7 @@ import functools
 from dataclasses import dataclass
 
 import numpy as np
+import scipy.sparse as sp
 
 from flexmvm import setup_cache
 from flexmvm.bodies.body import FlexibleBody
@@ -39,6 +40,7 @@ from flexmvm.contact.geometry import MasterSurface
 from flexmvm.contact.pairs import PointToSurfaceContact
 from flexmvm.errors import InputError, MeshError
 from flexmvm.fe.assembly import FEModel, assemble
+from flexmvm.fe.mass_redistribution import redistribute_mass
 from flexmvm.integrate.run_result import Probe, TimeGrid
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import System
@@ -82,8 +84,21 @@ def cached_rod_mesh(spec: RodSpec) -> RodMesh:
     return rod_mesh(spec)
 
 
+@dataclass(frozen=True)
+class ContactMass:
+    """The mesh key (a RodSpec or a mesh file path) of a body whose contact nodes ``nodes``
+    carry no mass (fe/mass_redistribution.py): a key of its own for every cache."""
+
+    key: RodSpec | str
+    nodes: tuple[int, ...]
+
+
 def _mesh_source(key) -> dict | None:
-    """Disk-cache key inputs of a rod spec or a mesh file (None: file unreadable, no caching)."""
+    """Disk-cache key inputs of a rod spec or a mesh file (None: file unreadable, no caching),
+    with the massless contact nodes of a ContactMass key."""
+    if isinstance(key, ContactMass):
+        inner = _mesh_source(key.key)
+        return None if inner is None else inner | {"massless_nodes": list(key.nodes)}
     if isinstance(key, RodSpec):
         return setup_cache.rod_source(key)
     return setup_cache.file_source(key)
@@ -92,18 +107,28 @@ def _mesh_source(key) -> dict | None:
 @functools.lru_cache(maxsize=8)
 def _mesh(key) -> Mesh:
     """The mesh of a rod spec (generated) or of a mesh file path."""
+    if isinstance(key, ContactMass):
+        return _mesh(key.key)
     return cached_rod_mesh(key).mesh if isinstance(key, RodSpec) else read_mesh(key)
 
 
 @functools.lru_cache(maxsize=8)
 def fe_model_for(key, material: Material) -> FEModel:
     """The FE model (M, K) of a rod spec or mesh file path ``key`` in ``material``: per-process
-    cache, then the disk cache, else assembled."""
+    cache, then the disk cache, else assembled; for a ContactMass key the model of its mesh
+    with the mass of the contact nodes redistributed (M_scalar and M; K unchanged)."""
+    if isinstance(key, ContactMass):
+        fe = fe_model_for(key.key, material)
+        m_scalar = redistribute_mass(fe.M_scalar, fe.mesh.nodes, key.nodes)
+        return dataclasses.replace(fe, M_scalar=m_scalar,
+                                   M=sp.csr_matrix(sp.kron(m_scalar, sp.identity(3))))
     return setup_cache.cached_fe(_mesh_source(key), _mesh(key), material, assemble)
 
 
 def reference_condition(key, mesh: Mesh, ref_set: str):
     """A rod's default (end_b) reference is rod_reference; otherwise a 3-2-1 on the set."""
+    if isinstance(key, ContactMass):
+        key = key.key
     if isinstance(key, RodSpec) and ref_set == "end_b":
         return rod_reference(cached_rod_mesh(key))
     return three_two_one(mesh, mesh.node_set(ref_set))
@@ -247,15 +272,33 @@ def _retained_nodes(model, mesh: Mesh, rod: RodMesh | None, where: str) -> np.nd
     return np.asarray(ids, dtype=np.int64)
 
 
-def _build_body(cfg) -> tuple[FlexibleBody, BodyInfo]:
+def _mesh_key(cfg) -> RodSpec | str:
+    return cfg.rod.spec() if cfg.rod is not None else str(cfg.mesh_file)
+
+
+def contact_nodes(sc, body: str, mesh: Mesh) -> np.ndarray:
+    """Nodes of ``body`` on the surfaces of the contacts that redistribute their mass
+    (``redistribute_mass``): the slave face's nodes, or the master facets' nodes."""
+    ids = []
+    for k, c in enumerate(sc.contacts):
+        if not c.redistribute_mass:
+            continue
+        for who, surface in ((c.slave_body, c.slave_surface), (c.master_body, c.master_surface)):
+            if who == body:
+                try:
+                    ids.append(mesh.facet_set(surface).nodes)
+                except MeshError as exc:
+                    raise InputError(f"contacts[{k}]: {exc}") from None
+    return np.unique(np.concatenate(ids)) if ids else np.zeros(0, np.int64)
+
+
+def _build_body(cfg, massless: np.ndarray | None = None) -> tuple[FlexibleBody, BodyInfo]:
+    """The body of ``cfg``; ``massless``: its contact nodes whose mass is redistributed
+    (retained ones only for the MVM kinds, none for a modal or rigid model)."""
     where = f"bodies[{cfg.name}]"
     material = cfg.material_obj()
-    rod = None
-    if cfg.rod is not None:
-        key = cfg.rod.spec()
-        rod = cached_rod_mesh(key)
-    else:
-        key = str(cfg.mesh_file)
+    key = _mesh_key(cfg)
+    rod = cached_rod_mesh(key) if cfg.rod is not None else None
     mesh = _mesh(key)
     kind = cfg.model.kind
     try:
@@ -269,6 +312,11 @@ def _build_body(cfg) -> tuple[FlexibleBody, BodyInfo]:
     if kind.retains_nodes:
         retained = tuple(int(i) for i in _retained_nodes(cfg.model, mesh, rod, f"{where}.model"))
     modes = cfg.model.modes if kind.uses_modes else 0
+    if massless is not None and massless.size and kind.basis is not None \
+            and (kind is ModelKind.FULL or kind.retains_nodes):
+        nodes = massless if kind is ModelKind.FULL else np.intersect1d(massless, retained)
+        if nodes.size:
+            key = ContactMass(key, tuple(int(i) for i in nodes))
     args = (key, material, kind.basis, retained, modes, cfg.model.reference)
     body = body_from_parts(cfg.name, mesh, basis_for(*args), body_parts_for(*args))
     n_ret = len(retained) if kind.retains_nodes else (mesh.n_nodes if kind is ModelKind.FULL
@@ -338,12 +386,16 @@ def build_scenario(sc) -> BuiltScenario:
     """Meshes, FE models, bases, bodies, joints, contacts and probes of a Scenario."""
     bodies, infos, states = [], [], []
     for cfg in sc.bodies:
-        body, info = _build_body(cfg)
+        massless = None
+        if any(c.redistribute_mass for c in sc.contacts):
+            massless = contact_nodes(sc, cfg.name, _mesh(_mesh_key(cfg)))
+        body, info = _build_body(cfg, massless)
         bodies.append(body)
         infos.append(info)
         states.append(_initial_state(body, cfg.placement))
     index = {cfg.name: i for i, cfg in enumerate(sc.bodies)}
-    contacts = tuple(_contact(c, k, bodies, infos, index) for k, c in enumerate(sc.contacts))
+    contacts = tuple(_contact(c, k, bodies, infos, index, sc.time.theta)
+                     for k, c in enumerate(sc.contacts))
     joints = []
     for k, j in enumerate(sc.joints):
         joints.extend(_joint(j, f"joints[{k}]", bodies, infos, index, states))
@@ -359,7 +411,9 @@ def build_scenario(sc) -> BuiltScenario:
     return BuiltScenario(system, states, probes, grid, infos)
 
 
-def _contact(c, k, bodies, infos, index):
+def _contact(c, k, bodies, infos, index, theta):
+    """The contact provider of contacts[k]; theta: the scheme's (time.theta), which the
+    position law's bound needs (the end gap is g + h (theta u_N+ + (1 - theta) u_N-))."""
     where = f"contacts[{k}]"
     s, m = index[c.slave_body], index[c.master_body]
     try:
@@ -372,7 +426,8 @@ def _contact(c, k, bodies, infos, index):
     return PointToSurfaceContact(bodies, s, slave_nodes, m, master, c.kind,
                                  radius, name=f"{c.slave}->{c.master}",
                                  slave_surface=MasterSurface.from_facet_set(slave_facets),
-                                 friction_coefficient=c.friction_coefficient)
+                                 friction_coefficient=c.friction_coefficient,
+                                 law=c.law, theta=theta)
 
 
 def _probe(p, where, infos, index) -> Probe:

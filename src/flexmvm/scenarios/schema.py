@@ -38,7 +38,7 @@ from pydantic import (
 )
 
 from flexmvm.bodies.build import ModelKind
-from flexmvm.constraints.contact import ContactKind
+from flexmvm.constraints.contact import ContactKind, ContactLaw
 from flexmvm.constraints.joints import JointType
 from flexmvm.integrate import DEFAULT_THETA
 from flexmvm.materials import Material
@@ -71,14 +71,22 @@ class ContactConfig(Frozen):
     search_radius_m: Positive | None = None
     # Coulomb friction coefficient [-] of the pair; 0: frictionless rows, the exact LCP
     friction_coefficient: Annotated[float, Strict(), Ge(0.0)] = 0.0
+    # the contact nodes of both surfaces carry no mass (fe/mass_redistribution.py)
+    redistribute_mass: bool = False
+    # the normal rows' law (constraints.contact.ContactLaw): velocity (Moreau, beta recovery)
+    # or position (the gap at the end of the step, with the scenario's time.theta)
+    law: ContactLaw = ContactLaw.VELOCITY
 
     @model_serializer(mode="wrap")
     def _dump(self, handler):
-        # a frictionless contact dumps as before the key existed: study case keys and cache
+        # options at their defaults dump as before the keys existed: study case keys and cache
         # identities hash these dumps
         data = handler(self)
-        if isinstance(data, dict) and data.get("friction_coefficient") == 0.0:
-            data.pop("friction_coefficient")
+        if isinstance(data, dict):
+            for key, default in (("friction_coefficient", 0.0), ("redistribute_mass", False),
+                                 ("law", ContactLaw.VELOCITY)):
+                if key in data and data[key] == default:
+                    data.pop(key)
         return data
 
     @model_validator(mode="after")
@@ -86,6 +94,8 @@ class ContactConfig(Frozen):
         if self.friction_coefficient > 0.0 and self.kind is ContactKind.BONDED:
             raise problem("a bonded contact locks all three components: friction_coefficient "
                           f"must be 0, got {self.friction_coefficient!r}", "friction_coefficient")
+        if self.law is ContactLaw.POSITION and self.kind is ContactKind.BONDED:
+            raise problem("law = \"position\" is for frictionless contact, not bonded", "law")
         return self
 
     @property
