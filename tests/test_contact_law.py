@@ -65,18 +65,20 @@ def _energy_error(run) -> float:
     return float(np.abs(E - E[0]).max() / E[0])
 
 
-@pytest.mark.parametrize("redistribute", [False, True])
-def test_end_gap_held_to_round_off(redistribute):
-    """Every row's end gap g + h (u_N+ + u_N-) / 2 (theta = 1/2) is >= 0 and, where the row
+@pytest.mark.parametrize("redistribute, theta", [(False, 0.5), (True, 0.55)])
+def test_end_gap_held_to_round_off(redistribute, theta):
+    """Every row's end gap g + h (theta u_N+ + (1 - theta) u_N-) is >= 0 and, where the row
     carries an impulse, 0: both to 1e-9 of the step's approach h v0 (round-off of the LCP and
-    of the rows); the pairs close over the impact (rows with impulse at many steps)."""
-    _, steps = _run("position", redistribute)
+    of the rows); the pairs close over the impact (rows with impulse at many steps). Mass
+    redistribution needs theta > 1/2 (refused at 1/2: test_redistribution_needs_damping)."""
+    _, steps = _run("position", redistribute, theta)
     scale = 0.25e-6 * 0.21
     worst_open = worst_active = 0.0
     n_active = 0
     for h, g, lower, um, up, lam in steps:
-        end = g + h * (0.5 * up + 0.5 * um)
-        assert np.allclose(lower, -(g + 0.5 * h * um) / (0.5 * h), rtol=0, atol=1e-12)
+        end = g + h * (theta * up + (1.0 - theta) * um)
+        assert np.allclose(lower, -(g + (1.0 - theta) * h * um) / (theta * h), rtol=0,
+                           atol=1e-12)
         worst_open = max(worst_open, float(-end.min()))
         on = lam > 0
         n_active += int(on.sum())
@@ -87,14 +89,21 @@ def test_end_gap_held_to_round_off(redistribute):
     assert worst_active <= 1e-9 * scale
 
 
+def test_redistribution_needs_damping():
+    """Massless contact nodes at theta = 1/2 (v+ = 2 v_m - v-, neutrally stable) grew without
+    bound on the hemispherical short seed case at h = 0.25 us (docs/contact_law.md): the
+    scenario is refused with a one-line reason."""
+    with pytest.raises(ScenarioError, match="theta > 0.5"):
+        _scenario("position", True, theta=0.5)
+
+
 def test_energy_conserved_through_the_impact():
     """theta = 1/2 with the position law: the largest |E(t) - E(0)| / E(0) over the 40 us (the
-    whole impact and 20 us after) is below 1e-3: measured 4.5e-4, and 5e-8 with the contact
-    nodes' mass redistributed (on this flat-on-flat case; on the hemispherical short seed
-    case at h = 0.25 us the massless nodes' end velocities grow instead: docs/contact_law.md);
-    the velocity law gains 2.8e-3 (4.3e-3 with redistribution)."""
+    whole impact and 20 us after) is below 1e-3: measured 4.5e-4 (5e-8 with the contact
+    nodes' mass redistributed on this flat-on-flat case, but on the hemispherical short seed
+    case at h = 0.25 us the massless nodes' end velocities grow instead, so that combination
+    is refused: docs/contact_law.md); the velocity law gains 2.8e-3."""
     assert _energy_error(_run("position", False)[0]) < 1e-3
-    assert _energy_error(_run("position", True)[0]) < 1e-6
     assert _energy_error(_run("velocity", False)[0]) > 2 * _energy_error(_run("position", False)[0])
 
 

@@ -239,6 +239,12 @@ class Scenario(Frozen):
                 raise problem(
                     f"slave and master are both on body {c.slave_body!r}", f"contacts[{i}].master"
                 )
+            if c.redistribute_mass and self.time.theta == 0.5:
+                # massless nodes' end velocities v+ = 2 v_m - v- are neutrally stable at
+                # theta = 1/2 and grew without bound at h = 0.25 us (docs/contact_law.md)
+                raise problem("mass redistribution needs time.theta > 0.5 (at 0.5 the massless "
+                              "contact nodes' velocities grow without bound: docs/contact_law.md)",
+                              f"contacts[{i}].redistribute_mass")
         seen = [(c.slave, c.master) for c in self.contacts]
         _unique([f"{s} on {m}" for s, m in seen], "contacts", "contact", "")
         for i, j in enumerate(self.joints):
