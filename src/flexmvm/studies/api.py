@@ -57,12 +57,14 @@ def material_study(scenario: Scenario | str | Path, body: str = "b2", *,
                    selections: Sequence[tuple[int, int]] | str = ((1, 1), (2, 2)),
                    modes: Iterable[int] = range(7, 44, 12), out_dir: str | Path | None = None,
                    workers: int | None = None, scheduler: str | None = None,
-                   serial: bool = False, progress: bool = False) -> MaterialStudy:
+                   serial: bool = False, progress: bool = False,
+                   kind: ModelKind | str = ModelKind.MVM) -> MaterialStudy:
     """Material study (studies/materials.py): ``body`` made of each of ``materials`` (keys of
-    SEED_MATERIALS: W, Cu, Al, PA6), each MVM model of ``selections`` x ``modes`` against that
-    material's full-FE reference. Returns the rows and the summary (per-material mean NCC,
-    the seed's ordering)."""
+    SEED_MATERIALS: W, Cu, Al, PA6), each ``kind`` model (Craig-Bampton by default, or the
+    seed's eq. (4) readings mvm-seed / mvm-seed-fixed) of ``selections`` x ``modes`` against
+    that material's full-FE reference. Returns the rows and the summary (per-material mean
+    NCC, the seed's ordering)."""
     with _directory(out_dir) as out:
         return material_studies.material_study(
             _scenario(scenario), out, body, materials, selections, modes, scheduler, workers,
-            progress, serial=serial)
+            progress, serial=serial, kind=kind)
