@@ -16,11 +16,11 @@ directory holds one kind (a rerun with another kind is refused: its stored param
 - ``DIR/cases/<mat>-l<i>-j<j>-m<m>.json``: the MVM runs (studies.selection.run_selection_case);
 - ``DIR/materials.csv``: ``material,kind,E_pa,nu,rho_kg_m3,selection,nodes,modes,dof,ncc_force,
   ncc_<probe>...,peak_err,impulse_err,duration_err,wall_time_s``;
-- ``DIR/materials.json``: the model ``kind``, per-material mean NCC of the force over the runs (the same
-  selections x modes for every material; ``n_cases`` = the runs the mean covers, ``failed``
-  the runs without an NCC), ``failures`` (``{"case", "reason"}``: failed references, whose
-  material then has no MVM run, and failed runs; also printed), ``seed_ordering_holds`` = the mean NCCs decrease in
-  the seed's order W > Cu > Al > PA6 (restricted to the materials run), and the observed order;
+- ``DIR/materials.json``: the model ``kind``, per-material mean NCC of the force over the runs
+  (the same selections x modes for every material; ``n_cases`` = the runs the mean covers,
+  ``failed`` the runs without an NCC), ``failures`` (``{"case", "reason"}``: failed
+  references, whose material then has no MVM run, and failed runs; also printed),
+  ``seed_ordering_holds`` = the mean NCCs decrease in the seed's order W > Cu > Al > PA6 (restricted to the materials run), and the observed order;
 - ``DIR/fig9_materials.png``: NCC against modes per material and selection.
 
 A material is set by rebuilding the scenario dict with an inline material table
@@ -133,8 +133,8 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
     :func:`run_materials_study`). ``kind``: the reduced model (module doc).
 
     Raises InputError for an unknown material name (keys of SEED_MATERIALS), a kind that
-    retains no nodes, a bad body or a selection beyond the mesh. A reference or a case that fails is listed in ``failures``,
-    not raised.
+    retains no nodes, a bad body or a selection beyond the mesh. A reference or a case that
+    fails is listed in ``failures``, not raised.
     """
     out = Path(out_dir).resolve()
     materials = list(materials)
