@@ -41,10 +41,11 @@ def select(scenario: Scenario | str | Path, body: str, *, layers: Iterable[int] 
     """Selection study of ``body`` (studies/selection.py): every ``layers`` x ``laps`` x
     ``modes`` Craig-Bampton model of it against its full-FE reference, the other bodies as in
     the scenario (``kind``: the candidates' model, Craig-Bampton by default, or the seed's
-    eq. (4) readings mvm-seed / mvm-seed-fixed). ``target``: a Target or the force NCC to reach; ``search``: the pruned
-    search instead of the whole grid. Runs on a local Dask cluster of ``workers`` processes
-    (default: one per core), on ``scheduler``, or in this process with ``serial``. Returns the
-    table (``rows``), the smallest model reaching the target (``best``) and the summary."""
+    eq. (4) readings mvm-seed / mvm-seed-fixed). ``target``: a Target or the force NCC to
+    reach; ``search``: the pruned search instead of the whole grid. Runs on a local Dask
+    cluster of ``workers`` processes (default: one per core), on ``scheduler``, or in this
+    process with ``serial``. Returns the table (``rows``), the smallest model reaching the
+    target (``best``) and the summary."""
     target = target if isinstance(target, Target) else Target(float(target))
     with _directory(out_dir) as out:
         return select_models(_scenario(scenario), body, out, layers, laps, modes, target,

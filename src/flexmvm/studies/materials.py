@@ -20,7 +20,8 @@ directory holds one kind (a rerun with another kind is refused: its stored param
   (the same selections x modes for every material; ``n_cases`` = the runs the mean covers,
   ``failed`` the runs without an NCC), ``failures`` (``{"case", "reason"}``: failed
   references, whose material then has no MVM run, and failed runs; also printed),
-  ``seed_ordering_holds`` = the mean NCCs decrease in the seed's order W > Cu > Al > PA6 (restricted to the materials run), and the observed order;
+  ``seed_ordering_holds`` = the mean NCCs decrease in the seed's order W > Cu > Al > PA6
+  (restricted to the materials run), and the observed order;
 - ``DIR/fig9_materials.png``: NCC against modes per material and selection.
 
 A material is set by rebuilding the scenario dict with an inline material table
@@ -182,7 +183,8 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
             nodes = len(rod.selection(c.params["layers"], c.params["laps"]))
             r = failed_case_row(c, case_failed.get(c.key, "failed"), nodes)
         mat = SEED_MATERIALS[c.params["material"]]
-        r.update(material=c.params["material"], kind=kind.value, E_pa=mat.E, nu=mat.nu, rho_kg_m3=mat.rho,
+        r.update(material=c.params["material"], kind=kind.value, E_pa=mat.E, nu=mat.nu,
+                 rho_kg_m3=mat.rho,
                  selection=f"{r['layers']}-{r['laps']}")
         rows.append(r)
     per = {}
@@ -204,7 +206,8 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
     holds = all(v is not None for v in means) and all(a > b for a, b in itertools.pairwise(means))
     observed = sorted((m for m in materials if per[m]["mean_ncc_force"] is not None),
                       key=lambda m: -per[m]["mean_ncc_force"])
-    result = {"body": body, "kind": kind.value, "selections": [f"{i}-{j}" for i, j in selections], "modes": modes,
+    result = {"body": body, "kind": kind.value,
+              "selections": [f"{i}-{j}" for i, j in selections], "modes": modes,
               "materials": per, "seed_order": ranked, "observed_order": observed,
               "seed_ordering_holds": bool(holds),
               "note": "seed_ordering_holds: mean NCC of the force over the same selections x "
@@ -233,7 +236,8 @@ def run_materials_study(scenario: str | Path | Scenario, out_dir: str | Path, bo
     """The material study of ``body`` in ``scenario`` (a Scenario or a scenario file) with its
     files and console lines (module doc): :func:`material_study`, then materials.csv,
     materials.json, the figure and the summary line. ``t_end_s``, ``dt_s`` and ``other`` as in
-    studies.grid.study_scenario; ``kind`` the reduced model (module doc). Returns the materials.json content.
+    studies.grid.study_scenario; ``kind`` the reduced model (module doc). Returns the
+    materials.json content.
 
     Raises as :func:`material_study`, and SolverError, after everything is written, if no run
     at all could be compared.
