@@ -11,8 +11,9 @@ other bodies as --other says), then one run per model of BODY: those of --models
 (every kind x layers x laps x modes). Each is compared with the reference (force NCC, peak,
 impulse and duration errors: scenarios.compare.compare_runs) and with the 1D wave-Hertz theory
 of the scenario (flexmvm theory); the reference too. Printed as a table and written to --json
-(numbers, settings, the git commit of the code). `flexmvm select` runs Craig-Bampton only; this
-script runs any model kind, one process, no resume.
+(numbers, settings, the git commit of the code). The grids of one kind are also
+`flexmvm select --kind K` and `flexmvm study materials --kind K` (Dask, resumable); this script
+runs any list of models of any kinds, one process, no resume.
 """
 
 from __future__ import annotations

@@ -206,6 +206,55 @@ def test_materials_study_two_materials(tmp_path):
         assert res["materials"][m]["theory_contact_radius_m"] > 0
         assert res["materials"][m]["theory_contact_duration_s"] > 0
     assert res["selection_radius_m"] == {"1-1": 0.0}
+    # the default kind is Craig-Bampton, and its cases keep the keys and params stored before
+    # the kind existed (no "kind" param), so existing study directories resume
+    assert res["kind"] == "mvm" and {r["kind"] for r in rows} == {"mvm"}
+    stored = json.loads((tmp_path / "cases" / "W-l1-j1-m7.json").read_text())
+    assert "kind" not in stored["params"]
+
+
+def test_materials_study_of_the_seed_eq4_kind(tmp_path, monkeypatch):
+    """kind = mvm-seed: every run builds the seed's eq. (4) basis (SEED_BLOCK) for the
+    material's b2, never Craig-Bampton; the kind is in the cases, materials.csv/json and the
+    library result; a rerun of the directory with another kind is refused (stored params
+    differ) rather than mixing kinds."""
+    import flexmvm as fm
+    from flexmvm.reduction.basis import BasisKind
+    from flexmvm.scenarios import build
+
+    built = []
+
+    def recording(*args):
+        built.append((args[1].name, args[2]))
+        return basis_for(*args)
+
+    basis_for = build.basis_for
+    monkeypatch.setattr(build, "basis_for", recording)
+    study = fm.material_study(TINY, materials=["Al"], selections="1-1", modes=[7],
+                              serial=True, kind="mvm-seed", out_dir=tmp_path)
+    assert ("Al", BasisKind.SEED_BLOCK) in built
+    assert all(k is not BasisKind.CRAIG_BAMPTON for _, k in built)
+    assert study.summary["kind"] == "mvm-seed" and [r["kind"] for r in study.rows] == ["mvm-seed"]
+    assert 0.0 < study.rows[0]["ncc_force"] <= 1.0
+    stored = json.loads((tmp_path / "cases" / "Al-l1-j1-m7.json").read_text())
+    assert stored["params"]["kind"] == "mvm-seed"
+    with pytest.raises(InputError, match="stored params"):
+        fm.material_study(TINY, materials=["Al"], selections="1-1", modes=[7], serial=True,
+                          out_dir=tmp_path)
+    with pytest.raises(InputError, match="expected one of mvm, mvm-seed, mvm-seed-fixed"):
+        fm.material_study(TINY, materials=["Al"], serial=True, kind="modal",
+                          out_dir=tmp_path / "modal")
+    assert not (tmp_path / "modal").exists()
+
+
+def test_materials_cli_bad_kind_is_one_line(tmp_path):
+    p = subprocess.run([sys.executable, "-m", "flexmvm.cli.main", "study", "materials",
+                        str(TINY), "--kind", "modal", "--out", str(tmp_path / "out")],
+                       check=False, capture_output=True, text=True, timeout=120)
+    assert p.returncode == 2
+    lines = p.stderr.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("flexmvm: error: ") and "--kind" in lines[0]
+    assert "mvm-seed-fixed" in lines[0] and not (tmp_path / "out").exists()
 
 
 @pytest.mark.skipif(not os.environ.get("FLEXMVM_SLOW"),

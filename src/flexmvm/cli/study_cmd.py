@@ -7,6 +7,7 @@ from pathlib import Path
 import click
 
 from flexmvm.cli.study_options import check_workers, study_run_options
+from flexmvm.scenarios import ModelKind
 
 
 @click.group("study")
@@ -24,12 +25,15 @@ def command() -> None:
 @click.option("--selections", default="1-1,2-2", show_default=True, help="i-j selections.")
 @click.option("--modes", default="7:43:12", show_default=True,
               help="Mode counts: start:stop:step, stop included.")
+@click.option("--kind", type=click.Choice([k.value for k in ModelKind if k.retains_nodes]),
+              default=ModelKind.MVM.value, show_default=True,
+              help="Reduced model of BODY: Craig-Bampton (mvm) or the seed's eq. (4) readings.")
 @study_run_options
 @click.option("--progress/--no-progress", default=True, show_default=True)
-def materials(scenario, out_dir, body, materials, selections, modes, scheduler, workers, serial,
-              t_end, dt, other, progress) -> None:
-    """Body BODY of W, Cu, Al, PA6 (seed table 2): MVM runs against each full-FE reference;
-    writes materials.csv, materials.json, fig9_materials.png."""
+def materials(scenario, out_dir, body, materials, selections, modes, kind, scheduler, workers,
+              serial, t_end, dt, other, progress) -> None:
+    """Body BODY of W, Cu, Al, PA6 (seed table 2): runs of the KIND model against each
+    full-FE reference; writes materials.csv, materials.json, fig9_materials.png."""
     from flexmvm.cli.select_cmd import parse_range
     from flexmvm.studies.materials import parse_selections, run_materials_study
 
@@ -39,5 +43,5 @@ def materials(scenario, out_dir, body, materials, selections, modes, scheduler, 
                         selections=parse_selections(selections), modes=parse_range(modes, "modes"),
                         scheduler=scheduler, n_workers=workers, progress=progress, t_end_s=t_end,
                         dt_s=dt, other=other,
-                        serial=serial, echo=click.echo)
+                        serial=serial, echo=click.echo, kind=kind)
     click.echo(f"wrote {out_dir}")

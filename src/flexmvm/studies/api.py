@@ -41,10 +41,11 @@ def select(scenario: Scenario | str | Path, body: str, *, layers: Iterable[int] 
     """Selection study of ``body`` (studies/selection.py): every ``layers`` x ``laps`` x
     ``modes`` Craig-Bampton model of it against its full-FE reference, the other bodies as in
     the scenario (``kind``: the candidates' model, Craig-Bampton by default, or the seed's
-    eq. (4) readings mvm-seed / mvm-seed-fixed). ``target``: a Target or the force NCC to reach; ``search``: the pruned
-    search instead of the whole grid. Runs on a local Dask cluster of ``workers`` processes
-    (default: one per core), on ``scheduler``, or in this process with ``serial``. Returns the
-    table (``rows``), the smallest model reaching the target (``best``) and the summary."""
+    eq. (4) readings mvm-seed / mvm-seed-fixed). ``target``: a Target or the force NCC to
+    reach; ``search``: the pruned search instead of the whole grid. Runs on a local Dask
+    cluster of ``workers`` processes (default: one per core), on ``scheduler``, or in this
+    process with ``serial``. Returns the table (``rows``), the smallest model reaching the
+    target (``best``) and the summary."""
     target = target if isinstance(target, Target) else Target(float(target))
     with _directory(out_dir) as out:
         return select_models(_scenario(scenario), body, out, layers, laps, modes, target,
@@ -57,12 +58,14 @@ def material_study(scenario: Scenario | str | Path, body: str = "b2", *,
                    selections: Sequence[tuple[int, int]] | str = ((1, 1), (2, 2)),
                    modes: Iterable[int] = range(7, 44, 12), out_dir: str | Path | None = None,
                    workers: int | None = None, scheduler: str | None = None,
-                   serial: bool = False, progress: bool = False) -> MaterialStudy:
+                   serial: bool = False, progress: bool = False,
+                   kind: ModelKind | str = ModelKind.MVM) -> MaterialStudy:
     """Material study (studies/materials.py): ``body`` made of each of ``materials`` (keys of
-    SEED_MATERIALS: W, Cu, Al, PA6), each MVM model of ``selections`` x ``modes`` against that
-    material's full-FE reference. Returns the rows and the summary (per-material mean NCC,
-    the seed's ordering)."""
+    SEED_MATERIALS: W, Cu, Al, PA6), each ``kind`` model (Craig-Bampton by default, or the
+    seed's eq. (4) readings mvm-seed / mvm-seed-fixed) of ``selections`` x ``modes`` against
+    that material's full-FE reference. Returns the rows and the summary (per-material mean
+    NCC, the seed's ordering)."""
     with _directory(out_dir) as out:
         return material_studies.material_study(
             _scenario(scenario), out, body, materials, selections, modes, scheduler, workers,
-            progress, serial=serial)
+            progress, serial=serial, kind=kind)

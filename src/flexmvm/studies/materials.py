@@ -4,18 +4,24 @@ The target body (b2 in the seed) is made in turn of tungsten, copper, aluminium 
 (table 2: E 344.70, 96.50, 72.71, 2.32 GPa; nu 0.28, 0.36, 0.33, 0.34; rho 19250, 8390, 2700,
 1140 kg/m^3, flexmvm.materials); the striker keeps the scenario's model and material (brass,
 full FE) and speed (0.21 m/s). For each material a full-FE reference (the target full FE) and
-MVM runs at the given selections x modes are made, every run a case of
-flexmvm.studies.runner (parallel on Dask, resumable):
+reduced runs at the given selections x modes are made, every run a case of
+flexmvm.studies.runner (parallel on Dask, resumable). The reduced model is of any kind that
+retains the selection's nodes (studies.grid.study_kind): ``mvm`` (Craig-Bampton, the default),
+``mvm-seed`` or ``mvm-seed-fixed`` (the seed's eq. (4) readings). As in the selection study
+(studies.grid.selection_cases) a case carries ``kind`` in its params only when it is not
+``mvm``, so the keys and params of the Craig-Bampton studies stored before stay valid; a study
+directory holds one kind (a rerun with another kind is refused: its stored params differ).
 
 - ``DIR/<material>/reference/history.csv``: the reference of each material (case ``ref-<mat>``);
 - ``DIR/cases/<mat>-l<i>-j<j>-m<m>.json``: the MVM runs (studies.selection.run_selection_case);
-- ``DIR/materials.csv``: ``material,E_pa,nu,rho_kg_m3,selection,nodes,modes,dof,ncc_force,
+- ``DIR/materials.csv``: ``material,kind,E_pa,nu,rho_kg_m3,selection,nodes,modes,dof,ncc_force,
   ncc_<probe>...,peak_err,impulse_err,duration_err,wall_time_s``;
-- ``DIR/materials.json``: per-material mean NCC of the force over the runs (the same
-  selections x modes for every material; ``n_cases`` = the runs the mean covers, ``failed``
-  the runs without an NCC), ``failures`` (``{"case", "reason"}``: failed references, whose
-  material then has no MVM run, and failed runs; also printed), ``seed_ordering_holds`` = the mean NCCs decrease in
-  the seed's order W > Cu > Al > PA6 (restricted to the materials run), and the observed order;
+- ``DIR/materials.json``: the model ``kind``, per-material mean NCC of the force over the runs
+  (the same selections x modes for every material; ``n_cases`` = the runs the mean covers,
+  ``failed`` the runs without an NCC), ``failures`` (``{"case", "reason"}``: failed
+  references, whose material then has no MVM run, and failed runs; also printed),
+  ``seed_ordering_holds`` = the mean NCCs decrease in the seed's order W > Cu > Al > PA6
+  (restricted to the materials run), and the observed order;
 - ``DIR/fig9_materials.png``: NCC against modes per material and selection.
 
 A material is set by rebuilding the scenario dict with an inline material table
@@ -37,8 +43,8 @@ from flexmvm.errors import InputError, SolverError
 from flexmvm.materials import ALUMINIUM, COPPER, PA6, TUNGSTEN, Material
 from flexmvm.results.atomic import write_json_atomic, write_table_csv
 from flexmvm.results.outdir import make_out_dir
-from flexmvm.scenarios import Scenario, load_scenario, scenario_from_dict
-from flexmvm.studies.grid import check_grid, rod_of, study_scenario
+from flexmvm.scenarios import ModelKind, Scenario, load_scenario, scenario_from_dict
+from flexmvm.studies.grid import check_grid, rod_of, study_kind, study_scenario
 from flexmvm.studies.reference import file_sha256, reference_history
 from flexmvm.studies.report import echo_failures, failed_case_row, failure_list
 from flexmvm.studies.runner import Case, check_cluster_options, run_cases, study_cluster
@@ -122,14 +128,14 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
                    selections: Sequence[tuple[int, int]] | str = ((1, 1), (2, 2)),
                    modes: Iterable[int] = range(7, 44, 12), scheduler: str | None = None,
                    n_workers: int | None = None, progress: bool = False, *,
-                   serial: bool = False) -> MaterialStudy:
+                   serial: bool = False, kind: ModelKind | str = ModelKind.MVM) -> MaterialStudy:
     """The material study of ``body`` in scenario ``sc`` (module doc), its cases and references
     stored in ``out_dir`` (a rerun resumes); no table, figure or console output (see
-    :func:`run_materials_study`).
+    :func:`run_materials_study`). ``kind``: the reduced model (module doc).
 
-    Raises InputError for an unknown material name (keys of SEED_MATERIALS), a bad body or a
-    selection beyond the mesh. A reference or a case that fails is listed in ``failures``,
-    not raised.
+    Raises InputError for an unknown material name (keys of SEED_MATERIALS), a kind that
+    retains no nodes, a bad body or a selection beyond the mesh. A reference or a case that
+    fails is listed in ``failures``, not raised.
     """
     out = Path(out_dir).resolve()
     materials = list(materials)
@@ -138,6 +144,7 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
         raise InputError(f"materials: unknown {unknown or 'none given'}; expected some of "
                          f"{', '.join(SEED_MATERIALS)}")
     selections = parse_selections(selections)
+    kind = study_kind(kind)
     rod = rod_of(sc, body)
     _, _, _, modes = check_grid(sc, body, [s[0] for s in selections],
                                  [s[1] for s in selections], modes)
@@ -148,6 +155,7 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
                                    "scenario": scen[m].model_dump(mode="json")})
                  for m in materials]
     ref_paths = {m: str(out / m / "reference" / "history.csv") for m in materials}
+    kind_param = {} if kind is ModelKind.MVM else {"kind": kind.value}  # as selection_cases
     kw: dict[str, Any]
     with study_cluster(scheduler, n_workers, serial) as address:
         kw = {"serial": True} if serial else {"scheduler": address}
@@ -157,14 +165,14 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
         cases = [Case(f"{m}-l{i}-j{j}-m{n}",
                       {"body": body, "layers": i, "laps": j, "modes": n, "material": m,
                        "modes_max": max(modes), "scenario": scen[m].model_dump(mode="json"),
-                       "reference_sha256": refs[f"ref-{m}"]["sha256"]})
+                       "reference_sha256": refs[f"ref-{m}"]["sha256"]} | kind_param)
                  for m in materials if f"ref-{m}" in refs
                  for (i, j) in selections for n in modes]
         case_failed: dict[str, str] = {}
         results = run_cases(cases, partial(run_material_case, references=ref_paths), out,
                             progress=progress, failures=case_failed, **kw)
     probes = [p.name for p in sc.probes]
-    cols = (["material", "E_pa", "nu", "rho_kg_m3", "selection", "nodes", "modes", "dof",
+    cols = (["material", "kind", "E_pa", "nu", "rho_kg_m3", "selection", "nodes", "modes", "dof",
              "ncc_force"] + [f"ncc_{p}" for p in probes]
             + ["peak_err", "impulse_err", "duration_err", "wall_time_s"])
     rows = []
@@ -175,7 +183,8 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
             nodes = len(rod.selection(c.params["layers"], c.params["laps"]))
             r = failed_case_row(c, case_failed.get(c.key, "failed"), nodes)
         mat = SEED_MATERIALS[c.params["material"]]
-        r.update(material=c.params["material"], E_pa=mat.E, nu=mat.nu, rho_kg_m3=mat.rho,
+        r.update(material=c.params["material"], kind=kind.value, E_pa=mat.E, nu=mat.nu,
+                 rho_kg_m3=mat.rho,
                  selection=f"{r['layers']}-{r['laps']}")
         rows.append(r)
     per = {}
@@ -197,7 +206,8 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
     holds = all(v is not None for v in means) and all(a > b for a, b in itertools.pairwise(means))
     observed = sorted((m for m in materials if per[m]["mean_ncc_force"] is not None),
                       key=lambda m: -per[m]["mean_ncc_force"])
-    result = {"body": body, "selections": [f"{i}-{j}" for i, j in selections], "modes": modes,
+    result = {"body": body, "kind": kind.value,
+              "selections": [f"{i}-{j}" for i, j in selections], "modes": modes,
               "materials": per, "seed_order": ranked, "observed_order": observed,
               "seed_ordering_holds": bool(holds),
               "note": "seed_ordering_holds: mean NCC of the force over the same selections x "
@@ -221,20 +231,23 @@ def run_materials_study(scenario: str | Path | Scenario, out_dir: str | Path, bo
                         n_workers: int | None = None, progress: bool = True, *,
                         t_end_s: float | None = None, dt_s: float | None = None,
                         other: str | None = None, serial: bool = False,
-                        echo: Callable[[str], Any] = print) -> dict:
+                        echo: Callable[[str], Any] = print,
+                        kind: ModelKind | str = ModelKind.MVM) -> dict:
     """The material study of ``body`` in ``scenario`` (a Scenario or a scenario file) with its
     files and console lines (module doc): :func:`material_study`, then materials.csv,
     materials.json, the figure and the summary line. ``t_end_s``, ``dt_s`` and ``other`` as in
-    studies.grid.study_scenario. Returns the materials.json content.
+    studies.grid.study_scenario; ``kind`` the reduced model (module doc). Returns the
+    materials.json content.
 
     Raises as :func:`material_study`, and SolverError, after everything is written, if no run
     at all could be compared.
     """
     out = Path(out_dir).resolve()
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
+    kind = study_kind(kind)
     sc = study_scenario(sc, body, t_end_s=t_end_s, dt_s=dt_s, other=other)
     study = material_study(sc, out, body, materials, selections, modes, scheduler, n_workers,
-                           progress, serial=serial)
+                           progress, serial=serial, kind=kind)
     rows, result = study.rows, study.summary
     materials, per, failures = list(result["materials"]), result["materials"], result["failures"]
     n_per = len(result["selections"]) * len(result["modes"])
@@ -244,9 +257,9 @@ def run_materials_study(scenario: str | Path | Scenario, out_dir: str | Path, bo
     from flexmvm.plots.study_figures import plot_materials
 
     plot_materials(out / "fig9_materials.png", rows,
-                   title=f"{sc.name}: body {body} of each material")
+                   title=f"{sc.name}: body {body} of each material, {kind.value} models")
     echo_failures(echo, failures, len(materials) * (1 + n_per), out / "materials.json")
-    echo("mean NCC of the force: " + ", ".join(
+    echo(f"mean NCC of the force ({kind.value}): " + ", ".join(
         f"{m} {per[m]['mean_ncc_force']:.6f} (over {per[m]['n_cases']} of "
         f"{n_per} runs)" if per[m]["mean_ncc_force"] is not None
         else f"{m} (no run compared)" for m in materials)
