@@ -252,12 +252,16 @@ def test_nonconforming_mesh_raises():
 
 
 def test_mode_solver_errors():
-    """Bad shift, too many modes, and an indefinite 'stiffness' are reported, not hidden."""
+    """Bad shift, too many modes, and an indefinite 'stiffness' are reported, not hidden;
+    every mode (n_modes = the DOFs) is a dense solve, M-orthonormal."""
     fe = assemble(box_hex(order=1), ALUMINIUM)
     with pytest.raises(InputError):
         free_modes(fe, 4, sigma=1.0)
     with pytest.raises(InputError):
-        free_modes(fe, fe.n_dof)
+        free_modes(fe, fe.n_dof + 1)
+    freqs, phi = free_modes(fe, fe.n_dof)
+    assert freqs.shape == (fe.n_dof,) and np.all(np.diff(freqs) >= 0)
+    np.testing.assert_allclose(phi.T @ (fe.M @ phi), np.eye(fe.n_dof), atol=1e-9)
     fixed = np.arange(12)                      # nodes 0..3 clamped: no rigid motion left
     with pytest.raises(SolverError, match="negative eigenvalue"):
         constrained_modes(fe.M, -fe.K, fixed, 3)

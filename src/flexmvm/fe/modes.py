@@ -12,6 +12,7 @@ from __future__ import annotations
 from collections.abc import Callable
 
 import numpy as np
+import scipy.linalg as sla
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 
@@ -39,6 +40,10 @@ V0_SEED = 20140101
 #: pivoting off the diagonal. SuperLU's default (COLAMD, partial pivoting) orders for an
 #: unsymmetric A, and its fill on our meshes is erratic: 108 million factor entries (28 s)
 #: against 22 million (1.2 s) for K_ii of the seed rod with the 3-4 selection retained.
+#: Every mode of a problem (n_modes = its DOFs) comes from a dense solve up to this size
+#: (memory 2 m^2 doubles: 400 MB at 5,000).
+DENSE_MAX_DOF = 5000
+
 SPD_LU = {"permc_spec": "MMD_AT_PLUS_A", "diag_pivot_thresh": 0.0,
           "options": {"SymmetricMode": True}}
 
@@ -81,12 +86,21 @@ def shift_invert_modes(M: sp.spmatrix, K: sp.spmatrix, n_modes: int, sigma: floa
     solve: x = (K - sigma M)^{-1} b if already factored (e.g. CB reuses its K_ii factor).
     The Lanczos start vector is fixed (V0_SEED): the same input gives the same modes.
     Returns (lam (n_modes,) ascending [rad^2/s^2], phi (m, n_modes) M-normalised).
-    Raises InputError if n_modes is not in 1..m-1, SolverError if ARPACK fails or an
-    eigenvalue is negative beyond round-off.
+    n_modes = m (every mode: Lanczos cannot) takes LAPACK's dense generalized eigensolver,
+    for m up to DENSE_MAX_DOF.
+    Raises InputError if n_modes is not in 1..m (or m is too large for all of them),
+    SolverError if ARPACK fails or an eigenvalue is negative beyond round-off.
     """
     m = M.shape[0]
-    if not 1 <= n_modes < m:
-        raise InputError(f"number of modes must be in 1..{m - 1} for {m} free DOFs, got {n_modes}")
+    if not 1 <= n_modes <= m:
+        raise InputError(f"number of modes must be in 1..{m} for {m} free DOFs, got {n_modes}")
+    if n_modes == m:
+        if m > DENSE_MAX_DOF:
+            raise InputError(f"all {m} modes need a dense eigensolve, limited to "
+                             f"{DENSE_MAX_DOF} DOFs; ask for at most {m - 1} modes")
+        lam, phi = sla.eigh(np.asarray(sp.csr_matrix(K).todense()),
+                            np.asarray(sp.csr_matrix(M).todense()))   # phi^T M phi = I
+        return _check_eigenvalues(lam, sigma), phi
     if solve is None:
         solve = factor(sp.csc_matrix(K - sigma * M), spd=sigma <= 0.0)
     op_inv = spla.LinearOperator((m, m), matvec=solve, dtype=np.float64)
@@ -160,5 +174,5 @@ def constrained_modes(M: sp.spmatrix, K: sp.spmatrix, fixed_dofs: np.ndarray, n_
     return to_hz(lam), phi
 
 
-__all__ = ["NEG_RTOL", "SPD_LU", "V0_SEED", "constrained_modes", "factor", "free_modes",
+__all__ = ["DENSE_MAX_DOF", "NEG_RTOL", "SPD_LU", "V0_SEED", "constrained_modes", "factor", "free_modes",
            "shift_invert_modes", "to_hz"]
