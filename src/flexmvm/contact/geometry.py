@@ -19,6 +19,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
+import scipy.sparse as sp
 from scipy.spatial import cKDTree
 
 from flexmvm.errors import InputError, SolverError
@@ -380,3 +381,15 @@ def closest_facets(proj: Projection) -> Projection:
     order = np.lexsort((score, ~proj.inside, proj.point))
     _, first = np.unique(proj.point[order], return_index=True)
     return proj.take(order[first])
+
+
+def facet_adjacency(connectivity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Facets sharing a node with each facet (itself excluded), CSR (indptr, indices)."""
+    nf = len(connectivity)
+    inc = sp.csr_matrix((np.ones(connectivity.size), (np.repeat(np.arange(nf), 4),
+                                                      connectivity.ravel())))
+    adj = (inc @ inc.T).tocsr()
+    adj.setdiag(0)
+    adj.eliminate_zeros()
+    adj.sort_indices()
+    return adj.indptr.astype(np.int64), adj.indices.astype(np.int64)

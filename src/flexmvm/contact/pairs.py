@@ -31,12 +31,11 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse as sp
 
 from flexmvm.constraints.contact import ContactKind, ContactLaw, ContactRows, FrictionRows
 from flexmvm.constraints.rows import Rows
 from flexmvm.contact import kernels
-from flexmvm.contact.geometry import BroadPhase, MasterSurface
+from flexmvm.contact.geometry import BroadPhase, MasterSurface, facet_adjacency
 from flexmvm.contact.nodes import ContactNodes, SearchState
 from flexmvm.contact.penetration import Penetration, SurfaceMeasure
 from flexmvm.contact.reference import body_rows
@@ -57,18 +56,6 @@ class _Active:
     nodes: np.ndarray
     weights: np.ndarray
     normal: np.ndarray
-
-
-def facet_adjacency(connectivity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Facets sharing a node with each facet (itself excluded), CSR (indptr, indices)."""
-    nf = len(connectivity)
-    inc = sp.csr_matrix((np.ones(connectivity.size), (np.repeat(np.arange(nf), 4),
-                                                      connectivity.ravel())))
-    adj = (inc @ inc.T).tocsr()
-    adj.setdiag(0)
-    adj.eliminate_zeros()
-    adj.sort_indices()
-    return adj.indptr.astype(np.int64), adj.indices.astype(np.int64)
 
 
 #: beta: the fraction of a penetration (or a bond's drift) the rows push back per step,

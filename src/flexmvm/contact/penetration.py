@@ -24,7 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexmvm.contact import kernels
-from flexmvm.contact.geometry import BroadPhase, MasterSurface
+from flexmvm.contact.geometry import BroadPhase, MasterSurface, facet_adjacency
 from flexmvm.contact.nodes import ContactNodes, SearchState
 
 EDGE_TOL = 0.01  # lateral offset beyond a facet edge, per facet circumradius, still counted:
@@ -65,8 +65,6 @@ class _Direction:
         if self.conn.min() < 0:
             raise ValueError("facet nodes missing from the facet node set")
         self.n_quads = surface.n_quads
-        from flexmvm.contact.pairs import facet_adjacency
-
         self.adj = facet_adjacency(surface.connectivity)
         Xs = bodies[against].X[surface.nodes()]
         self.box = np.vstack([Xs.min(axis=0), Xs.max(axis=0)]).astype(np.float64)

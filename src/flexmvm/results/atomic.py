@@ -25,6 +25,7 @@ from flexmvm.errors import InputError
 __all__ = [
     "atomic_path",
     "canonical_json",
+    "file_sha256",
     "write_bytes_atomic",
     "write_json_atomic",
     "write_text_atomic",
@@ -180,3 +181,10 @@ def write_table_csv(path, columns, rows) -> None:
         w.writerow(["" if r.get(c) is None else (repr(float(r[c])) if isinstance(r[c], float)
                                                  else r[c]) for c in columns])
     write_text_atomic(path, buf.getvalue())
+
+
+def file_sha256(path: str | Path) -> str:
+    """SHA-256 of a file's bytes (hex): the identity of a stored result another one refers to."""
+    import hashlib
+
+    return hashlib.sha256(Path(path).read_bytes()).hexdigest()

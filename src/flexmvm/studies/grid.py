@@ -8,8 +8,8 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from flexmvm.errors import InputError
+from flexmvm.results.atomic import file_sha256
 from flexmvm.scenarios import ModelConfig, ModelKind, Scenario, full, mvm
-from flexmvm.studies.reference import file_sha256
 from flexmvm.studies.runner import Case
 
 

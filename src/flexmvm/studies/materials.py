@@ -41,11 +41,11 @@ import numpy as np
 
 from flexmvm.errors import InputError, SolverError
 from flexmvm.materials import ALUMINIUM, COPPER, PA6, TUNGSTEN, Material
-from flexmvm.results.atomic import write_json_atomic, write_table_csv
+from flexmvm.results.atomic import file_sha256, write_json_atomic, write_table_csv
 from flexmvm.results.outdir import make_out_dir
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario, scenario_from_dict
 from flexmvm.studies.grid import check_grid, rod_of, study_kind, study_scenario
-from flexmvm.studies.reference import file_sha256, reference_history
+from flexmvm.studies.reference import reference_history
 from flexmvm.studies.report import echo_failures, failed_case_row, failure_list
 from flexmvm.studies.runner import Case, check_cluster_options, run_cases, study_cluster
 from flexmvm.studies.selection import run_selection_case

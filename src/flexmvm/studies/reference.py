@@ -12,12 +12,6 @@ from flexmvm.results.history import write_history
 from flexmvm.scenarios import Scenario
 
 
-def file_sha256(path: str | Path) -> str:
-    import hashlib
-
-    return hashlib.sha256(Path(path).read_bytes()).hexdigest()
-
-
 def reference_history(sc: Scenario, body: str, out_dir: Path, progress: bool = False
                       ) -> tuple[Path, bool]:
     """The full-FE reference history of the study (computed once, reused while the scenario is

@@ -63,7 +63,7 @@ from typing import Any
 
 from flexmvm.errors import InputError, SolverError
 from flexmvm.metrics.ncc import Comparison, Target
-from flexmvm.results.atomic import write_json_atomic
+from flexmvm.results.atomic import file_sha256, write_json_atomic
 from flexmvm.results.history import read_history
 from flexmvm.results.outdir import make_out_dir
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario, scenario_from_dict
@@ -77,7 +77,7 @@ from flexmvm.studies.grid import (
     study_kind,
     study_scenario,
 )
-from flexmvm.studies.reference import file_sha256, reference_history
+from flexmvm.studies.reference import reference_history
 from flexmvm.studies.report import (
     echo_failures,
     failed_case_row,
