@@ -60,7 +60,13 @@ def momentum_terms(A, q, dv, vm, Lq, Lqd, Kq, mqq_dv, mqq_vm, mass, S0, S1, G0, 
     J = -Gs
     for a in range(3):
         J[a, a] += tr
-    # M_wq[c] = C[a][b] - C[b][a] over cyclic (c, a, b), applied without forming it
+    # M_wq[c] = C[a][b] - C[b][a] over cyclic (c, a, b): (3, nq), used by both products below
+    Mwq = np.empty((3, nq))
+    for c in range(3):
+        a = _CYC[c, 1]
+        b = _CYC[c, 2]
+        for k in range(nq):
+            Mwq[c, k] = G1[a, b, k] + Lq[a, b, k] - G1[b, a, k] - Lq[b, a, k]
     ASt = A @ _skew(S)
     w = vm[3:6]
     # --- inertia = M dv and momentum = M vm (M_fq = [A S1; M_wq]) -------------------------
@@ -76,9 +82,7 @@ def momentum_terms(A, q, dv, vm, Lq, Lqd, Kq, mqq_dv, mqq_vm, mass, S0, S1, G0, 
             for a in range(3):
                 s1x[a] += S1[a, k] * xk
             for c in range(3):
-                a = _CYC[c, 1]
-                b = _CYC[c, 2]
-                mw[c] += (G1[a, b, k] + Lq[a, b, k] - G1[b, a, k] - Lq[b, a, k]) * xk
+                mw[c] += Mwq[c, k] * xk
         out[:3] += A @ s1x
         out[3:6] += mw
         # q rows: M_fq^T x_f + M_qq x_q
@@ -88,9 +92,7 @@ def momentum_terms(A, q, dv, vm, Lq, Lqd, Kq, mqq_dv, mqq_vm, mass, S0, S1, G0, 
             for a in range(3):
                 acc += S1[a, k] * At_xr[a]
             for c in range(3):
-                a = _CYC[c, 1]
-                b = _CYC[c, 2]
-                acc += (G1[a, b, k] + Lq[a, b, k] - G1[b, a, k] - Lq[b, a, k]) * xw[c]
+                acc += Mwq[c, k] * xw[c]
             out[6 + k] = acc
     # --- quadratic-velocity forces (FlexibleBody.velocity_forces) ---------------------------
     W = _skew(w)

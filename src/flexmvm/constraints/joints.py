@@ -63,18 +63,18 @@ class BodyPoint:
         body = bodies[self.body]
         st = states[self.body]
         d = np.asarray(direction, float)
-        n_dofs = body.psi.shape[0] if body.nq else 0
         if self.node is not None:
             fr, qp = body.point_jacobian(self.node, st.A, st.q, d)
             if self.offset_m is not None:
                 fr = fr + np.concatenate([np.zeros(3),
                                           cross3(np.asarray(self.offset_m, float), st.A.T @ d)])
-            nodal = (3 * self.node + np.arange(3), sign * (st.A.T @ d), n_dofs)
+            nodal = (3 * self.node + np.arange(3), sign * (st.A.T @ d),
+                     body.psi.shape[0] if body.nq else 0)
         else:
             p = np.asarray(self.local, float)
             fr = np.concatenate([d, cross3(p, st.A.T @ d)])
             qp = np.zeros(body.nq)
-            nodal = (np.zeros(0, np.int64), np.zeros(0), n_dofs)
+            nodal = _no_elastic(body)
         rows.add(row, self.body, sign * fr, sign * qp, body.nq, nodal)
 
 

@@ -281,7 +281,7 @@ class PointToSurfaceContact:
             rows.nodal[self.slave] = ssel
         if msel is not None:
             rows.nodal[self.master] = -msel
-        lower_n = self.beta * np.maximum(0.0, -gaps) / h   # bonded contact: velocity law
+        lower_n = self._lower(gaps, None, h)   # bonded contact: the velocity law
         keys = eq_keys + list(zip([self.name] * len(idx), self.slave_nodes[idx].tolist(),
                                   self._facet[idx].tolist()))
         weight = np.ones(m)

@@ -36,7 +36,6 @@ def _supernodes(Lp, Li, n):  # pragma: no cover - compiled
     sorted, diagonal stored): column j + 1 joins column j's supernode when the rows of
     column j below its diagonal are j + 1 followed by those of column j + 1."""
     starts = np.empty(n + 1, np.int64)
-    ns = 0
     starts[0] = 0
     ns = 1
     for j in range(n - 1):

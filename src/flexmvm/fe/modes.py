@@ -98,8 +98,7 @@ def shift_invert_modes(M: sp.spmatrix, K: sp.spmatrix, n_modes: int, sigma: floa
         if m > DENSE_MAX_DOF:
             raise InputError(f"all {m} modes need a dense eigensolve, limited to "
                              f"{DENSE_MAX_DOF} DOFs; ask for at most {m - 1} modes")
-        lam, phi = sla.eigh(np.asarray(sp.csr_matrix(K).todense()),
-                            np.asarray(sp.csr_matrix(M).todense()))   # phi^T M phi = I
+        lam, phi = sla.eigh(sp.csr_matrix(K).toarray(), sp.csr_matrix(M).toarray())  # phi^T M phi = I
         return _check_eigenvalues(lam, sigma), phi
     if solve is None:
         solve = factor(sp.csc_matrix(K - sigma * M), spd=sigma <= 0.0)

@@ -134,6 +134,12 @@ class MoreauJeanIntegrator:
         self._loads: dict[int, list] = {}
         for load in system.loads:
             self._loads.setdefault(load.body, []).append(load)
+        self._gravity = np.asarray(system.gravity, dtype=float)
+        # bodies whose per-body work goes on threads (full FE: their kernels release the GIL),
+        # and the pool, fixed for the integrator's life (read once: not in the step loop)
+        sparse = {b for b, body in enumerate(system.bodies) if body.nq and body.is_sparse}
+        self._pool = _thread_pool() if len(sparse) >= 2 else None
+        self._threaded = sparse if self._pool is not None else set()
 
     # ----------------------------------------------------------------------------------------
     def _residuals(self, t, states, v_plus, h):
@@ -146,7 +152,7 @@ class MoreauJeanIntegrator:
 
     def _residual(self, b, t, st, vp, h):
         """Body b's residual, its midpoint and end states and its momentum scale."""
-        body, g = self.system.bodies[b], self.system.gravity
+        body, g = self.system.bodies[b], self._gravity
         th = self.theta
         vm = th * vp + (1.0 - th) * st.v
         mid = st.advanced(vm, th * h)
@@ -163,7 +169,7 @@ class MoreauJeanIntegrator:
             inv = body.inv
             momentum_terms(mid.A, mid.q, dv, vm, Lq_m, Lqd_m, Kq_m, mqq_dv, mqq_vm,
                            inv.mass, inv.S0, inv.S1, inv.G0, body.G1_array,
-                           np.asarray(g, float), inertia, F, momentum)
+                           g, inertia, F, momentum)
             if body.c_hat is not None:
                 F[6:] -= _times(body.c_hat, vm[6:])
         else:
@@ -376,12 +382,10 @@ class MoreauJeanIntegrator:
         of its own (results as serial: the work of one body touches nothing of another), up
         to $FLEXMVM_THREADS threads (default: the cores; 1: none)."""
         bodies = list(bodies)
-        sysb = self.system.bodies
-        sparse = [b for b in bodies if sysb[b].nq and sysb[b].is_sparse]
-        pool = _thread_pool() if len(sparse) >= 2 else None
-        if pool is None:
+        threaded = [b for b in bodies if b in self._threaded]
+        if len(threaded) < 2:
             return {b: fn(b) for b in bodies}
-        futures = {b: pool.submit(fn, b) for b in sparse[1:]}
+        futures = {b: self._pool.submit(fn, b) for b in threaded[1:]}
         done = {b: fn(b) for b in bodies if b not in futures}
         return {b: done[b] if b in done else futures[b].result() for b in bodies}
 
