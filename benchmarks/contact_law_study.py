@@ -1,9 +1,11 @@
 """Contact law x mass redistribution on the short seed case (issue 14 part 3).
 
-    python benchmarks/contact_law_study.py MODEL THETA LAW REDIS [DT_US] [OUT.json]
+    python benchmarks/contact_law_study.py MODEL THETA LAW REDIS [DT_US] [OUT.json] [SCENARIO]
 
-MODEL: full (both bodies full FE) or shipped (b1 full FE, b2 MVM 1-3 + 37); LAW: velocity or
-position; REDIS: 0 or 1 (redistribute_mass). Writes a JSON line of measures:
+MODEL: shipped (the scenario's models: on the short case b1 full FE, b2 MVM 1-3 + 37) or a
+model kind for every body (full, mvm, mvm-seed, ...); LAW: velocity or position; REDIS: 0 or 1
+(redistribute_mass); SCENARIO: default scenarios/rod_impact_short.toml (the seed case:
+scenarios/rod_impact.toml). Writes a JSON line of measures:
 - energy: (E - E0) / E0 at the end (t_end, after separation) and the largest |E - E0| / E0;
 - ncc / peak_err: force history against `flexmvm theory` (scenarios.compare.compare_runs);
 - pen: the run's max_penetration_m (both directions, after every step);
@@ -25,6 +27,7 @@ from __future__ import annotations
 import json
 import sys
 import time
+from pathlib import Path
 
 import numpy as np
 
@@ -39,10 +42,11 @@ from flexmvm.theory.scenario import theory_histories
 SHORT = "scenarios/rod_impact_short.toml"
 
 
-def scenario(model: str, theta: float, law: str, redis: bool, dt: float | None):
-    sc = fm.load_scenario(SHORT)
-    if model == "full":
-        sc = sc.with_kind("full")
+def scenario(model: str, theta: float, law: str, redis: bool, dt: float | None,
+             path: str = SHORT):
+    sc = fm.load_scenario(path)
+    if model != "shipped":
+        sc = sc.with_kind(model)
     data = sc.model_dump(mode="json")
     data["contacts"][0]["law"] = law
     data["contacts"][0]["redistribute_mass"] = bool(redis)
@@ -50,10 +54,10 @@ def scenario(model: str, theta: float, law: str, redis: bool, dt: float | None):
     return sc.with_time(theta=theta, **({"dt_s": dt} if dt else {}))
 
 
-def main(model, theta, law, redis, dt_us=None, out=None):
+def main(model, theta, law, redis, dt_us=None, out=None, path=SHORT):
     theta, redis = float(theta), bool(int(redis))
     dt = float(dt_us) * 1e-6 if dt_us else None
-    sc = scenario(model, theta, law, redis, dt)
+    sc = scenario(model, theta, law, redis, dt, path)
     built = build_scenario(sc)
     system = built.system
     prov = system.contacts[0]
@@ -119,7 +123,7 @@ def main(model, theta, law, redis, dt_us=None, out=None):
     pf, _ = ring("xs", free)
     vf, _ = ring("us", free)
     d2f = np.abs(F[ks + 1] - 2 * F[ks] + F[ks - 1])
-    out_d = {"model": model, "theta": theta, "law": law, "redis": redis,
+    out_d = {"scenario": path, "model": model, "theta": theta, "law": law, "redis": redis,
              "dt_us": hc * 1e6, "energy_end": float((E[-1] - E[0]) / E[0]),
              "energy_max": float(np.abs(E - E[0]).max() / E[0]),
              "ncc": cmp_.get("ncc_force"), "peak_err": cmp_.get("peak_err"),
@@ -139,7 +143,7 @@ def main(model, theta, law, redis, dt_us=None, out=None):
     if out:
         with open(out, "a") as fh:
             fh.write(line + "\n")
-        np.savez(out.replace(".json", "") + f"_{model}_{theta}_{law}_{int(redis)}_{hc*1e6:g}.npz",
+        np.savez(out.replace(".json", "") + f"_{Path(path).stem}_{model}_{theta}_{law}_{int(redis)}_{hc*1e6:g}.npz",
                  t=t_f, f=f, t_step=t_s, F_step=F, E=E, t_E=run.t,
                  xs=np.array(rec["xs"])[:, sorted(touched_s)],
                  us=np.array(rec["us"])[:, sorted(touched_s)],

@@ -51,7 +51,7 @@ def test_scenario_option_acts_on_the_retained_contact_nodes():
     Craig-Bampton constraint mode still carries the mass of the interior it drags)."""
     sc = fm.load_scenario(SHORT)
     data = sc.model_dump(mode="json")
-    data["contacts"][0]["redistribute_mass"] = True
+    data["contacts"][0].update(redistribute_mass=True, law="position")
     plain, redis = build_scenario(sc), build_scenario(fm.scenario_from_dict(data))
     for b in range(2):
         i0, i1 = plain.system.bodies[b].inv, redis.system.bodies[b].inv

@@ -39,6 +39,10 @@ re-impact at 66.5 us (the reduced faces chatter); seed case (hemispherical b1), 
 1.8e-6 m, at 190 us (of 660 us of contact; peak Hertz approach 21 um). The short full-FE flat
 test case (h = 0.25 us): 2.4e-8 m both ways, h (1 - theta) v0.
 
+Massless coordinates (contact nodes whose mass was redistributed, fe.mass_redistribution) are
+algebraic: after every step they are put in equilibrium at the step's end (integrate.massless),
+which keeps them from alternating about their midpoint equilibrium (undamped at theta = 1/2).
+
 Solved by modified Newton with the per-body matrix W = M + h^2/4 K (factored once per h, see
 body_solver); constraint impulses by the mixed LCP on D = Phi W^-1 Phi^T.
 """
@@ -52,13 +56,14 @@ from dataclasses import dataclass
 import numpy as np
 
 from flexmvm.bodies.momentum import momentum_terms
-from flexmvm.constraints.contact import FrictionRows
+from flexmvm.constraints.contact import ContactLaw, FrictionRows
 from flexmvm.constraints.rows import Rows, stack
 from flexmvm.errors import SolverError
 from flexmvm.integrate import DEFAULT_THETA, nonrotating
 from flexmvm.integrate.body_solver import BodySolver
 from flexmvm.integrate.compliance import DenseCompliance
 from flexmvm.integrate.coulomb import solve_contact_impulses
+from flexmvm.integrate.massless import MasslessCoordinates, equilibrate
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import ContactRows, System
 
@@ -140,6 +145,15 @@ class MoreauJeanIntegrator:
         sparse = {b for b, body in enumerate(system.bodies) if body.nq and body.is_sparse}
         self._pool = _thread_pool() if len(sparse) >= 2 else None
         self._threaded = sparse if self._pool is not None else set()
+        # coordinates without mass (redistributed contact nodes): equilibrium at step ends
+        self._massless = [MasslessCoordinates.of(b) for b in system.bodies]
+        for provider in system.contacts:
+            sides = (getattr(provider, "slave", None), getattr(provider, "master", None))
+            if (getattr(provider, "law", None) is ContactLaw.VELOCITY
+                    and any(b is not None and self._massless[b] is not None for b in sides)):
+                raise SolverError("massless (mass-redistributed) contact nodes need the position "
+                                  "contact law: under the velocity law their velocities flip "
+                                  "every step (docs/contact_law.md)")
 
     # ----------------------------------------------------------------------------------------
     def _residuals(self, t, states, v_plus, h):
@@ -285,6 +299,7 @@ class MoreauJeanIntegrator:
             if out is not None:
                 self.n_nonrotating_steps += 1
                 new_states, lam_c, res_t, lcp_res = out
+                self._equilibrate_massless(t, h, states, new_states, crows.rows, lam_c)
                 self._after_step(parts, lam_c, h)
                 return StepResult(new_states, np.zeros(0), crows, lam_c, 1, 0.0,
                                   translation_residual=res_t, lcp_residual=lcp_res)
@@ -371,10 +386,58 @@ class MoreauJeanIntegrator:
         for st, vp in zip(new_states, v_plus):
             st.v = vp
         self._carry(states, new_states, h)
+        self._equilibrate_massless(t, h, states, new_states, crows.rows, lam[n_j:],
+                                   jrows if n_j else None, lam[:n_j])
         drift = float(np.abs(phi).max()) if phi.size else 0.0
         return StepResult(new_states, lam[:n_j], crows, lam[n_j:], it, drift,
                           converged=rel <= self.rtol, residual=rel, translation_residual=res_t,
                           lcp_residual=lcp_max)
+
+    def _equilibrate_massless(self, t, h, states, new_states, crows: Rows, lam_c,
+                              jrows: Rows | None = None, lam_j=None) -> None:
+        """Massless coordinates (integrate.massless) to equilibrium at the step's end, under
+        the step's constraint impulses as forces lambda / h and the point loads, with the
+        rows that carried an impulse held; their velocity the step's mean velocity. The
+        carried k_hat q and k_hat q_dot follow (the mass-weighted contractions do not see
+        massless coordinates)."""
+        todo = [b for b, ml in enumerate(self._massless) if ml is not None]
+        if not todo:
+            return
+        held = [(rows, lam, np.flatnonzero(lam != 0.0))
+                for rows, lam in ((crows, lam_c), (jrows, lam_j))
+                if rows is not None and lam is not None and len(lam)]
+        parts = []
+        for b in todo:
+            ml, body, new = self._massless[b], self.system.bodies[b], new_states[b]
+            force = np.zeros(body.nq)
+            Phi = [np.zeros((len(on), len(ml.s))) for _, _, on in held]
+            for k, (rows, lam, on) in enumerate(held):
+                blk = rows.blocks.get(b)
+                if blk is not None:
+                    force += blk[1].T @ lam
+                    Phi[k] = blk[1][np.ix_(on, ml.s)]
+            force /= h
+            for load in self._loads.get(b, ()):
+                if t + self.theta * h >= load.t_start_s:
+                    force += body.point_jacobian(load.node, new.A, new.q,
+                                                 np.asarray(load.force_n, float))[1]
+            P = np.vstack(Phi) if Phi else np.zeros((0, len(ml.s)))
+            parts.append((ml, new.q, force[ml.s], P))
+        # rows with no massless column in any body impose nothing here
+        if parts and parts[0][3].shape[0]:
+            keep = np.any(np.hstack([p[3] for p in parts]) != 0.0, axis=1)
+            parts = [(ml, q, f, P[keep]) for ml, q, f, P in parts]
+        for b, (ml, q, _, _), dq in zip(todo, parts, equilibrate(parts)):
+            st, new = states[b], new_states[b]
+            q[ml.s] += dq
+            qd = new.v[6:]
+            v_s = (q[ml.s] - st.q[ml.s]) / h
+            dv = v_s - qd[ml.s]
+            qd[ml.s] = v_s
+            c = self._carried[b]
+            if c is not None and c.q is new.q and c.v is new.v:
+                c.Kq = c.Kq + ml.K_cols @ dq
+                c.Kqd = c.Kqd + ml.K_cols @ dv
 
     def _each_body(self, fn, bodies) -> dict:
         """{b: fn(b)} for b in bodies. The back-substitutions of sparse (full-FE) bodies

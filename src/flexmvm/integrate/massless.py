@@ -1,0 +1,113 @@
+"""Massless elastic coordinates held in equilibrium at the end of every step.
+
+Mass redistribution on the contact boundary (fe.mass_redistribution; Khenous, Laborde and
+Renard 2008) leaves the contact nodes of a full-FE body without mass: their rows of M_qq are
+zero, and with them every inertia term of the floating frame (the inertia invariants are
+mass-weighted). Their rows of the Moreau-Jean step (moreau_jean.py) are then algebraic,
+
+    0 = h F_s(x_m) + (Phi^T lambda)_s,        F_s = -(k_hat q)_s + f_s,
+
+equilibrium at the midpoint configuration q_m = q + theta h v_m. The end position q(t + h) =
+q + h v_m is an extrapolation of it, q(t + h) - q_m = ((1 - theta) / theta) (q_m - q(t)): a
+node whose q(t) is off the equilibrium alternates about it from step to step, undamped at
+theta = 1/2 (amplification -1), and its end velocity v+ = (v_m - (1 - theta) v-) / theta
+alternates with it and grew without bound in the position-law runs of docs/contact_law.md.
+
+The cure is the one of the Newmark schemes with redistributed mass (Khenous et al. 2008,
+whose equation of motion holds at the time nodes): the massless coordinates are in
+equilibrium at the end of the step. After the step, with the massive coordinates at their
+end values q_n and the constraint impulses of the step acting as the force lambda / h,
+
+    K_ss q_s = (Phi^T lambda)_s / h + f_s - K_sn q_n        (one solve with K_ss, factored once)
+
+and their velocity is the step's mean velocity (q_s(t + h) - q_s(t)) / h (they carry no
+momentum and no kinetic energy, so v+ is no state of theirs: it enters only the next step's
+contact prediction). Without contact (and linear elasticity) the end positions of the
+midpoint step are already in equilibrium when the start ones are, so this changes nothing;
+it acts only where the contact force changes. Linear and angular momentum are unchanged (no
+mass moves); the strain energy of the alternation is removed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.linalg as sla
+import scipy.sparse as sp
+
+from flexmvm.errors import SolverError
+from flexmvm.fe.ldl import ldl_factor
+from flexmvm.integrate.lcp import regularised_cho
+
+
+@dataclass
+class MasslessCoordinates:
+    """The elastic coordinates s of one body with zero rows in M_qq and the factor of K_ss."""
+
+    s: np.ndarray              # (ns,) indices into q
+    K_s: sp.csr_matrix         # rows s of k_hat (ns, nq)
+    K_cols: sp.csc_matrix      # columns s of k_hat (nq, ns)
+    solve: object              # x = K_ss^-1 b
+
+    @classmethod
+    def of(cls, body) -> MasslessCoordinates | None:
+        """The massless coordinates of body, or None if it has none: a full-FE body's
+        redistributed contact nodes, or the nodal coordinates of the seed eq. (4) kinds'
+        region II (identity columns). A Craig-Bampton basis keeps mass on every coordinate:
+        a constraint mode moves interior mass."""
+        if not body.nq:
+            return None
+        if body.is_sparse:
+            M = sp.csr_matrix(body.inv.M_qq)
+            row_abs = np.asarray(abs(M).sum(axis=1)).ravel()
+        else:
+            row_abs = np.abs(np.asarray(body.inv.M_qq)).sum(axis=1)
+        s = np.flatnonzero(row_abs == 0.0)
+        if not s.size:
+            return None
+        if body.c_hat is not None:
+            raise SolverError(f"body {body.name!r}: massless (mass-redistributed) contact nodes "
+                              "with Rayleigh damping are not supported")
+        K = sp.csr_matrix(body.k_hat)
+        K_s = K[s]
+        K_ss = sp.csc_matrix(K_s[:, s])
+        try:
+            if body.is_sparse:
+                solve = ldl_factor(K_ss)
+            else:
+                cho = sla.cho_factor(K_ss.toarray())
+                solve = lambda b, cho=cho: sla.cho_solve(cho, b)
+        except (SolverError, np.linalg.LinAlgError) as exc:
+            raise SolverError(f"body {body.name!r}: stiffness of the massless contact nodes "
+                              f"is singular ({exc})") from None
+        return cls(s, K_s, sp.csc_matrix(K_s.T), solve)
+
+    def free_change(self, q: np.ndarray, force_s: np.ndarray) -> np.ndarray:
+        """dq_s (ns,) that brings q[s] to K_ss q_s = force_s - K_sn q_n, the other
+        coordinates as they are (no constraint held)."""
+        return np.asarray(self.solve(force_s - self.K_s @ q)).ravel()
+
+
+def equilibrate(parts: list[tuple[MasslessCoordinates, np.ndarray, np.ndarray, np.ndarray]]
+                ) -> list[np.ndarray]:
+    """Changes dq_s of the massless coordinates of several bodies: equilibrium at the end of
+    the step with the constraint rows that carried an impulse held,
+
+        K_ss dq_s + Phi_s^T mu = r_s  (per body),    sum_b Phi_b,s dq_b,s = 0,
+
+    so the step's closed contacts stay closed (their gaps unchanged: no penetration is made
+    that the next step would push out, doing work) and the impulses lambda / h do no work on
+    dq (minimum of the strain energy under fixed forces: the projection only dissipates).
+    parts: per body (coordinates, q (nq,), force_s (ns,), Phi_s (m, ns) the held rows'
+    columns s, m the same for every body). Returns dq_s per body; q is not changed."""
+    dq0 = [ml.free_change(q, f) for ml, q, f, _ in parts]
+    m = parts[0][3].shape[0] if parts else 0
+    if not m:
+        return dq0
+    Y = [np.asarray(ml.solve(np.ascontiguousarray(P.T))).reshape(len(ml.s), m)
+         for ml, _, _, P in parts]
+    D = sum((P @ y for (_, _, _, P), y in zip(parts, Y)), np.zeros((m, m)))
+    rhs = sum((P @ d for (_, _, _, P), d in zip(parts, dq0)), np.zeros(m))
+    mu = sla.cho_solve(regularised_cho(0.5 * (D + D.T), "massless-node"), rhs)
+    return [d - y @ mu for d, y in zip(dq0, Y)]
