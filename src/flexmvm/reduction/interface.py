@@ -117,6 +117,19 @@ def contact_patch(mesh: Mesh, surface: str, centre_m=None) -> Patch:
     return Patch(node, X[node].copy(), n / np.linalg.norm(n))
 
 
+def patch_nodes(mesh: Mesh, surface: str, patch: Patch, radius_m: float) -> np.ndarray:
+    """Nodes of facet set ``surface`` within ``radius_m`` of the patch centre, measured in
+    its tangent plane (the centre node alone for radius 0), sorted."""
+    nodes = np.unique(_quads(mesh, surface))
+    return nodes[tangent_distance(mesh.nodes[nodes], patch) <= radius_m * (1 + 1e-9)]
+
+
+def tangent_distance(points: np.ndarray, patch: Patch) -> np.ndarray:
+    """Distance (p,) [m] of points (p, 3) from the patch centre in its tangent plane."""
+    d = np.asarray(points, float) - patch.centre_m
+    return np.linalg.norm(d - np.outer(d @ patch.normal, patch.normal), axis=1)
+
+
 def hertz_load(mesh: Mesh, surface: str, patch: Patch, radius_m: float) -> np.ndarray:
     """Nodal forces (3n,) [N] of the Hertz pressure p(r) = p0 sqrt(1 - r^2/a^2), a = radius_m,
     on facet set ``surface`` about ``patch`` (r: distance from the patch centre in its tangent
@@ -249,4 +262,5 @@ def interface_columns(fe: FEModel, reference: ReferenceCondition, spec: Interfac
 
 
 __all__ = ["InterfaceColumns", "InterfaceSpec", "ModeChoice", "Patch", "contact_patch",
-           "hertz_load", "inertia_relief", "interface_columns"]
+           "hertz_load", "inertia_relief", "interface_columns", "patch_nodes",
+           "tangent_distance"]

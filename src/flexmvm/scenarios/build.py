@@ -49,7 +49,7 @@ from flexmvm.mesh.io import read_mesh
 from flexmvm.mesh.mesh import Mesh
 from flexmvm.mesh.rod import RodMesh, RodSpec, rod_mesh
 from flexmvm.reduction.basis import Basis, BasisKind, build_basis
-from flexmvm.reduction.interface import InterfaceSpec
+from flexmvm.reduction.interface import InterfaceSpec, Patch, contact_patch, patch_nodes
 from flexmvm.reduction.reference import three_two_one
 from flexmvm.reduction.rod_reference import rod_reference
 from flexmvm.scenarios.sag import quasi_static_sag
@@ -69,6 +69,13 @@ class BodyInfo:
     n_retained_nodes: int
     n_modes: int
     rod: RodMesh | None
+    # the validity guard (scenarios/guard.py): nodes where the basis leaves a contact free
+    # (MVM kinds: the retained nodes; interface: the patch surface's nodes within the largest
+    # patch radius); None: not guarded (full FE, modal, rigid). patch: the interface kind's
+    # expected contact point, patch_radius_m its largest patch radius [m].
+    covered_nodes: np.ndarray | None = None
+    patch: Patch | None = None
+    patch_radius_m: float = 0.0
 
 
 @dataclass
@@ -330,7 +337,15 @@ def _build_body(cfg, massless: np.ndarray | None = None) -> tuple[FlexibleBody, 
     body = body_from_parts(cfg.name, mesh, basis_for(*args), body_parts_for(*args))
     n_ret = len(retained) if kind.retains_nodes else (mesh.n_nodes if kind is ModelKind.FULL
                                                       else 0)
-    return body, BodyInfo(cfg.name, kind, mesh, material, body.nv, n_ret, modes, rod)
+    covered, patch, radius = None, None, 0.0
+    if kind.retains_nodes:
+        covered = np.array(retained, dtype=np.int64)
+    elif interface is not None:
+        patch = contact_patch(mesh, interface.surface, interface.centre_m)
+        radius = max(interface.radii_m, default=0.0)
+        covered = patch_nodes(mesh, interface.surface, patch, radius)
+    return body, BodyInfo(cfg.name, kind, mesh, material, body.nv, n_ret, modes, rod,
+                          covered, patch, radius)
 
 
 def _initial_state(body: FlexibleBody, placement) -> BodyState:
