@@ -6,7 +6,9 @@ stores it (DIR/reference/history.csv), so a selection study with --out DIR reuse
 
     python benchmarks/interface_front.py --out out/interface_front [--models NAME ...]
 
-Each candidate b2 model is a name of MODELS below; a finished one is kept in
+Each candidate b2 model is a name (model_of: 'mvm:1-3:25', 'interface:0.46:10' = one patch
+of radius 0.46 mm + 10 modes by participation, 'interface:0.2,0.46,0.9:20:frequency', or an
+alias of ALIASES, e.g. p1+10); a finished one is kept in
 DIR/front.json and not rerun. Prints and writes (DIR/front.csv) DOF (elastic coordinates of
 b2), force NCC, peak / impulse / duration errors, the NCC of the two b2 probe velocities and
 the wall time.
@@ -33,25 +35,31 @@ SEED = ROOT / "scenarios" / "rod_impact.toml"
 MM = 1e-3
 
 
-def _radii(*mm: float) -> list[float]:
-    return [a * MM for a in mm]
+#: the names of the first measurements (docs/interface_basis.md) -> model text
+ALIASES = {"mvm-1-1+37": "mvm:1-1:37", "mvm-1-3+25": "mvm:1-3:25", "mvm-1-3+37": "mvm:1-3:37"}
+_SETS = {"p1": "0.46", "p3": "0.2,0.46,0.9", "p5": "0.15,0.3,0.46,0.7,1.0",
+         "p8": "0.1,0.2,0.3,0.46,0.6,0.8,1.0,1.4"}
+for _tag, _r in _SETS.items():
+    for _n in range(0, 41):
+        ALIASES[f"{_tag}+{_n}"] = f"interface:{_r}:{_n}"
+        ALIASES[f"{_tag}+{_n}f"] = f"interface:{_r}:{_n}:frequency"
+for _n in range(1, 41):
+    ALIASES[f"part-{_n}"] = f"interface::{_n}"
 
 
-#: name -> b2 model
-MODELS = {
-    "mvm-1-1+37": lambda: fm.mvm("1-1", 37),
-    "mvm-1-3+25": lambda: fm.mvm("1-3", 25),
-    "mvm-1-3+37": lambda: fm.mvm("1-3", 37),
-}
-for _n in (5, 10, 15, 20, 25, 30, 35, 40):
-    MODELS[f"part-{_n}"] = (lambda n: lambda: fm.interface((), n))(_n)
-for _radii_mm, _tag in (((0.15, 0.3, 0.46, 0.7, 1.0), "p5"),
-                        ((0.1, 0.2, 0.3, 0.46, 0.6, 0.8, 1.0, 1.4), "p8"),
-                        ((0.46,), "p1"), ((0.2, 0.46, 0.9), "p3")):
-    for _n in (5, 10, 15, 20, 25, 30, 32, 35):
-        MODELS[f"{_tag}+{_n}"] = (lambda r, n: lambda: fm.interface(_radii(*r), n))(_radii_mm, _n)
-        MODELS[f"{_tag}+{_n}f"] = (lambda r, n: lambda: fm.interface(
-            _radii(*r), n, mode_choice="frequency"))(_radii_mm, _n)
+def model_of(name: str):
+    """The b2 model of a name: an alias above, 'mvm:I-J:M' or
+    'interface:<radii in mm, comma-separated>:<modes>[:frequency]'."""
+    text = ALIASES.get(name, name)
+    bits = text.split(":")
+    if bits[0] == "mvm" and len(bits) == 3:
+        return fm.mvm(bits[1], int(bits[2]))
+    if bits[0] == "interface" and len(bits) in (3, 4):
+        radii = [float(a) * MM for a in bits[1].split(",") if a.strip()]
+        choice = bits[3] if len(bits) == 4 else "participation"
+        return fm.interface(radii, int(bits[2]), mode_choice=choice)
+    raise SystemExit(f"unknown model {name!r}: expected one of the aliases, 'mvm:I-J:M' or "
+                     "'interface:R1,R2,...(mm):MODES[:frequency]'")
 
 
 def _commit() -> str:
@@ -71,9 +79,7 @@ def main() -> None:
     ap.add_argument("--other", default="mvm:3-5:40")
     ap.add_argument("--scenario", type=Path, default=SEED)
     args = ap.parse_args()
-    unknown = [m for m in args.models if m not in MODELS]
-    if unknown:
-        raise SystemExit(f"unknown models {unknown}; known: {', '.join(MODELS)}")
+    models = {name: model_of(name) for name in args.models}
     sc = study_scenario(fm.load_scenario(args.scenario), "b2", t_end_s=args.t_end,
                         dt_s=args.dt, other=args.other)
     args.out.mkdir(parents=True, exist_ok=True)
@@ -85,7 +91,7 @@ def main() -> None:
     for name in args.models:
         if name in rows:
             continue
-        model = MODELS[name]()
+        model = models[name]
         t0 = time.perf_counter()
         run = run_scenario(sc.with_model("b2", model))
         info = next(b for b in run.built.info if b.name == "b2")
