@@ -78,6 +78,11 @@ def main() -> None:
     ap.add_argument("--dt", type=float, default=1e-6)
     ap.add_argument("--other", default="mvm:3-5:40")
     ap.add_argument("--scenario", type=Path, default=SEED)
+    ap.add_argument("--figure", type=Path, default=None,
+                    help="write the NCC-DOF front figure here (interface rows of DIR/front.json "
+                         "beside the node selections of --nodes)")
+    ap.add_argument("--nodes", type=Path, default=ROOT / "docs" / "studies" / "selection" / "ncc.csv",
+                    help="ncc.csv of the 140-run selection study at the same settings")
     args = ap.parse_args()
     models = {name: model_of(name) for name in args.models}
     sc = study_scenario(fm.load_scenario(args.scenario), "b2", t_end_s=args.t_end,
@@ -112,11 +117,32 @@ def main() -> None:
         w.writeheader()
         for name, row in sorted(rows.items(), key=lambda kv: (kv[1]["dof"], kv[0])):
             w.writerow({"name": name} | row)
+    if args.figure is not None:
+        _figure(args.figure, rows, args.nodes)
     for name, row in sorted(rows.items(), key=lambda kv: (kv[1]["dof"], kv[0])):
         print(f"{name:14s} {row['dof']:4d}  NCC {row.get('ncc_force', float('nan')):.4f}  "
               f"peak {100 * row.get('peak_err', float('nan')):+.2f} %  "
               f"impact end {row.get('ncc_b2_impact_end', float('nan')):.4f}  "
               f"free end {row.get('ncc_b2_free_end', float('nan')):.4f}")
+
+
+def _figure(path: Path, rows: dict, nodes_csv: Path) -> None:
+    from flexmvm.plots.study_figures import plot_ncc_dof_fronts
+
+    with open(nodes_csv, newline="") as fh:
+        nodes = [(int(r["dof"]), float(r["ncc_force"])) for r in csv.DictReader(fh)
+                 if r.get("ncc_force")]
+    kinds = {"node selections (mvm, Craig-Bampton)": nodes,
+             "interface, modes by participation": [
+                 (r["dof"], r["ncc_force"]) for r in rows.values()
+                 if r["model"].startswith("interface") and "frequency" not in r["model"]],
+             "interface, modes by frequency": [
+                 (r["dof"], r["ncc_force"]) for r in rows.values()
+                 if r["model"].startswith("interface") and "frequency" in r["model"]]}
+    path.parent.mkdir(parents=True, exist_ok=True)
+    plot_ncc_dof_fronts(path, kinds, target=0.995,
+                        title="seed case, b2: force NCC against b2 full FE (0.8 ms, 1 us)")
+    print(f"wrote {path}")
 
 
 if __name__ == "__main__":
