@@ -27,6 +27,7 @@ from flexmvm.materials import PRESETS
 from flexmvm.mesh.rod import RodSpec, rod_mesh
 from flexmvm.reduction.basis import BasisKind, build_basis
 from flexmvm.reduction.interface import (
+    EXCITED_RTOL,
     InterfaceSpec,
     ModeChoice,
     contact_patch,
@@ -108,6 +109,16 @@ def test_participation_keeps_the_modes_an_axial_load_excites(small):
     assert part.participation.min() > 1e3 * np.sort(p_all)[:4].max()
     assert not np.allclose(part.mode_freqs_hz, freq.mode_freqs_hz)
     np.testing.assert_allclose(freq.mode_freqs_hz, f_hz[6:10], rtol=1e-8)
+    # never a mode the load does not excite (round-off of the mesh's symmetry), even when
+    # its 1/omega^2 is large: the kept modes' modal forces are all real ones
+    force = np.abs(phi[:, 6:].T @ f)
+    excited = force > EXCITED_RTOL * force.max()
+    n_exc = int(excited.sum())
+    assert 4 <= n_exc < 40
+    kept = np.isin(np.round(f_hz[6:], 6), np.round(part.mode_freqs_hz, 6))
+    assert np.all(excited[kept])
+    with pytest.raises(InputError, match=f"excites {n_exc} of the lowest 40"):
+        interface_columns(fe, ref, spec, n_exc + 1)
 
 
 def test_build_basis_and_cache_key_carry_the_patch(small):

@@ -19,8 +19,10 @@ floating frame of the 3-2-1 reference: reference DOF rows zero):
 2. **Modes**: elastic free-free modes phi_i of (K, M). ``participation`` keeps the
    ``n_modes`` of a pool of the lowest ``pool`` with the largest static participation in the
    expected contact load f (the mean of the patch loads), p_i = |phi_i^T f| / omega_i^2
-   (the modal share of the static displacement; an on-axis impact excites no bending or
-   torsion mode); ``frequency`` keeps the lowest n_modes.
+   (the modal share of the static displacement), among the modes the load excites
+   (|phi_i^T f| above EXCITED_RTOL of the largest: an on-axis impact excites no bending or
+   torsion mode); the default pool is doubled until it holds n_modes excited modes;
+   ``frequency`` keeps the lowest n_modes.
 
 A load in the span of the patch loads has its full-FE static response (inertia relief,
 floating frame) in span(psi), so the reduced static solution psi k_hat^-1 psi^T P f equals
@@ -44,6 +46,16 @@ from flexmvm.reduction.reference import ReferenceCondition, rigid_body_modes
 #: A patch vector whose M-norm drops below this fraction when made orthogonal to the columns
 #: before it adds nothing (the radius is too close to another one, or the modes hold it).
 DEPENDENT_RTOL = 1e-6
+
+#: A mode whose modal force |phi^T f| is below this fraction of the pool's largest is not
+#: excited by the expected load (on the seed rod an on-axis load gives the axial modes 1.5 and
+#: the bending and torsion modes 1e-13..2e-10, round-off of the mesh's symmetry): the
+#: participation choice never keeps one, however low its frequency.
+EXCITED_RTOL = 1e-6
+
+#: The participation choice doubles its default pool until it holds ``modes`` excited modes,
+#: up to this many free-free modes.
+MAX_POOL = 640
 
 #: Sub-cells per facet diameter over the patch radius: each facet near the patch is split into
 #: s x s sub-cells (2 x 2 Gauss points each), s = ceil(SUBCELLS_PER_RADIUS * d / a), so the
@@ -194,6 +206,37 @@ def inertia_relief(fe: FEModel, f: np.ndarray) -> np.ndarray:
     return f - MR @ np.linalg.solve(R.T @ MR, R.T @ f)
 
 
+def _chosen_modes(fe: FEModel, spec: InterfaceSpec, n_modes: int, f_exp: np.ndarray
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(phi (3n, n_modes) free-free elastic modes, M-normalised, their frequencies [Hz] and
+    participations |phi^T f| / omega^2 [m/N]) chosen as spec.mode_choice says."""
+    n_free = fe.n_dof - 7
+    if spec.mode_choice is ModeChoice.FREQUENCY:
+        f_hz, modes = free_modes(fe, min(n_modes, n_free) + 6)
+        f_hz, modes = f_hz[6:], modes[:, 6:]  # the six rigid-body modes come first
+        return modes, f_hz, np.abs(modes.T @ f_exp) / (2.0 * np.pi * f_hz) ** 2
+    grow = spec.pool is None
+    pool = min(spec.pool_size(n_modes), n_free)
+    while True:
+        if pool < n_modes:
+            raise InputError(f"interface basis: {n_modes} modes asked, the mode pool holds "
+                             f"{pool}")
+        f_hz, modes = free_modes(fe, pool + 6)
+        f_hz, modes = f_hz[6:], modes[:, 6:]
+        force = np.abs(modes.T @ f_exp)
+        excited = np.nonzero(force > EXCITED_RTOL * force.max())[0]
+        if excited.size >= n_modes or not grow or pool >= min(MAX_POOL, n_free):
+            break
+        pool = min(2 * pool, MAX_POOL, n_free)
+    if excited.size < n_modes:
+        raise InputError(f"interface basis: the expected load excites {excited.size} of the "
+                         f"lowest {pool} free-free modes, {n_modes} asked; ask for fewer modes"
+                         + (" or a larger mode_pool" if not grow else ""))
+    p_all = force / (2.0 * np.pi * f_hz) ** 2
+    keep = np.sort(excited[np.argsort(-p_all[excited], kind="stable")[:n_modes]])
+    return modes[:, keep], f_hz[keep], p_all[keep]
+
+
 def interface_columns(fe: FEModel, reference: ReferenceCondition, spec: InterfaceSpec,
                       n_modes: int) -> InterfaceColumns:
     """The interface basis of ``fe`` for ``spec`` with ``n_modes`` modes (module doc)."""
@@ -216,21 +259,7 @@ def interface_columns(fe: FEModel, reference: ReferenceCondition, spec: Interfac
     # modes: free-free, elastic ones (the six rigid-body modes come first)
     phi, freqs, part = np.zeros((n, 0)), np.zeros(0), np.zeros(0)
     if n_modes:
-        pool = spec.pool_size(n_modes) if spec.mode_choice is ModeChoice.PARTICIPATION \
-            else n_modes
-        pool = min(pool, n - 7)
-        if pool < n_modes:
-            raise InputError(f"interface basis: {n_modes} modes asked, the mode pool holds "
-                             f"{pool}")
-        f_hz, modes = free_modes(fe, pool + 6)
-        f_hz, modes = f_hz[6:], modes[:, 6:]
-        omega2 = (2.0 * np.pi * f_hz) ** 2
-        p_all = np.abs(modes.T @ f_exp) / omega2
-        if spec.mode_choice is ModeChoice.PARTICIPATION:
-            keep = np.sort(np.argsort(-p_all, kind="stable")[:n_modes])
-        else:
-            keep = np.arange(n_modes)
-        phi, freqs, part = modes[:, keep], f_hz[keep], p_all[keep]
+        phi, freqs, part = _chosen_modes(fe, spec, n_modes, f_exp)
     # patch vectors: inertia-relief static responses, then M-orthonormal to the modes and
     # each other (modal truncation augmentation)
     free = reference.free_dofs(n)
