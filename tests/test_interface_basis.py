@@ -119,6 +119,11 @@ def test_participation_keeps_the_modes_an_axial_load_excites(small):
     assert np.all(excited[kept])
     with pytest.raises(InputError, match=f"excites {n_exc} of the lowest 40"):
         interface_columns(fe, ref, spec, n_exc + 1)
+    # a pool of bending modes only holds no excited mode: one mode asked grows the pool to the
+    # first axial mode instead of keeping a bending one
+    one = interface_columns(fe, ref, InterfaceSpec(radii_m=(0.5 * MM,)), 1)
+    first = np.nonzero(excited)[0][np.argmax(p_all[excited])]
+    np.testing.assert_allclose(one.mode_freqs_hz, f_hz[6 + first], rtol=1e-8)
 
 
 def test_build_basis_and_cache_key_carry_the_patch(small):

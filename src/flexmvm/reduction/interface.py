@@ -47,7 +47,8 @@ from flexmvm.reduction.reference import ReferenceCondition, rigid_body_modes
 #: before it adds nothing (the radius is too close to another one, or the modes hold it).
 DEPENDENT_RTOL = 1e-6
 
-#: A mode whose modal force |phi^T f| is below this fraction of the pool's largest is not
+#: A mode whose modal force |phi^T f| is below this fraction of the pool's largest (rigid-body
+#: modes included) is not
 #: excited by the expected load (on the seed rod an on-axis load gives the axial modes 1.5 and
 #: the bending and torsion modes 1e-13..2e-10, round-off of the mesh's symmetry): the
 #: participation choice never keeps one, however low its frequency.
@@ -222,9 +223,12 @@ def _chosen_modes(fe: FEModel, spec: InterfaceSpec, n_modes: int, f_exp: np.ndar
             raise InputError(f"interface basis: {n_modes} modes asked, the mode pool holds "
                              f"{pool}")
         f_hz, modes = free_modes(fe, pool + 6)
-        f_hz, modes = f_hz[6:], modes[:, 6:]
         force = np.abs(modes.T @ f_exp)
-        excited = np.nonzero(force > EXCITED_RTOL * force.max())[0]
+        # the scale of a real modal force: the largest, rigid-body modes included (a 1 N
+        # load gives a rigid translation 1/sqrt(mass)), so a pool holding no excited elastic
+        # mode keeps none
+        excited = np.nonzero(force[6:] > EXCITED_RTOL * force.max())[0]
+        f_hz, modes, force = f_hz[6:], modes[:, 6:], force[6:]
         if excited.size >= n_modes or not grow or pool >= min(MAX_POOL, n_free):
             break
         pool = min(2 * pool, MAX_POOL, n_free)
