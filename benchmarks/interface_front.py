@@ -63,9 +63,13 @@ def model_of(name: str):
 
 
 def _commit() -> str:
+    """HEAD at the start of this process (the code it runs), '-dirty' if src/ has changes."""
     try:
-        return subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, text=True,
+        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, text=True,
                               capture_output=True, check=True).stdout.strip()
+        dirty = subprocess.run(["git", "status", "--porcelain", "src"], cwd=ROOT, text=True,
+                               capture_output=True, check=True).stdout.strip()
+        return head + ("-dirty" if dirty else "")
     except (OSError, subprocess.CalledProcessError):
         return "unknown"
 
@@ -91,6 +95,7 @@ def main() -> None:
     hist, fresh = reference_history(sc, "b2", args.out, progress=False)
     print(f"reference {hist} ({'computed' if fresh else 'stored'})", flush=True)
     t_ref, f_ref, probes_ref = read_history(hist)
+    commit = _commit()
     store = args.out / "front.json"
     rows = json.loads(store.read_text()) if store.is_file() else {}
     for name in args.models:
@@ -101,7 +106,7 @@ def main() -> None:
         run = run_scenario(sc.with_model("b2", model))
         info = next(b for b in run.built.info if b.name == "b2")
         cmp = compare_runs(t_ref, f_ref, probes_ref, *run.result.curves())
-        row = {"model": model.label, "dof": info.dof - 6, "commit": _commit(),
+        row = {"model": model.label, "dof": info.dof - 6, "commit": commit,
                "wall_time_s": round(time.perf_counter() - t0, 1)}
         row |= {k: v for k, v in cmp.items() if isinstance(v, float)}
         guard = run.summary.get("reduced_contact_guard")
