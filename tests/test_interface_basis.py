@@ -246,3 +246,18 @@ def test_selection_study_sweeps_the_interface_kind_beside_the_nodes(tmp_path):
     assert (tmp_path / "fig_front_ncc_dof.png").stat().st_size > 1000
     stored = sorted(p.name for p in (tmp_path / "cases").glob("if-*.json"))
     assert stored == ["if-r200-m3.json", "if-r200_400-m3.json"]
+
+
+def test_shipped_40dof_scenario_is_the_seed_case_with_an_interface_b2():
+    """scenarios/rod_impact_40dof.toml: the seed case but for b2's model, an interface basis of
+    at most 40 elastic coordinates (docs/interface_basis.md)."""
+    seed = fm.load_scenario(ROOT / "scenarios" / "rod_impact.toml")
+    ship = fm.load_scenario(ROOT / "scenarios" / "rod_impact_40dof.toml")
+    m = ship.body("b2").model
+    assert m.kind is fm.ModelKind.INTERFACE and m.mode_choice == "participation"
+    assert len(m.patch_radii_m) + m.modes <= 40
+    a, b = seed.model_dump(mode="json"), ship.model_dump(mode="json")
+    for d in (a, b):
+        d.pop("name"), d.pop("description")
+        d["bodies"][1].pop("model")
+    assert a == b
