@@ -72,10 +72,9 @@ class BodyInfo:
     # the validity guard (scenarios/guard.py): nodes where the basis leaves a contact free
     # (MVM kinds: the retained nodes; interface: the patch surface's nodes within the largest
     # patch radius); None: not guarded (full FE, modal, rigid). patch: the interface kind's
-    # expected contact point, patch_radius_m its largest patch radius [m].
+    # expected contact point.
     covered_nodes: np.ndarray | None = None
     patch: Patch | None = None
-    patch_radius_m: float = 0.0
 
 
 @dataclass
@@ -337,15 +336,14 @@ def _build_body(cfg, massless: np.ndarray | None = None) -> tuple[FlexibleBody, 
     body = body_from_parts(cfg.name, mesh, basis_for(*args), body_parts_for(*args))
     n_ret = len(retained) if kind.retains_nodes else (mesh.n_nodes if kind is ModelKind.FULL
                                                       else 0)
-    covered, patch, radius = None, None, 0.0
+    covered, patch = None, None
     if kind.retains_nodes:
         covered = np.array(retained, dtype=np.int64)
     elif interface is not None:
         patch = contact_patch(mesh, interface.surface, interface.centre_m)
-        radius = max(interface.radii_m, default=0.0)
-        covered = patch_nodes(mesh, interface.surface, patch, radius)
+        covered = patch_nodes(mesh, interface.surface, patch, max(interface.radii_m, default=0.0))
     return body, BodyInfo(cfg.name, kind, mesh, material, body.nv, n_ret, modes, rod,
-                          covered, patch, radius)
+                          covered, patch)
 
 
 def _initial_state(body: FlexibleBody, placement) -> BodyState:
