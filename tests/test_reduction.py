@@ -6,6 +6,8 @@ Beam: 0.12 x 0.02 x 0.02 m, 6 x 2 x 2 HEX27 cells (325 nodes, 975 DOF), aluminiu
 
 from __future__ import annotations
 
+import dataclasses
+
 import numpy as np
 import pytest
 import scipy.linalg as sla
@@ -15,7 +17,7 @@ import scipy.sparse.linalg as spla
 from flexmvm.errors import InputError
 from flexmvm.fe import assemble, constrained_modes
 from flexmvm.materials import ALUMINIUM
-from flexmvm.mesh.mesh import CellBlock, CellType, Mesh
+from flexmvm.mesh.mesh import CellBlock, CellType, FacetSet, Mesh
 from flexmvm.reduction import (
     BasisKind,
     ReferenceCondition,
@@ -24,6 +26,7 @@ from flexmvm.reduction import (
     rigid_body_modes,
     three_two_one,
 )
+from flexmvm.reduction.interface import InterfaceSpec
 
 # meshio/VTK hexahedron27 nodes as doubled reference coordinates (independent of the library).
 _HEX27 = [(0, 0, 0), (2, 0, 0), (2, 2, 0), (0, 2, 0), (0, 0, 2), (2, 0, 2), (2, 2, 2), (0, 2, 2),
@@ -74,7 +77,21 @@ def reduced_lam(fe, basis):
     return sla.eigh(k, m, eigvals_only=True)
 
 
+def _with_face(fe):
+    """fe with facet set end_a: the x = 0 face as 4 x 4 linear quads (outward normal -x)."""
+    X = fe.mesh.nodes
+    ids = np.flatnonzero(np.isclose(X[:, 0], 0.0))
+    grid = ids[np.lexsort((X[ids, 2], X[ids, 1]))].reshape(5, 5)  # [y index, z index]
+    quads = [[grid[i, j], grid[i, j + 1], grid[i + 1, j + 1], grid[i + 1, j]]
+             for i in range(4) for j in range(4)]
+    mesh = dataclasses.replace(fe.mesh, facet_sets={"end_a": FacetSet(quads=np.array(quads))})
+    return dataclasses.replace(fe, mesh=mesh)
+
+
 def make(fe, ref, face_a, kind, n_modes=6, retained=None):
+    if kind is BasisKind.INTERFACE:  # two Hertz patches on the x = 0 face + modes
+        return build_basis(_with_face(fe), kind, ref, (), n_modes,
+                           interface=InterfaceSpec(radii_m=(0.003, 0.006)))
     if kind in (BasisKind.FULL, BasisKind.MODAL):
         return build_basis(fe, kind, ref, (), 0 if kind is BasisKind.FULL else n_modes)
     return build_basis(fe, kind, ref, face_a if retained is None else retained, n_modes)

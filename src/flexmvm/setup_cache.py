@@ -231,26 +231,33 @@ def cached_fe(source: Mapping | None, mesh: Mesh, material: Material,
 
 
 def _basis_inputs(source: Mapping, material: Material, kind: BasisKind, reference_set: str,
-                  reference: ReferenceCondition, retained: np.ndarray, n_modes: int) -> dict:
-    """Key inputs shared by a basis and the body parts built on it."""
-    return {"mesh": source, "material": material_inputs(material), "kind": kind.value,
-            "reference": {"set": reference_set, "fixed_dofs": reference.fixed_dofs.tolist()},
-            "retained": [int(k) for k in retained], "n_modes": int(n_modes)}
+                  reference: ReferenceCondition, retained: np.ndarray, n_modes: int,
+                  extra: Mapping | None = None) -> dict:
+    """Key inputs shared by a basis and the body parts built on it; ``extra``: the further
+    parameters of a kind (an interface basis: InterfaceSpec.key(), its patch and mode
+    choice), left out when None so that the keys of the other kinds do not change."""
+    inputs = {"mesh": source, "material": material_inputs(material), "kind": kind.value,
+              "reference": {"set": reference_set, "fixed_dofs": reference.fixed_dofs.tolist()},
+              "retained": [int(k) for k in retained], "n_modes": int(n_modes)}
+    return inputs if extra is None else inputs | {"extra": dict(extra)}
 
 
 def basis_key(source: Mapping, material: Material, kind: BasisKind, reference_set: str,
               reference: ReferenceCondition, retained: np.ndarray, n_modes: int,
-              version: str | None = None) -> str:
-    """Entry name of a basis: its FE model's inputs, kind, reference, retained nodes, modes."""
-    inputs = _basis_inputs(source, material, kind, reference_set, reference, retained, n_modes)
+              version: str | None = None, extra: Mapping | None = None) -> str:
+    """Entry name of a basis: its FE model's inputs, kind, reference, retained nodes, modes
+    and the kind's further parameters ``extra``."""
+    inputs = _basis_inputs(source, material, kind, reference_set, reference, retained, n_modes,
+                           extra)
     return make_key("basis", inputs, version)
 
 
 def body_key(source: Mapping, material: Material, kind: BasisKind, reference_set: str,
              reference: ReferenceCondition, retained: np.ndarray, n_modes: int,
-             version: str | None = None) -> str:
+             version: str | None = None, extra: Mapping | None = None) -> str:
     """Entry name of a body's parts: the inputs of its basis, under the BODY_SOURCES version."""
-    inputs = _basis_inputs(source, material, kind, reference_set, reference, retained, n_modes)
+    inputs = _basis_inputs(source, material, kind, reference_set, reference, retained, n_modes,
+                           extra)
     return make_key("body", inputs, code_version(BODY_SOURCES) if version is None else version)
 
 
@@ -267,11 +274,13 @@ def _basis_from(arrays: Mapping[str, np.ndarray], kind: BasisKind,
 
 def cached_basis(source: Mapping | None, material: Material, kind: BasisKind,
                  reference_set: str, reference: ReferenceCondition, retained: np.ndarray,
-                 n_modes: int, build: Callable[[], Basis]) -> Basis:
-    """The basis from the cache, else ``build()`` stored; source None: build, no caching."""
+                 n_modes: int, build: Callable[[], Basis], extra: Mapping | None = None) -> Basis:
+    """The basis from the cache, else ``build()`` stored; source None: build, no caching.
+    extra: the kind's further parameters (basis_key)."""
     if source is None:
         return build()
-    key = basis_key(source, material, kind, reference_set, reference, retained, n_modes)
+    key = basis_key(source, material, kind, reference_set, reference, retained, n_modes,
+                    extra=extra)
     hit = _decoded(key, lambda arrays: _basis_from(arrays, kind, reference, retained, n_modes))
     if hit is not None:
         return hit
@@ -308,7 +317,8 @@ def _parts_from(arrays: Mapping[str, np.ndarray], nq: int) -> BodyParts:
 
 def cached_body(source: Mapping | None, material: Material, kind: BasisKind,
                 reference_set: str, reference: ReferenceCondition, retained: np.ndarray,
-                n_modes: int, nq: int, build: Callable[[], BodyParts]) -> BodyParts:
+                n_modes: int, nq: int, build: Callable[[], BodyParts],
+                extra: Mapping | None = None) -> BodyParts:
     """A body's parts (invariants, k_hat) from the cache, else ``build()`` stored.
 
     The arguments up to n_modes are those of its basis (cached_basis); nq: its number of
@@ -317,7 +327,8 @@ def cached_body(source: Mapping | None, material: Material, kind: BasisKind,
     """
     if source is None or kind is BasisKind.FULL:
         return build()
-    key = body_key(source, material, kind, reference_set, reference, retained, n_modes)
+    key = body_key(source, material, kind, reference_set, reference, retained, n_modes,
+                   extra=extra)
     hit = _decoded(key, lambda arrays: _parts_from(arrays, nq))
     if hit is not None:
         return hit

@@ -27,6 +27,7 @@ class ModelKind(StrEnum):
     MVM_SEED = "mvm-seed"  # seed eq. (4): modes on region I, nodal DOFs on region II
     MVM_SEED_FIXED = "mvm-seed-fixed"  # seed eq. (4) with region-I modes of region II held
     MODAL = "modal"  # first N modes of the reference-supported body
+    INTERFACE = "interface"  # Hertz contact-patch Ritz vectors + modes by participation
     RIGID = "rigid"  # no elastic coordinates
 
     @property
@@ -47,7 +48,7 @@ class ModelKind(StrEnum):
 
 _BASIS = {ModelKind.FULL: BasisKind.FULL, ModelKind.MVM: BasisKind.CRAIG_BAMPTON,
           ModelKind.MVM_SEED: BasisKind.SEED_BLOCK, ModelKind.MVM_SEED_FIXED: BasisKind.SEED_FIXED,
-          ModelKind.MODAL: BasisKind.MODAL}
+          ModelKind.MODAL: BasisKind.MODAL, ModelKind.INTERFACE: BasisKind.INTERFACE}
 
 
 @dataclass(frozen=True)

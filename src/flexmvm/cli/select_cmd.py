@@ -50,24 +50,36 @@ def parse_range(text: str, name: str = "range") -> list[int]:
 @click.option("--kind", type=click.Choice(["mvm", "mvm-seed", "mvm-seed-fixed"]), default="mvm",
               show_default=True,
               help="Model of the candidates: Craig-Bampton (mvm) or the seed's eq. (4) readings.")
+@click.option("--patches", default=None,
+              help="Also sweep the interface kind (docs/interface_basis.md): patch-radius sets "
+                   "in mm, comma-separated, sets separated by ';' (e.g. '0.46;0.2,0.46,0.9'; "
+                   "'-': no patch vector).")
+@click.option("--interface-modes", default="5:20:5", show_default=True,
+              help="Mode counts of the interface kind (with --patches): a..b, start:stop:step.")
 @click.option("--search", is_flag=True,
               help="Bisect the mode counts per selection instead of running the whole grid.")
 @study_run_options
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
               help="Study directory (a rerun resumes).")
 @click.option("--progress/--no-progress", default=True, show_default=True)
-def command(scenario, body, layers, laps, modes, target, kind, search, scheduler, workers,
-            serial, t_end, dt, other, out_dir, progress) -> None:
+def command(scenario, body, layers, laps, modes, target, kind, patches, interface_modes, search,
+            scheduler, workers, serial, t_end, dt, other, out_dir, progress) -> None:
     """Selection study: node selections x mode counts of BODY against the full-FE force;
-    writes ncc.csv, selection.json, fig7_ncc_map.png, fig8_ncc_modes.png."""
+    writes ncc.csv, selection.json, fig7_ncc_map.png, fig8_ncc_modes.png (with --patches
+    also ncc_interface.csv and fig_front_ncc_dof.png, the NCC-DOF front of both kinds)."""
     from flexmvm.metrics.ncc import Target
     from flexmvm.studies.selection import run_selection_study
 
+    from flexmvm.studies.interface import parse_patches
+
     grid = (parse_range(layers, "layers"), parse_range(laps, "laps"), parse_range(modes, "modes"))
+    patch_sets = parse_patches(patches) if patches is not None else None
+    if_modes = parse_range(interface_modes, "interface-modes")
     tgt = Target.parse(target)
     check_workers(workers)
     run_selection_study(scenario, body, out_dir, *grid, target=tgt, search=search,
                         scheduler=scheduler, n_workers=workers, progress=progress, t_end_s=t_end,
                         dt_s=dt, other=other,
-                        serial=serial, echo=click.echo, kind=kind)
+                        serial=serial, echo=click.echo, kind=kind, patches=patch_sets,
+                        interface_modes=if_modes)
     click.echo(f"wrote {out_dir}")

@@ -131,6 +131,7 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
     intervals: list[list[float]] = []
     max_pen, n_steps, drift = 0.0, 0, 0.0
     step_t, step_h, step_impulse = [], [], []
+    row_impulses: dict = {}   # normal contact row key -> [impulse [N s], first time [s]]
     n_loose, worst_res, worst_lcp, p_res = 0, 0.0, 0.0, np.zeros(3)
     friction = (FrictionSummary() if any(c.mu > 0 for c in system.contacts)
                 else None)   # runs with friction report it even if no contact closes
@@ -168,6 +169,8 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
         _track_intervals(intervals, in_contact, t, t + h)
         impulse += f
         jimpulse += res.joint_impulses
+        if f > 0.0:
+            _add_row_impulses(row_impulses, res.contact, res.contact_impulses, t0 + tick * dt)
         step_t.append(t0 + tick * dt)
         step_h.append(h)
         step_impulse.append(f)
@@ -193,9 +196,27 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
                       n_factorizations=nfac, n_nonrotating_steps=integ.n_nonrotating_steps,
                       steps_not_converged=n_loose, newton_residual_max=worst_res,
                       lcp_residual_max=worst_lcp, momentum_residual=p_res, wall_time_s=wall,
-                      friction=friction,
+                      friction=friction, contact_row_impulses=row_impulses,
                       steps=StepHistory(np.array(step_t), np.array(step_h),
                                         np.array(step_impulse, dtype=float)))
+
+
+def _add_row_impulses(acc: dict, crows, lam: np.ndarray, t: float) -> None:
+    """Add the compressive normal impulses of the step's unilateral normal rows (keys
+    (contact, slave node, master facet); not tangent or bond rows) to acc[key] = [impulse
+    [N s], first time [s] it carried one]: where on the surfaces a run's contact was carried
+    (the validity guard of reduced bases, scenarios/guard.py)."""
+    w = crows.normal_weight
+    for i in np.nonzero(lam > 0.0)[0]:
+        key = crows.keys[i]
+        if i < crows.n_eq or len(key) != 3:
+            continue
+        x = float(lam[i] * (1.0 if w is None else w[i]))
+        entry = acc.get(key)
+        if entry is None:
+            acc[key] = [x, t]
+        else:
+            entry[0] += x
 
 
 def _check_finite(row: dict, system, t: float) -> None:

@@ -122,6 +122,9 @@ class RunResult:
     steps_not_converged: int = 0   # steps that stopped above the Newton rtol (round-off floor)
     newton_residual_max: float = 0.0  # largest relative momentum residual at a step's exit
     lcp_residual_max: float = 0.0  # largest complementarity residual of any LCP solve
+    # normal contact row (contact name, slave node, master facet) -> [impulse [N s], first
+    # time it carried one [s]] over the run (the reduced-basis guard, scenarios/guard.py)
+    contact_row_impulses: dict = field(default_factory=dict)
     momentum_residual: np.ndarray = field(default_factory=lambda: np.zeros(3))
     # sum over all steps of the translational momentum residuals of all bodies [N s]: the
     # linear-momentum change the scheme's solves left unbalanced (a free system's error)

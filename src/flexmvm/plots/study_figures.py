@@ -5,6 +5,8 @@
 - :func:`plot_ncc_modes`: NCC against the number of modes, one line per selection, the node
   count in the legend, seed fig. 8.
 - :func:`plot_materials`: NCC against modes per material and selection, seed fig. 9 / table 2.
+- :func:`plot_ncc_dof_fronts`: force NCC against DOF, every model of each kind (node
+  selections, interface bases) as points and its front (the best NCC at or below each DOF).
 """
 
 from __future__ import annotations
@@ -20,7 +22,49 @@ from matplotlib.figure import Figure
 from flexmvm.errors import InputError
 from flexmvm.plots.figures import COLOURS, STYLES, save_figure
 
-__all__ = ["plot_materials", "plot_ncc_map", "plot_ncc_modes"]
+__all__ = ["front", "plot_materials", "plot_ncc_dof_fronts", "plot_ncc_map", "plot_ncc_modes"]
+
+
+def front(points: Sequence[tuple[float, float]]) -> list[tuple[float, float]]:
+    """The Pareto front of (dof, ncc) points: the points with a higher NCC than every point
+    of fewer or equal DOF, in DOF order."""
+    out: list[tuple[float, float]] = []
+    for dof, ncc in sorted(points, key=lambda p: (p[0], -p[1])):
+        if not out or ncc > out[-1][1]:
+            out.append((dof, ncc))
+    return out
+
+
+def plot_ncc_dof_fronts(path_png: str | os.PathLike[str],
+                        kinds: Mapping[str, Sequence[tuple[float, float]]], *,
+                        target: float | None = None, title: str = "", dpi: int = 150) -> None:
+    """Force NCC against DOF (log x): per kind (label -> (dof, ncc) points) the points and
+    their front; y as 1 - NCC on a log axis so that 0.99 and 0.999 are apart; ``target``: a
+    horizontal line at that NCC."""
+    if not any(kinds.values()):
+        raise InputError("plot_ncc_dof_fronts: expected at least one (dof, ncc) point")
+    fig = Figure(figsize=(7.0, 4.6))
+    ax = fig.add_subplot(1, 1, 1)
+    for (label, pts), colour in zip(kinds.items(), itertools.cycle(COLOURS), strict=False):
+        pts = [(float(d), float(n)) for d, n in pts if np.isfinite(n)]
+        if not pts:
+            continue
+        d, n = np.array(pts).T
+        ax.scatter(d, np.clip(1.0 - n, 1e-6, None), s=12, color=colour, alpha=0.45)
+        fd, fn = np.array(front(pts)).T
+        ax.step(fd, np.clip(1.0 - fn, 1e-6, None), where="post", color=colour, lw=1.8,
+                label=f"{label}: front")
+    if target is not None:
+        ax.axhline(1.0 - target, color="k", ls=":", lw=1.0, label=f"NCC = {target:g}")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("elastic DOF of the body")
+    ax.set_ylabel("1 - force NCC against full FE")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(fontsize=8)
+    if title:
+        ax.set_title(title, fontsize=10)
+    save_figure(fig, path_png, dpi=dpi)
 
 
 def _selections(rows: Sequence[Mapping[str, Any]]) -> list[tuple[int, int, int]]:

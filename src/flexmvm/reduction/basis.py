@@ -10,6 +10,8 @@
 |               | of region I with region II held (Craig-Bampton  |                            |
 |               | without its static constraint modes)            |                            |
 | MODAL         | first N modes of the reference-supported body   | modal coordinates          |
+| INTERFACE     | Hertz contact-patch Ritz vectors + free-free    | patch amplitudes, modal    |
+|               | modes by participation (reduction/interface.py) | coordinates                |
 
 Every Psi has zero rows at the reference DOFs (ReferenceCondition), so q carries no
 rigid-body motion. The reduced matrices are m_hat = Psi^T M Psi, k_hat = Psi^T K Psi
@@ -28,6 +30,7 @@ from threadpoolctl import threadpool_limits
 from flexmvm.errors import InputError
 from flexmvm.fe.assembly import FEModel
 from flexmvm.fe.modes import constrained_modes, factor, shift_invert_modes, to_hz
+from flexmvm.reduction.interface import InterfaceSpec, interface_columns
 from flexmvm.reduction.reference import ReferenceCondition
 
 
@@ -39,6 +42,7 @@ class BasisKind(Enum):
     SEED_BLOCK = "mvm-seed"       # seed eq. (4): whole-body modes on region I, nodes on II
     SEED_FIXED = "mvm-seed-fixed"  # seed eq. (4): region-I modes with region II held, nodes on II
     MODAL = "modal"               # first N modes of the reference-supported body
+    INTERFACE = "interface"       # contact-patch Ritz vectors + modes by participation
 
 
 @dataclass(frozen=True)
@@ -192,12 +196,23 @@ def _modal(fe: FEModel, reference: ReferenceCondition, n_modes: int) -> Basis:
     return Basis(BasisKind.MODAL, phi, np.zeros(0, dtype=np.int64), n_modes, reference, freqs)
 
 
+def _interface(fe: FEModel, reference: ReferenceCondition, spec: InterfaceSpec | None,
+               n_modes: int) -> Basis:
+    if not isinstance(spec, InterfaceSpec):
+        raise InputError(f"an interface basis needs an InterfaceSpec, got {spec!r}")
+    cols = interface_columns(fe, reference, spec, n_modes)
+    return Basis(BasisKind.INTERFACE, cols.psi, np.zeros(0, dtype=np.int64), n_modes, reference,
+                 cols.mode_freqs_hz)
+
+
 def build_basis(fe: FEModel, kind: BasisKind, reference: ReferenceCondition,
-                retained_nodes=(), n_modes: int = 0) -> Basis:
+                retained_nodes=(), n_modes: int = 0,
+                interface: InterfaceSpec | None = None) -> Basis:
     """Build the basis ``kind`` of body ``fe`` (see the module table).
 
     retained_nodes: region-II node ids (CRAIG_BAMPTON, SEED_BLOCK, SEED_FIXED: at least one;
-    FULL and MODAL: none); n_modes: modal columns (MODAL: >= 1; FULL: 0).
+    FULL, MODAL and INTERFACE: none); n_modes: modal columns (MODAL: >= 1; FULL: 0);
+    interface: the patch and mode choice of an INTERFACE basis (reduction/interface.py).
     Raises InputError for a wrong kind, retained nodes that are reference nodes, repeated or
     outside the mesh, or n_modes negative or more than the free DOFs allow; SolverError if
     a factorisation or eigen solve fails.
@@ -209,7 +224,7 @@ def build_basis(fe: FEModel, kind: BasisKind, reference: ReferenceCondition,
     if reference.fixed_dofs.max() >= fe.n_dof:
         raise InputError(f"reference DOFs {reference.fixed_dofs.tolist()} exceed {fe.n_dof} DOFs")
     nodes = _retained(fe, reference, retained_nodes)
-    if kind in (BasisKind.FULL, BasisKind.MODAL) and nodes.size:
+    if kind in (BasisKind.FULL, BasisKind.MODAL, BasisKind.INTERFACE) and nodes.size:
         raise InputError(f"a {kind.value} basis takes no retained nodes, got {nodes.size}")
     if kind in (BasisKind.CRAIG_BAMPTON, BasisKind.SEED_BLOCK, BasisKind.SEED_FIXED) \
             and not nodes.size:
@@ -226,6 +241,8 @@ def build_basis(fe: FEModel, kind: BasisKind, reference: ReferenceCondition,
     with threadpool_limits(limits=1, user_api="blas"):
         if kind is BasisKind.MODAL:
             return _modal(fe, reference, int(n_modes))
+        if kind is BasisKind.INTERFACE:
+            return _interface(fe, reference, interface, int(n_modes))
         if kind is BasisKind.CRAIG_BAMPTON:
             return _craig_bampton(fe, reference, nodes, int(n_modes))
         if kind is BasisKind.SEED_FIXED:

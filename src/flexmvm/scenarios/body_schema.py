@@ -26,7 +26,9 @@ from flexmvm.bodies.rotation import axis_angle
 from flexmvm.errors import InputError
 from flexmvm.materials import PRESETS, Material
 from flexmvm.mesh.rod import EndShape, RodSpec
+from flexmvm.reduction.interface import InterfaceSpec, ModeChoice
 from flexmvm.scenarios.fields import (
+    ROD_FACET_SETS,
     ROD_NODE_SETS,
     ZERO3,
     Count,
@@ -169,13 +171,22 @@ class RegionSpec(Frozen):
 
 class ModelConfig(Frozen):
     """Model of one body. ``selection``/``region``/``modes`` are ignored by kinds that do not
-    use them (full, rigid; modal ignores selection/region) so that a kind override stays valid."""
+    use them (full, rigid; modal ignores selection/region) so that a kind override stays valid.
+    The ``patch_*``/``mode_*`` keys are the interface kind's (reduction/interface.py): Hertz
+    patch radii [m] (one static patch vector each) about the expected contact point
+    (``patch_centre_m``, default the centre of facet set ``patch_surface``), and how its
+    ``modes`` are chosen from a pool of free-free modes; the other kinds ignore them."""
 
     kind: ModelKind = ModelKind.FULL
     selection: str | None = None
     region: RegionSpec | None = None
     modes: Annotated[int, Strict(), Ge(0)] = 0
     reference: SetName = "end_b"
+    patch_radii_m: tuple[Positive, ...] = ()
+    patch_surface: SetName = "end_a"
+    patch_centre_m: Vec3 | None = None
+    mode_choice: ModeChoice = ModeChoice.PARTICIPATION
+    mode_pool: Count | None = None
 
     @field_validator("selection")
     @classmethod
@@ -194,11 +205,31 @@ class ModelConfig(Frozen):
             raise problem(f"kind {kind!r} needs selection = 'i-j' or a region", "selection")
         if self.kind.uses_modes and self.modes < 1:
             raise problem(f"must be >= 1 for kind {kind!r}, got {self.modes}", "modes")
+        if self.kind is ModelKind.INTERFACE:
+            radii = self.patch_radii_m
+            if self.modes + len(radii) < 1:
+                raise problem("kind 'interface' needs modes >= 1 or at least one patch radius",
+                              "patch_radii_m")
+            if len(set(radii)) != len(radii):
+                raise problem(f"must be distinct radii [m], got {list(radii)}", "patch_radii_m")
+            if self.mode_pool is not None and self.mode_pool < self.modes:
+                raise problem(f"must be >= modes = {self.modes}, got {self.mode_pool}",
+                              "mode_pool")
         return self
+
+    def interface_spec(self) -> InterfaceSpec:
+        """The reduction.interface.InterfaceSpec of the interface kind's keys."""
+        return InterfaceSpec(self.patch_surface, self.patch_centre_m,
+                             tuple(float(a) for a in self.patch_radii_m),
+                             ModeChoice(self.mode_choice), self.mode_pool)
 
     @property
     def label(self) -> str:
         """Short description: 'full', 'rigid', 'modal 20', 'mvm 1-3 + 25', 'mvm-seed 1-1 + 37'."""
+        if self.kind is ModelKind.INTERFACE:
+            radii = ", ".join(f"{1e3 * a:g}" for a in self.patch_radii_m)
+            patch = f" patch [{radii}] mm" if radii else ""
+            return f"interface{patch} + {self.modes} {ModeChoice(self.mode_choice).value}"
         if not self.kind.uses_modes:
             return self.kind.value
         if not self.kind.retains_nodes:
@@ -290,6 +321,8 @@ class BodyConfig(Frozen):
             if region is not None and region.node_set is not None:
                 check_rod_set(region.node_set, ROD_NODE_SETS, "model.region.node_set")
             check_rod_set(self.model.reference, ROD_NODE_SETS, "model.reference")
+            if self.model.kind is ModelKind.INTERFACE:
+                check_rod_set(self.model.patch_surface, ROD_FACET_SETS, "model.patch_surface")
         return self
 
     def material_obj(self) -> Material:
@@ -314,6 +347,19 @@ def modal(modes: int, reference: str = "end_b") -> ModelConfig:
     """The first ``modes`` modes of the body supported by its reference condition."""
     return validate_part(ModelConfig, {"kind": ModelKind.MODAL, "modes": modes,
                                        "reference": reference}, f"modal({modes!r})")
+
+
+def interface(patch_radii_m=(), modes: int = 0, *, mode_choice: str = "participation",
+              patch_surface: str = "end_a", patch_centre_m=None, mode_pool: int | None = None,
+              reference: str = "end_b") -> ModelConfig:
+    """Interface model (reduction/interface.py): one static Hertz-patch vector per radius in
+    ``patch_radii_m`` [m] about the centre of ``patch_surface`` (or ``patch_centre_m``), plus
+    ``modes`` free-free modes chosen by ``mode_choice`` (participation or frequency)."""
+    data = {"kind": ModelKind.INTERFACE, "patch_radii_m": tuple(patch_radii_m), "modes": modes,
+            "mode_choice": mode_choice, "patch_surface": patch_surface,
+            "patch_centre_m": patch_centre_m, "mode_pool": mode_pool, "reference": reference}
+    return validate_part(ModelConfig, data,
+                         f"interface({list(patch_radii_m)!r}, modes={modes!r})")
 
 
 def mvm(selection: str | tuple[int, int] | None = None, modes: int = 0, *,

@@ -49,6 +49,7 @@ from flexmvm.mesh.io import read_mesh
 from flexmvm.mesh.mesh import Mesh
 from flexmvm.mesh.rod import RodMesh, RodSpec, rod_mesh
 from flexmvm.reduction.basis import Basis, BasisKind, build_basis
+from flexmvm.reduction.interface import InterfaceSpec, Patch, contact_patch, patch_nodes
 from flexmvm.reduction.reference import three_two_one
 from flexmvm.reduction.rod_reference import rod_reference
 from flexmvm.scenarios.sag import quasi_static_sag
@@ -68,6 +69,12 @@ class BodyInfo:
     n_retained_nodes: int
     n_modes: int
     rod: RodMesh | None
+    # the validity guard (scenarios/guard.py): nodes where the basis leaves a contact free
+    # (MVM kinds: the retained nodes; interface: the patch surface's nodes within the largest
+    # patch radius); None: not guarded (full FE, modal, rigid). patch: the interface kind's
+    # expected contact point.
+    covered_nodes: np.ndarray | None = None
+    patch: Patch | None = None
 
 
 @dataclass
@@ -151,47 +158,54 @@ def craig_bampton_mode_floor(n_modes: int):
         _MODE_FLOOR[0] = old
 
 
-def basis_for(key, material: Material, kind: BasisKind, retained: tuple, modes: int, ref_set: str) -> Basis:
+def basis_for(key, material: Material, kind: BasisKind, retained: tuple, modes: int, ref_set: str,
+              interface: InterfaceSpec | None = None) -> Basis:
     floor = _MODE_FLOOR[0]
     if kind is not BasisKind.CRAIG_BAMPTON or modes >= floor:
-        return _basis_cached(key, material, kind, retained, modes, ref_set)
+        return _basis_cached(key, material, kind, retained, modes, ref_set, interface)
     big = _basis_cached(key, material, kind, retained, floor, ref_set)
     nb = 3 * len(big.retained_nodes)
     return dataclasses.replace(big, psi=np.ascontiguousarray(big.psi[:, : nb + modes]),
                                n_modes=modes, mode_freqs_hz=big.mode_freqs_hz[:modes].copy())
 
 
+def _extra(interface: InterfaceSpec | None) -> dict | None:
+    return None if interface is None else interface.key()
+
+
 @functools.lru_cache(maxsize=64)
 def _basis_cached(key, material: Material, kind: BasisKind, retained: tuple, modes: int,
-                  ref_set: str) -> Basis:
+                  ref_set: str, interface: InterfaceSpec | None = None) -> Basis:
     ref = reference_condition(key, _mesh(key), ref_set)
     nodes = np.array(retained, dtype=np.int64)
     return setup_cache.cached_basis(
         _mesh_source(key), material, kind, ref_set, ref, nodes, modes,
-        lambda: build_basis(fe_model_for(key, material), kind, ref, retained_nodes=nodes, n_modes=modes))
+        lambda: build_basis(fe_model_for(key, material), kind, ref, retained_nodes=nodes,
+                            n_modes=modes, interface=interface),
+        extra=_extra(interface))
 
 
 def body_parts_for(key, material: Material, kind: BasisKind, retained: tuple, modes: int,
-           ref_set: str) -> BodyParts:
+                   ref_set: str, interface: InterfaceSpec | None = None) -> BodyParts:
     """Invariants and k_hat of the body whose basis is basis_for(same arguments); under a
     Craig-Bampton mode floor cut from the floor's parts, as the basis is cut."""
     floor = _MODE_FLOOR[0]
     if kind is not BasisKind.CRAIG_BAMPTON or modes >= floor:
-        return _parts_cached(key, material, kind, retained, modes, ref_set)
+        return _parts_cached(key, material, kind, retained, modes, ref_set, interface)
     big = _parts_cached(key, material, kind, retained, floor, ref_set)
     return big.leading(3 * len(retained) + modes)
 
 
 @functools.lru_cache(maxsize=16)
 def _parts_cached(key, material: Material, kind: BasisKind, retained: tuple, modes: int,
-                  ref_set: str) -> BodyParts:
+                  ref_set: str, interface: InterfaceSpec | None = None) -> BodyParts:
     """Parts of the basis _basis_cached(same arguments): disk cache, else computed from the FE
     model (loaded only then)."""
-    basis = _basis_cached(key, material, kind, retained, modes, ref_set)
+    basis = _basis_cached(key, material, kind, retained, modes, ref_set, interface)
     return setup_cache.cached_body(
         _mesh_source(key), material, kind, ref_set, basis.reference,
         np.array(retained, dtype=np.int64), modes, basis.psi.shape[1],
-        lambda: body_parts(fe_model_for(key, material), basis))
+        lambda: body_parts(fe_model_for(key, material), basis), extra=_extra(interface))
 
 
 #: The per-process caches by what they hold, with their default bounds (entries).
@@ -311,17 +325,25 @@ def _build_body(cfg, massless: np.ndarray | None = None) -> tuple[FlexibleBody, 
     retained: tuple = ()
     if kind.retains_nodes:
         retained = tuple(int(i) for i in _retained_nodes(cfg.model, mesh, rod, f"{where}.model"))
-    modes = cfg.model.modes if kind.uses_modes else 0
+    modes = cfg.model.modes if kind.uses_modes or kind is ModelKind.INTERFACE else 0
+    interface = cfg.model.interface_spec() if kind is ModelKind.INTERFACE else None
     if massless is not None and massless.size and kind.basis is not None \
             and (kind is ModelKind.FULL or kind.retains_nodes):
         nodes = massless if kind is ModelKind.FULL else np.intersect1d(massless, retained)
         if nodes.size:
             key = ContactMass(key, tuple(int(i) for i in nodes))
-    args = (key, material, kind.basis, retained, modes, cfg.model.reference)
+    args = (key, material, kind.basis, retained, modes, cfg.model.reference, interface)
     body = body_from_parts(cfg.name, mesh, basis_for(*args), body_parts_for(*args))
     n_ret = len(retained) if kind.retains_nodes else (mesh.n_nodes if kind is ModelKind.FULL
                                                       else 0)
-    return body, BodyInfo(cfg.name, kind, mesh, material, body.nv, n_ret, modes, rod)
+    covered, patch = None, None
+    if kind.retains_nodes:
+        covered = np.array(retained, dtype=np.int64)
+    elif interface is not None:
+        patch = contact_patch(mesh, interface.surface, interface.centre_m)
+        covered = patch_nodes(mesh, interface.surface, patch, max(interface.radii_m, default=0.0))
+    return body, BodyInfo(cfg.name, kind, mesh, material, body.nv, n_ret, modes, rod,
+                          covered, patch)
 
 
 def _initial_state(body: FlexibleBody, placement) -> BodyState:

@@ -28,6 +28,7 @@ from flexmvm.results.output import write_run
 from flexmvm.results.writers import write_summary_json
 from flexmvm.scenarios import pendulum
 from flexmvm.scenarios.compare import compare_runs
+from flexmvm.scenarios.guard import guard_warnings
 from flexmvm.scenarios.load import load_scenario
 from flexmvm.scenarios.run import run_scenario
 from flexmvm.scenarios.schema import Scenario
@@ -65,7 +66,7 @@ def _labelled(label: str, exc: BaseException) -> BaseException:
 
 def _run_and_write(sc, label: str, out_dir: Path, fields: bool, progress: bool):
     """Run sc, write its files into out_dir; returns (summary, curves, n_steps, wall [s])."""
-    run = run_scenario(sc, label=label, progress=progress)
+    run = run_scenario(sc, label=label, progress=progress, warn=False)
     swing = pendulum.is_pendulum(run.built)
     if swing:
         run.summary["pendulum"] = pendulum.event_summary(run.built, run.result)
@@ -99,6 +100,8 @@ def run_main_job(scenario: Path | str | Scenario, out_dir: Path, *, model=None, 
     own_label = ModelKind(model).value if model is not None else "scenario"
     with staged_dir(out_dir, "flexmvm run", legacy=("summary.json",)) as tmp:
         summary = _run_into(tmp, sc, ref_sc, own_label, fields, progress, echo, jobs)
+    for line in guard_warnings(summary.get("reduced_contact_guard") or {}):
+        echo(f"warning: {line}")
     failures = summary["failures"]
     if failures:
         echo(f"not compared ({len(failures)}): "

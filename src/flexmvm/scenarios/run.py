@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -10,6 +11,7 @@ import numpy as np
 from flexmvm.integrate.driver import simulate
 from flexmvm.integrate.run_result import ProbeHistory, RunResult, StepHistory
 from flexmvm.scenarios.build import BuiltScenario, build_scenario
+from flexmvm.scenarios.guard import contact_guard, guard_warnings
 from flexmvm.scenarios.load import load_scenario
 from flexmvm.scenarios.schema import Scenario
 
@@ -56,11 +58,21 @@ class ScenarioRun:
         return int(self.summary["dof"][body])
 
 
-def run_scenario(sc, label: str = "run", progress: bool = False) -> ScenarioRun:
-    """Build and simulate scenario sc; returns the run with its summary."""
+class ReducedBasisWarning(UserWarning):
+    """Contact fell on surface nodes a reduced basis holds stiff (scenarios/guard.py)."""
+
+
+def run_scenario(sc, label: str = "run", progress: bool = False, warn: bool = True
+                 ) -> ScenarioRun:
+    """Build and simulate scenario sc; returns the run with its summary. warn: issue a
+    ReducedBasisWarning when the validity guard fires (summary reduced_contact_guard)."""
     built = build_scenario(sc)
     res = simulate(built.system, built.states, built.grid, built.probes, progress=progress)
-    return ScenarioRun(label, built, res, summarize(res, built))
+    summary = summarize(res, built)
+    if warn:
+        for line in guard_warnings(summary["reduced_contact_guard"]):
+            warnings.warn(line, ReducedBasisWarning, stacklevel=2)
+    return ScenarioRun(label, built, res, summary)
 
 
 def run(scenario: Scenario | str | Path, *, t_end_s: float | None = None,
@@ -114,6 +126,9 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         # momentum_rel_error can be at most, from the residuals themselves (free systems)
         "momentum_residual_rel": (float(np.linalg.norm(res.momentum_residual) / scale)
                                   if free else None),
+        # per guarded (MVM or interface) body: the share of its contact impulse carried on
+        # surface nodes its basis holds stiff, when it first happened, a model covering them
+        "reduced_contact_guard": contact_guard(res, built),
         **_friction_summary(res),
     }
 

@@ -37,20 +37,25 @@ def select(scenario: Scenario | str | Path, body: str, *, layers: Iterable[int] 
            target: Target | float = 0.99, search: bool = False,
            out_dir: str | Path | None = None, workers: int | None = None,
            scheduler: str | None = None, serial: bool = False,
-           progress: bool = False, kind: ModelKind | str = ModelKind.MVM) -> SelectionStudy:
+           progress: bool = False, kind: ModelKind | str = ModelKind.MVM,
+           patches: Sequence[Sequence[float]] | None = None,
+           interface_modes: Iterable[int] = (5, 10, 20)) -> SelectionStudy:
     """Selection study of ``body`` (studies/selection.py): every ``layers`` x ``laps`` x
     ``modes`` Craig-Bampton model of it against its full-FE reference, the other bodies as in
     the scenario (``kind``: the candidates' model, Craig-Bampton by default, or the seed's
     eq. (4) readings mvm-seed / mvm-seed-fixed). ``target``: a Target or the force NCC to
     reach; ``search``: the pruned search instead of the whole grid. Runs on a local Dask
     cluster of ``workers`` processes (default: one per core), on ``scheduler``, or in this
-    process with ``serial``. Returns the table (``rows``), the smallest model reaching the
+    process with ``serial``. ``patches`` (patch-radius sets [m]) adds the interface kind's
+    grid patches x ``interface_modes`` (``interface_rows``; summary ``interface`` and
+    ``best_overall``). Returns the table (``rows``), the smallest model reaching the
     target (``best``) and the summary."""
     target = target if isinstance(target, Target) else Target(float(target))
     with _directory(out_dir) as out:
         return select_models(_scenario(scenario), body, out, layers, laps, modes, target,
                              search=search, scheduler=scheduler, n_workers=workers,
-                             serial=serial, progress=progress, kind=kind)
+                             serial=serial, progress=progress, kind=kind, patches=patches,
+                             interface_modes=interface_modes)
 
 
 def material_study(scenario: Scenario | str | Path, body: str = "b2", *,

@@ -77,6 +77,13 @@ from flexmvm.studies.grid import (
     study_kind,
     study_scenario,
 )
+from flexmvm.studies.interface import (
+    failed_interface_row,
+    interface_cases,
+    interface_winner,
+    run_interface_case,
+    write_interface_csv,
+)
 from flexmvm.studies.reference import reference_history
 from flexmvm.studies.report import (
     echo_failures,
@@ -132,7 +139,8 @@ def run_selection_case(case: Case, reference: str | Path | None = None) -> dict:
 
     try:
         with craig_bampton_mode_floor(int(p.get("modes_max", m))):
-            run = run_scenario(mvm_scenario(sc, body, i, j, m, ModelKind(p.get("kind", "mvm"))))
+            run = run_scenario(mvm_scenario(sc, body, i, j, m, ModelKind(p.get("kind", "mvm"))),
+                               warn=False)
     except SolverError as exc:
         return row | {"failed": str(exc).splitlines()[0]}
     info = next(b for b in run.built.info if b.name == body)
@@ -192,6 +200,7 @@ class SelectionStudy:
     rows: list[dict]
     summary: dict
     probes: list[str]
+    interface_rows: tuple[dict, ...] = ()  # the interface kind's grid (studies/interface.py)
 
     @property
     def best(self) -> dict | None:
@@ -208,7 +217,9 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
                   search: bool = False, scheduler: str | None = None,
                   n_workers: int | None = None, serial: bool = False, progress: bool = False,
                   echo: Callable[[str], Any] = lambda _line: None,
-                  kind: ModelKind | str = ModelKind.MVM) -> SelectionStudy:
+                  kind: ModelKind | str = ModelKind.MVM,
+                  patches: Sequence[Sequence[float]] | None = None,
+                  interface_modes: Iterable[int] = (5, 10, 20)) -> SelectionStudy:
     """The selection study of ``body`` in scenario ``sc`` (module doc), its cases and reference
     stored in ``out_dir`` (a rerun resumes); no table, figure or console output (see
     :func:`run_selection_study`).
@@ -218,6 +229,10 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     resumable). ``scheduler``: address of a Dask scheduler; otherwise one LocalCluster of
     ``n_workers`` processes for the whole study, or in-process with ``serial=True``. ``kind``:
     the candidates' model (grid.study_kind: mvm, the default, mvm-seed or mvm-seed-fixed).
+    ``patches`` (patch-radius sets [m]) adds the interface kind's grid patches x
+    ``interface_modes`` (studies/interface.py), run whole beside the node selections;
+    ``summary["interface"]`` is its smallest model reaching the target and
+    ``summary["best_overall"]`` the smaller of the two winners.
     Raises InputError for a bad body / grid / options, SolverError if the reference fails.
     Failed runs are listed in ``summary["failures"]``; they count as not reaching the target.
     """
@@ -231,6 +246,8 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     echo(f"reference (full FE {body}): {'computed' if ref_made else 'loaded'} {hist}")
     cases = {(c.params["layers"], c.params["laps"], c.params["modes"]): c
              for c in selection_cases(sc, body, layers, laps, modes, reference=hist, kind=kind)}
+    if_cases = (interface_cases(sc, body, patches, interface_modes, reference=hist)
+                if patches else [])
     cands = {k: Candidate((k[0], k[1]), k[2], 3 * len(rod.selection(k[0], k[1])) + k[2])
              for k in cases}
     key_of = {v: k for k, v in cands.items()}
@@ -256,6 +273,12 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
                       for c in cands.values()}
             passing = [(rank_key(c, s), c) for c, s in scores.items() if passes(s)]
             best = min(passing, key=lambda x: x[0])[1] if passing else None
+        if_rows: list[dict] = []
+        if if_cases:
+            if_batches = _Batches(out, address, serial, progress,
+                                  functools.partial(run_interface_case, reference=str(hist)),
+                                  failed_interface_row)
+            if_rows = if_batches(if_cases)
     rows = {(r["layers"], r["laps"], r["modes"]): r for r in batches.rows.values()}
     table = sorted(rows.values(), key=lambda r: (r["layers"], r["laps"], r["modes"]))
     summary = winner_dict(best, rows) | {
@@ -276,7 +299,38 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
                          "case raised: see cases/<key>.error.txt, a rerun tries it again; or a "
                          "metric could not be computed); they count as not reaching the target",
     }
-    return SelectionStudy(table, summary, [p.name for p in sc.probes])
+    if if_cases:
+        summary |= _interface_summary(if_rows, summary, target, if_batches, patches,
+                                      interface_modes, if_cases)
+    return SelectionStudy(table, summary, [p.name for p in sc.probes],
+                          tuple(sorted(if_rows, key=lambda r: (r["dof"], r["model"]))))
+
+
+def _interface_summary(rows, summary, target, batches, patches, modes, cases) -> dict:
+    """selection.json's interface entries: the grid, run counts, its winner, the smaller
+    winner of both kinds (best_overall) and the interface runs that failed."""
+    win = interface_winner(rows, target)
+    entry = {"passed": win is not None, "grid": {"patch_radii_m": [list(p) for p in patches],
+                                                 "modes": sorted({int(m) for m in modes})},
+             "runs": len(rows), "runs_made": len(batches.made),
+             "runs_loaded": len(batches.loaded),
+             "failures": failure_list((c.key, r) for c, r in zip(cases, rows, strict=True))}
+    if win is not None:
+        entry |= {k: win.get(k) for k in ("model", "patch_radii_m", "modes", "dof", "dof_total",
+                                          "ncc_force", "peak_err")}
+    best = None
+    if summary["passed"]:
+        best = {"kind": summary["kind"], "model": f"{summary['kind']} {summary['layers']}-"
+                f"{summary['laps']} + {summary['modes']}", "dof": summary["dof"],
+                "ncc_force": summary["ncc_force"]}
+    if win is not None and (best is None or win["dof"] < best["dof"]):
+        best = {"kind": "interface", "model": win["model"], "dof": win["dof"],
+                "ncc_force": win["ncc_force"]}
+    return {"interface": entry, "best_overall": best}
+
+
+def kind_name(summary: dict) -> str:
+    return str(summary.get("kind", "mvm"))
 
 
 def run_selection_study(scenario: str | Path | Scenario, body: str, out_dir: str | Path,
@@ -287,7 +341,9 @@ def run_selection_study(scenario: str | Path | Scenario, body: str, out_dir: str
                         t_end_s: float | None = None, dt_s: float | None = None,
                         other: str | None = None, serial: bool = False,
                         echo: Callable[[str], Any] = print,
-                        kind: ModelKind | str = ModelKind.MVM) -> dict:
+                        kind: ModelKind | str = ModelKind.MVM,
+                        patches: Sequence[Sequence[float]] | None = None,
+                        interface_modes: Iterable[int] = (5, 10, 20)) -> dict:
     """The selection study of ``body`` in ``scenario`` (a Scenario or a scenario file) with
     its files and console lines (module doc): :func:`select_models`, then ncc.csv,
     selection.json, the two figures and the summary line. ``t_end_s``, ``dt_s`` override the
@@ -304,7 +360,8 @@ def run_selection_study(scenario: str | Path | Scenario, body: str, out_dir: str
     sc = study_scenario(sc, body, t_end_s=t_end_s, dt_s=dt_s, other=other)
     study = select_models(sc, body, out, layers, laps, modes, target, search=search,
                           scheduler=scheduler, n_workers=n_workers, serial=serial,
-                          progress=progress, echo=echo, kind=kind)
+                          progress=progress, echo=echo, kind=kind, patches=patches,
+                          interface_modes=interface_modes)
     result = study.summary
     write_ncc_csv(out / "ncc.csv", study.rows, study.probes)
     write_json_atomic(out / "selection.json", result)
@@ -313,6 +370,16 @@ def run_selection_study(scenario: str | Path | Scenario, body: str, out_dir: str
     plot_ncc_map(out / "fig7_ncc_map.png", study.rows,
                  title=f"{sc.name}: NCC of the contact force")
     plot_ncc_modes(out / "fig8_ncc_modes.png", study.rows, title=f"{sc.name}: NCC against modes")
+    if study.interface_rows:
+        write_interface_csv(out / "ncc_interface.csv", study.interface_rows, study.probes)
+        from flexmvm.plots.study_figures import plot_ncc_dof_fronts
+
+        pts = {f"node selections ({kind_name(result)})":
+               [(r["dof"], r["ncc_force"]) for r in study.rows if "ncc_force" in r],
+               "interface": [(r["dof"], r["ncc_force"]) for r in study.interface_rows
+                             if "ncc_force" in r]}
+        plot_ncc_dof_fronts(out / "fig_front_ncc_dof.png", pts, target=target.ncc_min,
+                            title=f"{sc.name}: force NCC against DOF of {body}")
     echo_failures(echo, result["failures"], result["runs"], out / "selection.json")
     if result["passed"]:
         echo(f"smallest model reaching {target_text(target)}: {result['layers']}-{result['laps']}"
@@ -322,6 +389,17 @@ def run_selection_study(scenario: str | Path | Scenario, body: str, out_dir: str
     else:
         echo(f"no model of the grid reaches {target_text(target)}; {result['runs']} runs "
              f"({result['runs_made']} made, {result['runs_loaded']} loaded)")
+    if "interface" in result:
+        ie = result["interface"]
+        echo_failures(echo, ie["failures"], ie["runs"], out / "selection.json")
+        if ie["passed"]:
+            echo(f"smallest interface model reaching {target_text(target)}: {ie['model']}, "
+                 f"{ie['dof']} DOF, NCC {ie['ncc_force']:.6f}; {ie['runs']} runs")
+        else:
+            echo(f"no interface model of the grid reaches {target_text(target)}")
+        b = result["best_overall"]
+        if b is not None:
+            echo(f"smallest model over both kinds: {b['model']}, {b['dof']} DOF")
     if result["failures"] and len(result["failures"]) == result["runs"]:
         first = result["failures"][0]
         raise SolverError(f"selection study: every run failed ({first['case']}: "

@@ -1,0 +1,110 @@
+"""The validity guard of reduced bases (issue 12, part 3).
+
+A reduced basis leaves the contact free only where it was built for it: the retained nodes of
+an MVM model (Craig-Bampton, seed eq. 4), the contact patch (the patch surface's nodes within
+the largest patch radius) of an interface model. Elsewhere on the surface a node moves only
+as its constraint modes, patch vectors and modes let it, and a contact there meets a
+surface the basis holds stiff. After a run, the guard adds up the normal contact impulse
+each row carried (RunResult.contact_row_impulses: the driver's per-row record), assigns it
+to the nodes of each body it acted on (the slave node; a master facet's nodes, equal
+shares) and reports per guarded body the fraction carried outside the covered nodes, the
+first time that happened and a model that would cover the loaded nodes: for a rod the
+smallest i-j selection holding them, for an interface model the patch radius reaching them,
+otherwise a ball region around them.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+#: A guarded body whose contact impulse falls outside its covered nodes by more than this
+#: fraction of its total contact impulse gets a console warning (the record is always kept).
+WARN_FRACTION = 0.01
+
+
+def _node_impulses(result, system) -> dict[int, dict[int, list[float]]]:
+    """body index -> {node: [impulse [N s], first time [s]]} from the per-row record."""
+    providers = {getattr(c, "name", None): c for c in system.contacts}
+    out: dict[int, dict[int, list[float]]] = {}
+
+    def add(body: int, node: int, x: float, t: float) -> None:
+        entry = out.setdefault(body, {}).get(node)
+        if entry is None:
+            out[body][node] = [x, t]
+        else:
+            entry[0] += x
+            entry[1] = min(entry[1], t)
+
+    for key, (x, t) in result.contact_row_impulses.items():
+        c = providers.get(key[0])
+        if c is None:
+            continue
+        add(int(c.slave), int(key[1]), x, t)
+        facet = np.unique(c.surface.connectivity[int(key[2])])
+        for node in facet:
+            add(int(c.master), int(node), x / len(facet), t)
+    return out
+
+
+def _suggestion(info, loaded: np.ndarray) -> str:
+    """A model of body ``info`` covering the nodes ``loaded``."""
+    X = info.mesh.nodes[loaded]
+    if info.patch is not None:
+        from flexmvm.reduction.interface import tangent_distance
+
+        r = float(tangent_distance(X, info.patch).max())
+        return f"patch_radii_m reaching {r:.3g} m (the loaded nodes' distance from the patch centre)"
+    if info.rod is not None:
+        i = int(info.rod.node_layer[loaded].max())
+        j = int(info.rod.node_lap[loaded].max())
+        return f"selection = '{i}-{j}'"
+    c = X.mean(axis=0)
+    r = float(np.linalg.norm(X - c, axis=1).max())
+    return (f"region ball centre_m = [{c[0]:.4g}, {c[1]:.4g}, {c[2]:.4g}], "
+            f"radius_m = {r:.3g}")
+
+
+def contact_guard(result, built) -> dict:
+    """{body name: {model, covered_nodes, contact_impulse_Ns, impulse_fraction_outside,
+    first_outside_t_s, nodes_loaded, nodes_loaded_outside, cover}} for every guarded body
+    (an MVM or interface model) that carried contact; cover: a model that would hold every
+    loaded node free (None when none was outside)."""
+    per_body = _node_impulses(result, built.system)
+    report = {}
+    for b, info in enumerate(built.info):
+        if info.covered_nodes is None or b not in per_body:
+            continue
+        nodes = np.array(sorted(per_body[b]), dtype=np.int64)
+        x = np.array([per_body[b][k][0] for k in nodes])
+        t = np.array([per_body[b][k][1] for k in nodes])
+        outside = ~np.isin(nodes, info.covered_nodes)
+        total = float(x.sum())
+        frac = float(x[outside].sum() / total) if total > 0 else 0.0
+        report[info.name] = {
+            "model": info.model.value,
+            "covered_nodes": int(len(info.covered_nodes)),
+            "contact_impulse_Ns": total,
+            "impulse_fraction_outside": frac,
+            "first_outside_t_s": float(t[outside].min()) if outside.any() else None,
+            "nodes_loaded": int(len(nodes)),
+            "nodes_loaded_outside": int(outside.sum()),
+            "cover": _suggestion(info, nodes) if outside.any() else None,
+        }
+    return report
+
+
+def guard_warnings(report: dict, threshold: float = WARN_FRACTION) -> list[str]:
+    """One line per guarded body whose outside fraction exceeds ``threshold``."""
+    lines = []
+    for name, g in report.items():
+        if g["impulse_fraction_outside"] > threshold:
+            lines.append(
+                f"body {name} ({g['model']}): {100 * g['impulse_fraction_outside']:.1f} % of "
+                f"its contact impulse fell on {g['nodes_loaded_outside']} surface node(s) the "
+                f"reduced basis holds stiff, first at t = {g['first_outside_t_s']:.3g} s; "
+                f"the run is outside the model's validity; cover at least the loaded nodes: "
+                f"{g['cover']} (summary.json reduced_contact_guard)")
+    return lines
+
+
+__all__ = ["WARN_FRACTION", "contact_guard", "guard_warnings"]

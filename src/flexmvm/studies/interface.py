@@ -1,0 +1,147 @@
+"""The interface kind in the selection study (issue 12 part 2): a grid of patch-radius sets x
+mode counts of the study body as an interface basis (reduction/interface.py), run beside
+the node selections against the same full-FE reference, and the smallest model over both.
+
+Keys ``if-r<radii in um, '_'-joined>-m<modes>`` (``if-r-m10``: no patch vector); params
+{body, kind: "interface", patch_radii_m, modes, mode_choice, scenario, reference_sha256}.
+Rows: {model, patch_radii_m, n_patch, modes, dof (= patches + modes, elastic coordinates),
+dof_total, ncc_force, ncc_<probe>..., peak_err, impulse_err, duration_err, wall_time_s,
+guard_outside_fraction} (ncc_interface.csv). The interface grid is always run whole (it is
+small); ``--search`` bisects the node selections only.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable, Sequence
+from pathlib import Path
+from typing import Any
+
+from flexmvm.errors import InputError, SolverError
+from flexmvm.metrics.ncc import Comparison, Target
+from flexmvm.results.atomic import file_sha256, write_table_csv
+from flexmvm.results.history import read_history
+from flexmvm.scenarios import Scenario, interface, scenario_from_dict
+from flexmvm.scenarios.compare import compare_runs
+from flexmvm.studies.runner import Case
+
+__all__ = ["interface_cases", "interface_columns", "interface_key", "interface_winner",
+           "parse_patches", "run_interface_case", "write_interface_csv"]
+
+
+def parse_patches(text: str) -> list[tuple[float, ...]]:
+    """'0.46;0.2,0.46,0.9' (radii in mm, sets separated by ';', '-' for none) -> patch-radius
+    sets [m]. InputError (one line) on anything else."""
+    sets = []
+    for part in text.split(";"):
+        part = part.strip()
+        if part == "-":
+            sets.append(())
+            continue
+        try:
+            radii = tuple(float(a) * 1e-3 for a in part.split(","))
+        except ValueError:
+            radii = ()
+        if not radii or min(radii) <= 0 or len(set(radii)) != len(radii):
+            raise InputError(f"--patches {text!r}: expected sets of distinct radii > 0 in mm, "
+                             "comma-separated, sets separated by ';' (e.g. '0.46;0.2,0.46,0.9')")
+        sets.append(radii)
+    return sets
+
+
+def interface_key(radii_m: Sequence[float], modes: int) -> str:
+    return "if-r" + "_".join(f"{round(a * 1e6):d}" for a in radii_m) + f"-m{int(modes)}"
+
+
+def interface_cases(sc: Scenario, body: str, patches: Iterable[Sequence[float]],
+                    modes: Iterable[int], reference: str | Path | None = None,
+                    mode_choice: str = "participation") -> list[Case]:
+    """The cases patch sets x mode counts of ``body`` as an interface model."""
+    sc.body(body)
+    data = sc.model_dump(mode="json")
+    sha = file_sha256(reference) if reference is not None else None
+    cases = []
+    for radii in patches:
+        for m in sorted({int(v) for v in modes}):
+            if m < 0 or m + len(radii) < 1:
+                raise InputError(f"interface grid: modes {m} with {len(radii)} patch radii "
+                                 "gives no column")
+            cases.append(Case(interface_key(radii, m), {
+                "body": body, "kind": "interface", "patch_radii_m": [float(a) for a in radii],
+                "modes": m, "mode_choice": mode_choice, "scenario": data,
+                "reference_sha256": sha}))
+    return cases
+
+
+def _model(p) -> Any:
+    return interface(list(p["patch_radii_m"]), int(p["modes"]), mode_choice=p["mode_choice"],
+                     reference="end_b")
+
+
+def run_interface_case(case: Case, reference: str | Path | None = None) -> dict:
+    """One interface run of the study against the stored reference history (as
+    selection.run_selection_case)."""
+    from flexmvm.scenarios.run import run_scenario
+
+    p = case.params
+    sc = scenario_from_dict(p["scenario"], source=f"case {case.key}")
+    body = p["body"]
+    ref_model = sc.body(body).model.reference
+    model = interface(list(p["patch_radii_m"]), int(p["modes"]), mode_choice=p["mode_choice"],
+                      reference=ref_model)
+    if reference is None:
+        raise InputError(f"case {case.key}: no reference history given")
+    sha = p.get("reference_sha256")
+    if sha is not None and file_sha256(reference) != sha:
+        raise InputError(f"case {case.key}: {reference} is not the reference of this case "
+                         "(its SHA-256 differs)")
+    t_ref, f_ref, probes_ref = read_history(Path(reference))
+    n_patch = len(p["patch_radii_m"])
+    dof = n_patch + int(p["modes"])
+    row: dict[str, Any] = {"model": model.label, "patch_radii_m": list(p["patch_radii_m"]),
+                           "n_patch": n_patch, "modes": int(p["modes"]), "dof": dof,
+                           "dof_total": dof + 6}
+    try:
+        run = run_scenario(sc.with_model(body, model), warn=False)
+    except SolverError as exc:
+        return row | {"failed": str(exc).splitlines()[0]}
+    cmp = compare_runs(t_ref, f_ref, probes_ref, *run.result.curves())
+    row.update({k: v for k, v in cmp.items() if isinstance(v, float)})
+    errors = [v for k, v in cmp.items() if k.endswith("_error")]
+    if errors:
+        row["failed"] = errors[0]
+    guard = run.summary.get("reduced_contact_guard", {}).get(body)
+    row["guard_outside_fraction"] = None if guard is None else guard["impulse_fraction_outside"]
+    row["wall_time_s"] = float(run.summary["wall_time_s"])
+    return row
+
+
+def failed_interface_row(case: Case, line: str) -> dict:
+    p = case.params
+    n = len(p["patch_radii_m"])
+    return {"model": _model(p).label, "patch_radii_m": list(p["patch_radii_m"]), "n_patch": n,
+            "modes": int(p["modes"]), "dof": n + int(p["modes"]),
+            "dof_total": n + int(p["modes"]) + 6, "failed": line}
+
+
+def _passes(row: dict, target: Target) -> bool:
+    if any(k not in row for k in ("ncc_force", "peak_err", "impulse_err", "duration_err")):
+        return False
+    return target.met_by(Comparison(row["ncc_force"], row["peak_err"], row["impulse_err"],
+                                    row["duration_err"]))
+
+
+def interface_winner(rows: Sequence[dict], target: Target) -> dict | None:
+    """The smallest-DOF row reaching the target (ties: the higher NCC), or None."""
+    ok = [r for r in rows if _passes(r, target)]
+    return min(ok, key=lambda r: (r["dof"], -r["ncc_force"])) if ok else None
+
+
+def interface_columns(probes: Sequence[str]) -> list[str]:
+    return (["model", "n_patch", "modes", "dof", "ncc_force"] + [f"ncc_{p}" for p in probes]
+            + ["peak_err", "impulse_err", "duration_err", "guard_outside_fraction",
+               "wall_time_s"])
+
+
+def write_interface_csv(path: Path, rows: Iterable[dict], probes: Sequence[str]) -> None:
+    rows = sorted(rows, key=lambda r: (r["dof"], r["n_patch"], r["model"]))
+    write_table_csv(path, interface_columns(probes), rows)
