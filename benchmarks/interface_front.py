@@ -40,7 +40,7 @@ ALIASES = {"mvm-1-1+37": "mvm:1-1:37", "mvm-1-3+25": "mvm:1-3:25", "mvm-1-3+37":
 _SETS = {"p1": "0.46", "p3": "0.2,0.46,0.9", "p5": "0.15,0.3,0.46,0.7,1.0",
          "p8": "0.1,0.2,0.3,0.46,0.6,0.8,1.0,1.4"}
 for _tag, _r in _SETS.items():
-    for _n in range(0, 41):
+    for _n in range(41):
         ALIASES[f"{_tag}+{_n}"] = f"interface:{_r}:{_n}"
         ALIASES[f"{_tag}+{_n}f"] = f"interface:{_r}:{_n}:frequency"
 for _n in range(1, 41):

@@ -62,7 +62,7 @@ def _full_static(fe, ref, f):
 
 
 def test_hertz_load_total_and_centre(small):
-    rod, fe, _ = small
+    rod, _fe, _ = small
     patch = contact_patch(rod.mesh, "end_a")
     assert patch.node == int(rod.mesh.node_set("end_a_centre")[0])
     np.testing.assert_allclose(patch.normal, [-1.0, 0.0, 0.0], atol=1e-12)
@@ -96,7 +96,7 @@ def test_statics_of_the_patch_loads_to_round_off(small):
 
 
 def test_participation_keeps_the_modes_an_axial_load_excites(small):
-    rod, fe, ref = small
+    _rod, fe, ref = small
     spec = InterfaceSpec(radii_m=(0.5 * MM,), pool=40)
     part = interface_columns(fe, ref, spec, 4)
     freq = interface_columns(fe, ref, InterfaceSpec(radii_m=(0.5 * MM,),
@@ -127,7 +127,7 @@ def test_participation_keeps_the_modes_an_axial_load_excites(small):
 
 
 def test_build_basis_and_cache_key_carry_the_patch(small):
-    rod, fe, ref = small
+    _rod, fe, ref = small
     spec = InterfaceSpec(radii_m=(0.3 * MM, 0.6 * MM))
     basis = build_basis(fe, BasisKind.INTERFACE, ref, n_modes=3, interface=spec)
     assert basis.nq == 5 and basis.n_modes == 3 and basis.retained_nodes.size == 0

@@ -68,9 +68,8 @@ def command(scenario, body, layers, laps, modes, target, kind, patches, interfac
     writes ncc.csv, selection.json, fig7_ncc_map.png, fig8_ncc_modes.png (with --patches
     also ncc_interface.csv and fig_front_ncc_dof.png, the NCC-DOF front of both kinds)."""
     from flexmvm.metrics.ncc import Target
-    from flexmvm.studies.selection import run_selection_study
-
     from flexmvm.studies.interface import parse_patches
+    from flexmvm.studies.selection import run_selection_study
 
     grid = (parse_range(layers, "layers"), parse_range(laps, "laps"), parse_range(modes, "modes"))
     patch_sets = parse_patches(patches) if patches is not None else None

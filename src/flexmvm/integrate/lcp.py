@@ -262,8 +262,7 @@ def active_set_qp(D, c, tol, max_passes):  # pragma: no cover - compiled
                 if z[a] <= 0.0:
                     li = lam[idx[a]]
                     step = li / (li - z[a])
-                    if step < alpha:
-                        alpha = step
+                    alpha = min(alpha, step)
             for a in range(k):
                 i = idx[a]
                 lam[i] += alpha * (z[a] - lam[i])

@@ -82,11 +82,11 @@ def contact_guard(result, built) -> dict:
         frac = float(x[outside].sum() / total) if total > 0 else 0.0
         report[info.name] = {
             "model": info.model.value,
-            "covered_nodes": int(len(info.covered_nodes)),
+            "covered_nodes": len(info.covered_nodes),
             "contact_impulse_Ns": total,
             "impulse_fraction_outside": frac,
             "first_outside_t_s": float(t[outside].min()) if outside.any() else None,
-            "nodes_loaded": int(len(nodes)),
+            "nodes_loaded": len(nodes),
             "nodes_loaded_outside": int(outside.sum()),
             "cover": _suggestion(info, nodes) if outside.any() else None,
         }

@@ -19,9 +19,9 @@ from typing import Any
 from flexmvm.errors import InputError, SolverError
 from flexmvm.metrics.ncc import Comparison, Target
 from flexmvm.results.atomic import file_sha256, write_table_csv
-from flexmvm.results.history import read_history
 from flexmvm.scenarios import Scenario, interface, scenario_from_dict
 from flexmvm.scenarios.compare import compare_runs
+from flexmvm.studies.reference import case_reference
 from flexmvm.studies.runner import Case
 
 __all__ = ["interface_cases", "interface_columns", "interface_key", "interface_winner",
@@ -88,13 +88,7 @@ def run_interface_case(case: Case, reference: str | Path | None = None) -> dict:
     ref_model = sc.body(body).model.reference
     model = interface(list(p["patch_radii_m"]), int(p["modes"]), mode_choice=p["mode_choice"],
                       reference=ref_model)
-    if reference is None:
-        raise InputError(f"case {case.key}: no reference history given")
-    sha = p.get("reference_sha256")
-    if sha is not None and file_sha256(reference) != sha:
-        raise InputError(f"case {case.key}: {reference} is not the reference of this case "
-                         "(its SHA-256 differs)")
-    t_ref, f_ref, probes_ref = read_history(Path(reference))
+    t_ref, f_ref, probes_ref = case_reference(case, reference)
     n_patch = len(p["patch_radii_m"])
     dof = n_patch + int(p["modes"])
     row: dict[str, Any] = {"model": model.label, "patch_radii_m": list(p["patch_radii_m"]),

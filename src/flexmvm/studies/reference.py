@@ -7,8 +7,8 @@ import json
 from pathlib import Path
 
 from flexmvm.errors import InputError
-from flexmvm.results.atomic import canonical_json, write_json_atomic
-from flexmvm.results.history import write_history
+from flexmvm.results.atomic import canonical_json, file_sha256, write_json_atomic
+from flexmvm.results.history import read_history, write_history
 from flexmvm.scenarios import Scenario
 
 
@@ -34,3 +34,19 @@ def reference_history(sc: Scenario, body: str, out_dir: Path, progress: bool = F
     write_history(hist, t, f, probes)
     write_json_atomic(meta, {"identity": ident, "summary": run.summary})
     return hist, True
+
+
+def case_reference(case, reference=None):
+    """(t, force, probes) of the stored reference history a study case is compared with:
+    ``reference`` (default: ``case.params["reference"]``), checked against the case's
+    ``reference_sha256`` when it has one. InputError (one line) if there is none or it is
+    not this case's."""
+    p = case.params
+    reference = reference if reference is not None else p.get("reference")
+    if reference is None:
+        raise InputError(f"case {case.key}: no reference history given")
+    sha = p.get("reference_sha256")
+    if sha is not None and file_sha256(reference) != sha:
+        raise InputError(f"case {case.key}: {reference} is not the reference of this case "
+                         "(its SHA-256 differs)")
+    return read_history(Path(reference))

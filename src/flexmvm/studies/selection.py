@@ -61,10 +61,9 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from flexmvm.errors import InputError, SolverError
+from flexmvm.errors import SolverError
 from flexmvm.metrics.ncc import Comparison, Target
-from flexmvm.results.atomic import file_sha256, write_json_atomic
-from flexmvm.results.history import read_history
+from flexmvm.results.atomic import write_json_atomic
 from flexmvm.results.outdir import make_out_dir
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario, scenario_from_dict
 from flexmvm.scenarios.compare import compare_runs
@@ -84,7 +83,7 @@ from flexmvm.studies.interface import (
     run_interface_case,
     write_interface_csv,
 )
-from flexmvm.studies.reference import reference_history
+from flexmvm.studies.reference import case_reference, reference_history
 from flexmvm.studies.report import (
     echo_failures,
     failed_case_row,
@@ -124,14 +123,7 @@ def run_selection_case(case: Case, reference: str | Path | None = None) -> dict:
     p = case.params
     sc = scenario_from_dict(p["scenario"], source=f"case {case.key}")
     body, i, j, m = p["body"], int(p["layers"]), int(p["laps"]), int(p["modes"])
-    reference = reference if reference is not None else p.get("reference")
-    if reference is None:
-        raise InputError(f"case {case.key}: no reference history given")
-    sha = p.get("reference_sha256")
-    if sha is not None and file_sha256(reference) != sha:
-        raise InputError(f"case {case.key}: {reference} is not the reference of this case "
-                         "(its SHA-256 differs)")
-    t_ref, f_ref, probes_ref = read_history(Path(reference))
+    t_ref, f_ref, probes_ref = case_reference(case, reference)
     nodes = len(rod_of(sc, body).selection(i, j))
     row: dict[str, Any] = {"layers": i, "laps": j, "nodes": nodes, "modes": m,
                            "dof": 3 * nodes + m, "dof_total": 3 * nodes + m + 6}
