@@ -58,14 +58,12 @@ def solve_mixed_lcp(D: np.ndarray, c: np.ndarray, n_eq: int) -> np.ndarray:
     if n_eq == m:
         return _refine(D, c, n_eq, -sla.cho_solve(regularised_cho(D, "joint"), c))
     if n_eq == 0:
-        if np.all(c >= 0):
-            return np.zeros(m)
-        lam, ok = _active_set(D, c)
-        # the active-set solution solves the unregularised active block exactly: nothing for
-        # _refine to remove (it is for the regularised NNLS fallback and the eliminations)
-        return lam if ok else _refine(D, c, 0, _nnls(D, c))
+        # an exact active-set solution leaves _refine nothing to remove (it is for the
+        # regularised NNLS fallback and the eliminated equalities)
+        lam, exact = _solve_lcp(D, c)
+        return lam if exact else _refine(D, c, 0, lam)
     el = eliminate_equalities(D, c, n_eq)
-    lu = _solve_lcp(0.5 * (el.D + el.D.T), el.c)
+    lu, _ = _solve_lcp(0.5 * (el.D + el.D.T), el.c)
     return _refine(D, c, n_eq, np.concatenate([el.equalities(lu), lu]))
 
 
@@ -149,25 +147,45 @@ def _passive_solve(D, c, idx, k, A, z):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True)
+def _gather(passive, idx):  # pragma: no cover - compiled
+    """idx[:k] = the passive rows in order; returns k."""
+    k = 0
+    for i in range(passive.shape[0]):
+        if passive[i]:
+            idx[k] = i
+            k += 1
+    return k
+
+
+@numba.njit(cache=True, nogil=True)
+def _velocity(D, c, lam, w):  # pragma: no cover - compiled
+    """w = D lam + c."""
+    m = c.shape[0]
+    for i in range(m):
+        acc = c[i]
+        for t in range(m):
+            acc += D[i, t] * lam[t]
+        w[i] = acc
+
+
+@numba.njit(cache=True, nogil=True)
+def _all_positive(z, k):  # pragma: no cover - compiled
+    for a in range(k):
+        if z[a] <= 0.0:
+            return False
+    return True
+
+
+@numba.njit(cache=True, nogil=True)
 def _refine_passive(D, c, lam, passive, idx, A, z):  # pragma: no cover - compiled
     """One sweep of iterative refinement of the passive block's solution (D_PP l_P = -c_P with
     the residual in double precision), kept only if l_P stays positive: the round-off of an
     ill-conditioned block (measured up to 6e-9 of the velocity scale at cond 1e8 without it)."""
-    m = c.shape[0]
-    k = 0
-    for i in range(m):
-        if passive[i]:
-            idx[k] = i
-            k += 1
+    k = _gather(passive, idx)
     if k == 0:
         return
-    r = np.zeros(m)
-    for a in range(k):
-        i = idx[a]
-        acc = c[i]
-        for t in range(m):
-            acc += D[i, t] * lam[t]
-        r[i] = acc
+    r = np.empty(c.shape[0])
+    _velocity(D, c, lam, r)     # only its passive rows are read
     if not _passive_solve(D, r, idx, k, A, z):
         return
     for a in range(k):
@@ -188,7 +206,6 @@ def active_set_qp(D, c, tol, max_passes):  # pragma: no cover - compiled
     definite (numerically: pivot <= 1e-14 of its diagonal) or max_passes is exceeded."""
     m = c.shape[0]
     lam = np.zeros(m)
-    passive = np.zeros(m, np.bool_)
     blocked = np.zeros(m, np.bool_)
     w = c.copy()
     idx = np.empty(m, np.int64)
@@ -196,25 +213,14 @@ def active_set_qp(D, c, tol, max_passes):  # pragma: no cover - compiled
     z = np.empty(m)
     # start: the rows with c < 0 all passive, if that block's solution is positive (impacts
     # and persistent contacts: usually the answer, one Cholesky instead of one per row)
-    k = 0
-    for i in range(m):
-        if c[i] < 0.0:
-            idx[k] = i
-            k += 1
-    if _passive_solve(D, c, idx, k, A, z) and k > 0:
-        positive = True
+    passive = c < 0.0
+    k = _gather(passive, idx)
+    if k > 0 and _passive_solve(D, c, idx, k, A, z) and _all_positive(z, k):
         for a in range(k):
-            if z[a] <= 0.0:
-                positive = False
-        if positive:
-            for a in range(k):
-                lam[idx[a]] = z[a]
-                passive[idx[a]] = True
-            for i in range(m):
-                acc = c[i]
-                for t in range(m):
-                    acc += D[i, t] * lam[t]
-                w[i] = acc
+            lam[idx[a]] = z[a]
+        _velocity(D, c, lam, w)
+    else:
+        passive[:] = False
     for _ in range(max_passes):
         j = -1
         wmin = -tol
@@ -228,11 +234,7 @@ def active_set_qp(D, c, tol, max_passes):  # pragma: no cover - compiled
         passive[j] = True
         first = True
         while True:
-            k = 0
-            for i in range(m):
-                if passive[i]:
-                    idx[k] = i
-                    k += 1
+            k = _gather(passive, idx)
             if not _passive_solve(D, c, idx, k, A, z):
                 return lam, False
             if first:
@@ -245,35 +247,24 @@ def active_set_qp(D, c, tol, max_passes):  # pragma: no cover - compiled
                     passive[j] = False
                     blocked[j] = True
                     break
-            feasible = True
-            for a in range(k):
-                if z[a] <= 0.0:
-                    feasible = False
-            if feasible:
-                for i in range(m):
-                    lam[i] = 0.0
+            if _all_positive(z, k):
+                lam[:] = 0.0
                 for a in range(k):
                     lam[idx[a]] = z[a]
-                for i in range(m):
-                    blocked[i] = False
+                blocked[:] = False
                 break
             alpha = 1.0
             for a in range(k):
                 if z[a] <= 0.0:
                     li = lam[idx[a]]
-                    step = li / (li - z[a])
-                    alpha = min(alpha, step)
+                    alpha = min(alpha, li / (li - z[a]))
             for a in range(k):
                 i = idx[a]
                 lam[i] += alpha * (z[a] - lam[i])
                 if lam[i] <= 0.0 or (z[a] <= 0.0 and lam[i] <= 1e-15 * abs(z[a])):
                     lam[i] = 0.0
                     passive[i] = False
-        for i in range(m):
-            acc = c[i]
-            for t in range(m):
-                acc += D[i, t] * lam[t]
-            w[i] = acc
+        _velocity(D, c, lam, w)
     return lam, False
 
 
@@ -292,13 +283,14 @@ def _nnls(D: np.ndarray, c: np.ndarray) -> np.ndarray:
     return lam
 
 
-def _solve_lcp(D: np.ndarray, c: np.ndarray) -> np.ndarray:
-    """The LCP's l for D symmetric positive (semi-)definite: the compiled active-set method,
-    or NNLS on the regularised Cholesky factor where it fails."""
+def _solve_lcp(D: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, bool]:
+    """(l, exact) of the LCP for D symmetric positive (semi-)definite: the compiled
+    active-set method, exact on the unregularised active block (or l = 0 when c >= 0), or,
+    where it fails, NNLS on the regularised Cholesky factor (exact False: _refine it)."""
     if np.all(c >= 0):
-        return np.zeros_like(c)
+        return np.zeros_like(c), True
     lam, ok = _active_set(D, c)
-    return lam if ok else _nnls(D, c)
+    return (lam, True) if ok else (_nnls(D, c), False)
 
 
 def complementarity_residual(D: np.ndarray, c: np.ndarray, n_eq: int, lam: np.ndarray) -> float:

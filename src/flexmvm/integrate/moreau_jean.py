@@ -409,20 +409,21 @@ class MoreauJeanIntegrator:
         parts = []
         for b in todo:
             ml, body, new = self._massless[b], self.system.bodies[b], new_states[b]
-            force = np.zeros(body.nq)
+            force = np.zeros(len(ml.s))    # on the massless coordinates only
             Phi = [np.zeros((len(on), len(ml.s))) for _, _, on in held]
             for k, (rows, lam, on) in enumerate(held):
                 blk = rows.blocks.get(b)
                 if blk is not None:
-                    force += blk[1].T @ lam
-                    Phi[k] = blk[1][np.ix_(on, ml.s)]
+                    cols = blk[1][:, ml.s]
+                    force += cols.T @ lam
+                    Phi[k] = cols[on]
             force /= h
             for load in self._loads.get(b, ()):
                 if t + self.theta * h >= load.t_start_s:
                     force += body.point_jacobian(load.node, new.A, new.q,
-                                                 np.asarray(load.force_n, float))[1]
+                                                 np.asarray(load.force_n, float))[1][ml.s]
             P = np.vstack(Phi) if Phi else np.zeros((0, len(ml.s)))
-            parts.append((ml, new.q, force[ml.s], P))
+            parts.append((ml, new.q, force, P))
         # rows with no massless column in any body impose nothing here
         if parts and parts[0][3].shape[0]:
             keep = np.any(np.hstack([p[3] for p in parts]) != 0.0, axis=1)
