@@ -64,8 +64,11 @@ def test_brute_force_writes_table_json_and_figures(brute):
     out, res = brute
     header = (out / "ncc.csv").read_text().splitlines()[0]
     assert header == ("layers,laps,nodes,modes,dof,ncc_force,ncc_b2_impact_end,ncc_b2_free_end,"
-                      "peak_err,impulse_err,duration_err,wall_time_s")
+                      "peak_err,impulse_err,duration_err,guard_outside_fraction,wall_time_s")
     rows = _table(out, drop=())
+    # every run records its validity guard: the share of the contact impulse on surface
+    # nodes the basis holds stiff, a fraction in [0, 1]
+    assert all(0.0 <= float(r["guard_outside_fraction"]) <= 1.0 for r in rows)
     assert [(int(r["layers"]), int(r["laps"]), int(r["modes"])) for r in rows] == \
         [(i, j, m) for i in (1, 2) for j in (1, 2) for m in (7, 13)]
     for r in rows:  # dof = 3 x nodes + modes (elastic coordinates, seed count)
@@ -186,6 +189,7 @@ def test_cli_one_line_errors(tmp_path, args, message):
 
 
 def test_materials_study_two_materials(tmp_path):
+    from flexmvm.scenarios.guard import WARN_FRACTION
     from flexmvm.studies.materials import run_materials_study
 
     res = run_materials_study(TINY, tmp_path, materials=["W", "Al"], selections=[(1, 1)],
@@ -198,6 +202,13 @@ def test_materials_study_two_materials(tmp_path):
     w, al = (res["materials"][m]["mean_ncc_force"] for m in ("W", "Al"))
     assert w == pytest.approx(float(rows[0]["ncc_force"]))
     assert res["seed_ordering_holds"] is (w > al)
+    # the guard's verdict per run, and the means over the runs it accepts
+    outside = {b["case"] for b in res["guard_outside_validity"]}
+    for r, m in zip(rows, ("W", "Al")):
+        frac = float(r["guard_outside_fraction"])
+        assert (f"{m}-l1-j1-m7" in outside) is (frac > WARN_FRACTION)
+        valid = res["materials"][m]["mean_ncc_force_valid"]
+        assert valid == (None if frac > WARN_FRACTION else pytest.approx(float(r["ncc_force"])))
     assert (tmp_path / "fig9_materials.png").is_file()
     assert (tmp_path / "W" / "reference" / "history.csv").is_file()
     # the 1D wave-Hertz contact radius and duration are reported beside each material, and
@@ -336,3 +347,21 @@ def test_selection_study_of_the_seed_eq4_kind(tmp_path):
     assert stored["params"]["kind"] == "mvm-seed"
     with pytest.raises(InputError, match="expected one of mvm, mvm-seed, mvm-seed-fixed"):
         fm.select(sc, "b2", layers=[1], laps=[1], modes=[7], serial=True, kind="modal")
+
+
+def test_score_refuses_a_run_outside_its_models_validity():
+    """A run whose validity guard puts more than WARN_FRACTION of the contact impulse on nodes
+    the basis holds stiff scores as failed whatever its NCC (a study must not pick it); at or
+    below the threshold, and without a guard record (unguarded, or rows stored before the
+    guard existed), the NCC decides."""
+    from flexmvm.metrics.ncc import Target
+    from flexmvm.scenarios.guard import WARN_FRACTION
+    from flexmvm.studies.selection import FAIL_SCORE, score
+
+    target = Target.parse("ncc>=0.99")
+    row = {"ncc_force": 0.995, "peak_err": 0.01, "impulse_err": 0.0, "duration_err": 0.0}
+    assert score(row, target) == 0.995
+    assert score(row | {"guard_outside_fraction": None}, target) == 0.995
+    assert score(row | {"guard_outside_fraction": WARN_FRACTION}, target) == 0.995
+    assert score(row | {"guard_outside_fraction": 2 * WARN_FRACTION}, target) == FAIL_SCORE
+    assert score(row | {"guard_outside_fraction": 1.0}, target) == FAIL_SCORE

@@ -93,6 +93,19 @@ def contact_guard(result, built) -> dict:
     return report
 
 
+def outside_fraction(summary: dict, body: str) -> float | None:
+    """The guarded ``body``'s fraction of contact impulse outside its covered nodes in a run's
+    summary (None: not guarded, or no contact)."""
+    g = summary.get("reduced_contact_guard", {}).get(body)
+    return None if g is None else float(g["impulse_fraction_outside"])
+
+
+def outside_validity(fraction: float | None, threshold: float = WARN_FRACTION) -> bool:
+    """True if a run whose guard fraction is ``fraction`` is outside its model's validity
+    (the fraction exceeds ``threshold``; None, unguarded or unknown, is not)."""
+    return fraction is not None and fraction > threshold
+
+
 def guard_warnings(report: dict, threshold: float = WARN_FRACTION) -> list[str]:
     """One line per guarded body whose outside fraction exceeds ``threshold``."""
     lines = []
@@ -107,4 +120,5 @@ def guard_warnings(report: dict, threshold: float = WARN_FRACTION) -> list[str]:
     return lines
 
 
-__all__ = ["WARN_FRACTION", "contact_guard", "guard_warnings"]
+__all__ = ["WARN_FRACTION", "contact_guard", "guard_warnings", "outside_fraction",
+           "outside_validity"]

@@ -21,6 +21,7 @@ from flexmvm.metrics.ncc import Comparison, Target
 from flexmvm.results.atomic import file_sha256, write_table_csv
 from flexmvm.scenarios import Scenario, interface, scenario_from_dict
 from flexmvm.scenarios.compare import compare_runs
+from flexmvm.scenarios.guard import outside_fraction
 from flexmvm.studies.reference import case_reference
 from flexmvm.studies.runner import Case
 
@@ -103,8 +104,7 @@ def run_interface_case(case: Case, reference: str | Path | None = None) -> dict:
     errors = [v for k, v in cmp.items() if k.endswith("_error")]
     if errors:
         row["failed"] = errors[0]
-    guard = run.summary.get("reduced_contact_guard", {}).get(body)
-    row["guard_outside_fraction"] = None if guard is None else guard["impulse_fraction_outside"]
+    row["guard_outside_fraction"] = outside_fraction(run.summary, body)
     row["wall_time_s"] = float(run.summary["wall_time_s"])
     return row
 
