@@ -198,3 +198,29 @@ def test_law_default_and_checks():
     with pytest.raises(InputError, match="theta"):
         PointToSurfaceContact(built.system.bodies, c.slave, c.slave_nodes, c.master, c.surface,
                               law="position")
+
+
+def test_penetration_recovery_option():
+    """penetration_recovery (the velocity law's beta, u_N+ >= beta max(0, -g) / h) reaches the
+    contact rows: default contact.pairs.PENETRATION_RECOVERY and absent from the dump; 0 gives
+    a penetrated row the lower bound 0 (hold, do not push out); out of [0, 1] and with the
+    position law it is refused with the key named."""
+    from flexmvm.contact.pairs import PENETRATION_RECOVERY
+
+    sc = load_scenario(CASE)
+    assert sc.contacts[0].penetration_recovery is None
+    assert "penetration_recovery" not in sc.model_dump(mode="json")["contacts"][0]
+    assert build_scenario(sc).system.contacts[0].beta == PENETRATION_RECOVERY
+    data = sc.model_dump(mode="json")
+    data["contacts"][0]["penetration_recovery"] = 0.0
+    c = build_scenario(scenario_from_dict(data)).system.contacts[0]
+    assert c.beta == 0.0
+    gaps, h = np.array([-1e-6, 0.0, 2e-6]), 1e-6
+    assert np.all(c._lower(gaps, None, h) == 0.0)
+    data["contacts"][0]["penetration_recovery"] = 0.5
+    c = build_scenario(scenario_from_dict(data)).system.contacts[0]
+    assert c._lower(gaps, None, h) == pytest.approx([0.5, 0.0, 0.0])
+    for bad, law in ((-0.1, "velocity"), (1.5, "velocity"), (0.1, "position")):
+        data["contacts"][0].update(penetration_recovery=bad, law=law)
+        with pytest.raises(ScenarioError, match="penetration_recovery"):
+            scenario_from_dict(data)

@@ -449,7 +449,9 @@ def _contact(c, k, bodies, infos, index, theta):
                                  radius, name=f"{c.slave}->{c.master}",
                                  slave_surface=MasterSurface.from_facet_set(slave_facets),
                                  friction_coefficient=c.friction_coefficient,
-                                 law=c.law, theta=theta)
+                                 law=c.law, theta=theta,
+                                 **({} if c.penetration_recovery is None
+                                    else {"beta": c.penetration_recovery}))
 
 
 def _probe(p, where, infos, index) -> Probe:

@@ -76,6 +76,9 @@ class ContactConfig(Frozen):
     # the normal rows' law (constraints.contact.ContactLaw): velocity (Moreau, beta recovery)
     # or position (the gap at the end of the step, with the scenario's time.theta)
     law: ContactLaw = ContactLaw.VELOCITY
+    # the velocity law's penetration recovery beta [-]: u_N+ >= beta max(0, -g) / h
+    # (None: contact.pairs.PENETRATION_RECOVERY); docs/studies.md "Material study" for when 0
+    penetration_recovery: Annotated[float, Strict(), Ge(0.0), Le(1.0)] | None = None
 
     @model_serializer(mode="wrap")
     def _dump(self, handler):
@@ -84,7 +87,7 @@ class ContactConfig(Frozen):
         data = handler(self)
         if isinstance(data, dict):
             for key, default in (("friction_coefficient", 0.0), ("redistribute_mass", False),
-                                 ("law", ContactLaw.VELOCITY)):
+                                 ("law", ContactLaw.VELOCITY), ("penetration_recovery", None)):
                 if key in data and data[key] == default:
                     data.pop(key)
         return data
@@ -96,6 +99,9 @@ class ContactConfig(Frozen):
                           f"must be 0, got {self.friction_coefficient!r}", "friction_coefficient")
         if self.law is ContactLaw.POSITION and self.kind is ContactKind.BONDED:
             raise problem("law = \"position\" is for frictionless contact, not bonded", "law")
+        if self.law is ContactLaw.POSITION and self.penetration_recovery is not None:
+            raise problem("penetration_recovery is the velocity law's: the position law holds "
+                          "the end-of-step gap itself", "penetration_recovery")
         return self
 
     @property
