@@ -180,3 +180,36 @@ def test_simulate_refuses_an_overlap_unless_continuing():
     res = simulate(built.system, states, built.grid, check_overlap=False)
     assert abs(res.max_penetration_m - 0.001) < 1e-9
     assert res.max_penetration_at["t_s"] == 0.0
+
+
+@pytest.mark.parametrize("recovery", [None, 0.0])
+def test_energy_gain_warns_when_recovery_adds_energy(recovery):
+    """Two rigid rods moving together at 0.1 m/s, overlapping by 10 um (a continuation): the
+    velocity law's penetration recovery (default beta = 0.2) pushes them apart at
+    beta * 10 um / h = 8 m/s (h = 0.25 us), a rise of the kinetic energy by a factor of
+    hundreds that nothing in the system supplies: energy_gain_rel_max records it and
+    energy_gain_warning says so. With
+    penetration_recovery = 0 the overlap is held, not pushed out: no gain, no warning."""
+    from flexmvm.integrate.driver import simulate
+    from flexmvm.scenarios.build import build_scenario
+    from flexmvm.scenarios.run import ENERGY_GAIN_WARN, energy_gain_warning, summarize
+
+    data = load_scenario(SHORT).with_overrides(model="rigid", t_end_s=5e-6).model_dump(mode="json")
+    for b in data["bodies"]:
+        b["placement"]["velocity_mps"] = [0.1, 0.0, 0.0]
+    if recovery is not None:
+        data["contacts"][0]["penetration_recovery"] = recovery
+    from flexmvm.scenarios import scenario_from_dict
+
+    built = build_scenario(scenario_from_dict(data))
+    states = [s.copy() for s in built.states]
+    states[1].r = states[1].r + np.array([-1e-5, 0.0, 0.0])
+    s = summarize(simulate(built.system, states, built.grid, check_overlap=False), built)
+    if recovery is None:
+        assert s["energy_gain_rel_max"] > 100.0
+        assert "energy rose" in energy_gain_warning(s)
+    else:
+        assert 0.0 <= s["energy_gain_rel_max"] <= 1e-9
+        assert energy_gain_warning(s) is None
+    assert energy_gain_warning({"energy_gain_rel_max": ENERGY_GAIN_WARN}) is None
+    assert energy_gain_warning({"energy_gain_rel_max": None}) is None

@@ -30,7 +30,7 @@ from flexmvm.scenarios import pendulum
 from flexmvm.scenarios.compare import compare_runs
 from flexmvm.scenarios.guard import guard_warnings
 from flexmvm.scenarios.load import load_scenario
-from flexmvm.scenarios.run import run_scenario
+from flexmvm.scenarios.run import energy_gain_warning, run_scenario
 from flexmvm.scenarios.schema import Scenario
 
 
@@ -101,6 +101,9 @@ def run_main_job(scenario: Path | str | Scenario, out_dir: Path, *, model=None, 
     with staged_dir(out_dir, "flexmvm run", legacy=("summary.json",)) as tmp:
         summary = _run_into(tmp, sc, ref_sc, own_label, fields, progress, echo, jobs)
     for line in guard_warnings(summary.get("reduced_contact_guard") or {}):
+        echo(f"warning: {line}")
+    line = energy_gain_warning(summary)
+    if line is not None:
         echo(f"warning: {line}")
     failures = summary["failures"]
     if failures:

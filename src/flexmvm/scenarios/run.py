@@ -62,6 +62,30 @@ class ReducedBasisWarning(UserWarning):
     """Contact fell on surface nodes a reduced basis holds stiff (scenarios/guard.py)."""
 
 
+class EnergyGainWarning(UserWarning):
+    """The total energy of a run without applied loads rose (energy_gain_warning)."""
+
+
+#: A run without applied loads whose total energy rises above its start by more than this
+#: share gets a warning. Nothing in it can add energy: the Moreau-Jean step with theta >= 1/2
+#: and frictionless or Coulomb contact, joints and gravity (in the potential) keep or lose it;
+#: what can is the velocity law's penetration recovery, which pushes a penetrated node out at
+#: beta (-g) / h whatever its mass: on reduced bodies whose contact reaches the edge of the
+#: retained nodes it feeds chatter (docs/studies.md, "Material study": PA6 on 1-4 gains 2.6 %).
+ENERGY_GAIN_WARN = 1e-3
+
+
+def energy_gain_warning(summary: dict, threshold: float = ENERGY_GAIN_WARN) -> str | None:
+    """The console line for a run whose energy rose by more than ``threshold``, or None."""
+    gain = summary.get("energy_gain_rel_max")
+    if gain is None or gain <= threshold:
+        return None
+    return (f"the total energy rose by {100 * gain:.2g} % of its start in a run without applied "
+            "loads: the contact added energy (penetration recovery pushing penetrated nodes "
+            "out, chatter); try penetration_recovery = 0 on the contact, law = \"position\", or "
+            "a reduced model covering the contact patch with a ring to spare")
+
+
 def run_scenario(sc, label: str = "run", progress: bool = False, warn: bool = True
                  ) -> ScenarioRun:
     """Build and simulate scenario sc; returns the run with its summary. warn: issue a
@@ -72,6 +96,9 @@ def run_scenario(sc, label: str = "run", progress: bool = False, warn: bool = Tr
     if warn:
         for line in guard_warnings(summary["reduced_contact_guard"]):
             warnings.warn(line, ReducedBasisWarning, stacklevel=2)
+        line = energy_gain_warning(summary)
+        if line is not None:
+            warnings.warn(line, EnergyGainWarning, stacklevel=2)
     return ScenarioRun(label, built, res, summary)
 
 
@@ -97,6 +124,9 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
     counts = res.steps.size_counts() if res.steps is not None else {}  # steps per size [s]
     e_err = float((E[-1] - E[0]) / E[0]) if E[0] != 0 else None
     e_err_max = float(np.abs(E - E[0]).max() / abs(E[0])) if E[0] != 0 else None
+    # no applied loads: nothing may add energy (module ENERGY_GAIN_WARN)
+    gain = (float(max(0.0, (E - E[0]).max()) / abs(E[0]))
+            if E[0] != 0 and not built.system.loads else None)
     return {
         "max_contact_force_N": float(res.contact_force.max()) if res.contact_force.size else 0.0,
         "min_contact_force_N": float(res.contact_force.min()) if res.contact_force.size else 0.0,
@@ -115,6 +145,8 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         "momentum_rel_error": mom_err,
         "energy_rel_error": e_err,
         "energy_rel_error_max": e_err_max,
+        # the largest rise of the total energy over its start [-] (None with applied loads)
+        "energy_gain_rel_max": gain,
         "max_penetration_m": float(res.max_penetration_m),
         "max_penetration_at": res.max_penetration_at,
         "max_penetration_by_direction_m": dict(res.max_penetration_by_direction_m),
