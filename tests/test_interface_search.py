@@ -147,3 +147,79 @@ def test_cli_search_with_patches_reports_both_kinds(brute, tmp_path):
                for line in lines), res.output
     assert any(f"up to {exp[3]} DOF" in line and "looked no further" in line
                for line in lines), res.output
+
+
+# ----------------------------------------------------------------------------------------------
+# the a-priori estimate's interface rule (studies/estimate.py)
+def test_estimate_interface_on_the_seed_case():
+    """The seed case at the docs/studies.md window (0.8 ms): one patch at the theory's Hertz
+    radius (0.461 mm) and the modes the Hertz load excites below f_max = 3 / T_c (4.64 kHz).
+    Closed form: the excited modes of an on-axis load are the axial ones, f_n = n c / (2 L)
+    with c = sqrt(E / rho) = 5189 m/s, L = 1 m: 2.59 kHz below f_max, 5.19 kHz above; so
+    exactly one mode, within 1 % of c / (2 L) (the 3D rod's mode is a little lower:
+    dispersion, mesh), and 2 DOF."""
+    import math
+
+    import flexmvm as fm
+    from flexmvm.theory.scenario import theory_pulse
+
+    sc = fm.load_scenario(ROOT / "scenarios" / "rod_impact.toml").with_time(t_end_s=8e-4)
+    est = fm.estimate_interface(sc, "b2", Target(0.99))
+    pulse = theory_pulse(sc, "b2")
+    assert est["patch_radii_m"] == [pulse["contact_radius_m"]]
+    assert est["patch_radii_m"][0] == pytest.approx(0.461e-3, rel=5e-3)
+    assert est["window_s"] == min(pulse["contact_duration_s"], 8e-4)
+    assert est["f_max_hz"] == pytest.approx(3.0 / est["window_s"], rel=1e-12)
+    assert all(f < est["f_max_hz"] for f in est["mode_freqs_hz"])
+    assert est["modes"] == est["n_modes_below_f_max"] == len(est["mode_freqs_hz"]) == 1
+    assert est["dof"] == 1 + est["modes"] == 2
+    c = math.sqrt(72.71e9 / 2700.0)
+    assert est["mode_freqs_hz"][0] == pytest.approx(c / 2.0, rel=0.01)
+    assert est["keeps_modes_below_f_max"] and est["patch_surface"] == "end_a"
+    assert est["target"]["ncc_min"] == 0.99
+
+
+def test_estimate_interface_rounds_up_to_a_grid_and_keeps_its_modes():
+    """Tiny case: the count of excited modes below f_max, rounded up to a grid of mode counts
+    (as --interface-modes), and the participation choice keeps the modes below f_max."""
+    import flexmvm as fm
+    from flexmvm.theory.scenario import theory_pulse
+
+    sc = fm.load_scenario(TINY)
+    bare = fm.estimate_interface(sc, "b2")
+    n = bare["n_modes_below_f_max"]
+    assert n >= 1 and bare["modes"] == n and bare["dof"] == 1 + n
+    assert bare["patch_radii_m"] == [theory_pulse(sc, "b2")["contact_radius_m"]]
+    grid = [n + 2, n + 5]
+    est = fm.estimate_interface(sc, "b2", modes=grid)
+    assert est["modes"] == n + 2 and est["dof"] == n + 3
+    assert len(est["kept_mode_freqs_hz"]) == n + 2 and est["keeps_modes_below_f_max"]
+    assert not est["grid_max_modes_insufficient"]
+    short = fm.estimate_interface(sc, "b2", modes=[0])
+    assert short["modes"] == 0 and short["grid_max_modes_insufficient"]
+
+
+@pytest.mark.parametrize("kwargs, message", [
+    ({"k": 0.0}, "k: expected a number > 0"),
+    ({"modes": []}, "modes: expected a grid"),
+    ({"body": "b7"}, "no body 'b7'"),
+])
+def test_estimate_interface_bad_input_is_one_line(kwargs, message):
+    import flexmvm as fm
+
+    sc = fm.load_scenario(TINY)
+    body = kwargs.pop("body", "b2")
+    with pytest.raises(fm.InputError, match=message) as err:
+        fm.estimate_interface(sc, body, **kwargs)
+    assert "\n" not in str(err.value)
+
+
+def test_estimate_interface_needs_a_hertz_contact(tmp_path):
+    """Flat on flat (St Venant): the theory gives no contact radius, so no patch radius."""
+    import flexmvm as fm
+
+    text = TINY.read_text().replace('end_a = "hemisphere"', 'end_a = "flat"')
+    path = tmp_path / "flat.toml"
+    path.write_text(text)
+    with pytest.raises(fm.InputError, match="no Hertz contact radius"):
+        fm.estimate_interface(fm.load_scenario(path), "b2")

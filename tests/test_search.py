@@ -171,7 +171,7 @@ def test_mixed_families_match_brute_force_on_random_monotone_tables(max_open):
         # kind_exact says so; otherwise the kind has nothing passing up to the winner's DOF
         for kind in FamilyKind:
             own = best_passing(table, passes, kind)
-            if kind_exact(kind, found, scores, passes):
+            if kind_exact(kind, found, scores, passes, candidates):
                 assert best_passing(scores, passes, kind) == own
             else:
                 n_exact_fail += 1
@@ -206,8 +206,15 @@ def test_an_interface_winner_closes_the_node_selections():
         found, scores = smallest_passing(nodes + iface, rec, passes, max_open=max_open)
         assert found == Candidate.interface((0.46e-3,), 5) and found.dof == 6
         assert sum(c.kind is FamilyKind.NODES for c in scores) == node_runs
-        assert not kind_exact(FamilyKind.NODES, found, scores, passes)
-        assert kind_exact(FamilyKind.INTERFACE, found, scores, passes)
+        assert not kind_exact(FamilyKind.NODES, found, scores, passes, nodes + iface)
+        assert kind_exact(FamilyKind.INTERFACE, found, scores, passes, nodes + iface)
+    # the node selections won, and no interface model passes: the search covered the whole
+    # interface grid (every DOF <= 21 < 22), so "none of this kind passes" is exact
+    table = {c: 0.999 for c in nodes} | {c: 0.5 for c in iface}
+    found, scores = smallest_passing(nodes + iface, Recorder(table), passes)
+    assert found == nodes[0] and found.dof == 22
+    assert kind_exact(FamilyKind.INTERFACE, found, scores, passes, nodes + iface)
+    assert not kind_exact(FamilyKind.INTERFACE, found, scores, passes)  # grid unknown
 
 
 def test_cross_kind_ties_higher_score_then_nodes_then_fewer_patches():

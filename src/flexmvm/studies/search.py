@@ -309,15 +309,21 @@ def brute_force(
     return best_passing(run.scores, passes), run.scores
 
 
-def kind_exact(kind: FamilyKind, winner: Candidate | None,
-               scores: dict[Candidate, float], passes: Callable[[float], bool]) -> bool:
+def kind_exact(kind: FamilyKind, winner: Candidate | None, scores: dict[Candidate, float],
+               passes: Callable[[float], bool],
+               candidates: Sequence[Candidate] | None = None) -> bool:
     """Whether ``best_passing(scores, passes, kind)`` (None if nothing of ``kind`` passed) is
-    that kind's own answer over its whole grid, after
-    :func:`smallest_passing` returned ``(winner, scores)`` (module doc): true when no
-    candidate passes at all, or the kind's best has the winner's DOF; false when the winner
-    is of fewer DOF than anything of ``kind`` that passed (the search does not look past the
-    winner's DOF). After :func:`brute_force` every kind is exact."""
+    that kind's own answer over its whole grid, after :func:`smallest_passing` returned
+    ``(winner, scores)`` for the grid ``candidates`` (module doc): true when no candidate
+    passes at all, when the kind's best has the winner's DOF, or when nothing of ``kind``
+    passed and none of its candidates has more DOF than the winner (the search covered them
+    all); false otherwise (the search does not look past the winner's DOF; with
+    ``candidates`` None the grid is taken to extend past it). After :func:`brute_force` every
+    kind is exact."""
     if winner is None:
         return True
-    own = [c for c, s in scores.items() if c.kind is kind and passes(s)]
-    return bool(own) and min(c.dof for c in own) == winner.dof
+    own = [c.dof for c, s in scores.items() if c.kind is kind and passes(s)]
+    if own:
+        return min(own) == winner.dof
+    return candidates is not None and all(c.dof <= winner.dof for c in candidates
+                                          if c.kind is kind)

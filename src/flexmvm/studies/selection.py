@@ -297,7 +297,7 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     if_rows = [batches.rows[c.key] for c in if_cases if c.key in batches.rows]
     if if_cases:
         def exact(k: FamilyKind) -> bool:
-            return not search or kind_exact(k, best, scores, passes)
+            return not search or kind_exact(k, best, scores, passes, list(case_of))
 
         if_best = best_passing(scores, passes, FamilyKind.INTERFACE)
         summary |= {"grid_size": len(case_of) - len(if_cases), "exact": exact(FamilyKind.NODES),
@@ -314,9 +314,9 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
 #: selection.json's note on ``exact`` (node kind) and ``interface.exact``.
 EXACT_NOTE = ("exact: this kind's entry is its smallest model reaching the target over its "
               "whole grid (always with brute force); false after --search when the other "
-              "kind's winner (best_overall) has fewer DOF: the search then proved only that "
-              "nothing of this kind passes up to best_overall's DOF, and the entry (if any) is "
-              "the best of the runs it made")
+              "kind's winner (best_overall) has fewer DOF and this kind has models above that "
+              "DOF: the search then proved only that nothing of this kind passes up to "
+              "best_overall's DOF, and the entry (if any) is the best of the runs it made")
 
 
 def run_study_case(case: Case, reference: str | Path | None = None) -> dict:
