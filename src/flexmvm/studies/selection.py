@@ -31,7 +31,8 @@ Files of a study directory ``DIR``:
 - ``fig7_ncc_map.png`` (NCC of the force over selection x modes, seed fig. 7) and
   ``fig8_ncc_modes.png`` (NCC against modes per selection, seed fig. 8).
 
-A-priori estimate (:func:`estimate_selection`), without any FE time integration:
+A-priori estimate (studies/estimate.py ``estimate_selection``; the interface kind's:
+``estimate_interface``, rule in that module), without any FE time integration:
 
 - *modes*: the contact force of the 1D wave + Hertz theory (flexmvm.theory.wave; Hertz for a
   hemispherical end of either rod, St Venant otherwise) gives the contact duration ``T_c`` (first
@@ -201,7 +202,7 @@ class SelectionStudy:
     rows: list[dict]
     summary: dict
     probes: list[str]
-    interface_rows: tuple[dict, ...] = ()  # the interface kind's grid (studies/interface.py)
+    interface_rows: tuple[dict, ...] = ()  # the interface cases evaluated (interface.py)
 
     @property
     def best(self) -> dict | None:
@@ -235,8 +236,8 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     force or the same search (each patch set a family); then ``summary["interface"]`` is that
     kind's answer (runs, ``grid_size``, ``exact``), ``summary["best_overall"]`` the winner over
     both kinds (search.rank_key), and ``summary["grid_size"]`` / ``summary["exact"]`` the node
-    kind's (``exact_note``: a kind's entry after ``--search`` is its own smallest model only
-    when it has best_overall's DOF).
+    kind's (``exact`` false: ``--search`` stopped that kind at best_overall's DOF, see
+    ``exact_note`` and search.kind_exact).
     Raises InputError for a bad body / grid / options, SolverError if the reference fails.
     Failed runs are listed in ``summary["failures"]``; they count as not reaching the target.
     """
@@ -323,8 +324,8 @@ def run_study_case(case: Case, reference: str | Path | None = None) -> dict:
     """One run of a selection study, of either kind: the interface kind's (params ``kind``
     "interface", studies/interface.py) or a node selection's (:func:`run_selection_case`)."""
     if case.params.get("kind") == "interface":
-        return run_interface_case(case, reference)
-    return run_selection_case(case, reference)
+        return run_interface_case(case, reference=reference)
+    return run_selection_case(case, reference=reference)
 
 
 def _failed_row(case: Case, line: str, n_nodes: dict[tuple[int, int], int]) -> dict:
