@@ -1,4 +1,5 @@
-"""Smallest passing model by per-selection bisection == brute force, with fewer runs."""
+"""Smallest passing model by per-family bisection == brute force, with fewer runs: node
+selections alone and node selections beside interface patch sets (one search over both)."""
 
 from __future__ import annotations
 
@@ -6,9 +7,19 @@ import numpy as np
 import pytest
 
 from flexmvm.errors import InputError
-from flexmvm.studies.search import Candidate, brute_force, smallest_passing
+from flexmvm.studies.search import (
+    Candidate,
+    FamilyKind,
+    best_passing,
+    brute_force,
+    kind_exact,
+    rank_key,
+    smallest_passing,
+)
 
 MODES = (7, 13, 19, 25, 31, 37, 43)  # seed §3.2
+RADII = (0.1e-3, 0.2e-3, 0.3e-3, 0.46e-3, 0.6e-3, 0.9e-3)  # interface patch radii [m]
+IF_MODES = (0, 1, 2, 3, 5, 10, 15, 20)
 
 
 def random_table(rng: np.random.Generator):
@@ -105,6 +116,122 @@ def test_seed_sized_grid_saves_most_runs():
     assert np.mean(ratios) < 0.5
 
 
+def monotone_scores(rng: np.random.Generator, n: int) -> np.ndarray:
+    """n scores non-decreasing, capped at 1, rounded to 0.005 (score ties occur)."""
+    start = rng.uniform(0.5, 1.0)
+    steps = rng.exponential(0.03, n) * (rng.random(n) < 0.7)
+    return np.minimum(1.0, np.round((start + np.cumsum(steps)) / 0.005) * 0.005)
+
+
+def mixed_table(rng: np.random.Generator):
+    """random_table's node selections beside 1-3 random interface patch sets (0-3 radii,
+    random mode counts, DOF = patches + modes), each family monotone in modes. Interface and
+    node DOF overlap (node DOF 13..., interface 1..23), so cross-kind DOF ties occur."""
+    candidates, table, threshold = random_table(rng)
+    sets = set()
+    for _ in range(int(rng.integers(1, 4))):
+        radii = tuple(sorted(float(a) for a in rng.choice(RADII, int(rng.integers(0, 4)),
+                                                           replace=False)))
+        if radii in sets:
+            continue
+        sets.add(radii)
+        pool = [m for m in IF_MODES if m + len(radii) >= 1]
+        modes = sorted(int(m) for m in rng.choice(pool, int(rng.integers(1, len(pool) + 1)),
+                                                  replace=False))
+        for m, s in zip(modes, monotone_scores(rng, len(modes))):
+            c = Candidate.interface(radii, m)
+            candidates.append(c)
+            table[c] = float(s)
+    order = rng.permutation(len(candidates))  # the search must not depend on the input order
+    return [candidates[k] for k in order], table, threshold
+
+
+@pytest.mark.parametrize("max_open", [None, 1, 4])
+def test_mixed_families_match_brute_force_on_random_monotone_tables(max_open):
+    """One search over node selections and interface patch sets: the brute-force answer, each
+    candidate run at most once, at most one per family in a round, and best_dof from either
+    kind prunes the other (fewer runs than two separate searches, on average)."""
+    rng = np.random.default_rng(20251124)
+    ratios, joint, separate, won = [], [], [], {k: 0 for k in FamilyKind}
+    n_exact_fail = 0
+    for _ in range(200):
+        candidates, table, threshold = mixed_table(rng)
+        passes = lambda s, t=threshold: s >= t
+        expected, all_scores = brute_force(candidates, Recorder(table), passes)
+        assert all_scores == table
+        rec = Recorder(table)
+        found, scores = smallest_passing(candidates, rec, passes, max_open=max_open)
+        assert found == expected
+        assert scores == {c: table[c] for c in rec.evaluated}
+        assert len(set(rec.evaluated)) == len(rec.evaluated)
+        assert all(len({c.family for c in b}) == len(b) for b in rec.batches)
+        if max_open is not None:
+            assert max(len(b) for b in rec.batches) <= max_open
+        # per kind: the search's best of a kind is that kind's brute-force answer when
+        # kind_exact says so; otherwise the kind has nothing passing up to the winner's DOF
+        for kind in FamilyKind:
+            own = best_passing(table, passes, kind)
+            if kind_exact(kind, found, scores, passes, candidates):
+                assert best_passing(scores, passes, kind) == own
+            else:
+                n_exact_fail += 1
+                assert own is None or own.dof > found.dof
+        by_kind = [[c for c in candidates if c.kind is k] for k in FamilyKind]
+        separate.append(sum(len(smallest_passing(cs, Recorder(table), passes,
+                                                 max_open=max_open)[1]) for cs in by_kind))
+        joint.append(len(scores))
+        ratios.append(len(scores) / len(candidates))
+        if expected is not None:
+            won[expected.kind] += 1
+    print(f"\nmax_open={max_open}: mixed tables, evaluations / brute force = "
+          f"{np.mean(ratios):.3f}, joint / separate searches = "
+          f"{np.sum(joint) / np.sum(separate):.3f}, winners {dict(won)}, "
+          f"kinds not exact {n_exact_fail}")
+    assert all(n > 20 for n in won.values())  # both kinds win in some tables
+    assert n_exact_fail > 20
+    assert np.mean(ratios) < 0.75
+    assert np.sum(joint) < 0.95 * np.sum(separate)  # 0.911 (None), 0.703 (1), 0.747 (4)
+
+
+def test_an_interface_winner_closes_the_node_selections():
+    """The point of one search over both kinds: a 6-DOF interface pass closes every node
+    selection (cheapest 22 DOF) without a run in the sequential search, and after the first
+    round in the parallel one."""
+    nodes = [Candidate((i, 1), m, 15 * i + m) for i in (1, 2, 3) for m in MODES]
+    iface = [Candidate.interface((0.46e-3,), m) for m in (5, 10, 15, 20)]
+    table = {c: 0.999 for c in nodes} | {c: 0.5 + 0.1 * c.modes for c in iface}  # 5 passes
+    passes = lambda s: s >= 0.99
+    for max_open, node_runs in ((1, 0), (None, 3)):
+        rec = Recorder(table)
+        found, scores = smallest_passing(nodes + iface, rec, passes, max_open=max_open)
+        assert found == Candidate.interface((0.46e-3,), 5) and found.dof == 6
+        assert sum(c.kind is FamilyKind.NODES for c in scores) == node_runs
+        assert not kind_exact(FamilyKind.NODES, found, scores, passes, nodes + iface)
+        assert kind_exact(FamilyKind.INTERFACE, found, scores, passes, nodes + iface)
+    # the node selections won, and no interface model passes: the search covered the whole
+    # interface grid (every DOF <= 21 < 22), so "none of this kind passes" is exact
+    table = {c: 0.999 for c in nodes} | {c: 0.5 for c in iface}
+    found, scores = smallest_passing(nodes + iface, Recorder(table), passes)
+    assert found == nodes[0] and found.dof == 22
+    assert kind_exact(FamilyKind.INTERFACE, found, scores, passes, nodes + iface)
+    assert not kind_exact(FamilyKind.INTERFACE, found, scores, passes)  # grid unknown
+
+
+def test_cross_kind_ties_higher_score_then_nodes_then_fewer_patches():
+    n = Candidate((1, 1), 7, 10)                 # 3 node DOF + 7 modes
+    p1 = Candidate.interface((0.46e-3,), 9)      # 1 patch + 9 modes
+    p3 = Candidate.interface((0.2e-3, 0.46e-3, 0.9e-3), 7)
+    assert n.dof == p1.dof == p3.dof == 10
+    passes = lambda s: s >= 0.99
+    table = {n: 0.995, p1: 0.999, p3: 0.995}
+    assert smallest_passing([n, p1, p3], Recorder(table), passes)[0] == p1
+    table[p1] = 0.995
+    assert smallest_passing([p3, p1, n], Recorder(table), passes)[0] == n
+    table[n] = 0.98
+    assert smallest_passing([p3, p1, n], Recorder(table), passes)[0] == p1  # 1 patch < 3
+    assert rank_key(p1, 0.995) < rank_key(p3, 0.995)
+
+
 def test_no_candidate_passes_returns_none():
     candidates = [Candidate((i, 1), m, 3 * i + m) for i in (1, 2) for m in MODES]
     table = {c: 0.5 + 0.001 * c.modes for c in candidates}
@@ -146,6 +273,20 @@ def test_invalid_input():
         smallest_passing([Candidate((1, 1), 7, 20)], lambda b: [float("nan")], lambda s: True)
     with pytest.raises(InputError, match="selection"):
         Candidate((0, 1), 7, 20)
+    with pytest.raises(InputError, match="exactly one"):
+        Candidate((1, 1), 7, 20, patch_radii_m=(0.46e-3,))
+    with pytest.raises(InputError, match="exactly one"):
+        Candidate(None, 7, 20)
+    with pytest.raises(InputError, match="distinct radii > 0"):
+        Candidate.interface((0.46e-3, 0.46e-3), 5)
+    with pytest.raises(InputError, match="distinct radii > 0"):
+        Candidate.interface((-1e-3,), 5)
+    with pytest.raises(InputError, match=r"patch set \(0.46\) mm: 5 modes appears twice"):
+        smallest_passing([Candidate.interface((0.46e-3,), 5), Candidate(None, 5, 7, (0.46e-3,))],
+                         lambda b: [1.0] * len(b), lambda s: True)
+    with pytest.raises(InputError, match="strictly increasing"):
+        brute_force([Candidate(None, 5, 7, (0.46e-3,)), Candidate(None, 10, 7, (0.46e-3,))],
+                    lambda b: [1.0] * len(b), lambda s: True)
     assert smallest_passing([], lambda b: [], lambda s: True) == (None, {})
 
 

@@ -48,6 +48,7 @@ _API = {
     "select": "flexmvm.studies.api",
     "material_study": "flexmvm.studies.api",
     "estimate_selection": "flexmvm.studies.estimate",
+    "estimate_interface": "flexmvm.studies.estimate",
     # per-process caches
     "clear_caches": "flexmvm.scenarios.build",
     "set_cache_sizes": "flexmvm.scenarios.build",
@@ -74,6 +75,7 @@ __all__ = [
     "cache_sizes",
     "clear_caches",
     "compare",
+    "estimate_interface",
     "estimate_selection",
     "full",
     "interface",

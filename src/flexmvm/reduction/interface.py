@@ -207,10 +207,50 @@ def inertia_relief(fe: FEModel, f: np.ndarray) -> np.ndarray:
     return f - MR @ np.linalg.solve(R.T @ MR, R.T @ f)
 
 
-def _chosen_modes(fe: FEModel, spec: InterfaceSpec, n_modes: int, f_exp: np.ndarray
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _excited(force: np.ndarray) -> np.ndarray:
+    """force (6 + p,): |phi^T f| of a free-free mode pool, the six rigid-body modes first ->
+    (p,) indices of the elastic modes the load excites. The scale of a real modal force is the
+    largest, rigid-body modes included (a 1 N load gives a rigid translation 1/sqrt(mass)), so
+    a pool holding no excited elastic mode keeps none."""
+    return np.nonzero(force[6:] > EXCITED_RTOL * force.max())[0]
+
+
+def excited_modes_below(fe: FEModel, f: np.ndarray, f_max_hz: float, pool: int = 16
+                        ) -> tuple[np.ndarray, np.ndarray]:
+    """The elastic free-free modes of ``fe`` below ``f_max_hz`` that the load ``f`` (3n,) [N]
+    excites, by the participation choice's rule (modal force |phi^T f| above EXCITED_RTOL of
+    the pool's largest): (frequencies [Hz], participations |phi^T f| / omega^2 [m/N]), in
+    frequency order. The pool of the lowest ``pool`` elastic modes is doubled until its top
+    mode reaches f_max_hz (or holds every mode).
+
+    Raises:
+        InputError: f_max_hz <= 0, or MAX_POOL modes do not reach f_max_hz.
+    """
+    if not f_max_hz > 0:
+        raise InputError(f"f_max_hz: expected a frequency > 0 Hz, got {f_max_hz!r}")
+    n_free = fe.n_dof - 7
+    pool = min(int(pool), n_free)
+    while True:
+        f_hz, modes = free_modes(fe, pool + 6)
+        if f_hz[-1] >= f_max_hz or pool >= n_free:
+            break
+        if pool >= MAX_POOL:
+            raise InputError(f"the lowest {pool} free-free modes end at {f_hz[-1]:.4g} Hz, "
+                             f"below f_max = {f_max_hz:.4g} Hz; expected f_max within "
+                             f"{MAX_POOL} modes")
+        pool = min(2 * pool, MAX_POOL, n_free)
+    force = np.abs(modes.T @ f)
+    idx = _excited(force)
+    idx = idx[f_hz[6:][idx] < f_max_hz]
+    omega = 2.0 * np.pi * f_hz[6:][idx]
+    return f_hz[6:][idx], force[6:][idx] / omega ** 2
+
+
+def chosen_modes(fe: FEModel, spec: InterfaceSpec, n_modes: int, f_exp: np.ndarray
+                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(phi (3n, n_modes) free-free elastic modes, M-normalised, their frequencies [Hz] and
-    participations |phi^T f| / omega^2 [m/N]) chosen as spec.mode_choice says."""
+    participations |phi^T f| / omega^2 [m/N]) chosen as spec.mode_choice says for the expected
+    load f_exp (3n,)."""
     n_free = fe.n_dof - 7
     if spec.mode_choice is ModeChoice.FREQUENCY:
         f_hz, modes = free_modes(fe, min(n_modes, n_free) + 6)
@@ -224,10 +264,7 @@ def _chosen_modes(fe: FEModel, spec: InterfaceSpec, n_modes: int, f_exp: np.ndar
                              f"{pool}")
         f_hz, modes = free_modes(fe, pool + 6)
         force = np.abs(modes.T @ f_exp)
-        # the scale of a real modal force: the largest, rigid-body modes included (a 1 N
-        # load gives a rigid translation 1/sqrt(mass)), so a pool holding no excited elastic
-        # mode keeps none
-        excited = np.nonzero(force[6:] > EXCITED_RTOL * force.max())[0]
+        excited = _excited(force)
         f_hz, modes, force = f_hz[6:], modes[:, 6:], force[6:]
         if excited.size >= n_modes or not grow or pool >= min(MAX_POOL, n_free):
             break
@@ -263,7 +300,7 @@ def interface_columns(fe: FEModel, reference: ReferenceCondition, spec: Interfac
     # modes: free-free, elastic ones (the six rigid-body modes come first)
     phi, freqs, part = np.zeros((n, 0)), np.zeros(0), np.zeros(0)
     if n_modes:
-        phi, freqs, part = _chosen_modes(fe, spec, n_modes, f_exp)
+        phi, freqs, part = chosen_modes(fe, spec, n_modes, f_exp)
     # patch vectors: inertia-relief static responses, then M-orthonormal to the modes and
     # each other (modal truncation augmentation)
     free = reference.free_dofs(n)
@@ -294,6 +331,6 @@ def interface_columns(fe: FEModel, reference: ReferenceCondition, spec: Interfac
     return InterfaceColumns(np.ascontiguousarray(psi), freqs, part, patch, loads, static)
 
 
-__all__ = ["InterfaceColumns", "InterfaceSpec", "ModeChoice", "Patch", "contact_patch",
-           "hertz_load", "inertia_relief", "interface_columns", "patch_nodes",
-           "tangent_distance"]
+__all__ = ["InterfaceColumns", "InterfaceSpec", "ModeChoice", "Patch", "chosen_modes",
+           "contact_patch", "excited_modes_below", "hertz_load", "inertia_relief",
+           "interface_columns", "patch_nodes", "tangent_distance"]

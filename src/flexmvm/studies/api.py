@@ -48,7 +48,8 @@ def select(scenario: Scenario | str | Path, body: str, *, layers: Iterable[int] 
     cluster of ``workers`` processes (default: one per core), on ``scheduler``, or in this
     process with ``serial``. ``patches`` (patch-radius sets [m]) adds the interface kind's
     grid patches x ``interface_modes`` (``interface_rows``; summary ``interface`` and
-    ``best_overall``). Returns the table (``rows``), the smallest model reaching the
+    ``best_overall``), in the same brute force or the same search as the node selections.
+    Returns the table (``rows``), the smallest model reaching the
     target (``best``) and the summary."""
     target = target if isinstance(target, Target) else Target(float(target))
     with _directory(out_dir) as out:

@@ -1,5 +1,17 @@
-"""The a-priori estimate of a selection study: an MVM model of the study body from the 1D
-wave(-Hertz) theory, without any FE time integration (studies/selection.py module doc)."""
+"""The a-priori estimate of a selection study, without any FE time integration, from the 1D
+wave(-Hertz) theory of the scenario (flexmvm.theory.scenario.theory_pulse): an MVM model of the
+study body (:func:`estimate_selection`, rule in studies/selection.py module doc) or an
+interface model of it (:func:`estimate_interface`).
+
+Interface rule (issue 12; reduction/interface.py): one patch vector at the Hertz contact
+radius ``a`` of the theory at the window's peak force (the static response of the face to
+the expected Hertz pressure), plus the free-free modes that this Hertz load excites (modal
+force above EXCITED_RTOL of the largest, the participation choice's rule) with frequency
+below ``f_max = k / T_c``, ``T_c`` the theory's contact duration clipped to the window (as
+for node selections). On the seed case (docs/studies.md settings) this is 1 patch + 1 mode
+(the first axial mode, 2.6 kHz; f_max 4.64 kHz), 2 DOF, which gives force NCC 0.989 and a
+peak 11.7 % high (docs/interface_basis.md): a starting point for ``--search``, not an answer.
+"""
 
 from __future__ import annotations
 
@@ -13,6 +25,8 @@ from flexmvm.metrics.ncc import Target
 from flexmvm.scenarios import Scenario
 from flexmvm.studies.grid import rod_of
 from flexmvm.studies.report import target_dict
+
+__all__ = ["estimate_interface", "estimate_selection", "median_ncc"]
 
 
 def estimate_selection(sc: Scenario, body: str, target: Target | None = None, *, k: float = 3.0,
@@ -60,6 +74,87 @@ def estimate_selection(sc: Scenario, body: str, target: Target | None = None, *,
             "rule": "modes: fixed-interface modes below k/T_c (T_c = 1D wave-Hertz contact "
                     "duration clipped to the window), rounded up to the grid; nodes: layer 1, "
                     "the laps inside the Hertz contact radius at the window's peak force"}
+
+
+def _contact_surface(sc: Scenario, body: str) -> str:
+    """The facet set of ``body`` in its (first) contact."""
+    for c in sc.contacts:
+        if body in (c.slave_body, c.master_body):
+            return c.slave_surface if c.slave_body == body else c.master_surface
+    raise InputError(f"body {body!r} is in no contact of the scenario; the estimate needs one")
+
+
+def estimate_interface(sc: Scenario, body: str, target: Target | None = None, *,
+                       k: float = 3.0, modes: Sequence[int] | None = None) -> dict:
+    """A-priori interface model of ``body`` without a full-FE run (module doc: the rule):
+    ``fm.interface(est["patch_radii_m"], est["modes"])``, patch about the centre of the body's
+    contact surface.
+
+    Args:
+        sc, body: the scenario and the study body (a rod in a rod-on-rod contact, as the 1D
+            theory needs).
+        target: recorded only; the rule does not depend on the NCC level.
+        k: bandwidth factor, f_max = k / T_c (> 0).
+        modes: a grid of mode counts (e.g. ``--interface-modes``): the count is rounded up to
+            it (the grid's largest if none is enough: ``grid_max_modes_insufficient``); None
+            keeps the count of modes below f_max.
+
+    Returns:
+        {patch_radii_m: [a], modes, dof (= 1 + modes), n_modes_below_f_max, mode_freqs_hz (of
+        those), kept_mode_freqs_hz (what the participation choice keeps for ``modes``),
+        keeps_modes_below_f_max, f_max_hz, k, window_s, patch_surface,
+        grid_max_modes_insufficient, target, theory_<key> (theory_pulse), rule}.
+
+    Raises:
+        InputError: k <= 0, an empty grid, an unknown body, no rod-on-rod contact of the body,
+            or a flat-on-flat contact (St Venant: the theory gives no Hertz radius).
+    """
+    from flexmvm.reduction.interface import (
+        InterfaceSpec,
+        chosen_modes,
+        contact_patch,
+        excited_modes_below,
+        hertz_load,
+    )
+    from flexmvm.scenarios.build import fe_model_for
+    from flexmvm.theory.scenario import theory_pulse
+
+    if not k > 0:
+        raise InputError(f"k: expected a number > 0, got {k!r}")
+    grid = None if modes is None else sorted({int(m) for m in modes})
+    if grid is not None and (not grid or grid[0] < 0):
+        raise InputError(f"modes: expected a grid of mode counts >= 0, got {modes!r}")
+    cfg = sc.body(body)
+    pulse = theory_pulse(sc, body)
+    a = float(pulse["contact_radius_m"])
+    if not a > 0:
+        raise InputError(f"body {body!r}: the 1D theory gives no Hertz contact radius "
+                         f"(law {pulse['law']}, flat on flat); the interface rule needs one")
+    window = min(pulse["contact_duration_s"], sc.time.t_end_s)
+    f_max = k / window
+    surface = _contact_surface(sc, body)
+    key = cfg.rod.spec() if cfg.rod is not None else str(cfg.mesh_file)
+    fe = fe_model_for(key, cfg.material_obj())
+    patch = contact_patch(fe.mesh, surface)
+    load = hertz_load(fe.mesh, surface, patch, a)
+    freqs, _ = excited_modes_below(fe, load, f_max)
+    n_below = int(freqs.size)
+    m = n_below if grid is None else next((g for g in grid if g >= n_below), grid[-1])
+    kept = np.zeros(0)
+    if m:
+        kept = chosen_modes(fe, InterfaceSpec(surface, None, (a,)), m, load)[1]
+    return {"patch_radii_m": [a], "modes": m, "dof": 1 + m, "n_modes_below_f_max": n_below,
+            "mode_freqs_hz": [float(f) for f in freqs],
+            "kept_mode_freqs_hz": [float(f) for f in kept],
+            "keeps_modes_below_f_max": bool(all(np.any(np.abs(kept - f) <= 1e-6 * f)
+                                                for f in freqs)),
+            "f_max_hz": f_max, "k": k, "window_s": window, "patch_surface": surface,
+            "grid_max_modes_insufficient": grid is not None and n_below > grid[-1],
+            "target": None if target is None else target_dict(target),
+            **{f"theory_{k2}": v for k2, v in pulse.items()},
+            "rule": "one patch vector at the 1D wave-Hertz contact radius at the window's peak "
+                    "force; the free-free modes that Hertz load excites below k/T_c (T_c = "
+                    "contact duration clipped to the window), rounded up to the grid if given"}
 
 
 def median_ncc(rows: Iterable[dict]) -> float:

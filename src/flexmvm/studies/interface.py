@@ -6,8 +6,10 @@ Keys ``if-r<radii in um, '_'-joined>-m<modes>`` (``if-r-m10``: no patch vector);
 {body, kind: "interface", patch_radii_m, modes, mode_choice, scenario, reference_sha256}.
 Rows: {model, patch_radii_m, n_patch, modes, dof (= patches + modes, elastic coordinates),
 dof_total, ncc_force, ncc_<probe>..., peak_err, impulse_err, duration_err, wall_time_s,
-guard_outside_fraction} (ncc_interface.csv). The interface grid is always run whole (it is
-small); ``--search`` bisects the node selections only.
+guard_outside_fraction} (ncc_interface.csv: the evaluated cases). Brute force runs the whole
+grid of both kinds; ``--search`` runs one search over both (studies/search.py): each patch
+set is a family, bisected over its mode counts like a node selection, and a pass of either
+kind closes the other kind's models of more DOF.
 """
 
 from __future__ import annotations
@@ -17,16 +19,16 @@ from pathlib import Path
 from typing import Any
 
 from flexmvm.errors import InputError, SolverError
-from flexmvm.metrics.ncc import Comparison, Target
 from flexmvm.results.atomic import file_sha256, write_table_csv
 from flexmvm.scenarios import Scenario, interface, scenario_from_dict
 from flexmvm.scenarios.compare import compare_runs
 from flexmvm.scenarios.guard import outside_fraction
 from flexmvm.studies.reference import case_reference
+from flexmvm.studies.report import failure_list
 from flexmvm.studies.runner import Case
 
-__all__ = ["interface_cases", "interface_columns", "interface_key", "interface_winner",
-           "parse_patches", "run_interface_case", "write_interface_csv"]
+__all__ = ["interface_cases", "interface_columns", "interface_key", "interface_summary",
+           "is_interface_key", "parse_patches", "run_interface_case", "write_interface_csv"]
 
 
 def parse_patches(text: str) -> list[tuple[float, ...]]:
@@ -53,11 +55,24 @@ def interface_key(radii_m: Sequence[float], modes: int) -> str:
     return "if-r" + "_".join(f"{round(a * 1e6):d}" for a in radii_m) + f"-m{int(modes)}"
 
 
+def is_interface_key(key: str) -> bool:
+    """Whether a case key of a selection study is the interface kind's (node keys: l<i>-...)."""
+    return key.startswith("if-")
+
+
 def interface_cases(sc: Scenario, body: str, patches: Iterable[Sequence[float]],
                     modes: Iterable[int], reference: str | Path | None = None,
                     mode_choice: str = "participation") -> list[Case]:
     """The cases patch sets x mode counts of ``body`` as an interface model."""
     sc.body(body)
+    patches = [tuple(float(a) for a in radii) for radii in patches]
+    for radii in patches:
+        if not all(a > 0 for a in radii) or len(set(radii)) != len(radii):
+            raise InputError(f"interface grid: patch radii {list(radii)}: expected distinct "
+                             "radii > 0 [m]")
+    if len(set(patches)) != len(patches):
+        raise InputError(f"interface grid: a patch set appears twice in {patches}; expected "
+                         "each once")
     data = sc.model_dump(mode="json")
     sha = file_sha256(reference) if reference is not None else None
     cases = []
@@ -117,17 +132,23 @@ def failed_interface_row(case: Case, line: str) -> dict:
             "dof_total": n + int(p["modes"]) + 6, "failed": line}
 
 
-def _passes(row: dict, target: Target) -> bool:
-    if any(k not in row for k in ("ncc_force", "peak_err", "impulse_err", "duration_err")):
-        return False
-    return target.met_by(Comparison(row["ncc_force"], row["peak_err"], row["impulse_err"],
-                                    row["duration_err"]))
-
-
-def interface_winner(rows: Sequence[dict], target: Target) -> dict | None:
-    """The smallest-DOF row reaching the target (ties: the higher NCC), or None."""
-    ok = [r for r in rows if _passes(r, target)]
-    return min(ok, key=lambda r: (r["dof"], -r["ncc_force"])) if ok else None
+def interface_summary(rows: dict[str, dict], cases: Sequence[Case], winner_key: str | None,
+                      exact: bool, made: int, loaded: int, patches: Iterable[Sequence[float]],
+                      modes: Iterable[int]) -> dict:
+    """selection.json's ``interface`` entry: the grid and its size, the runs of this kind
+    (evaluated, made, loaded), its failures and its winner (``winner_key``: the case of the
+    kind's best passing candidate by search.rank_key, or None), ``exact`` as
+    search.kind_exact says."""
+    done = [(c.key, rows[c.key]) for c in cases if c.key in rows]
+    entry = {"passed": winner_key is not None, "exact": bool(exact),
+             "grid": {"patch_radii_m": [list(p) for p in patches],
+                      "modes": sorted({int(m) for m in modes})},
+             "grid_size": len(cases), "runs": len(done), "runs_made": made,
+             "runs_loaded": loaded, "failures": failure_list(done)}
+    if winner_key is not None:
+        entry |= {k: rows[winner_key].get(k) for k in ("model", "patch_radii_m", "modes", "dof",
+                                                       "dof_total", "ncc_force", "peak_err")}
+    return entry
 
 
 def interface_columns(probes: Sequence[str]) -> list[str]:

@@ -67,9 +67,50 @@ def target_dict(t: Target) -> dict:
 
 
 def target_text(t: Target) -> str:
-    parts = [f"ncc>={t.ncc_min:g}"]
+    parts = [f"ncc>={t.ncc_min:.12g}"]  # 12 digits: 0.9999996 is not printed as 1
     for key, name in (("peak_err_max", "peak"), ("impulse_err_max", "impulse"),
                       ("duration_err_max", "duration")):
         if getattr(t, key) is not None:
-            parts.append(f"{name}<={getattr(t, key):g}")
+            parts.append(f"{name}<={getattr(t, key):.12g}")
     return ",".join(parts)
+
+
+def echo_summary(echo: Callable[[str], Any], result: dict, target: Target, where: Path) -> None:
+    """The console lines of a selection study's selection.json content ``result``: failures,
+    the node kind's answer and, with the interface kind, its answer and the best overall. A
+    kind that ``--search`` did not follow past the other kind's smaller winner (``exact``
+    false) is reported as such, not as that kind's smallest model."""
+    t = target_text(target)
+    ie = result.get("interface")
+    top = result["best_overall"]["dof"] if ie and result["best_overall"] else None
+    beyond = f"none up to {top} DOF, the search looked no further"
+    echo_failures(echo, result["failures"], result["runs"], where)
+    runs = (f"{result['runs']} runs ({result['runs_made']} made, {result['runs_loaded']} "
+            "loaded)")
+    exact = result.get("exact", True)
+    if result["passed"]:
+        model = (f"{result['layers']}-{result['laps']} with {result['modes']} modes, "
+                 f"{result['dof']} DOF ({result['nodes']} nodes), NCC {result['ncc_force']:.6f}")
+        echo(f"smallest model reaching {t}: {model}; {runs}" if exact else
+             f"node selections, best run reaching {t}: {model} ({beyond}); {runs}")
+    else:
+        echo(f"no model of the grid reaches {t}; {runs}" if exact else
+             f"no node selection reaches {t} up to {top} DOF (the search looked no further); "
+             f"{runs}")
+    if ie is None:
+        return
+    echo_failures(echo, ie["failures"], ie["runs"], where)
+    runs = f"{ie['runs']} of {ie['grid_size']} runs"
+    if ie["passed"]:
+        model = f"{ie['model']}, {ie['dof']} DOF, NCC {ie['ncc_force']:.6f}"
+        echo(f"smallest interface model reaching {t}: {model}; {runs}" if ie["exact"] else
+             f"interface, best run reaching {t}: {model} ({beyond}); {runs}")
+    else:
+        echo(f"no interface model of the grid reaches {t}; {runs}" if ie["exact"] else
+             f"no interface model reaches {t} up to {top} DOF (the search looked no further); "
+             f"{runs}")
+    b = result["best_overall"]
+    if b is not None:
+        echo(f"smallest model over both kinds: {b['model']}, {b['dof']} DOF, "
+             f"NCC {b['ncc_force']:.6f}; {result['runs'] + ie['runs']} of "
+             f"{result['grid_size'] + ie['grid_size']} runs")

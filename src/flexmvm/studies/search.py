@@ -1,32 +1,49 @@
 """Find the smallest reduced model that reaches a target score without running every case.
 
 The selection study (seed §3.2) asks for the model with the fewest DOF whose contact force
-reaches a target NCC, over a grid of node selections x mode counts (20 x 7 = 140 runs).
-Each candidate costs one expensive simulation; this module finds the same answer as running
-the whole grid (:func:`brute_force`) with far fewer runs (:func:`smallest_passing`).
+reaches a target NCC, over a grid of node selections x mode counts (20 x 7 = 140 runs), and,
+with ``--patches``, over the interface kind's patch-radius sets x mode counts beside them
+(studies/interface.py). Each candidate costs one expensive simulation; this module finds the
+same answer as running the whole grid (:func:`brute_force`) with far fewer runs
+(:func:`smallest_passing`).
 
-Assumption (Rayleigh-Ritz): for a fixed node selection, the score is non-decreasing in the
-number of modes, because adding modes enlarges the trial subspace; so ``passes(score)`` is
-false up to some mode count and true from there on. Candidates of one selection must have
-DOF strictly increasing with the mode count (each mode adds one generalised coordinate).
+Families. A candidate belongs to one *family*: a node selection ``(layers, laps)`` (node
+kind) or a patch-radius set (interface kind); within a family only the mode count varies.
 
-Strategy of :func:`smallest_passing`:
+Assumption (Rayleigh-Ritz): within a family the score is non-decreasing in the number of
+modes, because adding modes enlarges the trial subspace (node selection: the fixed-interface
+modes in frequency order; interface: the modes in participation order, so a larger count
+keeps the smaller count's modes as long as the ranking of the smaller pool is a prefix of
+the larger one's); so ``passes(score)`` is false up to some mode count and true from there
+on. Candidates of one family must have DOF strictly increasing with the mode count (each mode
+adds one generalised coordinate).
+
+Strategy of :func:`smallest_passing`, one search over the families of both kinds:
 
 1. Keep ``best_dof`` = the smallest DOF of any passing candidate evaluated so far (inf at
-   start). Only candidates with ``dof <= best_dof`` can still win (``<=`` keeps DOF ties,
-   which the score then decides).
-2. Open the selections in order of the DOF of their cheapest candidate (at most
-   ``max_open`` at a time; all by default); a selection whose cheapest candidate has
-   ``dof > best_dof`` is closed without any run.
-3. Each open selection binary-searches the smallest passing mode count among its candidates
+   start), whatever its kind: a passing 18-DOF interface model closes every node selection
+   above 18 DOF and vice versa. Only candidates with ``dof <= best_dof`` can still win
+   (``<=`` keeps DOF ties, which the score then decides).
+2. Open the families in order of the DOF of their cheapest candidate (at most ``max_open``
+   at a time; all by default); a family whose cheapest candidate has ``dof > best_dof`` is
+   closed without any run.
+3. Each open family binary-searches the smallest passing mode count among its candidates
    with ``dof <= best_dof``: everything below a failing candidate fails, everything above a
-   passing one passes. In each round the midpoints of all open selections are evaluated
+   passing one passes. In each round the midpoints of all open families are evaluated
    together, in one call of ``evaluate`` (so a Dask runner runs the batch in parallel);
    then ``best_dof`` is lowered and every search range is cut to ``dof <= best_dof``.
 4. When no search is open, the winner is the evaluated passing candidate of smallest DOF;
-   ties go to the higher score, then to fewer node DOF (``dof - modes``), then to the
-   smaller ``(selection, modes)``. The brute-force answer uses the same order, so both agree
-   whenever the assumption holds (tests/test_search.py checks 200 random monotone tables).
+   ties go to the higher score, then to the node kind before the interface kind, then to
+   fewer static coordinates ``dof - modes`` (node DOF of a selection, patch vectors of an
+   interface set), then to the smaller ``(selection, modes)`` (node kind) or
+   ``(patch radii, modes)`` (interface kind). The brute-force answer uses the same order,
+   so both agree whenever the assumption holds (tests/test_search.py checks 200 random
+   monotone tables of node selections and 200 of both kinds).
+
+What the search proves beyond the winner: every family's first passing candidate with
+``dof <= winner dof`` is known, so a kind's best evaluated candidate is that kind's own
+smallest model when its DOF equals the winner's (:func:`kind_exact`); a kind that lost has
+no passing model up to the winner's DOF, and models above it were not searched.
 
 Each round costs one ``evaluate`` call, so ``max_open`` trades rounds (wall time on a
 cluster) against runs: ``max_open=1`` is the sequential search with the strongest pruning.
@@ -40,70 +57,122 @@ import math
 from collections import deque
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from enum import StrEnum
 
 from flexmvm.errors import InputError
 
-__all__ = ["Candidate", "brute_force", "rank_key", "smallest_passing"]
+__all__ = ["Candidate", "FamilyKind", "best_passing", "brute_force", "kind_exact", "rank_key",
+           "smallest_passing"]
+
+
+class FamilyKind(StrEnum):
+    """The kind of a candidate's family; the order of the members is the tie order."""
+
+    NODES = "nodes"            # a node selection (layers, laps) + modes (Craig-Bampton, ...)
+    INTERFACE = "interface"    # a patch-radius set + modes by participation
+
+
+_KIND_ORDER = {FamilyKind.NODES: 0, FamilyKind.INTERFACE: 1}
 
 
 @dataclass(frozen=True)
 class Candidate:
-    """One reduced model of a selection study.
+    """One reduced model of a selection study, a member of one family (module doc).
 
     Attributes:
-        selection: node selection ``(layers, laps)`` (seed's i-j scheme), both >= 1.
+        selection: node selection ``(layers, laps)`` (seed's i-j scheme), both >= 1; None for
+            an interface candidate.
         modes: number of modes of the basis (>= 0).
         dof: number of generalised coordinates of the model (>= 1), the cost to minimise.
+        patch_radii_m: the interface kind's patch-radius set [m] (distinct radii > 0, may be
+            empty: modes only); None for a node selection. Exactly one of ``selection`` and
+            ``patch_radii_m`` is given.
 
     Raises:
-        InputError: a field has the wrong type or range.
+        InputError: a field has the wrong type or range, or both or neither family is given.
     """
 
-    selection: tuple[int, int]
+    selection: tuple[int, int] | None
     modes: int
     dof: int
+    patch_radii_m: tuple[float, ...] | None = None
 
     def __post_init__(self) -> None:
-        sel = tuple(self.selection)
-        if len(sel) != 2 or not all(isinstance(v, int) and v >= 1 for v in sel):
+        if (self.selection is None) == (self.patch_radii_m is None):
             raise InputError(
-                f"Candidate selection {self.selection!r}: expected (layers, laps) >= 1"
+                f"Candidate selection {self.selection!r}, patch_radii_m {self.patch_radii_m!r}: "
+                "expected exactly one (a node selection or an interface patch set)"
             )
-        object.__setattr__(self, "selection", sel)
+        if self.selection is not None:
+            sel = tuple(self.selection)
+            if len(sel) != 2 or not all(isinstance(v, int) and v >= 1 for v in sel):
+                raise InputError(
+                    f"Candidate selection {self.selection!r}: expected (layers, laps) >= 1"
+                )
+            object.__setattr__(self, "selection", sel)
+        else:
+            try:
+                radii = tuple(float(a) for a in self.patch_radii_m)
+            except (TypeError, ValueError):
+                radii = (-1.0,)
+            if not all(math.isfinite(a) and a > 0 for a in radii) or len(set(radii)) != len(radii):
+                raise InputError(f"Candidate patch_radii_m {self.patch_radii_m!r}: expected "
+                                 "distinct radii > 0 [m]")
+            object.__setattr__(self, "patch_radii_m", radii)
         if not isinstance(self.modes, int) or self.modes < 0:
             raise InputError(f"Candidate modes {self.modes!r}: expected an integer >= 0")
         if not isinstance(self.dof, int) or self.dof < 1:
             raise InputError(f"Candidate dof {self.dof!r}: expected an integer >= 1")
 
+    @classmethod
+    def interface(cls, patch_radii_m, modes: int) -> Candidate:
+        """An interface candidate: one coordinate per patch vector and per mode."""
+        radii = tuple(patch_radii_m)
+        return cls(None, modes, len(radii) + modes, patch_radii_m=radii)
+
+    @property
+    def kind(self) -> FamilyKind:
+        return FamilyKind.NODES if self.selection is not None else FamilyKind.INTERFACE
+
+    @property
+    def family(self) -> tuple:
+        """Sortable, hashable key of the family: (kind order, selection or patch radii)."""
+        member = self.selection if self.selection is not None else self.patch_radii_m
+        return (_KIND_ORDER[self.kind], member)
+
+    @property
+    def family_label(self) -> str:
+        if self.selection is not None:
+            return f"selection {self.selection}"
+        return "patch set (" + ", ".join(f"{a * 1e3:g}" for a in self.patch_radii_m) + ") mm"
+
 
 def rank_key(candidate: Candidate, score: float) -> tuple:
-    """Order of passing candidates, best first: fewer DOF, higher score, fewer node DOF,
-    then ``(selection, modes)`` so the choice is deterministic."""
-    return (
-        candidate.dof,
-        -score,
-        candidate.dof - candidate.modes,
-        candidate.selection,
-        candidate.modes,
-    )
+    """Order of passing candidates, best first: fewer DOF, higher score, the node kind before
+    the interface kind, fewer static coordinates (``dof - modes``), then the family and
+    ``modes`` so the choice is deterministic."""
+    kind, member = candidate.family
+    return (candidate.dof, -score, kind, candidate.dof - candidate.modes, member,
+            candidate.modes)
 
 
-def _group(candidates: Sequence[Candidate]) -> dict[tuple[int, int], list[Candidate]]:
-    """Candidates per selection, sorted by modes; checks uniqueness and increasing DOF."""
-    groups: dict[tuple[int, int], list[Candidate]] = {}
+def _group(candidates: Sequence[Candidate]) -> dict[tuple, list[Candidate]]:
+    """Candidates per family, sorted by modes; checks uniqueness and increasing DOF."""
+    groups: dict[tuple, list[Candidate]] = {}
     for c in candidates:
         if not isinstance(c, Candidate):
             raise InputError(f"received {type(c).__name__}, expected Candidate objects")
-        groups.setdefault(c.selection, []).append(c)
-    for sel, items in groups.items():
+        groups.setdefault(c.family, []).append(c)
+    for items in groups.values():
         items.sort(key=lambda c: c.modes)
         for a, b in itertools.pairwise(items):
             if a.modes == b.modes:
-                raise InputError(f"selection {sel}: {a.modes} modes appears twice; expected once")
+                raise InputError(f"{a.family_label}: {a.modes} modes appears twice; "
+                                 "expected once")
             if b.dof <= a.dof:
                 raise InputError(
-                    f"selection {sel}: dof {a.dof} at {a.modes} modes but {b.dof} at {b.modes}; "
-                    "expected dof strictly increasing with modes"
+                    f"{a.family_label}: dof {a.dof} at {a.modes} modes but {b.dof} at "
+                    f"{b.modes}; expected dof strictly increasing with modes"
                 )
     return groups
 
@@ -134,7 +203,7 @@ class _Evaluator:
 
 
 class _Bisection:
-    """Binary search for the first passing candidate of one selection.
+    """Binary search for the first passing candidate of one family.
 
     Invariant: items[:lo] fail, items[hi] passes (or hi == len(items)).
     """
@@ -161,8 +230,12 @@ class _Bisection:
             self.lo = index + 1
 
 
-def _winner(scores: dict[Candidate, float], passes: Callable[[float], bool]) -> Candidate | None:
-    passing = [(rank_key(c, s), c) for c, s in scores.items() if passes(s)]
+def best_passing(scores: dict[Candidate, float], passes: Callable[[float], bool],
+                 kind: FamilyKind | None = None) -> Candidate | None:
+    """The first passing candidate of ``scores`` by :func:`rank_key` (of ``kind`` only, if
+    given), or None."""
+    passing = [(rank_key(c, s), c) for c, s in scores.items()
+               if (kind is None or c.kind is kind) and passes(s)]
     return min(passing, key=lambda item: item[0])[1] if passing else None
 
 
@@ -173,15 +246,16 @@ def smallest_passing(
     *,
     max_open: int | None = None,
 ) -> tuple[Candidate | None, dict[Candidate, float]]:
-    """The passing candidate of fewest DOF, found by per-selection bisection (module doc).
+    """The passing candidate of fewest DOF, found by per-family bisection (module doc).
 
     Args:
-        candidates: the grid; per selection, unique mode counts with DOF strictly increasing.
+        candidates: the grid, node selections and/or interface patch sets; per family, unique
+            mode counts with DOF strictly increasing.
         evaluate: scores of a batch of candidates, in order (e.g. NCC against the full FE
-            force); called once per round with at most one candidate per open selection.
+            force); called once per round with at most one candidate per open family.
         passes: whether a score reaches the target (e.g. ``lambda r: r >= 0.99``); must be
             monotone in the score for the search to be exact.
-        max_open: number of selections searched at once (None: all).
+        max_open: number of families searched at once (None: all).
 
     Returns:
         ``(winner or None, {candidate: score} of every evaluated candidate)``; the length of
@@ -194,15 +268,15 @@ def smallest_passing(
     if max_open is not None and max_open < 1:
         raise InputError(f"max_open={max_open}; expected a positive integer or None")
     groups = _group(candidates)
-    queue = deque(sorted(groups, key=lambda sel: (groups[sel][0].dof, sel)))
+    queue = deque(sorted(groups, key=lambda fam: (groups[fam][0].dof, fam)))
     run = _Evaluator(evaluate)
     best_dof = math.inf
     searches: list[_Bisection] = []
     while queue or searches:
         while queue and (max_open is None or len(searches) < max_open):
-            sel = queue.popleft()
-            if groups[sel][0].dof <= best_dof:
-                searches.append(_Bisection(groups[sel]))
+            fam = queue.popleft()
+            if groups[fam][0].dof <= best_dof:
+                searches.append(_Bisection(groups[fam]))
         probes = [(s, s.probe(best_dof)) for s in searches]
         searches = [s for s, c in probes if c is not None]
         batch = [c for _, c in probes if c is not None]
@@ -213,7 +287,7 @@ def smallest_passing(
             search.record(c, passed)
             if passed:
                 best_dof = min(best_dof, c.dof)
-    return _winner(run.scores, passes), run.scores
+    return best_passing(run.scores, passes), run.scores
 
 
 def brute_force(
@@ -229,7 +303,27 @@ def brute_force(
     """
     groups = _group(candidates)
     run = _Evaluator(evaluate)
-    everything = [c for sel in sorted(groups) for c in groups[sel]]
+    everything = [c for fam in sorted(groups) for c in groups[fam]]
     if everything:
         run(everything)
-    return _winner(run.scores, passes), run.scores
+    return best_passing(run.scores, passes), run.scores
+
+
+def kind_exact(kind: FamilyKind, winner: Candidate | None, scores: dict[Candidate, float],
+               passes: Callable[[float], bool],
+               candidates: Sequence[Candidate] | None = None) -> bool:
+    """Whether ``best_passing(scores, passes, kind)`` (None if nothing of ``kind`` passed) is
+    that kind's own answer over its whole grid, after :func:`smallest_passing` returned
+    ``(winner, scores)`` for the grid ``candidates`` (module doc): true when no candidate
+    passes at all, when the kind's best has the winner's DOF, or when nothing of ``kind``
+    passed and none of its candidates has more DOF than the winner (the search covered them
+    all); false otherwise (the search does not look past the winner's DOF; with
+    ``candidates`` None the grid is taken to extend past it). After :func:`brute_force` every
+    kind is exact."""
+    if winner is None:
+        return True
+    own = [c.dof for c, s in scores.items() if c.kind is kind and passes(s)]
+    if own:
+        return min(own) == winner.dof
+    return candidates is not None and all(c.dof <= winner.dof for c in candidates
+                                          if c.kind is kind)

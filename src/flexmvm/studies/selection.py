@@ -25,11 +25,14 @@ Files of a study directory ``DIR``:
   metric cells for a run that failed (solver did not converge, the case raised: its
   ``cases/<key>.error.txt`` holds the traceback and a rerun tries it again);
 - ``selection.json``: the smallest-DOF model reaching the target, the run counts, the target,
-  ``failures`` (``{"case", "reason"}`` of every run without a comparison; also printed);
+  ``failures`` (``{"case", "reason"}`` of every run without a comparison; also printed); with
+  the interface kind (``--patches``) also ``interface``, ``best_overall``, ``grid_size`` and
+  ``exact`` (select_models);
 - ``fig7_ncc_map.png`` (NCC of the force over selection x modes, seed fig. 7) and
   ``fig8_ncc_modes.png`` (NCC against modes per selection, seed fig. 8).
 
-A-priori estimate (:func:`estimate_selection`), without any FE time integration:
+A-priori estimate (studies/estimate.py ``estimate_selection``; the interface kind's:
+``estimate_interface``, rule in that module), without any FE time integration:
 
 - *modes*: the contact force of the 1D wave + Hertz theory (flexmvm.theory.wave; Hertz for a
   hemispherical end of either rod, St Venant otherwise) gives the contact duration ``T_c`` (first
@@ -80,17 +83,17 @@ from flexmvm.studies.grid import (
 from flexmvm.studies.interface import (
     failed_interface_row,
     interface_cases,
-    interface_winner,
+    interface_summary,
+    is_interface_key,
     run_interface_case,
     write_interface_csv,
 )
 from flexmvm.studies.reference import case_reference, reference_history
 from flexmvm.studies.report import (
-    echo_failures,
+    echo_summary,
     failed_case_row,
     failure_list,
     target_dict,
-    target_text,
     winner_dict,
     write_ncc_csv,
 )
@@ -101,10 +104,17 @@ from flexmvm.studies.runner import (
     run_cases,
     study_cluster,
 )
-from flexmvm.studies.search import Candidate, rank_key, smallest_passing
+from flexmvm.studies.search import (
+    Candidate,
+    FamilyKind,
+    best_passing,
+    brute_force,
+    kind_exact,
+    smallest_passing,
+)
 
-__all__ = ["FAIL_SCORE", "SelectionStudy", "run_selection_case", "run_selection_study", "score",
-           "select_models"]
+__all__ = ["FAIL_SCORE", "SelectionStudy", "run_selection_case", "run_selection_study",
+           "run_study_case", "score", "select_models"]
 
 #: Score of a run that failed or misses a non-NCC bound of the target (below any NCC).
 FAIL_SCORE = -2.0
@@ -196,7 +206,7 @@ class SelectionStudy:
     rows: list[dict]
     summary: dict
     probes: list[str]
-    interface_rows: tuple[dict, ...] = ()  # the interface kind's grid (studies/interface.py)
+    interface_rows: tuple[dict, ...] = ()  # the interface cases evaluated (interface.py)
 
     @property
     def best(self) -> dict | None:
@@ -220,15 +230,18 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     stored in ``out_dir`` (a rerun resumes); no table, figure or console output (see
     :func:`run_selection_study`).
 
-    Brute force runs every case of the grid; ``search=True`` runs
+    Brute force runs every case of the grid (one batch); ``search=True`` runs
     studies.search.smallest_passing, each round's batch through run_cases (parallel,
     resumable). ``scheduler``: address of a Dask scheduler; otherwise one LocalCluster of
     ``n_workers`` processes for the whole study, or in-process with ``serial=True``. ``kind``:
     the candidates' model (grid.study_kind: mvm, the default, mvm-seed or mvm-seed-fixed).
     ``patches`` (patch-radius sets [m]) adds the interface kind's grid patches x
-    ``interface_modes`` (studies/interface.py), run whole beside the node selections;
-    ``summary["interface"]`` is its smallest model reaching the target and
-    ``summary["best_overall"]`` the smaller of the two winners.
+    ``interface_modes`` (studies/interface.py) beside the node selections, in the same brute
+    force or the same search (each patch set a family); then ``summary["interface"]`` is that
+    kind's answer (runs, ``grid_size``, ``exact``), ``summary["best_overall"]`` the winner over
+    both kinds (search.rank_key), and ``summary["grid_size"]`` / ``summary["exact"]`` the node
+    kind's (``exact`` false: ``--search`` stopped that kind at best_overall's DOF, see
+    ``exact_note`` and search.kind_exact).
     Raises InputError for a bad body / grid / options, SolverError if the reference fails.
     Failed runs are listed in ``summary["failures"]``; they count as not reaching the target.
     """
@@ -240,47 +253,38 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     make_out_dir(out)
     hist, ref_made = reference_history(sc, body, out, progress=progress)
     echo(f"reference (full FE {body}): {'computed' if ref_made else 'loaded'} {hist}")
-    cases = {(c.params["layers"], c.params["laps"], c.params["modes"]): c
-             for c in selection_cases(sc, body, layers, laps, modes, reference=hist, kind=kind)}
+    n_nodes = {(i, j): len(rod.selection(i, j)) for i in layers for j in laps}
+    case_of: dict[Candidate, Case] = {}
+    for c in selection_cases(sc, body, layers, laps, modes, reference=hist, kind=kind):
+        i, j, m = c.params["layers"], c.params["laps"], c.params["modes"]
+        case_of[Candidate((i, j), m, 3 * n_nodes[(i, j)] + m)] = c
     if_cases = (interface_cases(sc, body, patches, interface_modes, reference=hist)
                 if patches else [])
-    cands = {k: Candidate((k[0], k[1]), k[2], 3 * len(rod.selection(k[0], k[1])) + k[2])
-             for k in cases}
-    key_of = {v: k for k, v in cands.items()}
+    for c in if_cases:
+        case_of[Candidate.interface(c.params["patch_radii_m"], c.params["modes"])] = c
     with study_cluster(scheduler, n_workers, serial) as address:
         batches = _Batches(out, address, serial, progress,
-                           functools.partial(run_selection_case, reference=str(hist)),
-                           lambda c, line: failed_case_row(
-                               c, line, len(rod.selection(c.params["layers"],
-                                                          c.params["laps"]))))
+                           functools.partial(run_study_case, reference=str(hist)),
+                           lambda c, line: _failed_row(c, line, n_nodes))
 
         def evaluate(batch: Sequence[Candidate]) -> list[float]:
-            rows = batches([cases[key_of[c]] for c in batch])
+            rows = batches([case_of[c] for c in batch])
             return [score(r, target) for r in rows]
 
         def passes(s: float) -> bool:
             return s >= target.ncc_min
 
-        if search:
-            best, scores = smallest_passing(list(cands.values()), evaluate, passes)
-        else:
-            evaluate(list(cands.values()))
-            scores = {c: score(batches.rows[cases[key_of[c]].key], target)
-                      for c in cands.values()}
-            passing = [(rank_key(c, s), c) for c, s in scores.items() if passes(s)]
-            best = min(passing, key=lambda x: x[0])[1] if passing else None
-        if_rows: list[dict] = []
-        if if_cases:
-            if_batches = _Batches(out, address, serial, progress,
-                                  functools.partial(run_interface_case, reference=str(hist)),
-                                  failed_interface_row)
-            if_rows = if_batches(if_cases)
-    rows = {(r["layers"], r["laps"], r["modes"]): r for r in batches.rows.values()}
+        find = smallest_passing if search else brute_force
+        best, scores = find(list(case_of), evaluate, passes)
+    made, loaded = _Counts(batches.made), _Counts(batches.loaded)
+    rows = {(r["layers"], r["laps"], r["modes"]): r for k, r in batches.rows.items()
+            if not is_interface_key(k)}
     table = sorted(rows.values(), key=lambda r: (r["layers"], r["laps"], r["modes"]))
-    summary = winner_dict(best, rows) | {
+    summary = winner_dict(best_passing(scores, passes, FamilyKind.NODES), rows) | {
         "body": body, "kind": kind.value, "search": bool(search),
         "target": target_dict(target),
-        "runs": len(scores), "runs_made": len(batches.made), "runs_loaded": len(batches.loaded),
+        "runs": sum(c.kind is FamilyKind.NODES for c in scores), "runs_made": made.nodes,
+        "runs_loaded": loaded.nodes,
         "runs_note": "runs = MVM cases evaluated for this answer = runs_made (computed in this "
                      "invocation) + runs_loaded (found stored in cases/); the full-FE reference "
                      "is not counted",
@@ -295,34 +299,65 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
                          "case raised: see cases/<key>.error.txt, a rerun tries it again; or a "
                          "metric could not be computed); they count as not reaching the target",
     }
+    if_rows = [batches.rows[c.key] for c in if_cases if c.key in batches.rows]
     if if_cases:
-        summary |= _interface_summary(if_rows, summary, target, if_batches, patches,
-                                      interface_modes, if_cases)
+        def exact(k: FamilyKind) -> bool:
+            return not search or kind_exact(k, best, scores, passes, list(case_of))
+
+        if_best = best_passing(scores, passes, FamilyKind.INTERFACE)
+        summary |= {"grid_size": len(case_of) - len(if_cases), "exact": exact(FamilyKind.NODES),
+                    "exact_note": EXACT_NOTE,
+                    "interface": interface_summary(
+                        batches.rows, if_cases, None if if_best is None else case_of[if_best].key,
+                        exact(FamilyKind.INTERFACE), made.interface, loaded.interface, patches,
+                        interface_modes),
+                    "best_overall": _best_overall(best, case_of, batches.rows, kind)}
     return SelectionStudy(table, summary, [p.name for p in sc.probes],
                           tuple(sorted(if_rows, key=lambda r: (r["dof"], r["model"]))))
 
 
-def _interface_summary(rows, summary, target, batches, patches, modes, cases) -> dict:
-    """selection.json's interface entries: the grid, run counts, its winner, the smaller
-    winner of both kinds (best_overall) and the interface runs that failed."""
-    win = interface_winner(rows, target)
-    entry = {"passed": win is not None, "grid": {"patch_radii_m": [list(p) for p in patches],
-                                                 "modes": sorted({int(m) for m in modes})},
-             "runs": len(rows), "runs_made": len(batches.made),
-             "runs_loaded": len(batches.loaded),
-             "failures": failure_list((c.key, r) for c, r in zip(cases, rows, strict=True))}
-    if win is not None:
-        entry |= {k: win.get(k) for k in ("model", "patch_radii_m", "modes", "dof", "dof_total",
-                                          "ncc_force", "peak_err")}
-    best = None
-    if summary["passed"]:
-        best = {"kind": summary["kind"], "model": f"{summary['kind']} {summary['layers']}-"
-                f"{summary['laps']} + {summary['modes']}", "dof": summary["dof"],
-                "ncc_force": summary["ncc_force"]}
-    if win is not None and (best is None or win["dof"] < best["dof"]):
-        best = {"kind": "interface", "model": win["model"], "dof": win["dof"],
-                "ncc_force": win["ncc_force"]}
-    return {"interface": entry, "best_overall": best}
+#: selection.json's note on ``exact`` (node kind) and ``interface.exact``.
+EXACT_NOTE = ("exact: this kind's entry is its smallest model reaching the target over its "
+              "whole grid (always with brute force); false after --search when the other "
+              "kind's winner (best_overall) has fewer DOF and this kind has models above that "
+              "DOF: the search then proved only that nothing of this kind passes up to "
+              "best_overall's DOF, and the entry (if any) is the best of the runs it made")
+
+
+def run_study_case(case: Case, reference: str | Path | None = None) -> dict:
+    """One run of a selection study, of either kind: the interface kind's (params ``kind``
+    "interface", studies/interface.py) or a node selection's (:func:`run_selection_case`)."""
+    if case.params.get("kind") == "interface":
+        return run_interface_case(case, reference=reference)
+    return run_selection_case(case, reference=reference)
+
+
+def _failed_row(case: Case, line: str, n_nodes: dict[tuple[int, int], int]) -> dict:
+    if case.params.get("kind") == "interface":
+        return failed_interface_row(case, line)
+    return failed_case_row(case, line, n_nodes[(case.params["layers"], case.params["laps"])])
+
+
+class _Counts:
+    """Case keys split by kind."""
+
+    def __init__(self, keys: Iterable[str]) -> None:
+        keys = list(keys)
+        self.interface = sum(map(is_interface_key, keys))
+        self.nodes = len(keys) - self.interface
+
+
+def _best_overall(best: Candidate | None, case_of: dict[Candidate, Case],
+                  rows: dict[str, dict], kind: ModelKind) -> dict | None:
+    """selection.json's best_overall: the search's (or brute force's) winner over both kinds."""
+    if best is None:
+        return None
+    r = rows[case_of[best].key]
+    if best.kind is FamilyKind.INTERFACE:
+        model, name = r["model"], "interface"
+    else:
+        model, name = f"{kind.value} {r['layers']}-{r['laps']} + {r['modes']}", kind.value
+    return {"kind": name, "model": model, "dof": r["dof"], "ncc_force": r.get("ncc_force")}
 
 
 def kind_name(summary: dict) -> str:
@@ -363,9 +398,11 @@ def run_selection_study(scenario: str | Path | Scenario, body: str, out_dir: str
     write_json_atomic(out / "selection.json", result)
     from flexmvm.plots.study_figures import plot_ncc_map, plot_ncc_modes
 
-    plot_ncc_map(out / "fig7_ncc_map.png", study.rows,
-                 title=f"{sc.name}: NCC of the contact force")
-    plot_ncc_modes(out / "fig8_ncc_modes.png", study.rows, title=f"{sc.name}: NCC against modes")
+    if study.rows:  # none when --search closed every node selection (an interface winner)
+        plot_ncc_map(out / "fig7_ncc_map.png", study.rows,
+                     title=f"{sc.name}: NCC of the contact force")
+        plot_ncc_modes(out / "fig8_ncc_modes.png", study.rows,
+                       title=f"{sc.name}: NCC against modes")
     if study.interface_rows:
         write_interface_csv(out / "ncc_interface.csv", study.interface_rows, study.probes)
         from flexmvm.plots.study_figures import plot_ncc_dof_fronts
@@ -374,30 +411,13 @@ def run_selection_study(scenario: str | Path | Scenario, body: str, out_dir: str
                [(r["dof"], r["ncc_force"]) for r in study.rows if "ncc_force" in r],
                "interface": [(r["dof"], r["ncc_force"]) for r in study.interface_rows
                              if "ncc_force" in r]}
-        plot_ncc_dof_fronts(out / "fig_front_ncc_dof.png", pts, target=target.ncc_min,
-                            title=f"{sc.name}: force NCC against DOF of {body}")
-    echo_failures(echo, result["failures"], result["runs"], out / "selection.json")
-    if result["passed"]:
-        echo(f"smallest model reaching {target_text(target)}: {result['layers']}-{result['laps']}"
-             f" with {result['modes']} modes, {result['dof']} DOF ({result['nodes']} nodes), "
-             f"NCC {result['ncc_force']:.6f}; {result['runs']} runs ({result['runs_made']} made,"
-             f" {result['runs_loaded']} loaded)")
-    else:
-        echo(f"no model of the grid reaches {target_text(target)}; {result['runs']} runs "
-             f"({result['runs_made']} made, {result['runs_loaded']} loaded)")
-    if "interface" in result:
-        ie = result["interface"]
-        echo_failures(echo, ie["failures"], ie["runs"], out / "selection.json")
-        if ie["passed"]:
-            echo(f"smallest interface model reaching {target_text(target)}: {ie['model']}, "
-                 f"{ie['dof']} DOF, NCC {ie['ncc_force']:.6f}; {ie['runs']} runs")
-        else:
-            echo(f"no interface model of the grid reaches {target_text(target)}")
-        b = result["best_overall"]
-        if b is not None:
-            echo(f"smallest model over both kinds: {b['model']}, {b['dof']} DOF")
-    if result["failures"] and len(result["failures"]) == result["runs"]:
-        first = result["failures"][0]
+        if any(pts.values()):
+            plot_ncc_dof_fronts(out / "fig_front_ncc_dof.png", pts, target=target.ncc_min,
+                                title=f"{sc.name}: force NCC against DOF of {body}")
+    echo_summary(echo, result, target, out / "selection.json")
+    failures = result["failures"] + result.get("interface", {}).get("failures", [])
+    if failures and len(failures) == result["runs"] + result.get("interface", {}).get("runs", 0):
+        first = failures[0]
         raise SolverError(f"selection study: every run failed ({first['case']}: "
                           f"{first['reason']}); see {out / 'selection.json'}")
     return result
