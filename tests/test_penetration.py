@@ -192,7 +192,8 @@ def test_energy_gain_warns_when_recovery_adds_energy(recovery):
     penetration_recovery = 0 the overlap is held, not pushed out: no gain, no warning."""
     from flexmvm.integrate.driver import simulate
     from flexmvm.scenarios.build import build_scenario
-    from flexmvm.scenarios.run import ENERGY_GAIN_WARN, energy_gain_warning, summarize
+    from flexmvm.scenarios.guard import ENERGY_GAIN_WARN, energy_gain_warning
+    from flexmvm.scenarios.run import summarize
 
     data = load_scenario(SHORT).with_overrides(model="rigid", t_end_s=5e-6).model_dump(mode="json")
     for b in data["bodies"]:

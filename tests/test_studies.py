@@ -64,7 +64,8 @@ def test_brute_force_writes_table_json_and_figures(brute):
     out, res = brute
     header = (out / "ncc.csv").read_text().splitlines()[0]
     assert header == ("layers,laps,nodes,modes,dof,ncc_force,ncc_b2_impact_end,ncc_b2_free_end,"
-                      "peak_err,impulse_err,duration_err,guard_outside_fraction,wall_time_s")
+                      "peak_err,impulse_err,duration_err,guard_outside_fraction,energy_gain_rel_max,"
+                      "wall_time_s")
     rows = _table(out, drop=())
     # every run records its validity guard: the share of the contact impulse on surface
     # nodes the basis holds stiff, a fraction in [0, 1]
@@ -189,7 +190,7 @@ def test_cli_one_line_errors(tmp_path, args, message):
 
 
 def test_materials_study_two_materials(tmp_path):
-    from flexmvm.scenarios.guard import WARN_FRACTION
+    from flexmvm.scenarios.guard import ENERGY_GAIN_WARN, WARN_FRACTION
     from flexmvm.studies.materials import run_materials_study
 
     res = run_materials_study(TINY, tmp_path, materials=["W", "Al"], selections=[(1, 1)],
@@ -202,13 +203,15 @@ def test_materials_study_two_materials(tmp_path):
     w, al = (res["materials"][m]["mean_ncc_force"] for m in ("W", "Al"))
     assert w == pytest.approx(float(rows[0]["ncc_force"]))
     assert res["seed_ordering_holds"] is (w > al)
-    # the guard's verdict per run, and the means over the runs it accepts
+    # the validity verdict per run, and the means over the models valid for every material
     outside = {b["case"] for b in res["guard_outside_validity"]}
-    for r, m in zip(rows, ("W", "Al")):
-        frac = float(r["guard_outside_fraction"])
-        assert (f"{m}-l1-j1-m7" in outside) is (frac > WARN_FRACTION)
+    bad = [float(r["guard_outside_fraction"]) > WARN_FRACTION
+           or float(r["energy_gain_rel_max"]) > ENERGY_GAIN_WARN for r in rows]
+    for r, m, b in zip(rows, ("W", "Al"), bad):
+        assert (f"{m}-l1-j1-m7" in outside) is b
         valid = res["materials"][m]["mean_ncc_force_valid"]
-        assert valid == (None if frac > WARN_FRACTION else pytest.approx(float(r["ncc_force"])))
+        assert valid == (None if any(bad) else pytest.approx(float(r["ncc_force"])))
+    assert res["valid_models"] == ([] if any(bad) else ["1-1 + 7"])
     assert (tmp_path / "fig9_materials.png").is_file()
     assert (tmp_path / "W" / "reference" / "history.csv").is_file()
     # the 1D wave-Hertz contact radius and duration are reported beside each material, and
@@ -351,11 +354,12 @@ def test_selection_study_of_the_seed_eq4_kind(tmp_path):
 
 def test_score_refuses_a_run_outside_its_models_validity():
     """A run whose validity guard puts more than WARN_FRACTION of the contact impulse on nodes
-    the basis holds stiff scores as failed whatever its NCC (a study must not pick it); at or
-    below the threshold, and without a guard record (unguarded, or rows stored before the
-    guard existed), the NCC decides."""
+    the basis holds stiff, or whose energy rose by more than ENERGY_GAIN_WARN, scores as
+    failed whatever its NCC (a study must not pick it); at or below the thresholds, and
+    without the records (unguarded, or rows stored before the checks existed), the NCC
+    decides."""
     from flexmvm.metrics.ncc import Target
-    from flexmvm.scenarios.guard import WARN_FRACTION
+    from flexmvm.scenarios.guard import ENERGY_GAIN_WARN, WARN_FRACTION
     from flexmvm.studies.selection import FAIL_SCORE, score
 
     target = Target.parse("ncc>=0.99")
@@ -365,3 +369,6 @@ def test_score_refuses_a_run_outside_its_models_validity():
     assert score(row | {"guard_outside_fraction": WARN_FRACTION}, target) == 0.995
     assert score(row | {"guard_outside_fraction": 2 * WARN_FRACTION}, target) == FAIL_SCORE
     assert score(row | {"guard_outside_fraction": 1.0}, target) == FAIL_SCORE
+    # an energy rise above ENERGY_GAIN_WARN (chatter) fails it too
+    assert score(row | {"energy_gain_rel_max": ENERGY_GAIN_WARN}, target) == 0.995
+    assert score(row | {"energy_gain_rel_max": 0.03}, target) == FAIL_SCORE

@@ -1,4 +1,5 @@
-"""The validity guard of reduced bases (issue 12, part 3).
+"""The validity checks of a run: the guard of reduced bases (issue 12, part 3) and the energy
+rise of a run without applied loads (issue 12, part 4).
 
 A reduced basis leaves the contact free only where it was built for it: the retained nodes of
 an MVM model (Craig-Bampton, seed eq. 4), the contact patch (the patch surface's nodes within
@@ -106,6 +107,47 @@ def outside_validity(fraction: float | None, threshold: float = WARN_FRACTION) -
     return fraction is not None and fraction > threshold
 
 
+#: A run without applied loads whose total energy rises above its start by more than this
+#: share gets a warning. Nothing in it can add energy: the Moreau-Jean step with theta >= 1/2
+#: and frictionless or Coulomb contact, joints and gravity (in the potential) keep or lose it;
+#: what can is the velocity law's penetration recovery, which pushes a penetrated node out at
+#: beta (-g) / h whatever its mass: on reduced bodies whose contact reaches the edge of the
+#: retained nodes it feeds chatter (docs/studies.md, "Material study": PA6 on 1-4 gains 2.6 %).
+ENERGY_GAIN_WARN = 1e-3
+
+
+def energy_gain_warning(summary: dict, threshold: float = ENERGY_GAIN_WARN) -> str | None:
+    """The console line for a run whose energy rose by more than ``threshold``, or None."""
+    gain = summary.get("energy_gain_rel_max")
+    if gain is None or gain <= threshold:
+        return None
+    return (f"the total energy rose by {100 * gain:.2g} % of its start in a run without applied "
+            "loads: the contact added energy (penetration recovery pushing penetrated nodes "
+            "out, chatter); try penetration_recovery = 0 on the contact, law = \"position\", or "
+            "a reduced model covering the contact patch with a ring to spare")
+
+
+def validity_fields(summary: dict, body: str) -> dict:
+    """A study row's validity entries from a run's summary: guard_outside_fraction (of
+    ``body``) and energy_gain_rel_max (None: unknown, or a run with applied loads)."""
+    return {"guard_outside_fraction": outside_fraction(summary, body),
+            "energy_gain_rel_max": summary.get("energy_gain_rel_max")}
+
+
+def invalid_reason(row: dict) -> str | None:
+    """Why a study row (validity_fields) is outside its model's validity, or None: contact
+    on nodes the basis holds stiff above WARN_FRACTION of the impulse, or an energy rise
+    above ENERGY_GAIN_WARN (chatter). Missing entries (rows stored before the checks
+    existed) pass."""
+    frac = row.get("guard_outside_fraction")
+    if outside_validity(frac):
+        return f"guard: {100 * frac:.0f} % of the contact impulse on nodes held stiff"
+    gain = row.get("energy_gain_rel_max")
+    if gain is not None and gain > ENERGY_GAIN_WARN:
+        return f"energy rose by {100 * gain:.2g} % (chatter)"
+    return None
+
+
 def guard_warnings(report: dict, threshold: float = WARN_FRACTION) -> list[str]:
     """One line per guarded body whose outside fraction exceeds ``threshold``."""
     lines = []
@@ -120,5 +162,6 @@ def guard_warnings(report: dict, threshold: float = WARN_FRACTION) -> list[str]:
     return lines
 
 
-__all__ = ["WARN_FRACTION", "contact_guard", "guard_warnings", "outside_fraction",
-           "outside_validity"]
+__all__ = ["ENERGY_GAIN_WARN", "WARN_FRACTION", "contact_guard", "energy_gain_warning",
+           "guard_warnings", "invalid_reason", "outside_fraction", "outside_validity",
+           "validity_fields"]

@@ -11,7 +11,7 @@ import numpy as np
 from flexmvm.integrate.driver import simulate
 from flexmvm.integrate.run_result import ProbeHistory, RunResult, StepHistory
 from flexmvm.scenarios.build import BuiltScenario, build_scenario
-from flexmvm.scenarios.guard import contact_guard, guard_warnings
+from flexmvm.scenarios.guard import contact_guard, energy_gain_warning, guard_warnings
 from flexmvm.scenarios.load import load_scenario
 from flexmvm.scenarios.schema import Scenario
 
@@ -64,26 +64,6 @@ class ReducedBasisWarning(UserWarning):
 
 class EnergyGainWarning(UserWarning):
     """The total energy of a run without applied loads rose (energy_gain_warning)."""
-
-
-#: A run without applied loads whose total energy rises above its start by more than this
-#: share gets a warning. Nothing in it can add energy: the Moreau-Jean step with theta >= 1/2
-#: and frictionless or Coulomb contact, joints and gravity (in the potential) keep or lose it;
-#: what can is the velocity law's penetration recovery, which pushes a penetrated node out at
-#: beta (-g) / h whatever its mass: on reduced bodies whose contact reaches the edge of the
-#: retained nodes it feeds chatter (docs/studies.md, "Material study": PA6 on 1-4 gains 2.6 %).
-ENERGY_GAIN_WARN = 1e-3
-
-
-def energy_gain_warning(summary: dict, threshold: float = ENERGY_GAIN_WARN) -> str | None:
-    """The console line for a run whose energy rose by more than ``threshold``, or None."""
-    gain = summary.get("energy_gain_rel_max")
-    if gain is None or gain <= threshold:
-        return None
-    return (f"the total energy rose by {100 * gain:.2g} % of its start in a run without applied "
-            "loads: the contact added energy (penetration recovery pushing penetrated nodes "
-            "out, chatter); try penetration_recovery = 0 on the contact, law = \"position\", or "
-            "a reduced model covering the contact patch with a ring to spare")
 
 
 def run_scenario(sc, label: str = "run", progress: bool = False, warn: bool = True

@@ -22,7 +22,7 @@ from flexmvm.errors import InputError, SolverError
 from flexmvm.results.atomic import file_sha256, write_table_csv
 from flexmvm.scenarios import Scenario, interface, scenario_from_dict
 from flexmvm.scenarios.compare import compare_runs
-from flexmvm.scenarios.guard import outside_fraction
+from flexmvm.scenarios.guard import validity_fields
 from flexmvm.studies.reference import case_reference
 from flexmvm.studies.report import failure_list
 from flexmvm.studies.runner import Case
@@ -119,7 +119,7 @@ def run_interface_case(case: Case, reference: str | Path | None = None) -> dict:
     errors = [v for k, v in cmp.items() if k.endswith("_error")]
     if errors:
         row["failed"] = errors[0]
-    row["guard_outside_fraction"] = outside_fraction(run.summary, body)
+    row.update(validity_fields(run.summary, body))
     row["wall_time_s"] = float(run.summary["wall_time_s"])
     return row
 
@@ -154,6 +154,7 @@ def interface_summary(rows: dict[str, dict], cases: Sequence[Case], winner_key: 
 def interface_columns(probes: Sequence[str]) -> list[str]:
     return (["model", "n_patch", "modes", "dof", "ncc_force"] + [f"ncc_{p}" for p in probes]
             + ["peak_err", "impulse_err", "duration_err", "guard_outside_fraction",
+               "energy_gain_rel_max",
                "wall_time_s"])
 
 

@@ -15,18 +15,21 @@ directory holds one kind (a rerun with another kind is refused: its stored param
 - ``DIR/<material>/reference/history.csv``: the reference of each material (case ``ref-<mat>``);
 - ``DIR/cases/<mat>-l<i>-j<j>-m<m>.json``: the MVM runs (studies.selection.run_selection_case);
 - ``DIR/materials.csv``: ``material,kind,E_pa,nu,rho_kg_m3,selection,nodes,modes,dof,ncc_force,
-  ncc_<probe>...,peak_err,impulse_err,duration_err,guard_outside_fraction,wall_time_s``
+  ncc_<probe>...,peak_err,impulse_err,duration_err,guard_outside_fraction,energy_gain_rel_max,
+  wall_time_s``
   (guard_outside_fraction: the share of the contact impulse on surface nodes the reduced basis
-  holds stiff, scenarios/guard.py);
+  holds stiff, scenarios/guard.py; energy_gain_rel_max: the largest rise of the total energy);
 - ``DIR/materials.json``: the model ``kind``, per-material mean NCC of the force over the runs
   (the same selections x modes for every material; ``n_cases`` = the runs the mean covers,
   ``failed`` the runs without an NCC), ``failures`` (``{"case", "reason"}``: failed
   references, whose material then has no MVM run, and failed runs; also printed),
   ``seed_ordering_holds`` = the mean NCCs decrease in the seed's order W > Cu > Al > PA6
   (restricted to the materials run), and the observed order; the same over the runs the
-  validity guard accepts (``mean_ncc_force_valid``, ``n_valid``, ``seed_ordering_holds_valid``)
-  and the runs it does not (``guard_outside_validity``: a contact patch wider than the retained
-  nodes, as PA6's on selections up to 1-3; docs/studies.md "Material study");
+  validity checks accept for every material (``valid_models``; ``mean_ncc_force_valid``,
+  ``n_valid``, ``seed_ordering_holds_valid``) and the runs they do not (``guard_outside_validity``
+  with the reason, scenarios.guard.invalid_reason: a contact patch wider than the retained
+  nodes, as PA6's on selections up to 1-3, or an energy rise; docs/studies.md "Material
+  study");
 - ``DIR/fig9_materials.png``: NCC against modes per material and selection.
 
 A material is set by rebuilding the scenario dict with an inline material table
@@ -49,7 +52,7 @@ from flexmvm.materials import ALUMINIUM, COPPER, PA6, TUNGSTEN, Material
 from flexmvm.results.atomic import file_sha256, write_json_atomic, write_table_csv
 from flexmvm.results.outdir import make_out_dir
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario, scenario_from_dict
-from flexmvm.scenarios.guard import WARN_FRACTION, outside_validity
+from flexmvm.scenarios.guard import WARN_FRACTION, invalid_reason
 from flexmvm.studies.grid import check_grid, rod_of, study_kind, study_scenario
 from flexmvm.studies.reference import reference_history
 from flexmvm.studies.report import echo_failures, failed_case_row, failure_list
@@ -185,7 +188,7 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
     cols = (["material", "kind", "E_pa", "nu", "rho_kg_m3", "selection", "nodes", "modes", "dof",
              "ncc_force"] + [f"ncc_{p}" for p in probes]
             + ["peak_err", "impulse_err", "duration_err", "guard_outside_fraction",
-               "wall_time_s"])
+               "energy_gain_rel_max", "wall_time_s"])
     rows = []
     for c in cases:
         if c.key in results:
@@ -198,11 +201,18 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
                  rho_kg_m3=mat.rho,
                  selection=f"{r['layers']}-{r['laps']}")
         rows.append(r)
+    # the models (selection, modes) every material's run of which has an NCC and is valid
+    # (scenarios.guard.invalid_reason): the same models for every material, as the seed's
+    # ordering compares
+    model_of = lambda r: (r["selection"], int(r["modes"]))
+    common = {model_of(r) for r in rows}
+    for r in rows:
+        if "ncc_force" not in r or invalid_reason(r) is not None:
+            common.discard(model_of(r))
     per = {}
     for m in materials:
         vals = [r["ncc_force"] for r in rows if r["material"] == m and "ncc_force" in r]
-        valid = [r["ncc_force"] for r in rows if r["material"] == m and "ncc_force" in r
-                 and not outside_validity(r.get("guard_outside_fraction"))]
+        valid = [r["ncc_force"] for r in rows if r["material"] == m and model_of(r) in common]
         mat = SEED_MATERIALS[m]
         per[m] = {"mean_ncc_force": _mean(vals), "n_cases": len(vals),
                   "mean_ncc_force_valid": _mean(valid), "n_valid": len(valid),
@@ -218,8 +228,8 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
     ranked = [m for m in SEED_ORDER if m in materials]
     holds = _decreasing([per[m]["mean_ncc_force"] for m in ranked])
     outside = [{"case": f"{r['material']}-l{r['layers']}-j{r['laps']}-m{r['modes']}",
-                "fraction": r["guard_outside_fraction"], "ncc_force": r.get("ncc_force")}
-               for r in rows if outside_validity(r.get("guard_outside_fraction"))]
+                "reason": invalid_reason(r), "ncc_force": r.get("ncc_force")}
+               for r in rows if invalid_reason(r) is not None]
     observed = sorted((m for m in materials if per[m]["mean_ncc_force"] is not None),
                       key=lambda m: -per[m]["mean_ncc_force"])
     result = {"body": body, "kind": kind.value,
@@ -227,15 +237,17 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
               "materials": per, "seed_order": ranked, "observed_order": observed,
               "seed_ordering_holds": bool(holds),
               "guard_outside_validity": outside,
+              "valid_models": [f"{sel} + {n}" for sel, n in sorted(common)],
               "seed_ordering_holds_valid": bool(_decreasing(
                   [per[m]["mean_ncc_force_valid"] for m in ranked])),
               "note": "seed_ordering_holds: mean NCC of the force over the same selections x "
                       "modes strictly decreasing in the seed's order W > Cu > Al > PA6 "
                       "(restricted to the materials run; false if a material has no mean). "
                       "n_cases: the runs the mean covers (runs - failed). The _valid means and "
-                      "ordering: over the runs the validity guard accepts (scenarios/guard.py: "
-                      "at most WARN_FRACTION of the contact impulse on surface nodes the basis "
-                      "holds stiff); guard_outside_validity: the others",
+                      "ordering: over valid_models, the models whose run is valid for every "
+                      "material (scenarios.guard.invalid_reason: at most WARN_FRACTION of the "
+                      "contact impulse on nodes the basis holds stiff, no energy rise above "
+                      "ENERGY_GAIN_WARN); guard_outside_validity: the invalid runs",
               "failures": failures,
               "nodes": {f"{i}-{j}": len(rod.selection(i, j)) for i, j in selections},
               "selection_radius_m": {f"{i}-{j}": _radius(rod, i, j) for i, j in selections},
@@ -288,10 +300,12 @@ def run_materials_study(scenario: str | Path | Scenario, out_dir: str | Path, bo
         + f"; seed ordering W > Cu > Al > PA6 {'holds' if holds else 'does not hold'}")
     if result["guard_outside_validity"]:
         bad = result["guard_outside_validity"]
-        echo(f"validity guard: {len(bad)} run(s) put more than {100 * WARN_FRACTION:g} % of the "
-             "contact impulse on nodes the basis holds stiff (outside the model's validity), "
-             "e.g. " + ", ".join(f"{b['case']} ({100 * b['fraction']:.0f} %)" for b in bad[:3])
-             + "; over the runs it accepts: " + ", ".join(
+        echo(f"validity: {len(bad)} run(s) outside their model's validity (more than "
+             f"{100 * WARN_FRACTION:g} % of the contact impulse on nodes the basis holds stiff, "
+             "or the energy rose: chatter), "
+             "e.g. " + ", ".join(f"{b['case']} ({b['reason']})" for b in bad[:3])
+             + f"; over the {len(result['valid_models'])} models valid for every material: "
+             + ", ".join(
                  f"{m} {per[m]['mean_ncc_force_valid']:.6f} ({per[m]['n_valid']} runs)"
                  if per[m]["mean_ncc_force_valid"] is not None else f"{m} (none)"
                  for m in materials)

@@ -70,7 +70,7 @@ from flexmvm.results.atomic import write_json_atomic
 from flexmvm.results.outdir import make_out_dir
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario, scenario_from_dict
 from flexmvm.scenarios.compare import compare_runs
-from flexmvm.scenarios.guard import outside_fraction, outside_validity
+from flexmvm.scenarios.guard import invalid_reason, validity_fields
 from flexmvm.studies.grid import (
     case_key,
     check_grid,
@@ -153,7 +153,7 @@ def run_selection_case(case: Case, reference: str | Path | None = None) -> dict:
     errors = [v for k, v in cmp.items() if k.endswith("_error")]
     if errors:
         row["failed"] = errors[0]
-    row["guard_outside_fraction"] = outside_fraction(run.summary, body)
+    row.update(validity_fields(run.summary, body))
     row["wall_time_s"] = float(run.summary["wall_time_s"])
     return row
 
@@ -161,9 +161,9 @@ def run_selection_case(case: Case, reference: str | Path | None = None) -> dict:
 def score(row: dict, target: Target) -> float:
     """NCC of the force if the row meets the target's error bounds, else FAIL_SCORE; so that
     ``score >= target.ncc_min`` is ``target.met_by(...)``. A run outside its model's validity
-    (the guard's outside fraction above scenarios.guard.WARN_FRACTION: contact on surface
-    nodes the basis holds stiff) scores FAIL_SCORE whatever its NCC: a study never picks it."""
-    if any(k not in row for k in _METRICS) or outside_validity(row.get("guard_outside_fraction")):
+    (scenarios.guard.invalid_reason: contact on surface nodes the basis holds stiff, or an
+    energy rise, chatter) scores FAIL_SCORE whatever its NCC: a study never picks it."""
+    if any(k not in row for k in _METRICS) or invalid_reason(row) is not None:
         return FAIL_SCORE
     c = Comparison(row["ncc_force"], row["peak_err"], row["impulse_err"], row["duration_err"])
     if not target.met_by(Comparison(1.0, c.peak_err, c.impulse_err, c.duration_err)):
