@@ -104,7 +104,7 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
     counts = res.steps.size_counts() if res.steps is not None else {}  # steps per size [s]
     e_err = float((E[-1] - E[0]) / E[0]) if E[0] != 0 else None
     e_err_max = float(np.abs(E - E[0]).max() / abs(E[0])) if E[0] != 0 else None
-    # no applied loads: nothing may add energy (module ENERGY_GAIN_WARN)
+    # no applied loads: nothing may add energy (scenarios.guard.ENERGY_GAIN_WARN)
     gain = (float(max(0.0, (E - E[0]).max()) / abs(E[0]))
             if E[0] != 0 and not built.system.loads else None)
     return {
