@@ -11,6 +11,7 @@ cannot carry a Hertz patch that covers the first two rings) and is silent on the
 
 from __future__ import annotations
 
+import csv
 import json
 import warnings
 from pathlib import Path
@@ -237,7 +238,10 @@ def test_selection_study_sweeps_the_interface_kind_beside_the_nodes(tmp_path):
                               echo=lambda s: None, patches=[(0.2 * MM,), (0.2 * MM, 0.4 * MM)],
                               interface_modes=[3])
     rows = (tmp_path / "ncc_interface.csv").read_text().splitlines()
-    assert len(rows) == 3 and rows[0].startswith("model,n_patch,modes,dof,ncc_force")
+    assert len(rows) == 3 and rows[0].startswith("model,n_patch,modes,mode_pool,dof,ncc_force")
+    # each case with its patch set's explicit mode pool (the default pool of its 3 modes)
+    with open(tmp_path / "ncc_interface.csv", newline="") as fh:
+        assert all(int(r["mode_pool"]) >= 4 * 3 + 6 for r in csv.DictReader(fh))
     ie = res["interface"]
     assert ie["runs"] == 2 and not ie["failures"]
     assert ie["passed"] and ie["dof"] == 4          # 1 patch + 3 modes, the smaller passing

@@ -1,5 +1,10 @@
-"""Disk cache of what setup builds: FE models (M, K, M_scalar), reduction bases (psi) and the
-parts of bodies with dense bases (inertia invariants and k_hat, flexmvm.bodies.build.BodyParts).
+"""Disk cache of what setup builds: FE models (M, K, M_scalar), reduction bases (psi), the
+parts of bodies with dense bases (inertia invariants and k_hat, flexmvm.bodies.build.BodyParts)
+and the two expensive parts of an interface basis that do not depend on its mode count: the
+free-free mode pool (``freemodes-``: frequencies and M-normalised modes of the lowest k free-free
+modes, keyed by mesh, material and k; 36 MB for the seed rod's 178) and the patch vectors'
+static responses (``patchstatic-``: keyed by mesh, material, reference, surface, patch node and
+radii), so bases that differ only in ``modes`` (and share a ``mode_pool``) share them.
 
 An entry is one ``.npz`` file (``np.savez``, no pickles; sparse matrices as their CSR
 arrays) named ``<kind>-<key>.npz``. The key is a SHA-256 of the canonical JSON of every input
@@ -292,6 +297,75 @@ def cached_basis(source: Mapping | None, material: Material, kind: BasisKind,
     return basis
 
 
+def free_modes_key(source: Mapping, material: Material, n_modes: int,
+                   version: str | None = None) -> str:
+    """Entry name of the lowest ``n_modes`` free-free modes (six rigid-body modes included) of
+    mesh ``source`` in ``material`` (fe.modes.free_modes, default shift)."""
+    return make_key("freemodes", {"mesh": source, "material": material_inputs(material),
+                                  "free_modes": int(n_modes)}, version)
+
+
+def cached_free_modes(source: Mapping | None, material: Material, n_modes: int, n_dof: int,
+                      build: Callable[[], tuple[np.ndarray, np.ndarray]]
+                      ) -> tuple[np.ndarray, np.ndarray]:
+    """(frequencies [Hz] (n_modes,), modes (n_dof, n_modes)) from the cache, else ``build()``
+    (fe.modes.free_modes(fe, n_modes)) stored; source None: build, no caching."""
+    if source is None:
+        return build()
+    key = free_modes_key(source, material, n_modes)
+
+    def decode(arrays):
+        f_hz, modes = arrays["freqs_hz"], arrays["modes"]
+        if f_hz.shape != (n_modes,) or modes.shape != (n_dof, n_modes) \
+                or modes.dtype != np.float64:
+            raise ValueError("stored free-free modes are malformed")
+        return f_hz, modes
+
+    hit = _decoded(key, decode)
+    if hit is not None:
+        return hit
+    f_hz, modes = build()
+    save(key, {"freqs_hz": np.asarray(f_hz), "modes": np.ascontiguousarray(modes)})
+    return f_hz, modes
+
+
+def patch_statics_key(source: Mapping, material: Material, reference_set: str,
+                      reference: ReferenceCondition, surface: str, node: int,
+                      radii_m: tuple[float, ...], version: str | None = None) -> str:
+    """Entry name of the inertia-relieved static responses of the Hertz patch loads of
+    ``radii_m`` about node ``node`` of facet set ``surface`` (reduction.interface
+    relieved_statics), under the reference condition."""
+    return make_key("patchstatic", {
+        "mesh": source, "material": material_inputs(material),
+        "reference": {"set": reference_set, "fixed_dofs": reference.fixed_dofs.tolist()},
+        "surface": surface, "patch_node": int(node), "radii_m": [float(a) for a in radii_m]},
+        version)
+
+
+def cached_patch_statics(source: Mapping | None, material: Material, reference_set: str,
+                         reference: ReferenceCondition, surface: str, node: int,
+                         radii_m: tuple[float, ...], n_dof: int,
+                         build: Callable[[], np.ndarray]) -> np.ndarray:
+    """The static responses (n_dof, len(radii_m)) from the cache, else ``build()`` stored (one
+    entry per radius set: the columns are solved together, so a rebuild gives the same bits);
+    source None: build, no caching."""
+    if source is None:
+        return build()
+    key = patch_statics_key(source, material, reference_set, reference, surface, node, radii_m)
+
+    def decode(arrays):
+        static = arrays["static"]
+        if static.shape != (n_dof, len(radii_m)) or static.dtype != np.float64:
+            raise ValueError("stored patch statics are malformed")
+        return static
+
+    hit = _decoded(key, decode)
+    if hit is not None:
+        return hit
+    static = build()
+    save(key, {"static": np.ascontiguousarray(static)})
+    return static
+
 
 def _parts_arrays(parts: BodyParts) -> dict[str, np.ndarray]:
     """Arrays of an entry: mass (1,), S0, S1, G0, G1 (3, 3, nq), G2 (3, 3, nq, nq), M_qq, k_hat."""
@@ -339,6 +413,7 @@ def cached_body(source: Mapping | None, material: Material, kind: BasisKind,
 
 
 __all__ = ["BODY_SOURCES", "CODE_SOURCES", "ENV_DIR", "ENV_OFF", "CacheInfo", "basis_key",
-           "body_key", "cache_dir", "cached_basis", "cached_body", "cached_fe", "clear",
-           "code_version", "enabled", "fe_key",
-           "file_source", "info", "load", "make_key", "material_inputs", "rod_source", "save"]
+           "body_key", "cache_dir", "cached_basis", "cached_body", "cached_fe",
+           "cached_free_modes", "cached_patch_statics", "clear", "code_version", "enabled",
+           "fe_key", "file_source", "free_modes_key", "info", "load", "make_key",
+           "material_inputs", "patch_statics_key", "rod_source", "save"]

@@ -30,7 +30,7 @@ from threadpoolctl import threadpool_limits
 from flexmvm.errors import InputError
 from flexmvm.fe.assembly import FEModel
 from flexmvm.fe.modes import constrained_modes, factor, shift_invert_modes, to_hz
-from flexmvm.reduction.interface import InterfaceSpec, interface_columns
+from flexmvm.reduction.interface import InterfaceSources, InterfaceSpec, interface_columns
 from flexmvm.reduction.reference import ReferenceCondition
 
 
@@ -197,22 +197,24 @@ def _modal(fe: FEModel, reference: ReferenceCondition, n_modes: int) -> Basis:
 
 
 def _interface(fe: FEModel, reference: ReferenceCondition, spec: InterfaceSpec | None,
-               n_modes: int) -> Basis:
+               n_modes: int, sources: InterfaceSources | None) -> Basis:
     if not isinstance(spec, InterfaceSpec):
         raise InputError(f"an interface basis needs an InterfaceSpec, got {spec!r}")
-    cols = interface_columns(fe, reference, spec, n_modes)
+    cols = interface_columns(fe, reference, spec, n_modes, sources)
     return Basis(BasisKind.INTERFACE, cols.psi, np.zeros(0, dtype=np.int64), n_modes, reference,
                  cols.mode_freqs_hz)
 
 
 def build_basis(fe: FEModel, kind: BasisKind, reference: ReferenceCondition,
                 retained_nodes=(), n_modes: int = 0,
-                interface: InterfaceSpec | None = None) -> Basis:
+                interface: InterfaceSpec | None = None,
+                sources: InterfaceSources | None = None) -> Basis:
     """Build the basis ``kind`` of body ``fe`` (see the module table).
 
     retained_nodes: region-II node ids (CRAIG_BAMPTON, SEED_BLOCK, SEED_FIXED: at least one;
     FULL, MODAL and INTERFACE: none); n_modes: modal columns (MODAL: >= 1; FULL: 0);
-    interface: the patch and mode choice of an INTERFACE basis (reduction/interface.py).
+    interface: the patch and mode choice of an INTERFACE basis (reduction/interface.py);
+    sources: where it takes its mode pool and patch statics from (default: computed).
     Raises InputError for a wrong kind, retained nodes that are reference nodes, repeated or
     outside the mesh, or n_modes negative or more than the free DOFs allow; SolverError if
     a factorisation or eigen solve fails.
@@ -242,7 +244,7 @@ def build_basis(fe: FEModel, kind: BasisKind, reference: ReferenceCondition,
         if kind is BasisKind.MODAL:
             return _modal(fe, reference, int(n_modes))
         if kind is BasisKind.INTERFACE:
-            return _interface(fe, reference, interface, int(n_modes))
+            return _interface(fe, reference, interface, int(n_modes), sources)
         if kind is BasisKind.CRAIG_BAMPTON:
             return _craig_bampton(fe, reference, nodes, int(n_modes))
         if kind is BasisKind.SEED_FIXED:

@@ -21,8 +21,15 @@ floating frame of the 3-2-1 reference: reference DOF rows zero):
    expected contact load f (the mean of the patch loads), p_i = |phi_i^T f| / omega_i^2
    (the modal share of the static displacement), among the modes the load excites
    (|phi_i^T f| above EXCITED_RTOL of the largest: an on-axis impact excites no bending or
-   torsion mode); the default pool is doubled until it holds n_modes excited modes;
+   torsion mode); the default pool is doubled until it holds n_modes excited modes (an
+   explicit pool is not: too few excited modes in it is an InputError);
    ``frequency`` keeps the lowest n_modes.
+
+The two expensive parts, the free-free mode pool and the patch vectors' static solve, do not
+depend on ``n_modes``: ``interface_columns`` takes them from an InterfaceSources (the setup
+cache's, scenarios/build.py), so the bases of one patch set that differ only in their mode
+count share one eigen solve and one factor of K when they share the pool (a study gives all
+of them the pool of its largest mode count: studies/interface.py, participation_pool).
 
 A load in the span of the patch loads has its full-FE static response (inertia relief,
 floating frame) in span(psi), so the reduced static solution psi k_hat^-1 psi^T P f equals
@@ -31,6 +38,7 @@ K_ref^-1 P f to round-off (tests/test_interface_basis.py).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 from enum import StrEnum
 
@@ -199,6 +207,26 @@ class InterfaceColumns:
     static: np.ndarray
 
 
+#: free(k) -> (frequencies [Hz] (k,), modes (3n, k) M-normalised): the lowest k free-free
+#: modes, the six rigid-body modes first, as fe.modes.free_modes(fe, k) gives them.
+FreeModes = Callable[[int], tuple[np.ndarray, np.ndarray]]
+
+#: statics(patch, radii, loads (3n, k)) -> (3n, k): the inertia-relieved static responses of
+#: the patch loads of ``radii`` about ``patch``, as relieved_statics gives them.
+PatchStatics = Callable[["Patch", tuple[float, ...], np.ndarray], np.ndarray]
+
+
+@dataclass(frozen=True)
+class InterfaceSources:
+    """Where interface_columns takes its expensive parts from (None: computed here): the
+    free-free mode pool (``free_modes``) and the patch vectors' static responses
+    (``patch_statics``). Both must return what the default computation would (the setup
+    cache's stored copies of it), so that a basis does not depend on where they came from."""
+
+    free_modes: FreeModes | None = None
+    patch_statics: PatchStatics | None = None
+
+
 def inertia_relief(fe: FEModel, f: np.ndarray) -> np.ndarray:
     """P f = f - M R (R^T M R)^-1 R^T f: the load balanced by the rigid-body inertia it
     causes (self-equilibrated: R^T P f = 0), f (3n,) or (3n, k)."""
@@ -246,23 +274,41 @@ def excited_modes_below(fe: FEModel, f: np.ndarray, f_max_hz: float, pool: int =
     return f_hz[6:][idx], force[6:][idx] / omega ** 2
 
 
-def chosen_modes(fe: FEModel, spec: InterfaceSpec, n_modes: int, f_exp: np.ndarray
+def chosen_modes(fe: FEModel, spec: InterfaceSpec, n_modes: int, f_exp: np.ndarray,
+                 free: FreeModes | None = None
                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(phi (3n, n_modes) free-free elastic modes, M-normalised, their frequencies [Hz] and
     participations |phi^T f| / omega^2 [m/N]) chosen as spec.mode_choice says for the expected
-    load f_exp (3n,)."""
+    load f_exp (3n,). free: the source of the free-free modes (default free_modes(fe, k))."""
+    free = _free_source(fe, free)
     n_free = fe.n_dof - 7
     if spec.mode_choice is ModeChoice.FREQUENCY:
-        f_hz, modes = free_modes(fe, min(n_modes, n_free) + 6)
+        f_hz, modes = free(min(n_modes, n_free) + 6)
         f_hz, modes = f_hz[6:], modes[:, 6:]  # the six rigid-body modes come first
         return modes, f_hz, np.abs(modes.T @ f_exp) / (2.0 * np.pi * f_hz) ** 2
+    _pool, f_hz, modes, force, excited = _participation_pool(fe, spec, n_modes, f_exp, free)
+    p_all = force / (2.0 * np.pi * f_hz) ** 2
+    keep = np.sort(excited[np.argsort(-p_all[excited], kind="stable")[:n_modes]])
+    return modes[:, keep], f_hz[keep], p_all[keep]
+
+
+def _free_source(fe: FEModel, free: FreeModes | None) -> FreeModes:
+    return free if free is not None else (lambda k: free_modes(fe, k))
+
+
+def _participation_pool(fe: FEModel, spec: InterfaceSpec, n_modes: int, f_exp: np.ndarray,
+                        free: FreeModes):
+    """The participation choice's pool: (pool, elastic frequencies [Hz], elastic modes, their
+    |phi^T f_exp|, indices of the excited ones); spec.pool if given, else the default pool
+    doubled until it holds n_modes excited modes. InputError (one line) when it holds fewer."""
+    n_free = fe.n_dof - 7
     grow = spec.pool is None
     pool = min(spec.pool_size(n_modes), n_free)
     while True:
         if pool < n_modes:
             raise InputError(f"interface basis: {n_modes} modes asked, the mode pool holds "
                              f"{pool}")
-        f_hz, modes = free_modes(fe, pool + 6)
+        f_hz, modes = free(pool + 6)
         force = np.abs(modes.T @ f_exp)
         excited = _excited(force)
         f_hz, modes, force = f_hz[6:], modes[:, 6:], force[6:]
@@ -273,42 +319,76 @@ def chosen_modes(fe: FEModel, spec: InterfaceSpec, n_modes: int, f_exp: np.ndarr
         raise InputError(f"interface basis: the expected load excites {excited.size} of the "
                          f"lowest {pool} free-free modes, {n_modes} asked; ask for fewer modes"
                          + (" or a larger mode_pool" if not grow else ""))
-    p_all = force / (2.0 * np.pi * f_hz) ** 2
-    keep = np.sort(excited[np.argsort(-p_all[excited], kind="stable")[:n_modes]])
-    return modes[:, keep], f_hz[keep], p_all[keep]
+    return pool, f_hz, modes, force, excited
+
+
+def patch_loads(mesh: Mesh, spec: InterfaceSpec) -> tuple[Patch, np.ndarray, np.ndarray]:
+    """(patch, loads (3n, n_patch) [N]: the Hertz load of each radius, f_exp (3n,) [N]: the
+    expected contact load, the mean patch load, or 1 N along the inward normal at the patch
+    node without radii)."""
+    radii = tuple(float(a) for a in spec.radii_m)
+    n = 3 * mesh.n_nodes
+    patch = contact_patch(mesh, spec.surface, spec.centre_m)
+    loads = np.column_stack([hertz_load(mesh, spec.surface, patch, a) for a in radii]) \
+        if radii else np.zeros((n, 0))
+    f_exp = loads.mean(axis=1) if radii else np.zeros(n)
+    if not radii:
+        f_exp[3 * patch.node: 3 * patch.node + 3] = -patch.normal
+    return patch, loads, f_exp
+
+
+def participation_pool(fe: FEModel, spec: InterfaceSpec, n_modes: int,
+                       free: FreeModes | None = None) -> int:
+    """The pool of free-free modes from which the participation choice of ``spec`` takes
+    ``n_modes`` modes: spec.pool if given, else 4 n_modes + 6 doubled until it holds n_modes
+    excited modes. An explicit ``mode_pool`` of this size gives the same basis as the default;
+    a study gives it to every mode count of a patch set, so that they share one eigen solve.
+    Raises InputError (one line) as interface_columns does when the pool excites too few."""
+    if spec.mode_choice is not ModeChoice.PARTICIPATION:
+        raise InputError(f"a mode pool is the participation choice's, got mode_choice "
+                         f"{ModeChoice(spec.mode_choice).value!r}")
+    _patch, _loads, f_exp = patch_loads(fe.mesh, spec)
+    return int(_participation_pool(fe, spec, int(n_modes), f_exp, _free_source(fe, free))[0])
+
+
+def relieved_statics(fe: FEModel, reference: ReferenceCondition, loads: np.ndarray
+                     ) -> np.ndarray:
+    """u = K_ref^-1 P f of each load column f of ``loads`` (3n, k) [N]: the inertia-relieved
+    static responses (3n, k) [m], reference DOF rows zero (one sparse factor of K_ref, one
+    solve of all columns)."""
+    n = fe.n_dof
+    static = np.zeros((n, loads.shape[1]))
+    if loads.shape[1]:
+        free = reference.free_dofs(n)
+        solve = factor(fe.K[free][:, free])
+        static[free] = solve(inertia_relief(fe, loads)[free])
+    return static
 
 
 def interface_columns(fe: FEModel, reference: ReferenceCondition, spec: InterfaceSpec,
-                      n_modes: int) -> InterfaceColumns:
-    """The interface basis of ``fe`` for ``spec`` with ``n_modes`` modes (module doc)."""
+                      n_modes: int, sources: InterfaceSources | None = None
+                      ) -> InterfaceColumns:
+    """The interface basis of ``fe`` for ``spec`` with ``n_modes`` modes (module doc); its
+    mode pool and patch statics from ``sources`` (default: computed here)."""
     radii = tuple(float(a) for a in spec.radii_m)
     if n_modes + len(radii) < 1:
         raise InputError("an interface basis needs at least one patch radius or one mode")
     if len(set(radii)) != len(radii):
         raise InputError(f"patch radii repeat: {list(radii)}")
-    mesh, n = fe.mesh, fe.n_dof
-    patch = contact_patch(mesh, spec.surface, spec.centre_m)
+    sources = sources if sources is not None else InterfaceSources()
+    mesh = fe.mesh
     R = rigid_body_modes(mesh.nodes)
     MR = fe.M @ R
     RMR = R.T @ MR
-    loads = np.column_stack([hertz_load(mesh, spec.surface, patch, a) for a in radii]) \
-        if radii else np.zeros((n, 0))
-    # the expected contact load: the mean patch load, or 1 N along the inward normal
-    f_exp = loads.mean(axis=1) if radii else np.zeros(n)
-    if not radii:
-        f_exp[3 * patch.node: 3 * patch.node + 3] = -patch.normal
+    patch, loads, f_exp = patch_loads(mesh, spec)
     # modes: free-free, elastic ones (the six rigid-body modes come first)
-    phi, freqs, part = np.zeros((n, 0)), np.zeros(0), np.zeros(0)
+    phi, freqs, part = np.zeros((fe.n_dof, 0)), np.zeros(0), np.zeros(0)
     if n_modes:
-        phi, freqs, part = chosen_modes(fe, spec, n_modes, f_exp)
+        phi, freqs, part = chosen_modes(fe, spec, n_modes, f_exp, sources.free_modes)
     # patch vectors: inertia-relief static responses, then M-orthonormal to the modes and
     # each other (modal truncation augmentation)
-    free = reference.free_dofs(n)
-    static = np.zeros((n, len(radii)))
-    if radii:
-        solve = factor(fe.K[free][:, free])
-        relieved = loads - MR @ np.linalg.solve(RMR, R.T @ loads)
-        static[free] = solve(relieved[free])
+    static = (sources.patch_statics(patch, radii, loads) if sources.patch_statics is not None
+              and radii else relieved_statics(fe, reference, loads))
     cols = [phi]
     basis = phi
     for k in range(len(radii)):
@@ -331,6 +411,7 @@ def interface_columns(fe: FEModel, reference: ReferenceCondition, spec: Interfac
     return InterfaceColumns(np.ascontiguousarray(psi), freqs, part, patch, loads, static)
 
 
-__all__ = ["InterfaceColumns", "InterfaceSpec", "ModeChoice", "Patch", "chosen_modes",
-           "contact_patch", "excited_modes_below", "hertz_load", "inertia_relief",
-           "interface_columns", "patch_nodes", "tangent_distance"]
+__all__ = ["FreeModes", "InterfaceColumns", "InterfaceSources", "InterfaceSpec", "ModeChoice",
+           "Patch", "PatchStatics", "chosen_modes", "contact_patch", "excited_modes_below",
+           "hertz_load", "inertia_relief", "interface_columns", "participation_pool",
+           "patch_loads", "patch_nodes", "relieved_statics", "tangent_distance"]

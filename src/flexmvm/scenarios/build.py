@@ -41,6 +41,7 @@ from flexmvm.contact.pairs import PointToSurfaceContact
 from flexmvm.errors import InputError, MeshError
 from flexmvm.fe.assembly import FEModel, assemble
 from flexmvm.fe.mass_redistribution import redistribute_mass
+from flexmvm.fe.modes import free_modes
 from flexmvm.integrate.run_result import Probe, TimeGrid
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import System
@@ -49,7 +50,15 @@ from flexmvm.mesh.io import read_mesh
 from flexmvm.mesh.mesh import Mesh
 from flexmvm.mesh.rod import RodMesh, RodSpec, rod_mesh
 from flexmvm.reduction.basis import Basis, BasisKind, build_basis
-from flexmvm.reduction.interface import InterfaceSpec, Patch, contact_patch, patch_nodes
+from flexmvm.reduction.interface import (
+    InterfaceSources,
+    InterfaceSpec,
+    Patch,
+    contact_patch,
+    participation_pool,
+    patch_nodes,
+    relieved_statics,
+)
 from flexmvm.reduction.reference import three_two_one
 from flexmvm.reduction.rod_reference import rod_reference
 from flexmvm.scenarios.sag import quasi_static_sag
@@ -178,11 +187,53 @@ def _basis_cached(key, material: Material, kind: BasisKind, retained: tuple, mod
                   ref_set: str, interface: InterfaceSpec | None = None) -> Basis:
     ref = reference_condition(key, _mesh(key), ref_set)
     nodes = np.array(retained, dtype=np.int64)
-    return setup_cache.cached_basis(
-        _mesh_source(key), material, kind, ref_set, ref, nodes, modes,
-        lambda: build_basis(fe_model_for(key, material), kind, ref, retained_nodes=nodes,
-                            n_modes=modes, interface=interface),
-        extra=_extra(interface))
+
+    def build() -> Basis:
+        fe = fe_model_for(key, material)
+        sources = (_interface_sources(key, material, fe, ref_set, ref, interface.surface)
+                   if interface is not None else None)
+        return build_basis(fe, kind, ref, retained_nodes=nodes, n_modes=modes,
+                           interface=interface, sources=sources)
+
+    return setup_cache.cached_basis(_mesh_source(key), material, kind, ref_set, ref, nodes,
+                                    modes, build, extra=_extra(interface))
+
+
+def _free_modes_source(key, material: Material, fe: FEModel):
+    """k -> the lowest k free-free modes of ``fe`` (mesh key ``key``): the setup cache's
+    ``freemodes`` entry, else fe.modes.free_modes (stored)."""
+    source = _mesh_source(key)
+    return lambda k: setup_cache.cached_free_modes(source, material, k, fe.n_dof,
+                                                   lambda: free_modes(fe, k))
+
+
+def _interface_sources(key, material: Material, fe: FEModel, ref_set: str, ref,
+                       surface: str) -> InterfaceSources:
+    """An interface basis's mode pool and patch statics through the setup cache: keyed
+    without the mode count, so the bases of one patch set and pool share them."""
+    source = _mesh_source(key)
+
+    def statics(patch: Patch, radii: tuple[float, ...], loads: np.ndarray) -> np.ndarray:
+        return setup_cache.cached_patch_statics(
+            source, material, ref_set, ref, surface, patch.node, radii, fe.n_dof,
+            lambda: relieved_statics(fe, ref, loads))
+
+    return InterfaceSources(_free_modes_source(key, material, fe), statics)
+
+
+def interface_mode_pool(cfg, spec: InterfaceSpec, modes: int) -> int:
+    """The mode pool from which an interface basis of ``spec`` with ``modes`` modes of body
+    ``cfg`` (a scenario's body) takes its modes (reduction.interface.participation_pool):
+    with ``mode_pool`` = this, every smaller mode count of the spec shares its eigen solve
+    (setup cache), and the ``modes`` one is the default's basis. The eigen solves it makes
+    are stored for the bases that follow. InputError (one line) if the pool cannot hold
+    ``modes`` excited modes."""
+    from threadpoolctl import threadpool_limits
+
+    key, material = _mesh_key(cfg), cfg.material_obj()
+    fe = fe_model_for(key, material)
+    with threadpool_limits(limits=1, user_api="blas"):  # as build_basis
+        return participation_pool(fe, spec, modes, _free_modes_source(key, material, fe))
 
 
 def body_parts_for(key, material: Material, kind: BasisKind, retained: tuple, modes: int,

@@ -3,10 +3,20 @@ mode counts of the study body as an interface basis (reduction/interface.py), ru
 the node selections against the same full-FE reference, and the smallest model over both.
 
 Keys ``if-r<radii in um, '_'-joined>-m<modes>`` (``if-r-m10``: no patch vector); params
-{body, kind: "interface", patch_radii_m, modes, mode_choice, scenario, reference_sha256}.
-Rows: {model, patch_radii_m, n_patch, modes, dof (= patches + modes, elastic coordinates),
-dof_total, ncc_force, ncc_<probe>..., peak_err, impulse_err, duration_err, wall_time_s,
-guard_outside_fraction} (ncc_interface.csv: the evaluated cases). Brute force runs the whole
+{body, kind: "interface", patch_radii_m, modes, mode_choice, mode_pool, scenario,
+reference_sha256}. Rows: {model, patch_radii_m, n_patch, modes, mode_pool, dof (= patches +
+modes, elastic coordinates), dof_total, ncc_force, ncc_<probe>..., peak_err, impulse_err,
+duration_err, wall_time_s, guard_outside_fraction} (ncc_interface.csv: the evaluated cases).
+
+Mode pool. Every case of a patch set gets the same explicit ``mode_pool``: the pool from which
+the grid's largest mode count takes its modes by default (reduction.interface
+participation_pool: 4 m + 6 doubled until it holds m excited modes), computed when the cases
+are made. The cases of a patch set then share one free-free eigen solve and one static solve
+(setup cache, keyed without the mode count), and a case is the standalone scenario with that
+``mode_pool`` (docs/interface_basis.md "In the selection study"). A smaller mode count picks its
+modes from this larger pool, which can differ from its default pool's choice. Mode counts
+above the largest one whose pool exists (MAX_POOL), cases without modes and the frequency
+choice get none (their default). Brute force runs the whole
 grid of both kinds; ``--search`` runs one search over both (studies/search.py): each patch
 set is a family, bisected over its mode counts like a node selection, and a pass of either
 kind closes the other kind's models of more DOF.
@@ -19,6 +29,7 @@ from pathlib import Path
 from typing import Any
 
 from flexmvm.errors import InputError, SolverError
+from flexmvm.reduction.interface import ModeChoice
 from flexmvm.results.atomic import file_sha256, write_table_csv
 from flexmvm.scenarios import Scenario, interface, scenario_from_dict
 from flexmvm.scenarios.compare import compare_runs
@@ -28,7 +39,8 @@ from flexmvm.studies.report import failure_list
 from flexmvm.studies.runner import Case
 
 __all__ = ["interface_cases", "interface_columns", "interface_key", "interface_summary",
-           "is_interface_key", "parse_patches", "run_interface_case", "write_interface_csv"]
+           "is_interface_key", "mode_pools", "parse_patches", "run_interface_case",
+           "write_interface_csv"]
 
 
 def parse_patches(text: str) -> list[tuple[float, ...]]:
@@ -63,8 +75,10 @@ def is_interface_key(key: str) -> bool:
 def interface_cases(sc: Scenario, body: str, patches: Iterable[Sequence[float]],
                     modes: Iterable[int], reference: str | Path | None = None,
                     mode_choice: str = "participation") -> list[Case]:
-    """The cases patch sets x mode counts of ``body`` as an interface model."""
-    sc.body(body)
+    """The cases patch sets x mode counts of ``body`` as an interface model, each patch set's
+    with one ``mode_pool`` (module doc; computing it solves the free-free eigenproblem of the
+    body, stored in the setup cache for the runs)."""
+    cfg = sc.body(body)
     patches = [tuple(float(a) for a in radii) for radii in patches]
     for radii in patches:
         if not all(a > 0 for a in radii) or len(set(radii)) != len(radii):
@@ -73,24 +87,51 @@ def interface_cases(sc: Scenario, body: str, patches: Iterable[Sequence[float]],
     if len(set(patches)) != len(patches):
         raise InputError(f"interface grid: a patch set appears twice in {patches}; expected "
                          "each once")
+    counts = sorted({int(v) for v in modes})
+    for radii in patches:
+        for m in counts:
+            if m < 0 or m + len(radii) < 1:
+                raise InputError(f"interface grid: modes {m} with {len(radii)} patch radii "
+                                 "gives no column")
     data = sc.model_dump(mode="json")
     sha = file_sha256(reference) if reference is not None else None
     cases = []
     for radii in patches:
-        for m in sorted({int(v) for v in modes}):
-            if m < 0 or m + len(radii) < 1:
-                raise InputError(f"interface grid: modes {m} with {len(radii)} patch radii "
-                                 "gives no column")
+        pools = mode_pools(cfg, radii, counts, mode_choice)
+        for m in counts:
             cases.append(Case(interface_key(radii, m), {
                 "body": body, "kind": "interface", "patch_radii_m": [float(a) for a in radii],
-                "modes": m, "mode_choice": mode_choice, "scenario": data,
-                "reference_sha256": sha}))
+                "modes": m, "mode_choice": mode_choice, "mode_pool": pools[m],
+                "scenario": data, "reference_sha256": sha}))
     return cases
 
 
-def _model(p) -> Any:
+def mode_pools(cfg, radii: Sequence[float], counts: Sequence[int],
+               mode_choice: str = "participation") -> dict[int, int | None]:
+    """The ``mode_pool`` of each mode count of patch set ``radii`` of body ``cfg`` (module
+    doc): the pool of the largest count whose pool exists, for that count and the smaller ones
+    (0 excluded); None for the others and for the frequency choice."""
+    from flexmvm.scenarios.build import interface_mode_pool
+
+    pools: dict[int, int | None] = {m: None for m in counts}
+    if ModeChoice(mode_choice) is not ModeChoice.PARTICIPATION:
+        return pools
+    for top in sorted((m for m in counts if m > 0), reverse=True):
+        # the spec of the case's own model (as run_interface_case makes it), default pool
+        spec = _model({"patch_radii_m": list(radii), "modes": top,
+                       "mode_choice": mode_choice}).interface_spec()
+        try:
+            pool = interface_mode_pool(cfg, spec, top)
+        except InputError:  # too few excited modes within MAX_POOL: those cases fail alone
+            continue
+        return pools | {m: pool for m in counts if 0 < m <= top}
+    return pools
+
+
+def _model(p, reference: str = "end_b") -> Any:
+    """The interface model of case params ``p`` (its ``mode_pool`` included)."""
     return interface(list(p["patch_radii_m"]), int(p["modes"]), mode_choice=p["mode_choice"],
-                     reference="end_b")
+                     mode_pool=p.get("mode_pool"), reference=reference)
 
 
 def run_interface_case(case: Case, reference: str | Path | None = None) -> dict:
@@ -102,14 +143,13 @@ def run_interface_case(case: Case, reference: str | Path | None = None) -> dict:
     sc = scenario_from_dict(p["scenario"], source=f"case {case.key}")
     body = p["body"]
     ref_model = sc.body(body).model.reference
-    model = interface(list(p["patch_radii_m"]), int(p["modes"]), mode_choice=p["mode_choice"],
-                      reference=ref_model)
+    model = _model(p, ref_model)
     t_ref, f_ref, probes_ref = case_reference(case, reference)
     n_patch = len(p["patch_radii_m"])
     dof = n_patch + int(p["modes"])
     row: dict[str, Any] = {"model": model.label, "patch_radii_m": list(p["patch_radii_m"]),
-                           "n_patch": n_patch, "modes": int(p["modes"]), "dof": dof,
-                           "dof_total": dof + 6}
+                           "n_patch": n_patch, "modes": int(p["modes"]),
+                           "mode_pool": p.get("mode_pool"), "dof": dof, "dof_total": dof + 6}
     try:
         run = run_scenario(sc.with_model(body, model), warn=False)
     except SolverError as exc:
@@ -128,7 +168,7 @@ def failed_interface_row(case: Case, line: str) -> dict:
     p = case.params
     n = len(p["patch_radii_m"])
     return {"model": _model(p).label, "patch_radii_m": list(p["patch_radii_m"]), "n_patch": n,
-            "modes": int(p["modes"]), "dof": n + int(p["modes"]),
+            "modes": int(p["modes"]), "mode_pool": p.get("mode_pool"), "dof": n + int(p["modes"]),
             "dof_total": n + int(p["modes"]) + 6, "failed": line}
 
 
@@ -146,13 +186,14 @@ def interface_summary(rows: dict[str, dict], cases: Sequence[Case], winner_key: 
              "grid_size": len(cases), "runs": len(done), "runs_made": made,
              "runs_loaded": loaded, "failures": failure_list(done)}
     if winner_key is not None:
-        entry |= {k: rows[winner_key].get(k) for k in ("model", "patch_radii_m", "modes", "dof",
-                                                       "dof_total", "ncc_force", "peak_err")}
+        entry |= {k: rows[winner_key].get(k) for k in ("model", "patch_radii_m", "modes",
+                                                       "mode_pool", "dof", "dof_total",
+                                                       "ncc_force", "peak_err")}
     return entry
 
 
 def interface_columns(probes: Sequence[str]) -> list[str]:
-    return (["model", "n_patch", "modes", "dof", "ncc_force"] + [f"ncc_{p}" for p in probes]
+    return (["model", "n_patch", "modes", "mode_pool", "dof", "ncc_force"] + [f"ncc_{p}" for p in probes]
             + ["peak_err", "impulse_err", "duration_err", "guard_outside_fraction",
                "energy_gain_rel_max",
                "wall_time_s"])

@@ -59,6 +59,7 @@ no larger than the brute-force winner there).
 from __future__ import annotations
 
 import functools
+import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -258,8 +259,14 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     for c in selection_cases(sc, body, layers, laps, modes, reference=hist, kind=kind):
         i, j, m = c.params["layers"], c.params["laps"], c.params["modes"]
         case_of[Candidate((i, j), m, 3 * n_nodes[(i, j)] + m)] = c
+    t0 = time.perf_counter()
     if_cases = (interface_cases(sc, body, patches, interface_modes, reference=hist)
                 if patches else [])
+    pools = sorted({c.params["mode_pool"] for c in if_cases} - {None})
+    if pools:
+        echo(f"interface kind: modes chosen from the lowest {', '.join(map(str, pools))} "
+             f"free-free modes (mode_pool of every mode count of a patch set; "
+             f"{time.perf_counter() - t0:.1f} s)")
     for c in if_cases:
         case_of[Candidate.interface(c.params["patch_radii_m"], c.params["modes"])] = c
     with study_cluster(scheduler, n_workers, serial) as address:
