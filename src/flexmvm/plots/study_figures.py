@@ -151,9 +151,9 @@ def _finish_ncc_axes(fig, ax, path_png, title: str, dpi: int) -> None:
 def plot_materials(path_png: str | os.PathLike[str], rows: Sequence[Mapping[str, Any]], *,
                    title: str = "", dpi: int = 150) -> None:
     """Seed fig. 9: ncc_force against modes, a colour per material, a line style per
-    selection; rows carry material, selection ('i-j'), modes, ncc_force. Runs outside their
-    model's validity (scenarios.guard.invalid_reason) get open markers."""
-    from flexmvm.scenarios.guard import invalid_reason
+    selection; rows carry material, selection ('i-j'), modes, ncc_force. Rows with
+    ``valid`` False (a run outside its model's validity, scenarios.guard.invalid_reason) get
+    open markers."""
 
     _check(rows, "plot_materials")
     materials = list(dict.fromkeys(str(r["material"]) for r in rows))
@@ -172,14 +172,14 @@ def plot_materials(path_png: str | os.PathLike[str], rows: Sequence[Mapping[str,
                 ax.plot(m, v, linestyle=style[sel], color=colour[mat], lw=1.0,
                         label=f"{mat} {sel}")
                 bad = {int(r["modes"]) for r in rows if r["material"] == mat
-                       and r["selection"] == sel and invalid_reason(r) is not None}
+                       and r["selection"] == sel and not r.get("valid", True)}
                 for filled in (True, False):
                     mk = [(a, b) for a, b in pts if (a not in bad) is filled]
                     if mk:
                         ax.plot(*zip(*mk), linestyle="none", marker="o", ms=3 if filled else 5,
                                 color=colour[mat],
                                 markerfacecolor=colour[mat] if filled else "white")
-    if any(invalid_reason(r) is not None for r in rows):
+    if not all(r.get("valid", True) for r in rows):
         ax.plot([], [], linestyle="none", marker="o", ms=5, color="grey",
                 markerfacecolor="white", label="outside validity (guard / energy)")
     _finish_ncc_axes(fig, ax, path_png, title, dpi)

@@ -290,7 +290,8 @@ def run_materials_study(scenario: str | Path | Scenario, out_dir: str | Path, bo
     write_json_atomic(out / "materials.json", result)
     from flexmvm.plots.study_figures import plot_materials
 
-    plot_materials(out / "fig9_materials.png", rows,
+    plot_materials(out / "fig9_materials.png",
+                   [r | {"valid": invalid_reason(r) is None} for r in rows],
                    title=f"{sc.name}: body {body} of each material, {kind.value} models")
     echo_failures(echo, failures, len(materials) * (1 + n_per), out / "materials.json")
     echo(f"mean NCC of the force ({kind.value}): " + ", ".join(
