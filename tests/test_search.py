@@ -62,6 +62,23 @@ class Recorder:
         return [c for b in self.batches for c in b]
 
 
+def _search_as_brute_force(candidates, table, passes, max_open):
+    """The search on a table against brute force: the same answer, each candidate run at
+    most once, at most one per family in a round, at most max_open per round. Returns
+    (expected, found, scores, recorder)."""
+    expected, all_scores = brute_force(candidates, Recorder(table), passes)
+    assert all_scores == table
+    rec = Recorder(table)
+    found, scores = smallest_passing(candidates, rec, passes, max_open=max_open)
+    assert found == expected
+    assert scores == {c: table[c] for c in rec.evaluated}
+    assert len(set(rec.evaluated)) == len(rec.evaluated)  # never the same run twice
+    assert all(len({c.family for c in b}) == len(b) for b in rec.batches)
+    if max_open is not None:
+        assert max(len(b) for b in rec.batches) <= max_open
+    return expected, found, scores, rec
+
+
 @pytest.mark.parametrize("max_open", [None, 1, 4])
 def test_matches_brute_force_on_random_monotone_tables(max_open):
     rng = np.random.default_rng(20240611)
@@ -69,16 +86,7 @@ def test_matches_brute_force_on_random_monotone_tables(max_open):
     for _ in range(200):
         candidates, table, threshold = random_table(rng)
         passes = lambda s, t=threshold: s >= t
-        expected, all_scores = brute_force(candidates, Recorder(table), passes)
-        assert all_scores == table
-        rec = Recorder(table)
-        found, scores = smallest_passing(candidates, rec, passes, max_open=max_open)
-        assert found == expected
-        assert scores == {c: table[c] for c in rec.evaluated}
-        assert len(set(rec.evaluated)) == len(rec.evaluated)  # never the same run twice
-        assert all(len({c.selection for c in b}) == len(b) for b in rec.batches)
-        if max_open is not None:
-            assert max(len(b) for b in rec.batches) <= max_open
+        expected, _, scores, rec = _search_as_brute_force(candidates, table, passes, max_open)
         ratios.append(len(scores) / len(candidates))
         rounds.append(len(rec.batches))
         n_pass += expected is not None
@@ -157,16 +165,7 @@ def test_mixed_families_match_brute_force_on_random_monotone_tables(max_open):
     for _ in range(200):
         candidates, table, threshold = mixed_table(rng)
         passes = lambda s, t=threshold: s >= t
-        expected, all_scores = brute_force(candidates, Recorder(table), passes)
-        assert all_scores == table
-        rec = Recorder(table)
-        found, scores = smallest_passing(candidates, rec, passes, max_open=max_open)
-        assert found == expected
-        assert scores == {c: table[c] for c in rec.evaluated}
-        assert len(set(rec.evaluated)) == len(rec.evaluated)
-        assert all(len({c.family for c in b}) == len(b) for b in rec.batches)
-        if max_open is not None:
-            assert max(len(b) for b in rec.batches) <= max_open
+        expected, found, scores, _ = _search_as_brute_force(candidates, table, passes, max_open)
         # per kind: the search's best of a kind is that kind's brute-force answer when
         # kind_exact says so; otherwise the kind has nothing passing up to the winner's DOF
         for kind in FamilyKind:
