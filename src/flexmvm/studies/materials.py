@@ -122,6 +122,10 @@ def _mean(values: list[float]) -> float | None:
     return sum(values) / len(values) if values else None
 
 
+def _case_key(row: dict) -> str:
+    return f"{row['material']}-l{row['layers']}-j{row['laps']}-m{row['modes']}"
+
+
 def _decreasing(means: list[float | None]) -> bool:
     return all(v is not None for v in means) and all(a > b for a, b in itertools.pairwise(means))
 
@@ -223,12 +227,10 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
             per[m]["reference_failed"] = ref_failed[f"ref-{m}"]
     failures = ([{"case": k, "reason": f"full-FE reference failed, no MVM run of this "
                                        f"material: {v}"} for k, v in sorted(ref_failed.items())]
-                + failure_list((f"{r['material']}-l{r['layers']}-j{r['laps']}-m{r['modes']}", r)
-                               for r in rows))
+                + failure_list((_case_key(r), r) for r in rows))
     ranked = [m for m in SEED_ORDER if m in materials]
     holds = _decreasing([per[m]["mean_ncc_force"] for m in ranked])
-    outside = [{"case": f"{r['material']}-l{r['layers']}-j{r['laps']}-m{r['modes']}",
-                "reason": invalid_reason(r), "ncc_force": r.get("ncc_force")}
+    outside = [{"case": _case_key(r), "reason": invalid_reason(r), "ncc_force": r.get("ncc_force")}
                for r in rows if invalid_reason(r) is not None]
     observed = sorted((m for m in materials if per[m]["mean_ncc_force"] is not None),
                       key=lambda m: -per[m]["mean_ncc_force"])
