@@ -113,7 +113,10 @@ def outside_validity(fraction: float | None, threshold: float = WARN_FRACTION) -
 #: what can is the velocity law's penetration recovery, which pushes a penetrated node out at
 #: beta (-g) / h whatever its mass: on reduced bodies whose contact reaches the edge of the
 #: retained nodes it feeds chatter (docs/studies.md, "Material study": PA6 on 1-4 gains 2.6 %).
-ENERGY_GAIN_WARN = 1e-3
+#: The recovery also lifts the energy a little in clean runs: up to 3.2e-4 in the full-FE
+#: references of the material study, 1.3e-3 in its 48 reduced runs that do not chatter, against
+#: 1.1e-2 to 5.6 in those that do (commit 275a325); 0.5 % lies between.
+ENERGY_GAIN_WARN = 5e-3
 
 
 def energy_gain_warning(summary: dict, threshold: float = ENERGY_GAIN_WARN) -> str | None:
