@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 
 
@@ -17,12 +19,21 @@ def skew(v: np.ndarray) -> np.ndarray:
 
 
 def expm_so3(theta: np.ndarray) -> np.ndarray:
-    """exp(theta~) by Rodrigues' formula (theta: rotation vector [rad], shape (3,))."""
-    angle = float(np.linalg.norm(theta))
-    K = skew(theta)
+    """exp(theta~) by Rodrigues' formula (theta: rotation vector [rad], shape (3,)):
+    I + (sin a / a) K + ((1 - cos a) / a^2) K^2, a = |theta|, K = theta~, K^2 = theta theta^T -
+    a^2 I; below a = 1e-8 the series I + K + K^2 / 2. Written out on scalars: it runs several
+    times per body and time step, where numpy's eye, norm and 3 x 3 products cost ~17 us."""
+    x, y, z = float(theta[0]), float(theta[1]), float(theta[2])
+    xx, yy, zz = x * x, y * y, z * z
+    angle = math.sqrt(xx + yy + zz)
     if angle < 1e-8:
-        return np.eye(3) + K + 0.5 * K @ K
-    return np.eye(3) + np.sin(angle) / angle * K + (1 - np.cos(angle)) / angle**2 * K @ K
+        s, c = 1.0, 0.5
+    else:
+        s, c = math.sin(angle) / angle, (1.0 - math.cos(angle)) / angle**2
+    xy, xz, yz = c * (x * y), c * (x * z), c * (y * z)
+    return np.array([[1.0 - c * (yy + zz), xy - s * z, xz + s * y],
+                     [xy + s * z, 1.0 - c * (xx + zz), yz - s * x],
+                     [xz - s * y, yz + s * x, 1.0 - c * (xx + yy)]])
 
 
 def axis_angle(axis, angle_rad: float) -> np.ndarray:
