@@ -243,23 +243,25 @@ def _excited(force: np.ndarray) -> np.ndarray:
     return np.nonzero(force[6:] > EXCITED_RTOL * force.max())[0]
 
 
-def excited_modes_below(fe: FEModel, f: np.ndarray, f_max_hz: float, pool: int = 16
-                        ) -> tuple[np.ndarray, np.ndarray]:
+def excited_modes_below(fe: FEModel, f: np.ndarray, f_max_hz: float, pool: int = 16,
+                        free: FreeModes | None = None) -> tuple[np.ndarray, np.ndarray]:
     """The elastic free-free modes of ``fe`` below ``f_max_hz`` that the load ``f`` (3n,) [N]
     excites, by the participation choice's rule (modal force |phi^T f| above EXCITED_RTOL of
     the pool's largest): (frequencies [Hz], participations |phi^T f| / omega^2 [m/N]), in
     frequency order. The pool of the lowest ``pool`` elastic modes is doubled until its top
-    mode reaches f_max_hz (or holds every mode).
+    mode reaches f_max_hz (or holds every mode). free: the source of the free-free modes
+    (default free_modes(fe, k)).
 
     Raises:
         InputError: f_max_hz <= 0, or MAX_POOL modes do not reach f_max_hz.
     """
     if not f_max_hz > 0:
         raise InputError(f"f_max_hz: expected a frequency > 0 Hz, got {f_max_hz!r}")
+    free = _free_source(fe, free)
     n_free = fe.n_dof - 7
     pool = min(int(pool), n_free)
     while True:
-        f_hz, modes = free_modes(fe, pool + 6)
+        f_hz, modes = free(pool + 6)
         if f_hz[-1] >= f_max_hz or pool >= n_free:
             break
         if pool >= MAX_POOL:

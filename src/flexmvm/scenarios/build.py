@@ -51,6 +51,7 @@ from flexmvm.mesh.mesh import Mesh
 from flexmvm.mesh.rod import RodMesh, RodSpec, rod_mesh
 from flexmvm.reduction.basis import Basis, BasisKind, build_basis
 from flexmvm.reduction.interface import (
+    FreeModes,
     InterfaceSources,
     InterfaceSpec,
     Patch,
@@ -201,10 +202,26 @@ def _basis_cached(key, material: Material, kind: BasisKind, retained: tuple, mod
 
 def _free_modes_source(key, material: Material, fe: FEModel):
     """k -> the lowest k free-free modes of ``fe`` (mesh key ``key``): the setup cache's
-    ``freemodes`` entry, else fe.modes.free_modes (stored)."""
+    ``freemodes`` entry, else fe.modes.free_modes on one BLAS thread, as build_basis solves
+    (stored)."""
+    from threadpoolctl import threadpool_limits
+
+    def solve(k: int):
+        with threadpool_limits(limits=1, user_api="blas"):
+            return free_modes(fe, k)
+
     source = _mesh_source(key)
     return lambda k: setup_cache.cached_free_modes(source, material, k, fe.n_dof,
-                                                   lambda: free_modes(fe, k))
+                                                   lambda: solve(k))
+
+
+def free_modes_source(cfg) -> tuple[FEModel, FreeModes]:
+    """(FE model, k -> its lowest k free-free modes through the setup cache) of a scenario's
+    body ``cfg``: the source interface bases take their mode pool from
+    (reduction.interface.FreeModes)."""
+    key, material = _mesh_key(cfg), cfg.material_obj()
+    fe = fe_model_for(key, material)
+    return fe, _free_modes_source(key, material, fe)
 
 
 def _interface_sources(key, material: Material, fe: FEModel, ref_set: str, ref,
@@ -228,12 +245,8 @@ def interface_mode_pool(cfg, spec: InterfaceSpec, modes: int) -> int:
     (setup cache), and the ``modes`` one is the default's basis. The eigen solves it makes
     are stored for the bases that follow. InputError (one line) if the pool cannot hold
     ``modes`` excited modes."""
-    from threadpoolctl import threadpool_limits
-
-    key, material = _mesh_key(cfg), cfg.material_obj()
-    fe = fe_model_for(key, material)
-    with threadpool_limits(limits=1, user_api="blas"):  # as build_basis
-        return participation_pool(fe, spec, modes, _free_modes_source(key, material, fe))
+    fe, free = free_modes_source(cfg)
+    return participation_pool(fe, spec, modes, free)
 
 
 def body_parts_for(key, material: Material, kind: BasisKind, retained: tuple, modes: int,

@@ -130,11 +130,16 @@ def energy_gain_warning(summary: dict, threshold: float = ENERGY_GAIN_WARN) -> s
             "a reduced model covering the contact patch with a ring to spare")
 
 
+#: The entries validity_fields adds to a study row (and its CSV columns), in column order.
+VALIDITY_KEYS = ("guard_outside_fraction", "energy_gain_rel_max")
+
+
 def validity_fields(summary: dict, body: str) -> dict:
-    """A study row's validity entries from a run's summary: guard_outside_fraction (of
-    ``body``) and energy_gain_rel_max (None: unknown, or a run with applied loads)."""
-    return {"guard_outside_fraction": outside_fraction(summary, body),
-            "energy_gain_rel_max": summary.get("energy_gain_rel_max")}
+    """A study row's validity entries (VALIDITY_KEYS) from a run's summary:
+    guard_outside_fraction (of ``body``) and energy_gain_rel_max (None: unknown, or a run with
+    applied loads)."""
+    return dict(zip(VALIDITY_KEYS, (outside_fraction(summary, body),
+                                    summary.get("energy_gain_rel_max")), strict=True))
 
 
 def invalid_reason(row: dict) -> str | None:
@@ -165,6 +170,6 @@ def guard_warnings(report: dict, threshold: float = WARN_FRACTION) -> list[str]:
     return lines
 
 
-__all__ = ["ENERGY_GAIN_WARN", "WARN_FRACTION", "contact_guard", "energy_gain_warning",
+__all__ = ["ENERGY_GAIN_WARN", "VALIDITY_KEYS", "WARN_FRACTION", "contact_guard", "energy_gain_warning",
            "guard_warnings", "invalid_reason", "outside_fraction", "outside_validity",
            "validity_fields"]

@@ -116,7 +116,7 @@ def estimate_interface(sc: Scenario, body: str, target: Target | None = None, *,
         excited_modes_below,
         hertz_load,
     )
-    from flexmvm.scenarios.build import fe_model_for
+    from flexmvm.scenarios.build import free_modes_source
     from flexmvm.theory.scenario import theory_pulse
 
     if not k > 0:
@@ -133,16 +133,15 @@ def estimate_interface(sc: Scenario, body: str, target: Target | None = None, *,
     window = min(pulse["contact_duration_s"], sc.time.t_end_s)
     f_max = k / window
     surface = _contact_surface(sc, body)
-    key = cfg.rod.spec() if cfg.rod is not None else str(cfg.mesh_file)
-    fe = fe_model_for(key, cfg.material_obj())
+    fe, free = free_modes_source(cfg)   # the setup cache's mode pools, shared with the bases
     patch = contact_patch(fe.mesh, surface)
     load = hertz_load(fe.mesh, surface, patch, a)
-    freqs, _ = excited_modes_below(fe, load, f_max)
+    freqs, _ = excited_modes_below(fe, load, f_max, free=free)
     n_below = int(freqs.size)
     m = n_below if grid is None else next((g for g in grid if g >= n_below), grid[-1])
     kept = np.zeros(0)
     if m:
-        kept = chosen_modes(fe, InterfaceSpec(surface, None, (a,)), m, load)[1]
+        kept = chosen_modes(fe, InterfaceSpec(surface, None, (a,)), m, load, free)[1]
     return {"patch_radii_m": [a], "modes": m, "dof": 1 + m, "n_modes_below_f_max": n_below,
             "mode_freqs_hz": [float(f) for f in freqs],
             "kept_mode_freqs_hz": [float(f) for f in kept],

@@ -33,7 +33,7 @@ from flexmvm.reduction.interface import ModeChoice
 from flexmvm.results.atomic import file_sha256, write_table_csv
 from flexmvm.scenarios import Scenario, interface, scenario_from_dict
 from flexmvm.scenarios.compare import compare_runs
-from flexmvm.scenarios.guard import validity_fields
+from flexmvm.scenarios.guard import VALIDITY_KEYS, validity_fields
 from flexmvm.studies.reference import case_reference
 from flexmvm.studies.report import failure_list
 from flexmvm.studies.runner import Case
@@ -193,10 +193,9 @@ def interface_summary(rows: dict[str, dict], cases: Sequence[Case], winner_key: 
 
 
 def interface_columns(probes: Sequence[str]) -> list[str]:
-    return (["model", "n_patch", "modes", "mode_pool", "dof", "ncc_force"] + [f"ncc_{p}" for p in probes]
-            + ["peak_err", "impulse_err", "duration_err", "guard_outside_fraction",
-               "energy_gain_rel_max",
-               "wall_time_s"])
+    return (["model", "n_patch", "modes", "mode_pool", "dof", "ncc_force"]
+            + [f"ncc_{p}" for p in probes]
+            + ["peak_err", "impulse_err", "duration_err", *VALIDITY_KEYS, "wall_time_s"])
 
 
 def write_interface_csv(path: Path, rows: Iterable[dict], probes: Sequence[str]) -> None:

@@ -52,7 +52,7 @@ from flexmvm.materials import ALUMINIUM, COPPER, PA6, TUNGSTEN, Material
 from flexmvm.results.atomic import file_sha256, write_json_atomic, write_table_csv
 from flexmvm.results.outdir import make_out_dir
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario, scenario_from_dict
-from flexmvm.scenarios.guard import WARN_FRACTION, invalid_reason
+from flexmvm.scenarios.guard import VALIDITY_KEYS, WARN_FRACTION, invalid_reason
 from flexmvm.studies.grid import check_grid, rod_of, study_kind, study_scenario
 from flexmvm.studies.reference import reference_history
 from flexmvm.studies.report import echo_failures, failed_case_row, failure_list
@@ -191,8 +191,7 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
     probes = [p.name for p in sc.probes]
     cols = (["material", "kind", "E_pa", "nu", "rho_kg_m3", "selection", "nodes", "modes", "dof",
              "ncc_force"] + [f"ncc_{p}" for p in probes]
-            + ["peak_err", "impulse_err", "duration_err", "guard_outside_fraction",
-               "energy_gain_rel_max", "wall_time_s"])
+            + ["peak_err", "impulse_err", "duration_err", *VALIDITY_KEYS, "wall_time_s"])
     rows = []
     for c in cases:
         if c.key in results:
@@ -205,13 +204,14 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
                  rho_kg_m3=mat.rho,
                  selection=f"{r['layers']}-{r['laps']}")
         rows.append(r)
+    reason = {_case_key(r): invalid_reason(r) for r in rows}   # None: valid
     # the models (selection, modes) every material's run of which has an NCC and is valid
     # (scenarios.guard.invalid_reason): the same models for every material, as the seed's
     # ordering compares
     model_of = lambda r: (r["selection"], int(r["modes"]))
     common = {model_of(r) for r in rows}
     for r in rows:
-        if "ncc_force" not in r or invalid_reason(r) is not None:
+        if "ncc_force" not in r or reason[_case_key(r)] is not None:
             common.discard(model_of(r))
     per = {}
     for m in materials:
@@ -230,8 +230,8 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
                 + failure_list((_case_key(r), r) for r in rows))
     ranked = [m for m in SEED_ORDER if m in materials]
     holds = _decreasing([per[m]["mean_ncc_force"] for m in ranked])
-    outside = [{"case": _case_key(r), "reason": invalid_reason(r), "ncc_force": r.get("ncc_force")}
-               for r in rows if invalid_reason(r) is not None]
+    outside = [{"case": k, "reason": why, "ncc_force": r.get("ncc_force")}
+               for (k, why), r in zip(reason.items(), rows, strict=True) if why is not None]
     observed = sorted((m for m in materials if per[m]["mean_ncc_force"] is not None),
                       key=lambda m: -per[m]["mean_ncc_force"])
     result = {"body": body, "kind": kind.value,
@@ -292,8 +292,9 @@ def run_materials_study(scenario: str | Path | Scenario, out_dir: str | Path, bo
     write_json_atomic(out / "materials.json", result)
     from flexmvm.plots.study_figures import plot_materials
 
+    invalid = {b["case"] for b in result["guard_outside_validity"]}
     plot_materials(out / "fig9_materials.png",
-                   [r | {"valid": invalid_reason(r) is None} for r in rows],
+                   [r | {"valid": _case_key(r) not in invalid} for r in rows],
                    title=f"{sc.name}: body {body} of each material, {kind.value} models")
     echo_failures(echo, failures, len(materials) * (1 + n_per), out / "materials.json")
     echo(f"mean NCC of the force ({kind.value}): " + ", ".join(

@@ -9,6 +9,7 @@ from typing import Any
 
 from flexmvm.metrics.ncc import Target
 from flexmvm.results.atomic import write_table_csv
+from flexmvm.scenarios.guard import VALIDITY_KEYS
 from flexmvm.studies.runner import Case
 from flexmvm.studies.search import Candidate
 
@@ -41,9 +42,8 @@ def echo_failures(echo: Callable[[str], Any], failures: Sequence[dict], n_runs: 
 
 def ncc_columns(probes: Sequence[str]) -> list[str]:
     return (["layers", "laps", "nodes", "modes", "dof", "ncc_force"]
-            + [f"ncc_{p}" for p in probes] + ["peak_err", "impulse_err", "duration_err",
-                                                "guard_outside_fraction", "energy_gain_rel_max",
-                                                "wall_time_s"])
+            + [f"ncc_{p}" for p in probes]
+            + ["peak_err", "impulse_err", "duration_err", *VALIDITY_KEYS, "wall_time_s"])
 
 
 def write_ncc_csv(path: Path, rows: Iterable[dict], probes: Sequence[str]) -> list[dict]:
