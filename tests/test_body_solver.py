@@ -70,3 +70,21 @@ def test_solve_nodal_equals_bordered_solve(sparse):
     got = solver.solve_nodal(h, bf, N)
     want = solver.solve(np.hstack([bf, bq]).T)
     np.testing.assert_allclose(got, want, rtol=0, atol=1e-10 * np.abs(want).max())
+
+
+@pytest.mark.parametrize("sparse", [True, False])
+def test_solve_frame_equals_bordered_solve_of_frame_rows(sparse):
+    """W^-1 [bf; 0] from the frame Schur complement and the cached Z columns alone (the later
+    Newton iterates whose residual sits in the frame rows) equals the full bordered solve of
+    the same right-hand side: linear algebra, round-off (1e-10 relative)."""
+    body, rng = _body(sparse)
+    solver = BodySolver(body, theta=0.55)
+    h = 1e-3
+    A = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    q = 1e-3 * rng.normal(size=body.nq)
+    solver.prepare(h, A, body.frame_mass(A, body.first_moment(q),
+                                         body.frame_inertia_first_order(q)))
+    bf = rng.normal(size=6)
+    got = solver.solve_frame(bf)
+    want = solver.solve(np.concatenate([bf, np.zeros(body.nq)]))
+    np.testing.assert_allclose(got, want, rtol=0, atol=1e-10 * np.abs(want).max())

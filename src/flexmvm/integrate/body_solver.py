@@ -151,6 +151,13 @@ class BodySolver:
             y = y[:, None]
         return self._bordered(b[:6], y)
 
+    def solve_frame(self, bf: np.ndarray) -> np.ndarray:
+        """x = W^-1 [bf; 0] for bf (6,): the frame Schur complement and the cached columns Z,
+        no back-substitution."""
+        if self._f is None:
+            return cho_solve(self._schur, bf)
+        return self._bordered(bf, np.zeros(self.body.nq))
+
     def _bordered(self, bf: np.ndarray, y: np.ndarray) -> np.ndarray:
         """W^-1 [bf; bq] from y = W_qq^-1 bq (the frame Schur complement of prepare())."""
         f, A = self._f, self._A
