@@ -55,6 +55,7 @@ class BodySolver:
         self._Mw0 = body.inertia_terms(np.zeros(body.nq))[2] if body.nq else np.zeros((3, 0))
         self._schur = None
         self._A = np.eye(3)
+        self._dMw = None       # M_wq(q) - the M_wq in W, when refresh_coupling kept the old one
         self.n_coupling_updates = 0
 
     def _factor(self, h: float) -> _Factor:
@@ -106,8 +107,11 @@ class BodySolver:
             return
         f = self._factor(h)
         ref = getattr(f, "Mw_used", self._Mw0)
-        if np.linalg.norm(M_wq - ref) <= tol * max(np.linalg.norm(ref), 1e-300):
+        dMw = M_wq - ref
+        if np.linalg.norm(dMw) <= tol * max(np.linalg.norm(ref), 1e-300):
+            self._dMw = dMw
             return
+        self._dMw = None
         Zw = np.asarray(f.solve(np.ascontiguousarray(M_wq.T)))
         f.Zw, f.S1Zw, f.MwZr, f.MwZw = Zw, self.body.inv.S1 @ Zw, M_wq @ f.Zr, M_wq @ Zw
         f.Mw_used = M_wq.copy()
@@ -135,6 +139,16 @@ class BodySolver:
         MZ[:3, 3:] = A @ f.S1Zw
         MZ[3:, :3] = f.MwZr @ A.T
         MZ[3:, 3:] = f.MwZw
+        if self._dMw is not None:
+            # the Schur complement of the current M_wq to first order in the drift dM_w of
+            # the one in W (exact in the omega-translation blocks, since Z_r is exact; the
+            # omitted dM_w W_qq^-1 dM_w^T is below COUPLING_TOL^2 of M_w Z_w). S is small for
+            # full FE (module docstring of moreau_jean), so a stale M_w changes it by
+            # several per cent (later iterates then converge by ~1/16 per iterate)
+            dr, dw = self._dMw @ f.Zr, self._dMw @ f.Zw
+            MZ[:3, 3:] += A @ dr.T
+            MZ[3:, :3] += dr @ A.T
+            MZ[3:, 3:] += dw + dw.T
         S = Mff - MZ
         try:
             self._schur = sla.lu_factor(S)
