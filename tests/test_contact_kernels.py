@@ -17,6 +17,7 @@ from flexmvm.bodies.body import FlexibleBody
 from flexmvm.contact import kernels
 from flexmvm.contact import reference as ref
 from flexmvm.contact.geometry import MasterSurface, project_points
+from flexmvm.contact.nodes import ContactNodes
 from flexmvm.contact.pairs import PENETRATION_RECOVERY, PointToSurfaceContact
 
 
@@ -182,3 +183,60 @@ def test_min_gap_ahead_matches_reference():
             continue
         want = np.min(proj.gap + horizon * np.minimum(ref.normal_velocity(kin, proj), 0.0))
         assert abs(got - want) <= 1e-12
+
+
+def test_kinematics_kept_while_the_state_is_unchanged():
+    """ContactNodes.update gives bit for bit what body_kinematics gives, and recomputes
+    exactly when q, v, r or A changed in value (in place too, and 0.0 -> -0.0): at an
+    unchanged state it leaves its arrays as they are (shown by scribbling on them)."""
+    rng = np.random.default_rng(3)
+    bodies, surf = _bodies(rng)
+    A = _rotation(rng)
+    for b, nodes in ((0, surf.nodes()), (1, np.arange(25))):
+        cn, fresh = ContactNodes(bodies[b], nodes), ContactNodes(bodies[b], nodes)
+        st = _states(rng, 0.3, A)[b]
+
+        def check(reused):
+            got = cn.update(st)
+            want = kernels.body_kinematics(fresh.X, fresh.psi_c, fresh.indptr, fresh.indices,
+                                           fresh.data, fresh.dense, st.q, st.v, st.r, st.A,
+                                           fresh.u, fresh.ud, fresh.s, fresh.x, fresh.xd)
+            assert got == want
+            if reused:
+                assert (cn.x == -7.0).all()
+            else:
+                for name in ("u", "ud", "s", "x", "xd"):
+                    np.testing.assert_array_equal(getattr(cn, name), getattr(fresh, name))
+            cn.x[:] = -7.0
+
+        check(False)
+        check(True)
+        for change in (lambda: st.q.__setitem__(0, st.q[0] + 1e-9),
+                       lambda: st.v.__setitem__(-1, 0.5 * st.v[-1]),
+                       lambda: st.r.__setitem__(2, st.r[2] + 1e-12),
+                       lambda: st.A.__setitem__((1, 2), st.A[1, 2] * (1 + 1e-15)),
+                       lambda: st.q.__setitem__(1, 0.0), lambda: st.q.__setitem__(1, -0.0)):
+            change()
+            check(False)
+            check(True)
+        st.q = st.q.copy()          # other arrays, same values: reused
+        check(True)
+
+
+def test_measure_shares_the_search_node_sets_when_equal():
+    """The penetration measure updates the search's ContactNodes (one update per state for
+    both) when it measures the same node sets; a slave surface with other nodes than the
+    slave nodes gets its own."""
+    rng = np.random.default_rng(2)
+    bodies, surf = _bodies(rng)
+    g = np.arange(25).reshape(5, 5)
+    quads = np.column_stack([g[:-1, :-1].ravel(), g[1:, :-1].ravel(), g[1:, 1:].ravel(),
+                             g[:-1, 1:].ravel()])
+    slave_surf = MasterSurface(quads, np.zeros((0, 3)))
+    prov = PointToSurfaceContact(bodies, 1, np.arange(25), 0, surf, search_radius_m=0.05,
+                                 slave_surface=slave_surf)
+    assert prov._measure._s is prov._s and prov._measure._m is prov._m
+    prov = PointToSurfaceContact(bodies, 1, np.arange(5, 25), 0, surf, search_radius_m=0.05,
+                                 slave_surface=slave_surf)
+    assert prov._measure._s is not prov._s and prov._measure._m is prov._m
+    assert len(prov._measure._s.nodes) == 25

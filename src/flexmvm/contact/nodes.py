@@ -5,6 +5,10 @@ mostly non-zero, else in CSR form (a full-FE body, or the retained nodes of a Cr
 basis, whose rows select single q entries). Per step, body_kinematics fills the node
 positions and velocities and body_rows the constraint rows, both compiled (contact.kernels)
 and on arrays preallocated here.
+
+The kinematics are kept with the state they were computed at (q, v, r, A, by value, bit for
+bit): an update at the same state again (the penetration measure at the end of a step and the
+next step's search, which share these objects when their node sets are equal) reuses them.
 """
 
 from __future__ import annotations
@@ -29,6 +33,8 @@ class ContactNodes:
         self.gdof = 3 * self.nodes
         self._gather(body, n)
         self.u, self.ud, self.s, self.x, self.xd = (np.zeros((n, 3)) for _ in range(5))
+        # the state of the last update (kernels.body_kinematics_memo): q, v, [r, A], result
+        self._last = (np.zeros(self.nq), np.zeros(6 + self.nq), np.full(12, np.nan), np.zeros(2))
 
     def _gather(self, body, n: int) -> None:
         self.psi_c = np.zeros((0, 3, 0))
@@ -52,11 +58,12 @@ class ContactNodes:
         self.data = rows.data.astype(np.float64)
 
     def update(self, st) -> tuple[float, float]:
-        """Positions x, velocities xd (global), body-frame positions s at state st.
-        Returns (largest velocity component [m/s], largest displacement |u| [m])."""
-        return kernels.body_kinematics(self.X, self.psi_c, self.indptr, self.indices, self.data,
-                                       self.dense, st.q, st.v, st.r, st.A, self.u, self.ud,
-                                       self.s, self.x, self.xd)
+        """Positions x, velocities xd (global), body-frame positions s at state st (kept
+        when st holds the values of the last update). Returns (largest velocity component
+        [m/s], largest displacement |u| [m])."""
+        return kernels.body_kinematics_memo(self.X, self.psi_c, self.indptr, self.indices,
+                                            self.data, self.dense, st.q, st.v, st.r, st.A,
+                                            self.u, self.ud, self.s, self.x, self.xd, *self._last)
 
     def rows(self, nodes, w, kc, dirs, A, sign: float):
         """sign * rows of the pairs (nodes, w (m, k) local ids / weights, kc (m,) nodes per

@@ -127,7 +127,7 @@ class PointToSurfaceContact:
         if slave_surface is not None and slave_surface.connectivity.max() >= n_s:
             raise InputError(f"{name}: slave facets refer to nodes outside body {bodies[slave].name!r}")
         self._measure = SurfaceMeasure(bodies, slave, self.slave_nodes, slave_surface, master,
-                                       surface, self.search_radius)
+                                       surface, self.search_radius, shared=(self._s, self._m))
 
     def _setup(self, bodies) -> None:
         """Gathered node data, facet geometry and the search state (see kernels.scan_nodes)."""

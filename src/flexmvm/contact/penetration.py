@@ -94,16 +94,22 @@ class SurfaceMeasure:
     """Both directions of a contact between body `slave` (nodes slave_nodes, facets
     slave_surface, optional) and body `master` (facets master_surface): slave nodes against
     the master facets, and, when slave_surface is given, the master surface nodes against the
-    slave facets. Positions come from own ContactNodes (the constraint pass's are not touched)."""
+    slave facets. Positions come from ContactNodes of those node sets: `shared` (the
+    constraint pass's, slave and master) where they hold the same nodes in the same order, so
+    that the end-of-step measure and the next step's search (the same state) update them once
+    (ContactNodes.update keeps them at an unchanged state); own ones otherwise."""
 
     def __init__(self, bodies, slave: int, slave_nodes, slave_surface: MasterSurface | None,
-                 master: int, master_surface: MasterSurface, search_radius: float):
+                 master: int, master_surface: MasterSurface, search_radius: float,
+                 shared: tuple[ContactNodes, ContactNodes] | None = None):
         s_ids = np.asarray(slave_nodes, dtype=np.int64)
         if slave_surface is not None:
             s_ids = np.union1d(s_ids, slave_surface.nodes())
         self.slave, self.master = slave, master
-        self._s = ContactNodes(bodies[slave], s_ids)
-        self._m = ContactNodes(bodies[master], master_surface.nodes())
+        sh_s, sh_m = (None, None) if shared is None else shared
+        self._s = _same_set(sh_s, s_ids) or ContactNodes(bodies[slave], s_ids)
+        self._m = _same_set(sh_m, master_surface.nodes()) or ContactNodes(bodies[master],
+                                                                           master_surface.nodes())
         rows = np.searchsorted(s_ids, np.unique(np.asarray(slave_nodes, dtype=np.int64)))
         self.directions = [_Direction(bodies, slave, self._s, rows, master, self._m,
                                       master_surface, search_radius)]
@@ -122,3 +128,10 @@ class SurfaceMeasure:
         floors = [0.0] * len(self.directions) if floors is None else floors
         return [d.measure(states, u[d.against], deep, max(float(f), RESOLUTION_M))
                 for d, f in zip(self.directions, floors)]
+
+
+def _same_set(nodes: ContactNodes | None, ids: np.ndarray) -> ContactNodes | None:
+    """nodes when it holds exactly the node ids `ids` in that order, else None."""
+    if nodes is not None and np.array_equal(nodes.nodes, np.asarray(ids, dtype=np.int64)):
+        return nodes
+    return None
