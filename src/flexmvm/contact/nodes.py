@@ -16,6 +16,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from flexmvm.constraints.rows import NodalSelector
 from flexmvm.contact import kernels
 
 _DENSE_FILL = 0.25  # gathered rows with more non-zeros than this fraction are stored dense
@@ -68,7 +69,8 @@ class ContactNodes:
     def rows(self, nodes, w, kc, dirs, A, sign: float):
         """sign * rows of the pairs (nodes, w (m, k) local ids / weights, kc (m,) nodes per
         row, dirs (m, 3)), from the positions of the last update: frame (m, 6), elastic
-        (m, nq) and the nodal selector (csr (m, 3 n_nodes); None for a rigid body)."""
+        (m, nq) and the nodal selector (NodalSelector (m, 3 n_nodes), rows with ascending
+        columns; None for a rigid body)."""
         m, k = nodes.shape
         frame, elastic = np.empty((m, 6)), np.empty((m, self.nq))
         sel_data, sel_idx = np.empty(3 * k * m), np.empty(3 * k * m, dtype=np.int64)
@@ -79,8 +81,7 @@ class ContactNodes:
         if not self.nq:
             return frame, elastic, None
         n = sel_ptr[m]
-        sel = sp.csr_matrix((sel_data[:n], sel_idx[:n], sel_ptr), shape=(m, self.n_dofs))
-        return frame, elastic, sel
+        return frame, elastic, NodalSelector(sel_data[:n], sel_idx[:n], sel_ptr, (m, self.n_dofs))
 
 
 class SearchState:
