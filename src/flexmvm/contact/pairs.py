@@ -36,7 +36,7 @@ from flexmvm.constraints.contact import ContactKind, ContactLaw, ContactRows, Fr
 from flexmvm.constraints.rows import Rows
 from flexmvm.contact import kernels
 from flexmvm.contact.geometry import BroadPhase, MasterSurface, facet_adjacency
-from flexmvm.contact.nodes import ContactNodes, SearchState
+from flexmvm.contact.nodes import ContactNodes, ProjectionMemo, SearchState
 from flexmvm.contact.penetration import Penetration, SurfaceMeasure
 from flexmvm.contact.reference import body_rows
 from flexmvm.errors import InputError, SolverError
@@ -127,7 +127,8 @@ class PointToSurfaceContact:
         if slave_surface is not None and slave_surface.connectivity.max() >= n_s:
             raise InputError(f"{name}: slave facets refer to nodes outside body {bodies[slave].name!r}")
         self._measure = SurfaceMeasure(bodies, slave, self.slave_nodes, slave_surface, master,
-                                       surface, self.search_radius, shared=(self._s, self._m))
+                                       surface, self.search_radius,
+                                       shared=(self._s, self._m, self._memo))
 
     def _setup(self, bodies) -> None:
         """Gathered node data, facet geometry and the search state (see kernels.scan_nodes)."""
@@ -141,6 +142,7 @@ class PointToSurfaceContact:
         self._params = kernels.projection_params()
         ns, nf = len(self.slave_nodes), self.surface.n_facets
         self._search = SearchState(ns, nf, _LIST_CAP)
+        self._memo = ProjectionMemo(self._s, self._m, self._conn, self._params)
         self._facet = np.full(ns, -1, dtype=np.int64)
         self._out = np.zeros((ns, 11))
         self._idx = np.zeros(ns, dtype=np.int64)
@@ -165,7 +167,7 @@ class PointToSurfaceContact:
             self._s.x, self._s.xd, m.x, m.xd, sm.r, sm.A, self._box2, reach, self._rho,
             self._u_max, self._geo, self._conn, self.surface.n_quads, *self._adj, self._params,
             *self._search.arrays(),
-            self._facet, self._out)
+            self._facet, self._out, *self._memo.arrays())
         if status:
             raise SolverError(_failure(status, facet))
         return n
