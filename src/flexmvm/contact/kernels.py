@@ -660,6 +660,28 @@ def active_nodes(facet, out, h, gap_tol, bonded, idx):
     return m
 
 
+@numba.njit(cache=True)
+def active_pairs(facet, out, h, gap_tol, bonded, idx, conn, n_quads, slave_nodes):
+    """active_nodes (into idx), then the data of those m pairs in one call: (m, nodes (m,)
+    their slave indices, slave_ids (m,) = slave_nodes[nodes], facets (m,), normal (m, 3),
+    gap (m,), u_N (m,) (copies of their rows of out), and pair_nodes' slave (s_nodes,
+    s_w, s_k) and master (m_nodes, m_w, m_k) row data)."""
+    m = active_nodes(facet, out, h, gap_tol, bonded, idx)
+    nodes = idx[:m].copy()
+    slave_ids, facets = np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64)
+    normal, gap, u_n = np.empty((m, 3)), np.empty(m), np.empty(m)
+    for a in range(m):
+        i = nodes[a]
+        slave_ids[a], facets[a] = slave_nodes[i], facet[i]
+        normal[a, 0], normal[a, 1], normal[a, 2] = out[i, 6], out[i, 7], out[i, 8]
+        gap[a], u_n[a] = out[i, 9], out[i, 10]
+    s_nodes, s_w, s_k = np.empty((m, 1), np.int64), np.empty((m, 1)), np.empty(m, np.int64)
+    m_nodes, m_w, m_k = np.empty((m, 4), np.int64), np.empty((m, 4)), np.empty(m, np.int64)
+    pair_nodes(nodes, facet, out, conn, n_quads, s_nodes, s_w, s_k, m_nodes, m_w, m_k)
+    return (m, nodes, slave_ids, facets, normal, gap, u_n, (s_nodes, s_w, s_k),
+            (m_nodes, m_w, m_k))
+
+
 # -- constraint rows ------------------------------------------------------------------------------
 @numba.njit(cache=True)
 def pair_nodes(idx, facet, out, conn, n_quads, s_nodes, s_w, s_k, m_nodes, m_w, m_k):

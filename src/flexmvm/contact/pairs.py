@@ -202,29 +202,24 @@ class PointToSurfaceContact:
             hp, tol = 0.0, self.gap_tol + POSITION_REACH * h * speed
         else:
             hp, tol = h, self.gap_tol
-        m_n = kernels.active_nodes(self._facet, self._out, hp, tol, self._bonded,
-                                   self._idx) if n else 0
+        m_n, idx, slave_ids, facets, normal, gaps, u_n, s_pairs, m_pairs = kernels.active_pairs(
+            self._facet, self._out, hp, tol, self._bonded, self._idx, self._conn,
+            self.surface.n_quads, self.slave_nodes)
         eq = self._bond_rows(h) if self._bonds else None
         if m_n == 0 and eq is None:
             self._last = (None, 0)
             return ContactRows.empty()
-        idx = self._idx[:m_n].copy()
-        out = self._out[idx]
-        s_nodes, s_w, s_k = np.empty((m_n, 1), np.int64), np.empty((m_n, 1)), np.empty(m_n, np.int64)
-        m_nodes, m_w, m_k = np.empty((m_n, 4), np.int64), np.empty((m_n, 4)), np.empty(m_n, np.int64)
-        kernels.pair_nodes(idx, self._facet, self._out, self._conn, self.surface.n_quads,
-                           s_nodes, s_w, s_k, m_nodes, m_w, m_k)
-        normal, gaps = out[:, 6:9], out[:, 9]
-        self._last = (_Active(idx, self.master_nodes[m_nodes], m_w, normal), 0 if eq is None else len(eq[4]))
+        m_nodes, m_w = m_pairs[0], m_pairs[1]
+        # the pairs for after_step (bonded contact): (slave index, master facet nodes (local),
+        # weights, normal)
+        self._last = ((idx, m_nodes, m_w, normal), 0 if eq is None else len(eq[4]))
         if eq is None:
-            lower = self._lower(gaps, out[:, 10], h)
-            keys = list(zip([self.name] * m_n, self.slave_nodes[idx].tolist(),
-                            self._facet[idx].tolist()))
+            lower = self._lower(gaps, u_n, h)
+            keys = list(zip([self.name] * m_n, slave_ids.tolist(), facets.tolist()))
             if self.mu > 0.0:
-                return self._friction_rows(states, (s_nodes, s_w, s_k), (m_nodes, m_w, m_k),
-                                           normal, lower, keys, gaps)
+                return self._friction_rows(states, s_pairs, m_pairs, normal, lower, keys, gaps)
             rows = Rows(m_n, {})
-            self._fill_rows(rows, states, (s_nodes, s_w, s_k), (m_nodes, m_w, m_k), normal)
+            self._fill_rows(rows, states, s_pairs, m_pairs, normal)
             return ContactRows(rows, lower, keys, gaps, 0, np.ones(m_n))
         return self._rows_with_bonds(bodies, states, h, eq, idx, m_nodes, m_w, normal, gaps)
 
@@ -314,7 +309,9 @@ class PointToSurfaceContact:
         whose normal impulse component turned tensile."""
         if self.kind is not ContactKind.BONDED:
             return
-        proj, n_eq = self._last
+        last, n_eq = self._last
+        proj = None if last is None else _Active(last[0], self.master_nodes[last[1]], last[2],
+                                                 last[3])
         # release: normal component of the bond impulse (bond rows come in x, y, z triples)
         released = []
         for i in range(0, n_eq, 3):
