@@ -25,7 +25,7 @@ class NodalSelector:
     Anything else than the nodal columns reads it as the scipy matrix of these arrays
     (tocsr, made once on first use; `N @ x` goes through it)."""
 
-    __slots__ = ("data", "indices", "indptr", "shape", "_csr")
+    __slots__ = ("_csr", "data", "indices", "indptr", "shape")
 
     def __init__(self, data: np.ndarray, indices: np.ndarray, indptr: np.ndarray,
                  shape: tuple[int, int]):

@@ -196,7 +196,7 @@ class PointToSurfaceContact:
     # -- constraint rows ----------------------------------------------------------------------
     def candidate_rows(self, bodies, states, h: float) -> ContactRows:
         speed = self._kinematics(states)
-        n = self._scan(states, self.search_radius + 2 * speed * h)
+        self._scan(states, self.search_radius + 2 * speed * h)
         if self.law is ContactLaw.POSITION:
             # g <= gap_tol + POSITION_REACH h u_reach, whatever u_N- (see the module doc)
             hp, tol = 0.0, self.gap_tol + POSITION_REACH * h * speed
