@@ -2,13 +2,16 @@
 W^-1 Phi^T lambda from the cached nodal columns equal the explicit dense formulas (W^-1 by a
 dense solve) to 1e-10 relative, for the 6 x 6 frame Schur complement (Newton step) and the
 3 x 3 translational one (non-rotating step); also after the cache grew, and after
-refresh_coupling replaced M_w (the cached M_w c_j and psi_j Z_w must follow)."""
+refresh_coupling replaced M_w (the cached M_w c_j and psi_j Z_w must follow). A selector
+given as a NodalSelector (CSR arrays, read by a compiled kernel) gives bit for bit what its
+scipy matrix gives."""
 
 import numpy as np
 import pytest
 import scipy.sparse as sp
 
 from flexmvm.bodies.body import FlexibleBody
+from flexmvm.constraints.rows import NodalSelector, Rows, stack
 from flexmvm.integrate.body_solver import BodySolver
 
 H_STEP = 1e-3
@@ -124,3 +127,60 @@ def test_velocity_reads_only_rows_with_impulse():
     lam = np.zeros(m)
     lam[2] = 1.5
     _check(solver.contact_compliance(H_STEP, bf, N), Phi, W, lam)
+
+
+def _raw_selector(rng, m: int, n_nodes: int, nodes: np.ndarray, sort: bool = True):
+    """CSR arrays of m rows as contact rows make them (ContactNodes.rows: 3 DOFs per node,
+    columns ascending within a row), with what the scipy path must agree on too: a node
+    repeated in a row (its columns add), explicit zeros and -0.0 (a direction with a zero
+    component). sort=False leaves the columns of each row in node order."""
+    data, idx, ptr = [], [], [0]
+    for i in range(m):
+        d = rng.normal(size=3)
+        d[rng.integers(0, 3)] = rng.choice([0.0, -0.0])
+        row = list(rng.choice(nodes, size=rng.integers(1, 5), replace=False))
+        if i % 3 == 0:
+            row.append(row[0])
+        entries = [(3 * k + j, rng.uniform() * d[j]) for k in row for j in range(3)]
+        if sort:
+            entries.sort(key=lambda e: e[0])      # stable, as kernels._sort_row
+        idx += [c for c, _ in entries]
+        data += [v for _, v in entries]
+        ptr.append(len(idx))
+    return (np.array(data), np.array(idx, dtype=np.int64), np.array(ptr, dtype=np.int64),
+            (m, 3 * n_nodes))
+
+
+@pytest.mark.parametrize("kind", ["select", "dense"])
+@pytest.mark.parametrize("sort", [True, False])
+def test_nodal_selector_equals_its_csr_bit_for_bit(kind, sort):
+    """The same rows as a NodalSelector and as the scipy matrix of its arrays: the same
+    slots and N_d, D and velocity bit for bit (both caches growing alike), also for rows
+    with a repeated node, explicit zeros, -0.0, and (sort=False) unsorted columns, which
+    the kernel hands back to the scipy path. N @ x and stack read it as that matrix."""
+    body, solver_a, rng, A, Wqq = _setup(kind)
+    solver_b = BodySolver(body, 0.55)
+    n = len(body.X)
+    Mw = body.inertia_terms(np.zeros(body.nq))[2]
+    for s in (solver_a, solver_b):
+        _prepare_full(s, body, np.random.default_rng(1), A, Wqq, Mw)
+    for nodes in (np.arange(0, 8), np.arange(4, 20), np.arange(0, n)):
+        m = 10
+        data, idx, ptr, shape = _raw_selector(rng, m, n, nodes, sort)
+        sel = NodalSelector(data, idx, ptr, shape)
+        csr = sp.csr_matrix((data.copy(), idx.copy(), ptr.copy()), shape=shape)
+        bf, lam = rng.normal(size=(m, 6)), rng.normal(size=m)
+        got = solver_a.contact_compliance(H_STEP, bf, sel)
+        want = solver_b.contact_compliance(H_STEP, bf, csr)
+        np.testing.assert_array_equal(got.D, want.D)
+        np.testing.assert_array_equal(got.velocity(lam), want.velocity(lam))
+        ca, cb = solver_a._f.nodal, solver_b._f.nodal
+        for (sa, Na), (sb, Nb) in zip([ca.touch(sel, None)], [cb.touch(csr, None)]):
+            np.testing.assert_array_equal(sa, sb)
+            np.testing.assert_array_equal(Na, Nb)
+            assert np.array_equal(np.signbit(Na), np.signbit(Nb))
+        x = rng.normal(size=shape[1])
+        np.testing.assert_array_equal(sel @ x, csr @ x)
+        rows = Rows(m, {0: (bf, np.zeros((m, body.nq)))}, {0: sel})
+        stacked = stack([rows, rows]).nodal_selector(0)
+        assert (stacked != sp.vstack([csr, csr])).nnz == 0

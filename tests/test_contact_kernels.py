@@ -17,6 +17,7 @@ from flexmvm.bodies.body import FlexibleBody
 from flexmvm.contact import kernels
 from flexmvm.contact import reference as ref
 from flexmvm.contact.geometry import MasterSurface, project_points
+from flexmvm.contact.nodes import ContactNodes, ProjectionMemo
 from flexmvm.contact.pairs import PENETRATION_RECOVERY, PointToSurfaceContact
 
 
@@ -160,7 +161,7 @@ def _check_rows(bodies, states, prov, crows, act):
         for a, b in zip(got, want):
             np.testing.assert_allclose(a, b, rtol=0, atol=1e-12 * max(1.0, np.abs(b).max()))
     for b, want in ((1, ssel), (0, -msel)):
-        assert abs(crows.rows.nodal[b] - want).max() <= 1e-12
+        assert abs(crows.rows.nodal[b].tocsr() - want).max() <= 1e-12
 
 
 def test_min_gap_ahead_matches_reference():
@@ -182,3 +183,105 @@ def test_min_gap_ahead_matches_reference():
             continue
         want = np.min(proj.gap + horizon * np.minimum(ref.normal_velocity(kin, proj), 0.0))
         assert abs(got - want) <= 1e-12
+
+
+def test_kinematics_kept_while_the_state_is_unchanged():
+    """ContactNodes.update gives bit for bit what body_kinematics gives, and recomputes
+    exactly when q, v, r or A changed in value (in place too, and 0.0 -> -0.0): at an
+    unchanged state it leaves its arrays as they are (shown by scribbling on them)."""
+    rng = np.random.default_rng(3)
+    bodies, surf = _bodies(rng)
+    A = _rotation(rng)
+
+    def check(cn, fresh, st, reused):
+        got = cn.update(st)
+        want = kernels.body_kinematics(fresh.X, fresh.psi_c, fresh.indptr, fresh.indices,
+                                       fresh.data, fresh.dense, st.q, st.v, st.r, st.A,
+                                       fresh.u, fresh.ud, fresh.s, fresh.x, fresh.xd)
+        assert got == want
+        if reused:
+            assert (cn.x == -7.0).all()
+        else:
+            for name in ("u", "ud", "s", "x", "xd"):
+                np.testing.assert_array_equal(getattr(cn, name), getattr(fresh, name))
+        cn.x[:] = -7.0
+
+    for b, nodes in ((0, surf.nodes()), (1, np.arange(25))):
+        cn, fresh = ContactNodes(bodies[b], nodes), ContactNodes(bodies[b], nodes)
+        st = _states(rng, 0.3, A)[b]
+        check(cn, fresh, st, False)
+        check(cn, fresh, st, True)
+        for arr, at, value in ((st.q, 0, st.q[0] + 1e-9), (st.v, -1, 0.5 * st.v[-1]),
+                               (st.r, 2, st.r[2] + 1e-12), (st.A, (1, 2), st.A[1, 2] * (1 + 1e-15)),
+                               (st.q, 1, 0.0), (st.q, 1, -0.0)):
+            arr[at] = value                 # in place
+            check(cn, fresh, st, False)
+            check(cn, fresh, st, True)
+        st.q = st.q.copy()                  # other arrays, same values: reused
+        check(cn, fresh, st, True)
+
+
+def _slave_quads():
+    g = np.arange(25).reshape(5, 5)
+    quads = np.column_stack([g[:-1, :-1].ravel(), g[1:, :-1].ravel(), g[1:, 1:].ravel(),
+                             g[:-1, 1:].ravel()])
+    return MasterSurface(quads, np.zeros((0, 3)))
+
+
+def test_projection_memo_changes_nothing():
+    """The search and the penetration measure sharing their projections (ProjectionMemo: the
+    measure at a step's end state, the next search at that state) give bit for bit what they
+    give without (k = 0), along a trajectory whose states repeat and change in place."""
+    rng = np.random.default_rng(13)
+    bodies, surf = _bodies(rng)
+    A = _rotation(rng)
+    provs = [PointToSurfaceContact(bodies, 1, np.arange(25), 0, surf, search_radius_m=0.05,
+                                   slave_surface=_slave_quads()) for _ in range(2)]
+    bare = provs[1]
+    bare._memo = ProjectionMemo(bare._s, bare._m, bare._conn, bare._params, k=0)
+    bare._measure.directions[0].memo = bare._memo
+    assert provs[0]._measure.directions[0].memo is provs[0]._memo
+    h, hits = 1e-3, 0
+    for t in np.linspace(0.0, 1.0, 30):
+        states = _states(rng, t, A)
+        got = []
+        for p in provs:
+            seq = [p.penetration(bodies, states), p.candidate_rows(bodies, states, h),
+                   p.min_gap_ahead(bodies, states, 4 * h)]
+            states[0].q[1] *= 1.0 + 1e-9          # in place: nothing kept may be read
+            seq.append(p.candidate_rows(bodies, states, h))
+            states[0].q[1] /= 1.0 + 1e-9
+            got.append((seq, p._facet.copy(), p._out.copy()))
+            hits += p is provs[0] and int(p._memo.count.sum())
+        (a, fa, oa), (b, fb, ob) = got
+        np.testing.assert_array_equal(fa, fb)
+        np.testing.assert_array_equal(oa, ob)
+        assert a[0] == b[0]
+        assert a[2] == b[2]
+        for ca, cb in ((a[1], b[1]), (a[3], b[3])):
+            assert ca.keys == cb.keys
+            np.testing.assert_array_equal(ca.lower, cb.lower)
+            np.testing.assert_array_equal(ca.gaps, cb.gaps)
+            for k in ca.rows.blocks:
+                for x, y in zip(ca.rows.blocks[k], cb.rows.blocks[k]):
+                    np.testing.assert_array_equal(x, y)
+    assert hits > 100
+
+
+def test_measure_shares_the_search_node_sets_when_equal():
+    """The penetration measure updates the search's ContactNodes (one update per state for
+    both) and reads and fills its projection memo when it measures the same node sets; a
+    slave surface with other nodes than the slave nodes gets its own."""
+    rng = np.random.default_rng(2)
+    bodies, surf = _bodies(rng)
+    slave_surf = _slave_quads()
+    prov = PointToSurfaceContact(bodies, 1, np.arange(25), 0, surf, search_radius_m=0.05,
+                                 slave_surface=slave_surf)
+    assert prov._measure._s is prov._s and prov._measure._m is prov._m
+    assert prov._measure.directions[0].memo is prov._memo
+    assert prov._measure.directions[1].memo.fac.shape[1] == 0
+    prov = PointToSurfaceContact(bodies, 1, np.arange(5, 25), 0, surf, search_radius_m=0.05,
+                                 slave_surface=slave_surf)
+    assert prov._measure._s is not prov._s and prov._measure._m is prov._m
+    assert len(prov._measure._s.nodes) == 25
+    assert prov._measure.directions[0].memo is not prov._memo

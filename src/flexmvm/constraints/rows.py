@@ -4,7 +4,10 @@ A block of m rows holds, for each body it touches, a frame part (m, 6) acting on
 [r_dot, omega] and an elastic part (m, nq) acting on q_dot. Dense arrays: m is small.
 Rows built from nodal directions (contact) may also carry, per body, the sparse nodal
 selector N (m, 3 n_nodes) with elastic part = N psi: the integrator then applies W_qq^-1 to
-psi^T N^T through cached nodal columns instead of one back-substitution per row.
+psi^T N^T through cached nodal columns instead of one back-substitution per row. The
+selector is a scipy CSR matrix, or (contact rows, made every step) a NodalSelector: the same
+CSR arrays without the scipy object, which the nodal columns read directly
+(integrate.compliance.NodalColumns.touch).
 """
 
 from __future__ import annotations
@@ -15,13 +18,41 @@ import numpy as np
 import scipy.sparse as sp
 
 
+class NodalSelector:
+    """A nodal selector N (shape (m, n_dofs)) as CSR arrays: row a holds the columns
+    indices[indptr[a]:indptr[a + 1]] (ascending, repeats allowed: they add) with the values
+    data[...]. Not copied: the arrays are the caller's and are not written afterwards.
+    Anything else than the nodal columns reads it as the scipy matrix of these arrays
+    (tocsr, made once on first use; `N @ x` goes through it)."""
+
+    __slots__ = ("_csr", "data", "indices", "indptr", "shape")
+
+    def __init__(self, data: np.ndarray, indices: np.ndarray, indptr: np.ndarray,
+                 shape: tuple[int, int]):
+        self.data, self.indices, self.indptr = data, indices, indptr
+        self.shape = (int(shape[0]), int(shape[1]))
+        self._csr = None
+
+    def tocsr(self) -> sp.csr_matrix:
+        """The scipy CSR matrix of these arrays (as it was built before there was this class)."""
+        if self._csr is None:
+            self._csr = sp.csr_matrix((self.data, self.indices, self.indptr), shape=self.shape)
+        return self._csr
+
+    def toarray(self) -> np.ndarray:
+        return self.tocsr().toarray()
+
+    def __matmul__(self, other):
+        return self.tocsr() @ other
+
+
 @dataclass
 class Rows:
     """m rows of Phi_v: blocks[body_index] = (frame (m, 6), elastic (m, nq))."""
 
     m: int
     blocks: dict[int, tuple[np.ndarray, np.ndarray]] = field(default_factory=dict)
-    nodal: dict[int, sp.csr_matrix] = field(default_factory=dict)
+    nodal: dict[int, sp.csr_matrix | NodalSelector] = field(default_factory=dict)
     # rows built by add(..., nodal=...): per body the selector's entries (row, dofs, values)
     # and its column count, or None once an elastic part came without them
     _entries: dict[int, tuple[list, int] | None] = field(default_factory=dict, repr=False)
@@ -49,7 +80,7 @@ class Rows:
             known[0].append((row, np.asarray(dofs, np.int64), np.asarray(values, float)))
             self._entries[body] = (known[0], n_dofs)
 
-    def nodal_selector(self, b: int) -> sp.csr_matrix | None:
+    def nodal_selector(self, b: int) -> sp.csr_matrix | NodalSelector | None:
         """The nodal selector N (m, n_dofs) of body b (elastic part = N psi), or None."""
         sel = self.nodal.get(b)
         if sel is None and self._entries.get(b) is not None and b in self.blocks:
@@ -97,6 +128,7 @@ def stack(parts: list[Rows]) -> Rows:
         sels = [p.nodal_selector(b) for p in parts if b in p.blocks]
         if all(s is not None for s in sels):
             n = sels[0].shape[1]
-            blocks = [p.nodal[b] if b in p.blocks else sp.csr_matrix((p.m, n)) for p in parts]
+            blocks = [p.nodal[b].tocsr() if b in p.blocks else sp.csr_matrix((p.m, n))
+                      for p in parts]
             out.nodal[b] = sp.vstack(blocks, format="csr")
     return out

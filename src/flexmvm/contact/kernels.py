@@ -12,9 +12,17 @@ indices 0..n_c-1); master facets refer to local master node indices.
 
 Tolerances of the projection travel in ``params`` (float64 array, see :func:`projection_params`)
 rather than as module globals, so a compiled cache never holds stale values.
+
+Projections made at unchanged node positions are kept and read again (contact.nodes.
+ProjectionMemo, :func:`_try`): the penetration measure at the end of a step and the next
+step's search project the same pairs at the same positions. The small helpers of the search
+(_try, _closest, _candidates, ...) are inlined into the scans (numba ``inline="always"``):
+their calls cost more than their work; the arithmetic is the same, operation for operation.
 """
 
 from __future__ import annotations
+
+import math
 
 import numba
 import numpy as np
@@ -334,13 +342,56 @@ def body_kinematics(X, psi_c, indptr, indices, data, dense, q, v, r, A, u, ud, s
     return frame_kinematics(X, u, ud, r, A, v, s, x, xd)
 
 
-# -- search: candidate lists, warm start, pruning -------------------------------------------------
 @numba.njit(cache=True)
+def _same_bits(a, b):
+    """a and b (1-D float64, equal length) hold the same values bit for bit (a NaN never
+    matches, so it is always recomputed; 0.0 and -0.0 differ)."""
+    for i in range(a.shape[0]):
+        x, y = a[i], b[i]
+        if not (x == y and (x != 0.0 or math.copysign(1.0, x) == math.copysign(1.0, y))):
+            return False
+    return True
+
+
+@numba.njit(cache=True)
+def body_kinematics_memo(X, psi_c, indptr, indices, data, dense, q, v, r, A, u, ud, s, x, xd,
+                         last_q, last_v, last_frame, last_out, version):
+    """body_kinematics unless q, v, r and A are bit for bit those of the last call that
+    filled u, ud, s, x, xd (last_q (nq,), last_v (6 + nq,), last_frame (12,) = [r, A row by
+    row], last_out (2,) its result; NaN in last_frame: none yet): the outputs are a function
+    of these inputs only, so they are then already there. version[0] counts the updates that
+    computed (what was kept for the positions, ProjectionMemo, is valid while it stands).
+    Returns (max |xd component| [m/s], max |u| [m]), as body_kinematics."""
+    same = q.shape[0] == last_q.shape[0] and v.shape[0] == last_v.shape[0]
+    if same:
+        for i in range(3):
+            same = same and _same_bits(A[i], last_frame[3 + 3 * i:6 + 3 * i])
+        same = same and _same_bits(r, last_frame[0:3]) and _same_bits(q, last_q) and _same_bits(
+            v, last_v)
+    if same:
+        return last_out[0], last_out[1]
+    vmax, umax = body_kinematics(X, psi_c, indptr, indices, data, dense, q, v, r, A, u, ud, s,
+                                 x, xd)
+    version[0] += 1
+    if q.shape[0] == last_q.shape[0] and v.shape[0] == last_v.shape[0]:
+        last_q[:] = q
+        last_v[:] = v
+        last_frame[0:3] = r
+        for i in range(3):
+            last_frame[3 + 3 * i:6 + 3 * i] = A[i]
+        last_out[0], last_out[1] = vmax, umax
+    else:
+        last_frame[0] = np.nan
+    return vmax, umax
+
+
+# -- search: candidate lists, warm start, pruning -------------------------------------------------
+@numba.njit(cache=True, inline="always")
 def _distance(p, c):
     return np.sqrt((p[0] - c[0]) ** 2 + (p[1] - c[1]) ** 2 + (p[2] - c[2]) ** 2)
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _refresh_list(i, p, reach, rho, geo, lists, ref):
     """Candidate superset of node i: facets g with |p - c_g| - R_g <= reach + rho (geo (nf, 4):
     centroid, circumradius), stored in lists[i] (count first; -1 when it overflows: all
@@ -359,7 +410,7 @@ def _refresh_list(i, p, reach, rho, geo, lists, ref):
     ref[i, 0], ref[i, 1], ref[i, 2], ref[i, 3] = p[0], p[1], p[2], radius
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _candidates(i, p, reach, rho, geo, lists, ref, mark, tag, cand, lb):
     """Broad-phase candidates of node i, exactly BroadPhase.query's set {g : |p - c_g| <=
     reach + R_g}, from its cached superset; the superset is rebuilt when the node has moved
@@ -384,7 +435,7 @@ def _candidates(i, p, reach, rho, geo, lists, ref, mark, tag, cand, lb):
     return n
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _better(rec, g, best, best_g):
     """closest_facets' order: inside first, then the smaller score (|gap| inside, distance
     outside), then the lower facet index."""
@@ -401,23 +452,53 @@ def _better(rec, g, best, best_g):
     return g < best_g
 
 
-@numba.njit(cache=True)
-def _try(g, xs, xm, conn, n_quads, params, work, best, best_g):
-    """Project xs on facet g; keep it in best when it beats best_g. Returns (status, best_g)."""
+@numba.njit(cache=True, inline="always")
+def _memo_begin(memo, ver_s, ver_m):
+    """Forget the kept projections of memo = (facets, count, records, versions) unless the
+    node and facet positions are still those they were made at (their ContactNodes versions
+    ver_s[0], ver_m[0])."""
+    count, versions = memo[1], memo[3]
+    if versions[0] != ver_s[0] or versions[1] != ver_m[0]:
+        count[:] = 0
+        versions[0], versions[1] = ver_s[0], ver_m[0]
+
+
+@numba.njit(cache=True, inline="always")
+def _try(g, i, xs, xm, conn, n_quads, params, work, memo, best, best_g):
+    """Project xs (node i) on facet g; keep it in best when it beats best_g. Returns (status,
+    best_g). memo = (facets (n, k), count (n,), records (n, k, REC_LEN), versions): up to k
+    projections of node i at the current positions (_memo_begin), read instead of projecting
+    again (project_pair writes every entry of a record and depends on xs, the facet's nodes
+    and params only: the same record bit for bit); k = 0: none kept."""
     C, t, r, P, rec = work
-    for a in range(4):
-        for i in range(3):
-            P[a, i] = xm[conn[g, a], i]
-    status = project_pair(xs, P, g < n_quads, params, C, t, r, rec)
+    m_fac, m_count, m_rec = memo[0], memo[1], memo[2]
+    kept = -1
+    for k in range(m_count[i]):
+        if m_fac[i, k] == g:
+            kept = k
+            break
+    if kept >= 0:
+        rec[:] = m_rec[i, kept]
+        status = 0
+    else:
+        for a in range(4):
+            for j in range(3):
+                P[a, j] = xm[conn[g, a], j]
+        status = project_pair(xs, P, g < n_quads, params, C, t, r, rec)
+        c = m_count[i]
+        if status == 0 and c < m_fac.shape[1]:
+            m_fac[i, c] = g
+            m_rec[i, c] = rec
+            m_count[i] = c + 1
     if status == 0 and _better(rec, g, best, best_g):
         best[:] = rec
         best_g = g
     return status, best_g
 
 
-@numba.njit(cache=True)
-def _closest(xs, n, cand, lb, mark, tag, f0, adj_ptr, adj_idx, geo, u_max, xm, conn, n_quads,
-             params, work, best):
+@numba.njit(cache=True, inline="always")
+def _closest(i, xs, n, cand, lb, mark, tag, f0, adj_ptr, adj_idx, geo, u_max, xm, conn,
+             n_quads, params, work, memo, best):
     """Closest facet among the n candidates (marked mark[g] == tag): the previous facet f0
     first (warm start), its neighbours next unless f0 holds an inside projection, then the
     rest. Once an inside projection with score
@@ -429,7 +510,8 @@ def _closest(xs, n, cand, lb, mark, tag, f0, adj_ptr, adj_idx, geo, u_max, xm, c
     best_g = -1
     if f0 >= 0:
         if mark[f0] == tag:
-            status, best_g = _try(f0, xs, xm, conn, n_quads, params, work, best, best_g)
+            status, best_g = _try(f0, i, xs, xm, conn, n_quads, params, work, memo, best,
+                                  best_g)
             mark[f0] = tag + 1
             if status:
                 return status, f0
@@ -437,7 +519,8 @@ def _closest(xs, n, cand, lb, mark, tag, f0, adj_ptr, adj_idx, geo, u_max, xm, c
         for k in range(start, adj_ptr[f0 + 1]):
             g = adj_idx[k]
             if mark[g] == tag:
-                status, best_g = _try(g, xs, xm, conn, n_quads, params, work, best, best_g)
+                status, best_g = _try(g, i, xs, xm, conn, n_quads, params, work, memo, best,
+                                      best_g)
                 mark[g] = tag + 1
                 if status:
                     return status, g
@@ -450,14 +533,14 @@ def _closest(xs, n, cand, lb, mark, tag, f0, adj_ptr, adj_idx, geo, u_max, xm, c
             margin = u_max * (1.0 + 1e-5) + 1e-5 * R + 1e-9 * (lb[k] + R) + 1e-15
             if lb[k] - margin > abs(best[REC_GAP]):
                 continue
-        status, best_g = _try(g, xs, xm, conn, n_quads, params, work, best, best_g)
+        status, best_g = _try(g, i, xs, xm, conn, n_quads, params, work, memo, best, best_g)
         mark[g] = tag + 1
         if status:
             return status, g
     return 0, best_g
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _finish(i, g, best, xs, vs, xm, vm, conn, n_quads, out):
     """Row i of out (ns, 11): weights (4), xi (2), normal (3), gap [m], normal velocity u_N
     [m/s]. A projection outside its facet is clamped as pairs._clamp does: local coordinates
@@ -489,9 +572,9 @@ def _finish(i, g, best, xs, vs, xm, vm, conn, n_quads, out):
     out[i, 9], out[i, 10] = gap, un
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _search_node(i, xs, xm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_quads, adj_ptr,
-                 adj_idx, params, lists, ref, prev, mark, counter, cand, lb, work, best, p):
+                 adj_idx, params, lists, ref, prev, mark, counter, cand, lb, work, memo, best, p):
     """Closest facet of node i of xs, shared by scan_nodes and penetration_scan: the box test
     in the facet body's frame (r_m, A_m), the candidate superset, the closest projection.
     Returns (searched: False when outside the box or without candidates, status, facet)."""
@@ -507,14 +590,15 @@ def _search_node(i, xs, xm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_quads
     n = _candidates(i, p, reach, rho, geo, lists, ref, mark, tag, cand, lb)
     if n == 0:
         return False, 0, -1
-    status, g = _closest(xs[i], n, cand, lb, mark, tag, prev[i], adj_ptr, adj_idx, geo,
-                         u_max, xm, conn, n_quads, params, work, best)
+    status, g = _closest(i, xs[i], n, cand, lb, mark, tag, prev[i], adj_ptr, adj_idx, geo,
+                         u_max, xm, conn, n_quads, params, work, memo, best)
     return True, status, g
 
 
 @numba.njit(cache=True)
 def scan_nodes(xs, vs, xm, vm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_quads, adj_ptr,
-               adj_idx, params, lists, ref, prev, mark, counter, cand, lb, facet, out):
+               adj_idx, params, lists, ref, prev, mark, counter, cand, lb, facet, out,
+               memo_fac, memo_count, memo_rec, memo_ver, ver_s, ver_m):
     """Closest facet of every slave node within reach, as PointToSurfaceContact's numpy path
     (box test in the master frame, BroadPhase candidates, project_points, closest_facets,
     clamping) and its normal velocity.
@@ -526,17 +610,23 @@ def scan_nodes(xs, vs, xm, vm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_qu
     conn (nf, 4) local master node ids; adj_ptr, adj_idx facet adjacency (CSR).
     State kept between calls: lists (ns, cap + 1), ref (ns, 4), prev (ns,) last facet per node.
     Work: mark (nf,), counter (1,), cand (nf,), lb (nf,). Output: facet (ns,) (-1: none),
-    out (ns, 11) as in _finish. Returns (status, facet of the failure, number of pairs)."""
+    out (ns, 11) as in _finish. Projections kept for the positions of versions ver_s[0],
+    ver_m[0] of the two node sets (ContactNodes.version): memo_fac (ns, k), memo_count (ns,),
+    memo_rec (ns, k, REC_LEN), memo_ver (2,) (contact.nodes.ProjectionMemo; _try).
+    Returns (status, facet of the failure, number of pairs)."""
     C, t, r = np.empty((4, 3)), np.empty((2, 3)), np.empty(3)
     P, rec, best = np.empty((4, 3)), np.empty(REC_LEN), np.empty(REC_LEN)
     work = (C, t, r, P, rec)
+    memo = (memo_fac, memo_count, memo_rec, memo_ver)
+    _memo_begin(memo, ver_s, ver_m)
     p = np.empty(3)
     n_pairs = 0
     for i in range(xs.shape[0]):
         facet[i] = -1
         searched, status, g = _search_node(i, xs, xm, r_m, A_m, box, reach, rho, u_max, geo,
                                            conn, n_quads, adj_ptr, adj_idx, params, lists, ref,
-                                           prev, mark, counter, cand, lb, work, best, p)
+                                           prev, mark, counter, cand, lb, work, memo, best,
+                                           p)
         if not searched:
             continue
         if status:
@@ -568,6 +658,28 @@ def active_nodes(facet, out, h, gap_tol, bonded, idx):
             idx[m] = i
             m += 1
     return m
+
+
+@numba.njit(cache=True)
+def active_pairs(facet, out, h, gap_tol, bonded, idx, conn, n_quads, slave_nodes):
+    """active_nodes (into idx), then the data of those m pairs in one call: (m, nodes (m,)
+    their slave indices, slave_ids (m,) = slave_nodes[nodes], facets (m,), normal (m, 3),
+    gap (m,), u_N (m,) (copies of their rows of out), and pair_nodes' slave (s_nodes,
+    s_w, s_k) and master (m_nodes, m_w, m_k) row data)."""
+    m = active_nodes(facet, out, h, gap_tol, bonded, idx)
+    nodes = idx[:m].copy()
+    slave_ids, facets = np.empty(m, dtype=np.int64), np.empty(m, dtype=np.int64)
+    normal, gap, u_n = np.empty((m, 3)), np.empty(m), np.empty(m)
+    for a in range(m):
+        i = nodes[a]
+        slave_ids[a], facets[a] = slave_nodes[i], facet[i]
+        normal[a, 0], normal[a, 1], normal[a, 2] = out[i, 6], out[i, 7], out[i, 8]
+        gap[a], u_n[a] = out[i, 9], out[i, 10]
+    s_nodes, s_w, s_k = np.empty((m, 1), np.int64), np.empty((m, 1)), np.empty(m, np.int64)
+    m_nodes, m_w, m_k = np.empty((m, 4), np.int64), np.empty((m, 4)), np.empty(m, np.int64)
+    pair_nodes(nodes, facet, out, conn, n_quads, s_nodes, s_w, s_k, m_nodes, m_w, m_k)
+    return (m, nodes, slave_ids, facets, normal, gap, u_n, (s_nodes, s_w, s_k),
+            (m_nodes, m_w, m_k))
 
 
 # -- constraint rows ------------------------------------------------------------------------------
@@ -653,7 +765,8 @@ def _sort_row(idx, val, lo, hi):
 # -- penetration measure --------------------------------------------------------------------------
 @numba.njit(cache=True)
 def penetration_scan(xs, xm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_quads, adj_ptr,
-                     adj_idx, params, edge_tol, floor, lists, ref, prev, mark, counter, cand, lb):
+                     adj_idx, params, edge_tol, floor, lists, ref, prev, mark, counter, cand, lb,
+                     memo_fac, memo_count, memo_rec, memo_ver, ver_s, ver_m):
     """Deepest penetration of the nodes xs (ns, 3) [m] into the facet surface xm (nm, 3) (local
     node ids in conn), searched as scan_nodes does (box test in the facet body's frame r_m,
     A_m; candidate supersets, warm start, pruning; same state arrays and meaning).
@@ -673,24 +786,30 @@ def penetration_scan(xs, xm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_quad
     i.e. if the other surface folded back over the facet within g0 of the node (a sheet
     thinner than the node's gap); at a ridge (convex edge) of plane facets the projection
     on the far facet is outside it. Contact surfaces do not fold so: the search is skipped.
+    Projections kept as in scan_nodes (memo_*, ver_s, ver_m): the warm start's projection
+    is not made again in the node's search, nor, with the constraint pass's memo at the same
+    positions, in the next step's scan_nodes.
     Returns (status, facet of a failure, depth [m], node (-1 when none), facet of the
     deepest node)."""
     C, t, r = np.empty((4, 3)), np.empty((2, 3)), np.empty(3)
     P, rec, best = np.empty((4, 3)), np.empty(REC_LEN), np.empty(REC_LEN)
     work = (C, t, r, P, rec)
+    memo = (memo_fac, memo_count, memo_rec, memo_ver)
+    _memo_begin(memo, ver_s, ver_m)
     p = np.empty(3)
     depth, node, at = floor, -1, -1
     for i in range(xs.shape[0]):
         f0 = prev[i]
         if f0 >= 0:
-            status, g = _try(f0, xs[i], xm, conn, n_quads, params, work, best, -1)
+            status, g = _try(f0, i, xs[i], xm, conn, n_quads, params, work, memo, best, -1)
             if status:
                 return status, f0, 0.0, -1, -1
             if best[REC_IN] == 1.0 and best[REC_GAP] >= -depth:
                 continue
         searched, status, g = _search_node(i, xs, xm, r_m, A_m, box, reach, rho, u_max, geo,
                                            conn, n_quads, adj_ptr, adj_idx, params, lists, ref,
-                                           prev, mark, counter, cand, lb, work, best, p)
+                                           prev, mark, counter, cand, lb, work, memo, best,
+                                           p)
         if not searched:
             continue
         if status:

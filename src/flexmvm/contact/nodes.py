@@ -5,6 +5,11 @@ mostly non-zero, else in CSR form (a full-FE body, or the retained nodes of a Cr
 basis, whose rows select single q entries). Per step, body_kinematics fills the node
 positions and velocities and body_rows the constraint rows, both compiled (contact.kernels)
 and on arrays preallocated here.
+
+The kinematics are kept with the state they were computed at (q, v, r, A, by value, bit for
+bit): an update at the same state again (the penetration measure at the end of a step and the
+next step's search, which share these objects when their node sets are equal) reuses them,
+and so do the closest-point projections made at those positions (ProjectionMemo).
 """
 
 from __future__ import annotations
@@ -12,6 +17,7 @@ from __future__ import annotations
 import numpy as np
 import scipy.sparse as sp
 
+from flexmvm.constraints.rows import NodalSelector
 from flexmvm.contact import kernels
 
 _DENSE_FILL = 0.25  # gathered rows with more non-zeros than this fraction are stored dense
@@ -29,6 +35,12 @@ class ContactNodes:
         self.gdof = 3 * self.nodes
         self._gather(body, n)
         self.u, self.ud, self.s, self.x, self.xd = (np.zeros((n, 3)) for _ in range(5))
+        # the state of the last update (kernels.body_kinematics_memo): q, v, [r, A], result;
+        # version[0]: how many updates computed (positions kept for other uses are valid as
+        # long as it stands: ProjectionMemo)
+        self.version = np.zeros(1, dtype=np.int64)
+        self._last = (np.zeros(self.nq), np.zeros(6 + self.nq), np.full(12, np.nan), np.zeros(2),
+                      self.version)
 
     def _gather(self, body, n: int) -> None:
         self.psi_c = np.zeros((0, 3, 0))
@@ -52,16 +64,18 @@ class ContactNodes:
         self.data = rows.data.astype(np.float64)
 
     def update(self, st) -> tuple[float, float]:
-        """Positions x, velocities xd (global), body-frame positions s at state st.
-        Returns (largest velocity component [m/s], largest displacement |u| [m])."""
-        return kernels.body_kinematics(self.X, self.psi_c, self.indptr, self.indices, self.data,
-                                       self.dense, st.q, st.v, st.r, st.A, self.u, self.ud,
-                                       self.s, self.x, self.xd)
+        """Positions x, velocities xd (global), body-frame positions s at state st (kept
+        when st holds the values of the last update). Returns (largest velocity component
+        [m/s], largest displacement |u| [m])."""
+        return kernels.body_kinematics_memo(self.X, self.psi_c, self.indptr, self.indices,
+                                            self.data, self.dense, st.q, st.v, st.r, st.A,
+                                            self.u, self.ud, self.s, self.x, self.xd, *self._last)
 
     def rows(self, nodes, w, kc, dirs, A, sign: float):
         """sign * rows of the pairs (nodes, w (m, k) local ids / weights, kc (m,) nodes per
         row, dirs (m, 3)), from the positions of the last update: frame (m, 6), elastic
-        (m, nq) and the nodal selector (csr (m, 3 n_nodes); None for a rigid body)."""
+        (m, nq) and the nodal selector (NodalSelector (m, 3 n_nodes), rows with ascending
+        columns; None for a rigid body)."""
         m, k = nodes.shape
         frame, elastic = np.empty((m, 6)), np.empty((m, self.nq))
         sel_data, sel_idx = np.empty(3 * k * m), np.empty(3 * k * m, dtype=np.int64)
@@ -72,8 +86,7 @@ class ContactNodes:
         if not self.nq:
             return frame, elastic, None
         n = sel_ptr[m]
-        sel = sp.csr_matrix((sel_data[:n], sel_idx[:n], sel_ptr), shape=(m, self.n_dofs))
-        return frame, elastic, sel
+        return frame, elastic, NodalSelector(sel_data[:n], sel_idx[:n], sel_ptr, (m, self.n_dofs))
 
 
 class SearchState:
@@ -92,3 +105,33 @@ class SearchState:
 
     def arrays(self):
         return self.lists, self.ref, self.prev, self.mark, self.counter, self.cand, self.lb
+
+
+class ProjectionMemo:
+    """Closest-point projections of the nodes of `nodes` (ContactNodes, n nodes) on the facets
+    conn (nf, 4) (local ids into `facets`, a ContactNodes), with the projection params, up to
+    k per node, kept while neither set's positions changed (their versions): kernels.scan_nodes
+    and kernels.penetration_scan read a kept one instead of projecting again (kernels._try).
+    Scans of all of these nodes against these facets with these params may share one memo
+    (serves); k = 0 keeps none."""
+
+    def __init__(self, nodes: ContactNodes, facets: ContactNodes, conn: np.ndarray,
+                 params: np.ndarray, k: int = 8):
+        n = len(nodes.nodes)
+        self.nodes, self.facets = nodes, facets
+        self.conn, self.params = np.array(conn, dtype=np.int64), np.array(params, dtype=np.float64)
+        self.fac = np.zeros((n, k), dtype=np.int64)
+        self.count = np.zeros(n, dtype=np.int64)
+        self.rec = np.zeros((n, k, kernels.REC_LEN))
+        self.versions = np.full(2, -1, dtype=np.int64)
+
+    def serves(self, nodes: ContactNodes, facets: ContactNodes, conn: np.ndarray,
+               params: np.ndarray) -> bool:
+        """Whether a scan of all nodes of `nodes` against the facets conn over `facets` with
+        these params may use this memo."""
+        return (nodes is self.nodes and facets is self.facets and self.fac.shape[1] > 0
+                and np.array_equal(conn, self.conn) and np.array_equal(params, self.params))
+
+    def arrays(self):
+        return (self.fac, self.count, self.rec, self.versions, self.nodes.version,
+                self.facets.version)

@@ -36,7 +36,7 @@ from flexmvm.constraints.contact import ContactKind, ContactLaw, ContactRows, Fr
 from flexmvm.constraints.rows import Rows
 from flexmvm.contact import kernels
 from flexmvm.contact.geometry import BroadPhase, MasterSurface, facet_adjacency
-from flexmvm.contact.nodes import ContactNodes, SearchState
+from flexmvm.contact.nodes import ContactNodes, ProjectionMemo, SearchState
 from flexmvm.contact.penetration import Penetration, SurfaceMeasure
 from flexmvm.contact.reference import body_rows
 from flexmvm.errors import InputError, SolverError
@@ -127,7 +127,8 @@ class PointToSurfaceContact:
         if slave_surface is not None and slave_surface.connectivity.max() >= n_s:
             raise InputError(f"{name}: slave facets refer to nodes outside body {bodies[slave].name!r}")
         self._measure = SurfaceMeasure(bodies, slave, self.slave_nodes, slave_surface, master,
-                                       surface, self.search_radius)
+                                       surface, self.search_radius,
+                                       shared=(self._s, self._m, self._memo))
 
     def _setup(self, bodies) -> None:
         """Gathered node data, facet geometry and the search state (see kernels.scan_nodes)."""
@@ -141,6 +142,7 @@ class PointToSurfaceContact:
         self._params = kernels.projection_params()
         ns, nf = len(self.slave_nodes), self.surface.n_facets
         self._search = SearchState(ns, nf, _LIST_CAP)
+        self._memo = ProjectionMemo(self._s, self._m, self._conn, self._params)
         self._facet = np.full(ns, -1, dtype=np.int64)
         self._out = np.zeros((ns, 11))
         self._idx = np.zeros(ns, dtype=np.int64)
@@ -165,7 +167,7 @@ class PointToSurfaceContact:
             self._s.x, self._s.xd, m.x, m.xd, sm.r, sm.A, self._box2, reach, self._rho,
             self._u_max, self._geo, self._conn, self.surface.n_quads, *self._adj, self._params,
             *self._search.arrays(),
-            self._facet, self._out)
+            self._facet, self._out, *self._memo.arrays())
         if status:
             raise SolverError(_failure(status, facet))
         return n
@@ -194,35 +196,30 @@ class PointToSurfaceContact:
     # -- constraint rows ----------------------------------------------------------------------
     def candidate_rows(self, bodies, states, h: float) -> ContactRows:
         speed = self._kinematics(states)
-        n = self._scan(states, self.search_radius + 2 * speed * h)
+        self._scan(states, self.search_radius + 2 * speed * h)
         if self.law is ContactLaw.POSITION:
             # g <= gap_tol + POSITION_REACH h u_reach, whatever u_N- (see the module doc)
             hp, tol = 0.0, self.gap_tol + POSITION_REACH * h * speed
         else:
             hp, tol = h, self.gap_tol
-        m_n = kernels.active_nodes(self._facet, self._out, hp, tol, self._bonded,
-                                   self._idx) if n else 0
+        m_n, idx, slave_ids, facets, normal, gaps, u_n, s_pairs, m_pairs = kernels.active_pairs(
+            self._facet, self._out, hp, tol, self._bonded, self._idx, self._conn,
+            self.surface.n_quads, self.slave_nodes)
         eq = self._bond_rows(h) if self._bonds else None
         if m_n == 0 and eq is None:
             self._last = (None, 0)
             return ContactRows.empty()
-        idx = self._idx[:m_n].copy()
-        out = self._out[idx]
-        s_nodes, s_w, s_k = np.empty((m_n, 1), np.int64), np.empty((m_n, 1)), np.empty(m_n, np.int64)
-        m_nodes, m_w, m_k = np.empty((m_n, 4), np.int64), np.empty((m_n, 4)), np.empty(m_n, np.int64)
-        kernels.pair_nodes(idx, self._facet, self._out, self._conn, self.surface.n_quads,
-                           s_nodes, s_w, s_k, m_nodes, m_w, m_k)
-        normal, gaps = out[:, 6:9], out[:, 9]
-        self._last = (_Active(idx, self.master_nodes[m_nodes], m_w, normal), 0 if eq is None else len(eq[4]))
+        m_nodes, m_w = m_pairs[0], m_pairs[1]
+        # the pairs for after_step (bonded contact): (slave index, master facet nodes (local),
+        # weights, normal)
+        self._last = ((idx, m_nodes, m_w, normal), 0 if eq is None else len(eq[4]))
         if eq is None:
-            lower = self._lower(gaps, out[:, 10], h)
-            keys = list(zip([self.name] * m_n, self.slave_nodes[idx].tolist(),
-                            self._facet[idx].tolist()))
+            lower = self._lower(gaps, u_n, h)
+            keys = list(zip([self.name] * m_n, slave_ids.tolist(), facets.tolist()))
             if self.mu > 0.0:
-                return self._friction_rows(states, (s_nodes, s_w, s_k), (m_nodes, m_w, m_k),
-                                           normal, lower, keys, gaps)
+                return self._friction_rows(states, s_pairs, m_pairs, normal, lower, keys, gaps)
             rows = Rows(m_n, {})
-            self._fill_rows(rows, states, (s_nodes, s_w, s_k), (m_nodes, m_w, m_k), normal)
+            self._fill_rows(rows, states, s_pairs, m_pairs, normal)
             return ContactRows(rows, lower, keys, gaps, 0, np.ones(m_n))
         return self._rows_with_bonds(bodies, states, h, eq, idx, m_nodes, m_w, normal, gaps)
 
@@ -312,7 +309,9 @@ class PointToSurfaceContact:
         whose normal impulse component turned tensile."""
         if self.kind is not ContactKind.BONDED:
             return
-        proj, n_eq = self._last
+        last, n_eq = self._last
+        proj = None if last is None else _Active(last[0], self.master_nodes[last[1]], last[2],
+                                                 last[3])
         # release: normal component of the bond impulse (bond rows come in x, y, z triples)
         released = []
         for i in range(0, n_eq, 3):

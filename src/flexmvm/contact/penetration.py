@@ -25,7 +25,7 @@ import numpy as np
 
 from flexmvm.contact import kernels
 from flexmvm.contact.geometry import BroadPhase, MasterSurface, facet_adjacency
-from flexmvm.contact.nodes import ContactNodes, SearchState
+from flexmvm.contact.nodes import ContactNodes, ProjectionMemo, SearchState
 
 EDGE_TOL = 0.01  # lateral offset beyond a facet edge, per facet circumradius, still counted:
                  # covers the round-off and the differential Poisson expansion of two faces
@@ -52,7 +52,7 @@ class _Direction:
     body `against`, whose nodes are facet_set.nodes."""
 
     def __init__(self, bodies, body, node_set: ContactNodes, rows, against, facet_set: ContactNodes,
-                 surface: MasterSurface, search_radius: float):
+                 surface: MasterSurface, search_radius: float, memo: ProjectionMemo | None = None):
         self.body, self.against = body, against
         self.node_set, self.facet_set = node_set, facet_set
         self.rows = None if len(rows) == len(node_set.nodes) else np.asarray(rows, np.int64)
@@ -74,6 +74,14 @@ class _Direction:
         self.rho = max(search_radius, 0.5 * float(np.median(broad.circumradius)))
         self.params = kernels.projection_params()
         self.search = SearchState(len(self.node_ids), surface.n_facets)
+        # projections kept at the current positions: the constraint pass's memo when it serves
+        # this scan (all nodes of its node set against its facets: the next step's search
+        # reads what this measure projected), else none (keeping costs more than the few
+        # projections a measure repeats itself)
+        if memo is None or self.rows is not None or not memo.serves(node_set, facet_set,
+                                                                    self.conn, self.params):
+            memo = ProjectionMemo(node_set, facet_set, self.conn, self.params, k=0)
+        self.memo = memo
 
     def measure(self, states, u_max_facets: float, deep: bool, floor: float
                 ) -> tuple[int, int, Penetration]:
@@ -85,7 +93,8 @@ class _Direction:
             reach, search = self.search_radius + u_max_facets, self.search
         status, bad, depth, i, g = kernels.penetration_scan(
             x, self.facet_set.x, st.r, st.A, self.box, reach, self.rho, u_max_facets, self.geo,
-            self.conn, self.n_quads, *self.adj, self.params, EDGE_TOL, floor, *search.arrays())
+            self.conn, self.n_quads, *self.adj, self.params, EDGE_TOL, floor, *search.arrays(),
+            *self.memo.arrays())
         node = int(self.node_ids[i]) if i >= 0 else -1
         return status, bad, Penetration(float(depth), self.body, node, self.against, int(g))
 
@@ -94,19 +103,25 @@ class SurfaceMeasure:
     """Both directions of a contact between body `slave` (nodes slave_nodes, facets
     slave_surface, optional) and body `master` (facets master_surface): slave nodes against
     the master facets, and, when slave_surface is given, the master surface nodes against the
-    slave facets. Positions come from own ContactNodes (the constraint pass's are not touched)."""
+    slave facets. Positions come from ContactNodes of those node sets: `shared` (the
+    constraint pass's, slave and master) where they hold the same nodes in the same order, so
+    that the end-of-step measure and the next step's search (the same state) update them once
+    (ContactNodes.update keeps them at an unchanged state); own ones otherwise."""
 
     def __init__(self, bodies, slave: int, slave_nodes, slave_surface: MasterSurface | None,
-                 master: int, master_surface: MasterSurface, search_radius: float):
+                 master: int, master_surface: MasterSurface, search_radius: float,
+                 shared: tuple[ContactNodes, ContactNodes, ProjectionMemo] | None = None):
         s_ids = np.asarray(slave_nodes, dtype=np.int64)
         if slave_surface is not None:
             s_ids = np.union1d(s_ids, slave_surface.nodes())
         self.slave, self.master = slave, master
-        self._s = ContactNodes(bodies[slave], s_ids)
-        self._m = ContactNodes(bodies[master], master_surface.nodes())
+        sh_s, sh_m, memo = (None, None, None) if shared is None else shared
+        self._s = _same_set(sh_s, s_ids) or ContactNodes(bodies[slave], s_ids)
+        self._m = _same_set(sh_m, master_surface.nodes()) or ContactNodes(bodies[master],
+                                                                           master_surface.nodes())
         rows = np.searchsorted(s_ids, np.unique(np.asarray(slave_nodes, dtype=np.int64)))
         self.directions = [_Direction(bodies, slave, self._s, rows, master, self._m,
-                                      master_surface, search_radius)]
+                                      master_surface, search_radius, memo)]
         if slave_surface is not None:
             self.directions.append(_Direction(bodies, master, self._m, np.arange(len(self._m.nodes)),
                                               slave, self._s, slave_surface, search_radius))
@@ -122,3 +137,10 @@ class SurfaceMeasure:
         floors = [0.0] * len(self.directions) if floors is None else floors
         return [d.measure(states, u[d.against], deep, max(float(f), RESOLUTION_M))
                 for d, f in zip(self.directions, floors)]
+
+
+def _same_set(nodes: ContactNodes | None, ids: np.ndarray) -> ContactNodes | None:
+    """nodes when it holds exactly the node ids `ids` in that order, else None."""
+    if nodes is not None and np.array_equal(nodes.nodes, np.asarray(ids, dtype=np.int64)):
+        return nodes
+    return None

@@ -31,6 +31,7 @@ import numba
 import numpy as np
 import scipy.sparse as sp
 
+from flexmvm.constraints.rows import NodalSelector
 from flexmvm.integrate.dense_solve import cho_solve, lu_solve
 
 
@@ -45,6 +46,45 @@ def add_weighted_rows(cols, slots, w, out):  # pragma: no cover - compiled
             row = cols[slots[i]]
             for j in range(out.shape[0]):
                 out[j] += wi * row[j]
+
+
+@numba.njit(cache=True)
+def selector_columns(data, indices, indptr, slot_of):  # pragma: no cover - compiled
+    """The DOFs a nodal selector in CSR arrays (m rows) touches, as NodalColumns.touch's
+    scipy path finds them: dofs (n_d,) sorted and unique (explicit zeros included), their
+    slots slot_of[dofs] (-1: not cached), N_d (m, n_d) with repeated columns of a row added in
+    their order (scipy's sum_duplicates), and the number of uncached DOFs. ok = False when a
+    row's columns are not ascending (the scipy path then sorts them first)."""
+    m = indptr.shape[0] - 1
+    nnz = indptr[m]
+    ok = True
+    for a in range(m):
+        for e in range(indptr[a] + 1, indptr[a + 1]):
+            ok = ok and indices[e - 1] <= indices[e]
+    cols = np.sort(indices[:nnz])
+    dofs = np.empty(nnz, dtype=np.int64)
+    n = 0
+    for i in range(nnz):
+        if i == 0 or cols[i] != cols[i - 1]:
+            dofs[n] = cols[i]
+            n += 1
+    dofs = dofs[:n]
+    slots = np.empty(n, dtype=np.int64)
+    missing = 0
+    for i in range(n):
+        slots[i] = slot_of[dofs[i]]
+        if slots[i] < 0:
+            missing += 1
+    Nd = np.zeros((m, n))
+    if ok:
+        for a in range(m):
+            for e in range(indptr[a], indptr[a + 1]):
+                k = np.searchsorted(dofs, indices[e])
+                if e > indptr[a] and indices[e] == indices[e - 1]:
+                    Nd[a, k] += data[e]
+                else:
+                    Nd[a, k] = data[e]
+    return ok, dofs, slots, Nd, missing
 
 
 def _psi_times(psi_rows, X: np.ndarray) -> np.ndarray:
@@ -86,10 +126,21 @@ class NodalColumns:
         self.F = np.zeros((0, 12))
         self._zr, self._zw, self._mw = zr, zw, mw
 
-    def touch(self, selector: sp.csr_matrix, solve) -> tuple[np.ndarray, np.ndarray]:
+    def touch(self, selector, solve) -> tuple[np.ndarray, np.ndarray]:
         """Slots (n_d,) of the DOFs the selector (m, 3 n_nodes) touches, sorted by DOF, and the
         selector restricted to them, N_d (m, n_d). DOFs not cached yet are solved for (one
-        multi-RHS back-substitution with `solve`)."""
+        multi-RHS back-substitution with `solve`). selector: a scipy sparse matrix, or a
+        NodalSelector (constraints.rows), read in its CSR arrays by a compiled kernel
+        (selector_columns: the same DOFs and N_d, bit for bit)."""
+        if isinstance(selector, NodalSelector):
+            ok, dofs, slots, Nd, missing = selector_columns(
+                selector.data, selector.indices, selector.indptr, self.slot_of)
+            if ok:
+                if missing:
+                    self._add(dofs[slots < 0], solve)
+                    slots = self.slot_of[dofs]
+                return slots, Nd
+            selector = selector.tocsr()
         sel = sp.csr_matrix(selector, copy=True)
         sel.sum_duplicates()
         dofs = np.unique(sel.indices)
