@@ -71,8 +71,9 @@ from flexmvm.integrate.system import ContactRows, System
 # The frame Schur complement S = M_ff - B W_qq^-1 B^T is small when the basis nearly spans
 # the rigid motions (full FE: S ~ the mass within c h of the reference nodes, ~1e-5 of the
 # body), so W's coupling B must be that of the current configuration: it is refreshed at the
-# start of every step (3 back-substitutions) and again at the midpoint when an iteration
-# does not reduce the residual.
+# start of a step when it drifted (3 back-substitutions; every step for small bases, by
+# COUPLING_TOL for large ones; in between S follows it to first order, BodySolver.prepare)
+# and again at the midpoint when an iteration does not reduce the residual.
 SLOW_ITERATIONS = 6
 ROUNDOFF_FLOOR = 1e-7  # a residual below this that stops decreasing is round-off (large bases)
 TRANSLATION_RTOL = 1e-13  # ...but the frame's translational rows (sums: no such floor) must
@@ -82,10 +83,10 @@ COUPLING_TOL = 1e-4   # larger bases: refresh when M_wq moved by this much (rela
 NODAL_CACHE_MIN_NQ = 200  # from this many elastic coordinates, contact rows use nodal columns
 # A later iterate whose residual sits in a body's frame rows only (its elastic rows, constraint
 # impulses included, below this fraction of rtol) corrects that body's velocity by
-# W^-1 [R_f; 0]: the bordered solve without its back-substitution. That residual is the stale
-# rotational coupling M_wq in W (refreshed only by COUPLING_TOL): seed case as shipped, b1 full
-# FE over 2 ms, 483 of the 500 steps after 1 ms that took a second iterate left b1's frame
-# rotational rows at 1.2e-9 (median, relative) and its elastic rows at 1.6e-12.
+# W^-1 [R_f; 0]: the bordered solve without its back-substitution. Between refreshes of M_wq
+# the frame Schur complement follows it to first order (BodySolver.prepare), which leaves such
+# residuals rare in contact (seed as shipped: 1,304 of 1,317 contact steps in one iterate)
+# but not after the separation at 2 us steps (2-4 iterates, frame rows at ~1e-10).
 FRAME_ONLY_FRACTION = 0.5
 
 
@@ -545,7 +546,7 @@ class MoreauJeanIntegrator:
         J = body.frame_inertia_first_order(st.q)
         solver.prepare(h, st.A, body.frame_mass(st.A, body.first_moment(st.q), J))
 
-    def _relative_residual(self, R, Gj, Gc, lam, n_j, scales) -> float:
+    def _relative_residual(self, R, Gj, Gc, lam, n_j, scales) -> tuple:
         """Largest momentum residual (constraint impulses included) relative to each body's
         momentum scale (the largest of its inertia, force, momentum and constraint impulse
         terms); the same for the translational rows alone; the sum over bodies of
