@@ -7,6 +7,7 @@ a matrix of condition ~1e3) guards against an agreement of two wrong answers.
 """
 
 import threading
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import pytest
@@ -66,6 +67,58 @@ def test_threads_give_the_serial_answer(iteration_matrix):
         t.join()
     for a, b in zip(got, serial):
         np.testing.assert_array_equal(a, b)
+
+
+@pytest.mark.parametrize("k", [0, 3])
+def test_two_halves_on_two_threads(iteration_matrix, k):
+    """A solve split into its two etree halves (a pool given) equals the solve without the
+    pool bit for bit (same arithmetic, other threads) and SuperLU's to round-off; the split
+    really happens on this tube (4,680 DOFs: above SPLIT_MIN_N, halves of ~equal work)."""
+    A = iteration_matrix
+    lu = superlu_spd(A)
+    serial = SupernodalLDL(lu)
+    assert serial.split
+    first, second, top = serial._halves[:3]
+    assert len(first) and len(second)
+    assert not set(first) & set(second) and not (set(first) | set(second)) & set(top)
+    rng = np.random.default_rng(11 + k)
+    b = rng.standard_normal(A.shape[0]) if k == 0 else rng.standard_normal((A.shape[0], k))
+    want = lu.solve(b)
+    with ThreadPoolExecutor(2) as pool:
+        threaded = SupernodalLDL(lu, pool)
+        got = [threaded.solve(b) for _ in range(3)]
+    x = serial.solve(b)
+    np.testing.assert_allclose(x, want, rtol=0, atol=1e-12 * np.abs(want).max())
+    for g in got:
+        np.testing.assert_array_equal(g, x)
+
+
+@pytest.mark.parametrize("kind", ["tube", "tridiagonal", "dense"])
+def test_halves_are_whole_subtrees(iteration_matrix, kind):
+    """What makes the halves independent: every row a supernode of one half updates (its
+    rectangle's rows) is a column of the same half or of the top, never of the other half.
+    A dense matrix (one supernode) has nothing to split."""
+    from flexmvm.fe.ldl import _etree_halves
+
+    n = 60
+    A = {"tube": iteration_matrix,
+         "tridiagonal": sp.diags([-np.ones(n - 1), 2.5 * np.ones(n), -np.ones(n - 1)],
+                                 [-1, 0, 1]),
+         "dense": np.ones((n, n)) + n * np.eye(n)}[kind]
+    ldl = SupernodalLDL(superlu_spd(sp.csc_matrix(A)))
+    starts, _, _, r_off, _, _, rows = ldl._factor
+    halves = _etree_halves(starts, r_off, rows, 1.0)
+    if kind == "dense":
+        assert halves is None
+        return
+    label = np.full(ldl.n, -1)
+    for h, part in enumerate(halves):
+        for s in part:
+            label[starts[s]: starts[s + 1]] = h
+    assert np.all(label >= 0) and len(halves[0]) and len(halves[1])
+    for h in (0, 1):
+        for s in halves[h]:
+            assert set(label[rows[r_off[s]: r_off[s + 1]]]) <= {h, 2}
 
 
 def test_zero_pivot_is_a_solver_error():

@@ -151,3 +151,37 @@ def test_threads_do_not_change_the_history(monkeypatch):
     assert np.array_equal(threaded.probe_v, serial.probe_v)
     for a, b in zip(threaded.q, serial.q):
         assert np.array_equal(a, b)
+
+
+def test_one_full_fe_body_splits_its_solves_without_changing_the_history(monkeypatch):
+    """With one full-FE body (tiny: b1 full FE, b2 MVM) the threads go to b1's
+    back-substitutions: its two etree halves (fe.ordering, fe.ldl) on two threads. The
+    arithmetic is the same on one thread, so the history is the same bit for bit. The tiny
+    rod is below SPLIT_MIN_N; the threshold is lowered so that the split really happens
+    (checked)."""
+    from flexmvm.fe import ldl
+    from flexmvm.integrate import body_solver
+
+    monkeypatch.setattr(ldl, "SPLIT_MIN_N", 0)
+    monkeypatch.setattr(body_solver, "SPLIT_MIN_N", 0)
+    seen = []
+    solve = ldl.SupernodalLDL.solve
+
+    def spy(self, b):
+        seen.append((self.split, self.pool is not None))
+        return solve(self, b)
+
+    monkeypatch.setattr(ldl.SupernodalLDL, "solve", spy)
+    f, model = CASES["tiny"]
+    sc = load_scenario(DATA / f).with_overrides(model=model)
+    monkeypatch.setenv("FLEXMVM_THREADS", "2")
+    threaded = run_scenario(sc).result
+    assert seen and all(split and pooled for split, pooled in seen)
+    seen.clear()
+    monkeypatch.setenv("FLEXMVM_THREADS", "1")
+    serial = run_scenario(sc).result
+    assert seen and all(split and not pooled for split, pooled in seen)
+    assert np.array_equal(threaded.contact_force, serial.contact_force)
+    assert np.array_equal(threaded.probe_v, serial.probe_v)
+    for a, b in zip(threaded.q, serial.q):
+        assert np.array_equal(a, b)

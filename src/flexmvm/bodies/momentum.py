@@ -34,7 +34,7 @@ def _skew(v):  # pragma: no cover - compiled
     return out
 
 
-@numba.njit(cache=True, nogil=True)
+@numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
 def momentum_terms(A, q, dv, vm, Lq, Lqd, Kq, mqq_dv, mqq_vm, mass, S0, S1, G0, G1, g,
                    inertia, force, momentum):  # pragma: no cover - compiled
     """Fill inertia, force, momentum (each (6 + nq,)) as described in the module docstring.

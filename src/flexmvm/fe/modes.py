@@ -58,10 +58,11 @@ def factor(a: sp.spmatrix, spd: bool = True) -> Solve:
     return _superlu(a, SPD_LU if spd else {}).solve
 
 
-def superlu_spd(a: sp.spmatrix):
+def superlu_spd(a: sp.spmatrix, natural: bool = False):
     """SuperLU's factor object of the SPD matrix a with the symmetric ordering SPD_LU
-    (fe.ldl solves with its L and D). Raises SolverError as factor does."""
-    return _superlu(a, SPD_LU)
+    (fe.ldl solves with its L and D), or in a's own order (natural: a is already ordered,
+    e.g. by fe.ordering). Raises SolverError as factor does."""
+    return _superlu(a, {**SPD_LU, "permc_spec": "NATURAL"} if natural else SPD_LU)
 
 
 def _superlu(a: sp.spmatrix, options: dict):

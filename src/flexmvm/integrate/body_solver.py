@@ -20,9 +20,11 @@ import scipy.sparse as sp
 
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.errors import SolverError
-from flexmvm.fe.ldl import ldl_factor
+from flexmvm.fe.ldl import SPLIT_MIN_N, ldl_factor
+from flexmvm.fe.ordering import dissection_order
 from flexmvm.integrate.compliance import NodalColumns, NodalCompliance, nodal_compliance
 from flexmvm.integrate.dense_solve import cho_solve, lu_solve
+from flexmvm.setup_cache import cached_elimination_order
 
 # Factors kept per body, least recently used dropped first: the variable step takes dt_s 2^k
 # for k = 0..9 (pendulum_release.toml: 0.5 us to 256 us), and a swing that comes down to the
@@ -45,8 +47,13 @@ class _Factor:
 class BodySolver:
     """Solves W x = b for one body; factorizations cached per step size."""
 
-    def __init__(self, body: FlexibleBody, theta: float = 0.5, max_cached: int = MAX_CACHED):
+    def __init__(self, body: FlexibleBody, theta: float = 0.5, max_cached: int = MAX_CACHED,
+                 pool=None):
         self.body = body
+        # a thread pool for the back-substitutions of a sparse W (fe.ldl: two etree halves
+        # on two threads); None: on the calling thread
+        self.pool = pool
+        self._elimination: np.ndarray | None | bool = False   # False: not made yet (_factor)
         self.theta = theta
         self._cache: dict[float, _Factor] = {}
         self._order: list[float] = []
@@ -75,8 +82,15 @@ class BodySolver:
             raise SolverError(f"body {b.name!r}: iteration matrix M + h^2/4 K holds a non-finite "
                               f"number (NaN/inf) at step size h = {h:.3g} s")
         if sp.issparse(W):
+            if self._elimination is False:
+                # an order whose elimination tree has two halves, solved on two threads with
+                # a pool, in the same arithmetic without one (fe.ordering; one pattern for
+                # every h: one order, kept in the setup cache)
+                self._elimination = (cached_elimination_order(W, dissection_order)
+                                     if W.shape[0] >= SPLIT_MIN_N else None)
             try:
-                solve = ldl_factor(W)  # W is SPD: L D L^T, GIL released
+                # W is SPD: L D L^T, GIL released
+                solve = ldl_factor(W, self.pool, self._elimination)
             except SolverError as exc:
                 raise SolverError(f"body {b.name!r}: iteration matrix is singular ({exc})") from None
         else:

@@ -154,6 +154,10 @@ class MoreauJeanIntegrator:
         sparse = {b for b, body in enumerate(system.bodies) if body.nq and body.is_sparse}
         self._pool = _thread_pool() if len(sparse) >= 2 else None
         self._threaded = sparse if self._pool is not None else set()
+        if len(sparse) == 1:
+            # one full-FE body: the threads go to its back-substitutions (fe.ldl, two etree
+            # halves; the same results on one thread)
+            self.solvers[next(iter(sparse))].pool = _thread_pool()
         # coordinates without mass (redistributed contact nodes): equilibrium at step ends
         self._massless = [MasslessCoordinates.of(b) for b in system.bodies]
         for provider in system.contacts:
@@ -335,6 +339,7 @@ class MoreauJeanIntegrator:
         Dcc = sum((c.D for c in Cc.values()), np.zeros((crows.rows.m, crows.rows.m)))
         n_j, m_c = self.n_joint_rows, crows.rows.m
         v_plus = [st.v.copy() for st in states]
+        v_free = v_plus                       # set by the first iterate
         lam = np.zeros(n_j + m_c)
         last_norm = last_rel = np.inf
         lcp_max = 0.0
