@@ -187,6 +187,30 @@ def test_packed_g2_contraction_equals_the_nine_products(nq):
                                        atol=1e-13 * max(np.abs(want).max(), 1.0))
 
 
+@pytest.mark.parametrize("sparse", [False, True])
+def test_mass_times_is_the_trace_of_the_contraction(sparse):
+    """M_qq = sum_a G2[a][a], so M_qq x is the trace L(x)[0, 0] + L(x)[1, 1] + L(x)[2, 2]
+    of the contraction (the integrator takes M_qq dq_dot from it instead of a product with
+    M_qq): equal to round-off (1e-13 relative) for dense and sparse bases, and for a dense
+    basis wide enough for the packed contraction."""
+    body = _random_body(sparse)[0]
+    bodies = [body]
+    if not sparse:
+        rng = np.random.default_rng(4)
+        n = 120
+        X = rng.normal(size=(n, 3))
+        B = sp.random(n, n, density=0.05, random_state=4)
+        Ms = sp.csr_matrix(B @ B.T + sp.eye(n))
+        bodies.append(FlexibleBody.build("wide", X, Ms, rng.normal(size=(3 * n, 320)),
+                                         np.eye(320)))
+    for b in bodies:
+        x = np.random.default_rng(b.nq).standard_normal(b.nq)
+        L = b.contractions(x)
+        want = b.inv.M_qq @ x
+        np.testing.assert_allclose(L[0, 0] + L[1, 1] + L[2, 2], want, rtol=0,
+                                   atol=1e-13 * np.abs(want).max())
+
+
 def test_expm_so3_against_the_matrix_exponential():
     """Rodrigues' formula written out on scalars against scipy's expm of the skew matrix, from
     1e-12 rad (the series branch below 1e-8) to 3 rad: agreement to 1e-13 (expm's own

@@ -318,3 +318,29 @@ def test_cli_info_and_clear(rod, cache):
     assert str(cache) in out and "entries: 1" in out and "MB" in out
     assert "removed 1 entries" in run("clear").stdout
     assert "entries: 0" in run("info").stdout
+
+
+def test_elimination_order_round_trip(cache):
+    """An elimination order is kept under the sparsity pattern alone: the same pattern with
+    other values is a hit; a stored "no order" (None) is a hit too; an entry that is not a
+    permutation of the right size is rebuilt. (A 10 x 200 grid: a strip, as a rod is.)"""
+    from flexmvm.fe.ordering import dissection_order
+
+    def lap(n):
+        return sp.diags([-np.ones(n - 1), 2.0 * np.ones(n), -np.ones(n - 1)], [-1, 0, 1])
+
+    grid = sp.csr_matrix(sp.kron(lap(200), sp.eye(10)) + sp.kron(sp.eye(200), lap(10)))
+    builder = Counter(dissection_order)
+    first = setup_cache.cached_elimination_order(grid, builder)
+    assert builder.calls == 1 and first is not None
+    assert np.array_equal(np.sort(first), np.arange(grid.shape[0]))
+    again = setup_cache.cached_elimination_order(3.0 * grid + sp.eye(2000), builder)
+    assert builder.calls == 1 and np.array_equal(again, first)
+    (entry,) = cache.glob("order-*.npz")
+    np.savez(entry, order=first[:-1])
+    rebuilt = setup_cache.cached_elimination_order(grid, builder)
+    assert builder.calls == 2 and np.array_equal(rebuilt, first)
+    none = Counter(lambda a: None)
+    small = sp.eye(5, format="csr")
+    assert setup_cache.cached_elimination_order(small, none) is None
+    assert setup_cache.cached_elimination_order(small, none) is None and none.calls == 1

@@ -160,10 +160,8 @@ def test_one_full_fe_body_splits_its_solves_without_changing_the_history(monkeyp
     rod is below SPLIT_MIN_N; the threshold is lowered so that the split really happens
     (checked)."""
     from flexmvm.fe import ldl
-    from flexmvm.integrate import body_solver
 
     monkeypatch.setattr(ldl, "SPLIT_MIN_N", 0)
-    monkeypatch.setattr(body_solver, "SPLIT_MIN_N", 0)
     seen = []
     solve = ldl.SupernodalLDL.solve
 

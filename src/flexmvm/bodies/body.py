@@ -50,6 +50,9 @@ class FlexibleBody:
     c_hat: np.ndarray | sp.spmatrix | None = None
     label: str = ""
     _psi_rows: dict = field(default_factory=dict, compare=False, repr=False)
+    #: An elimination order of the pattern of M_qq + k_hat (+ c_hat) for the integrator's
+    #: sparse factors (fe.ordering.dissection_order; None: the integrator makes it if needed)
+    elimination_order: np.ndarray | None = field(default=None, compare=False, repr=False)
 
     @classmethod
     def build(cls, name, X, M_scalar, psi, k_hat, *, mesh=None, c_hat=None, label=""):

@@ -24,6 +24,7 @@ import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from scipy.sparse import csgraph
 
+from flexmvm.fe import ldl
 from flexmvm.fe.modes import SPD_LU
 
 #: The separator is used when it holds at most this fraction of the vertices (a larger one
@@ -66,3 +67,21 @@ def dissection_order(a: sp.spmatrix) -> np.ndarray | None:
     last = np.zeros(n, bool)
     last[sep] = True
     return np.concatenate([order[~last[order]], sep]).astype(np.int64)
+
+
+def elimination_order(a: sp.spmatrix) -> np.ndarray | None:
+    """The order the integrator factors a sparse iteration matrix a with: dissection_order
+    from SPLIT_MIN_N rows (fe.ldl: solves in two halves), else None (SuperLU's minimum
+    degree)."""
+    return dissection_order(a) if a.shape[0] >= ldl.SPLIT_MIN_N else None
+
+
+def iteration_pattern(M_qq: sp.spmatrix, k_hat: sp.spmatrix,
+                      c_hat: sp.spmatrix | None = None) -> sp.csr_matrix:
+    """The sparsity pattern (ones) of W = M_qq + theta h C + (theta h)^2 K, the same for
+    every step size."""
+    parts = [M_qq, k_hat] + ([c_hat] if c_hat is not None else [])
+    total = sum(abs(sp.csr_matrix(p)) for p in parts)
+    total = sp.csr_matrix(total)
+    total.data[:] = 1.0
+    return total

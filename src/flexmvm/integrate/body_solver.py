@@ -20,11 +20,10 @@ import scipy.sparse as sp
 
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.errors import SolverError
-from flexmvm.fe.ldl import SPLIT_MIN_N, ldl_factor
-from flexmvm.fe.ordering import dissection_order
+from flexmvm.fe.ldl import ldl_factor
+from flexmvm.fe.ordering import elimination_order
 from flexmvm.integrate.compliance import NodalColumns, NodalCompliance, nodal_compliance
 from flexmvm.integrate.dense_solve import cho_solve, lu_solve
-from flexmvm.setup_cache import cached_elimination_order
 
 # Factors kept per body, least recently used dropped first: the variable step takes dt_s 2^k
 # for k = 0..9 (pendulum_release.toml: 0.5 us to 256 us), and a swing that comes down to the
@@ -85,9 +84,9 @@ class BodySolver:
             if self._elimination is False:
                 # an order whose elimination tree has two halves, solved on two threads with
                 # a pool, in the same arithmetic without one (fe.ordering; one pattern for
-                # every h: one order, kept in the setup cache)
-                self._elimination = (cached_elimination_order(W, dissection_order)
-                                     if W.shape[0] >= SPLIT_MIN_N else None)
+                # every h: one order, made with the body when it was built by a scenario)
+                self._elimination = (b.elimination_order if b.elimination_order is not None
+                                     else elimination_order(W))
             try:
                 # W is SPD: L D L^T, GIL released
                 solve = ldl_factor(W, self.pool, self._elimination)
