@@ -120,3 +120,36 @@ def test_schur_complement_follows_a_kept_coupling_to_first_order(sparse):
     stale = BodySolver(body, theta=0.55)         # the complement with M_wq(0), uncorrected
     stale.prepare(h, A, Mff)
     assert schur_error(kept) < 1e-3 * schur_error(stale)
+
+
+@pytest.mark.parametrize("sparse", [True, False])
+def test_elastic_rows_of_a_solve_are_known(sparse):
+    """For x = W^-1 b: W_qq x_q = b_q - B^T x_f with B^T x_f = coupling_transpose(x_f), for
+    a full solve, a frame-only solve and a solve through the nodal columns, also with a
+    refreshed and with a kept (drifted) coupling: what the integrator takes k_hat dq_dot from
+    (moreau_jean._WImages). Round-off of the solve (1e-10 of the largest term)."""
+    body, rng = _body(sparse)
+    solver = BodySolver(body, theta=0.55)
+    h = 1e-3
+    A = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    n = len(body.X)
+    Wqq = body.inv.M_qq + (0.55 * h) ** 2 * body.k_hat
+    for drift in (0.0, 1e-5, 1e-2):
+        q = drift * rng.normal(size=body.nq)
+        solver.refresh_coupling(h, body.rotational_coupling(q), 1e-4)
+        solver.prepare(h, A, body.frame_mass(A, body.first_moment(q),
+                                             body.frame_inertia_first_order(q)))
+        b = rng.normal(size=body.nv)
+        N = _selector(rng, 4, n, np.arange(n))
+        bf = rng.normal(size=(4, 6))
+        lam = rng.normal(size=4)
+        cases = [(b, solver.solve(b)),
+                 (np.concatenate([b[:6], np.zeros(body.nq)]), solver.solve_frame(b[:6]))]
+        rows_q = np.asarray(N @ body.psi.toarray() if sparse else N @ body.psi)
+        cases.append((np.concatenate([bf.T @ lam, rows_q.T @ lam]),
+                      solver.solve_nodal(h, bf, N) @ lam))
+        for rhs, x in cases:
+            got = Wqq @ x[6:]
+            want = rhs[6:] - solver.coupling_transpose(x[:6])
+            size = max(np.abs(rhs[6:]).max(), np.abs(solver.coupling_transpose(x[:6])).max())
+            np.testing.assert_allclose(got, want, rtol=0, atol=1e-10 * size)

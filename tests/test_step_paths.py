@@ -183,3 +183,40 @@ def test_one_full_fe_body_splits_its_solves_without_changing_the_history(monkeyp
     assert np.array_equal(threaded.probe_v, serial.probe_v)
     for a, b in zip(threaded.q, serial.q):
         assert np.array_equal(a, b)
+
+
+@pytest.mark.parametrize("key", ["tiny", "flat"])
+def test_k_dq_from_w_images_agrees_with_the_product(monkeypatch, key):
+    """Full-FE bodies take k_hat dq_dot from W_qq dq_dot (moreau_jean._WImages). Checked on
+    every residual here (IMAGE_CHECK_STEPS = 1): the image and the product agree within
+    IMAGE_RTOL (1e-11) of the largest term summed on every step of a case with one (tiny) and
+    two (flat) full-FE bodies, so no body falls back; and the check can fail: with the impulse
+    increments left out of the image, b1 of tiny falls back to the product, and the history
+    is the same as with the images (to 1e-9 of the peak force: what the Newton tolerance
+    leaves). (The flat case's contact steps are mostly non-rotating steps, which need no
+    k_hat dq_dot.)"""
+    from flexmvm.integrate import moreau_jean as mj
+
+    monkeypatch.setattr(mj, "IMAGE_CHECK_STEPS", 1)
+    made = []
+    init = mj.MoreauJeanIntegrator.__init__
+
+    def spy(self, *args, **kwargs):
+        init(self, *args, **kwargs)
+        made.append(self)
+
+    monkeypatch.setattr(mj.MoreauJeanIntegrator, "__init__", spy)
+    f, model = CASES[key]
+    sc = load_scenario(DATA / f).with_overrides(model=model)
+    good = run_scenario(sc).result
+    (integ,) = made
+    assert integ._images.bodies and integ._images.n_fallbacks == 0
+    if key != "tiny":
+        return
+    made.clear()
+    monkeypatch.setattr(mj._WImages, "impulses", lambda *args: None)
+    bad = run_scenario(sc).result
+    (integ,) = made
+    assert integ._images.n_fallbacks >= 1 and not integ._images.bodies
+    peak = np.abs(good.contact_force).max()
+    assert np.abs(good.contact_force - bad.contact_force).max() <= 1e-9 * peak

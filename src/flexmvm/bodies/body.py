@@ -285,11 +285,15 @@ class FlexibleBody:
         return frame, np.asarray(qpart).ravel()
 
     # -- integrals of motion ----------------------------------------------------------------------
-    def kinetic_energy(self, A, q, v, terms=None) -> float:
-        return 0.5 * float(v @ self.mass_times(A, q, v, terms))
+    def kinetic_energy(self, A, q, v, terms=None, mqq_v: np.ndarray | None = None) -> float:
+        """1/2 v^T M v [J]; mqq_v = M_qq v[6:] when already known."""
+        return 0.5 * float(v @ self.mass_times(A, q, v, terms, mqq_v))
 
-    def strain_energy(self, q) -> float:
-        return 0.5 * float(q @ (self.k_hat @ q)) if self.nq else 0.0
+    def strain_energy(self, q, kq: np.ndarray | None = None) -> float:
+        """1/2 q^T k_hat q [J]; kq = k_hat q when already known."""
+        if not self.nq:
+            return 0.0
+        return 0.5 * float(q @ (self.k_hat @ q if kq is None else kq))
 
     def linear_momentum(self, A, q, v, terms=None) -> np.ndarray:
         """p = m r_dot + A (w x S + S1 q_dot) [kg m/s], global."""

@@ -178,6 +178,13 @@ class BodySolver:
             y = y[:, None]
         return self._bordered(b[:6], y)
 
+    def coupling_transpose(self, xf: np.ndarray) -> np.ndarray:
+        """B^T xf (nq,) for a frame vector xf (6,), B = [A S1; M_wq] the frame-elastic block
+        of the W that solve(), solve_frame() and the contact columns use (with the A and
+        M_wq of the last prepare / refresh_coupling). For x = W^-1 b: W_qq x_q = b_q - B^T x_f
+        (what integrate.moreau_jean takes k_hat dq_dot from)."""
+        return self.body.inv.S1.T @ (self._A.T @ xf[:3]) + self._mw(self._f).T @ xf[3:6]
+
     def solve_frame(self, bf: np.ndarray) -> np.ndarray:
         """x = W^-1 [bf; 0] for bf (6,): the frame Schur complement and the cached columns Z,
         no back-substitution."""

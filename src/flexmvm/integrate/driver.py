@@ -34,8 +34,9 @@ class _Recorder:
         self.n_joint_rows = n_joint_rows
         self.shape = (nb, npb)
 
-    def record(self, t, states, force, jforce, carried=None):
-        """carried(b, state) -> (L(q), L(q_dot)): the integrator's carried contractions."""
+    def record(self, t, states, force, jforce, carried=None, products=None):
+        """carried(b, state) -> (L(q), L(q_dot)): the integrator's carried contractions;
+        products(b, state) -> (k_hat q, M_qq q_dot), the same for the energies."""
         sysm = self.system
         rec = {"t": t, "force": force, "jforce": jforce}
         kin = strain = pot = 0.0
@@ -45,8 +46,10 @@ class _Recorder:
         for b, (body, st) in enumerate(zip(sysm.bodies, states)):
             Lq = carried(b, st)[0] if (carried is not None and body.nq) else None
             terms = body.inertia_terms(st.q, Lq)
-            kin += body.kinetic_energy(st.A, st.q, st.v, terms)
-            strain += body.strain_energy(st.q)
+            kq, mqq_v = (products(b, st) if (products is not None and body.nq)
+                         else (None, None))
+            kin += body.kinetic_energy(st.A, st.q, st.v, terms, mqq_v)
+            strain += body.strain_energy(st.q, kq)
             pot -= float(sysm.gravity @ (body.inv.mass * st.r + st.A @ terms[0]))
             pb.append(body.linear_momentum(st.A, st.q, st.v, terms))
             p += pb[-1]
@@ -178,7 +181,8 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
         if tick % out_ticks == 0 or tick >= n_ticks or fine:
             span_t = (tick - last_out) * dt
             last_out = tick
-            rec.record(t0 + tick * dt, states, impulse / span_t, jimpulse / span_t, integ.carried)
+            rec.record(t0 + tick * dt, states, impulse / span_t, jimpulse / span_t, integ.carried,
+                       integ.carried_products)
             _check_finite(rec.rows[-1], system, t0 + tick * dt)
             impulse, jimpulse = 0.0, np.zeros_like(jimpulse)
             if bar is not None:

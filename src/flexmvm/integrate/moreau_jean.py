@@ -92,6 +92,13 @@ FRAME_ONLY_FRACTION = 0.5
 
 RESYNC_STEPS = 256  # carried contractions are recomputed from the state this often
 
+# Full-FE bodies take k_hat dq_dot of their checking residual from W_qq dq_dot, known from
+# the right-hand sides of the step's solves (_WImages), not from a product with k_hat (4.6 M
+# entries, ~5 ms on the seed rods); every this many steps the product is made too and the two
+# must agree to IMAGE_RTOL of the terms they come from, else the body goes back to the product.
+IMAGE_CHECK_STEPS = 100
+IMAGE_RTOL = 1e-11
+
 
 @dataclass
 class _Carried:
@@ -160,6 +167,8 @@ class MoreauJeanIntegrator:
             self.solvers[next(iter(sparse))].pool = _thread_pool()
         # coordinates without mass (redistributed contact nodes): equilibrium at step ends
         self._massless = [MasslessCoordinates.of(b) for b in system.bodies]
+        # bodies whose k_hat dq_dot comes from W_qq dq_dot (full FE, undamped)
+        self._images = _WImages({b for b in sparse if system.bodies[b].c_hat is None})
         for provider in system.contacts:
             sides = (getattr(provider, "slave", None), getattr(provider, "master", None))
             if (getattr(provider, "law", None) is ContactLaw.VELOCITY
@@ -224,6 +233,12 @@ class MoreauJeanIntegrator:
         c = self._carried_at(b, st)
         return c.Lq, c.Lqd
 
+    def carried_products(self, b: int, st: BodyState) -> tuple[np.ndarray, np.ndarray]:
+        """(k_hat q, M_qq q_dot) of body b at state st, as carried (see carried): the
+        energies of an output need no product with k_hat or M_qq."""
+        c = self._carried_at(b, st)
+        return c.Kq, c.Mqd
+
     def _carried_at(self, b: int, st: BodyState) -> _Carried:
         c = self._carried[b]
         if c is None or c.q is not st.q or c.v is not st.v or c.age >= RESYNC_STEPS:
@@ -243,7 +258,8 @@ class MoreauJeanIntegrator:
         body = self.system.bodies[b]
         dqd = vp[6:] - st.v[6:]
         if np.any(dqd):
-            LD, KD = body.contractions(dqd), _times(body.k_hat, dqd)
+            LD = body.contractions(dqd)
+            KD = self._images.k_dq(b, body, LD, dqd, th * h)
         else:
             LD, KD = np.zeros_like(c.Lqd), np.zeros_like(c.Kqd)
         Lqd_m, Kqd_m = c.Lqd + th * LD, c.Kqd + th * KD
@@ -343,6 +359,8 @@ class MoreauJeanIntegrator:
         n_j, m_c = self.n_joint_rows, crows.rows.m
         v_plus = [st.v.copy() for st in states]
         v_free = v_plus                       # set by the first iterate
+        images = self._images
+        images.start(self.system.bodies)
         lam = np.zeros(n_j + m_c)
         last_norm = last_rel = np.inf
         lcp_max = 0.0
@@ -388,9 +406,13 @@ class MoreauJeanIntegrator:
                 # R_f); the others as on the first iterate, v+ - W^-1 R
                 v_free = self._correct(R, res, scales, v_free, v_plus)
             else:
-                v_free = [vp - x for vp, x in zip(v_plus, self._solve_each(R))]
+                xs = self._solve_each(R)
+                v_free = [vp - x for vp, x in zip(v_plus, xs)]
+                for b in images.bodies:
+                    images.solved(b, self.solvers[b], R[b], xs[b])
             if n_j + m_c == 0:
                 v_plus = v_free
+                images.plus = dict(images.free)
                 continue
             Yj = self._apply_inverse(jrows, h) if n_j else {}
             D = np.zeros((n_j + m_c, n_j + m_c))
@@ -408,10 +430,15 @@ class MoreauJeanIntegrator:
             lam, lcp_res = solve_contact_impulses(D, c, n_j, crows, lam if it else None)
             lcp_max = max(lcp_max, lcp_res)
             v_plus = list(v_free)
+            images.plus = {b: w.copy() for b, w in images.free.items()}
             for b, Yb in Yj.items():
-                v_plus[b] = v_plus[b] + Yb @ lam[:n_j]
+                dv = Yb @ lam[:n_j]
+                v_plus[b] = v_plus[b] + dv
+                images.impulses(b, self.solvers[b], jrows, lam[:n_j], dv)
             for b, cb in Cc.items():
-                v_plus[b] = v_plus[b] + cb.velocity(lam[n_j:])
+                dv = cb.velocity(lam[n_j:])
+                v_plus[b] = v_plus[b] + dv
+                images.impulses(b, self.solvers[b], crows.rows, lam[n_j:], dv)
         if not n_j:
             rel, res_t = self._balance_translation(balanced or self._balanced(res, scales, mids),
                                                    ends, v_plus, h, rel, res_t)
@@ -504,8 +531,18 @@ class MoreauJeanIntegrator:
                  for b in range(len(R))]
         full = [b for b in range(len(R)) if not frame[b]]
         x = self._each_body(lambda b: self.solvers[b].solve(R[b]), full)
-        return [v_free[b] - self.solvers[b].solve_frame(res[b][:6]) if frame[b]
-                else v_plus[b] - x[b] for b in range(len(R))]
+        out = []
+        for b in range(len(R)):
+            if frame[b]:
+                x[b] = self.solvers[b].solve_frame(res[b][:6])
+                out.append(v_free[b] - x[b])
+                if b in self._images.bodies:
+                    self._images.frame_corrected(b, self.solvers[b], x[b])
+            else:
+                out.append(v_plus[b] - x[b])
+                if b in self._images.bodies:
+                    self._images.solved(b, self.solvers[b], R[b], x[b])
+        return out
 
     def _balance_translation(self, balanced, ends, v_plus, h, rel, res_t):
         """Zero the translational rows of an accepted step's residual (no joints).
@@ -593,6 +630,85 @@ class MoreauJeanIntegrator:
             res_t += res[:3]
             residuals.append(res)
         return worst, worst_r, res_t, residuals
+
+
+class _WImages:
+    """W_qq dq_dot of the current iterate of each full-FE body, from the right-hand sides of
+    the step's solves, for k_hat dq_dot without a product with k_hat.
+
+    Every velocity increment x = W^-1 b of a step (the free velocity's -W^-1 R, a frame-only
+    correction W^-1 [R_f; 0], a constraint impulse's W^-1 Phi^T lambda) has
+    W_qq x_q = b_q - B^T x_f (BodySolver.coupling_transpose), so W_qq dq_dot of the iterate is
+    a sum of known vectors; with M_qq dq_dot (the trace of the contraction L(dq_dot)) and
+    W_qq = M_qq + (theta h)^2 k_hat (undamped bodies):
+    k_hat dq_dot = (W_qq dq_dot - M_qq dq_dot) / (theta h)^2. In the residual it appears times
+    (theta h)^2, so the subtraction costs round-off of M_qq dq_dot only, the size of the inertia
+    term's own (and of the summed terms: constraint impulses, frame coupling). Every
+    IMAGE_CHECK_STEPS checks the product is made as well; a body where the two disagree by
+    more than IMAGE_RTOL of the largest term (a missed increment: a bug) goes back to the
+    product (n_fallbacks counts them)."""
+
+    def __init__(self, bodies: set[int]):
+        self.bodies = set(bodies)
+        self.plus: dict[int, np.ndarray] = {}    # image of v_plus - v of the iterate
+        self.free: dict[int, np.ndarray] = {}    # image of v_free - v
+        self.size: dict[int, float] = {}         # largest entry of the terms summed (check)
+        self._countdown = dict.fromkeys(bodies, 0)
+        self.n_fallbacks = 0
+
+    def start(self, bodies) -> None:
+        """A new step: v_plus = v."""
+        self.plus = {b: np.zeros(bodies[b].nq) for b in self.bodies}
+        self.free = {}
+        self.size = dict.fromkeys(self.bodies, 0.0)
+
+    def _term(self, b: int, *terms: np.ndarray) -> None:
+        self.size[b] = max(self.size[b], *(float(np.abs(t).max(initial=0.0)) for t in terms))
+
+    def solved(self, b: int, solver, R_b: np.ndarray, x: np.ndarray) -> None:
+        """v_free = v_plus - x with x = W^-1 R_b."""
+        bt = solver.coupling_transpose(x[:6])
+        self._term(b, R_b[6:], bt)
+        self.free[b] = self.plus[b] - (R_b[6:] - bt)
+
+    def frame_corrected(self, b: int, solver, x: np.ndarray) -> None:
+        """v_free -= x with x = W^-1 [R_f; 0]."""
+        bt = solver.coupling_transpose(x[:6])
+        self._term(b, bt)
+        self.free[b] = self.free[b] + bt
+
+    def impulses(self, b: int, solver, rows: Rows, lam: np.ndarray, dv: np.ndarray) -> None:
+        """v_plus += dv with dv = W^-1 Phi^T lam (Phi: body b's part of rows)."""
+        if b not in self.bodies:
+            return
+        sel = rows.nodal_selector(b)
+        if sel is not None:
+            body = solver.body
+            phi_t_lam = body.psi.T @ (sel.tocsr().T @ lam)
+        else:
+            phi_t_lam = rows.blocks[b][1].T @ lam
+        phi_t_lam = np.asarray(phi_t_lam).ravel()
+        bt = solver.coupling_transpose(dv[:6])
+        self._term(b, phi_t_lam, bt)
+        self.plus[b] = self.plus[b] + (phi_t_lam - bt)
+
+    def k_dq(self, b: int, body, LD: np.ndarray, dqd: np.ndarray, th_h: float) -> np.ndarray:
+        """k_hat dq_dot of body b's iterate (LD = L(dq_dot))."""
+        if b not in self.bodies:
+            return _times(body.k_hat, dqd)
+        mqq = LD[0, 0] + LD[1, 1] + LD[2, 2]
+        wq = self.plus[b]
+        KD = (wq - mqq) / (th_h * th_h)
+        self._countdown[b] -= 1
+        if self._countdown[b] <= 0:
+            self._countdown[b] = IMAGE_CHECK_STEPS
+            exact = _times(body.k_hat, dqd)
+            scale = max(self.size[b], float(np.abs(mqq).max()), 1e-300)
+            if float(np.abs(KD - exact).max()) * th_h * th_h > IMAGE_RTOL * scale:
+                self.bodies.discard(b)
+                self.n_fallbacks += 1
+                return exact
+        return KD
 
 
 #: Environment variable: threads for the per-body work of several full-FE bodies (default:
