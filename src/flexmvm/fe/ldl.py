@@ -12,8 +12,10 @@ dense row-major rectangle per supernode, with the rectangle's row indices once, 
 solve streams 8 bytes per entry of L twice (forward and backward) instead of SuperLU's L and U
 with their indices, and several right-hand sides share one pass over the factor (SuperLU's
 solve costs k times one solve for k right-hand sides). The kernels release the GIL: two
-bodies' solves run on two threads (integrate.moreau_jean). Sparse-direct background: Davis,
-"Direct Methods for Sparse Linear Systems" (SIAM 2006), ch. 4 and 9 (supernodes).
+bodies' solves run on two threads (integrate.moreau_jean), and one body's solve can run its
+two elimination-tree halves on two threads (_etree_halves; fe.ordering makes an order that
+has them). Sparse-direct background: Davis, "Direct Methods for Sparse Linear Systems" (SIAM
+2006), ch. 4 and 9 (supernodes, elimination trees).
 """
 
 from __future__ import annotations

@@ -354,7 +354,6 @@ class MoreauJeanIntegrator:
     def _newton_step(self, t, states, h, crows, parts) -> StepResult:
         self._prepare(states, h, refresh_tol=None)
         Cc = self._contact_inverse(crows, h) if crows.rows.m else {}
-        Gc = {b: crows.rows.body_matrix(b) for b in crows.rows.blocks}
         Dcc = sum((c.D for c in Cc.values()), np.zeros((crows.rows.m, crows.rows.m)))
         n_j, m_c = self.n_joint_rows, crows.rows.m
         v_plus = [st.v.copy() for st in states]
@@ -371,7 +370,8 @@ class MoreauJeanIntegrator:
             res_norm = max(float(np.abs(r).max()) for r in R) if it else np.inf
             refreshed, balanced = False, None
             if it > 0:
-                rel, rel_r, res_t, res = self._relative_residual(R, Gj, Gc, lam, n_j, scales)
+                rel, rel_r, res_t, res = self._relative_residual(R, Gj, crows.rows, lam, n_j,
+                                                                 scales)
                 phi_ok = not (phi.size and np.abs(phi).max() > 1e-12)
                 # below ROUNDOFF_FLOOR a residual that stops decreasing (or still there at
                 # max_iter) is round-off: accepted, and counted as not converged (StepResult)
@@ -419,8 +419,8 @@ class MoreauJeanIntegrator:
             D[n_j:, n_j:] = Dcc
             for b, Yb in Yj.items():
                 D[:n_j, :n_j] += Gj[b] @ Yb
-                if b in Gc:
-                    D[n_j:, :n_j] += Gc[b] @ Yb
+                if b in crows.rows.blocks:
+                    D[n_j:, :n_j] += crows.rows.body_matrix(b) @ Yb
             D[:n_j, n_j:] = D[n_j:, :n_j].T
             c = np.zeros(n_j + m_c)
             if n_j:
@@ -604,7 +604,7 @@ class MoreauJeanIntegrator:
         J = body.frame_inertia_first_order(st.q)
         solver.prepare(h, st.A, body.frame_mass(st.A, body.first_moment(st.q), J))
 
-    def _relative_residual(self, R, Gj, Gc, lam, n_j, scales) -> tuple:
+    def _relative_residual(self, R, Gj, crows: Rows, lam, n_j, scales) -> tuple:
         """Largest momentum residual (constraint impulses included) relative to each body's
         momentum scale (the largest of its inertia, force, momentum and constraint impulse
         terms); the same for the translational rows alone; the sum over bodies of
@@ -621,8 +621,8 @@ class MoreauJeanIntegrator:
                 imp = Gj[b].T @ lam[:n_j]
                 res = res - imp
                 sc = max(sc, float(np.abs(imp).max()))
-            if b in Gc:
-                imp = Gc[b].T @ lam[n_j:]
+            if b in crows.blocks:
+                imp = _transpose_times(crows, b, self.system.bodies[b], lam[n_j:])
                 res = res - imp
                 sc = max(sc, float(np.abs(imp).max()))
             worst = max(worst, float(np.abs(res).max()) / max(sc, 1e-300))
@@ -681,13 +681,7 @@ class _WImages:
         """v_plus += dv with dv = W^-1 Phi^T lam (Phi: body b's part of rows)."""
         if b not in self.bodies:
             return
-        sel = rows.nodal_selector(b)
-        if sel is not None:
-            body = solver.body
-            phi_t_lam = body.psi.T @ (sel.tocsr().T @ lam)
-        else:
-            phi_t_lam = rows.blocks[b][1].T @ lam
-        phi_t_lam = np.asarray(phi_t_lam).ravel()
+        phi_t_lam = _transpose_times(rows, b, solver.body, lam)[6:]
         bt = solver.coupling_transpose(dv[:6])
         self._term(b, phi_t_lam, bt)
         self.plus[b] = self.plus[b] + (phi_t_lam - bt)
@@ -709,6 +703,19 @@ class _WImages:
                 self.n_fallbacks += 1
                 return exact
         return KD
+
+
+def _transpose_times(rows: Rows, b: int, body, lam: np.ndarray) -> np.ndarray:
+    """Phi_b^T lam (6 + nq,) for body b's part Phi_b = [bf, bq] of rows: with a nodal
+    selector N and a sparse basis (full FE) bq^T lam = psi^T (N^T lam), a few nodes' worth,
+    instead of a product with the dense (m, nq) block."""
+    bf, bq = rows.blocks[b]
+    sel = rows.nodal_selector(b) if body.is_sparse else None
+    if sel is None:
+        elastic = bq.T @ lam
+    else:
+        elastic = np.asarray(body.psi.T @ (sel.tocsr().T @ lam)).ravel()
+    return np.concatenate([bf.T @ lam, elastic])
 
 
 #: Environment variable: threads for the per-body work of several full-FE bodies (default:
