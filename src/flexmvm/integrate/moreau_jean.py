@@ -53,6 +53,7 @@ import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from flexmvm.bodies.momentum import momentum_terms
@@ -201,7 +202,7 @@ class MoreauJeanIntegrator:
             # contraction L(dq_dot) just made: no product with M_qq (4.6 M entries for a
             # full-FE rod)
             LD = self._pending[b][0]
-            mqq_dv = LD[0, 0] + LD[1, 1] + LD[2, 2]
+            mqq_dv = np.zeros(body.nq) if LD is None else LD[0, 0] + LD[1, 1] + LD[2, 2]
             mqq_vm = self._carried_at(b, st).Mqd + th * mqq_dv
             self._pending[b] = self._pending[b] + (mqq_dv,)
             inertia, F, momentum = (np.empty(body.nv) for _ in range(3))
@@ -257,14 +258,20 @@ class MoreauJeanIntegrator:
         c = self._carried_at(b, st)
         body = self.system.bodies[b]
         dqd = vp[6:] - st.v[6:]
+        Lq_m = np.empty(c.Lq.shape)
         if np.any(dqd):
             LD = body.contractions(dqd)
             KD = self._images.k_dq(b, body, LD, dqd, th * h)
-        else:
-            LD, KD = np.zeros_like(c.Lqd), np.zeros_like(c.Kqd)
-        Lqd_m, Kqd_m = c.Lqd + th * LD, c.Kqd + th * KD
+            Lqd_m = np.empty(c.Lqd.shape)
+            _midpoint(c.Lq.ravel(), c.Lqd.ravel(), LD.ravel(), th, th * h, Lq_m.ravel(),
+                      Lqd_m.ravel())
+            Kqd_m = c.Kqd + th * KD
+        else:   # the first iterate: q_dot_m = q_dot
+            LD = KD = None
+            Lqd_m, Kqd_m = c.Lqd, c.Kqd
+            _midpoint(c.Lq.ravel(), c.Lqd.ravel(), None, th, th * h, Lq_m.ravel(), None)
         self._pending[b] = (LD, Lqd_m, KD, Kqd_m)
-        return c.Lq + (th * h) * Lqd_m, Lqd_m, c.Kq + (th * h) * Kqd_m
+        return Lq_m, Lqd_m, c.Kq + (th * h) * Kqd_m
 
     def _carry(self, states, new_states, h):
         """Advance the carried contractions to the accepted step's end states."""
@@ -275,8 +282,13 @@ class MoreauJeanIntegrator:
                 self._carried[b] = None
                 continue
             LD, Lqd_m, KD, Kqd_m, MD = p
-            self._carried[b] = _Carried(new.q, new.v, c.Lq + h * Lqd_m, c.Lqd + LD,
-                                        c.Kq + h * Kqd_m, c.Kqd + KD, c.Mqd + MD, c.age + 1)
+            Lq = np.empty(c.Lq.shape)
+            Lqd = c.Lqd if LD is None else np.empty(c.Lqd.shape)
+            _advance(c.Lq.ravel(), c.Lqd.ravel(), None if LD is None else LD.ravel(),
+                     Lqd_m.ravel(), h, Lq.ravel(), Lqd.ravel())
+            self._carried[b] = _Carried(new.q, new.v, Lq, Lqd, c.Kq + h * Kqd_m,
+                                        c.Kqd if KD is None else c.Kqd + KD, c.Mqd + MD,
+                                        c.age + 1)
 
     def _joint_rows(self, t, h, mids, ends):
         if not self.system.joints:
@@ -627,6 +639,32 @@ class MoreauJeanIntegrator:
             res_t += res[:3]
             residuals.append(res)
         return worst, worst_r, res_t, residuals
+
+
+@numba.njit(cache=True, nogil=True)
+def _midpoint(Lq, Lqd, LD, th, th_h, Lq_m, Lqd_m):  # pragma: no cover - compiled
+    """Lqd_m = Lqd + th LD and Lq_m = Lq + th_h Lqd_m in one pass over the (flattened)
+    contractions (as numpy's two-step expressions, bit for bit); LD None: Lq_m = Lq + th_h
+    Lqd (Lqd_m not written)."""
+    if LD is None:
+        for i in range(Lq.shape[0]):
+            Lq_m[i] = Lq[i] + th_h * Lqd[i]
+        return
+    for i in range(Lq.shape[0]):
+        x = Lqd[i] + th * LD[i]
+        Lqd_m[i] = x
+        Lq_m[i] = Lq[i] + th_h * x
+
+
+@numba.njit(cache=True, nogil=True)
+def _advance(Lq, Lqd, LD, Lqd_m, h, Lq_new, Lqd_new):  # pragma: no cover - compiled
+    """The carried contractions at the step's end in one pass: Lq_new = Lq + h Lqd_m,
+    Lqd_new = Lqd + LD (LD None: Lqd_new is Lqd itself, not written)."""
+    for i in range(Lq.shape[0]):
+        Lq_new[i] = Lq[i] + h * Lqd_m[i]
+    if LD is not None:
+        for i in range(Lq.shape[0]):
+            Lqd_new[i] = Lqd[i] + LD[i]
 
 
 class _WImages:
