@@ -32,6 +32,13 @@ from flexmvm.fe.modes import SPD_LU
 MAX_SEPARATOR_FRACTION = 0.1
 
 
+def _ones(a: sp.spmatrix) -> sp.csr_matrix:
+    """The sparsity pattern of a as a CSR matrix of ones."""
+    pattern = sp.csr_matrix(a, dtype=float, copy=True)
+    pattern.data[:] = 1.0
+    return pattern
+
+
 def _levels(pattern: sp.csr_matrix, root: int) -> np.ndarray:
     """Breadth-first level of every vertex from root (-1: not reached)."""
     d = csgraph.shortest_path(pattern, unweighted=True, indices=root, directed=False)
@@ -44,10 +51,11 @@ def dissection_order(a: sp.spmatrix) -> np.ndarray | None:
     None when the graph of a is disconnected or has no separator of at most
     MAX_SEPARATOR_FRACTION of its vertices."""
     n = a.shape[0]
-    pattern = sp.csr_matrix((np.ones(sp.csr_matrix(a).nnz), sp.csr_matrix(a).indices,
-                             sp.csr_matrix(a).indptr), shape=a.shape)
+    if n < 3:
+        return None
+    pattern = _ones(a)
     level = _levels(pattern, 0)
-    if n < 3 or np.any(level < 0):
+    if np.any(level < 0):
         return None
     level = _levels(pattern, int(np.argmax(level)))   # from a pseudo-peripheral vertex
     mid = int(np.searchsorted(np.cumsum(np.bincount(level)), n / 2))
@@ -81,7 +89,4 @@ def iteration_pattern(M_qq: sp.spmatrix, k_hat: sp.spmatrix,
     """The sparsity pattern (ones) of W = M_qq + theta h C + (theta h)^2 K, the same for
     every step size."""
     parts = [M_qq, k_hat] + ([c_hat] if c_hat is not None else [])
-    total = sum(abs(sp.csr_matrix(p)) for p in parts)
-    total = sp.csr_matrix(total)
-    total.data[:] = 1.0
-    return total
+    return _ones(sum(abs(sp.csr_matrix(p)) for p in parts))

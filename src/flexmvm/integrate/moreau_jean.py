@@ -95,8 +95,9 @@ RESYNC_STEPS = 256  # carried contractions are recomputed from the state this of
 
 # Full-FE bodies take k_hat dq_dot of their checking residual from W_qq dq_dot, known from
 # the right-hand sides of the step's solves (_WImages), not from a product with k_hat (4.6 M
-# entries, ~5 ms on the seed rods); every this many steps the product is made too and the two
-# must agree to IMAGE_RTOL of the terms they come from, else the body goes back to the product.
+# entries, ~5 ms on the seed rods); every this many such residuals the product is made too and
+# the two must agree to IMAGE_RTOL of the terms they come from, else the body goes back to
+# the product.
 IMAGE_CHECK_STEPS = 100
 IMAGE_RTOL = 1e-11
 
@@ -197,14 +198,9 @@ class MoreauJeanIntegrator:
         dv = vp - st.v
         if body.nq:
             Lq_m, Lqd_m, Kq_m = self._mid_contractions(b, st, vp, th, h)
-            # M is linear: M v_m = M v- + th M dv, and M_qq v- is carried with the state;
-            # M_qq = sum_a G2[a][a] (bodies.invariants), so M_qq dq_dot is the trace of the
-            # contraction L(dq_dot) just made: no product with M_qq (4.6 M entries for a
-            # full-FE rod)
-            LD = self._pending[b][0]
-            mqq_dv = np.zeros(body.nq) if LD is None else LD[0, 0] + LD[1, 1] + LD[2, 2]
+            # M is linear: M v_m = M v- + th M dv, and M_qq v- is carried with the state
+            mqq_dv = self._pending[b][4]
             mqq_vm = self._carried_at(b, st).Mqd + th * mqq_dv
-            self._pending[b] = self._pending[b] + (mqq_dv,)
             inertia, F, momentum = (np.empty(body.nv) for _ in range(3))
             inv = body.inv
             momentum_terms(mid.A, mid.q, dv, vm, Lq_m, Lqd_m, Kq_m, mqq_dv, mqq_vm,
@@ -254,23 +250,28 @@ class MoreauJeanIntegrator:
     def _mid_contractions(self, b, st, vp, th, h):
         """L(q_m), L(q_dot_m) and k_hat q_m at the midpoint of the iterate vp: q_dot_m =
         q_dot + th dq_dot and q_m = q + th h q_dot_m, so one contraction L(dq_dot) and one
-        k_hat dq_dot per iterate (none on the first, where dq_dot = 0)."""
+        k_hat dq_dot per iterate (none on the first, where dq_dot = 0). M_qq = sum_a G2[a][a]
+        (bodies.invariants), so M_qq dq_dot is the trace of L(dq_dot): no product with M_qq
+        (4.6 M entries for a full-FE rod). Pending for _carry and _residual: (L(dq_dot),
+        L(q_dot_m), k_hat dq_dot, k_hat q_dot_m, M_qq dq_dot)."""
         c = self._carried_at(b, st)
         body = self.system.bodies[b]
         dqd = vp[6:] - st.v[6:]
         Lq_m = np.empty(c.Lq.shape)
         if np.any(dqd):
             LD = body.contractions(dqd)
-            KD = self._images.k_dq(b, body, LD, dqd, th * h)
+            MD = LD[0, 0] + LD[1, 1] + LD[2, 2]
+            KD = self._images.k_dq(b, body, MD, dqd, th * h)
             Lqd_m = np.empty(c.Lqd.shape)
             _midpoint(c.Lq.ravel(), c.Lqd.ravel(), LD.ravel(), th, th * h, Lq_m.ravel(),
                       Lqd_m.ravel())
             Kqd_m = c.Kqd + th * KD
         else:   # the first iterate: q_dot_m = q_dot
             LD = KD = None
+            MD = np.zeros(body.nq)
             Lqd_m, Kqd_m = c.Lqd, c.Kqd
             _midpoint(c.Lq.ravel(), c.Lqd.ravel(), None, th, th * h, Lq_m.ravel(), None)
-        self._pending[b] = (LD, Lqd_m, KD, Kqd_m)
+        self._pending[b] = (LD, Lqd_m, KD, Kqd_m, MD)
         return Lq_m, Lqd_m, c.Kq + (th * h) * Kqd_m
 
     def _carry(self, states, new_states, h):
@@ -417,7 +418,7 @@ class MoreauJeanIntegrator:
             else:
                 xs = self._solve_each(R)
                 v_free = [vp - x for vp, x in zip(v_plus, xs)]
-                for b in images.bodies:
+                for b in range(len(states)):
                     images.solved(b, self.solvers[b], R[b], xs[b])
             if n_j + m_c == 0:
                 v_plus = v_free
@@ -439,7 +440,7 @@ class MoreauJeanIntegrator:
             lam, lcp_res = solve_contact_impulses(D, c, n_j, crows, lam if it else None)
             lcp_max = max(lcp_max, lcp_res)
             v_plus = list(v_free)
-            images.plus = {b: w.copy() for b, w in images.free.items()}
+            images.plus = dict(images.free)   # (every update makes new arrays)
             for b, Yb in Yj.items():
                 dv = Yb @ lam[:n_j]
                 v_plus[b] = v_plus[b] + dv
@@ -545,12 +546,10 @@ class MoreauJeanIntegrator:
             if frame[b]:
                 x[b] = self.solvers[b].solve_frame(res[b][:6])
                 out.append(v_free[b] - x[b])
-                if b in self._images.bodies:
-                    self._images.frame_corrected(b, self.solvers[b], x[b])
+                self._images.frame_corrected(b, self.solvers[b], x[b])
             else:
                 out.append(v_plus[b] - x[b])
-                if b in self._images.bodies:
-                    self._images.solved(b, self.solvers[b], R[b], x[b])
+                self._images.solved(b, self.solvers[b], R[b], x[b])
         return out
 
     def _balance_translation(self, balanced, ends, v_plus, h, rel, res_t):
@@ -681,7 +680,8 @@ class _WImages:
     term's own (and of the summed terms: constraint impulses, frame coupling). Every
     IMAGE_CHECK_STEPS checks the product is made as well; a body where the two disagree by
     more than IMAGE_RTOL of the largest term (a missed increment: a bug) goes back to the
-    product (n_fallbacks counts them)."""
+    product (n_fallbacks counts them). Every method ignores bodies not (or no longer) in
+    `bodies`."""
 
     def __init__(self, bodies: set[int]):
         self.bodies = set(bodies)
@@ -702,12 +702,16 @@ class _WImages:
 
     def solved(self, b: int, solver, R_b: np.ndarray, x: np.ndarray) -> None:
         """v_free = v_plus - x with x = W^-1 R_b."""
+        if b not in self.bodies:
+            return
         bt = solver.coupling_transpose(x[:6])
         self._term(b, R_b[6:], bt)
         self.free[b] = self.plus[b] - (R_b[6:] - bt)
 
     def frame_corrected(self, b: int, solver, x: np.ndarray) -> None:
         """v_free -= x with x = W^-1 [R_f; 0]."""
+        if b not in self.bodies:
+            return
         bt = solver.coupling_transpose(x[:6])
         self._term(b, bt)
         self.free[b] = self.free[b] + bt
@@ -721,11 +725,11 @@ class _WImages:
         self._term(b, phi_t_lam, bt)
         self.plus[b] = self.plus[b] + (phi_t_lam - bt)
 
-    def k_dq(self, b: int, body, LD: np.ndarray, dqd: np.ndarray, th_h: float) -> np.ndarray:
-        """k_hat dq_dot of body b's iterate (LD = L(dq_dot))."""
+    def k_dq(self, b: int, body, mqq: np.ndarray, dqd: np.ndarray, th_h: float
+             ) -> np.ndarray:
+        """k_hat dq_dot of body b's iterate (mqq = M_qq dq_dot)."""
         if b not in self.bodies:
             return _times(body.k_hat, dqd)
-        mqq = LD[0, 0] + LD[1, 1] + LD[2, 2]
         wq = self.plus[b]
         KD = (wq - mqq) / (th_h * th_h)
         self._countdown[b] -= 1
