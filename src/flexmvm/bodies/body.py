@@ -23,6 +23,7 @@ import scipy.sparse as sp
 
 from flexmvm.bodies.contraction import G2Contraction
 from flexmvm.bodies.invariants import InertiaInvariants, inertia_invariants
+from flexmvm.bodies.nodal_contraction import NodalContraction
 from flexmvm.bodies.rotation import cross3, skew
 from flexmvm.mesh.mesh import Mesh
 
@@ -96,6 +97,24 @@ class FlexibleBody:
             return None
         return G2Contraction(self.inv.G2)
 
+    @functools.cached_property
+    def nodal(self) -> NodalContraction | None:
+        """The compact contraction of a basis that selects nodal DOFs (full FE), else None."""
+        return NodalContraction.of(self.psi, self.inv.Ms, self.X)
+
+    def carried_contractions(self, x: np.ndarray) -> np.ndarray:
+        """L(x) in the form an integrator carries: Y(x) (3, n nodes) for a basis selecting
+        nodal DOFs (bodies.nodal_contraction), else L(x) (3, 3, nq). Linear in x either way;
+        contraction_trace, inertia_terms and rotational_coupling take both."""
+        nodal = self.nodal
+        return nodal(x) if nodal is not None else self.contractions(x)
+
+    def contraction_trace(self, Lc: np.ndarray) -> np.ndarray:
+        """M_qq x from a carried contraction Lc of x (M_qq = sum_a G2[a][a])."""
+        if Lc.ndim == 2:
+            return self.nodal.trace(Lc)
+        return Lc[0, 0] + Lc[1, 1] + Lc[2, 2]
+
     def contractions(self, x: np.ndarray) -> np.ndarray:
         """L(x)[a, b] = G2[b][a] x, shape (3, 3, nq): every G2 contraction of the equations of
         motion is one of these, and L is linear, so an integrator can carry L(q) and
@@ -122,11 +141,20 @@ class FlexibleBody:
     def inertia_terms(self, q: np.ndarray, Lq: np.ndarray | None = None):
         """(S, J, M_wq, C) at q: first moment, inertia about the frame origin, the omega-q
         coupling (3, nq) and C[a][b] = s_a^T M_s P_b = G1[a][b] + G2[b][a] q (3, 3, nq),
-        reused by the velocity terms. Lq = contractions(q) when already known."""
+        reused by the velocity terms. Lq = contractions(q) when already known, or Lq in the
+        compact form of carried_contractions, which gives C = None (S, J and M_wq only)."""
         S = self.first_moment(q)
         if not self.nq:
             G = self.inv.G0
             return S, np.trace(G) * np.eye(3) - G, np.zeros((3, 0)), np.zeros((3, 3, 0))
+        if Lq is not None and Lq.ndim == 2:
+            # compact form (bodies.nodal_contraction): G = G0 + Q^T (M_s X) + Cq Q
+            nodal = self.nodal
+            Cq = nodal.first_moment_matrix(Lq)
+            Q = nodal.scattered(q)
+            G = self.inv.G0 + Q.T @ nodal.MsX + Cq @ Q
+            G = 0.5 * (G + G.T)
+            return S, np.trace(G) * np.eye(3) - G, nodal.antisymmetric(Cq), None
         C = self.G1_array + (self.contractions(q) if Lq is None else Lq)
         # G[a, b] = G0[a, b] + G1[b][a] q + C[a][b] q
         G = self.inv.G0 + self.G1_array.transpose(1, 0, 2) @ q + C @ q
@@ -139,7 +167,11 @@ class FlexibleBody:
         """J(q) without its quadratic part q^T G2 q (relative size (|u|/L)^2): cheap, for
         iteration matrices, never for residuals."""
         G = self.inv.G0.copy()
-        if self.nq:
+        nodal = self.nodal
+        if nodal is not None:
+            Gq = nodal.MsX.T @ nodal.scattered(q)  # G1[a][b] q = sum_n (M_s X)[n, a] Q[n, b]
+            G += Gq + Gq.T
+        elif self.nq:
             Gq = self.G1_array @ q  # Gq[a, b] = G1[a][b] q
             G += Gq + Gq.T
         G = 0.5 * (G + G.T)
@@ -160,10 +192,13 @@ class FlexibleBody:
     def rotational_coupling(self, q: np.ndarray, Lq: np.ndarray | None = None) -> np.ndarray:
         """M_wq(q) (3, nq), the omega-q inertia coupling, alone: 3 nq^2 operations for a dense
         basis instead of the 9 nq^2 of inertia_terms (sparse bases: three M_s products);
-        free when Lq = contractions(q) is known."""
+        free when Lq = contractions(q) (or carried_contractions(q)) is known."""
         Mw0, stack = self._rotational_coupling
         if not self.nq:
             return Mw0
+        if Lq is not None and Lq.ndim == 2:
+            nodal = self.nodal
+            return nodal.antisymmetric(nodal.first_moment_matrix(Lq))
         if Lq is None and stack is not None:
             return Mw0 + (stack @ q).reshape(3, self.nq)
         L = self.contractions(q) if Lq is None else Lq

@@ -56,7 +56,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from flexmvm.bodies.momentum import momentum_terms
+from flexmvm.bodies.momentum import momentum_terms, momentum_terms_nodal
 from flexmvm.bodies.rotation import skew
 from flexmvm.constraints.contact import ContactLaw, FrictionRows
 from flexmvm.constraints.rows import Rows, stack
@@ -104,7 +104,8 @@ IMAGE_RTOL = 1e-11
 
 @dataclass
 class _Carried:
-    """L(q) and L(q_dot) (body.contractions) of the state (q, v) they were made for."""
+    """L(q) and L(q_dot) (body.carried_contractions: (3, 3, nq), or (3, n) for full FE) of
+    the state (q, v) they were made for."""
 
     q: np.ndarray
     v: np.ndarray
@@ -202,10 +203,15 @@ class MoreauJeanIntegrator:
             mqq_dv = self._pending[b][4]
             mqq_vm = self._carried_at(b, st).Mqd + th * mqq_dv
             inertia, F, momentum = (np.empty(body.nv) for _ in range(3))
-            inv = body.inv
-            momentum_terms(mid.A, mid.q, dv, vm, Lq_m, Lqd_m, Kq_m, mqq_dv, mqq_vm,
-                           inv.mass, inv.S0, inv.S1, inv.G0, body.G1_array,
-                           g, inertia, F, momentum)
+            inv, nodal = body.inv, body.nodal
+            if nodal is not None:
+                momentum_terms_nodal(mid.A, mid.q, dv, vm, Lq_m, Lqd_m, Kq_m, mqq_dv, mqq_vm,
+                                     inv.mass, inv.S0, inv.S1, inv.G0, nodal.MsX, nodal.node,
+                                     nodal.comp, g, inertia, F, momentum)
+            else:
+                momentum_terms(mid.A, mid.q, dv, vm, Lq_m, Lqd_m, Kq_m, mqq_dv, mqq_vm,
+                               inv.mass, inv.S0, inv.S1, inv.G0, body.G1_array,
+                               g, inertia, F, momentum)
             if body.c_hat is not None:
                 F[6:] -= _times(body.c_hat, vm[6:])
         else:
@@ -225,8 +231,10 @@ class MoreauJeanIntegrator:
         return inertia - h * F, mid, end, scale
 
     def carried(self, b: int, st: BodyState) -> tuple[np.ndarray, np.ndarray]:
-        """(L(q), L(q_dot)) of body b at state st: the carried ones if st is the state this
-        integrator produced (and they are younger than RESYNC_STEPS), else computed."""
+        """(L(q), L(q_dot)) of body b at state st in the body's carried form
+        (FlexibleBody.carried_contractions: compact for full-FE bodies): the carried ones if st
+        is the state this integrator produced (and they are younger than RESYNC_STEPS), else
+        computed."""
         c = self._carried_at(b, st)
         return c.Lq, c.Lqd
 
@@ -241,7 +249,8 @@ class MoreauJeanIntegrator:
         if c is None or c.q is not st.q or c.v is not st.v or c.age >= RESYNC_STEPS:
             body = self.system.bodies[b]
             qd = st.v[6:]
-            c = _Carried(st.q, st.v, body.contractions(st.q), body.contractions(qd),
+            c = _Carried(st.q, st.v, body.carried_contractions(st.q),
+                         body.carried_contractions(qd),
                          _times(body.k_hat, st.q), _times(body.k_hat, qd),
                          _times(body.inv.M_qq, qd))
             self._carried[b] = c
@@ -259,8 +268,8 @@ class MoreauJeanIntegrator:
         dqd = vp[6:] - st.v[6:]
         Lq_m = np.empty(c.Lq.shape)
         if np.any(dqd):
-            LD = body.contractions(dqd)
-            MD = LD[0, 0] + LD[1, 1] + LD[2, 2]
+            LD = body.carried_contractions(dqd)
+            MD = body.contraction_trace(LD)
             KD = self._images.k_dq(b, body, MD, dqd, th * h)
             Lqd_m = np.empty(c.Lqd.shape)
             _midpoint(c.Lq.ravel(), c.Lqd.ravel(), LD.ravel(), th, th * h, Lq_m.ravel(),
