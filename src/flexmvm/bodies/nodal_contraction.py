@@ -27,7 +27,6 @@ import numpy as np
 import scipy.sparse as sp
 
 
-
 @numba.njit(nogil=True, cache=True, fastmath={"reassoc", "contract"})
 def _compact(indptr, indices, data, node, comp, x, U, Y):  # pragma: no cover - compiled
     """Y[a] = M_s U[:, a], U[n_k, c_k] = x_k (U zeroed here), M_s given as csr arrays."""
