@@ -157,7 +157,10 @@ class BodySolver:
             # the one in W (exact in the omega-translation blocks, since Z_r is exact; the
             # omitted dM_w W_qq^-1 dM_w^T is below COUPLING_TOL^2 of M_w Z_w). S is small for
             # full FE (module docstring of moreau_jean), so a stale M_w changes it by
-            # several per cent (later iterates then converge by ~1/16 per iterate)
+            # several per cent (later iterates then converge by ~1/16 per iterate). The
+            # bordered solve itself keeps the refreshed M_w (in M_fq~ y and Z), so its
+            # elastic part misses W_qq^-1 dM_w^T x_w, first order in the drift: hence the
+            # small COUPLING_TOL (moreau_jean)
             dr, dw = self._dMw @ f.Zr, self._dMw @ f.Zw
             MZ[:3, 3:] += A @ dr.T
             MZ[3:, :3] += dr @ A.T

@@ -80,7 +80,16 @@ ROUNDOFF_FLOOR = 1e-7  # a residual below this that stops decreasing is round-of
 TRANSLATION_RTOL = 1e-13  # ...but the frame's translational rows (sums: no such floor) must
                           # converge to this, so linear momentum drifts < 1e-9 over an impact
 SMALL_BASIS = 400     # up to this many elastic coordinates: refresh every step (cheap)
-COUPLING_TOL = 1e-4   # larger bases: refresh when M_wq moved by this much (relative)
+# Larger bases: refresh when M_wq moved by this much (relative). The bordered solve uses the
+# M_wq of the last refresh and S follows the drift to first order only, so a drift leaves the
+# first solve's frame rows off by ~the drift times the rotational coupling. Seed as shipped,
+# 2 ms (b1 full FE): at 1e-4, b1 refreshed 5 times and the steps after the separation
+# (2 us) took 3.41 residuals each (b1's first solve left 8e-8 of its momentum scale in the
+# translational rows, and its elastic rows over the frame-only limit: a second
+# back-substitution); at 1e-6, 120 refreshes (3-column solves) and 2.00 residuals per step
+# everywhere, 12.0 against 13.9-15.0 ms a step after the separation, whole run 32.3-33.7 s
+# against 33.8-35.8 s (both full FE: 71.7 against 73.2 s; 3e-6: 2.36 residuals a step).
+COUPLING_TOL = 1e-6
 NODAL_CACHE_MIN_NQ = 200  # from this many elastic coordinates, contact rows use nodal columns
 # A later iterate whose residual sits in a body's frame rows only (its elastic rows, constraint
 # impulses included, below this fraction of rtol) corrects that body's velocity by
