@@ -35,6 +35,30 @@ def _skew(v):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def _frame_velocity_forces(A, S, J, w, W, Om, S1qd, H, force):  # pragma: no cover - compiled
+    """The frame rows of the quadratic-velocity forces (FlexibleBody.velocity_forces):
+    force[:3] = -A (w~ w~ S + 2 w~ S1 q_dot), force[3:6] = -(w x J w + 2 (tr H w - H^T w)),
+    W = w~, Om = w~ w~, H[a, b] = C[a][b] . q_dot."""
+    force[:3] = -(A @ (Om @ S + 2.0 * (W @ S1qd)))
+    Jw = J @ w
+    cwJw = np.array([w[1] * Jw[2] - w[2] * Jw[1], w[2] * Jw[0] - w[0] * Jw[2],
+                     w[0] * Jw[1] - w[1] * Jw[0]])
+    trH = H[0, 0] + H[1, 1] + H[2, 2]
+    force[3:6] = -(cwJw + 2.0 * (trH * w - H.T @ w))
+
+
+@numba.njit(cache=True, nogil=True)
+def _frame_gravity(mass, S, g, gb, force):  # pragma: no cover - compiled
+    """Gravity on the frame rows (FlexibleBody.gravity_forces): m g and S x (A^T g); gb =
+    A^T g. Zero g adds nothing."""
+    if g[0] != 0.0 or g[1] != 0.0 or g[2] != 0.0:
+        force[:3] += mass * g
+        force[3] += S[1] * gb[2] - S[2] * gb[1]
+        force[4] += S[2] * gb[0] - S[0] * gb[2]
+        force[5] += S[0] * gb[1] - S[1] * gb[0]
+
+
+@numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
 def momentum_terms(A, q, dv, vm, Lq, Lqd, Kq, mqq_dv, mqq_vm, mass, S0, S1, G0, G1, g,
                    inertia, force, momentum):  # pragma: no cover - compiled
     """Fill inertia, force, momentum (each (6 + nq,)) as described in the module docstring.
@@ -105,12 +129,7 @@ def momentum_terms(A, q, dv, vm, Lq, Lqd, Kq, mqq_dv, mqq_vm, mass, S0, S1, G0, 
             S1qd[a] += S1[a, k] * qd[k]
             for b in range(3):
                 H[a, b] += (G1[a, b, k] + Lq[a, b, k]) * qd[k]
-    force[:3] = -(A @ (Om @ S + 2.0 * (W @ S1qd)))
-    Jw = J @ w
-    cwJw = np.array([w[1] * Jw[2] - w[2] * Jw[1], w[2] * Jw[0] - w[0] * Jw[2],
-                     w[0] * Jw[1] - w[1] * Jw[0]])
-    trH = H[0, 0] + H[1, 1] + H[2, 2]
-    force[3:6] = -(cwJw + 2.0 * (trH * w - H.T @ w))
+    _frame_velocity_forces(A, S, J, w, W, Om, S1qd, H, force)
     any_w = w[0] != 0.0 or w[1] != 0.0 or w[2] != 0.0
     for k in range(nq):
         f = 0.0
@@ -126,10 +145,7 @@ def momentum_terms(A, q, dv, vm, Lq, Lqd, Kq, mqq_dv, mqq_vm, mass, S0, S1, G0, 
     # --- gravity (FlexibleBody.gravity_forces) -----------------------------------------------
     if g[0] != 0.0 or g[1] != 0.0 or g[2] != 0.0:
         gb = A.T @ g
-        force[:3] += mass * g
-        force[3] += S[1] * gb[2] - S[2] * gb[1]
-        force[4] += S[2] * gb[0] - S[0] * gb[2]
-        force[5] += S[0] * gb[1] - S[1] * gb[0]
+        _frame_gravity(mass, S, g, gb, force)
         for k in range(nq):
             force[6 + k] += S1[0, k] * gb[0] + S1[1, k] * gb[1] + S1[2, k] * gb[2]
 
@@ -220,14 +236,5 @@ def momentum_terms_nodal(A, q, dv, vm, Yq, Yqd, Kq, mqq_dv, mqq_vm, mass, S0, S1
     inertia[3:6] = -(ASt.T @ xr_i) + J @ xw_i + mw_i
     momentum[:3] = mass * xr_m - ASt @ xw_m + A @ s1x_m
     momentum[3:6] = -(ASt.T @ xr_m) + J @ xw_m + mw_m
-    force[:3] = -(A @ (Om @ S + 2.0 * (W @ S1qd)))
-    Jw = J @ w
-    cwJw = np.array([w[1] * Jw[2] - w[2] * Jw[1], w[2] * Jw[0] - w[0] * Jw[2],
-                     w[0] * Jw[1] - w[1] * Jw[0]])
-    trH = H[0, 0] + H[1, 1] + H[2, 2]
-    force[3:6] = -(cwJw + 2.0 * (trH * w - H.T @ w))
-    if g[0] != 0.0 or g[1] != 0.0 or g[2] != 0.0:
-        force[:3] += mass * g
-        force[3] += S[1] * gb[2] - S[2] * gb[1]
-        force[4] += S[2] * gb[0] - S[0] * gb[2]
-        force[5] += S[0] * gb[1] - S[1] * gb[0]
+    _frame_velocity_forces(A, S, J, w, W, Om, S1qd, H, force)
+    _frame_gravity(mass, S, g, A.T @ g, force)
