@@ -20,6 +20,7 @@ contraction_trace, inertia_terms and rotational_coupling accept either form.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numba
@@ -96,6 +97,11 @@ class NodalContraction:
     @property
     def n_nodes(self) -> int:
         return self.Ms.shape[0]
+
+    @functools.cached_property
+    def dof(self) -> np.ndarray:
+        """(nq,) the DOF 3 n_k + c_k each coordinate selects."""
+        return 3 * self.node + self.comp
 
     def __call__(self, x: np.ndarray) -> np.ndarray:
         Y = np.empty((3, self.n_nodes))
