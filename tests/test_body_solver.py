@@ -1,6 +1,8 @@
 """BodySolver.nodal_inverse: W_qq^-1 psi^T N^T from cached nodal columns equals the direct
 back-substitution (an identity of linear algebra: tolerance round-off, 1e-10 relative)."""
 
+import dataclasses
+
 import numpy as np
 import pytest
 import scipy.sparse as sp
@@ -153,3 +155,29 @@ def test_elastic_rows_of_a_solve_are_known(sparse):
             want = rhs[6:] - solver.coupling_transpose(x[:6])
             size = max(np.abs(rhs[6:]).max(), np.abs(solver.coupling_transpose(x[:6])).max())
             np.testing.assert_allclose(got, want, rtol=0, atol=1e-10 * size)
+
+
+def test_an_order_found_absent_is_not_sought_again(monkeypatch):
+    """A body whose elimination order was looked for and none exists (scenarios.build stores
+    an empty order) is factored in SuperLU's minimum degree without a second search; a body
+    with no order at all (None, built through the API) gets one searched by the solver."""
+    import flexmvm.integrate.body_solver as bs
+
+    calls = []
+
+    def counting(W):
+        calls.append(W.shape[0])
+
+    monkeypatch.setattr(bs, "elimination_order", counting)
+    body = _body(True)[0]
+    x = np.random.default_rng(3).normal(size=body.nv)
+    A = np.eye(3)
+    Mff = body.frame_mass(A, body.first_moment(np.zeros(body.nq)),
+                          body.frame_inertia_first_order(np.zeros(body.nq)))
+    results = []
+    for b in (body, dataclasses.replace(body, elimination_order=np.zeros(0, np.int64))):
+        solver = BodySolver(b, 0.55)
+        solver.prepare(1e-6, A, Mff)
+        results.append(solver.solve(x))
+    assert calls == [body.nq]
+    np.testing.assert_array_equal(results[0], results[1])

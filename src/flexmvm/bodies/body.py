@@ -52,7 +52,8 @@ class FlexibleBody:
     label: str = ""
     _psi_rows: dict = field(default_factory=dict, compare=False, repr=False)
     #: An elimination order of the pattern of M_qq + k_hat (+ c_hat) for the integrator's
-    #: sparse factors (fe.ordering.dissection_order; None: the integrator makes it if needed)
+    #: sparse factors (fe.ordering.dissection_order; empty: none exists, SuperLU's minimum
+    #: degree; None: not made, the integrator makes it if needed)
     elimination_order: np.ndarray | None = field(default=None, compare=False, repr=False)
 
     @classmethod

@@ -125,9 +125,9 @@ class NodalContraction:
         _gather(Y, self.node, self.comp, out)
         return out
 
-    def first_moment_matrix(self, Y: np.ndarray | None) -> np.ndarray:
-        """Cq = (M_s X)^T + Y (3, n): C[a][b][k] = Cq[a, n_k] if c_k = b (Y None: G1 alone)."""
-        return self.MsX.T + Y if Y is not None else np.ascontiguousarray(self.MsX.T)
+    def first_moment_matrix(self, Y: np.ndarray) -> np.ndarray:
+        """Cq = (M_s X)^T + Y (3, n) for Y = Y(q): C[a][b][k] = Cq[a, n_k] if c_k = b."""
+        return self.MsX.T + Y
 
     def antisymmetric(self, Cq: np.ndarray) -> np.ndarray:
         """[C[a][b] - C[b][a]] over cyclic (c, a, b), (3, nq), for C given by Cq."""

@@ -85,8 +85,9 @@ class BodySolver:
                 # an order whose elimination tree has two halves, solved on two threads with
                 # a pool, in the same arithmetic without one (fe.ordering; one pattern for
                 # every h: one order, made with the body when it was built by a scenario)
-                self._elimination = (b.elimination_order if b.elimination_order is not None
-                                     else elimination_order(W))
+                order = (b.elimination_order if b.elimination_order is not None
+                         else elimination_order(W))
+                self._elimination = order if order is not None and order.size else None
             try:
                 # W is SPD: L D L^T, GIL released
                 solve = ldl_factor(W, self.pool, self._elimination)

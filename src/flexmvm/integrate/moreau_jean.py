@@ -55,12 +55,11 @@ from dataclasses import dataclass
 
 import numba
 import numpy as np
-import scipy.sparse as sp
 
 from flexmvm.bodies.momentum import momentum_terms, momentum_terms_nodal
 from flexmvm.bodies.rotation import skew
 from flexmvm.constraints.contact import ContactLaw, FrictionRows
-from flexmvm.constraints.rows import NodalSelector, Rows, stack
+from flexmvm.constraints.rows import Rows, stack
 from flexmvm.errors import SolverError
 from flexmvm.integrate import DEFAULT_THETA, nonrotating
 from flexmvm.integrate.body_solver import BodySolver
@@ -773,9 +772,9 @@ def _transpose_times(rows: Rows, b: int, body, lam: np.ndarray) -> np.ndarray:
         elastic = bq.T @ lam
     elif body.nodal is not None:
         # psi selects DOFs: psi^T y = y at each coordinate's DOF; N^T lam summed entry by
-        # entry in row order (as the transposed product does), no transposed matrices made
-        csr = sel if isinstance(sel, NodalSelector) else sp.csr_matrix(sel)
-        nt_lam = np.bincount(csr.indices, weights=csr.data * np.repeat(lam, np.diff(csr.indptr)),
+        # entry in row order (as the transposed product does) from N's CSR arrays (a
+        # NodalSelector's or a csr matrix's), no transposed matrices made
+        nt_lam = np.bincount(sel.indices, weights=sel.data * np.repeat(lam, np.diff(sel.indptr)),
                              minlength=sel.shape[1])
         elastic = nt_lam[body.nodal.dof]
     else:

@@ -508,7 +508,10 @@ def _with_elimination_order(body: FlexibleBody) -> FlexibleBody:
     pattern = iteration_pattern(body.inv.M_qq, body.k_hat,
                                 body.c_hat if sp.issparse(body.c_hat) else None)
     order = setup_cache.cached_elimination_order(pattern, elimination_order)
-    return dataclasses.replace(body, elimination_order=order) if order is not None else body
+    # an empty order: made, none found (the solver then takes SuperLU's minimum degree
+    # without looking again)
+    return dataclasses.replace(body, elimination_order=(order if order is not None
+                                                        else np.zeros(0, np.int64)))
 
 
 def _contact(c, k, bodies, infos, index, theta):
