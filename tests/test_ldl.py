@@ -16,7 +16,7 @@ from test_fe import tube_hex27
 
 from flexmvm.errors import SolverError
 from flexmvm.fe import assemble
-from flexmvm.fe.ldl import SupernodalLDL, ldl_factor
+from flexmvm.fe.ldl import SPLIT_MIN_N, SupernodalLDL, ldl_factor
 from flexmvm.fe.modes import superlu_spd
 from flexmvm.materials import ALUMINIUM
 
@@ -147,3 +147,28 @@ def test_edge_structures(kind):
     b = rng.standard_normal((n, 2))
     np.testing.assert_allclose(SupernodalLDL(lu).solve(b), lu.solve(b), rtol=0,
                                atol=1e-12 * np.abs(lu.solve(b)).max())
+
+
+@pytest.mark.parametrize("kind", ["diagonal", "two_chains"])
+def test_forest_split_with_empty_top(kind):
+    """An elimination tree that is a forest (a diagonal matrix; two uncoupled tridiagonal
+    chains, e.g. two bodies in one matrix) splits into halves with nothing above them: the
+    split is taken with an empty top (it raised ValueError from np.concatenate before) and
+    the solve equals SuperLU's to round-off, with and without the pool."""
+    n = SPLIT_MIN_N + 2
+    rng = np.random.default_rng(5)
+    if kind == "diagonal":
+        A = sp.diags(rng.uniform(1, 2, n))
+    else:
+        chain = sp.diags([-np.ones(n // 2 - 1), 2.5 * np.ones(n // 2), -np.ones(n // 2 - 1)],
+                         [-1, 0, 1])
+        A = sp.block_diag([chain, chain])
+    A = sp.csc_matrix(A)
+    lu = superlu_spd(A)
+    b = rng.standard_normal((A.shape[0], 3))
+    with ThreadPoolExecutor(1) as pool:
+        for p in (None, pool):
+            ldl = SupernodalLDL(lu, p)
+            assert ldl.split
+            np.testing.assert_allclose(ldl.solve(b), lu.solve(b), rtol=0,
+                                       atol=1e-12 * np.abs(lu.solve(b)).max())

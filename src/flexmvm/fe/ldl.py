@@ -332,7 +332,8 @@ class SupernodalLDL:
             self._halves = None
         else:
             first, second, top = halves
-            cols = [np.concatenate([np.arange(starts[s], starts[s + 1]) for s in part])
+            cols = [np.concatenate([np.arange(starts[s], starts[s + 1]) for s in part]
+                                   + [np.zeros(0, np.int64)])   # the top may be empty
                     for part in (second, top)]
             self._halves = (first, second, top, cols[0].astype(np.int64),
                             cols[1].astype(np.int64))
