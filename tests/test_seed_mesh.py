@@ -87,14 +87,23 @@ def test_seed_fixed_is_craig_bampton_without_constraint_modes(b2):
 def test_seed_block_is_whole_body_modes_zeroed_on_region_ii(b2):
     """SEED_BLOCK (the code's first reading): the first n modes of the reference-supported body
     with their region-II rows set to zero (equal to the direct eigen solve to 1e-9 relative),
-    identity on region II."""
+    identity on region II. The rod's bending modes come in near-degenerate pairs (the first
+    two 2.6e-9 apart in frequency), within which round-off (here: one BLAS thread in the build
+    against several in the direct solve) turns the vectors by ~eps / gap (1.5e-9 measured):
+    modes are compared as the spans of such clusters (relative gap < 1e-6)."""
     rod, fe, ref, _ = b2
     nodes = rod.selection(1, 1)
     basis = build_basis(fe, BasisKind.SEED_BLOCK, ref, retained_nodes=nodes, n_modes=10)
     freqs, phi = constrained_modes(fe.M, fe.K, ref.fixed_dofs, 10)
     b = (3 * nodes[:, None] + np.arange(3)).ravel()
     phi[b] = 0.0
-    assert np.abs(basis.psi[:, :10] - phi).max() <= 1e-9 * np.abs(phi).max()
+    psi = basis.psi[:, :10]
+    cluster = np.concatenate([[0], np.cumsum(np.diff(freqs) > 1e-6 * freqs[1:])])
+    for c in np.unique(cluster):
+        cols = np.flatnonzero(cluster == c)
+        turn = np.linalg.lstsq(phi[:, cols], psi[:, cols], rcond=None)[0]
+        assert np.abs(psi[:, cols] - phi[:, cols] @ turn).max() <= 1e-9 * np.abs(phi).max()
+        np.testing.assert_allclose(np.abs(np.linalg.svd(turn, compute_uv=False)), 1.0, atol=1e-6)
     np.testing.assert_allclose(basis.mode_freqs_hz, freqs, rtol=1e-10)
     np.testing.assert_array_equal(basis.psi[b, 10:], np.eye(3))
 

@@ -49,7 +49,6 @@ body_solver); constraint impulses by the mixed LCP on D = Phi W^-1 Phi^T.
 
 from __future__ import annotations
 
-import os
 from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 
@@ -68,6 +67,7 @@ from flexmvm.integrate.coulomb import solve_contact_impulses
 from flexmvm.integrate.massless import MasslessCoordinates, equilibrate
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import ContactRows, System
+from flexmvm.threads import ENV_THREADS, worker_threads  # noqa: F401 (ENV_THREADS re-exported)
 
 # The frame Schur complement S = M_ff - B W_qq^-1 B^T is small when the basis nearly spans
 # the rigid motions (full FE: S ~ the mass within c h of the reference nodes, ~1e-5 of the
@@ -782,23 +782,8 @@ def _transpose_times(rows: Rows, b: int, body, lam: np.ndarray) -> np.ndarray:
     return np.concatenate([bf.T @ lam, elastic])
 
 
-#: Environment variable: threads for the per-body work of several full-FE bodies (default:
-#: the number of cores; 1: all on the calling thread, e.g. under a study's many workers).
-ENV_THREADS = "FLEXMVM_THREADS"
 _POOL: tuple[int, ThreadPoolExecutor] | None = None   # (threads, pool)
-
-
-def _body_threads() -> int:
-    value = os.environ.get(ENV_THREADS, "").strip()
-    if not value:
-        return os.cpu_count() or 1
-    try:
-        n = int(value)
-    except ValueError:
-        raise SolverError(f"{ENV_THREADS} must be a whole number of threads, got {value!r}") from None
-    if n < 1:
-        raise SolverError(f"{ENV_THREADS} must be >= 1, got {n}")
-    return n
+_body_threads = worker_threads   # FLEXMVM_THREADS (flexmvm.threads)
 
 
 def _thread_pool() -> ThreadPoolExecutor | None:

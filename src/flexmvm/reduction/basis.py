@@ -29,7 +29,7 @@ from threadpoolctl import threadpool_limits
 
 from flexmvm.errors import InputError
 from flexmvm.fe.assembly import FEModel
-from flexmvm.fe.modes import constrained_modes, factor, shift_invert_modes, to_hz
+from flexmvm.fe.modes import constrained_modes, shift_invert_modes, solver_pool, spd_solver, to_hz
 from flexmvm.reduction.interface import InterfaceSources, InterfaceSpec, interface_columns
 from flexmvm.reduction.reference import ReferenceCondition
 
@@ -124,18 +124,21 @@ def _craig_bampton(fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray
     """Craig-Bampton (1968): constraint modes -K_ii^-1 K_ib and fixed-interface modes.
 
     b = the retained nodes' DOFs, i = the other DOFs not in the reference condition.
-    K_ii is factored once (SuperLU) and that factor serves the constraint modes and, as
-    OPinv of the shift-invert eigen solve about sigma = 0, the fixed-interface modes.
+    K_ii is factored once (fe.modes.spd_solver) and that factor serves the constraint modes
+    (all columns in one solve) and, inverted in blocks by the shift-invert Lanczos about
+    sigma = 0, the fixed-interface modes.
     """
     b = _node_dofs(nodes)
     interior = np.setdiff1d(reference.free_dofs(fe.n_dof), b)
     k_rows = fe.K[interior]
     k_ii, k_ib = k_rows[:, interior], k_rows[:, b]
-    solve = factor(k_ii)
     psi = np.zeros((fe.n_dof, b.size + n_modes))
     psi[b, np.arange(b.size)] = 1.0
-    psi[interior, : b.size] = -solve(k_ib.toarray())
-    psi[interior, b.size:], freqs = _fixed_interface_modes(fe, interior, k_ii, solve, n_modes)
+    with solver_pool() as pool:
+        solve = spd_solver(k_ii, pool)
+        psi[interior, : b.size] = -solve(k_ib.toarray())
+        psi[interior, b.size:], freqs = _fixed_interface_modes(fe, interior, k_ii, solve,
+                                                               n_modes)
     return Basis(BasisKind.CRAIG_BAMPTON, psi, nodes, n_modes, reference, freqs)
 
 
@@ -185,8 +188,9 @@ def _seed_fixed(fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray,
     freqs = np.zeros(0)
     if n_modes:
         k_ii = fe.K[interior][:, interior]
-        psi[interior, :n_modes], freqs = _fixed_interface_modes(fe, interior, k_ii,
-                                                                factor(k_ii), n_modes)
+        with solver_pool() as pool:
+            psi[interior, :n_modes], freqs = _fixed_interface_modes(
+                fe, interior, k_ii, spd_solver(k_ii, pool), n_modes)
     psi[b, n_modes + np.arange(b.size)] = 1.0
     return Basis(BasisKind.SEED_FIXED, psi, nodes, n_modes, reference, freqs)
 
