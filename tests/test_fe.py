@@ -299,3 +299,28 @@ def test_sparse_lu_spd_ordering_and_general_path():
         assert np.linalg.norm(A @ x - b) <= 1e-12 * np.linalg.norm(b)
     with pytest.raises(SolverError, match="failed"):
         factor(sp.csc_matrix((4, 4)))
+
+
+def test_spd_solver_choice():
+    """spd_solver takes fe.ldl's L D L^T solve when the work ahead pays for its set-up
+    (LDL_MIN_SOLVES), SuperLU's own below; SuperLU's also when fe.ldl refuses the factor
+    (an unsymmetric matrix: U is not D L^T). Every choice solves the system to a backward
+    error of 1e-12 (stable solves give ~1e-16)."""
+    from flexmvm.fe.ldl import SupernodalLDL
+    from flexmvm.fe.modes import LDL_MIN_SOLVES, spd_solver
+
+    fe = assemble(box_hex(n=(4, 2, 2)), STEEL)
+    free = np.arange(12, fe.n_dof)
+    A = sp.csc_matrix(fe.K[free][:, free])
+    b = np.random.default_rng(1).standard_normal(A.shape[0])
+    many = spd_solver(A, solves=LDL_MIN_SOLVES)
+    few = spd_solver(A, solves=LDL_MIN_SOLVES - 1)
+    assert isinstance(many.__self__, SupernodalLDL)
+    assert not isinstance(few.__self__, SupernodalLDL)
+    U = sp.csc_matrix(A + sp.triu(A, 1) * 1e-3)              # unsymmetric
+    refused = spd_solver(U, solves=np.inf)
+    assert not isinstance(refused.__self__, SupernodalLDL)
+    for solve, M in ((many, A), (few, A), (refused, U)):
+        x = solve(b)
+        scale = abs(M).sum(axis=1).max() * np.abs(x).max() + np.abs(b).max()
+        assert np.abs(M @ x - b).max() <= 1e-12 * scale

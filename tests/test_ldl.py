@@ -16,7 +16,7 @@ from test_fe import tube_hex27
 
 from flexmvm.errors import SolverError
 from flexmvm.fe import assemble
-from flexmvm.fe.ldl import SPLIT_MIN_N, SupernodalLDL, ldl_factor
+from flexmvm.fe.ldl import BACKWARD_RTOL, SPLIT_MIN_N, SupernodalLDL, ldl_factor
 from flexmvm.fe.modes import superlu_spd
 from flexmvm.materials import ALUMINIUM
 
@@ -172,3 +172,21 @@ def test_forest_split_with_empty_top(kind):
             assert ldl.split
             np.testing.assert_allclose(ldl.solve(b), lu.solve(b), rtol=0,
                                        atol=1e-12 * np.abs(lu.solve(b)).max())
+
+
+def test_backward_error_check_takes_ill_conditioned_spd_and_refuses_unsymmetric():
+    """Given A, the factor is checked by the backward error of one solve, which does not grow
+    with the conditioning: an SPD matrix of condition ~1e13 (a free beam's K - sigma M with
+    sigma 1e-12 of its stiffness scale: LU and LDL^T solves then differ by 3e-6, far more
+    than CHECK_RTOL, both correct) is accepted; an unsymmetric one, whose U is not D L^T, is
+    refused."""
+    fe = assemble(tube_hex27(n_x=3), ALUMINIUM)
+    sigma = -1e-12 * float(fe.K.diagonal().mean() / fe.M.diagonal().mean())
+    A = sp.csc_matrix(fe.K - sigma * fe.M)
+    ldl = SupernodalLDL(superlu_spd(A), a=A)
+    b = np.random.default_rng(7).standard_normal(A.shape[0])
+    x = ldl.solve(b)
+    assert np.abs(A @ x - b).max() <= BACKWARD_RTOL * (abs(A).sum(axis=1).max() * np.abs(x).max())
+    B = sp.csc_matrix(np.array([[4.0, 1.0, 0.0], [3.0, 5.0, 1.0], [0.0, 2.0, 6.0]]))
+    with pytest.raises(SolverError, match="backward error"):
+        SupernodalLDL(superlu_spd(B), a=B)

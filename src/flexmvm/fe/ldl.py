@@ -28,8 +28,13 @@ from flexmvm.errors import SolverError
 from flexmvm.fe.modes import superlu_spd
 
 #: A factor is accepted when its solve of a random right-hand side agrees with SuperLU's to
-#: this (relative, max norm); the two differ by round-off only (measured ~1e-15).
+#: this (relative, max norm); the two differ by round-off only (measured ~1e-15 on a
+#: well-conditioned W, 1.3e-10 on a free rod's K - sigma M: hence BACKWARD_RTOL when A is given).
 CHECK_RTOL = 1e-10
+
+#: With A given, a factor is accepted when the backward error of that solve, ||A x - b|| /
+#: (||A|| ||x|| + ||b||) (max norms), is at most this; stable solves give ~1e-16.
+BACKWARD_RTOL = 1e-12
 
 
 @numba.njit(nogil=True, cache=True)
@@ -300,9 +305,11 @@ class SupernodalLDL:
     (_etree_halves) on two threads; the arithmetic is the same with or without the pool, so
     the results are identical bit for bit."""
 
-    def __init__(self, lu, pool=None, order: np.ndarray | None = None):
+    def __init__(self, lu, pool=None, order: np.ndarray | None = None, a=None):
         """lu: SuperLU's factor of A, or of A[order][:, order] when an elimination order
-        is given (fe.ordering)."""
+        is given (fe.ordering); a: A itself (sparse), for the check by backward error
+        (BACKWARD_RTOL; without it, the solve is compared with SuperLU's, CHECK_RTOL).
+        Raises SolverError when the check fails."""
         n = lu.shape[0]
         perm = np.asarray(lu.perm_r, np.int64)
         if not np.array_equal(perm, np.asarray(lu.perm_c)):
@@ -338,15 +345,27 @@ class SupernodalLDL:
             self._halves = (first, second, top, cols[0].astype(np.int64),
                             cols[1].astype(np.int64))
         rhs = np.random.default_rng(0).standard_normal(n)
-        if order is None:
-            ref = lu.solve(rhs)
+        x = self.solve(rhs)
+        if a is not None:
+            # backward error of the solve: independent of the conditioning (a free body's
+            # K - sigma M, sigma ~1e-9 of its stiffness, solves to 1e-10 apart by LU and LDL^T,
+            # both correct); where U is not D L^T it is of order one
+            a = a if sp.isspmatrix_csc(a) or sp.isspmatrix_csr(a) else sp.csr_matrix(a)
+            scale = _major_norm(a) * np.abs(x).max() + np.abs(rhs).max()
+            err = np.abs(a @ x - rhs).max() / max(scale, 1e-300)
+            if not err <= BACKWARD_RTOL:
+                raise SolverError(f"LDL^T solve has a backward error of {err:.1e} (the matrix "
+                                  "is not symmetric positive definite?)")
         else:
-            ref = np.empty(n)
-            ref[order] = lu.solve(rhs[order])
-        err = np.abs(self.solve(rhs) - ref).max() / max(np.abs(ref).max(), 1e-300)
-        if not err <= CHECK_RTOL:
-            raise SolverError(f"LDL^T solve disagrees with SuperLU's LU by {err:.1e} "
-                              "(the matrix is not symmetric positive definite?)")
+            if order is None:
+                ref = lu.solve(rhs)
+            else:
+                ref = np.empty(n)
+                ref[order] = lu.solve(rhs[order])
+            err = np.abs(x - ref).max() / max(np.abs(ref).max(), 1e-300)
+            if not err <= CHECK_RTOL:
+                raise SolverError(f"LDL^T solve disagrees with SuperLU's LU by {err:.1e} "
+                                  "(the matrix is not symmetric positive definite?)")
 
     @property
     def split(self) -> bool:
@@ -392,6 +411,16 @@ class SupernodalLDL:
     __call__ = solve
 
 
+def _major_norm(a) -> float:
+    """max over a's columns (CSC: the 1-norm) or rows (CSR: the inf-norm) of the sum of |a|,
+    without a copy of the matrix (either norm scales a backward error)."""
+    if not a.nnz:
+        return 0.0
+    ptr = a.indptr
+    sums = np.add.reduceat(np.abs(a.data), ptr[:-1][np.diff(ptr) > 0])
+    return float(sums.max())
+
+
 def warm_kernels() -> None:
     """Load (or compile, the first time) every kernel of a split solve: one factor and solve
     of a small diagonal matrix (its forest of an elimination tree splits; ~0.4 s from numba's
@@ -405,6 +434,6 @@ def ldl_factor(a: sp.spmatrix, pool=None, order: np.ndarray | None = None):
     fe.ordering.dissection_order), solved as L D L^T by SupernodalLDL (its two etree halves
     on two threads when a pool is given). Raises SolverError as fe.modes.factor does."""
     if order is None:
-        return SupernodalLDL(superlu_spd(a), pool).solve
+        return SupernodalLDL(superlu_spd(a), pool, a=a).solve
     a = sp.csc_matrix(a)
-    return SupernodalLDL(superlu_spd(a[order][:, order], natural=True), pool, order).solve
+    return SupernodalLDL(superlu_spd(a[order][:, order], natural=True), pool, order, a).solve

@@ -66,24 +66,43 @@ def solver_pool() -> Iterator[ThreadPoolExecutor | None]:
         yield pool
 
 
-def spd_solver(a: sp.spmatrix, pool: ThreadPoolExecutor | None = None) -> Solve:
+#: fe.ldl's solve pays for its set-up (SuperLU's L as CSC, the supernodal packing, the check:
+#: 0.65 s on a seed rod's 25,767 DOFs, proportional to the factor like the solves) after
+#: ~57 single-vector solves (7.5 ms against 19 ms there) or ~2.3 times as many columns of one
+#: block solve (2 ms against 7.3 ms a column): spd_solver takes SuperLU's own solve below.
+LDL_MIN_SOLVES = 60
+
+#: A column of a block solve saves this fraction of what one single-vector solve saves.
+BLOCK_COLUMN_WEIGHT = 0.44
+
+
+def arpack_solves(n_modes: int) -> int:
+    """Shift-invert solves of eigsh for n_modes modes, about its ncv = max(2 n_modes + 1, 20)
+    Lanczos vectors (measured on the seed rod: 88 for 43 modes, 53 for 20)."""
+    return max(2 * n_modes + 1, 20)
+
+
+def spd_solver(a: sp.spmatrix, pool: ThreadPoolExecutor | None = None,
+               solves: float = np.inf) -> Solve:
     """x = solve(b) for the SPD sparse matrix a (b (n,) or (n, k)): SuperLU's factor with
     the symmetric ordering SPD_LU, solved as L D L^T by fe.ldl (several right-hand sides in
-    one pass over the factor, the two elimination-tree halves on two threads with a pool).
+    one pass over the factor, the two elimination-tree halves on two threads with a pool)
+    when the work ahead is worth its set-up: `solves`, the single-vector solves expected (a
+    block column counting BLOCK_COLUMN_WEIGHT), at least LDL_MIN_SOLVES; else SuperLU's solve.
     With a pool, fe.ldl's compiled kernels are loaded on the pool's thread while SuperLU
     factors (its factorization releases the GIL): ~0.5 s in a fresh process, hidden.
-    SuperLU's own solve is kept when fe.ldl refuses the factor (its solve of a random
-    right-hand side differs from SuperLU's by more than fe.ldl.CHECK_RTOL: a matrix that is
-    not SPD, or one so ill-conditioned that round-off differs that much, such as K - sigma M
-    of a free body with sigma ~1e-9 of its stiffness: 1.4e-9 on a HEX27 beam).
+    SuperLU's own solve is kept when fe.ldl refuses the factor (the backward error of its
+    solve of a random right-hand side above fe.ldl.BACKWARD_RTOL: a matrix that is not SPD).
     Raises SolverError as factor does."""
+    if solves < LDL_MIN_SOLVES:
+        return superlu_spd(a).solve
     warm = pool.submit(_load_ldl) if pool is not None else None
     lu = superlu_spd(a)
     if warm is not None:
         warm.result()
     from flexmvm.fe.ldl import SupernodalLDL
     try:
-        return SupernodalLDL(lu, pool).solve
+        return SupernodalLDL(lu, pool, a=a).solve
     except SolverError:
         return lu.solve
 
@@ -153,8 +172,8 @@ def shift_invert_modes(M: sp.spmatrix, K: sp.spmatrix, n_modes: int, sigma: floa
         return _arpack(M, K, n_modes, sigma, factor(sp.csc_matrix(K - sigma * M), spd=False),
                        tol)
     with solver_pool() as pool:
-        return _arpack(M, K, n_modes, sigma, spd_solver(sp.csc_matrix(K - sigma * M), pool),
-                       tol)
+        return _arpack(M, K, n_modes, sigma, spd_solver(sp.csc_matrix(K - sigma * M), pool,
+                                                         arpack_solves(n_modes)), tol)
 
 
 def _arpack(M, K, n_modes: int, sigma: float, solve: Solve, tol: float
@@ -232,5 +251,19 @@ def constrained_modes(M: sp.spmatrix, K: sp.spmatrix, fixed_dofs: np.ndarray, n_
     return to_hz(lam), phi
 
 
-__all__ = ["DENSE_MAX_DOF", "NEG_RTOL", "SPD_LU", "V0_SEED", "constrained_modes", "factor", "free_modes",
-           "shift_invert_modes", "solver_pool", "spd_solver", "to_hz"]
+__all__ = [
+    "BLOCK_COLUMN_WEIGHT",
+    "DENSE_MAX_DOF",
+    "LDL_MIN_SOLVES",
+    "NEG_RTOL",
+    "SPD_LU",
+    "V0_SEED",
+    "arpack_solves",
+    "constrained_modes",
+    "factor",
+    "free_modes",
+    "shift_invert_modes",
+    "solver_pool",
+    "spd_solver",
+    "to_hz",
+]
