@@ -5,6 +5,8 @@ formulation), so the tolerance is round-off: 1e-10 relative. The invariants them
 checked against their definitions, cut bases and the reduced stiffness.
 """
 
+from concurrent.futures import ThreadPoolExecutor
+
 import numpy as np
 import pytest
 import scipy.sparse as sp
@@ -179,12 +181,16 @@ def test_packed_g2_contraction_equals_the_nine_products(nq):
             G2[a][b] = rng.standard_normal((nq, nq))
             G2[b][a] = G2[a][b].T.copy()
     x = rng.standard_normal(nq)
-    got = G2Contraction(G2)(x)
+    packed = G2Contraction(G2)
+    got = packed(x)
     for a in range(3):
         for b in range(3):
             want = G2[b][a] @ x
             np.testing.assert_allclose(got[a, b], want, rtol=0,
                                        atol=1e-13 * max(np.abs(want).max(), 1.0))
+    # in two parts on two threads: the same arithmetic, bit for bit
+    with ThreadPoolExecutor(1) as pool:
+        np.testing.assert_array_equal(packed(x, pool), got)
 
 
 @pytest.mark.parametrize("sparse", [False, True])

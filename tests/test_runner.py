@@ -201,3 +201,29 @@ def test_local_cluster_sends_one_case_per_single_threaded_worker():
         assert cluster.scheduler.WORKER_SATURATION == 1.0
     finally:
         cluster.close()
+
+
+def test_workers_share_the_cores(monkeypatch):
+    """A local cluster's workers get FLEXMVM_THREADS = cores // workers (at least 1), so two
+    workers on two cores do not split their G2 contractions onto each other's core; a value
+    the user set is kept (no override). Checked in a real worker process."""
+    from distributed import Client
+
+    from flexmvm.studies.runner import local_cluster, worker_env
+    from flexmvm.threads import ENV_THREADS
+
+    monkeypatch.delenv(ENV_THREADS, raising=False)
+    monkeypatch.setattr(os, "cpu_count", lambda: 8)
+    assert worker_env(2) == {ENV_THREADS: "4"}
+    assert worker_env(16) == {ENV_THREADS: "1"}
+    monkeypatch.setenv(ENV_THREADS, "3")
+    assert worker_env(2) == {}
+    monkeypatch.delenv(ENV_THREADS)
+    monkeypatch.setattr(os, "cpu_count", lambda: 2)
+    cluster = local_cluster(2)
+    try:
+        with Client(cluster) as client:
+            seen = client.run(lambda: os.environ.get("FLEXMVM_THREADS"))
+        assert sorted(seen.values()) == ["1", "1"]
+    finally:
+        cluster.close()

@@ -103,12 +103,19 @@ class FlexibleBody:
         """The compact contraction of a basis that selects nodal DOFs (full FE), else None."""
         return NodalContraction.of(self.psi, self.inv.Ms, self.X)
 
-    def carried_contractions(self, x: np.ndarray) -> np.ndarray:
+    def carried_contractions(self, x: np.ndarray, pool=None) -> np.ndarray:
         """L(x) in the form an integrator carries: Y(x) (3, n nodes) for a basis selecting
         nodal DOFs (bodies.nodal_contraction), else L(x) (3, 3, nq). Linear in x either way;
-        contraction_trace, inertia_terms and rotational_coupling take both."""
+        contraction_trace, inertia_terms and rotational_coupling take both. pool: see
+        contractions."""
         nodal = self.nodal
-        return nodal(x) if nodal is not None else self.contractions(x)
+        return nodal(x) if nodal is not None else self.contractions(x, pool)
+
+    @property
+    def contracts_in_halves(self) -> bool:
+        """Whether contractions make one compiled pass over half of the G2 blocks (dense
+        bases from PACKED_MIN_NQ coordinates), which a thread pool can split in two."""
+        return self._g2_packed is not None
 
     def contraction_trace(self, Lc: np.ndarray) -> np.ndarray:
         """M_qq x from a carried contraction Lc of x (M_qq = sum_a G2[a][a])."""
@@ -116,14 +123,15 @@ class FlexibleBody:
             return self.nodal.trace(Lc)
         return Lc[0, 0] + Lc[1, 1] + Lc[2, 2]
 
-    def contractions(self, x: np.ndarray) -> np.ndarray:
+    def contractions(self, x: np.ndarray, pool=None) -> np.ndarray:
         """L(x)[a, b] = G2[b][a] x, shape (3, 3, nq): every G2 contraction of the equations of
         motion is one of these, and L is linear, so an integrator can carry L(q) and
-        L(q_dot) along with the state (integrate.moreau_jean). One pass over the G2 blocks."""
+        L(q_dot) along with the state (integrate.moreau_jean). One pass over the G2 blocks;
+        with a thread pool (contracts_in_halves) in two parts on two threads, bit for bit."""
         inv = self.inv
         packed = self._g2_packed
         if packed is not None:
-            return packed(x)
+            return packed(x, pool)
         if inv.Ms is not None:
             # G2[b][a] x = P_b^T M_s (P_a x): one M_s product with 3 columns instead of nine
             # products with the G2 blocks (each as large as M_s)

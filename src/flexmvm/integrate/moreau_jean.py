@@ -177,6 +177,10 @@ class MoreauJeanIntegrator:
             # one full-FE body: the threads go to its back-substitutions (fe.ldl, two etree
             # halves; the same results on one thread)
             self.solvers[next(iter(sparse))].pool = _thread_pool()
+        # a large dense (MVM) body: its G2 contraction, memory-bound, in two halves on two
+        # threads (bit for bit; not while several bodies' work holds the pool's threads)
+        self._g2_pool = (_thread_pool() if len(sparse) < 2
+                         and any(body.contracts_in_halves for body in system.bodies) else None)
         # coordinates without mass (redistributed contact nodes): equilibrium at step ends
         self._massless = [MasslessCoordinates.of(b) for b in system.bodies]
         # bodies whose k_hat dq_dot comes from W_qq dq_dot (full FE, undamped)
@@ -258,8 +262,8 @@ class MoreauJeanIntegrator:
         if c is None or c.q is not st.q or c.v is not st.v or c.age >= RESYNC_STEPS:
             body = self.system.bodies[b]
             qd = st.v[6:]
-            c = _Carried(st.q, st.v, body.carried_contractions(st.q),
-                         body.carried_contractions(qd),
+            c = _Carried(st.q, st.v, body.carried_contractions(st.q, self._g2_pool),
+                         body.carried_contractions(qd, self._g2_pool),
                          _times(body.k_hat, st.q), _times(body.k_hat, qd),
                          _times(body.inv.M_qq, qd))
             self._carried[b] = c
@@ -277,7 +281,7 @@ class MoreauJeanIntegrator:
         dqd = vp[6:] - st.v[6:]
         Lq_m = np.empty(c.Lq.shape)
         if np.any(dqd):
-            LD = body.carried_contractions(dqd)
+            LD = body.carried_contractions(dqd, self._g2_pool)
             MD = body.contraction_trace(LD)
             KD = self._images.k_dq(b, body, MD, dqd, th * h)
             Lqd_m = np.empty(c.Lqd.shape)

@@ -27,6 +27,7 @@ from tqdm import tqdm
 
 from flexmvm.errors import InputError, SolverError
 from flexmvm.results.atomic import canonical_json, write_json_atomic, write_text_atomic
+from flexmvm.threads import ENV_THREADS
 
 __all__ = ["Case", "Params", "case_path", "check_cluster_options", "collect", "error_path",
            "local_cluster", "run_cases", "study_cluster"]
@@ -245,11 +246,21 @@ def _check_picklable(fn: Callable[[Case], Any]) -> None:
         ) from None
 
 
+def worker_env(n_workers: int) -> dict[str, str]:
+    """Environment of a local cluster's worker processes: flexmvm's own thread pools
+    (FLEXMVM_THREADS: a run's G2 contraction or back-substitutions in two halves) get the
+    cores divided among the workers, at least one (two workers on two cores: one each, so
+    the workers do not take each other's core); a value set by the user is kept."""
+    if os.environ.get(ENV_THREADS, "").strip():
+        return {}
+    return {ENV_THREADS: str(max(1, (os.cpu_count() or 1) // max(n_workers, 1)))}
+
+
 def local_cluster(n_workers: int):
     """A LocalCluster of n_workers single-threaded processes that hands each worker one case
     at a time (worker-saturation 1.0: with the default 1.1 a one-thread worker is sent two
     cases, and with long cases one worker can sit idle while another holds two), no
-    dashboard."""
+    dashboard; the workers' thread pools as worker_env."""
     import dask
     from distributed import LocalCluster
 
@@ -259,7 +270,7 @@ def local_cluster(n_workers: int):
         # (another cluster on the machine); nothing here uses them, so that is no news
         warnings.filterwarnings("ignore", message="Port 8787 is already in use")
         return LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                            dashboard_address=None)
+                            dashboard_address=None, env=worker_env(n_workers))
 
 
 def check_cluster_options(scheduler: str | None, n_workers: int | None, serial: bool) -> None:
