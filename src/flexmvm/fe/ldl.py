@@ -23,6 +23,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 import scipy.sparse as sp
+import scipy.sparse.linalg as spla
 
 from flexmvm.errors import SolverError
 from flexmvm.fe.modes import superlu_spd
@@ -350,8 +351,7 @@ class SupernodalLDL:
             # backward error of the solve: independent of the conditioning (a free body's
             # K - sigma M, sigma ~1e-9 of its stiffness, solves to 1e-10 apart by LU and LDL^T,
             # both correct); where U is not D L^T it is of order one
-            a = a if sp.isspmatrix_csc(a) or sp.isspmatrix_csr(a) else sp.csr_matrix(a)
-            scale = _major_norm(a) * np.abs(x).max() + np.abs(rhs).max()
+            scale = spla.norm(a, np.inf) * np.abs(x).max() + np.abs(rhs).max()
             err = np.abs(a @ x - rhs).max() / max(scale, 1e-300)
             if not err <= BACKWARD_RTOL:
                 raise SolverError(f"LDL^T solve has a backward error of {err:.1e} (the matrix "
@@ -409,16 +409,6 @@ class SupernodalLDL:
         job.result()
 
     __call__ = solve
-
-
-def _major_norm(a) -> float:
-    """max over a's columns (CSC: the 1-norm) or rows (CSR: the inf-norm) of the sum of |a|,
-    without a copy of the matrix (either norm scales a backward error)."""
-    if not a.nnz:
-        return 0.0
-    ptr = a.indptr
-    sums = np.add.reduceat(np.abs(a.data), ptr[:-1][np.diff(ptr) > 0])
-    return float(sums.max())
 
 
 def warm_kernels() -> None:

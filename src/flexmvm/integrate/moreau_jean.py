@@ -787,13 +787,12 @@ def _transpose_times(rows: Rows, b: int, body, lam: np.ndarray) -> np.ndarray:
 
 
 _POOL: tuple[int, ThreadPoolExecutor] | None = None   # (threads, pool)
-_body_threads = worker_threads   # FLEXMVM_THREADS (flexmvm.threads)
 
 
 def _thread_pool() -> ThreadPoolExecutor | None:
     """One pool for the process (studies make many integrators), or None for one thread."""
     global _POOL
-    n = _body_threads()
+    n = worker_threads()   # FLEXMVM_THREADS (flexmvm.threads)
     if n < 2:
         return None
     if _POOL is None or _POOL[0] != n:

@@ -133,7 +133,7 @@ def _craig_bampton(fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray
 
     b = the retained nodes' DOFs, i = the other DOFs not in the reference condition.
     K_ii is factored once (fe.modes.spd_solver) and that factor serves the constraint modes
-    (all columns in one solve) and, inverted in blocks by the shift-invert Lanczos about
+    (all columns in one solve) and, as OPinv of the shift-invert eigen solve about
     sigma = 0, the fixed-interface modes.
     """
     b = _node_dofs(nodes)
@@ -143,8 +143,8 @@ def _craig_bampton(fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray
     psi = np.zeros((fe.n_dof, b.size + n_modes))
     psi[b, np.arange(b.size)] = 1.0
     with solver_pool() as pool:
-        solve = spd_solver(k_ii, pool, arpack_solves(n_modes) * (n_modes > 0)
-                           + BLOCK_COLUMN_WEIGHT * b.size)
+        eigen_solves = arpack_solves(n_modes) if n_modes else 0
+        solve = spd_solver(k_ii, pool, eigen_solves + BLOCK_COLUMN_WEIGHT * b.size)
         psi[interior, : b.size] = -solve(k_ib.toarray())
         psi[interior, b.size:], freqs = _fixed_interface_modes(fe, interior, k_ii, solve,
                                                                n_modes)

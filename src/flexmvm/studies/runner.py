@@ -30,7 +30,7 @@ from flexmvm.results.atomic import canonical_json, write_json_atomic, write_text
 from flexmvm.threads import ENV_THREADS
 
 __all__ = ["Case", "Params", "case_path", "check_cluster_options", "collect", "error_path",
-           "local_cluster", "run_cases", "study_cluster"]
+           "local_cluster", "run_cases", "study_cluster", "worker_env"]
 
 _KEY_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,199}")
 _CASES_DIR = "cases"
