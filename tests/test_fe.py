@@ -11,6 +11,7 @@ import itertools
 import numpy as np
 import pytest
 import scipy.sparse as sp
+from scipy.sparse.linalg import eigsh
 
 from flexmvm.errors import InputError, MeshError, SolverError
 from flexmvm.fe import assemble, constrained_modes, free_modes
@@ -301,26 +302,32 @@ def test_sparse_lu_spd_ordering_and_general_path():
         factor(sp.csc_matrix((4, 4)))
 
 
-def test_spd_solver_choice():
-    """spd_solver takes fe.ldl's L D L^T solve when the work ahead pays for its set-up
-    (LDL_MIN_SOLVES), SuperLU's own below; SuperLU's also when fe.ldl refuses the factor
-    (an unsymmetric matrix: U is not D L^T). Every choice solves the system to a backward
-    error of 1e-12 (stable solves give ~1e-16)."""
+def test_spd_solver_choice(monkeypatch):
+    """spd_solver takes fe.cholesky's L D L^T (solved by fe.ldl) from CHOLESKY_MIN_N rows,
+    SuperLU below; SuperLU's LU also when fe.cholesky refuses the matrix: a symmetric
+    indefinite one (a pivot not positive) or an unsymmetric one (its lower triangle factors,
+    but the solve's backward error against the matrix fails the check). Every choice solves
+    the system to a backward error of 1e-12 (stable solves give ~1e-16)."""
+    from flexmvm.fe import modes
     from flexmvm.fe.ldl import SupernodalLDL
-    from flexmvm.fe.modes import LDL_MIN_SOLVES, spd_solver
 
     fe = assemble(box_hex(n=(4, 2, 2)), STEEL)
     free = np.arange(12, fe.n_dof)
     A = sp.csc_matrix(fe.K[free][:, free])
     b = np.random.default_rng(1).standard_normal(A.shape[0])
-    many = spd_solver(A, solves=LDL_MIN_SOLVES)
-    few = spd_solver(A, solves=LDL_MIN_SOLVES - 1)
+    monkeypatch.setattr(modes, "CHOLESKY_MIN_N", A.shape[0])
+    many = modes.spd_solver(A)
+    monkeypatch.setattr(modes, "CHOLESKY_MIN_N", A.shape[0] + 1)
+    few = modes.spd_solver(A)
     assert isinstance(many.__self__, SupernodalLDL)
     assert not isinstance(few.__self__, SupernodalLDL)
+    monkeypatch.setattr(modes, "CHOLESKY_MIN_N", 1)
     U = sp.csc_matrix(A + sp.triu(A, 1) * 1e-3)              # unsymmetric
-    refused = spd_solver(U, solves=np.inf)
-    assert not isinstance(refused.__self__, SupernodalLDL)
-    for solve, M in ((many, A), (few, A), (refused, U)):
+    shift = 0.5 * float(eigsh(A, k=1, return_eigenvectors=False)[0])
+    S = sp.csc_matrix(A - shift * sp.eye(A.shape[0]))        # symmetric indefinite
+    refused = [modes.spd_solver(U), modes.spd_solver(S)]
+    assert not any(isinstance(r.__self__, SupernodalLDL) for r in refused)
+    for solve, M in ((many, A), (few, A), (refused[0], U), (refused[1], S)):
         x = solve(b)
         scale = abs(M).sum(axis=1).max() * np.abs(x).max() + np.abs(b).max()
         assert np.abs(M @ x - b).max() <= 1e-12 * scale

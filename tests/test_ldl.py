@@ -16,7 +16,8 @@ from test_fe import tube_hex27
 
 from flexmvm.errors import SolverError
 from flexmvm.fe import assemble
-from flexmvm.fe.ldl import BACKWARD_RTOL, SPLIT_MIN_N, SupernodalLDL, ldl_factor
+from flexmvm.fe.cholesky import ldl_factor
+from flexmvm.fe.ldl import BACKWARD_RTOL, SPLIT_MIN_N, SupernodalLDL
 from flexmvm.fe.modes import superlu_spd
 from flexmvm.materials import ALUMINIUM
 
@@ -98,7 +99,7 @@ def test_halves_are_whole_subtrees(iteration_matrix, kind):
     """What makes the halves independent: every row a supernode of one half updates (its
     rectangle's rows) is a column of the same half or of the top, never of the other half.
     A dense matrix (one supernode) has nothing to split."""
-    from flexmvm.fe.ldl import _etree_halves
+    from flexmvm.fe.ldl import etree_halves
 
     n = 60
     A = {"tube": iteration_matrix,
@@ -107,7 +108,7 @@ def test_halves_are_whole_subtrees(iteration_matrix, kind):
          "dense": np.ones((n, n)) + n * np.eye(n)}[kind]
     ldl = SupernodalLDL(superlu_spd(sp.csc_matrix(A)))
     starts, _, _, r_off, _, _, rows = ldl._factor
-    halves = _etree_halves(starts, r_off, rows, 1.0)
+    halves = etree_halves(starts, r_off, rows, 1.0)
     if kind == "dense":
         assert halves is None
         return

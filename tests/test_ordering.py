@@ -10,7 +10,7 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse import csgraph
 
-from flexmvm.fe.ldl import SupernodalLDL, _etree_halves
+from flexmvm.fe.ldl import SupernodalLDL, etree_halves
 from flexmvm.fe.modes import superlu_spd
 from flexmvm.fe.ordering import dissection_order, iteration_pattern
 
@@ -46,7 +46,7 @@ def test_fill_and_halves():
     assert nd.L.nnz <= 1.1 * md.L.nnz
     ldl = SupernodalLDL(nd, order=p)
     starts, _, _, r_off, _, _, rows = ldl._factor
-    halves = _etree_halves(starts, r_off, rows, 1.0)
+    halves = etree_halves(starts, r_off, rows, 1.0)
     width = np.diff(starts)
     work = width * (width + 1) / 2 + width * np.diff(r_off)
     share = [work[h].sum() / work.sum() for h in halves]

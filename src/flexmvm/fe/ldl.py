@@ -1,21 +1,21 @@
-"""Supernodal LDL^T solves with SuperLU's factor of a symmetric positive definite matrix.
-
-For an SPD matrix A factored by SuperLU with a symmetric ordering and diagonal pivots
-(fe.modes.SPD_LU: perm_r = perm_c = p, no pivoting), P A P^T = L U with U = D L^T up to
-round-off (measured 1.5e-16 of max |U| on the b2 rod's W = M + (theta h)^2 K), so
+"""Supernodal LDL^T solves of a symmetric positive definite matrix.
 
     A^-1 b = P^T L^-T D^-1 L^-1 P b
 
-needs only L and D. L is stored by supernodes (runs of columns with one row structure below
-their diagonal block; 1,912 of mean width 13 on that 25,041-DOF rod): a dense triangle and a
-dense row-major rectangle per supernode, with the rectangle's row indices once, so a
-solve streams 8 bytes per entry of L twice (forward and backward) instead of SuperLU's L and U
-with their indices, and several right-hand sides share one pass over the factor (SuperLU's
-solve costs k times one solve for k right-hand sides). The kernels release the GIL: two
-bodies' solves run on two threads (integrate.moreau_jean), and one body's solve can run its
-two elimination-tree halves on two threads (_etree_halves; fe.ordering makes an order that
-has them). Sparse-direct background: Davis, "Direct Methods for Sparse Linear Systems" (SIAM
-2006), ch. 4 and 9 (supernodes, elimination trees).
+with L unit lower triangular, stored by supernodes (runs of columns with one row structure
+below their diagonal block; ~1,270 of mean width 20 on a seed rod): a dense triangle and a
+dense row-major rectangle per supernode, with the rectangle's row indices once, so a solve
+streams 8 bytes per entry of L twice (forward and backward), and several right-hand sides
+share one pass over the factor. The kernels release the GIL: two bodies' solves run on two
+threads (integrate.moreau_jean), and one body's solve can run its two elimination-tree halves
+on two threads (etree_halves; fe.ordering makes an order that has them).
+
+The factor comes from fe.cholesky, packed in this layout as it is made (from_packed), or from
+SuperLU (SupernodalLDL(lu)): an SPD matrix factored by SuperLU with a symmetric ordering and
+diagonal pivots (fe.modes.SPD_LU: perm_r = perm_c = p, no pivoting) has P A P^T = L U with
+U = D L^T up to round-off (measured 1.5e-16 of max |U| on the b2 rod's W = M + (theta h)^2 K),
+so its L and D are this factor. Sparse-direct background: Davis, "Direct Methods for Sparse
+Linear Systems" (SIAM 2006), ch. 4 and 9 (supernodes, elimination trees).
 """
 
 from __future__ import annotations
@@ -23,10 +23,8 @@ from __future__ import annotations
 import numba
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 
 from flexmvm.errors import SolverError
-from flexmvm.fe.modes import superlu_spd
 
 #: A factor is accepted when its solve of a random right-hand side agrees with SuperLU's to
 #: this (relative, max norm); the two differ by round-off only (measured ~1e-15 on a
@@ -228,7 +226,7 @@ def _merge(y, y2, own2, top, top0):  # pragma: no cover - compiled
             y[i, c] += y2[i, c] - top0[j, c]
 
 
-def _etree_halves(starts, r_off, rows, min_gain: float):
+def etree_halves(starts, r_off, rows, min_gain: float):
     """The supernodes split for a solve on two threads: two sets of whole etree subtrees of
     about equal work (L entries) and the top of the tree above them, or None when that
     split would gain less than min_gain (ideal, work / (top + larger half)).
@@ -291,6 +289,25 @@ def _etree_halves(starts, r_off, rows, min_gain: float):
     return tuple(np.flatnonzero(label == h).astype(np.int64) for h in range(3))
 
 
+@numba.njit(cache=True)
+def _abs_row_sums(indptr, index, data, n, by_rows):  # pragma: no cover - compiled
+    """sum_j |a_ij| for every row i of a CSR (by_rows) or CSC matrix."""
+    out = np.zeros(n)
+    for k in range(indptr.shape[0] - 1):
+        for q in range(indptr[k], indptr[k + 1]):
+            out[k if by_rows else index[q]] += abs(data[q])
+    return out
+
+
+def _inf_norm(a) -> float:
+    """max_i sum_j |a_ij| (scipy.sparse.linalg.norm(a, inf) of a CSC matrix builds abs(a)
+    and a product: 0.3 s on a seed rod's K_ii, against ~10 ms here)."""
+    a = sp.csr_matrix(a) if not sp.issparse(a) or a.format not in ("csr", "csc") else a
+    sums = _abs_row_sums(a.indptr, a.indices, np.asarray(a.data, float), a.shape[0],
+                         a.format == "csr")
+    return float(sums.max()) if sums.size else 0.0
+
+
 #: A solve is split over two threads (SupernodalLDL.pool) when the etree split gains at least
 #: this (ideal: work / (top + larger half)) on a matrix of at least SPLIT_MIN_N rows; below,
 #: handing half a solve to another thread costs more than it saves.
@@ -299,11 +316,11 @@ SPLIT_MIN_N = 4000
 
 
 class SupernodalLDL:
-    """x = A^-1 b from SuperLU's factor of an SPD matrix (see the module docstring).
+    """x = A^-1 b from a supernodal L D L^T of an SPD matrix (see the module docstring).
 
     `solve(b)` for b (n,) or (n, k); the kernels hold no GIL. With a thread pool (`pool`, a
     concurrent.futures executor with a free worker) a large solve runs its two etree halves
-    (_etree_halves) on two threads; the arithmetic is the same with or without the pool, so
+    (etree_halves) on two threads; the arithmetic is the same with or without the pool, so
     the results are identical bit for bit."""
 
     def __init__(self, lu, pool=None, order: np.ndarray | None = None, a=None):
@@ -326,16 +343,37 @@ class SupernodalLDL:
         if np.any(Li[Lp[:-1]] != np.arange(n)):
             raise SolverError("LDL^T solve: SuperLU's L has a missing diagonal entry")
         starts = _supernodes(Lp, Li, n)
+        self.nnz = L.nnz
+        t_off, b_off, r_off, tri, rect, rows = _pack(Lp, Li, L.data, starts)
+        self._setup(perm, (starts, t_off, b_off, r_off, tri, rect, rows),
+                    np.asarray(lu.U.diagonal(), float), pool)
+        self._check(a, lu, order)
+
+    @classmethod
+    def from_packed(cls, perm: np.ndarray, factor: tuple, d: np.ndarray, pool=None,
+                    a=None) -> SupernodalLDL:
+        """The solver of a factor already packed by supernodes (fe.cholesky): perm with
+        (P b)[perm[i]] = b[i]; factor = (starts, t_off, b_off, r_off, tri, rect, rows) as _pack
+        makes them; d the pivots; a (sparse) for the check by backward error."""
+        self = cls.__new__(cls)
+        starts, r_off = factor[0], factor[3]
+        width = np.diff(starts)
+        self.nnz = int((width * (width + 1) // 2 + width * np.diff(r_off)).sum())
+        self._setup(np.asarray(perm, np.int64), factor, np.asarray(d, float), pool)
+        if a is not None:
+            self._check(a, None, None)
+        return self
+
+    def _setup(self, perm, factor, d, pool) -> None:
+        starts, r_off, rows = factor[0], factor[3], factor[6]
+        n = perm.shape[0]
         self.n = n
         self.n_supernodes = starts.shape[0] - 1
-        self.nnz = L.nnz
         self.pool = pool
-        t_off, b_off, r_off, tri, rect, rows = _pack(Lp, Li, L.data, starts)
-        d = np.asarray(lu.U.diagonal(), float)
-        self._factor = (starts, t_off, b_off, r_off, tri, rect, rows)
+        self._factor = factor
         self._d, self._perm = d, perm
         self._all = np.arange(self.n_supernodes, dtype=np.int64)
-        halves = _etree_halves(starts, r_off, rows, SPLIT_MIN_GAIN) if n >= SPLIT_MIN_N else None
+        halves = etree_halves(starts, r_off, rows, SPLIT_MIN_GAIN) if n >= SPLIT_MIN_N else None
         if halves is None:
             self._halves = None
         else:
@@ -345,13 +383,18 @@ class SupernodalLDL:
                     for part in (second, top)]
             self._halves = (first, second, top, cols[0].astype(np.int64),
                             cols[1].astype(np.int64))
+
+    def _check(self, a, lu, order) -> None:
+        """SolverError unless a solve of a random right-hand side passes: its backward
+        error with a given (BACKWARD_RTOL), else its agreement with SuperLU's (CHECK_RTOL)."""
+        n = self.n
         rhs = np.random.default_rng(0).standard_normal(n)
         x = self.solve(rhs)
         if a is not None:
             # backward error of the solve: independent of the conditioning (a free body's
             # K - sigma M, sigma ~1e-9 of its stiffness, solves to 1e-10 apart by LU and LDL^T,
             # both correct); where U is not D L^T it is of order one
-            scale = spla.norm(a, np.inf) * np.abs(x).max() + np.abs(rhs).max()
+            scale = _inf_norm(a) * np.abs(x).max() + np.abs(rhs).max()
             err = np.abs(a @ x - rhs).max() / max(scale, 1e-300)
             if not err <= BACKWARD_RTOL:
                 raise SolverError(f"LDL^T solve has a backward error of {err:.1e} (the matrix "
@@ -409,21 +452,3 @@ class SupernodalLDL:
         job.result()
 
     __call__ = solve
-
-
-def warm_kernels() -> None:
-    """Load (or compile, the first time) every kernel of a split solve: one factor and solve
-    of a small diagonal matrix (its forest of an elimination tree splits; ~0.4 s from numba's
-    disk cache in a fresh process)."""
-    SupernodalLDL(superlu_spd(sp.identity(SPLIT_MIN_N, format="csc"))).solve(np.ones(SPLIT_MIN_N))
-
-
-def ldl_factor(a: sp.spmatrix, pool=None, order: np.ndarray | None = None):
-    """x = solve(b) for the SPD sparse matrix a (b (n,) or (n, k)): SuperLU's factor with
-    the symmetric ordering of fe.modes.SPD_LU, or with the elimination order given (e.g.
-    fe.ordering.dissection_order), solved as L D L^T by SupernodalLDL (its two etree halves
-    on two threads when a pool is given). Raises SolverError as fe.modes.factor does."""
-    if order is None:
-        return SupernodalLDL(superlu_spd(a), pool, a=a).solve
-    a = sp.csc_matrix(a)
-    return SupernodalLDL(superlu_spd(a[order][:, order], natural=True), pool, order, a).solve

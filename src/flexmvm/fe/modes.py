@@ -1,10 +1,10 @@
 """Undamped eigenmodes K phi = omega^2 M phi by sparse shift-invert Lanczos (ARPACK eigsh).
 
 Nothing full-size is ever densified: the shifted matrix K - sigma M is factored sparsely
-(SuperLU; solved as L D L^T by fe.ldl when it is positive definite, spd_solver) and handed
-to eigsh as ``OPinv``. Seed rod, 43 fixed-interface modes of the 1-3 selection's K_ii (24,966
-DOFs, one BLAS thread): eigsh 2.1 s with SuperLU's solves, 1.0 s with fe.ldl's (88 solves
-of ~7 ms on two threads against ~19 ms).
+(fe.cholesky's supernodal L D L^T, solved by fe.ldl, when it is positive definite: spd_solver)
+and handed to eigsh as ``OPinv``. Seed rod, 43 fixed-interface modes of the 1-3 selection's
+K_ii (24,966 DOFs, one BLAS thread): eigsh 2.1 s with SuperLU's solves, 1.0 s with fe.ldl's
+(88 solves of ~7 ms on two threads against ~19 ms).
 Modes are M-normalised (phi^T M phi = 1).
 Eigenvalues are checked, never abs()-ed: a negative omega^2 with
 |omega^2| <= NEG_RTOL * scale (scale = max(|sigma|, largest computed omega^2)) is round-off of
@@ -66,51 +66,26 @@ def solver_pool() -> Iterator[ThreadPoolExecutor | None]:
         yield pool
 
 
-#: fe.ldl's solve pays for its set-up (SuperLU's L as CSC, the supernodal packing, the check:
-#: 0.65 s on a seed rod's 25,767 DOFs, proportional to the factor like the solves) after
-#: ~57 single-vector solves (7.5 ms against 19 ms there) or ~2.3 times as many columns of one
-#: block solve (2 ms against 7.3 ms a column): spd_solver takes SuperLU's own solve below.
-LDL_MIN_SOLVES = 60
-
-#: A column of a block solve saves this fraction of what one single-vector solve saves.
-BLOCK_COLUMN_WEIGHT = 0.44
+#: From this many rows spd_solver factors with fe.cholesky (0.6 s for a seed rod's K_ii,
+#: 24,972 DOFs, against 1.1 s for SuperLU's LU and 0.5 s more to solve it as L D L^T); below,
+#: SuperLU (milliseconds, less than loading fe.cholesky's kernels in a fresh process, ~0.2 s).
+CHOLESKY_MIN_N = 2000
 
 
-def arpack_solves(n_modes: int) -> int:
-    """Shift-invert solves of eigsh for n_modes modes, about its ncv = max(2 n_modes + 1, 20)
-    Lanczos vectors (measured on the seed rod: 88 for 43 modes, 53 for 20)."""
-    return max(2 * n_modes + 1, 20)
-
-
-def spd_solver(a: sp.spmatrix, pool: ThreadPoolExecutor | None = None,
-               solves: float = np.inf) -> Solve:
-    """x = solve(b) for the SPD sparse matrix a (b (n,) or (n, k)): SuperLU's factor with
-    the symmetric ordering SPD_LU, solved as L D L^T by fe.ldl (several right-hand sides in
-    one pass over the factor, the two elimination-tree halves on two threads with a pool)
-    when the work ahead is worth its set-up: `solves`, the single-vector solves expected (a
-    block column counting BLOCK_COLUMN_WEIGHT), at least LDL_MIN_SOLVES; else SuperLU's solve.
-    With a pool, fe.ldl's compiled kernels are loaded on the pool's thread while SuperLU
-    factors (its factorization releases the GIL): ~0.5 s in a fresh process, hidden.
-    SuperLU's own solve is kept when fe.ldl refuses the factor (the backward error of its
-    solve of a random right-hand side above fe.ldl.BACKWARD_RTOL: a matrix that is not SPD).
-    Raises SolverError as factor does."""
-    if solves < LDL_MIN_SOLVES:
+def spd_solver(a: sp.spmatrix, pool: ThreadPoolExecutor | None = None) -> Solve:
+    """x = solve(b) for the SPD sparse matrix a (b (n,) or (n, k)): from CHOLESKY_MIN_N rows
+    the supernodal L D L^T of fe.cholesky, solved by fe.ldl (several right-hand sides in one
+    pass over the factor, the two elimination-tree halves on two threads with a pool); below,
+    SuperLU with the symmetric ordering SPD_LU. SuperLU's LU is also taken when fe.cholesky
+    refuses a (a pivot not positive: a is not positive definite), so a symmetric indefinite
+    or unsymmetric matrix still solves, or fails there as factor does (SolverError)."""
+    if a.shape[0] < CHOLESKY_MIN_N:
         return superlu_spd(a).solve
-    warm = pool.submit(_load_ldl) if pool is not None else None
-    lu = superlu_spd(a)
-    if warm is not None:
-        warm.result()
-    from flexmvm.fe.ldl import SupernodalLDL
+    from flexmvm.fe.cholesky import cholesky_ldl
     try:
-        return SupernodalLDL(lu, pool, a=a).solve
+        return cholesky_ldl(a, pool).solve
     except SolverError:
-        return lu.solve
-
-
-def _load_ldl() -> None:
-    """Import fe.ldl (numba) and load its kernels from the disk cache: one tiny solve."""
-    from flexmvm.fe.ldl import warm_kernels
-    warm_kernels()
+        return superlu_spd(a).solve
 
 
 def factor(a: sp.spmatrix, spd: bool = True) -> Solve:
@@ -172,8 +147,8 @@ def shift_invert_modes(M: sp.spmatrix, K: sp.spmatrix, n_modes: int, sigma: floa
         return _arpack(M, K, n_modes, sigma, factor(sp.csc_matrix(K - sigma * M), spd=False),
                        tol)
     with solver_pool() as pool:
-        return _arpack(M, K, n_modes, sigma, spd_solver(sp.csc_matrix(K - sigma * M), pool,
-                                                         arpack_solves(n_modes)), tol)
+        return _arpack(M, K, n_modes, sigma, spd_solver(sp.csc_matrix(K - sigma * M), pool),
+                       tol)
 
 
 def _arpack(M, K, n_modes: int, sigma: float, solve: Solve, tol: float
@@ -252,13 +227,11 @@ def constrained_modes(M: sp.spmatrix, K: sp.spmatrix, fixed_dofs: np.ndarray, n_
 
 
 __all__ = [
-    "BLOCK_COLUMN_WEIGHT",
+    "CHOLESKY_MIN_N",
     "DENSE_MAX_DOF",
-    "LDL_MIN_SOLVES",
     "NEG_RTOL",
     "SPD_LU",
     "V0_SEED",
-    "arpack_solves",
     "constrained_modes",
     "factor",
     "free_modes",

@@ -4,7 +4,7 @@ SuperLU's minimum degree (fe.modes.SPD_LU) orders a rod's W = M + (theta h)^2 K 
 fill, but where its elimination tree branches is up to the mesh: on the seed's aluminium rod
 it splits into two subtrees of ~45 % of the factor each, on the brass rod with the
 hemispherical end it ends in a chain of 37 cross-section supernodes holding 56 % of it, which
-one thread must take alone (fe.ldl._etree_halves).
+one thread must take alone (fe.ldl.etree_halves).
 
 One level of nested dissection fixes the tree's top: a level set of a breadth-first search
 from a pseudo-peripheral vertex separates the graph (every edge joins equal or adjacent levels;
@@ -21,11 +21,10 @@ from __future__ import annotations
 
 import numpy as np
 import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 from scipy.sparse import csgraph
 
 from flexmvm.fe import ldl
-from flexmvm.fe.modes import SPD_LU
+from flexmvm.fe.cholesky import mmd_order
 
 #: The separator is used when it holds at most this fraction of the vertices (a larger one
 #: is not a rod-like body's cross-section: the dissection would add fill for little).
@@ -63,15 +62,13 @@ def dissection_order(a: sp.spmatrix) -> np.ndarray | None:
     if not (0 < mid < level.max()) or len(sep) > MAX_SEPARATOR_FRACTION * n:
         return None
     # minimum degree of the pattern with the separator a clique (values: a diagonally
-    # dominant SPD matrix of that pattern, factored only for SuperLU's ordering)
+    # dominant SPD matrix of that pattern, for SuperLU's ordering only)
     k = len(sep)
     clique = sp.csr_matrix((np.ones(k * k), (np.repeat(sep, k), np.tile(sep, k))),
                            shape=a.shape)
     aug = ((pattern + pattern.T + clique) != 0).astype(float)
     aug = sp.csc_matrix(aug + sp.diags(np.asarray(aug.sum(axis=1)).ravel() + 1.0))
-    perm_c = np.asarray(spla.splu(aug, **SPD_LU).perm_c)
-    order = np.empty(n, np.int64)
-    order[perm_c] = np.arange(n)                    # perm_c[i]: position of column i
+    order = mmd_order(aug)
     last = np.zeros(n, bool)
     last[sep] = True
     return np.concatenate([order[~last[order]], sep]).astype(np.int64)

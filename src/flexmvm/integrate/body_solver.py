@@ -20,7 +20,7 @@ import scipy.sparse as sp
 
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.errors import SolverError
-from flexmvm.fe.ldl import ldl_factor
+from flexmvm.fe.cholesky import SymbolicFactor, cholesky_ldl
 from flexmvm.fe.ordering import elimination_order
 from flexmvm.integrate.compliance import NodalColumns, NodalCompliance, nodal_compliance
 from flexmvm.integrate.dense_solve import cho_solve, lu_solve
@@ -52,7 +52,7 @@ class BodySolver:
         # a thread pool for the back-substitutions of a sparse W (fe.ldl: two etree halves
         # on two threads); None: on the calling thread
         self.pool = pool
-        self._elimination: np.ndarray | None | bool = False   # False: not made yet (_factor)
+        self._symbolic: SymbolicFactor | None = None   # of W's pattern, made by the first _factor
         self.theta = theta
         self._cache: dict[float, _Factor] = {}
         self._order: list[float] = []
@@ -81,16 +81,18 @@ class BodySolver:
             raise SolverError(f"body {b.name!r}: iteration matrix M + h^2/4 K holds a non-finite "
                               f"number (NaN/inf) at step size h = {h:.3g} s")
         if sp.issparse(W):
-            if self._elimination is False:
+            if self._symbolic is None:
                 # an order whose elimination tree has two halves, solved on two threads with
                 # a pool, in the same arithmetic without one (fe.ordering; one pattern for
-                # every h: one order, made with the body when it was built by a scenario)
+                # every h: one order and one symbolic analysis, the order made with the
+                # body when it was built by a scenario)
                 order = (b.elimination_order if b.elimination_order is not None
                          else elimination_order(W))
-                self._elimination = order if order is not None and order.size else None
+                self._symbolic = SymbolicFactor(W, order if order is not None and order.size
+                                                else None)
             try:
-                # W is SPD: L D L^T, GIL released
-                solve = ldl_factor(W, self.pool, self._elimination)
+                # W is SPD: supernodal L D L^T (fe.cholesky), GIL released
+                solve = cholesky_ldl(W, self.pool, self._symbolic).solve
             except SolverError as exc:
                 raise SolverError(f"body {b.name!r}: iteration matrix is singular ({exc})") from None
         else:

@@ -37,7 +37,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from flexmvm.errors import SolverError
-from flexmvm.fe.ldl import ldl_factor
+from flexmvm.fe.cholesky import ldl_factor
 from flexmvm.integrate.lcp import regularised_cho
 
 

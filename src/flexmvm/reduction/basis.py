@@ -30,8 +30,6 @@ from threadpoolctl import threadpool_limits
 from flexmvm.errors import InputError
 from flexmvm.fe.assembly import FEModel
 from flexmvm.fe.modes import (
-    BLOCK_COLUMN_WEIGHT,
-    arpack_solves,
     constrained_modes,
     shift_invert_modes,
     solver_pool,
@@ -143,8 +141,7 @@ def _craig_bampton(fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray
     psi = np.zeros((fe.n_dof, b.size + n_modes))
     psi[b, np.arange(b.size)] = 1.0
     with solver_pool() as pool:
-        eigen_solves = arpack_solves(n_modes) if n_modes else 0
-        solve = spd_solver(k_ii, pool, eigen_solves + BLOCK_COLUMN_WEIGHT * b.size)
+        solve = spd_solver(k_ii, pool)
         psi[interior, : b.size] = -solve(k_ib.toarray())
         psi[interior, b.size:], freqs = _fixed_interface_modes(fe, interior, k_ii, solve,
                                                                n_modes)
@@ -199,7 +196,7 @@ def _seed_fixed(fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray,
         k_ii = fe.K[interior][:, interior]
         with solver_pool() as pool:
             psi[interior, :n_modes], freqs = _fixed_interface_modes(
-                fe, interior, k_ii, spd_solver(k_ii, pool, arpack_solves(n_modes)), n_modes)
+                fe, interior, k_ii, spd_solver(k_ii, pool), n_modes)
     psi[b, n_modes + np.arange(b.size)] = 1.0
     return Basis(BasisKind.SEED_FIXED, psi, nodes, n_modes, reference, freqs)
 
