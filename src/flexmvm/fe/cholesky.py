@@ -230,6 +230,18 @@ def _supernodes(parent, counts, relax_width, relax_zeros):  # pragma: no cover -
     return starts[: m + 1], sn_count[:m]
 
 
+@numba.njit(cache=True, inline="always")
+def _add_row(i, s, c1, mark, rows, base, cnt, size):  # pragma: no cover - compiled
+    """Row i joins supernode s's structure (below its last column c1 - 1, once); the count."""
+    if i >= c1 and mark[i] != s:
+        if cnt == size:
+            raise ValueError("supernode row structure exceeds its column count")
+        mark[i] = s
+        rows[base + cnt] = i
+        cnt += 1
+    return cnt
+
+
 @numba.njit(cache=True)
 def _structure(Ap, Ai, p, pinv, parent, starts, sn_count):  # pragma: no cover - compiled
     """Row structure below every supernode (sorted), its parent supernode and the children
@@ -267,23 +279,11 @@ def _structure(Ap, Ai, p, pinv, parent, starts, sn_count):  # pragma: no cover -
         for j in range(starts[s], c1):
             col = p[j]
             for q in range(Ap[col], Ap[col + 1]):
-                i = pinv[Ai[q]]
-                if i >= c1 and mark[i] != s:
-                    if cnt == size:
-                        raise ValueError("supernode row structure exceeds its column count")
-                    mark[i] = s
-                    rows[base + cnt] = i
-                    cnt += 1
+                cnt = _add_row(pinv[Ai[q]], s, c1, mark, rows, base, cnt, size)
         for t in range(child_ptr[s], child_ptr[s + 1]):
             c = child_idx[t]
             for q in range(r_off[c], r_off[c + 1]):
-                i = rows[q]
-                if i >= c1 and mark[i] != s:
-                    if cnt == size:
-                        raise ValueError("supernode row structure exceeds its column count")
-                    mark[i] = s
-                    rows[base + cnt] = i
-                    cnt += 1
+                cnt = _add_row(rows[q], s, c1, mark, rows, base, cnt, size)
         if cnt != size:
             raise ValueError("supernode row structure differs from its column count")
         rows[base: base + size].sort()
