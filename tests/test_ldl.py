@@ -35,8 +35,10 @@ def test_supernodes_found(iteration_matrix):
     assert 1 <= ldl.n_supernodes < ldl.n  # Hex27 nodes couple 3 DOFs: runs of >= 3 columns
 
 
-@pytest.mark.parametrize("k", [0, 1, 3, 8])
+@pytest.mark.parametrize("k", [0, 1, 3, 8, 40])
 def test_equals_superlu_solve(iteration_matrix, k):
+    """From BLAS_MIN_COLUMNS right-hand sides the blocks go through BLAS (8, 40 here): the
+    same answer to round-off."""
     A = iteration_matrix
     lu = superlu_spd(A)
     solve = SupernodalLDL(lu).solve
@@ -166,13 +168,14 @@ def test_forest_split_with_empty_top(kind):
         A = sp.block_diag([chain, chain])
     A = sp.csc_matrix(A)
     lu = superlu_spd(A)
-    b = rng.standard_normal((A.shape[0], 3))
     with ThreadPoolExecutor(1) as pool:
         for p in (None, pool):
             ldl = SupernodalLDL(lu, p)
             assert ldl.split
-            np.testing.assert_allclose(ldl.solve(b), lu.solve(b), rtol=0,
-                                       atol=1e-12 * np.abs(lu.solve(b)).max())
+            for k in (3, 20):                  # loops; blocks through BLAS
+                b = rng.standard_normal((A.shape[0], k))
+                np.testing.assert_allclose(ldl.solve(b), lu.solve(b), rtol=0,
+                                           atol=1e-12 * np.abs(lu.solve(b)).max())
 
 
 def test_backward_error_check_takes_ill_conditioned_spd_and_refuses_unsymmetric():

@@ -18,8 +18,7 @@ of every supernode in LAPACK/BLAS (dpotrf, dtrsm, dsyrk: BLAS-3):
    matrices (extend-add), its pivot block factored (dpotrf), the rows below solved (dtrsm) and
    the update matrix formed (dsyrk), then packed as unit-triangular blocks and D.
 
-The kernels call the BLAS/LAPACK that scipy ships (scipy.linalg.cython_blas / cython_lapack),
-bound by name at import so that numba's disk cache holds them.
+The kernels call the BLAS/LAPACK that scipy ships, through fe.blas.
 """
 
 from __future__ import annotations
@@ -28,22 +27,11 @@ import numba
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
-from llvmlite import binding as _llvm
-from numba import types
-from numba.extending import get_cython_function_address
 from numba.typed import List
 from threadpoolctl import threadpool_limits
 
 from flexmvm.errors import SolverError
-
-_LAPACK = {"flexmvm_dpotrf": ("scipy.linalg.cython_lapack", "dpotrf", 5),
-           "flexmvm_dtrsm": ("scipy.linalg.cython_blas", "dtrsm", 11),
-           "flexmvm_dsyrk": ("scipy.linalg.cython_blas", "dsyrk", 10)}
-for _symbol, (_module, _name, _nargs) in _LAPACK.items():
-    _llvm.add_symbol(_symbol, get_cython_function_address(_module, _name))
-_dpotrf = types.ExternalFunction("flexmvm_dpotrf", types.void(*[types.voidptr] * 5))
-_dtrsm = types.ExternalFunction("flexmvm_dtrsm", types.void(*[types.voidptr] * 11))
-_dsyrk = types.ExternalFunction("flexmvm_dsyrk", types.void(*[types.voidptr] * 10))
+from flexmvm.fe.blas import dpotrf, dsyrk, dtrsm
 
 #: Relaxed amalgamation (CHOLMOD's defaults, cholmod_super.c): a child supernode is merged
 #: into its parent when the merged one is w columns wide with a fraction z of explicit zeros
@@ -351,16 +339,16 @@ def _numeric(sns, Ap, Ai, Ax, p, pinv, starts, r_off, rows, child_ptr, child_idx
                     F[pos[rows[cb0 + a]] + jb] += Fc[src + a]
             fronts[c] = np.empty(0)
         iv[0], iv[1], iv[2], iv[3] = w, m, r, 0
-        _dpotrf(ch[0:].ctypes, iv[0:].ctypes, F.ctypes, iv[1:].ctypes, iv[3:].ctypes)
+        dpotrf(ch[0:].ctypes, iv[0:].ctypes, F.ctypes, iv[1:].ctypes, iv[3:].ctypes)
         if iv[3] != 0:
             return c0 + iv[3] - 1
         if r > 0:
             below = F[w:]
-            _dtrsm(ch[1:].ctypes, ch[0:].ctypes, ch[2:].ctypes, ch[3:].ctypes, iv[2:].ctypes,
+            dtrsm(ch[1:].ctypes, ch[0:].ctypes, ch[2:].ctypes, ch[3:].ctypes, iv[2:].ctypes,
                    iv[0:].ctypes, dv[0:].ctypes, F.ctypes, iv[1:].ctypes, below.ctypes,
                    iv[1:].ctypes)
             update = F[w + w * m:]
-            _dsyrk(ch[0:].ctypes, ch[3:].ctypes, iv[2:].ctypes, iv[0:].ctypes, dv[1:].ctypes,
+            dsyrk(ch[0:].ctypes, ch[3:].ctypes, iv[2:].ctypes, iv[0:].ctypes, dv[1:].ctypes,
                    below.ctypes, iv[1:].ctypes, dv[0:].ctypes, update.ctypes, iv[1:].ctypes)
         t0 = t_off[s]
         b0 = b_off[s]
