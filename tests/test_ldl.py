@@ -1,6 +1,6 @@
-"""fe.ldl: the supernodal L D L^T solve from SuperLU's factor equals SuperLU's own solve.
+"""fe.ldl: the supernodal L D L^T solve (of fe.cholesky's factor) equals SuperLU's solve.
 
-Both solve the same factorization (U = D L^T to round-off), so they agree to round-off: the
+Both solve the same matrix with the same ordering, so they agree to round-off: the
 tolerance 1e-12 relative is ~1e3 machine epsilons, the growth of rounding through a
 triangular solve of a well-conditioned matrix. A residual check (|A x - b| / |b| < 1e-10 for
 a matrix of condition ~1e3) guards against an agreement of two wrong answers.
@@ -16,8 +16,8 @@ from test_fe import tube_hex27
 
 from flexmvm.errors import SolverError
 from flexmvm.fe import assemble
-from flexmvm.fe.cholesky import ldl_factor
-from flexmvm.fe.ldl import BACKWARD_RTOL, SPLIT_MIN_N, SupernodalLDL
+from flexmvm.fe.cholesky import SymbolicFactor, cholesky_ldl, ldl_factor
+from flexmvm.fe.ldl import BACKWARD_RTOL, SPLIT_MIN_N
 from flexmvm.fe.modes import superlu_spd
 from flexmvm.materials import ALUMINIUM
 
@@ -31,7 +31,7 @@ def iteration_matrix():
 
 
 def test_supernodes_found(iteration_matrix):
-    ldl = SupernodalLDL(superlu_spd(iteration_matrix))
+    ldl = cholesky_ldl(iteration_matrix)
     assert 1 <= ldl.n_supernodes < ldl.n  # Hex27 nodes couple 3 DOFs: runs of >= 3 columns
 
 
@@ -41,7 +41,7 @@ def test_equals_superlu_solve(iteration_matrix, k):
     same answer to round-off."""
     A = iteration_matrix
     lu = superlu_spd(A)
-    solve = SupernodalLDL(lu).solve
+    solve = cholesky_ldl(A).solve
     rng = np.random.default_rng(k)
     b = rng.standard_normal(A.shape[0]) if k == 0 else rng.standard_normal((A.shape[0], k))
     x = solve(b)
@@ -79,7 +79,7 @@ def test_two_halves_on_two_threads(iteration_matrix, k):
     really happens on this tube (4,680 DOFs: above SPLIT_MIN_N, halves of ~equal work)."""
     A = iteration_matrix
     lu = superlu_spd(A)
-    serial = SupernodalLDL(lu)
+    serial = cholesky_ldl(A)
     assert serial.split
     first, second, top = serial._halves[:3]
     assert len(first) and len(second)
@@ -88,7 +88,7 @@ def test_two_halves_on_two_threads(iteration_matrix, k):
     b = rng.standard_normal(A.shape[0]) if k == 0 else rng.standard_normal((A.shape[0], k))
     want = lu.solve(b)
     with ThreadPoolExecutor(2) as pool:
-        threaded = SupernodalLDL(lu, pool)
+        threaded = cholesky_ldl(A, pool)
         got = [threaded.solve(b) for _ in range(3)]
     x = serial.solve(b)
     np.testing.assert_allclose(x, want, rtol=0, atol=1e-12 * np.abs(want).max())
@@ -108,13 +108,13 @@ def test_halves_are_whole_subtrees(iteration_matrix, kind):
          "tridiagonal": sp.diags([-np.ones(n - 1), 2.5 * np.ones(n), -np.ones(n - 1)],
                                  [-1, 0, 1]),
          "dense": np.ones((n, n)) + n * np.eye(n)}[kind]
-    ldl = SupernodalLDL(superlu_spd(sp.csc_matrix(A)))
-    starts, _, _, r_off, _, _, rows = ldl._factor
+    sym = SymbolicFactor(sp.csc_matrix(A))
+    starts, r_off, rows = sym.starts, sym.r_off, sym.rows
     halves = etree_halves(starts, r_off, rows, 1.0)
     if kind == "dense":
         assert halves is None
         return
-    label = np.full(ldl.n, -1)
+    label = np.full(sym.n, -1)
     for h, part in enumerate(halves):
         for s in part:
             label[starts[s]: starts[s + 1]] = h
@@ -148,7 +148,7 @@ def test_edge_structures(kind):
     A = sp.csc_matrix(A)
     lu = superlu_spd(A)
     b = rng.standard_normal((n, 2))
-    np.testing.assert_allclose(SupernodalLDL(lu).solve(b), lu.solve(b), rtol=0,
+    np.testing.assert_allclose(cholesky_ldl(A).solve(b), lu.solve(b), rtol=0,
                                atol=1e-12 * np.abs(lu.solve(b)).max())
 
 
@@ -170,7 +170,7 @@ def test_forest_split_with_empty_top(kind):
     lu = superlu_spd(A)
     with ThreadPoolExecutor(1) as pool:
         for p in (None, pool):
-            ldl = SupernodalLDL(lu, p)
+            ldl = cholesky_ldl(A, p)
             assert ldl.split
             for k in (3, 20):                  # loops; blocks through BLAS
                 b = rng.standard_normal((A.shape[0], k))
@@ -181,16 +181,16 @@ def test_forest_split_with_empty_top(kind):
 def test_backward_error_check_takes_ill_conditioned_spd_and_refuses_unsymmetric():
     """Given A, the factor is checked by the backward error of one solve, which does not grow
     with the conditioning: an SPD matrix of condition ~1e13 (a free beam's K - sigma M with
-    sigma 1e-12 of its stiffness scale: LU and LDL^T solves then differ by 3e-6, far more
-    than CHECK_RTOL, both correct) is accepted; an unsymmetric one, whose U is not D L^T, is
+    sigma 1e-12 of its stiffness scale: LU and LDL^T solves then differ by 3e-6, both
+    correct) is accepted; an unsymmetric one, whose lower triangle alone was factored, is
     refused."""
     fe = assemble(tube_hex27(n_x=3), ALUMINIUM)
     sigma = -1e-12 * float(fe.K.diagonal().mean() / fe.M.diagonal().mean())
     A = sp.csc_matrix(fe.K - sigma * fe.M)
-    ldl = SupernodalLDL(superlu_spd(A), a=A)
+    ldl = cholesky_ldl(A)
     b = np.random.default_rng(7).standard_normal(A.shape[0])
     x = ldl.solve(b)
     assert np.abs(A @ x - b).max() <= BACKWARD_RTOL * (abs(A).sum(axis=1).max() * np.abs(x).max())
     B = sp.csc_matrix(np.array([[4.0, 1.0, 0.0], [3.0, 5.0, 1.0], [0.0, 2.0, 6.0]]))
     with pytest.raises(SolverError, match="backward error"):
-        SupernodalLDL(superlu_spd(B), a=B)
+        cholesky_ldl(B)

@@ -10,7 +10,8 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse import csgraph
 
-from flexmvm.fe.ldl import SupernodalLDL, etree_halves
+from flexmvm.fe.cholesky import SymbolicFactor, cholesky_ldl
+from flexmvm.fe.ldl import etree_halves
 from flexmvm.fe.modes import superlu_spd
 from flexmvm.fe.ordering import dissection_order, iteration_pattern
 
@@ -41,11 +42,11 @@ def test_separator_last_and_two_sides():
 def test_fill_and_halves():
     A = _strip()
     p = dissection_order(A)
-    nd = superlu_spd(A[p][:, p], natural=True)
+    nd = SymbolicFactor(A, p)
     md = superlu_spd(A)
-    assert nd.L.nnz <= 1.1 * md.L.nnz
-    ldl = SupernodalLDL(nd, order=p)
-    starts, _, _, r_off, _, _, rows = ldl._factor
+    assert nd.column_counts.sum() <= 1.1 * SymbolicFactor(A).column_counts.sum()
+    ldl = cholesky_ldl(A, symbolic=nd)
+    starts, r_off, rows = nd.starts, nd.r_off, nd.rows
     halves = etree_halves(starts, r_off, rows, 1.0)
     width = np.diff(starts)
     work = width * (width + 1) / 2 + width * np.diff(r_off)

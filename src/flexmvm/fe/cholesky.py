@@ -372,7 +372,7 @@ class SymbolicFactor:
     def __init__(self, a: sp.spmatrix, order: np.ndarray | None = None):
         """a: SPD sparse matrix (its full symmetric pattern is used); order: elimination
         order (default mmd_order(a))."""
-        from flexmvm.fe.ldl import SPLIT_MIN_GAIN, SPLIT_MIN_N, etree_halves
+        from flexmvm.fe.ldl import split_halves
         a = _symmetric_csc(a)
         n = a.shape[0]
         p0 = mmd_order(a) if order is None else np.asarray(order, np.int64)
@@ -403,8 +403,7 @@ class SymbolicFactor:
         self._pattern = (Ap, Ai.copy())
         self.given_order = p0
         #: (first, second, top) supernodes for a factor on two threads, or None
-        self.halves = (etree_halves(starts, r_off, rows, SPLIT_MIN_GAIN) if n >= SPLIT_MIN_N
-                       else None)
+        self.halves = split_halves(starts, r_off, rows)
 
     def matches(self, a: sp.spmatrix) -> bool:
         """Whether a has the sparsity pattern this analysis was made for."""
@@ -416,8 +415,8 @@ class SymbolicFactor:
     @property
     def nnz(self) -> int:
         """Entries of L stored (diagonal and amalgamation zeros included)."""
-        width = np.diff(self.starts)
-        return int((width * (width + 1) // 2 + width * np.diff(self.r_off)).sum())
+        from flexmvm.fe.ldl import stored_entries
+        return stored_entries(self.starts, self.r_off)
 
 
 def _relabel(parent0: np.ndarray, post: np.ndarray) -> np.ndarray:
@@ -488,7 +487,7 @@ def cholesky_ldl(a: sp.spmatrix, pool=None, symbolic: SymbolicFactor | None = No
     from flexmvm.fe.ldl import SupernodalLDL
     csc = _symmetric_csc(a)
     if symbolic is None:
-        warm = pool.submit(warm_kernels) if pool is not None else None
+        warm = pool.submit(warm_kernels) if pool is not None and not _WARM else None
         order = mmd_order(csc)
         if warm is not None:
             warm.result()
@@ -498,23 +497,28 @@ def cholesky_ldl(a: sp.spmatrix, pool=None, symbolic: SymbolicFactor | None = No
     tri, rect, d = numeric_factor(symbolic, csc, pool)
     factor = (symbolic.starts, symbolic.t_off, symbolic.b_off, symbolic.r_off, tri, rect,
               symbolic.rows)
-    return SupernodalLDL.from_packed(symbolic.inverse, factor, d, pool, a=a)
+    return SupernodalLDL(symbolic.inverse, factor, d, symbolic.halves, pool, a=a)
 
 
-def ldl_factor(a: sp.spmatrix, pool=None, order: np.ndarray | None = None):
+def ldl_factor(a: sp.spmatrix, pool=None):
     """x = solve(b) for the SPD sparse matrix a (b (n,) or (n, k)): cholesky_ldl with SuperLU's
-    minimum-degree ordering, or with the elimination order given (e.g.
-    fe.ordering.dissection_order). Raises SolverError when a is not positive definite."""
-    return cholesky_ldl(a, pool, None if order is None else SymbolicFactor(a, order)).solve
+    minimum-degree ordering. Raises SolverError when a is not positive definite."""
+    return cholesky_ldl(a, pool).solve
+
+
+_WARM = False   # the kernels are loaded in this process (warm_kernels ran)
 
 
 def warm_kernels() -> None:
-    """Load (or compile, the first time) every kernel of a factor and of a split solve: one
-    factor and solve of a small diagonal matrix (its forest of an elimination tree splits)."""
+    """Load (or compile, the first time) every kernel of a factor and of a split solve, once
+    per process: one factor and solve of a small diagonal matrix (its forest of an
+    elimination tree splits)."""
+    global _WARM
     from flexmvm.fe.ldl import SPLIT_MIN_N
     n = SPLIT_MIN_N
-    cholesky_ldl(sp.identity(n, format="csc"), symbolic=SymbolicFactor(
-        sp.identity(n, format="csc"), np.arange(n))).solve(np.ones(n))
+    eye = sp.identity(n, format="csc")
+    cholesky_ldl(eye, symbolic=SymbolicFactor(eye, np.arange(n))).solve(np.ones(n))
+    _WARM = True
 
 
 __all__ = ["RELAX_WIDTH", "RELAX_ZEROS", "SymbolicFactor", "cholesky_ldl", "ldl_factor",

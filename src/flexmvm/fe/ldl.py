@@ -12,11 +12,8 @@ on two threads (etree_halves; fe.ordering makes an order that has them). From
 BLAS_MIN_COLUMNS right-hand sides each supernode's block goes through BLAS-3 (dtrsm, dgemm;
 fe.blas): a Craig-Bampton build's constraint columns in one block.
 
-The factor comes from fe.cholesky, packed in this layout as it is made (from_packed), or from
-SuperLU (SupernodalLDL(lu)): an SPD matrix factored by SuperLU with a symmetric ordering and
-diagonal pivots (fe.modes.SPD_LU: perm_r = perm_c = p, no pivoting) has P A P^T = L U with
-U = D L^T up to round-off (measured 1.5e-16 of max |U| on the b2 rod's W = M + (theta h)^2 K),
-so its L and D are this factor. Sparse-direct background: Davis, "Direct Methods for Sparse
+The factor comes from fe.cholesky, packed in this layout as it is made. Sparse-direct
+background: Davis, "Direct Methods for Sparse
 Linear Systems" (SIAM 2006), ch. 4 and 9 (supernodes, elimination trees).
 """
 
@@ -29,84 +26,9 @@ import scipy.sparse as sp
 from flexmvm.errors import SolverError
 from flexmvm.fe.blas import dgemm, dtrsm
 
-#: A factor is accepted when its solve of a random right-hand side agrees with SuperLU's to
-#: this (relative, max norm); the two differ by round-off only (measured ~1e-15 on a
-#: well-conditioned W, 1.3e-10 on a free rod's K - sigma M: hence BACKWARD_RTOL when A is given).
-CHECK_RTOL = 1e-10
-
-#: With A given, a factor is accepted when the backward error of that solve, ||A x - b|| /
-#: (||A|| ||x|| + ||b||) (max norms), is at most this; stable solves give ~1e-16.
+#: A factor is accepted when the backward error of its solve of a random right-hand side,
+#: ||A x - b|| / (||A|| ||x|| + ||b||) (max norms), is at most this; stable solves give ~1e-16.
 BACKWARD_RTOL = 1e-12
-
-
-@numba.njit(nogil=True, cache=True)
-def _supernodes(Lp, Li, n):  # pragma: no cover - compiled
-    """Start columns of the fundamental supernodes of the unit lower triangular L (CSC,
-    sorted, diagonal stored): column j + 1 joins column j's supernode when the rows of
-    column j below its diagonal are j + 1 followed by those of column j + 1."""
-    starts = np.empty(n + 1, np.int64)
-    starts[0] = 0
-    ns = 1
-    for j in range(n - 1):
-        a0 = Lp[j] + 1            # skip the diagonal
-        b0 = Lp[j + 1] + 1
-        la = Lp[j + 1] - a0
-        lb = Lp[j + 2] - b0
-        same = la == lb + 1 and la > 0 and Li[a0] == j + 1
-        if same:
-            for t in range(lb):
-                if Li[a0 + 1 + t] != Li[b0 + t]:
-                    same = False
-                    break
-        if not same:
-            starts[ns] = j + 1
-            ns += 1
-    starts[ns] = n
-    return starts[: ns + 1]
-
-
-@numba.njit(cache=True)
-def _pack(Lp, Li, Lx, starts):  # pragma: no cover - compiled
-    """Dense blocks of every supernode: the w x w unit lower triangle (row-major, strictly
-    lower part used) and the r x w rectangle below it (row-major), in one value array."""
-    ns = starts.shape[0] - 1
-    t_off = np.empty(ns + 1, np.int64)
-    b_off = np.empty(ns + 1, np.int64)
-    r_off = np.empty(ns + 1, np.int64)
-    t_off[0] = b_off[0] = r_off[0] = 0
-    tv = 0
-    bv = 0
-    rv = 0
-    for s in range(ns):
-        c0 = starts[s]
-        w = starts[s + 1] - c0
-        r = (Lp[c0 + 1] - Lp[c0]) - w    # rows below the triangle (column c0 holds them all)
-        tv += w * w
-        bv += r * w
-        rv += r
-        t_off[s + 1] = tv
-        b_off[s + 1] = bv
-        r_off[s + 1] = rv
-    tri = np.zeros(tv)
-    rect = np.empty(bv)
-    rows = np.empty(rv, np.int32)
-    for s in range(ns):
-        c0 = starts[s]
-        w = starts[s + 1] - c0
-        r = r_off[s + 1] - r_off[s]
-        p0 = Lp[c0] + w
-        for i in range(r):
-            rows[r_off[s] + i] = Li[p0 + i]
-        for a in range(w):
-            col = c0 + a
-            p = Lp[col] + 1            # below the diagonal: rows c0 + a + 1 .. c0 + w - 1, then R
-            for a2 in range(a + 1, w):
-                tri[t_off[s] + a2 * w + a] = Lx[p]
-                p += 1
-            for i in range(r):
-                rect[b_off[s] + i * w + a] = Lx[p]
-                p += 1
-    return t_off, b_off, r_off, tri, rect, rows
 
 
 _FAST = {"reassoc", "contract"}   # lets LLVM vectorise the dot products (round-off only)
@@ -403,6 +325,20 @@ SPLIT_MIN_GAIN = 1.3
 SPLIT_MIN_N = 4000
 
 
+def split_halves(starts, r_off, rows):
+    """etree_halves of a factor of at least SPLIT_MIN_N rows that gains SPLIT_MIN_GAIN, else
+    None: the split a factorization (fe.cholesky) and the solves take on two threads."""
+    if starts[-1] < SPLIT_MIN_N:
+        return None
+    return etree_halves(starts, r_off, rows, SPLIT_MIN_GAIN)
+
+
+def stored_entries(starts, r_off) -> int:
+    """Entries of L held by the supernodes (triangles with their diagonals, rectangles)."""
+    width = np.diff(starts)
+    return int((width * (width + 1) // 2 + width * np.diff(r_off)).sum())
+
+
 class SupernodalLDL:
     """x = A^-1 b from a supernodal L D L^T of an SPD matrix (see the module docstring).
 
@@ -411,57 +347,20 @@ class SupernodalLDL:
     (etree_halves) on two threads; the arithmetic is the same with or without the pool, so
     the results are identical bit for bit."""
 
-    def __init__(self, lu, pool=None, order: np.ndarray | None = None, a=None):
-        """lu: SuperLU's factor of A, or of A[order][:, order] when an elimination order
-        is given (fe.ordering); a: A itself (sparse), for the check by backward error
-        (BACKWARD_RTOL; without it, the solve is compared with SuperLU's, CHECK_RTOL).
-        Raises SolverError when the check fails."""
-        n = lu.shape[0]
-        perm = np.asarray(lu.perm_r, np.int64)
-        if not np.array_equal(perm, np.asarray(lu.perm_c)):
-            raise SolverError("LDL^T solve needs a symmetric ordering (perm_r = perm_c)")
-        if order is not None:
-            outer = np.empty(n, np.int64)
-            outer[order] = perm               # (P b)[perm[j]] = b[order[j]]
-            perm = outer
-        L = sp.csc_matrix(lu.L)
-        L.sort_indices()
-        Lp = L.indptr.astype(np.int64)
-        Li = np.asarray(L.indices, np.int32)     # no copy: SuperLU's are int32 (0.1 s saved)
-        if np.any(Li[Lp[:-1]] != np.arange(n)):
-            raise SolverError("LDL^T solve: SuperLU's L has a missing diagonal entry")
-        starts = _supernodes(Lp, Li, n)
-        self.nnz = L.nnz
-        t_off, b_off, r_off, tri, rect, rows = _pack(Lp, Li, L.data, starts)
-        self._setup(perm, (starts, t_off, b_off, r_off, tri, rect, rows),
-                    np.asarray(lu.U.diagonal(), float), pool)
-        self._check(a, lu, order)
-
-    @classmethod
-    def from_packed(cls, perm: np.ndarray, factor: tuple, d: np.ndarray, pool=None,
-                    a=None) -> SupernodalLDL:
-        """The solver of a factor already packed by supernodes (fe.cholesky): perm with
-        (P b)[perm[i]] = b[i]; factor = (starts, t_off, b_off, r_off, tri, rect, rows) as _pack
-        makes them; d the pivots; a (sparse) for the check by backward error."""
-        self = cls.__new__(cls)
+    def __init__(self, perm: np.ndarray, factor: tuple, d: np.ndarray, halves, pool=None,
+                 a=None):
+        """perm with (P b)[perm[i]] = b[i]; factor = (starts, t_off, b_off, r_off, tri, rect,
+        rows), the packed supernodes (fe.cholesky); d the pivots; halves: split_halves of the
+        factor; a (sparse): the matrix, for the check by the backward error of one solve
+        (BACKWARD_RTOL). Raises SolverError when the check fails."""
         starts, r_off = factor[0], factor[3]
-        width = np.diff(starts)
-        self.nnz = int((width * (width + 1) // 2 + width * np.diff(r_off)).sum())
-        self._setup(np.asarray(perm, np.int64), factor, np.asarray(d, float), pool)
-        if a is not None:
-            self._check(a, None, None)
-        return self
-
-    def _setup(self, perm, factor, d, pool) -> None:
-        starts, r_off, rows = factor[0], factor[3], factor[6]
-        n = perm.shape[0]
-        self.n = n
+        self.n = perm.shape[0]
         self.n_supernodes = starts.shape[0] - 1
+        self.nnz = stored_entries(starts, r_off)
         self.pool = pool
         self._factor = factor
-        self._d, self._perm = d, perm
+        self._d, self._perm = np.asarray(d, float), np.asarray(perm, np.int64)
         self._all = np.arange(self.n_supernodes, dtype=np.int64)
-        halves = etree_halves(starts, r_off, rows, SPLIT_MIN_GAIN) if n >= SPLIT_MIN_N else None
         if halves is None:
             self._halves = None
         else:
@@ -471,32 +370,21 @@ class SupernodalLDL:
                     for part in (second, top)]
             self._halves = (first, second, top, cols[0].astype(np.int64),
                             cols[1].astype(np.int64))
-
-    def _check(self, a, lu, order) -> None:
-        """SolverError unless a solve of a random right-hand side passes: its backward
-        error with a given (BACKWARD_RTOL), else its agreement with SuperLU's (CHECK_RTOL)."""
-        n = self.n
-        rhs = np.random.default_rng(0).standard_normal(n)
-        x = self.solve(rhs)
         if a is not None:
-            # backward error of the solve: independent of the conditioning (a free body's
-            # K - sigma M, sigma ~1e-9 of its stiffness, solves to 1e-10 apart by LU and LDL^T,
-            # both correct); where U is not D L^T it is of order one
-            scale = _inf_norm(a) * np.abs(x).max() + np.abs(rhs).max()
-            err = np.abs(a @ x - rhs).max() / max(scale, 1e-300)
-            if not err <= BACKWARD_RTOL:
-                raise SolverError(f"LDL^T solve has a backward error of {err:.1e} (the matrix "
-                                  "is not symmetric positive definite?)")
-        else:
-            if order is None:
-                ref = lu.solve(rhs)
-            else:
-                ref = np.empty(n)
-                ref[order] = lu.solve(rhs[order])
-            err = np.abs(x - ref).max() / max(np.abs(ref).max(), 1e-300)
-            if not err <= CHECK_RTOL:
-                raise SolverError(f"LDL^T solve disagrees with SuperLU's LU by {err:.1e} "
-                                  "(the matrix is not symmetric positive definite?)")
+            self._check(a)
+
+    def _check(self, a) -> None:
+        """SolverError unless a solve of a random right-hand side has a backward error of at
+        most BACKWARD_RTOL: independent of the conditioning (a free body's K - sigma M, sigma
+        ~1e-9 of its stiffness, is accepted), of order one where the factor is not a's (an
+        unsymmetric a, whose lower triangle was factored)."""
+        rhs = np.random.default_rng(0).standard_normal(self.n)
+        x = self.solve(rhs)
+        scale = _inf_norm(a) * np.abs(x).max() + np.abs(rhs).max()
+        err = np.abs(a @ x - rhs).max() / max(scale, 1e-300)
+        if not err <= BACKWARD_RTOL:
+            raise SolverError(f"LDL^T solve has a backward error of {err:.1e} (the matrix "
+                              "is not symmetric positive definite?)")
 
     @property
     def split(self) -> bool:

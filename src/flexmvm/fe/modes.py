@@ -98,11 +98,10 @@ def factor(a: sp.spmatrix, spd: bool = True) -> Solve:
     return _superlu(a, SPD_LU if spd else {}).solve
 
 
-def superlu_spd(a: sp.spmatrix, natural: bool = False):
-    """SuperLU's factor object of the SPD matrix a with the symmetric ordering SPD_LU
-    (fe.ldl solves with its L and D), or in a's own order (natural: a is already ordered,
-    e.g. by fe.ordering). Raises SolverError as factor does."""
-    return _superlu(a, {**SPD_LU, "permc_spec": "NATURAL"} if natural else SPD_LU)
+def superlu_spd(a: sp.spmatrix):
+    """SuperLU's factor object of the SPD matrix a with the symmetric ordering SPD_LU (below
+    CHOLESKY_MIN_N rows, and where fe.cholesky refuses a). Raises SolverError as factor does."""
+    return _superlu(a, SPD_LU)
 
 
 def _superlu(a: sp.spmatrix, options: dict):
