@@ -27,13 +27,16 @@ from flexmvm.mesh.mesh import CellBlock, CellType, Mesh
 from flexmvm.mesh.quality import HEX27_IJK
 from flexmvm.mesh.rod import RodSpec, rod_mesh
 from flexmvm.plots.figures import curves_from_run, plot_force_comparison, plot_run
+from flexmvm.results import fields as fields_module
 from flexmvm.results.fields import (
+    StressOperator,
     displacement,
     nodal_stress,
     node_positions,
     node_velocities,
     von_mises,
 )
+from flexmvm.results.vtu import VtuSeries
 from flexmvm.results.writers import (
     default_every,
     write_history_csv,
@@ -314,6 +317,95 @@ def test_von_mises_quadratic_field_at_nodes(cell_type):
 def test_von_mises_rejects_bad_shape(rod):
     with pytest.raises(InputError, match="u_local"):
         von_mises(rod.mesh, ALUMINIUM, np.zeros((5, 3)))
+
+
+@pytest.mark.parametrize("gradient_bytes", [None, 1])
+def test_von_mises_series_is_von_mises_of_each_field(rod, monkeypatch, gradient_bytes):
+    """The batched path (one product per cell for many fields, a compiled average) gives
+    what one field at a time gives, to round-off (1e-12 of the largest stress: the sums run
+    in another order); gradient_bytes = 1 takes one field at a time through it (the chunk
+    boundaries). The uniaxial field is checked against its closed form, |s|."""
+    if gradient_bytes is not None:
+        monkeypatch.setattr(fields_module, "SERIES_GRADIENT_BYTES", gradient_bytes)
+    op = StressOperator(rod.mesh, ALUMINIUM)
+    rng = np.random.default_rng(7)
+    U = np.stack([_uniaxial(rod.mesh.nodes, -3.0e7, ALUMINIUM), np.zeros_like(rod.mesh.nodes)]
+                 + [1e-5 * rng.standard_normal(rod.mesh.nodes.shape) for _ in range(3)])
+    vm = op.von_mises_series(U)
+    assert vm.shape == (5, rod.mesh.n_nodes)
+    np.testing.assert_allclose(vm[0], 3.0e7, rtol=1e-10, atol=0)
+    assert not vm[1].any()
+    for k in range(2, 5):
+        one = op.von_mises(U[k])
+        np.testing.assert_allclose(vm[k], one, rtol=0, atol=1e-12 * one.max())
+    with pytest.raises(InputError, match="expected shape"):
+        op.von_mises_series(U[0])
+
+
+@pytest.mark.parametrize("cell_type", list(CellType))
+def test_von_mises_series_every_cell_type(cell_type):
+    mesh = _single_cell(cell_type, distort=1e-3)
+    op = StressOperator(mesh, BRASS)
+    U = np.stack([_uniaxial(mesh.nodes, 5.0e6, BRASS),
+                  1e-4 * np.random.default_rng(1).standard_normal(mesh.nodes.shape)])
+    vm = op.von_mises_series(U)
+    np.testing.assert_allclose(vm[0], 5.0e6, rtol=1e-10, atol=0)
+    np.testing.assert_allclose(vm[1], op.von_mises(U[1]), rtol=1e-12)
+
+
+# -- VTU files --------------------------------------------------------------------------------
+
+
+def _mixed_mesh():
+    """Every cell type flexmvm has, in separate blocks of one grid (offsets across blocks)."""
+    blocks, points = [], []
+    for k, cell_type in enumerate(CellType):
+        m = _single_cell(cell_type, distort=1e-3)
+        base = sum(len(p) for p in points)
+        points.append(m.nodes + [0.1 * k, 0.0, 0.0])
+        conn = m.cells[0].connectivity + base
+        blocks.append((cell_type.value, np.vstack([conn, conn[:, ::-1]])))
+    return np.vstack(points), blocks
+
+
+def test_vtu_series_reads_back_as_meshio_writes_it(tmp_path):
+    """A file of VtuSeries reads back (meshio's reader: the VTK XML format, zlib blocks)
+    as the same grid and data a file of meshio's own writer does: every cell type, the
+    linear wedge's node order (VTK's differs from meshio's), scalars and vectors."""
+    points, cells = _mixed_mesh()
+    rng = np.random.default_rng(5)
+    data = {"displacement": rng.standard_normal(points.shape), "von_mises": rng.random(len(points))}
+    series = VtuSeries(points, cells)
+    for k in range(2):   # the encoded grid is reused by every file
+        data = {name: v * (k + 1) for name, v in data.items()}
+        series.write(tmp_path / f"ours_{k}.vtu", data)
+        meshio.write(tmp_path / f"theirs_{k}.vtu", meshio.Mesh(points, cells, point_data=data))
+        ours, theirs = meshio.read(tmp_path / f"ours_{k}.vtu"), meshio.read(tmp_path / f"theirs_{k}.vtu")
+        np.testing.assert_array_equal(ours.points, points)
+        assert [c.type for c in ours.cells] == [c.type for c in theirs.cells] == [c for c, _ in cells]
+        for ours_block, theirs_block, (_, conn) in zip(ours.cells, theirs.cells, cells):
+            np.testing.assert_array_equal(ours_block.data, conn)
+            np.testing.assert_array_equal(theirs_block.data, conn)
+        for name, v in data.items():
+            np.testing.assert_array_equal(ours.point_data[name], v)
+            np.testing.assert_array_equal(theirs.point_data[name], v)
+    root = ET.parse(tmp_path / "ours_0.vtu").getroot()
+    assert root.get("type") == "UnstructuredGrid" and root.get("compressor") == "vtkZLibDataCompressor"
+    assert not list(tmp_path.glob(".*.tmp"))   # written atomically, nothing left behind
+
+
+def test_vtu_series_refuses_bad_input(tmp_path):
+    points, cells = _mixed_mesh()
+    with pytest.raises(InputError, match="unsupported cell type 'pyramid'"):
+        VtuSeries(points, [("pyramid", np.zeros((1, 5), int))])
+    with pytest.raises(InputError, match="node index outside"):
+        VtuSeries(points, [("tetra", np.array([[0, 1, 2, len(points)]]))])
+    with pytest.raises(InputError, match="expected shape"):
+        VtuSeries(points[:, :2], cells)
+    series = VtuSeries(points, cells)
+    with pytest.raises(InputError, match="rows"):
+        series.write(tmp_path / "a.vtu", {"v": np.zeros(len(points) - 1)})
+    assert not list(tmp_path.iterdir())
 
 
 # -- figures ----------------------------------------------------------------------------------

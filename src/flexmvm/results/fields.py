@@ -19,6 +19,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 import scipy.sparse as sp
 
@@ -115,6 +116,43 @@ def node_velocities(body: FlexibleBody, A: np.ndarray, q: np.ndarray, frame_v: n
     return fv[:3] + local @ A.T
 
 
+# von_mises_series takes as many fields at a time as keep their gradients within this [bytes]
+SERIES_GRADIENT_BYTES = 32 << 20
+
+
+@numba.njit(cache=True, nogil=True)
+def _average_stress(h, conn, w, lam, mu, S):  # pragma: no cover - compiled
+    """S[node, :, f] += w[node] sigma of h[c, p, :, :, f] = grad u (du_a/dx_i as [i, a]) at
+    cell c's node p = conn[c, p]; sigma's six components (xx, yy, zz, xy, yz, zx)."""
+    nc, npt, nf = h.shape[0], h.shape[1], h.shape[4]
+    for c in range(nc):
+        for p in range(npt):
+            node = conn[c, p]
+            wn = w[node]
+            g = h[c, p]
+            for k in range(nf):
+                exx, eyy, ezz = g[0, 0, k], g[1, 1, k], g[2, 2, k]
+                lt = lam * (exx + eyy + ezz)
+                S[node, 0, k] += wn * (lt + 2.0 * mu * exx)
+                S[node, 1, k] += wn * (lt + 2.0 * mu * eyy)
+                S[node, 2, k] += wn * (lt + 2.0 * mu * ezz)
+                S[node, 3, k] += wn * mu * (g[0, 1, k] + g[1, 0, k])
+                S[node, 4, k] += wn * mu * (g[1, 2, k] + g[2, 1, k])
+                S[node, 5, k] += wn * mu * (g[2, 0, k] + g[0, 2, k])
+
+
+@numba.njit(cache=True, nogil=True)
+def _von_mises_rows(S, out):  # pragma: no cover - compiled
+    """out[f, node] = the von Mises stress of the six components S[node, :, f]:
+    sqrt(((sxx - syy)^2 + (syy - szz)^2 + (szz - sxx)^2) / 2 + 3 (sxy^2 + syz^2 + szx^2))."""
+    for node in range(S.shape[0]):
+        for k in range(S.shape[2]):
+            a, b, c = S[node, 0, k], S[node, 1, k], S[node, 2, k]
+            d, e, f = S[node, 3, k], S[node, 4, k], S[node, 5, k]
+            out[k, node] = np.sqrt(0.5 * ((a - b) ** 2 + (b - c) ** 2 + (c - a) ** 2)
+                                   + 3.0 * (d * d + e * e + f * f))
+
+
 class StressOperator:
     """The linear map u_local (n, 3) [m] -> node-averaged small-strain stress (n, 3, 3) [Pa] of
     one mesh and material, built once (cell gradients, Jacobian inverses, averaging weights)
@@ -146,7 +184,8 @@ class StressOperator:
             Gt = np.empty((len(conn), p * 3, k))
             for lo in range(0, len(conn), _CHUNK):
                 c = conn[lo : lo + _CHUNK]
-                jac = np.einsum("cni,pnj->cpij", mesh.nodes[c], grads)  # dx_i/dxi_j
+                # jac[c, p, i, j] = dx_i/dxi_j = sum_n X[c, n, i] dN_n/dxi_j (p)
+                jac = np.matmul(mesh.nodes[c].transpose(0, 2, 1)[:, None], grads[None])
                 det = np.linalg.det(jac)
                 if np.any(det <= 0.0):
                     bad = lo + int(np.argwhere(det <= 0.0)[0, 0])
@@ -155,7 +194,8 @@ class StressOperator:
                         "node; expected a valid mesh (see mesh.quality.check_quality)"
                     )
                 # G[c, p, n, i] = sum_j dN_n/dxi_j (J^-1)_ji, stored as (c, p, i, n)
-                G = np.einsum("pnj,cpji->cpin", grads, np.linalg.inv(jac))
+                G = np.matmul(np.linalg.inv(jac).transpose(0, 1, 3, 2),
+                              grads.transpose(0, 2, 1)[None])
                 Gt[lo : lo + _CHUNK] = G.reshape(len(c), p * 3, k)
             self._blocks.append((conn, Gt))
             rows.append(conn.ravel())
@@ -164,7 +204,8 @@ class StressOperator:
         rows = np.concatenate(rows) if rows else np.zeros(0, int)
         cols = np.concatenate(cols) if cols else np.zeros(0, int)
         count = np.bincount(rows, minlength=n).astype(float)
-        w = 1.0 / np.maximum(count, 1.0)[rows]
+        self._node_weight = 1.0 / np.maximum(count, 1.0)   # (n,)
+        w = self._node_weight[rows]
         # average over the cells sharing a node (unweighted); nodes in no cell get zero
         self._average = sp.csr_matrix((w, (rows, cols)), shape=(n, offset))
 
@@ -192,6 +233,33 @@ class StressOperator:
     def von_mises(self, u_local: np.ndarray) -> np.ndarray:
         """Nodal von Mises stress (n,) [Pa] of the node-averaged stress of u_local."""
         return von_mises_of(self.nodal_stress(u_local))
+
+    def von_mises_series(self, U: np.ndarray) -> np.ndarray:
+        """von_mises of every field of U (k, n, 3) [m] -> (k, n) [Pa]: the gradients of all
+        fields as the columns of one product per cell (BLAS-3), then one compiled pass that
+        averages the stresses at the nodes and takes their von Mises stress; a few fields at a
+        time, so that the gradients stay within ~32 MB."""
+        U = np.asarray(U, dtype=float)
+        if U.ndim != 3 or U.shape[1:] != (self.n, 3):
+            raise InputError(f"U: expected shape (k, {self.n}, 3), got {U.shape}")
+        k = len(U)
+        out = np.zeros((k, self.n))
+        if not self._blocks or not k:
+            return out
+        per_field = max(Gt.shape[0] * Gt.shape[1] * 3 * 8 for _, Gt in self._blocks)
+        step = max(1, min(k, SERIES_GRADIENT_BYTES // per_field))
+        for lo in range(0, k, step):
+            f = min(step, k - lo)
+            # (n, 3 f): node rows, (component, field) columns
+            Uc = U[lo : lo + f].transpose(1, 2, 0).reshape(self.n, 3 * f)
+            S = np.zeros((self.n, 6, f))
+            for conn, Gt in self._blocks:
+                c, p3 = Gt.shape[0], Gt.shape[1]
+                h = np.matmul(Gt, Uc[conn])  # (c, p*3, 3 f): h[c, (p, i), (a, field)]
+                _average_stress(h.reshape(c, p3 // 3, 3, 3, f), conn, self._node_weight,
+                                self.lam, self.mu, S)
+            _von_mises_rows(S, out[lo : lo + f])
+        return out
 
 
 def nodal_stress(mesh: Mesh, material: Material, u_local: np.ndarray) -> np.ndarray:
@@ -253,11 +321,13 @@ def nodal_fields(body: FlexibleBody, material: Material, r: np.ndarray, A: np.nd
                  q: np.ndarray, frame_v: np.ndarray, q_dot: np.ndarray | None,
                  r0: np.ndarray, A0: np.ndarray, geometry: Mesh | None = None, *,
                  stress: StressOperator | None = None, u: np.ndarray | None = None,
-                 u_dot: np.ndarray | None = None) -> NodalFields:
+                 u_dot: np.ndarray | None = None,
+                 von_mises: np.ndarray | None = None) -> NodalFields:
     """All nodal fields of `body` in state (r, A, q, [r_dot, omega], q_dot), displacement from
     the undeformed body at (r0, A0). geometry: :func:`body_geometry`, stress: its
     :class:`StressOperator`, u / u_dot: :func:`elastic_displacement` of q / q_dot (pass them
-    to reuse them over many outputs)."""
+    to reuse them over many outputs), von_mises: its (n,) [Pa] when already known
+    (StressOperator.von_mises_series of many outputs)."""
     geometry = body_geometry(body) if geometry is None else geometry
     stress = StressOperator(geometry, material) if stress is None else stress
     r, A = _frame(r, A)
@@ -275,5 +345,5 @@ def nodal_fields(body: FlexibleBody, material: Material, r: np.ndarray, A: np.nd
         reference=reference,
         displacement=r + s @ A.T - reference,
         velocity=fv[:3] + local @ A.T,
-        von_mises=stress.von_mises(u),
+        von_mises=stress.von_mises(u) if von_mises is None else von_mises,
     )

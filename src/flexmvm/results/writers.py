@@ -16,7 +16,6 @@ from typing import Any
 from xml.sax.saxutils import quoteattr
 
 import h5py
-import meshio
 import numpy as np
 
 from flexmvm.bodies.body import FlexibleBody
@@ -26,6 +25,7 @@ from flexmvm.materials import Material
 from flexmvm.results.atomic import atomic_path, write_json_atomic, write_text_atomic
 from flexmvm.results.fields import StressOperator, body_geometry, nodal_fields
 from flexmvm.results.history import write_history
+from flexmvm.results.vtu import VtuSeries
 
 __all__ = [
     "MAX_PARAVIEW_STEPS",
@@ -197,19 +197,19 @@ def default_every(n_out: int, max_steps: int = MAX_PARAVIEW_STEPS) -> int:
     return max(1, math.ceil(n_out / max_steps))
 
 
-def _write_vtu(path: Path, points: np.ndarray, body: FlexibleBody, data: dict) -> None:
-    mesh = meshio.Mesh(points, [(b.cell_type.value, b.connectivity) for b in body.mesh.cells],
-                       point_data=data)
-    with atomic_path(path) as tmp:
-        meshio.write(tmp, mesh, file_format="vtu")
-
-
 def _elastic_series(body: FlexibleBody, q: np.ndarray) -> np.ndarray:
     """psi q of every row of q (k, nq): elastic displacements (k, n, 3) [m] in the body frame."""
     n = len(body.X)
     if body.nq == 0:
         return np.zeros((len(q), n, 3))
     return np.asarray(body.psi @ q.T).T.reshape(len(q), n, 3)
+
+
+def _finish(path: Path, text: str, writes) -> None:
+    """Wait for a body's files, then write its collection (last: it lists them)."""
+    for w in writes:
+        w.result()
+    write_text_atomic(path, text)
 
 
 def _pvd_text(entries: list[tuple[float, str]]) -> str:
@@ -245,7 +245,8 @@ def write_paraview_series(out_dir: str | os.PathLike[str], run: RunResult,
     every = default_every(n) if every is None else _check_every("every", every)
     out = Path(out_dir)
     out.mkdir(parents=True, exist_ok=True)
-    with ThreadPoolExecutor(max_workers=2) as pool:  # zlib in meshio releases the GIL
+    pending = None
+    with ThreadPoolExecutor(max_workers=2) as pool:  # zlib releases the GIL
         for b, (body, material) in enumerate(zip(bodies, materials)):
             name = _safe_name("body", body.name)
             geometry = body_geometry(body)
@@ -258,20 +259,30 @@ def write_paraview_series(out_dir: str | os.PathLike[str], run: RunResult,
                 raise InputError(f"RunResult.q_dot[{b}]: expected shape {q.shape} (the rates "
                                  f"of q), got {None if q_dot is None else q_dot.shape}")
             idx = np.arange(0, n, every)
-            # psi q for all written outputs at once: one pass over psi instead of two per output
+            # psi q and the stresses of all written outputs at once (one pass over psi, one
+            # product per cell for all fields: StressOperator.von_mises_series)
             U, Ud = _elastic_series(body, q[idx]), _elastic_series(body, q_dot[idx])
+            vm = stress.von_mises_series(U)
+            # the points (the undeformed body at output 0) and the cells are the same in
+            # every file: encoded once
+            series = VtuSeries(run.frame_r[0, b] + body.X @ np.asarray(run.frame_A[0, b]).T,
+                               [(c.cell_type.value, c.connectivity) for c in body.mesh.cells])
             entries, writes = [], []
             for k, i in enumerate(idx):
                 fl = nodal_fields(body, material, run.frame_r[i, b], run.frame_A[i, b], q[i],
                                   run.frame_v[i, b], q_dot[i], run.frame_r[0, b],
-                                  run.frame_A[0, b], geometry, stress=stress, u=U[k], u_dot=Ud[k])
+                                  run.frame_A[0, b], geometry, stress=stress, u=U[k], u_dot=Ud[k],
+                                  von_mises=vm[k])
                 fname = f"{name}_{i:06d}.vtu"
-                writes.append(pool.submit(_write_vtu, out / fname, fl.reference, body, {
+                writes.append(pool.submit(series.write, out / fname, {
                     "displacement": fl.displacement, "velocity": fl.velocity,
                     "von_mises": fl.von_mises}))
                 entries.append((float(run.t[i]), fname))
-            for w in writes:
-                w.result()
-            write_text_atomic(out / f"{name}.pvd", _pvd_text(entries))
+            # this body's files are written while the next body's fields are computed
+            if pending is not None:
+                _finish(*pending)
+            pending = (out / f"{name}.pvd", _pvd_text(entries), writes)
+        if pending is not None:
+            _finish(*pending)
     return out
 

@@ -1,0 +1,126 @@
+"""VTK XML unstructured-grid files (.vtu) of one mesh with changing point data.
+
+A ParaView time series writes the same points and cells in every file and only the point data
+changes (results/writers.py: the points are the undeformed body, the displacement a field).
+:class:`VtuSeries` compresses and encodes the points and cells once and, per file, only the
+point data: the same file layout meshio writes (binary, zlib-compressed blocks of 32 KiB with
+a UInt32 header, VTK file format 0.1; readable by ParaView, VTK and meshio), at a fraction of
+the cost. zlib level 1 (seed rod, hexahedron27, 8,591 nodes: displacement 3.2 ms instead of
+9.8 ms at meshio's level 6, 152.5 kB instead of 151.7 kB; velocities do not compress at
+either level): the fields are float64 and compress little whatever the effort.
+
+Cell node order is meshio's (flexmvm.mesh.mesh.CellBlock), which is VTK's except for the
+linear wedge (meshio follows gmsh there; written permuted, as meshio does).
+"""
+
+from __future__ import annotations
+
+import base64
+import os
+import sys
+import zlib
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+
+from flexmvm.errors import InputError
+from flexmvm.results.atomic import write_bytes_atomic
+
+__all__ = ["ZLIB_LEVEL", "VtuSeries"]
+
+ZLIB_LEVEL = 1
+_BLOCK = 32768  # bytes per compressed block (VTK's and meshio's default)
+
+# VTK cell type ids (vtkCellType.h) of flexmvm's cell types, named as meshio names them
+_VTK_TYPE = {"tetra": 10, "hexahedron": 12, "wedge": 13, "tetra10": 24, "hexahedron27": 29}
+# meshio -> VTK node order where they differ (meshio._vtk_common.meshio_to_vtk_order)
+_VTK_ORDER = {"wedge": np.array([0, 2, 1, 3, 5, 4])}
+_NUMPY_TO_VTK = {np.dtype(np.float64): "Float64", np.dtype(np.float32): "Float32",
+                 np.dtype(np.int64): "Int64", np.dtype(np.int32): "Int32",
+                 np.dtype(np.uint8): "UInt8"}
+
+
+def _encoded(data: np.ndarray, level: int) -> str:
+    """One binary DataArray body: base64(header) base64(zlib blocks), header UInt32
+    [n blocks, block size, last block size, compressed sizes...]."""
+    raw = np.ascontiguousarray(data).tobytes()
+    blocks = [zlib.compress(raw[i : i + _BLOCK], level) for i in range(0, len(raw), _BLOCK)]
+    last = len(raw) - (len(blocks) - 1) * _BLOCK if blocks else 0
+    header = np.array([len(blocks), _BLOCK, last] + [len(b) for b in blocks], dtype=np.uint32)
+    return (base64.b64encode(header.tobytes()).decode()
+            + base64.b64encode(b"".join(blocks)).decode())
+
+
+def _data_array(name: str, data: np.ndarray, level: int) -> str:
+    data = np.asarray(data)
+    vtk_type = _NUMPY_TO_VTK.get(data.dtype)
+    if vtk_type is None:
+        raise InputError(f"VTU array {name!r}: unsupported dtype {data.dtype}")
+    comps = f' NumberOfComponents="{data.shape[1]}"' if data.ndim == 2 else ""
+    return (f'<DataArray type="{vtk_type}" Name="{name}"{comps} format="binary">'
+            f"{_encoded(data, level)}</DataArray>\n")
+
+
+class VtuSeries:
+    """Files of one unstructured grid (points (n, 3) [m], cells as (meshio type name,
+    connectivity (c, k)) pairs) with their own point data each: ``write(path, point_data)``,
+    atomically (results/atomic.py). Thread-safe: the encoded points and cells are made once
+    and only read afterwards; zlib releases the GIL, so files can be written on threads."""
+
+    def __init__(self, points: np.ndarray, cells: Sequence[tuple[str, np.ndarray]],
+                 level: int = ZLIB_LEVEL):
+        points = np.asarray(points, dtype=np.float64)
+        if points.ndim != 2 or points.shape[1] != 3:
+            raise InputError(f"VTU points: expected shape (n, 3), got {points.shape}")
+        self.n_points = len(points)
+        self.level = level
+        conn, offsets, types = [], [], []
+        end = 0
+        for name, c in cells:
+            if name not in _VTK_TYPE:
+                raise InputError(f"VTU: unsupported cell type {name!r}; expected one of "
+                                 f"{sorted(_VTK_TYPE)}")
+            c = np.asarray(c, dtype=np.int64)
+            if c.ndim != 2:
+                raise InputError(f"VTU {name} connectivity: expected (cells, nodes), got "
+                                 f"shape {c.shape}")
+            if c.size and (c.min() < 0 or c.max() >= self.n_points):
+                raise InputError(f"VTU {name} connectivity: node index outside 0..."
+                                 f"{self.n_points - 1}")
+            if name in _VTK_ORDER:
+                c = c[:, _VTK_ORDER[name]]
+            conn.append(c.ravel())
+            offsets.append(end + c.shape[1] * np.arange(1, len(c) + 1, dtype=np.int64))
+            end += c.size
+            types.append(np.full(len(c), _VTK_TYPE[name], dtype=np.uint8))
+        self.n_cells = sum(len(t) for t in types)
+        cat = (lambda xs, dt: np.concatenate(xs) if xs else np.zeros(0, dt))
+        byte_order = "LittleEndian" if sys.byteorder == "little" else "BigEndian"
+        self._head = (
+            '<?xml version="1.0"?>\n'
+            f'<VTKFile type="UnstructuredGrid" version="0.1" byte_order="{byte_order}" '
+            'compressor="vtkZLibDataCompressor">\n'
+            "<UnstructuredGrid>\n"
+            f'<Piece NumberOfPoints="{self.n_points}" NumberOfCells="{self.n_cells}">\n'
+            "<Points>\n" + _data_array("Points", points, level) + "</Points>\n"
+            "<Cells>\n"
+            + _data_array("connectivity", cat(conn, np.int64), level)
+            + _data_array("offsets", cat(offsets, np.int64), level)
+            + _data_array("types", cat(types, np.uint8), level)
+            + "</Cells>\n"
+        ).encode()
+        self._tail = b"</Piece>\n</UnstructuredGrid>\n</VTKFile>\n"
+
+    def write(self, path: str | os.PathLike[str], point_data: Mapping[str, np.ndarray]) -> None:
+        """Write one file: the grid and point_data {name: (n,) or (n, k) array}."""
+        parts = []
+        for name, data in point_data.items():
+            data = np.asarray(data)
+            if data.ndim not in (1, 2) or data.shape[0] != self.n_points:
+                raise InputError(f"VTU point data {name!r}: expected {self.n_points} rows, got "
+                                 f"shape {data.shape}")
+            if any(c in name for c in '<>&"'):
+                raise InputError(f"VTU point data name {name!r}: no <, >, & or \" allowed")
+            parts.append(_data_array(name, data, self.level))
+        body = ("<PointData>\n" + "".join(parts) + "</PointData>\n").encode() if parts else b""
+        write_bytes_atomic(path, self._head + body + self._tail)
