@@ -125,12 +125,16 @@ def _run_into(out_dir: Path, sc, ref_sc, own_label: str, fields: bool, progress:
     needs_ref = ref_sc is not None
     own_what = f"{own_label} run"
     ref_what = "full-FE reference"
+    failures: list[dict] = []
     if needs_ref and jobs > 1:
         ctx = multiprocessing.get_context("spawn")
         with ProcessPoolExecutor(max_workers=2, mp_context=ctx) as pool:
             ref_future = pool.submit(_run_and_write, ref_sc, "full", out_dir / "full", fields,
                                      progress)
             own_future = pool.submit(_run_and_write, sc, own_label, out_dir, fields, False)
+            # while the two runs go: the theory and the figure module (matplotlib: ~1 s)
+            theory = _theory(sc, failures)
+            import flexmvm.plots.figures  # noqa: F401
             wait([own_future, ref_future], return_when=FIRST_EXCEPTION)
             failed = [(f, what) for f, what in ((own_future, own_what), (ref_future, ref_what))
                       if f.done() and f.exception() is not None]
@@ -150,12 +154,11 @@ def _run_into(out_dir: Path, sc, ref_sc, own_label: str, fields: bool, progress:
                    if needs_ref else None)
         except Exception as exc:
             raise _labelled(ref_what, exc) from exc
+        theory = _theory(sc, failures)
     own_summary, own_curves, n_own, wall_own = own
     echo(f"{own_label}: {n_own} steps in {wall_own:.1f} s")
     summary = dict(own_summary)
-    failures: list[dict] = []
     curves = {_label(own_summary): own_curves}
-    theory = _theory(sc, failures)
     if theory is not None:
         summary["comparison_vs_theory"] = compare_runs(theory[0], theory[1], theory[2],
                                                        *own_curves)
