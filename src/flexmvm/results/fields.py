@@ -39,6 +39,7 @@ __all__ = [
     "nodal_stress",
     "node_positions",
     "node_velocities",
+    "reference_positions",
     "von_mises",
     "von_mises_of",
 ]
@@ -89,13 +90,19 @@ def node_positions(body: FlexibleBody, r: np.ndarray, A: np.ndarray, q: np.ndarr
     return r + (body.X + elastic_displacement(body, q)) @ A.T
 
 
+def reference_positions(body: FlexibleBody, r0: np.ndarray, A0: np.ndarray) -> np.ndarray:
+    """The undeformed body at the frame (r0, A0): x0_k = r0 + A0 X_k, shape (n, 3) [m] (the
+    points of a ParaView series, from which its displacement field is measured)."""
+    r0, A0 = _frame(r0, A0)
+    return r0 + body.X @ A0.T
+
+
 def displacement(body: FlexibleBody, r: np.ndarray, A: np.ndarray, q: np.ndarray,
                  r0: np.ndarray, A0: np.ndarray) -> np.ndarray:
     """Global displacement x_k(r, A, q) - x0_k, shape (n, 3) [m], from the undeformed body at
     the initial frame: x0_k = r0 + A0 X_k. With x0 as mesh points, ParaView's Warp By Vector of
     this field gives the deformed body exactly (rigid motion included)."""
-    r0, A0 = _frame(r0, A0)
-    return node_positions(body, r, A, q) - (r0 + body.X @ A0.T)
+    return node_positions(body, r, A, q) - reference_positions(body, r0, A0)
 
 
 def node_velocities(body: FlexibleBody, A: np.ndarray, q: np.ndarray, frame_v: np.ndarray,
@@ -331,7 +338,6 @@ def nodal_fields(body: FlexibleBody, material: Material, r: np.ndarray, A: np.nd
     geometry = body_geometry(body) if geometry is None else geometry
     stress = StressOperator(geometry, material) if stress is None else stress
     r, A = _frame(r, A)
-    r0, A0 = _frame(r0, A0)
     fv = np.asarray(frame_v, dtype=float)
     if fv.shape != (6,):
         raise InputError(f"frame_v: expected [r_dot, omega] of shape (6,), got {fv.shape}")
@@ -340,7 +346,7 @@ def nodal_fields(body: FlexibleBody, material: Material, r: np.ndarray, A: np.nd
     local = np.cross(fv[3:], s)
     if q_dot is not None or u_dot is not None:
         local = local + (elastic_displacement(body, q_dot) if u_dot is None else u_dot)
-    reference = r0 + body.X @ A0.T
+    reference = reference_positions(body, r0, A0)
     return NodalFields(
         reference=reference,
         displacement=r + s @ A.T - reference,

@@ -23,7 +23,12 @@ from flexmvm.errors import InputError
 from flexmvm.integrate.run_result import RunResult
 from flexmvm.materials import Material
 from flexmvm.results.atomic import atomic_path, write_json_atomic, write_text_atomic
-from flexmvm.results.fields import StressOperator, body_geometry, nodal_fields
+from flexmvm.results.fields import (
+    StressOperator,
+    body_geometry,
+    nodal_fields,
+    reference_positions,
+)
 from flexmvm.results.history import write_history
 from flexmvm.results.vtu import VtuSeries
 
@@ -265,7 +270,7 @@ def write_paraview_series(out_dir: str | os.PathLike[str], run: RunResult,
             vm = stress.von_mises_series(U)
             # the points (the undeformed body at output 0) and the cells are the same in
             # every file: encoded once
-            series = VtuSeries(run.frame_r[0, b] + body.X @ np.asarray(run.frame_A[0, b]).T,
+            series = VtuSeries(reference_positions(body, run.frame_r[0, b], run.frame_A[0, b]),
                                [(c.cell_type.value, c.connectivity) for c in body.mesh.cells])
             entries, writes = [], []
             for k, i in enumerate(idx):
