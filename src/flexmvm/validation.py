@@ -310,7 +310,8 @@ def _cons_table(cols: dict[str, dict]) -> str:
             ("max penetration (both surfaces, every step)",
              lambda s: f"{s['max_penetration_m']:.1e} m"),
             ("... per direction", lambda s: ", ".join(
-                f"{k}: {v:.1e} m" for k, v in (s.get("max_penetration_by_direction_m") or {}).items())),
+                f"{k}: {v:.1e} m"
+                for k, v in sorted((s.get("max_penetration_by_direction_m") or {}).items()))),
             ("LCP complementarity residual, max", lambda s: _e(s.get("lcp_residual_max"))),
             ("Newton steps not converged (worst residual)",
              lambda s: f"{s.get('steps_not_converged')} ({_e(s.get('newton_residual_max'))})"),
