@@ -9,10 +9,14 @@ full-FE striker: ~50 ms per step instead of ~14, see docs/studies.md).
 
     python benchmarks/bench_studies.py [--t-end 8e-4] [--dt 1e-6] [--other mvm:3-5:40]
         [--workers 2] [--subset] [--target ncc>=0.99] [--out DIR] [--record DIR]
+        [--setup-cache empty|user]
 
-The record (default benchmarks/results/studies_<commit>.json) holds the commit, the settings,
-the wall times and the machine's load average before and after (a loaded machine makes every
-time here longer: quote a record only with its load).
+The study builds its meshes and Craig-Bampton bases in a new, empty setup cache, as a first
+study on a machine does, and the search reuses what the brute force built (``--setup-cache
+user``: the user's cache, where earlier runs may have left them: the 20 bases are ~95 s of
+the brute force on two workers). The record (default benchmarks/results/studies_<commit>.json)
+holds the commit, the settings, the wall times and the machine's load average before and
+after (a loaded machine makes every time here longer: quote a record only with its load).
 
 ``--subset`` runs the brute force on layers 1..2 x laps 1..2 x modes 7:43:6 (28 runs) instead
 of the 140; the extrapolation uses the measured mean wall time per run. The search runs in
@@ -31,6 +35,7 @@ import time
 from pathlib import Path
 
 from flexmvm.metrics.ncc import Target
+from flexmvm.setup_cache import ENV_DIR
 from flexmvm.studies.selection import run_selection_study
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -55,9 +60,16 @@ def main() -> None:
     ap.add_argument("--subset", action="store_true")
     ap.add_argument("--out", type=Path, default=None)
     ap.add_argument("--record", type=Path, default=ROOT / "benchmarks" / "results")
+    ap.add_argument("--setup-cache", choices=("empty", "user"), default="empty",
+                    help="empty (default): a new setup cache in the output directory, so the "
+                         "study builds its bases as a first study on a machine does; user: "
+                         "the user's cache ($FLEXMVM_CACHE_DIR or the platform's), bases "
+                         "built by earlier runs reused")
     a = ap.parse_args()
     load0 = os.getloadavg()
     out = a.out or Path(tempfile.mkdtemp(prefix="bench_studies_"))
+    if a.setup_cache == "empty":   # inherited by the cluster's worker processes
+        os.environ[ENV_DIR] = str(out / "setup_cache")
     layers, laps = ([1, 2], [1, 2]) if a.subset else (range(1, 5), range(1, 6))
     modes = range(7, 44, 6)
     target = Target.parse(a.target)
@@ -87,7 +99,8 @@ def main() -> None:
     print(f"reference run (study body full FE): {ref['wall_time_s']:.1f} s solver wall time")
     record = {"commit": _commit(), "settings": {"t_end_s": a.t_end, "dt_s": a.dt,
                                                 "other": a.other, "workers": a.workers,
-                                                "target": a.target, "subset": a.subset},
+                                                "target": a.target, "subset": a.subset,
+                                                "setup_cache": a.setup_cache},
               "brute": {k: brute.get(k) for k in keys},
               "search": {k: found.get(k) for k in keys},
               "runs": {"brute": brute["runs"], "search": found["runs"]},

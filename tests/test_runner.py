@@ -12,7 +12,14 @@ from _study_cases import CountingCase, chain_eigenvalues, computed_keys, computi
 
 from flexmvm.errors import InputError, SolverError
 from flexmvm.results.atomic import atomic_path, write_json_atomic
-from flexmvm.studies.runner import Case, case_path, collect, error_path, run_cases
+from flexmvm.studies.runner import (
+    Case,
+    case_path,
+    cluster_slots,
+    collect,
+    error_path,
+    run_cases,
+)
 
 
 def make_cases(n_cases: int = 8) -> list[Case]:
@@ -227,3 +234,20 @@ def test_workers_share_the_cores(monkeypatch):
         assert sorted(seen.values()) == ["1", "1"]
     finally:
         cluster.close()
+
+
+def test_cluster_slots_counts_the_cases_run_at_once():
+    """In-process 1, a local cluster its workers (default one per core), a running scheduler
+    the threads of its workers; option errors as check_cluster_options."""
+    from distributed import LocalCluster
+
+    assert cluster_slots(None, None, True) == 1
+    assert cluster_slots(None, 3, False) == 3
+    assert cluster_slots(None, None, False) == (os.cpu_count() or 1)
+    with LocalCluster(n_workers=2, threads_per_worker=2, processes=False,
+                      dashboard_address=None) as cluster:
+        assert cluster_slots(cluster.scheduler_address, None, False) == 4
+    with pytest.raises(InputError, match="expected one"):
+        cluster_slots("tcp://127.0.0.1:1", None, True)
+    with pytest.raises(InputError, match="positive integer"):
+        cluster_slots(None, 0, False)

@@ -237,8 +237,9 @@ def test_no_candidate_passes_returns_none():
     found, scores = smallest_passing(candidates, Recorder(table), lambda s: s >= 0.99)
     assert found is None
     assert brute_force(candidates, Recorder(table), lambda s: s >= 0.99)[0] is None
-    # Bisection proves "no pass" with about log2(7) + 1 runs per selection, not 7.
-    assert len(scores) == 6
+    # "No pass" in a selection is proved by its largest candidate failing: one run each.
+    assert len(scores) == 2
+    assert all(c.modes == max(MODES) for c in scores)
 
 
 def test_ties_higher_score_then_fewer_node_dof():

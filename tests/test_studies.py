@@ -21,6 +21,7 @@ from flexmvm.cli.select_cmd import parse_range
 from flexmvm.errors import InputError
 from flexmvm.metrics.ncc import Target
 from flexmvm.scenarios import load_scenario
+from flexmvm.studies import selection
 from flexmvm.studies.estimate import estimate_selection, median_ncc
 from flexmvm.studies.grid import selection_cases
 from flexmvm.studies.selection import run_selection_study
@@ -111,7 +112,7 @@ def test_interrupted_sweep_resumes_only_missing_cases(brute, tmp_path):
     _same_table(_table(out), _table(tmp_path))
 
 
-def test_search_finds_the_brute_force_answer_with_fewer_runs(brute, tmp_path):
+def test_search_finds_the_brute_force_answer_with_fewer_runs(brute, tmp_path, monkeypatch):
     out, _ = brute
     level = median_ncc([{"ncc_force": float(r["ncc_force"])} for r in _table(out)])
     target = Target(level)
@@ -125,8 +126,18 @@ def test_search_finds_the_brute_force_answer_with_fewer_runs(brute, tmp_path):
     assert b["runs_made"] == 0 and b["runs"] == 8 and b["passed"]
     sdir = tmp_path / "search"
     _copy_reference(out, sdir)
+    opened = []
+    real = selection.smallest_passing
+
+    def spy(*args, max_open=None, **kw):
+        opened.append(max_open)
+        return real(*args, max_open=max_open, **kw)
+
+    monkeypatch.setattr(selection, "smallest_passing", spy)
     s = run_selection_study(TINY, "b2", sdir, **GRID, target=target, search=True, serial=True,
                             progress=False, echo=lambda s: None)
+    # in-process: one case at a time, so SEARCH_OPEN_PER_SLOT families open
+    assert opened == [selection.SEARCH_OPEN_PER_SLOT]
     assert s["passed"] and s["search"] is True
     for key in ("layers", "laps", "modes", "dof", "ncc_force"):
         assert s[key] == b[key], key

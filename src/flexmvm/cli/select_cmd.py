@@ -57,8 +57,9 @@ def parse_range(text: str, name: str = "range") -> list[int]:
 @click.option("--interface-modes", default="5:20:5", show_default=True,
               help="Mode counts of the interface kind (with --patches): a..b, start:stop:step.")
 @click.option("--search", is_flag=True,
-              help="Bisect the mode counts per node selection and per patch set (one search "
-                   "over both kinds) instead of running the whole grid.")
+              help="Search the mode counts per node selection and per patch set (one search "
+                   "over both kinds: the largest model under the DOF bound first, then "
+                   "bisection) instead of running the whole grid.")
 @study_run_options
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
               help="Study directory (a rerun resumes).")

@@ -18,7 +18,7 @@ modes from this larger pool, which can differ from its default pool's choice. Mo
 above the largest one whose pool exists (MAX_POOL), cases without modes and the frequency
 choice get none (their default). Brute force runs the whole
 grid of both kinds; ``--search`` runs one search over both (studies/search.py): each patch
-set is a family, bisected over its mode counts like a node selection, and a pass of either
+set is a family, searched over its mode counts like a node selection, and a pass of either
 kind closes the other kind's models of more DOF.
 """
 

@@ -29,8 +29,8 @@ from flexmvm.errors import InputError, SolverError
 from flexmvm.results.atomic import canonical_json, write_json_atomic, write_text_atomic
 from flexmvm.threads import ENV_THREADS
 
-__all__ = ["Case", "Params", "case_path", "check_cluster_options", "collect", "error_path",
-           "local_cluster", "run_cases", "study_cluster", "worker_env"]
+__all__ = ["Case", "Params", "case_path", "check_cluster_options", "cluster_slots", "collect",
+           "error_path", "local_cluster", "run_cases", "study_cluster", "worker_env"]
 
 _KEY_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,199}")
 _CASES_DIR = "cases"
@@ -301,6 +301,36 @@ def study_cluster(scheduler: str | None, n_workers: int | None, serial: bool
         cluster.close()
 
 
+def _connect(scheduler: str):
+    """A distributed Client of the running scheduler at ``scheduler``; InputError if none."""
+    from distributed import Client
+
+    try:
+        return Client(scheduler, set_as_default=False)
+    except OSError as exc:
+        raise InputError(
+            f"cannot connect to Dask scheduler {scheduler!r} ({_one_line(exc)}); "
+            "expected the address of a running scheduler, e.g. tcp://host:8786"
+        ) from None
+
+
+def cluster_slots(scheduler: str | None, n_workers: int | None, serial: bool) -> int:
+    """How many cases the cluster of a study runs at once: 1 in-process (``serial``), the
+    local cluster's single-threaded workers (``n_workers``, default one per core, as
+    :func:`study_cluster`), or the threads of the workers connected to the scheduler at
+    ``scheduler`` when asked (at least 1). InputError if that scheduler cannot be reached."""
+    check_cluster_options(scheduler, n_workers, serial)
+    if serial:
+        return 1
+    if scheduler is None:
+        return n_workers or os.cpu_count() or 1
+    client = _connect(scheduler)
+    try:
+        return max(1, sum(client.nthreads().values()))
+    finally:
+        client.close()
+
+
 def _run_dask(
     pending: Sequence[Case],
     fn: Callable[[Case], Any],
@@ -320,13 +350,7 @@ def _run_dask(
             cluster.close()
             raise
     else:
-        try:
-            client = Client(scheduler, set_as_default=False)
-        except OSError as exc:
-            raise InputError(
-                f"cannot connect to Dask scheduler {scheduler!r} ({_one_line(exc)}); "
-                "expected the address of a running scheduler, e.g. tcp://host:8786"
-            ) from None
+        client = _connect(scheduler)
     try:
         run_id = uuid.uuid4().hex[:12]
         by_key = {}

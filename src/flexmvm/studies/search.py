@@ -27,11 +27,14 @@ Strategy of :func:`smallest_passing`, one search over the families of both kinds
 2. Open the families in order of the DOF of their cheapest candidate (at most ``max_open``
    at a time; all by default); a family whose cheapest candidate has ``dof > best_dof`` is
    closed without any run.
-3. Each open family binary-searches the smallest passing mode count among its candidates
-   with ``dof <= best_dof``: everything below a failing candidate fails, everything above a
-   passing one passes. In each round the midpoints of all open families are evaluated
-   together, in one call of ``evaluate`` (so a Dask runner runs the batch in parallel);
-   then ``best_dof`` is lowered and every search range is cut to ``dof <= best_dof``.
+3. Each open family searches the smallest passing mode count among its candidates with
+   ``dof <= best_dof``: everything below a failing candidate fails, everything above a
+   passing one passes. While no candidate within that cap is known to pass, the family
+   probes its largest one (one failing run closes the family: most families of a study
+   cannot reach the target below the winner's DOF); once one passes, it bisects below it.
+   In each round the probes of all open families are evaluated together, in one call of
+   ``evaluate`` (so a Dask runner runs the batch in parallel); then ``best_dof`` is lowered
+   and every search range is cut to ``dof <= best_dof``.
 4. When no search is open, the winner is the evaluated passing candidate of smallest DOF;
    ties go to the higher score, then to the node kind before the interface kind, then to
    fewer static coordinates ``dof - modes`` (node DOF of a selection, patch vectors of an
@@ -45,8 +48,15 @@ What the search proves beyond the winner: every family's first passing candidate
 smallest model when its DOF equals the winner's (:func:`kind_exact`); a kind that lost has
 no passing model up to the winner's DOF, and models above it were not searched.
 
-Each round costs one ``evaluate`` call, so ``max_open`` trades rounds (wall time on a
-cluster) against runs: ``max_open=1`` is the sequential search with the strongest pruning.
+Each round costs one ``evaluate`` call, so ``max_open`` trades rounds against runs: with
+every family open, the first round runs one candidate of each, most of them in families that
+a passing candidate of a cheaper family closes a round later; with few open, a passing
+candidate closes the others before they cost a run, but the rounds are many and a cluster's
+workers idle in rounds smaller than the cluster. ``max_open=1`` is the sequential search.
+studies.selection opens SEARCH_OPEN_PER_SLOT families per case the cluster runs at once (the
+seed study's table, two workers, ncc >= 0.99, replayed: 11 runs in 5 rounds, against 34 runs
+in 3 rounds with every family open and bisection from the first probe, as before 2026-11-25;
+docs/studies.md).
 """
 
 from __future__ import annotations
@@ -203,7 +213,8 @@ class _Evaluator:
 
 
 class _Bisection:
-    """Binary search for the first passing candidate of one family.
+    """Search for the first passing candidate of one family (module doc, strategy 3): the
+    largest candidate under the DOF cap while none there is known to pass, then bisection.
 
     Invariant: items[:lo] fail, items[hi] passes (or hi == len(items)).
     """
@@ -220,6 +231,8 @@ class _Bisection:
         end = min(self.hi, cap)
         if self.lo >= end:
             return None
+        if self.hi >= cap:   # no pass known under the cap: its largest candidate decides
+            return self.items[end - 1]
         return self.items[(self.lo + end) // 2]
 
     def record(self, candidate: Candidate, passed: bool) -> None:
@@ -246,7 +259,7 @@ def smallest_passing(
     *,
     max_open: int | None = None,
 ) -> tuple[Candidate | None, dict[Candidate, float]]:
-    """The passing candidate of fewest DOF, found by per-family bisection (module doc).
+    """The passing candidate of fewest DOF, found by a search per family (module doc).
 
     Args:
         candidates: the grid, node selections and/or interface patch sets; per family, unique
