@@ -333,3 +333,24 @@ def test_search_finds_the_brute_force_answer_on_the_seed_table():
         best, scores = smallest_passing(list(table), evaluate, passes)
         assert (best.selection, best.modes) == expected, text
         assert len(scores) < 140
+
+
+def test_brute_force_takes_the_families_in_turn():
+    """One batch of the whole grid, ordered so that a cluster's workers start on different
+    families (each selection's basis is built once, not by two workers at the same time):
+    every family's fewest modes first, then every family's next, ..."""
+    candidates = [Candidate((i, j), m, 3 * (i + j) + m) for i in (1, 2) for j in (1, 2, 3)
+                  for m in MODES[:4]]
+    candidates.append(Candidate((3, 1), 7, 19))           # a family of one member
+    table = {c: 0.9 + 0.001 * c.modes for c in candidates}
+    rec = Recorder(table)
+    brute_force(candidates, rec, lambda s: s >= 0.99)
+    (batch,) = rec.batches
+    assert sorted(batch, key=lambda c: (c.selection, c.modes)) == sorted(
+        candidates, key=lambda c: (c.selection, c.modes))
+    n_families = 7
+    assert len({c.selection for c in batch[:n_families]}) == n_families
+    assert [c.modes for c in batch[:n_families]] == [7] * n_families
+    later = batch[n_families:]
+    assert [c.modes for c in later] == [13] * 6 + [19] * 6 + [25] * 6
+    assert all(len({c.selection for c in later[k:k + 6]}) == 6 for k in (0, 6, 12))

@@ -311,12 +311,19 @@ def brute_force(
     """Evaluate every candidate (one batch) and return the best passing one, ranked as in
     :func:`smallest_passing`, with all scores.
 
+    The batch takes the families in turn (each one's fewest modes, then each one's next, ...),
+    so that a cluster's workers start on different families: the cases of one node selection
+    share one Craig-Bampton basis, built by the first of them that finds it missing from the
+    setup cache, and two of them started together would both build it.
+
     Raises:
         InputError: as :func:`smallest_passing`.
     """
     groups = _group(candidates)
     run = _Evaluator(evaluate)
-    everything = [c for fam in sorted(groups) for c in groups[fam]]
+    families = [groups[fam] for fam in sorted(groups)]
+    everything = [items[rank] for rank in range(max((len(g) for g in families), default=0))
+                  for items in families if rank < len(items)]
     if everything:
         run(everything)
     return best_passing(run.scores, passes), run.scores
