@@ -256,6 +256,11 @@ def worker_env(n_workers: int) -> dict[str, str]:
     return {ENV_THREADS: str(max(1, (os.cpu_count() or 1) // max(n_workers, 1)))}
 
 
+def _local_workers(n_workers: int | None) -> int:
+    """The workers of a study's local cluster: ``n_workers``, default one per core."""
+    return n_workers or os.cpu_count() or 1
+
+
 def local_cluster(n_workers: int):
     """A LocalCluster of n_workers single-threaded processes that hands each worker one case
     at a time (worker-saturation 1.0: with the default 1.1 a one-thread worker is sent two
@@ -294,7 +299,7 @@ def study_cluster(scheduler: str | None, n_workers: int | None, serial: bool
     if serial or scheduler is not None:
         yield scheduler
         return
-    cluster = local_cluster(n_workers or os.cpu_count() or 1)
+    cluster = local_cluster(_local_workers(n_workers))
     try:
         yield cluster.scheduler_address
     finally:
@@ -323,7 +328,7 @@ def cluster_slots(scheduler: str | None, n_workers: int | None, serial: bool) ->
     if serial:
         return 1
     if scheduler is None:
-        return n_workers or os.cpu_count() or 1
+        return _local_workers(n_workers)
     client = _connect(scheduler)
     try:
         return max(1, sum(client.nthreads().values()))
@@ -343,7 +348,7 @@ def _run_dask(
     _check_picklable(fn)
     cluster = None
     if scheduler is None:
-        cluster = local_cluster(n_workers or os.cpu_count() or 1)
+        cluster = local_cluster(_local_workers(n_workers))
         try:
             client = Client(cluster, set_as_default=False)
         except BaseException:

@@ -212,7 +212,7 @@ class _Evaluator:
         return scores
 
 
-class _Bisection:
+class _FamilySearch:
     """Search for the first passing candidate of one family (module doc, strategy 3): the
     largest candidate under the DOF cap while none there is known to pass, then bisection.
 
@@ -284,12 +284,12 @@ def smallest_passing(
     queue = deque(sorted(groups, key=lambda fam: (groups[fam][0].dof, fam)))
     run = _Evaluator(evaluate)
     best_dof = math.inf
-    searches: list[_Bisection] = []
+    searches: list[_FamilySearch] = []
     while queue or searches:
         while queue and (max_open is None or len(searches) < max_open):
             fam = queue.popleft()
             if groups[fam][0].dof <= best_dof:
-                searches.append(_Bisection(groups[fam]))
+                searches.append(_FamilySearch(groups[fam]))
         probes = [(s, s.probe(best_dof)) for s in searches]
         searches = [s for s, c in probes if c is not None]
         batch = [c for _, c in probes if c is not None]

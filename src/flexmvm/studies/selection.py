@@ -243,8 +243,9 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
 
     Brute force runs every case of the grid (one batch); ``search=True`` runs
     studies.search.smallest_passing with SEARCH_OPEN_PER_SLOT families open per case the
-    cluster runs at once, each round's batch through run_cases (parallel, resumable). ``scheduler``: address of a Dask scheduler; otherwise one LocalCluster of
-    ``n_workers`` processes for the whole study, or in-process with ``serial=True``. ``kind``:
+    cluster runs at once, each round's batch through run_cases (parallel, resumable).
+    ``scheduler``: address of a Dask scheduler; otherwise one LocalCluster of ``n_workers``
+    processes for the whole study, or in-process with ``serial=True``. ``kind``:
     the candidates' model (grid.study_kind: mvm, the default, mvm-seed or mvm-seed-fixed).
     ``patches`` (patch-radius sets [m]) adds the interface kind's grid patches x
     ``interface_modes`` (studies/interface.py) beside the node selections, in the same brute
