@@ -16,6 +16,10 @@ scenarios/rod_impact.toml). Writes a JSON line of measures:
   99th percentile of that quantity;
 - ringx: the same of the steps' mean velocities (x(k) - x(k-1)) / h (= v_m, what moves the
   nodes; the end velocity v+ of a massless node is no state: it carries no kinetic energy);
+- ringx_window_slave / ringx_window_master: ringx over fixed windows of 0.5, 1 and 2 us
+  (those at least h) instead of steps: the same quantity at every step h that divides the
+  window, so runs at h, h / 2, h / 4 tell the model's own motion on that time scale (it
+  converges with h) from an alternation the step makes (it does not);
 - ring_face_free / ringx_face_free: both measures on the slave face's nodes that never carried
   an impulse (the control: the same face's elastic response without contact);
 - force_ring: the same second difference of the per-step contact force impulse/h, mean over
@@ -66,7 +70,6 @@ def main(model, theta, law, redis, dt_us=None, out=None, path=SHORT):
     rec = {"t": [], "h": [], "us": [], "um": [], "xs": [], "xm": [], "imp": [], "n_on": [],
            "n_rows": []}
     touched_s, touched_m = set(), set()
-    mloc = {int(n): i for i, n in enumerate(prov.master_nodes)}
 
     class Recording(MoreauJeanIntegrator):
         def step(self, t, states, h):
@@ -83,12 +86,12 @@ def main(model, theta, law, redis, dt_us=None, out=None, path=SHORT):
             rec["imp"].append(float(res.contact.normal_impulse(lam)))
             rec["n_rows"].append(res.contact.rows.m)
             rec["n_on"].append(int((lam > 0).sum()))
-            last = prov._last[0]
+            last = prov._last[0]   # (slave index, master facet nodes (local), weights, normal)
             if last is not None and lam.size:
-                for j in np.nonzero(lam[: len(last.point)] > 0)[0]:
-                    touched_s.add(int(last.point[j]))
-                    touched_m.update(mloc[int(n)] for n, w in zip(last.nodes[j], last.weights[j])
-                                     if w != 0.0)
+                point, nodes, weights = last[0], last[1], last[2]
+                for j in np.nonzero(lam[: len(point)] > 0)[0]:
+                    touched_s.add(int(point[j]))
+                    touched_m.update(int(n) for n, w in zip(nodes[j], weights[j]) if w != 0.0)
             return res
 
     driver.MoreauJeanIntegrator = Recording
@@ -123,6 +126,21 @@ def main(model, theta, law, redis, dt_us=None, out=None, path=SHORT):
     pf, _ = ring("xs", free)
     vf, _ = ring("us", free)
     d2f = np.abs(F[ks + 1] - 2 * F[ks] + F[ks - 1])
+
+    def ring_windows(key, nodes, w):
+        """ringx over fixed windows of w [s] instead of steps: the mean velocities
+        (x(t_j) - x(t_j - w)) / w at step ends t_j = j w, second differences over the contact
+        interval; the same quantity at every h that divides w (module doc)."""
+        X = np.array(rec[key])[:, sorted(nodes)]
+        j = np.rint(t_s / w)
+        at = np.nonzero(np.abs(t_s - j * w) < 1e-9 * w)[0]
+        at = at[np.concatenate([[True], np.diff(j[at]) > 0])]
+        jj, tw = j[at], t_s[at]
+        V = np.diff(X[at], axis=0) / w
+        ok = np.diff(jj) == 1      # consecutive windows only
+        d2 = np.abs(V[2:] - 2 * V[1:-1] + V[:-2]) / v0
+        sel = ok[2:] & ok[1:-1] & ok[:-2] & (tw[2:-1] >= t_s[k0]) & (tw[2:-1] <= t_s[k1])
+        return float(d2[sel].mean()) if sel.any() else float("nan")
     out_d = {"scenario": path, "model": model, "theta": theta, "law": law, "redis": redis,
              "dt_us": hc * 1e6, "energy_end": float((E[-1] - E[0]) / E[0]),
              "energy_max": float(np.abs(E - E[0]).max() / E[0]),
@@ -134,6 +152,10 @@ def main(model, theta, law, redis, dt_us=None, out=None, path=SHORT):
              "ring_master_p99": rm99,
              "ringx_slave": ps, "ringx_slave_p99": ps99, "ringx_master": pm,
              "ringx_master_p99": pm99, "ringx_face_free": pf, "ring_face_free": vf, "force_ring": float(d2f.mean() / F.max()),
+             "ringx_window_slave": {f"{w * 1e6:g}us": ring_windows("xs", touched_s, w)
+                                    for w in (0.5e-6, 1e-6, 2e-6) if w >= hc * (1 - 1e-9)},
+             "ringx_window_master": {f"{w * 1e6:g}us": ring_windows("xm", touched_m, w)
+                                     for w in (0.5e-6, 1e-6, 2e-6) if w >= hc * (1 - 1e-9)},
              "n_touched": [len(touched_s), len(touched_m)],
              "contact_us": [float(t_s[k0] * 1e6), float(t_s[k1] * 1e6)],
              "ncc_b2_free_end": cmp_.get("ncc_b2_free_end"), "wall_s": wall,

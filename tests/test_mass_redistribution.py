@@ -11,6 +11,7 @@ import flexmvm as fm
 from flexmvm.errors import InputError
 from flexmvm.fe.assembly import assemble
 from flexmvm.fe.mass_redistribution import moments, redistribute_mass
+from flexmvm.integrate.massless import MasslessCoordinates
 from flexmvm.materials import ALUMINIUM
 from flexmvm.mesh.rod import EndShape, RodSpec, rod_mesh
 from flexmvm.scenarios.build import build_scenario
@@ -47,8 +48,9 @@ def test_bad_nodes_are_input_errors():
 def test_scenario_option_acts_on_the_retained_contact_nodes():
     """redistribute_mass = true: both bodies' rigid-body inertia is unchanged (mass to 1e-14,
     first moment and inertia to 1e-12 of their scale), and the MVM body's retained contact
-    nodes lose their own nodal mass: the diagonal of M_qq at their coordinates drops (a
-    Craig-Bampton constraint mode still carries the mass of the interior it drags)."""
+    nodes become massless coordinates: their constraint modes are split (reduction/basis.py),
+    so their rows of M_qq and of the frame couplings S1, G1 are exactly zero (the integrator's
+    test for them is == 0.0), and the other coordinates keep their mass."""
     sc = fm.load_scenario(SHORT)
     data = sc.model_dump(mode="json")
     data["contacts"][0].update(redistribute_mass=True, law="position")
@@ -60,6 +62,13 @@ def test_scenario_option_acts_on_the_retained_contact_nodes():
             a0, a1 = np.asarray(getattr(i0, name)), np.asarray(getattr(i1, name))
             assert np.abs(a1 - a0).max() <= 1e-12 * np.abs(a0).max()
     # b2 is MVM 1-3 + 37: its first 75 coordinates are the 25 retained face nodes, all on
-    # the contact face
-    d0, d1 = (np.diag(np.asarray(b.system.bodies[1].inv.M_qq)) for b in (plain, redis))
-    assert np.all(d1[:75] < d0[:75]) and np.all(d1 > 0)
+    # the contact face; their interior static fields follow as columns of their own
+    b2, b2_plain = redis.system.bodies[1], plain.system.bodies[1]
+    assert b2_plain.nq == 112 and 112 < b2.nq <= 112 + 75
+    d0, d1 = (np.diag(np.asarray(b.inv.M_qq)) for b in (b2_plain, b2))
+    assert np.all(d0 > 0) and np.all(d1[:75] == 0.0) and np.all(d1[75:] > 0)
+    assert np.all(np.asarray(b2.inv.M_qq)[:75] == 0.0)
+    assert np.all(np.asarray(b2.inv.S1)[:, :75] == 0.0)
+    assert all(np.all(np.asarray(g)[:75] == 0.0) for row in b2.inv.G1 for g in row)
+    assert all(np.all(np.asarray(g)[:75] == 0.0) for row in b2.inv.G2 for g in row)
+    assert MasslessCoordinates.of(b2).s.tolist() == list(range(75))

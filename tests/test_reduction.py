@@ -244,3 +244,91 @@ def test_bad_basis_inputs(fe, ref, face_a):
     basis = build_basis(fe, BasisKind.MODAL, ref, (), 2)
     with pytest.raises(InputError, match="rows"):
         reduced_matrices(other, basis)
+
+
+def _redistributed(fe, nodes):
+    """fe with ``nodes`` massless: their rows and columns of M_scalar removed (the algebra
+    under test needs only zero rows; fe.mass_redistribution, which also keeps the moments,
+    needs a finer mesh than this beam's)."""
+    keep = np.ones(fe.mesh.n_nodes)
+    keep[nodes] = 0.0
+    m = sp.csr_matrix(sp.diags(keep) @ fe.M_scalar @ sp.diags(keep))
+    m.eliminate_zeros()
+    return dataclasses.replace(fe, M_scalar=m, M=sp.csr_matrix(sp.kron(m, sp.identity(3))))
+
+
+def _condensed_lam_dense(k, m, s):
+    """omega^2 of (k, m) with the massless coordinates s condensed out (exact: they carry no
+    inertia), ascending."""
+    n = np.setdiff1d(np.arange(k.shape[0]), s)
+    k_eff = k[np.ix_(n, n)] - k[np.ix_(n, s)] @ np.linalg.solve(k[np.ix_(s, s)], k[np.ix_(s, n)])
+    return sla.eigh(k_eff, m[np.ix_(n, n)], eigvals_only=True)
+
+
+def _condensed_lam(fe, basis, s):
+    m, k = reduced_matrices(fe, basis)
+    return _condensed_lam_dense(k, m, s)
+
+
+def test_craig_bampton_split_at_massless_retained_nodes(fe, ref, face_a):
+    """Retained nodes without mass (the 9 central nodes of the x = 0 face redistributed; the
+    face's 25 nodes retained): their columns are nodal unit vectors and their interior static
+    fields columns of their own, M-orthonormal. Their coordinates have exactly zero rows in
+    m_hat, the other retained nodes' keep their mass; the span holds the Craig-Bampton one of the
+    same model (residual <= 1e-10: least squares in the 2-norm of nodal displacements), so
+    its frequencies are Rayleigh-Ritz bounded by Craig-Bampton's (<= 1e-9 relative: the
+    round-off of two eigen solves) and bound the full model's from above."""
+    fe_r = _redistributed(fe, face_a[:9])
+    cb_psi = _craig_bampton_unsplit(fe_r, ref, face_a, 6)
+    split = build_basis(fe_r, BasisKind.CRAIG_BAMPTON, ref, face_a, 6)
+    nb, ns = 3 * face_a.size, 27   # columns of the retained nodes, of the massless ones
+    assert split.n_static == split.nq - nb - 6 and 0 < split.n_static <= ns
+    dofs = (3 * face_a[:, None] + np.arange(3)).ravel()
+    assert np.array_equal(split.psi[dofs, :nb], np.eye(nb))
+    assert not split.psi[dofs, nb:].any()
+    interior = np.setdiff1d(np.arange(fe.n_dof), np.r_[dofs, ref.fixed_dofs])
+    # the massless nodes' columns move nothing but their node; the others are constraint modes
+    assert not split.psi[interior, :ns].any()
+    np.testing.assert_allclose(split.psi[:, ns:nb], cb_psi[:, ns:nb], rtol=0, atol=1e-12)
+    stat = split.psi[interior, nb : nb + split.n_static]
+    gram = stat.T @ (fe_r.M[interior][:, interior] @ stat)
+    np.testing.assert_allclose(gram, np.eye(split.n_static), atol=1e-10)
+    m, _ = reduced_matrices(fe_r, split)
+    assert np.all(m[:ns] == 0.0) and np.all(np.diag(m)[ns:] > 0)
+    coef = np.linalg.lstsq(split.psi, cb_psi, rcond=None)[0]
+    assert np.linalg.norm(split.psi @ coef - cb_psi) <= 1e-10 * np.linalg.norm(cb_psi)
+    lam_split = _condensed_lam(fe_r, split, np.arange(ns))[:8]
+    m_cb, k_cb = (cb_psi.T @ (a @ cb_psi) for a in (fe_r.M, fe_r.K))
+    lam_cb = sla.eigh(0.5 * (k_cb + k_cb.T), 0.5 * (m_cb + m_cb.T), eigvals_only=True)[:8]
+    assert np.all(lam_split <= lam_cb * (1 + 1e-9))
+    free = ref.free_dofs(fe.n_dof)
+    s_full = np.searchsorted(free, dofs[:ns])   # the massless DOFs among the free ones
+    k_f, m_f = (a[free][:, free].toarray() for a in (fe_r.K, fe_r.M))
+    lam_full = _condensed_lam_dense(k_f, m_f, s_full)[:8]
+    assert np.all(lam_full <= lam_split * (1 + 1e-9))
+
+
+def test_split_needs_no_static_column_when_the_neighbours_are_retained(fe, ref, face_a):
+    """A massless node whose element neighbours are all retained has no interior static
+    field: its constraint mode already is the nodal unit vector, and no column is added."""
+    x = fe.mesh.nodes[:, 0]
+    deep = np.r_[face_a, np.flatnonzero(np.isclose(x, 0.01)), np.flatnonzero(np.isclose(x, 0.02))]
+    fe_r = _redistributed(fe, face_a[:9])
+    basis = build_basis(fe_r, BasisKind.CRAIG_BAMPTON, ref, deep, 6)
+    m, _ = reduced_matrices(fe_r, basis)
+    assert basis.n_static == 0 and basis.nq == 3 * deep.size + 6
+    assert np.all(m[:27] == 0.0) and np.all(np.diag(m)[27:] > 0)
+
+
+def _craig_bampton_unsplit(fe, ref, nodes, n_modes):
+    """The textbook Craig-Bampton psi (constraint modes, fixed-interface modes) by dense
+    algebra, for comparison."""
+    b = (3 * np.asarray(nodes)[:, None] + np.arange(3)).ravel()
+    i = np.setdiff1d(ref.free_dofs(fe.n_dof), b)
+    K, M = fe.K.toarray(), fe.M.toarray()
+    psi = np.zeros((fe.n_dof, b.size + n_modes))
+    psi[b, np.arange(b.size)] = 1.0
+    psi[i, : b.size] = -np.linalg.solve(K[np.ix_(i, i)], K[np.ix_(i, b)])
+    _, v = sla.eigh(K[np.ix_(i, i)], M[np.ix_(i, i)], subset_by_index=[0, n_modes - 1])
+    psi[i, b.size:] = v
+    return psi

@@ -20,7 +20,7 @@ import pytest
 from flexmvm.cli.select_cmd import parse_range
 from flexmvm.errors import InputError
 from flexmvm.metrics.ncc import Target
-from flexmvm.scenarios import load_scenario
+from flexmvm.scenarios import load_scenario, scenario_from_dict
 from flexmvm.studies import selection
 from flexmvm.studies.estimate import estimate_selection, median_ncc
 from flexmvm.studies.grid import selection_cases
@@ -172,6 +172,11 @@ def test_selection_cases_keys_and_limits():
         selection_cases(sc, "b2", [1], [6], [7])
     with pytest.raises(InputError, match="no body 'b7'"):
         selection_cases(sc, "b7", [1], [1], [7])
+    # a massless retained node adds static columns: a case's DOF would not be 3 x nodes + modes
+    data = sc.model_dump(mode="json")
+    data["contacts"][0].update(law="position", redistribute_mass=True)
+    with pytest.raises(InputError, match=r"contacts\[0\] redistributes the mass of 'b2'"):
+        selection_cases(scenario_from_dict(data), "b2", [1], [1], [7])
 
 
 def test_parse_range():

@@ -53,9 +53,10 @@ class MasslessCoordinates:
     @classmethod
     def of(cls, body) -> MasslessCoordinates | None:
         """The massless coordinates of body, or None if it has none: a full-FE body's
-        redistributed contact nodes, or the nodal coordinates of the seed eq. (4) kinds'
-        region II (identity columns). A Craig-Bampton basis keeps mass on every coordinate:
-        a constraint mode moves interior mass."""
+        redistributed contact nodes, the nodal coordinates of the seed eq. (4) kinds'
+        region II (identity columns), or a Craig-Bampton body's redistributed retained nodes
+        (their constraint modes split into the nodal unit vector and a static column:
+        reduction/basis.py)."""
         if not body.nq:
             return None
         if body.is_sparse:

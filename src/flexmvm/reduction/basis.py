@@ -4,6 +4,8 @@
 |---------------|-------------------------------------------------|----------------------------|
 | FULL          | identity on every DOF but the reference ones    | nodal displacements        |
 | CRAIG_BAMPTON | [[I, 0], [-K_ii^-1 K_ib, Phi_in]] (default MVM) | u_b of retained nodes, eta |
+|               | massless retained nodes: [[I, 0, 0],            | u_b, static amplitudes,    |
+|               | [-K_ii^-1 K_in, S_ml, Phi_in]] (see below)      | eta                        |
 | SEED_BLOCK    | diag(Psi_I, I_II), seed eq. (4); Psi_I: whole-  | a_I, region-II u_II        |
 |               | body modes, region-II rows zeroed               |                            |
 | SEED_FIXED    | diag(Psi_I, I_II), seed eq. (4); Psi_I: modes   | a_I, region-II u_II        |
@@ -12,6 +14,17 @@
 | MODAL         | first N modes of the reference-supported body   | modal coordinates          |
 | INTERFACE     | Hertz contact-patch Ritz vectors + free-free    | patch amplitudes, modal    |
 |               | modes by participation (reduction/interface.py) | coordinates                |
+
+A retained node without mass (its mass redistributed to its neighbours,
+fe.mass_redistribution) keeps a massless coordinate only if its column moves nothing else: its
+constraint mode is split into the nodal unit vector and its interior static field, which
+becomes a column of its own. With c the massless retained nodes and n the others, the static
+columns S_ml span -K_ii^-1 K_ic, M-orthonormalised (columns of no rank dropped); the span is
+the Craig-Bampton one plus the unit vectors of c, so every frequency is at most the
+Craig-Bampton one (Rayleigh-Ritz), and the coordinates u_c have zero rows in m_hat: the
+integrator holds them in equilibrium at the step ends (integrate/massless.py). Without the
+split a constraint mode drags interior mass along and the redistribution leaves the
+retained contact coordinates massive.
 
 Every Psi has zero rows at the reference DOFs (ReferenceCondition), so q carries no
 rigid-body motion. The reduced matrices are m_hat = Psi^T M Psi, k_hat = Psi^T K Psi
@@ -72,6 +85,14 @@ class Basis:
     def nq(self) -> int:
         """Number of generalised elastic coordinates."""
         return int(self.psi.shape[1])
+
+    @property
+    def n_static(self) -> int:
+        """Static columns of the massless retained nodes (CRAIG_BAMPTON: between the retained
+        nodes' columns and the modal ones; 0 for the other kinds)."""
+        if self.kind is not BasisKind.CRAIG_BAMPTON:
+            return 0
+        return self.nq - 3 * self.retained_nodes.size - self.n_modes
 
     def retained_columns(self) -> np.ndarray:
         """Columns of psi holding the x, y, z displacement of each retained node, (nb, 3).
@@ -138,14 +159,37 @@ def _craig_bampton(fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray
     interior = np.setdiff1d(reference.free_dofs(fe.n_dof), b)
     k_rows = fe.K[interior]
     k_ii, k_ib = k_rows[:, interior], k_rows[:, b]
-    psi = np.zeros((fe.n_dof, b.size + n_modes))
-    psi[b, np.arange(b.size)] = 1.0
     with solver_pool() as pool:
         solve = spd_solver(k_ii, pool)
-        psi[interior, : b.size] = -solve(k_ib.toarray())
-        psi[interior, b.size:], freqs = _fixed_interface_modes(fe, interior, k_ii, solve,
-                                                               n_modes)
+        statics = -solve(k_ib.toarray())
+        modes, freqs = _fixed_interface_modes(fe, interior, k_ii, solve, n_modes)
+    split = _node_dofs(np.flatnonzero(_massless(fe, nodes)))  # columns of massless nodes
+    extra = _static_columns(fe, interior, statics[:, split])
+    statics[:, split] = 0.0
+    psi = np.zeros((fe.n_dof, b.size + extra.shape[1] + n_modes))
+    psi[b, np.arange(b.size)] = 1.0
+    psi[interior, : b.size] = statics
+    psi[interior, b.size : b.size + extra.shape[1]] = extra
+    psi[interior, b.size + extra.shape[1]:] = modes
     return Basis(BasisKind.CRAIG_BAMPTON, psi, nodes, n_modes, reference, freqs)
+
+
+def _massless(fe: FEModel, nodes: np.ndarray) -> np.ndarray:
+    """(len(nodes),) bool: the nodes whose rows of the scalar mass matrix are zero."""
+    m = sp.csr_matrix(fe.M_scalar)
+    return np.asarray(abs(m).sum(axis=1)).ravel()[nodes] == 0.0
+
+
+def _static_columns(fe: FEModel, interior: np.ndarray, fields: np.ndarray) -> np.ndarray:
+    """An M-orthonormal basis (interior rows) of the span of ``fields``, the interior static
+    fields of the massless retained nodes; directions of relative mass below 1e-12 of the
+    largest are dropped (a node whose neighbours are all retained has a zero field)."""
+    if not fields.shape[1]:
+        return fields
+    gram = fields.T @ (fe.M[interior][:, interior] @ fields)
+    w, v = np.linalg.eigh(0.5 * (gram + gram.T))
+    keep = w > 1e-12 * max(w.max(), 0.0)
+    return fields @ (v[:, keep] / np.sqrt(w[keep]))
 
 
 def _fixed_interface_modes(fe: FEModel, interior: np.ndarray, k_ii, solve, n_modes: int

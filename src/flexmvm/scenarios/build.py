@@ -176,7 +176,7 @@ def basis_for(key, material: Material, kind: BasisKind, retained: tuple, modes: 
     if kind is not BasisKind.CRAIG_BAMPTON or modes >= floor:
         return _basis_cached(key, material, kind, retained, modes, ref_set, interface)
     big = _basis_cached(key, material, kind, retained, floor, ref_set)
-    nb = 3 * len(big.retained_nodes)
+    nb = 3 * len(big.retained_nodes) + big.n_static
     return dataclasses.replace(big, psi=np.ascontiguousarray(big.psi[:, : nb + modes]),
                                n_modes=modes, mode_freqs_hz=big.mode_freqs_hz[:modes].copy())
 
@@ -259,7 +259,8 @@ def body_parts_for(key, material: Material, kind: BasisKind, retained: tuple, mo
     if kind is not BasisKind.CRAIG_BAMPTON or modes >= floor:
         return _parts_cached(key, material, kind, retained, modes, ref_set, interface)
     big = _parts_cached(key, material, kind, retained, floor, ref_set)
-    return big.leading(3 * len(retained) + modes)
+    n_static = _basis_cached(key, material, kind, retained, floor, ref_set).n_static
+    return big.leading(3 * len(retained) + n_static + modes)
 
 
 @functools.lru_cache(maxsize=16)

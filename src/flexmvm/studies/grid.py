@@ -32,6 +32,13 @@ def _ints(name: str, values: Iterable[int]) -> list[int]:
 
 def check_grid(sc: Scenario, body: str, layers, laps, modes):
     rod = rod_of(sc, body)
+    for k, c in enumerate(sc.contacts):
+        if c.redistribute_mass and body in (c.slave_body, c.master_body):
+            # a massless retained node adds static columns (reduction/basis.py), so a case's
+            # DOF would not be 3 x nodes + modes, the count the grid and the search rank by
+            raise InputError(f"contacts[{k}] redistributes the mass of {body!r}'s contact nodes;"
+                             " a selection study counts 3 x nodes + modes coordinates: set "
+                             "redistribute_mass = false for the study")
     layers, laps, modes = _ints("layers", layers), _ints("laps", laps), _ints("modes", modes)
     for name, vals, top in (("layers", layers, rod.n_layers), ("laps", laps, rod.n_laps)):
         if vals[-1] > top:
