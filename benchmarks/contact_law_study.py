@@ -170,6 +170,7 @@ def main(model, theta, law, redis, dt_us=None, out=None, path=SHORT):
                  xs=np.array(rec["xs"])[:, sorted(touched_s)],
                  us=np.array(rec["us"])[:, sorted(touched_s)],
                  n_on=np.array(rec["n_on"]), n_rows=np.array(rec["n_rows"]))
+    return out_d, np.asarray(t_f), np.asarray(f)
 
 
 if __name__ == "__main__":

@@ -244,3 +244,25 @@ def test_penetration_recovery_option():
         data["contacts"][0].update(penetration_recovery=bad, law=law)
         with pytest.raises(ScenarioError, match="penetration_recovery"):
             scenario_from_dict(data)
+
+
+def test_conserving_scheme_flag_and_its_energy_warning():
+    """theta = 1/2 with every contact on the position law conserves energy (stable runs: 1e-6
+    of the start): the summary says so, and a gain above 1e-4 (the unstable both-MVM runs
+    gained 4.6e-4 and more, docs/contact_law.md) is warned of, where the general threshold
+    (5e-3) would stay silent."""
+    from flexmvm.scenarios.guard import energy_gain_warning
+    from flexmvm.scenarios.run import run_scenario
+
+    short = {"t_end_s": 2e-6}
+    assert run_scenario(_scenario("position", True).with_time(**short)).summary[
+        "energy_conserving_scheme"] is True
+    assert run_scenario(_scenario("position", True, 0.55).with_time(**short)).summary[
+        "energy_conserving_scheme"] is False
+    assert run_scenario(_scenario("velocity", False).with_time(**short)).summary[
+        "energy_conserving_scheme"] is False
+    unstable = {"energy_gain_rel_max": 4.6e-4, "energy_conserving_scheme": True}
+    assert "theta = 0.55" in energy_gain_warning(unstable)
+    assert energy_gain_warning(unstable | {"energy_conserving_scheme": False}) is None
+    assert energy_gain_warning({"energy_gain_rel_max": 7e-7,
+                                "energy_conserving_scheme": True}) is None

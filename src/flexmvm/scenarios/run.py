@@ -8,6 +8,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flexmvm.constraints.contact import ContactLaw
 from flexmvm.integrate.driver import simulate
 from flexmvm.integrate.run_result import ProbeHistory, RunResult, StepHistory
 from flexmvm.scenarios.build import BuiltScenario, build_scenario
@@ -127,6 +128,12 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         "energy_rel_error_max": e_err_max,
         # the largest rise of the total energy over its start [-] (None with applied loads)
         "energy_gain_rel_max": gain,
+        # theta = 1/2 and every contact on the position law: the step conserves energy
+        # (scenarios.guard.CONSERVING_ENERGY_GAIN_WARN)
+        "energy_conserving_scheme": bool(
+            built.grid.theta == 0.5 and built.system.contacts
+            and all(getattr(c, "law", None) is ContactLaw.POSITION
+                    for c in built.system.contacts)),
         "max_penetration_m": float(res.max_penetration_m),
         "max_penetration_at": res.max_penetration_at,
         "max_penetration_by_direction_m": dict(res.max_penetration_by_direction_m),
