@@ -2,8 +2,9 @@
 
     python benchmarks/contact_law_study.py MODEL THETA LAW REDIS [DT_US] [OUT.json] [SCENARIO]
 
-MODEL: shipped (the scenario's models: on the short case b1 full FE, b2 MVM 1-3 + 37) or a
-model kind for every body (full, mvm, mvm-seed, ...); LAW: velocity or position; REDIS: 0 or 1
+MODEL: shipped (the scenario's models: on the short case b1 full FE, b2 MVM 1-3 + 37), a
+model kind for every body (full, mvm, mvm-seed, ...) or one per body, "b1=mvm,b2=mvm:1-5"
+(kind, optionally :selection); LAW: velocity or position; REDIS: 0 or 1
 (redistribute_mass); SCENARIO: default scenarios/rod_impact_short.toml (the seed case:
 scenarios/rod_impact.toml). Writes a JSON line of measures:
 - energy: (E - E0) / E0 at the end (t_end, after separation) and the largest |E - E0| / E0;
@@ -49,9 +50,17 @@ SHORT = "scenarios/rod_impact_short.toml"
 def scenario(model: str, theta: float, law: str, redis: bool, dt: float | None,
              path: str = SHORT):
     sc = fm.load_scenario(path)
-    if model != "shipped":
+    if model != "shipped" and "=" not in model:
         sc = sc.with_kind(model)
     data = sc.model_dump(mode="json")
+    if "=" in model:   # per body: "b1=mvm,b2=mvm:1-5" (kind, optionally :selection)
+        for item in model.split(","):
+            name, spec = item.split("=")
+            kind, _, selection = spec.partition(":")
+            body = next(b for b in data["bodies"] if b["name"] == name)
+            body["model"]["kind"] = kind
+            if selection:
+                body["model"]["selection"] = selection
     data["contacts"][0]["law"] = law
     data["contacts"][0]["redistribute_mass"] = bool(redis)
     sc = fm.scenario_from_dict(data)
