@@ -4,8 +4,8 @@
 |---------------|-------------------------------------------------|----------------------------|
 | FULL          | identity on every DOF but the reference ones    | nodal displacements        |
 | CRAIG_BAMPTON | [[I, 0], [-K_ii^-1 K_ib, Phi_in]] (default MVM) | u_b of retained nodes, eta |
-|               | massless retained nodes: [[I, 0, 0],            | u_b, static amplitudes,    |
-|               | [-K_ii^-1 K_in, S_ml, Phi_in]] (see below)      | eta                        |
+|               | with massless retained nodes c (n: the others): | u_b, static amplitudes,    |
+|               | [[I, 0, 0], [(0, -K_ii^-1 K_in), S_c, Phi_in]]  | eta                        |
 | SEED_BLOCK    | diag(Psi_I, I_II), seed eq. (4); Psi_I: whole-  | a_I, region-II u_II        |
 |               | body modes, region-II rows zeroed               |                            |
 | SEED_FIXED    | diag(Psi_I, I_II), seed eq. (4); Psi_I: modes   | a_I, region-II u_II        |
@@ -18,10 +18,10 @@
 A retained node without mass (its mass redistributed to its neighbours,
 fe.mass_redistribution) keeps a massless coordinate only if its column moves nothing else: its
 constraint mode is split into the nodal unit vector and its interior static field, which
-becomes a column of its own. With c the massless retained nodes and n the others, the static
-columns S_ml span -K_ii^-1 K_ic, M-orthonormalised (columns of no rank dropped); the span is
-the Craig-Bampton one plus the unit vectors of c, so every frequency is at most the
-Craig-Bampton one (Rayleigh-Ritz), and the coordinates u_c have zero rows in m_hat: the
+becomes a column of its own: the static columns S_c span -K_ii^-1 K_ic, M-orthonormalised
+(directions of no rank dropped), between the retained nodes' columns and the modes; the span is
+the Craig-Bampton one plus the unit vectors of c, so every frequency lies between the full
+model's and the Craig-Bampton one (Rayleigh-Ritz), and the coordinates u_c have zero rows in m_hat: the
 integrator holds them in equilibrium at the step ends (integrate/massless.py). Without the
 split a constraint mode drags interior mass along and the redistribution leaves the
 retained contact coordinates massive.
