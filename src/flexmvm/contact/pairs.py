@@ -27,9 +27,12 @@ the energy-conserving contact of Laursen and Chawla (1997, IJNME 40) and Armero 
 (1998, CMAME 158), where the gap's variation over the step is exact. Re-projected every step
 instead, the contact force of a closed pair turns with the facets' step-scale motion and does
 work on it: with both rods Craig-Bampton at theta = 1/2 that work grew the alternation of the
-contact region by x 2 in energy per 20 us (docs/contact_law.md). The pair goes back to the
-projection when it opens (no impulse) or when its linear gap leaves the exact closest-point
-gap by more than gap_tol (sliding along a curved master).
+contact region by x 2 in energy per 20 us (docs/contact_law.md). The exact closest-point gap
+is still computed: when the linear one has drifted from it by more than gap_tol since the
+geometry was taken (sliding along a curved master, facets turning), the pair takes the
+projection's facet, weights and normal with the offset that keeps its gap (no jump: no
+impulse, no work), and it goes back to the projection outright when it opens (no impulse) or
+when the two gaps are more than HOLD_DRIFT_MAX gap_tol apart.
 Bonded contact (seed eq. 7, all three components) locks a pair once it has carried a
 compressive impulse: three equality rows x_S - x_C = 0 at the frozen shape functions, until
 the normal component of its impulse would turn tensile.
@@ -369,7 +372,6 @@ class PointToSurfaceContact:
                 self._bonds[s] = (proj.nodes[j].copy(), proj.weights[j].copy())
                 self._bond_normal[s] = proj.normal[j].copy()
         self._bonded[:] = np.isin(self.slave_nodes, list(self._bonds))
-
 
     def _hold_closed(self, impulses: np.ndarray) -> None:
         """The pairs of the last candidate rows with a positive impulse are held on the
