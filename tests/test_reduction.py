@@ -26,6 +26,7 @@ from flexmvm.reduction import (
     rigid_body_modes,
     three_two_one,
 )
+from flexmvm.reduction.basis import MasslessStatics, massless_patterns
 from flexmvm.reduction.interface import InterfaceSpec
 
 # meshio/VTK hexahedron27 nodes as doubled reference coordinates (independent of the library).
@@ -271,7 +272,7 @@ def _condensed_lam(fe, basis, s):
 
 
 def test_craig_bampton_split_at_massless_retained_nodes(fe, ref, face_a):
-    """Retained nodes without mass (the 9 central nodes of the x = 0 face redistributed; the
+    """MasslessStatics.ALL. Retained nodes without mass (the 9 central nodes of the x = 0 face redistributed; the
     face's 25 nodes retained): their columns are nodal unit vectors and their interior static
     fields columns of their own, M-orthonormal. Their coordinates have exactly zero rows in
     m_hat, the other retained nodes' keep their mass; the span holds the Craig-Bampton one of the
@@ -280,7 +281,8 @@ def test_craig_bampton_split_at_massless_retained_nodes(fe, ref, face_a):
     round-off of two eigen solves) and bound the full model's from above."""
     fe_r = _redistributed(fe, face_a[:9])
     cb_psi = _craig_bampton_unsplit(fe_r, ref, face_a, 6)
-    split = build_basis(fe_r, BasisKind.CRAIG_BAMPTON, ref, face_a, 6)
+    split = build_basis(fe_r, BasisKind.CRAIG_BAMPTON, ref, face_a, 6,
+                        massless_statics=MasslessStatics.ALL)
     nb, ns = 3 * face_a.size, 27   # columns of the retained nodes, of the massless ones
     assert split.n_static == split.nq - nb - 6 and 0 < split.n_static <= ns
     dofs = (3 * face_a[:, None] + np.arange(3)).ravel()
@@ -306,6 +308,47 @@ def test_craig_bampton_split_at_massless_retained_nodes(fe, ref, face_a):
     k_f, m_f = (a[free][:, free].toarray() for a in (fe_r.K, fe_r.M))
     lam_full = _condensed_lam_dense(k_f, m_f, s_full)[:8]
     assert np.all(lam_full <= lam_split * (1 + 1e-9))
+
+
+def test_patch_statics_of_massless_retained_nodes(fe, ref, face_a):
+    """MasslessStatics.PATCH (the default): the same 9 massless nodes keep their nodal unit
+    vectors (zero rows of m_hat), and their static columns are the interior static fields of
+    massless_patterns' 11 smooth patterns only, M-orthonormal: a boundary motion along a
+    pattern, with its Craig-Bampton interior field, lies in the span (residual <= 1e-10), and
+    the span lies in ALL's, so its frequencies are Rayleigh-Ritz bounded by ALL's from above
+    (<= 1e-9 relative) and by the full model's from below. One massless node: its 3 static
+    fields, as ALL."""
+    fe_r = _redistributed(fe, face_a[:9])
+    cb_psi = _craig_bampton_unsplit(fe_r, ref, face_a, 6)
+    patch = build_basis(fe_r, BasisKind.CRAIG_BAMPTON, ref, face_a, 6)
+    full_split = build_basis(fe_r, BasisKind.CRAIG_BAMPTON, ref, face_a, 6,
+                             massless_statics=MasslessStatics.ALL)
+    nb, ns = 3 * face_a.size, 27
+    P = massless_patterns(fe.mesh.nodes[face_a[:9]])
+    assert P.shape == (ns, 11)
+    assert 0 < patch.n_static <= 11 < full_split.n_static
+    dofs = (3 * face_a[:, None] + np.arange(3)).ravel()
+    assert np.array_equal(patch.psi[dofs, :nb], np.eye(nb)) and not patch.psi[dofs, nb:].any()
+    interior = np.setdiff1d(np.arange(fe.n_dof), np.r_[dofs, ref.fixed_dofs])
+    stat = patch.psi[interior, nb : nb + patch.n_static]
+    gram = stat.T @ (fe_r.M[interior][:, interior] @ stat)
+    np.testing.assert_allclose(gram, np.eye(patch.n_static), atol=1e-10)
+    m, _ = reduced_matrices(fe_r, patch)
+    assert np.all(m[:ns] == 0.0) and np.all(np.diag(m)[ns:] > 0)
+    for basis_big, target in ((patch, cb_psi[:, :ns] @ P), (full_split, patch.psi)):
+        coef = np.linalg.lstsq(basis_big.psi, target, rcond=None)[0]
+        assert np.linalg.norm(basis_big.psi @ coef - target) <= 1e-10 * np.linalg.norm(target)
+    lam_patch = _condensed_lam(fe_r, patch, np.arange(ns))[:8]
+    lam_all = _condensed_lam(fe_r, full_split, np.arange(ns))[:8]
+    assert np.all(lam_all <= lam_patch * (1 + 1e-9))
+    free = ref.free_dofs(fe.n_dof)
+    s_full = np.searchsorted(free, dofs[:ns])
+    k_f, m_f = (a[free][:, free].toarray() for a in (fe_r.K, fe_r.M))
+    assert np.all(_condensed_lam_dense(k_f, m_f, s_full)[:8] <= lam_patch * (1 + 1e-9))
+    one = _redistributed(fe, face_a[:1])
+    a, b = (build_basis(one, BasisKind.CRAIG_BAMPTON, ref, face_a, 6, massless_statics=k)
+            for k in (MasslessStatics.PATCH, MasslessStatics.ALL))
+    assert a.n_static == b.n_static == 3
 
 
 def test_split_needs_no_static_column_when_the_neighbours_are_retained(fe, ref, face_a):

@@ -63,9 +63,24 @@ def _penetration_ok(summary: dict, slave_factor: float = 1.0) -> None:
     assert summary["max_penetration_m"] < PEN_ANY, by
 
 
+def _damped(sc):
+    """``sc`` on the damped scheme: Moreau's velocity law (restitution 0) without mass
+    redistribution, theta = 0.55."""
+    data = sc.model_dump(mode="json")
+    data["time"]["theta"] = 0.55
+    for c in data["contacts"]:
+        c.update(law="velocity", redistribute_mass=False)
+    return scenario_from_dict(data, "rod_impact_short.toml (damped scheme)")
+
+
 @functools.cache
 def _short(which: str):
+    """The short seed case with the models ``which``, on its own scheme (theta = 1/2, position
+    law, mass redistribution) or, with a "-damped" suffix, on the damped one (_damped)."""
     sc = validation.short_scenario()
+    if which.endswith("-damped"):
+        which = which.removesuffix("-damped")
+        sc = _damped(sc)
     models = {
         "full": None,
         "mvm": None,
@@ -104,22 +119,35 @@ def _restitution(run) -> float:
     return _impulse(run) / (m1 * m2 * V0 / (m1 + m2)) - 1.0
 
 
+def _ncc_below(a: np.ndarray, b: np.ndarray, cut_hz: float, dt_s: float) -> float:
+    """Pearson r of two histories on the same output grid (dt_s) after an FFT low-pass at
+    cut_hz (the histories start and end at rest: no window needed)."""
+    n = min(len(a), len(b))
+    keep = np.fft.rfftfreq(n, dt_s) <= cut_hz
+    a, b = (np.fft.irfft(np.fft.rfft(x[:n]) * keep, n) for x in (a, b))
+    return float(np.corrcoef(a, b)[0, 1])
+
+
 def _check_sane(run, e_min: float = 0.99) -> None:
     """What every free two-body impact must satisfy, whatever the body models:
     - total linear momentum conserved to 1e-9 relative (the translational equations are linear
       and the impulses act in equal and opposite pairs; the solver converges the frame's
       translational rows to 1e-13, TRANSLATION_RTOL);
     - contact force never tensile, positive during the impact, released before t_end;
-    - energy: the end value at most the initial (theta = 0.55 and the e = 0 impact law only
-      remove energy; measured -0.04 % to -0.08 %); during the contact it may rise by at most
-      2e-3 of the initial: the penetration recovery (beta = 0.2 of a penetration per step) does
-      positive work, ~ theta beta F g per step, more for stiffer contacts (measured transient
-      rise: full FE 1.4e-5, mvm-seed 2.6e-4, rigid striker 4.4e-4, modal 8.3e-4);
+    - energy: the end value at most the initial and never above it by more than 1e-9 of it
+      (the scenario's scheme, theta = 1/2 with the position law, conserves it: a closed pair
+      does no work and nothing pushes a penetrated node out; what it loses is the end
+      equilibrium of the massless nodes and the entry of pairs. Measured at the end: full FE
+      -6.4e-6, MVM -6.9e-6, mvm-seed -1.6e-5, modal -2.9e-5, rigid striker -9.3e-6; largest
+      rise 1e-14. The damped scheme loses 0.04-0.08 % and may rise by up to 2e-3 through
+      the velocity law's penetration recovery, ~ theta beta F g per step: measured up to
+      8.3e-4);
     - the impulse lies between the perfectly plastic and the perfectly elastic one, and near
       the elastic one: these Hertz contacts last 5-6 striker transits, so the rods come apart
       nearly free of vibration. 1D wave-Hertz: e = 0.99978; the 3D runs measured 0.9973
-      (mvm-seed) to 0.9992 (rigid striker): e >= 0.99 with room for the unresolved modes
-      theta damps; e <= 1 + 1e-6 (an impulse above the elastic one would create energy);
+      (mvm-seed) to 0.9992 (rigid striker) on the damped scheme, 0.9984 (mvm-seed, modal) to
+      0.99996 (rigid striker) on the scenario's: e >= 0.99 with room for the unresolved modes;
+      e <= 1 + 1e-6 (an impulse above the elastic one would create energy);
     - rebound direction: after the impact both move in +x and the target faster than the
       striker (m1 = 0.255 kg > m2 = 0.085 kg: the striker follows, slower)."""
     s, res = run.summary, run.result
@@ -131,7 +159,8 @@ def _check_sane(run, e_min: float = 0.99) -> None:
     assert s["contact_intervals_s"] and s["contact_intervals_s"][0][0] < 2e-6
     assert s["contact_intervals_s"][-1][1] < res.t[-1] - 10e-6
     E = res.total_energy
-    assert E[-1] <= E[0] and E.max() <= E[0] * (1 + 2e-3)
+    rise = 1e-9 if s["energy_conserving_scheme"] else 2e-3
+    assert E[-1] <= E[0] and E.max() <= E[0] * (1 + rise)
     e = _restitution(run)
     assert e_min <= e <= 1.0 + 1e-6, e
     m1, m2 = _masses(run)
@@ -146,8 +175,8 @@ def _check_sane(run, e_min: float = 0.99) -> None:
 # --- 1. the short seed case ------------------------------------------------------------------
 
 def test_short_full_fe_against_wave_hertz_theory():
-    """Full FE vs 1D wave-Hertz on the short case (measured at 3315d09: NCC 0.99719, peak
-    +3.74 %, impulse -0.97 %, contact duration +0.51 %, b2 free-end NCC 0.99984):
+    """Full FE vs 1D wave-Hertz on the short case (measured on the scenario's scheme: NCC
+    0.99718, peak +3.80 %, impulse -0.91 %, contact duration +0.51 %, b2 free-end NCC 0.99984):
     - force NCC >= 0.995: the gap to 1 is the contact-patch discretisation (coarse vs refined
       mesh NCC 0.9973; refined vs theory 0.9994);
     - peak within 6 %: +2.8 % 1D/3D limit (refined mesh) + 1.0 % mesh, 1.5x margin;
@@ -155,8 +184,10 @@ def test_short_full_fe_against_wave_hertz_theory():
     - contact duration within 5 %: the mesh moves it by 3 % (coarse +0.5 %, refined -2.6 %);
     - b2 free-end velocity NCC >= 0.999 (measured 0.99984; 0.99978 refined).
     Conservation: momentum 1e-9; no tensile force; penetration below 2 % of the peak Hertz
-    approach (measured 1.5e-7 m vs 2.5e-7 m); energy error within 0.2 % (measured -0.062 %,
-    the theta = 0.55 damping of the unresolved modes; -0.037 % at h/2)."""
+    approach (measured 2.0e-9 m vs 2.5e-7 m; the damped scheme 1.5e-7 m); energy error within
+    1e-4 (measured -6.4e-6 on the scenario's theta = 1/2; the damped scheme's theta = 0.55 lost
+    0.062 %, 0.037 % at h/2). The numbers above are the scenario's scheme; the damped one
+    measured NCC 0.99719, peak +3.74 %."""
     run = _short("full")
     tt, ft, pt, _ = _theory()
     c = compare_runs(tt, ft, pt, *run.result.curves())
@@ -168,23 +199,31 @@ def test_short_full_fe_against_wave_hertz_theory():
     s = run.summary
     assert s["model"] == {"b1": "full", "b2": "full"} and s["dof"]["b2"] > 9000
     _penetration_ok(s)
-    assert abs(s["energy_rel_error"]) < 0.002
+    assert abs(s["energy_rel_error"]) < 1e-4
     _check_sane(run)
 
 
 def test_short_mvm_matches_its_full_fe():
-    """The scenario's MVM model (b1 full FE, b2 1-3 + 37 modes, 118 DOF) against its full FE on
+    """The scenario's MVM model (b1 full FE, b2 1-3 + 37 modes; 129 DOF: its 25 retained face
+    nodes are massless, so their constraint modes split into the 75 nodal unit vectors and the
+    static fields of 11 smooth patterns, reduction/basis.py MasslessStatics.PATCH) against its
+    full FE on
     the short case: force NCC >= 0.999 (the issue's target; measured 1 - 1.1e-7), peak,
     impulse and contact duration within 0.5 % (measured 0.009 %, 0.003 %, 0.002 %: the
     step-halving change is 0.015-0.025 %, so 0.5 % is still far below the 1-3 % mesh error),
-    b2 free-end NCC >= 0.999 (measured 0.99996)."""
+    b2 free-end velocity NCC >= 0.995 whole and >= 0.999 below 50 kHz (measured 0.99801 and
+    0.99985; on the damped scheme 0.99996 and 0.99999: at theta = 1/2 nothing damps the
+    content the 37-mode basis and the full mesh carry differently above 50 kHz, a free-end
+    velocity ringing at 0.2 % of its NCC, while the force NCC is 1 - 3.7e-7, peak -0.03 %)."""
     full, mvm = _short("full"), _short("mvm")
-    assert mvm.summary["dof"]["b2"] == 3 * 25 + 37 + 6
+    assert mvm.summary["dof"]["b2"] == 3 * 25 + 11 + 37 + 6
     c = compare_runs(*full.result.curves(), *mvm.result.curves())
     assert c["ncc_force"] >= 0.999
     for key in ("peak_err", "impulse_err", "duration_err"):
         assert abs(c[key]) < 0.005, (key, c[key])
-    assert c["ncc_b2_free_end"] >= 0.999
+    assert c["ncc_b2_free_end"] >= 0.995
+    v_full, v_mvm = (run.result.curves()[2]["b2_free_end"] for run in (full, mvm))
+    assert _ncc_below(v_full, v_mvm, 50e3, 2e-6) >= 0.999
     _penetration_ok(mvm.summary)
     _check_sane(mvm)
 
@@ -239,8 +278,13 @@ def test_rigid_striker_against_rigid_limit_theory():
     theory: the measured force NCC 0.9952, peak +1.8 %, contact +1.7 %, impulse -0.95 % (the
     1D striker's extra 3.5 % mass) (E x 100 gives the same to 0.3 %). Required: NCC >= 0.99,
     peak within 5 %, duration within 5 %, impulse within 2 % (as for the flexible short case,
-    whose mesh error these share), and a sane impact (measured e = 0.9992)."""
-    run = _short("rigid-striker")
+    whose mesh error these share), and a sane impact (measured e = 0.9992). On the damped
+    scheme (velocity law, theta = 0.55): a rigid body has no contact nodes to make massless,
+    and on the scenario's undamped scheme the Craig-Bampton target hit by the rigid striker
+    keeps ringing after the separation (end-B velocity about its mean, std 0.037 m/s over the
+    last 120 us; 0.014 with MasslessStatics.ALL, 0.0026 for b2 full FE, 0.0023 damped:
+    docs/contact_law.md), which _check_sane's end-B check reads."""
+    run = _short("rigid-striker-damped")
     assert run.summary["dof"]["b1"] == 6
     _check_sane(run)
     r1, r2 = Rod1D.from_material(_stiff(BRASS), L, R), Rod1D.from_material(ALUMINIUM, L, R)
@@ -255,12 +299,14 @@ def test_rigid_striker_against_rigid_limit_theory():
 
 
 def test_two_rigid_bodies_impact_conserves_momentum_and_loses_energy():
-    """Both rods rigid: one impulse at t = 0 brings the contact point to rest (Newton e = 0),
+    """Both rods rigid, on the damped scheme (velocity law, theta = 0.55; the scenario's own
+    scheme makes this impact elastic: test_two_rigid_bodies_rebound_elastically_at_the_midpoint_rule):
+    one impulse at t = 0 brings the contact point to rest (Newton e = 0),
     the exact outcome is the plastic impact, v = m1 v0 / (m1 + m2), losing m2 / (m1 + m2) =
     25.0 % of the energy. What must hold whatever the stabilisation: momentum to 1e-9, the
     impulse between plastic and elastic, the energy loss within 1 % of the plastic one
     (measured 24.75 %: see the xfail below), a single short contact (<= 2 output steps)."""
-    run = _short("rigid-both")
+    run = _short("rigid-both-damped")
     s = run.summary
     m1, m2 = _masses(run)
     assert s["momentum_rel_error"] < 1e-9 and s["lcp_residual_max"] <= 1e-8
@@ -278,9 +324,28 @@ def test_two_rigid_bodies_impact_conserves_momentum_and_loses_energy():
 def test_two_rigid_bodies_impact_is_plastic():
     """Newton e = 0 between two rigid bodies: the relative velocity after the impact is 0, so
     e < 0.01 (round-off and the output-averaged impulse allow far less)."""
-    run = _short("rigid-both")
+    run = _short("rigid-both-damped")
     assert _restitution(run) < 0.01
     assert PENETRATION_RECOVERY * (1 - 0.55) > 0.01  # the mechanism named in the reason
+
+
+def test_two_rigid_bodies_rebound_elastically_at_the_midpoint_rule():
+    """Both rods rigid on the scenario's own scheme: the position law at theta = 1/2 holds the
+    gap at the end of the step, g + h (u_N+ + u_N-) / 2 >= 0, so a rigid pair closing at g = 0
+    leaves with u_N+ = -u_N- (Newton e = 1; rigid bodies have no contact nodes to make
+    massless). Exact outcome: the elastic impact, v1 = (m1 - m2) v0 / (m1 + m2),
+    v2 = 2 m1 v0 / (m1 + m2), the energy conserved. Required: momentum to 1e-9, the energy to
+    1e-6 (measured 1.6e-9: one step, at g = 0), restitution from the impulse within 5e-3 of 1
+    (measured 0.9981: the apex pair's normal is that of a facet of the faceted cap, tilted by
+    about a facet over the cap radius, so the impulse also turns the rods and the point-mass
+    formula of _restitution reads it 0.2 % short), one short contact."""
+    run = _short("rigid-both")
+    s = run.summary
+    assert s["momentum_rel_error"] < 1e-9 and s["lcp_residual_max"] <= 1e-8
+    assert abs(s["energy_rel_error"]) < 1e-6
+    assert abs(_restitution(run) - 1.0) < 5e-3
+    assert len(s["contact_intervals_s"]) == 1
+    assert s["contact_intervals_s"][0][1] <= 2 * 2e-6
 
 
 # --- 3. the pendulum, started just before impact -----------------------------------------------

@@ -17,14 +17,20 @@
 
 A retained node without mass (its mass redistributed to its neighbours,
 fe.mass_redistribution) keeps a massless coordinate only if its column moves nothing else: its
-constraint mode is split into the nodal unit vector and its interior static field, which
-becomes a column of its own: the static columns S_c span -K_ii^-1 K_ic, M-orthonormalised
-(directions of no rank dropped), between the retained nodes' columns and the modes; the span is
-the Craig-Bampton one plus the unit vectors of c, so every frequency lies between the full
-model's and the Craig-Bampton one (Rayleigh-Ritz), and the coordinates u_c have zero rows in m_hat: the
-integrator holds them in equilibrium at the step ends (integrate/massless.py). Without the
-split a constraint mode drags interior mass along and the redistribution leaves the
-retained contact coordinates massive.
+constraint mode is split into the nodal unit vector and its interior static field, whose span
+gets columns of its own, M-orthonormalised (directions of no rank dropped), between the
+retained nodes' columns and the modes (MasslessStatics):
+- ALL: the static fields -K_ii^-1 K_ic of every massless DOF c; the span is the Craig-Bampton
+  one plus the unit vectors of c, so every frequency lies between the full model's and the
+  Craig-Bampton one (Rayleigh-Ritz); 3 columns per massless node (75 on the seed's b2 1-3);
+- PATCH (default): the static fields of the smooth boundary patterns a contact patch loads
+  (massless_patterns: 11 fields over the massless nodes, about their centroid and
+  principal axes), so a body gains a handful of columns instead of 3 per node; on the seed
+  case (b2 1-3 + 37, 124 DOF instead of ALL's 193) its force matches ALL's and its full FE's
+  at theta = 1/2 (docs/contact_law.md).
+The coordinates u_c have zero rows in m_hat: the integrator holds them in equilibrium at the
+step ends (integrate/massless.py). Without the split a constraint mode drags interior mass
+along and the redistribution leaves the retained contact coordinates massive.
 
 Every Psi has zero rows at the reference DOFs (ReferenceCondition), so q carries no
 rigid-body motion. The reduced matrices are m_hat = Psi^T M Psi, k_hat = Psi^T K Psi
@@ -62,6 +68,13 @@ class BasisKind(Enum):
     SEED_FIXED = "mvm-seed-fixed"  # seed eq. (4): region-I modes with region II held, nodes on II
     MODAL = "modal"               # first N modes of the reference-supported body
     INTERFACE = "interface"       # contact-patch Ritz vectors + modes by participation
+
+
+class MasslessStatics(Enum):
+    """The static columns of the massless retained nodes of a Craig-Bampton basis."""
+
+    ALL = "all"      # every massless DOF's interior static field: span contains Craig-Bampton's
+    PATCH = "patch"  # the static fields of massless_patterns: a few columns per body
 
 
 @dataclass(frozen=True)
@@ -147,8 +160,10 @@ def _full(fe: FEModel, reference: ReferenceCondition) -> Basis:
 
 
 def _craig_bampton(fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray,
-                   n_modes: int) -> Basis:
-    """Craig-Bampton (1968): constraint modes -K_ii^-1 K_ib and fixed-interface modes.
+                   n_modes: int, statics_kind: MasslessStatics = MasslessStatics.PATCH
+                   ) -> Basis:
+    """Craig-Bampton (1968): constraint modes -K_ii^-1 K_ib and fixed-interface modes; the
+    constraint modes of massless retained nodes split (module doc, ``statics_kind``).
 
     b = the retained nodes' DOFs, i = the other DOFs not in the reference condition.
     K_ii is factored once (fe.modes.spd_solver) and that factor serves the constraint modes
@@ -163,8 +178,12 @@ def _craig_bampton(fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray
         solve = spd_solver(k_ii, pool)
         statics = -solve(k_ib.toarray())
         modes, freqs = _fixed_interface_modes(fe, interior, k_ii, solve, n_modes)
-    split = _node_dofs(np.flatnonzero(_massless(fe, nodes)))  # columns of massless nodes
-    extra = _static_columns(fe, interior, statics[:, split])
+    massless = np.flatnonzero(_massless(fe, nodes))
+    split = _node_dofs(massless)  # columns of massless nodes
+    fields = statics[:, split]
+    if statics_kind is MasslessStatics.PATCH and massless.size:
+        fields = fields @ massless_patterns(fe.mesh.nodes[nodes[massless]])
+    extra = _static_columns(fe, interior, fields)
     statics[:, split] = 0.0
     psi = np.zeros((fe.n_dof, b.size + extra.shape[1] + n_modes))
     psi[b, np.arange(b.size)] = 1.0
@@ -178,6 +197,40 @@ def _massless(fe: FEModel, nodes: np.ndarray) -> np.ndarray:
     """(len(nodes),) bool: the nodes whose rows of the scalar mass matrix are zero."""
     m = sp.csr_matrix(fe.M_scalar)
     return np.asarray(abs(m).sum(axis=1)).ravel()[nodes] == 0.0
+
+
+#: massless_patterns: axisymmetric normal displacements rho^0, rho^2, rho^4, rho^6 (a Hertz
+#: patch and its growth), radial rho and rho^3 (Poisson's expansion of the face).
+PATCH_NORMAL_POWERS = (0, 2, 4, 6)
+PATCH_RADIAL_POWERS = (1, 3)
+
+
+def massless_patterns(X: np.ndarray) -> np.ndarray:
+    """(3 n, 11) smooth displacement patterns of the n nodes X (n, 3) (DOFs node-major, as
+    _node_dofs): about their centroid, with n the principal axis of least spread (the normal
+    of a face or cap) and t1, t2 the others, rho the in-plane distance over its largest value
+    and phi its angle: along n, rho^k for k in PATCH_NORMAL_POWERS and the tilts rho cos phi,
+    rho sin phi; in the plane, rho^k e_rho for k in PATCH_RADIAL_POWERS, the slides t1, t2 and
+    the twist rho e_phi. A contact patch on the nodes, axial (the seed case) or oblique,
+    deforms them along these; their interior static fields span the massless nodes' static
+    columns in MasslessStatics.PATCH. Patterns that vanish on the nodes (one node: all but the
+    normal and the slides) give columns of no mass, dropped by _static_columns."""
+    X = np.asarray(X, dtype=float)
+    d = X - X.mean(axis=0)
+    _, vecs = np.linalg.eigh(d.T @ d)
+    n, t1, t2 = vecs[:, 0], vecs[:, 1], vecs[:, 2]
+    s1, s2 = d @ t1, d @ t2
+    rho = np.hypot(s1, s2)
+    top = rho.max()
+    rho, c, s = ((rho / top, s1 / top, s2 / top) if top > 0 else
+                 (rho, np.zeros_like(rho), np.zeros_like(rho)))
+    e_rho = np.outer(c, t1) + np.outer(s, t2)          # rho e_rho
+    e_phi = np.outer(-s, t1) + np.outer(c, t2)         # rho e_phi
+    fields = [np.outer(rho**k, n) for k in PATCH_NORMAL_POWERS]
+    fields += [np.outer(c, n), np.outer(s, n)]
+    fields += [e_rho * rho[:, None] ** (k - 1) for k in PATCH_RADIAL_POWERS]
+    fields += [np.tile(t1, (len(X), 1)), np.tile(t2, (len(X), 1)), e_phi]
+    return np.column_stack([f.ravel() for f in fields])
 
 
 def _static_columns(fe: FEModel, interior: np.ndarray, fields: np.ndarray) -> np.ndarray:
@@ -262,13 +315,15 @@ def _interface(fe: FEModel, reference: ReferenceCondition, spec: InterfaceSpec |
 def build_basis(fe: FEModel, kind: BasisKind, reference: ReferenceCondition,
                 retained_nodes=(), n_modes: int = 0,
                 interface: InterfaceSpec | None = None,
-                sources: InterfaceSources | None = None) -> Basis:
+                sources: InterfaceSources | None = None,
+                massless_statics: MasslessStatics = MasslessStatics.PATCH) -> Basis:
     """Build the basis ``kind`` of body ``fe`` (see the module table).
 
     retained_nodes: region-II node ids (CRAIG_BAMPTON, SEED_BLOCK, SEED_FIXED: at least one;
     FULL, MODAL and INTERFACE: none); n_modes: modal columns (MODAL: >= 1; FULL: 0);
     interface: the patch and mode choice of an INTERFACE basis (reduction/interface.py);
-    sources: where it takes its mode pool and patch statics from (default: computed).
+    sources: where it takes its mode pool and patch statics from (default: computed);
+    massless_statics: the static columns of massless retained nodes (CRAIG_BAMPTON).
     Raises InputError for a wrong kind, retained nodes that are reference nodes, repeated or
     outside the mesh, or n_modes negative or more than the free DOFs allow; SolverError if
     a factorisation or eigen solve fails.
@@ -300,7 +355,8 @@ def build_basis(fe: FEModel, kind: BasisKind, reference: ReferenceCondition,
         if kind is BasisKind.INTERFACE:
             return _interface(fe, reference, interface, int(n_modes), sources)
         if kind is BasisKind.CRAIG_BAMPTON:
-            return _craig_bampton(fe, reference, nodes, int(n_modes))
+            return _craig_bampton(fe, reference, nodes, int(n_modes),
+                                  MasslessStatics(massless_statics))
         if kind is BasisKind.SEED_FIXED:
             return _seed_fixed(fe, reference, nodes, int(n_modes))
         return _seed_block(fe, reference, nodes, int(n_modes))

@@ -8,8 +8,9 @@ from collections.abc import Iterable
 from pathlib import Path
 
 from flexmvm.errors import InputError
+from flexmvm.integrate import DEFAULT_THETA
 from flexmvm.results.atomic import file_sha256
-from flexmvm.scenarios import ModelConfig, ModelKind, Scenario, full, mvm
+from flexmvm.scenarios import ModelConfig, ModelKind, Scenario, full, mvm, scenario_from_dict
 from flexmvm.studies.runner import Case
 
 
@@ -30,15 +31,45 @@ def _ints(name: str, values: Iterable[int]) -> list[int]:
     return out
 
 
+def redistributing_contacts(sc: Scenario, body: str) -> list[int]:
+    """Indices of the contacts that redistribute the mass of ``body``'s contact nodes."""
+    return [k for k, c in enumerate(sc.contacts)
+            if c.redistribute_mass and body in (c.slave_body, c.master_body)]
+
+
+#: The console line of a study whose scenario's contact is on the undamped scheme.
+SEED_SCHEME_NOTE = ("study scheme: the study body's contact on the velocity law without mass "
+                    "redistribution, theta = 0.55 (the seed's models: 3 x nodes + modes "
+                    "coordinates; studies.grid.seed_scheme)")
+
+
+def seed_scheme(sc: Scenario, body: str) -> Scenario:
+    """The scheme a study of ``body`` runs: the seed's models, whose coordinates a study counts
+    as 3 x nodes + modes. A contact that redistributes the mass of ``body``'s contact nodes
+    (the undamped scheme of docs/contact_law.md: theta = 1/2, position law, massless contact
+    nodes, whose Craig-Bampton constraint modes split and add static columns) goes back to the
+    velocity law without redistribution, and the scheme to theta = DEFAULT_THETA (0.55: the
+    velocity law's contact nodes carry mass and ring undamped at theta = 1/2). ``sc`` itself
+    when no contact redistributes ``body``'s mass."""
+    touched = redistributing_contacts(sc, body)
+    if not touched:
+        return sc
+    data = sc.model_dump(mode="json")
+    for k in touched:
+        data["contacts"][k].update(law="velocity", redistribute_mass=False)
+    data["time"]["theta"] = DEFAULT_THETA
+    return scenario_from_dict(data, source=f"{data.get('name', 'scenario')} (study scheme)")
+
+
 def check_grid(sc: Scenario, body: str, layers, laps, modes):
     rod = rod_of(sc, body)
-    for k, c in enumerate(sc.contacts):
-        if c.redistribute_mass and body in (c.slave_body, c.master_body):
-            # a massless retained node adds static columns (reduction/basis.py), so a case's
-            # DOF would not be 3 x nodes + modes, the count the grid and the search rank by
-            raise InputError(f"contacts[{k}] redistributes the mass of {body!r}'s contact nodes;"
-                             " a selection study counts 3 x nodes + modes coordinates: set "
-                             "redistribute_mass = false for the study")
+    for k in redistributing_contacts(sc, body):
+        # a massless retained node adds static columns (reduction/basis.py), so a case's
+        # DOF would not be 3 x nodes + modes, the count the grid and the search rank by
+        # (the studies' entry points run seed_scheme first)
+        raise InputError(f"contacts[{k}] redistributes the mass of {body!r}'s contact nodes;"
+                         " a selection study counts 3 x nodes + modes coordinates: run it on "
+                         "studies.grid.seed_scheme(scenario, body)")
     layers, laps, modes = _ints("layers", layers), _ints("laps", laps), _ints("modes", modes)
     for name, vals, top in (("layers", layers, rod.n_layers), ("laps", laps, rod.n_laps)):
         if vals[-1] > top:
@@ -116,8 +147,10 @@ def study_scenario(sc: Scenario, body: str, *, t_end_s: float | None = None,
                    dt_s: float | None = None, other: str | ModelConfig | None = None) -> Scenario:
     """The scenario a study runs: end time and contact step overridden, and the model of
     every body other than ``body`` (rigid ones excepted) replaced by ``other`` (a
-    ModelConfig or parse_model text; None keeps the scenario's)."""
+    ModelConfig or parse_model text; None keeps the scenario's), on the study's scheme
+    (seed_scheme)."""
     sc.body(body)
+    sc = seed_scheme(sc, body)
     if isinstance(other, str):
         other = parse_model(other)
     models = {}

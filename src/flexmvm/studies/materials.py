@@ -53,7 +53,15 @@ from flexmvm.results.atomic import file_sha256, write_json_atomic, write_table_c
 from flexmvm.results.outdir import make_out_dir
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario, scenario_from_dict
 from flexmvm.scenarios.guard import VALIDITY_KEYS, WARN_FRACTION, invalid_reason
-from flexmvm.studies.grid import check_grid, rod_of, study_kind, study_scenario
+from flexmvm.studies.grid import (
+    SEED_SCHEME_NOTE,
+    check_grid,
+    redistributing_contacts,
+    rod_of,
+    seed_scheme,
+    study_kind,
+    study_scenario,
+)
 from flexmvm.studies.reference import reference_history
 from flexmvm.studies.report import echo_failures, failed_case_row, failure_list
 from flexmvm.studies.runner import Case, check_cluster_options, run_cases, study_cluster
@@ -163,6 +171,7 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
     selections = parse_selections(selections)
     kind = study_kind(kind)
     rod = rod_of(sc, body)
+    sc = seed_scheme(sc, body)
     _, _, _, modes = check_grid(sc, body, [s[0] for s in selections],
                                  [s[1] for s in selections], modes)
     check_cluster_options(scheduler, n_workers, serial)
@@ -281,6 +290,8 @@ def run_materials_study(scenario: str | Path | Scenario, out_dir: str | Path, bo
     out = Path(out_dir).resolve()
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     kind = study_kind(kind)
+    if redistributing_contacts(sc, body):
+        echo(SEED_SCHEME_NOTE)
     sc = study_scenario(sc, body, t_end_s=t_end_s, dt_s=dt_s, other=other)
     study = material_study(sc, out, body, materials, selections, modes, scheduler, n_workers,
                            progress, serial=serial, kind=kind)

@@ -73,10 +73,13 @@ from flexmvm.scenarios import ModelKind, Scenario, load_scenario, scenario_from_
 from flexmvm.scenarios.compare import compare_runs
 from flexmvm.scenarios.guard import invalid_reason, validity_fields
 from flexmvm.studies.grid import (
+    SEED_SCHEME_NOTE,
     case_key,
     check_grid,
     mvm_scenario,
+    redistributing_contacts,
     rod_of,
+    seed_scheme,
     selection_cases,
     study_kind,
     study_scenario,
@@ -259,6 +262,8 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     """
     target = Target(0.99) if target is None else target
     out = Path(out_dir).resolve()
+    sc.body(body)
+    sc = seed_scheme(sc, body)
     rod, layers, laps, modes = check_grid(sc, body, layers, laps, modes)
     kind = study_kind(kind)
     check_cluster_options(scheduler, n_workers, serial)
@@ -409,8 +414,11 @@ def run_selection_study(scenario: str | Path | Scenario, body: str, out_dir: str
     target = Target(0.99) if target is None else target
     out = Path(out_dir).resolve()
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
-    check_grid(sc, body, layers, laps, modes)
+    switched = bool(redistributing_contacts(sc, body))
     sc = study_scenario(sc, body, t_end_s=t_end_s, dt_s=dt_s, other=other)
+    check_grid(sc, body, layers, laps, modes)
+    if switched:
+        echo(SEED_SCHEME_NOTE)
     study = select_models(sc, body, out, layers, laps, modes, target, search=search,
                           scheduler=scheduler, n_workers=n_workers, serial=serial,
                           progress=progress, echo=echo, kind=kind, patches=patches,
