@@ -684,6 +684,23 @@ def active_pairs(facet, out, h, gap_tol, bonded, idx, conn, n_quads, slave_nodes
 
 
 @numba.njit(cache=True)
+def _normal_offset(w, n, g, conn, xs_i, vs_i, xm, vm):
+    """(n . (x_S - sum_P w_P x_P), n . (x_dot_S - sum_P w_P x_dot_P)) of slave node
+    position xs_i and velocity vs_i (3,) against master facet g with weights w (4,)."""
+    proj = un = 0.0
+    for k in range(3):
+        xc = vc = 0.0
+        for b in range(4):
+            wb = w[b]
+            if wb != 0.0:
+                xc += wb * xm[conn[g, b], k]
+                vc += wb * vm[conn[g, b], k]
+        proj += n[k] * (xs_i[k] - xc)
+        un += n[k] * (vs_i[k] - vc)
+    return proj, un
+
+
+@numba.njit(cache=True)
 def hold_pairs(held, held_w, held_n, held_off, held_d, facet, out, xs, vs, xm, vm, A_m, conn,
                tol, d_max):
     """Closed pairs on the geometry they closed with (pairs.PointToSurfaceContact, position
@@ -707,17 +724,8 @@ def hold_pairs(held, held_w, held_n, held_off, held_d, facet, out, xs, vs, xm, v
         n = np.empty(3)
         for k in range(3):
             n[k] = (A_m[k, 0] * held_n[i, 0] + A_m[k, 1] * held_n[i, 1]) + A_m[k, 2] * held_n[i, 2]
-        gap = held_off[i]
-        un = 0.0
-        for k in range(3):
-            xc = vc = 0.0
-            for b in range(4):
-                wb = held_w[i, b]
-                if wb != 0.0:
-                    xc += wb * xm[conn[g, b], k]
-                    vc += wb * vm[conn[g, b], k]
-            gap += n[k] * (xs[i, k] - xc)
-            un += n[k] * (vs[i, k] - vc)
+        proj, un = _normal_offset(held_w[i], n, g, conn, xs[i], vs[i], xm, vm)
+        gap = held_off[i] + proj
         d = gap - out[i, 9]
         if facet[i] < 0 or abs(d) > d_max:
             held[i] = -1
@@ -726,17 +734,9 @@ def hold_pairs(held, held_w, held_n, held_off, held_d, facet, out, xs, vs, xm, v
         if abs(d - held_d[i]) > tol:
             # the scan's geometry, offset so that the gap stays gap
             g = facet[i]
-            proj = un = 0.0
             for k in range(3):
-                xc = vc = 0.0
-                for b in range(4):
-                    wb = out[i, b]
-                    if wb != 0.0:
-                        xc += wb * xm[conn[g, b], k]
-                        vc += wb * vm[conn[g, b], k]
-                proj += out[i, 6 + k] * (xs[i, k] - xc)
-                un += out[i, 6 + k] * (vs[i, k] - vc)
                 n[k] = out[i, 6 + k]
+            proj, un = _normal_offset(out[i, 0:4], n, g, conn, xs[i], vs[i], xm, vm)
             held[i] = g
             for b in range(4):
                 held_w[i, b] = out[i, b]
@@ -760,14 +760,7 @@ def gap_offsets(idx, facet, out, xs, xm, conn, offsets):
     a projection on its facet; the clamped ones are computed that way)."""
     for a in range(len(idx)):
         i = idx[a]
-        g = facet[i]
-        d = 0.0
-        for k in range(3):
-            xc = 0.0
-            for b in range(4):
-                if out[i, b] != 0.0:
-                    xc += out[i, b] * xm[conn[g, b], k]
-            d += out[i, 6 + k] * (xs[i, k] - xc)
+        d, _ = _normal_offset(out[i, 0:4], out[i, 6:9], facet[i], conn, xs[i], xs[i], xm, xm)
         offsets[a] = out[i, 9] - d
 
 

@@ -25,9 +25,9 @@ retained nodes' columns and the modes (MasslessStatics):
   Craig-Bampton one (Rayleigh-Ritz); 3 columns per massless node (75 on the seed's b2 1-3);
 - PATCH (default): the static fields of the smooth boundary patterns a contact patch loads
   (massless_patterns: 11 fields over the massless nodes, about their centroid and
-  principal axes), so a body gains a handful of columns instead of 3 per node; on the seed
-  case (b2 1-3 + 37, 124 DOF instead of ALL's 193) its force matches ALL's and its full FE's
-  at theta = 1/2 (docs/contact_law.md).
+  principal axes), so a body gains at most 11 columns instead of 3 per node; on the seed
+  case (b2 1-3 + 37: 129 DOF with the frame, ALL's 193) its force matches ALL's and its full
+  FE's at theta = 1/2 (docs/contact_law.md).
 The coordinates u_c have zero rows in m_hat: the integrator holds them in equilibrium at the
 step ends (integrate/massless.py). Without the split a constraint mode drags interior mass
 along and the redistribution leaves the retained contact coordinates massive.
