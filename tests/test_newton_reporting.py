@@ -15,8 +15,9 @@ import pytest
 
 from flexmvm.integrate import driver
 from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
-from flexmvm.scenarios import load_scenario, scenario_from_dict
+from flexmvm.scenarios import load_scenario
 from flexmvm.scenarios.run import run_scenario
+from flexmvm.studies.grid import seed_scheme
 
 TINY = Path(__file__).parent / "data" / "tiny_impact.toml"
 RTOL = 1e-10  # the integrator's Newton tolerance (relative momentum residual)
@@ -93,10 +94,7 @@ def test_accepted_steps_balance_linear_momentum(monkeypatch, scheme):
     monkeypatch.setattr(MoreauJeanIntegrator, "step", checked)
     sc = validation.short_scenario()
     if scheme == "damped":
-        data = sc.model_dump(mode="json")
-        data["time"]["theta"] = 0.55
-        data["contacts"][0].update(law="velocity", redistribute_mass=False)
-        sc = scenario_from_dict(data, "rod_impact_short.toml (damped scheme)")
+        sc = seed_scheme(sc, "b2")   # velocity law, no redistribution, theta = 0.55
     s = run_scenario(sc.with_overrides(t_end_s=20e-6)).summary
     assert s["steps_not_converged"] == 0
     assert len(seen) == 2 * s["n_steps"]

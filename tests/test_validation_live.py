@@ -39,6 +39,7 @@ from flexmvm.scenarios.build import build_scenario
 from flexmvm.scenarios.compare import compare_runs
 from flexmvm.scenarios.pendulum import attachment_positions, strings
 from flexmvm.scenarios.run import run_scenario, summarize
+from flexmvm.studies.grid import seed_scheme
 from flexmvm.theory.scenario import theory_histories
 from flexmvm.theory.wave import ContactLaw, Rod1D, two_rod_impact
 
@@ -63,24 +64,15 @@ def _penetration_ok(summary: dict, slave_factor: float = 1.0) -> None:
     assert summary["max_penetration_m"] < PEN_ANY, by
 
 
-def _damped(sc):
-    """``sc`` on the damped scheme: Moreau's velocity law (restitution 0) without mass
-    redistribution, theta = 0.55."""
-    data = sc.model_dump(mode="json")
-    data["time"]["theta"] = 0.55
-    for c in data["contacts"]:
-        c.update(law="velocity", redistribute_mass=False)
-    return scenario_from_dict(data, "rod_impact_short.toml (damped scheme)")
-
-
 @functools.cache
 def _short(which: str):
     """The short seed case with the models ``which``, on its own scheme (theta = 1/2, position
-    law, mass redistribution) or, with a "-damped" suffix, on the damped one (_damped)."""
+    law, mass redistribution) or, with a "-damped" suffix, on the damped one: Moreau's velocity
+    law (restitution 0) without redistribution, theta = 0.55 (studies.grid.seed_scheme)."""
     sc = validation.short_scenario()
     if which.endswith("-damped"):
         which = which.removesuffix("-damped")
-        sc = _damped(sc)
+        sc = seed_scheme(sc, "b2")
     models = {
         "full": None,
         "mvm": None,
