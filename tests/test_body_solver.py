@@ -157,6 +157,45 @@ def test_elastic_rows_of_a_solve_are_known(sparse):
             np.testing.assert_allclose(got, want, rtol=0, atol=1e-10 * size)
 
 
+@pytest.mark.parametrize("sparse", [True, False])
+def test_a_deferred_refresh_solves_as_an_immediate_one(sparse):
+    """refresh_coupling(defer=True) solves the 3 columns W_qq^-1 M_wq^T with the next solve's
+    right-hand side (one multi-column back-substitution): that solve, and every later use of
+    W (solve, solve_frame, contact columns, coupling_transpose), equals the solver refreshed
+    at once; a first use other than solve() solves the columns on their own. Linear algebra:
+    round-off (1e-10 of the largest entry)."""
+    body, rng = _body(sparse)
+    h = 1e-3
+    A = np.linalg.qr(rng.normal(size=(3, 3)))[0]
+    q = 1e-2 * rng.normal(size=body.nq)
+    Mw = body.rotational_coupling(q)
+    Mff = body.frame_mass(A, body.first_moment(q), body.frame_inertia_first_order(q))
+    n = len(body.X)
+    N = _selector(rng, 4, n, np.arange(n))
+    bf = rng.normal(size=(4, 6))
+    b, b2, xf = (rng.normal(size=body.nv), rng.normal(size=body.nv), rng.normal(size=6))
+
+    def uses(solver, first):
+        out = [first(solver), solver.solve(b2), solver.solve_frame(b2[:6]),
+               solver.solve_nodal(h, bf, N), solver.coupling_transpose(xf)]
+        assert solver.n_coupling_updates == 1 and solver._pending is None
+        return out
+
+    def made(defer):
+        solver = BodySolver(body, theta=0.5)
+        solver.refresh_coupling(h, Mw, tol=1e-6, defer=defer)
+        solver.prepare(h, A, Mff)
+        assert solver.n_coupling_updates == (0 if defer else 1)
+        return solver
+
+    want = uses(made(False), lambda s: s.solve(b))
+    for first in (lambda s: s.solve(b), lambda s: s.solve(np.column_stack([b, b2]))[:, 0],
+                  lambda s: (s.solve_frame(b[:6]), s.solve(b))[1],
+                  lambda s: (s.coupling_transpose(xf), s.solve(b))[1]):
+        for got, w in zip(uses(made(True), first), want):
+            np.testing.assert_allclose(got, w, rtol=0, atol=1e-10 * np.abs(w).max())
+
+
 def test_an_order_found_absent_is_not_sought_again(monkeypatch):
     """A body whose elimination order was looked for and none exists (scenarios.build stores
     an empty order) is factored in SuperLU's minimum degree without a second search; a body

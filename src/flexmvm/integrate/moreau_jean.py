@@ -82,14 +82,18 @@ TRANSLATION_RTOL = 1e-13  # ...but the frame's translational rows (sums: no such
 SMALL_BASIS = 400     # up to this many elastic coordinates: refresh every step (cheap)
 # Larger bases: refresh when M_wq moved by this much (relative). The bordered solve uses the
 # M_wq of the last refresh and S follows the drift to first order only, so a drift leaves the
-# first solve's frame rows off by ~the drift times the rotational coupling. Seed as shipped,
-# 2 ms (b1 full FE): at 1e-4, b1 refreshed 5 times and the steps after the separation
-# (2 us) took 3.41 residuals each (b1's first solve left 8e-8 of its momentum scale in the
-# translational rows, and its elastic rows over the frame-only limit: a second
-# back-substitution); at 1e-6, 120 refreshes (3-column solves) and 2.00 residuals per step
-# everywhere, 12.0 against 13.9-15.0 ms a step after the separation, whole run 32.3-33.7 s
-# against 33.8-35.8 s (both full FE: 71.7 against 73.2 s; 3e-6: 2.36 residuals a step).
-COUPLING_TOL = 1e-6
+# first solve's frame rows off by ~the drift times the rotational coupling, and its elastic
+# rows by dM_w^T x_w. Seed as shipped, 2 ms (b1 full FE), damped scheme: at 1e-4, b1 refreshed
+# 5 times and the steps after the separation (2 us) took 3.41 residuals each; at 1e-6, 2.00
+# residuals per step everywhere, 12.0 against 13.9-15.0 ms a step after the separation. On the
+# undamped scheme (theta = 1/2) a full-FE rod's frame rings with its 3-2-1 reference nodes
+# (its rotation rate changes by 0.01-0.05 rad/s a step, mostly about the rod's axis, which one
+# end-B ring node fixes), and dM_w^T x_w grows with it: both rods full FE, 2 ms, at 1e-6 1,755
+# of the 3,978 body-steps needed a second back-substitution (elastic rows above the frame-only
+# limit), at 5e-7 1,151, at 3e-7 none. The refresh's 3 columns are solved with the first
+# iterate's right-hand side (BodySolver.refresh_coupling, defer: 4 columns cost 22 ms where 1
+# costs 14 and 3 cost 19 on the seed's rods), so the smaller tolerance costs ~8 ms a refresh.
+COUPLING_TOL = 3e-7
 NODAL_CACHE_MIN_NQ = 200  # from this many elastic coordinates, contact rows use nodal columns
 # A later iterate whose residual sits in a body's frame rows only (its elastic rows, constraint
 # impulses included, below this fraction of rtol) corrects that body's velocity by
@@ -387,9 +391,10 @@ class MoreauJeanIntegrator:
             provider.after_step(part, lam_c[offset : offset + part.rows.m], h)
 
     def _newton_step(self, t, states, h, crows, parts) -> StepResult:
-        self._prepare(states, h, refresh_tol=None)
-        Cc = self._contact_inverse(crows, h) if crows.rows.m else {}
-        Dcc = sum((c.D for c in Cc.values()), np.zeros((crows.rows.m, crows.rows.m)))
+        # a refresh of M_wq due at the start is solved with the first iterate's right-hand
+        # side (BodySolver.refresh_coupling, defer): the contact columns come after that solve
+        self._prepare(states, h, refresh_tol=None, defer=True)
+        Cc, Dcc = None, None
         n_j, m_c = self.n_joint_rows, crows.rows.m
         v_plus = [st.v.copy() for st in states]
         v_free = v_plus                       # set by the first iterate
@@ -442,6 +447,9 @@ class MoreauJeanIntegrator:
                 v_free = [vp - x for vp, x in zip(v_plus, xs)]
                 for b in range(len(states)):
                     images.solved(b, self.solvers[b], R[b], xs[b])
+            if Cc is None:
+                Cc = self._contact_inverse(crows, h) if m_c else {}
+                Dcc = sum((c.D for c in Cc.values()), np.zeros((m_c, m_c)))
             if n_j + m_c == 0:
                 v_plus = v_free
                 images.plus = dict(images.free)
@@ -615,13 +623,14 @@ class MoreauJeanIntegrator:
             moves.append(d)
         return new_rel, new_t, moves
 
-    def _prepare(self, states, h, refresh_tol):
+    def _prepare(self, states, h, refresh_tol, defer=False):
         """Frame blocks of W at `states`; M_wq refreshed when it drifted (always for small
-        bases, by COUPLING_TOL for large ones, unconditionally when refresh_tol = 0)."""
-        self._each_body(lambda b: self._prepare_body(b, states[b], h, refresh_tol),
+        bases, by COUPLING_TOL for large ones, unconditionally when refresh_tol = 0); defer:
+        with the next solve (BodySolver.refresh_coupling)."""
+        self._each_body(lambda b: self._prepare_body(b, states[b], h, refresh_tol, defer),
                         range(len(states)))
 
-    def _prepare_body(self, b, st, h, refresh_tol):
+    def _prepare_body(self, b, st, h, refresh_tol, defer=False):
         body, solver = self.system.bodies[b], self.solvers[b]
         # an iteration matrix: M_wq exact (thin rods' frame Schur complement depends on
         # it), J to first order in q (its quadratic part is (|u|/L)^2 of it)
@@ -630,7 +639,7 @@ class MoreauJeanIntegrator:
                 0.0 if body.nq <= SMALL_BASIS else COUPLING_TOL)
             c = self._carried[b]
             Lq = c.Lq if (c is not None and c.q is st.q) else None
-            solver.refresh_coupling(h, body.rotational_coupling(st.q, Lq), tol)
+            solver.refresh_coupling(h, body.rotational_coupling(st.q, Lq), tol, defer)
         J = body.frame_inertia_first_order(st.q)
         solver.prepare(h, st.A, body.frame_mass(st.A, body.first_moment(st.q), J))
 
