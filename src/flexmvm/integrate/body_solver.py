@@ -145,14 +145,21 @@ class BodySolver:
         f.Mw_used = M_wq.copy()
         self.n_coupling_updates += 1
 
-    def _flush(self) -> None:
-        """Solve a deferred refresh on its own (3 columns) and make the frame block."""
-        if self._pending is not None:
-            h, M_wq = self._pending
-            self._pending = None
-            f = self._factor(h)
-            self._install_coupling(f, np.asarray(f.solve(np.ascontiguousarray(M_wq.T))), M_wq)
-            self.prepare(*self._frame_args)
+    def _flush(self, rhs: np.ndarray | None = None) -> np.ndarray | None:
+        """Complete a deferred refresh, if any: its 3 columns solved (with rhs (nq,) or (nq, k)
+        in the same back-substitution when given), installed, and the frame block made.
+        Returns W_qq^-1 rhs (nq, k), or None when nothing was deferred."""
+        if self._pending is None:
+            return None
+        h, M_wq = self._pending
+        self._pending = None
+        f = self._factor(h)
+        cols = M_wq.T if rhs is None else np.column_stack([rhs, M_wq.T])
+        Y = np.asarray(f.solve(np.ascontiguousarray(cols)))
+        k = Y.shape[1] - 3
+        self._install_coupling(f, np.ascontiguousarray(Y[:, k:]), M_wq)
+        self.prepare(*self._frame_args)
+        return Y[:, :k]
 
     def prepare(self, h: float, A: np.ndarray, Mff: np.ndarray) -> None:
         """Set the step size and the frame block for the coming solves."""
@@ -203,16 +210,9 @@ class BodySolver:
         if self._f is None:
             return cho_solve(self._schur, b)
         f = self._f
-        if self._pending is not None:
-            # with the deferred refresh's columns: [b_q, M_wq^T] in one back-substitution
-            h, M_wq = self._pending
-            self._pending = None
-            k = 1 if b.ndim == 1 else b.shape[1]
-            Y = np.asarray(f.solve(np.column_stack([b[6:], M_wq.T])))
-            self._install_coupling(f, np.ascontiguousarray(Y[:, k:]), M_wq)
-            self.prepare(*self._frame_args)
-            y = Y[:, 0] if b.ndim == 1 else Y[:, :k]
-            return self._bordered(b[:6], y)
+        y = self._flush(b[6:])    # a deferred refresh: [b_q, M_wq^T] in one back-substitution
+        if y is not None:
+            return self._bordered(b[:6], y[:, 0] if b.ndim == 1 else y)
         y = np.asarray(f.solve(b[6:]))
         if y.ndim == 1 and b.ndim == 2:
             y = y[:, None]
