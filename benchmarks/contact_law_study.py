@@ -2,6 +2,8 @@
 
     python benchmarks/contact_law_study.py MODEL THETA LAW REDIS [DT_US] [OUT.json] [SCENARIO]
 
+THETA: a number, or tau=T (T in us) for theta = 1/2 + h / (4 T) (time.hf_damping_time_s);
+
 MODEL: shipped (the scenario's models: on the short case b1 full FE, b2 MVM 1-3 + 37), a
 model kind for every body (full, mvm, mvm-seed, ...) or one per body, "b1=mvm,b2=mvm:1-5"
 (kind, optionally :selection); LAW: velocity or position; REDIS: 0 or 1
@@ -63,12 +65,18 @@ def scenario(model: str, theta: float, law: str, redis: bool, dt: float | None,
                 body["model"]["selection"] = selection
     data["contacts"][0]["law"] = law
     data["contacts"][0]["redistribute_mass"] = bool(redis)
+    if isinstance(theta, str):            # "tau=12.5": theta = 1/2 + h / (4 tau), tau [us]
+        data["time"].pop("theta", None)
+        data["time"]["hf_damping_time_s"] = float(theta.partition("=")[2]) * 1e-6
+        sc = fm.scenario_from_dict(data)
+        return sc.with_time(**({"dt_s": dt} if dt else {}))
     sc = fm.scenario_from_dict(data)
     return sc.with_time(theta=theta, **({"dt_s": dt} if dt else {}))
 
 
 def main(model, theta, law, redis, dt_us=None, out=None, path=SHORT):
-    theta, redis = float(theta), bool(int(redis))
+    theta = theta if str(theta).startswith("tau=") else float(theta)
+    redis = bool(int(redis))
     dt = float(dt_us) * 1e-6 if dt_us else None
     sc = scenario(model, theta, law, redis, dt, path)
     built = build_scenario(sc)
@@ -150,7 +158,7 @@ def main(model, theta, law, redis, dt_us=None, out=None, path=SHORT):
         d2 = np.abs(V[2:] - 2 * V[1:-1] + V[:-2]) / v0
         sel = ok[2:] & ok[1:-1] & ok[:-2] & (tw[2:-1] >= t_s[k0]) & (tw[2:-1] <= t_s[k1])
         return float(d2[sel].mean()) if sel.any() else float("nan")
-    out_d = {"scenario": path, "model": model, "theta": theta, "law": law, "redis": redis,
+    out_d = {"scenario": path, "model": model, "theta": theta, "theta_used": built.grid.theta, "law": law, "redis": redis,
              "dt_us": hc * 1e6, "energy_end": float((E[-1] - E[0]) / E[0]),
              "energy_max": float(np.abs(E - E[0]).max() / E[0]),
              "ncc": cmp_.get("ncc_force"), "peak_err": cmp_.get("peak_err"),

@@ -60,7 +60,8 @@ def test_with_kind_keeps_selections_and_rigid_bodies():
 @pytest.mark.parametrize(("change", "words"), [
     (lambda sc: sc.with_model("b3", fm.full()), "no body 'b3' (bodies: b1, b2)"),
     (lambda sc: sc.with_model("b2", "mvm"), "received str, expected a ModelConfig"),
-    (lambda sc: sc.with_time(dt_s=1e-3), "time.output_dt_s: must be >= dt_s"),
+    (lambda sc: sc.with_time(output_dt_s=1e-7), "time.output_dt_s: must be >= dt_s"),
+    (lambda sc: sc.with_time(dt_s=1e-3), "time.hf_damping_time_s: must be >= dt_s / 2"),
     (lambda sc: sc.with_kind("fem"), "model kind 'fem'; expected one of full, mvm"),
     (lambda sc: sc.with_material("b2", "unobtainium"), "unknown material preset"),
     (lambda sc: sc.with_rod("b2", radius_m=-1.0), "bodies[1].rod.radius_m: must be > 0"),

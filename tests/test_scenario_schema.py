@@ -439,3 +439,28 @@ def test_scenario_from_dict_and_zero_length_string() -> None:
     assert str(info.value).startswith("dict: joints[0]: the two points coincide at t = 0")
     data["joints"][0]["length_m"] = 0.5
     assert scenario_from_dict(data).joints[0].length_m == 0.5
+
+
+def test_hf_damping_time_sets_theta_from_the_contact_step(tmp_path: Path) -> None:
+    """time.hf_damping_time_s = tau gives theta = 1/2 + dt_s / (4 tau) (0.51 for the seed's
+    12.5 us at 0.5 us), derived again when dt_s changes, by with_time or by editing a dump
+    (which carries tau, not theta); a theta given replaces it; both in a file, or a tau under
+    dt_s / 2 (theta above 1), are one-line errors naming the key."""
+    sc = load_scenario(SCENARIOS / "rod_impact.toml")
+    assert (sc.time.hf_damping_time_s, sc.time.dt_s, sc.time.theta) == (12.5e-6, 0.5e-6, 0.51)
+    assert sc.with_time(dt_s=0.25e-6).time.theta == 0.505
+    data = sc.model_dump(mode="json")
+    assert "theta" not in data["time"]
+    data["time"]["dt_s"] = 0.125e-6
+    assert scenario_from_dict(data).time.theta == 0.5025
+    damped = sc.with_time(theta=0.55).time
+    assert damped.theta == 0.55 and damped.hf_damping_time_s is None
+    # a scenario without tau dumps as before the key existed (cache identities hash dumps)
+    assert "hf_damping_time_s" not in damped.model_dump()
+    key = "hf_damping_time_s = 12.5e-6"
+    msg = _error(_variant(tmp_path, (key, key + "\ntheta = 0.55")))
+    assert "time.theta: give theta or hf_damping_time_s, not both" in msg
+    msg = _error(_variant(tmp_path, (key, "hf_damping_time_s = 0.2e-6")))
+    assert "time.hf_damping_time_s: must be >= dt_s / 2" in msg
+    msg = _error(_variant(tmp_path, (key, "hf_damping_time_s = -1.0")))
+    assert "time.hf_damping_time_s: must be > 0" in msg

@@ -19,19 +19,20 @@ TINY = Path(__file__).parent / "data" / "tiny_impact.toml"
 
 
 def test_seed_scheme_of_the_undamped_seed_case():
-    """rod_impact.toml ships theta = 1/2, the position law and mass redistribution; a study of
-    b2 runs it on the velocity law without redistribution at theta = 0.55, the rest of the
+    """rod_impact.toml ships theta = 1/2 + dt_s / (4 tau) (0.51), the position law and mass
+    redistribution; a study of b2 runs it on the velocity law without redistribution at
+    theta = 0.55 (no damping time), the rest of the
     scenario as it is; study_scenario applies it, check_grid refuses the scenario as shipped
     with a one-line reason."""
     sc = load_scenario(SEED)
-    assert sc.time.theta == 0.5 and sc.contacts[0].redistribute_mass
+    assert sc.time.theta == 0.51 and sc.contacts[0].redistribute_mass
     study = seed_scheme(sc, "b2")
     c = study.contacts[0]
     assert c.law is ContactLaw.VELOCITY and not c.redistribute_mass
-    assert study.time.theta == 0.55
+    assert study.time.theta == 0.55 and study.time.hf_damping_time_s is None
     a, b = sc.model_dump(mode="json"), study.model_dump(mode="json")
     for d in (a, b):
-        d["time"].pop("theta")
+        d["time"].pop("theta", None), d["time"].pop("hf_damping_time_s", None)
         for key in ("law", "redistribute_mass"):
             d["contacts"][0].pop(key, None)
     assert a == b

@@ -27,6 +27,7 @@ from flexmvm.integrate.system import System
 from flexmvm.scenarios import TimeConfig
 from flexmvm.scenarios.load import load_scenario
 from flexmvm.scenarios.run import run_scenario
+from flexmvm.scenarios.schema import theta_for_damping_time
 
 OMEGA = 2 * np.pi * 1000.0  # [rad/s]: period 1 ms
 PERIOD = 2 * np.pi / OMEGA
@@ -135,3 +136,28 @@ def test_momentum_through_impact_and_separation():
     coarse, _ = _momentum_error(0.55, 0.5e-6)
     fine, _ = _momentum_error(0.55, 0.25e-6)
     assert coarse < 1e-8 and fine < coarse / 1.6, (coarse, fine)
+
+
+def test_theta_proportional_to_the_step_is_second_order():
+    """theta = 1/2 + h / (4 tau) (time.hf_damping_time_s; theta_for_damping_time): the local
+    error (theta - 1/2) h^2 q'' is O(h^3), so the error after two periods falls as h^2 (the
+    observed order within 0.15 of 2, halving h from T/100, theta = 0.55 there, to T/800,
+    theta = 0.506), where a theta fixed at 0.55 is first order (test_convergence_order); and
+    per step the amplification of what the step cannot resolve, -(1 - theta) / theta, is
+    exp(-h / tau) to (h / tau)^3 / 12, so that content decays at the rate 1 / tau whatever h."""
+    tau = PERIOD / 20
+    errs = []
+    for n in (100, 200, 400, 800):
+        h = PERIOD / n
+        theta = theta_for_damping_time(h, tau)
+        sysm = _oscillator()
+        v = np.zeros(7)
+        v[6] = 1.0
+        st = BodyState(np.zeros(3), np.eye(3), np.zeros(1), v)
+        res = simulate(sysm, [st], TimeGrid(2.0 * PERIOD, h, theta=theta))
+        errs.append(np.abs(res.q[0][:, 0] - np.sin(OMEGA * res.t) / OMEGA).max())
+    observed = np.log2(np.array(errs[:-1]) / np.array(errs[1:]))
+    assert np.all(np.abs(observed - 2.0) < 0.15), observed
+    for x in (0.01, 0.05, 0.1):           # h / tau
+        theta = theta_for_damping_time(x, 1.0)
+        assert abs(np.log((1 - theta) / theta) + x) <= x**3 / 12 * 1.01

@@ -180,6 +180,34 @@ class ProbeConfig(Frozen):
         return self
 
 
+def theta_for_damping_time(dt_s: float, tau_s: float) -> float:
+    """The Moreau-Jean theta whose step damps what it cannot resolve with time constant tau_s
+    [s]: theta = 1/2 + dt_s / (4 tau_s). Per step the amplification at omega h >> 1 is
+    -(1 - theta) / theta = -exp(-dt_s / tau_s) (1 + O((dt_s / tau_s)^3)); for resolved
+    motion the local error (theta - 1/2) h^2 y'' is O(h^3), so the scheme stays second
+    order as dt_s -> 0 (a theta fixed above 1/2 is first order)."""
+    return 0.5 + dt_s / (4.0 * tau_s)
+
+
+def _damped_theta(data: dict) -> Any:
+    """time.theta from hf_damping_time_s (a "before" check: numbers of the wrong type are
+    left to the fields' own checks)."""
+    tau, dt = data["hf_damping_time_s"], data.get("dt_s")
+    if not all(isinstance(x, (int, float)) and not isinstance(x, bool) and x > 0
+               for x in (tau, dt)):
+        return data.get("theta", DEFAULT_THETA)
+    theta = theta_for_damping_time(float(dt), float(tau))
+    given = data.get("theta")
+    if given is not None and not math.isclose(given, theta, rel_tol=1e-12):
+        raise problem(f"give theta or hf_damping_time_s, not both (hf_damping_time_s = "
+                      f"{tau!r} s sets theta = 1/2 + dt_s / (4 tau) = {theta!r}, theta = "
+                      f"{given!r})", "theta")
+    if theta > 1.0:
+        raise problem(f"must be >= dt_s / 2 = {dt / 2!r} (theta = 1/2 + dt_s / (4 tau) <= 1), "
+                      f"got {tau!r}", "hf_damping_time_s")
+    return theta
+
+
 class TimeConfig(Frozen):
     """Step ``dt_s`` while a contact is active or near, up to ``dt_max_s`` in free flight."""
 
@@ -190,12 +218,28 @@ class TimeConfig(Frozen):
     theta: Annotated[float, Strict(), Ge(0.5), Le(1.0)] = DEFAULT_THETA
     # extra outputs this often while the step is dt_s (contact active or near); None: none
     output_contact_dt_s: Positive | None = None
+    # tau [s]: theta = 1/2 + dt_s / (4 tau) instead of a fixed theta (theta_for_damping_time):
+    # what the step cannot resolve decays as exp(-t / tau) whatever dt_s, and theta - 1/2 =
+    # O(dt_s) keeps the scheme second order (docs/contact_law.md, "theta = 1/2 + h / (4 tau)")
+    hf_damping_time_s: Positive | None = None
 
     @model_validator(mode="before")
     @classmethod
     def _default_dt_max(cls, data: Any) -> Any:
         if isinstance(data, dict) and data.get("dt_max_s") is None and "dt_s" in data:
-            return {**data, "dt_max_s": data["dt_s"]}
+            data = {**data, "dt_max_s": data["dt_s"]}
+        if isinstance(data, dict) and data.get("hf_damping_time_s") is not None:
+            data = {**data, "theta": _damped_theta(data)}
+        return data
+
+    @model_serializer(mode="wrap")
+    def _dump(self, handler):
+        # without hf_damping_time_s a dump is as before the key existed (cache identities);
+        # with it, theta is derived, not given: a dump edited (dt_s) and read back derives it
+        data = handler(self)
+        if isinstance(data, dict):
+            data.pop("hf_damping_time_s" if data.get("hf_damping_time_s") is None else "theta",
+                      None)
         return data
 
     @model_validator(mode="after")
@@ -340,10 +384,15 @@ class Scenario(Frozen):
                  "output_dt_s": output_dt_s, "theta": theta,
                  "output_contact_dt_s": output_contact_dt_s}
         given = {k: v for k, v in given.items() if v is not None}
+        base = dict(self.time)
+        if theta is not None:                 # a theta given replaces a damping time
+            base.pop("hf_damping_time_s", None)
+        elif base.get("hf_damping_time_s") is not None:
+            base.pop("theta")                 # derived again from the (new) dt_s
         if dt_s is not None and dt_max_s is None:
             given["dt_max_s"] = max(self.time.dt_max_s, dt_s)
         what = ", ".join(f"{k}={v!r}" for k, v in given.items())
-        time = validate_part(TimeConfig, {**dict(self.time), **given},
+        time = validate_part(TimeConfig, {**base, **given},
                              f"{self._source} ({what})", "time")
         return self._copy(what, time=time)
 

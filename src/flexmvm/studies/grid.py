@@ -58,6 +58,7 @@ def seed_scheme(sc: Scenario, body: str) -> Scenario:
     for k in touched:
         data["contacts"][k].update(law="velocity", redistribute_mass=False)
     data["time"]["theta"] = DEFAULT_THETA
+    data["time"].pop("hf_damping_time_s", None)
     return scenario_from_dict(data, source=f"{data.get('name', 'scenario')} (study scheme)")
 
 
