@@ -9,7 +9,9 @@ Cases (the full-FE seed runs are two 25,000-DOF rods, several minutes each):
 4. time-step convergence of the seed full-FE force (h and h/2);
 5. the short seed case (0.1 m rods, scenarios/rod_impact_short.toml) that the default test run
    checks live: full FE and MVM against theory, and its mesh and step convergence;
-6. conservation of every run: momentum and energy errors, penetration, no tensile force.
+6. the pendulum release (scenarios/pendulum_release.toml), the whole event: impact speed,
+   the impact against the seed case, the momenta after it against the rigid pendulum;
+7. conservation of every run: momentum and energy errors, penetration, no tensile force.
 
 A finished case is stored in DIR/<case>/ (history.csv, summary.json, key.json) and reused only
 if its key matches: a SHA-256 of the code version (a hash of every source file of the package
@@ -28,6 +30,7 @@ import json
 import subprocess
 from dataclasses import dataclass
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 
@@ -111,9 +114,10 @@ class Case:
 
 
 def run_case(out: Path, name: str, sc: Scenario, recompute: bool = False,
-             progress: bool = True) -> Case:
+             progress: bool = True, extra=None) -> Case:
     """Run scenario ``sc`` as case ``name`` under ``out``, or load it if a stored case has the
-    same key (code version + every setting of the run)."""
+    same key (code version + every setting of the run). ``extra(run)``: a dict of further
+    measures of a fresh run, stored in its summary."""
     d = out / name
     key = case_key(sc)
     if not recompute:
@@ -126,6 +130,8 @@ def run_case(out: Path, name: str, sc: Scenario, recompute: bool = False,
             pass  # absent, stale or unreadable: recompute
     from flexmvm.scenarios.run import run_scenario
     r = run_scenario(sc, progress=progress)
+    if extra is not None:
+        r.summary.update(extra(r))
     t, f, p = r.result.curves()
     meta = {"key": key, "code_version": run_code_version(), "commit": git_commit(),
             "computed_utc": _now(), "inputs": case_inputs(sc)}
@@ -267,6 +273,57 @@ def short_case(out: Path, recompute: bool = False, plot: bool = False) -> dict:
             "fine_mesh": SHORT_FINE_MESH, "dt": sc.time.dt_s, "t_end": sc.time.t_end_s,
             "cases": {k: _case_meta(c) for k, c in
                       (("full", full), ("mvm", mvm), ("fine", fine), ("dt_half", half))}}
+
+
+def _pendulum_event(run) -> dict:
+    """The pendulum's own measures (scenarios.pendulum.event_summary), and the energy at the
+    separation output relative to the start (the swing and the impact, before the steps grow
+    again)."""
+    from flexmvm.scenarios import pendulum
+    res = run.result
+    ev = pendulum.event_summary(run.built, res)
+    if ev.get("contact"):
+        k = int(np.searchsorted(res.t, res.contact_intervals[-1][1] - 1e-12))
+        E = res.total_energy
+        ev["energy_rel_at_separation"] = float(E[k] / E[0] - 1.0)
+    return {"pendulum": ev}
+
+
+def _as_run(c: Case) -> SimpleNamespace:
+    """A stored case as scenarios.pendulum.impact_comparison reads a run: times, force,
+    contact intervals and the probes' axial velocities."""
+    names = list(c.probes)
+    v = np.stack([c.probes[n] for n in names], axis=1)[:, :, None] if names else None
+    return SimpleNamespace(t=c.t, contact_force=c.force, probe_names=names, probe_v=v,
+                           contact_intervals=[tuple(iv) for iv in
+                                              c.summary.get("contact_intervals_s") or []])
+
+
+def pendulum_case(out: Path, recompute: bool = False) -> dict:
+    """The seed's experiment, the whole event (scenarios/pendulum_release.toml on its defaults:
+    release, swing, impact, separation, 4.5 ms past it): impact speed against sqrt(2 g h) (h:
+    b1's start height), the impact phase against the seed case with the same models and
+    scheme (the seed_mvm case: rod_impact.toml to 1 ms) aligned at first contact, the momenta
+    after the separation against the rigid pendulum, the strings' drift."""
+    from flexmvm.scenarios.pendulum import impact_comparison
+    sc = load_scenario(SCENARIOS / "pendulum_release.toml")
+    c = run_case(out, "pendulum", sc, recompute, extra=_pendulum_event)
+    seed = load_scenario(SCENARIOS / "rod_impact.toml").with_time(t_end_s=T_SEED, dt_s=DT)
+    ref = run_case(out, "seed_mvm", seed, recompute)
+    ev = c.summary["pendulum"]
+    g = float(np.linalg.norm(sc.gravity_mps2))
+    h = float(sc.body("b1").placement.position_m[2])
+    v_th = float(np.sqrt(2.0 * g * h))
+    v = ev["impact_speed"]["v_mps"]
+    return {"impact_speed_mps": v, "impact_speed_theory_mps": v_th, "release_height_m": h,
+            "impact_speed_err": v / v_th - 1.0, "vs_seed": impact_comparison(_as_run(c),
+                                                                           _as_run(ref)),
+            "momenta": ev["momenta_after_separation"],
+            "energy_rel_at_separation": ev["energy_rel_at_separation"],
+            "max_joint_drift_m": c.summary["max_joint_drift"],
+            "step_size_counts": c.summary["step_size_counts"],
+            "models": c.summary["model"], **_cons(c.summary),
+            "cases": {"pendulum": _case_meta(c), "seed": _case_meta(ref)}}
 
 
 # ---------------------------------------------------------------------------------------------
@@ -428,6 +485,41 @@ DOF {short['fine']['dof']['b1']:,} + {short['fine']['dof']['b2']:,}).
 """
     txt += _cons_table({"full FE": sf, "fine mesh": short["fine"], "h/2": short["dt_half"],
                         f"MVM {short['mvm_model']}": short["mvm"]})
+    pend = report.get("pendulum")
+    if pend is not None:
+        vs, mo = pend["vs_seed"], pend["momenta"]
+        ok_p = (abs(pend["impact_speed_err"]) < 0.005 and vs["ncc_force"] >= 0.995
+                and all(abs(mo[b]["p_end_rel_err_x"]) < 1e-3 for b in ("b1", "b2")))
+        steps = ", ".join(f"{int(n):,} at {_us(float(h))}" for h, n in
+                          sorted(pend["step_size_counts"].items(), key=lambda kv: float(kv[0])))
+        txt += f"""
+
+## The pendulum release (`scenarios/pendulum_release.toml`), the whole event
+
+The seed's experiment (fig. 3) on the scenario's defaults (b1 {pend['models']['b1']}, b2
+{pend['models']['b2']}): b1 released from rest {1e3 * pend['release_height_m']:.4f} mm up its
+swing on two strings, b2 hanging on two, gravity on; the swing, the impact, the separation and
+{1e3 * (mo['t_end_s'] - mo['t_separation_s']):.1f} ms past it. Steps: {steps}.
+
+| quantity | pendulum | reference | error |
+|---|---|---|---|
+| impact speed (b1's centre of mass, last output before contact) | {pend['impact_speed_mps']:.6f} m/s | sqrt(2 g h) = {pend['impact_speed_theory_mps']:.6f} m/s | {_p(pend['impact_speed_err'], 4)} |
+| b1 momentum at the end, x | {mo['b1']['p_end'][0]:.6f} kg m/s | rigid pendulum {mo['b1']['p_end_rigid_pendulum_x']:.6f} | {_p(mo['b1']['p_end_rel_err_x'], 4)} |
+| b2 momentum at the end, x | {mo['b2']['p_end'][0]:.6f} kg m/s | rigid pendulum {mo['b2']['p_end_rigid_pendulum_x']:.6f} | {_p(mo['b2']['p_end_rel_err_x'], 4)} |
+| string length drift, max | {pend['max_joint_drift_m']:.1e} m | | |
+| energy at the separation, relative to the release | {_e(pend['energy_rel_at_separation'])} | | |
+| energy at the end, relative | {_e(pend['energy_rel_error'])} | | |
+
+The impact phase against the seed case (`rod_impact.toml`, the same models and scheme, 1 ms),
+both aligned at first contact: force NCC {_n(vs['ncc_force'], 5)}, peak {_p(vs['peak_err'])},
+impulse {_p(vs['impulse_err'])}, contact duration {_p(vs['duration_err'])}, b2 free-end
+velocity NCC {_n(vs['ncc_b2_free_end'], 5)}, impact-end {_n(vs['ncc_b2_impact_end'], 3)}.
+After the separation the steps double up to the swing's; the energy they take there is the
+rods' vibration, which steps that large do not resolve (docs/pendulum.md).
+
+Acceptance (issue 14): impact speed within 0.5 % of sqrt(2 g h), impact force NCC against the
+seed case >= 0.995, momenta at the end within 0.1 % of the rigid pendulum's:
+**{'met' if ok_p else 'NOT met'}**."""
     txt += """
 
 The other live checks of the default run (an `mvm-seed`, a `modal` and a `rigid` body in
@@ -457,6 +549,8 @@ def _collect_cases(report: dict) -> dict:
         out["seed_mvm_1-1"] = s["mvm11"]
     out["seed_full_dt_half"] = report["step_convergence"]["cases"]["h_half"]
     out.update({f"short_{k}": v for k, v in report["short"]["cases"].items()})
+    if "pendulum" in report:
+        out["pendulum"] = report["pendulum"]["cases"]["pendulum"]
     return out
 
 
@@ -475,7 +569,8 @@ def main(argv=None) -> None:
     report = {"flat_vs_st_venant": flat_vs_st_venant(args.out, recompute=rc),
               "seed": seed_vs_theory(args.out, recompute=rc, with_1_1=True, plot=True),
               "step_convergence": step_convergence(args.out, t_end_h=T_SEED, recompute=rc),
-              "short": short_case(args.out, recompute=rc, plot=True)}
+              "short": short_case(args.out, recompute=rc, plot=True),
+              "pendulum": pendulum_case(args.out, recompute=rc)}
     import os
     import platform
     report["theta"] = load_scenario(SCENARIOS / "rod_impact.toml").time.theta
