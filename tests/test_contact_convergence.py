@@ -14,6 +14,7 @@ undamped content at the step's scale) and 1.78 below 100 kHz.
 
 from __future__ import annotations
 
+from itertools import pairwise
 from pathlib import Path
 
 import numpy as np
@@ -45,5 +46,5 @@ def test_force_history_second_order_in_the_step():
     assert all(np.allclose(c[0][:n], t, rtol=0, atol=1e-12) for c in curves)
     for cut, least in ((100e3, 1.8), (None, 1.6)):
         f = [_below(c[1][:n], float(t[1] - t[0]), cut) for c in curves]
-        d1, d2 = (np.linalg.norm(a - b) / np.linalg.norm(f[-1]) for a, b in zip(f, f[1:]))
+        d1, d2 = (np.linalg.norm(a - b) / np.linalg.norm(f[-1]) for a, b in pairwise(f))
         assert np.log2(d1 / d2) >= least, (cut, d1, d2)
