@@ -460,6 +460,8 @@ def test_hf_damping_time_sets_theta_from_the_contact_step(tmp_path: Path) -> Non
     key = "hf_damping_time_s = 12.5e-6"
     msg = _error(_variant(tmp_path, (key, key + "\ntheta = 0.55")))
     assert "time.theta: give theta or hf_damping_time_s, not both" in msg
+    msg = _error(_variant(tmp_path, (key, key + '\ntheta = "x"')))
+    assert "time.theta: give theta or hf_damping_time_s, not both" in msg
     msg = _error(_variant(tmp_path, (key, "hf_damping_time_s = 0.2e-6")))
     assert "time.hf_damping_time_s: must be >= dt_s / 2" in msg
     msg = _error(_variant(tmp_path, (key, "hf_damping_time_s = -1.0")))

@@ -198,7 +198,8 @@ def _damped_theta(data: dict) -> Any:
         return data.get("theta", DEFAULT_THETA)
     theta = theta_for_damping_time(float(dt), float(tau))
     given = data.get("theta")
-    if given is not None and not math.isclose(given, theta, rel_tol=1e-12):
+    if given is not None and not (isinstance(given, (int, float)) and not isinstance(given, bool)
+                                  and math.isclose(given, theta, rel_tol=1e-12)):
         raise problem(f"give theta or hf_damping_time_s, not both (hf_damping_time_s = "
                       f"{tau!r} s sets theta = 1/2 + dt_s / (4 tau) = {theta!r}, theta = "
                       f"{given!r})", "theta")
@@ -225,7 +226,8 @@ class TimeConfig(Frozen):
 
     @model_validator(mode="before")
     @classmethod
-    def _default_dt_max(cls, data: Any) -> Any:
+    def _derived_defaults(cls, data: Any) -> Any:
+        # dt_max_s defaults to dt_s; theta follows from hf_damping_time_s and dt_s
         if isinstance(data, dict) and data.get("dt_max_s") is None and "dt_s" in data:
             data = {**data, "dt_max_s": data["dt_s"]}
         if isinstance(data, dict) and data.get("hf_damping_time_s") is not None:
