@@ -114,10 +114,9 @@ class Case:
 
 
 def run_case(out: Path, name: str, sc: Scenario, recompute: bool = False,
-             progress: bool = True, extra=None) -> Case:
+             progress: bool = True) -> Case:
     """Run scenario ``sc`` as case ``name`` under ``out``, or load it if a stored case has the
-    same key (code version + every setting of the run). ``extra(run)``: a dict of further
-    measures of a fresh run, stored in its summary."""
+    same key (code version + every setting of the run)."""
     d = out / name
     key = case_key(sc)
     if not recompute:
@@ -130,8 +129,6 @@ def run_case(out: Path, name: str, sc: Scenario, recompute: bool = False,
             pass  # absent, stale or unreadable: recompute
     from flexmvm.scenarios.run import run_scenario
     r = run_scenario(sc, progress=progress)
-    if extra is not None:
-        r.summary.update(extra(r))
     t, f, p = r.result.curves()
     meta = {"key": key, "code_version": run_code_version(), "commit": git_commit(),
             "computed_utc": _now(), "inputs": case_inputs(sc)}
@@ -275,20 +272,6 @@ def short_case(out: Path, recompute: bool = False, plot: bool = False) -> dict:
                       (("full", full), ("mvm", mvm), ("fine", fine), ("dt_half", half))}}
 
 
-def _pendulum_event(run) -> dict:
-    """The pendulum's own measures (scenarios.pendulum.event_summary), and the energy at the
-    separation output relative to the start (the swing and the impact, before the steps grow
-    again)."""
-    from flexmvm.scenarios import pendulum
-    res = run.result
-    ev = pendulum.event_summary(run.built, res)
-    if ev.get("contact"):
-        k = int(np.searchsorted(res.t, res.contact_intervals[-1][1] - 1e-12))
-        E = res.total_energy
-        ev["energy_rel_at_separation"] = float(E[k] / E[0] - 1.0)
-    return {"pendulum": ev}
-
-
 def _as_run(c: Case) -> SimpleNamespace:
     """A stored case as scenarios.pendulum.impact_comparison reads a run: times, force,
     contact intervals and the probes' axial velocities."""
@@ -307,7 +290,7 @@ def pendulum_case(out: Path, recompute: bool = False) -> dict:
     after the separation against the rigid pendulum, the strings' drift."""
     from flexmvm.scenarios.pendulum import impact_comparison
     sc = load_scenario(SCENARIOS / "pendulum_release.toml")
-    c = run_case(out, "pendulum", sc, recompute, extra=_pendulum_event)
+    c = run_case(out, "pendulum", sc, recompute)   # its summary's "pendulum": scenarios.run
     seed = load_scenario(SCENARIOS / "rod_impact.toml").with_time(t_end_s=T_SEED, dt_s=DT)
     ref = run_case(out, "seed_mvm", seed, recompute)
     ev = c.summary["pendulum"]

@@ -184,9 +184,13 @@ def is_pendulum(built) -> bool:
 
 def event_summary(built, res) -> dict:
     """What a pendulum run reports (summary.json "pendulum"): the striker's (body 0) impact
-    speed and the momenta after the separation against the rigid pendulum; without contact
-    only {"contact": false}."""
+    speed, the momenta after the separation against the rigid pendulum and the total energy
+    at the separation output relative to the start (the swing and the impact, before the
+    steps grow again); without contact only {"contact": false}."""
     if not res.contact_intervals:
         return {"contact": False}
+    k = int(np.searchsorted(res.t, res.contact_intervals[-1][1] - 1e-12))
+    E = res.total_energy
     return {"contact": True, "impact_speed": impact_speed(built, res),
-            "momenta_after_separation": momenta_after_separation(built, res)}
+            "momenta_after_separation": momenta_after_separation(built, res),
+            "energy_rel_at_separation": float(E[k] / E[0] - 1.0)}

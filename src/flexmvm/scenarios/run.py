@@ -11,6 +11,7 @@ import numpy as np
 from flexmvm.constraints.contact import ContactLaw
 from flexmvm.integrate.driver import simulate
 from flexmvm.integrate.run_result import ProbeHistory, RunResult, StepHistory
+from flexmvm.scenarios import pendulum
 from flexmvm.scenarios.build import BuiltScenario, build_scenario
 from flexmvm.scenarios.guard import contact_guard, energy_gain_warning, guard_warnings
 from flexmvm.scenarios.load import load_scenario
@@ -149,6 +150,9 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         # surface nodes its basis holds stiff, when it first happened, a model covering them
         "reduced_contact_guard": contact_guard(res, built),
         **_friction_summary(res),
+        # strings, gravity and a contact: the pendulum release's own measures
+        **({"pendulum": pendulum.event_summary(built, res)} if pendulum.is_pendulum(built)
+           else {}),
     }
 
 
