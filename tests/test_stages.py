@@ -11,7 +11,7 @@ from pathlib import Path
 PACKAGE = Path(__file__).resolve().parents[1] / "src" / "flexmvm"
 
 # lowest first; a stage may import itself and anything earlier in this list
-STAGES = ["errors", "threads", "materials", "mesh", "fe", "reduction", "bodies", "constraints", "contact",
+STAGES = ["errors", "threads", "processes", "materials", "mesh", "fe", "reduction", "bodies", "constraints", "contact",
           "integrate", "metrics", "theory", "results", "setup_cache", "plots", "scenarios",
           "studies", "validation", "cli"]
 

@@ -6,7 +6,8 @@ No command ends in a traceback:
   ``flexmvm: error: <message>``, and exit status 2;
 - any other exception (a bug, or an OS error nobody turned into a message) becomes one line,
   ``flexmvm: error: <command>: <ExceptionType>: <message>``, and exit status 1;
-- a keyboard interrupt exits with 130.
+- a keyboard interrupt exits with 130, SIGTERM with 143 (both after cleaning up: staging
+  directories removed, worker processes stopped).
 
 ``flexmvm --debug ...`` or the environment variable ``FLEXMVM_DEBUG=1`` re-raises instead, so
 Python prints the full traceback.
@@ -21,6 +22,7 @@ import click
 
 from flexmvm import __version__
 from flexmvm.errors import FlexmvmError
+from flexmvm.processes import Terminated, sigterm_as_exit
 
 #: Environment variable that turns on --debug (any value but "", "0", "false", "no").
 DEBUG_ENV = "FLEXMVM_DEBUG"
@@ -95,16 +97,21 @@ def main(argv: list[str] | None = None) -> None:
     args = list(sys.argv[1:] if argv is None else argv)
     debug = debug_enabled(args)
     try:
-        cli.main(args=args, prog_name="flexmvm", standalone_mode=False)
+        with sigterm_as_exit():
+            cli.main(args=args, prog_name="flexmvm", standalone_mode=False)
     except click.exceptions.Exit as exc:
         sys.exit(exc.exit_code)
     except click.ClickException as exc:
         click.echo(f"flexmvm: error: {one_line(exc.format_message())}", err=True)
         sys.exit(2)
-    except (click.exceptions.Abort, KeyboardInterrupt):
-        click.echo("flexmvm: interrupted; finished study cases are kept, an unfinished run "
-                   "leaves its output directory as it was", err=True)
-        sys.exit(130)
+    except (click.exceptions.Abort, KeyboardInterrupt) as exc:
+        if not isinstance(exc, Terminated) and not isinstance(exc.__context__, Terminated):
+            click.echo("flexmvm: interrupted; finished study cases are kept, an unfinished run "
+                       "leaves its output directory as it was", err=True)
+            sys.exit(130)
+        click.echo("flexmvm: terminated (SIGTERM); finished study cases are kept, an unfinished "
+                   "run leaves its output directory as it was", err=True)
+        sys.exit(143)
     except FlexmvmError as exc:
         if debug:
             raise

@@ -25,7 +25,7 @@ def command(scenario: Path, out_dir: Path, dt: float | None) -> None:
 
     check_creatable(out_dir)
     sc = load_scenario(scenario)
-    with staged_dir(out_dir, "flexmvm theory", legacy=("history.csv",)) as tmp:
+    with staged_dir(out_dir, "flexmvm theory", echo=click.echo) as tmp:
         t, force, probes, info = theory_histories(sc, dt=dt)
         write_history(tmp / "history.csv", t, force, probes)
     path = out_dir / "history.csv"

@@ -18,11 +18,13 @@ from __future__ import annotations
 
 import contextlib
 import multiprocessing
+import os
 from concurrent.futures import FIRST_EXCEPTION, ProcessPoolExecutor, wait
 from pathlib import Path
 
 from flexmvm.bodies.build import ModelKind
 from flexmvm.errors import FlexmvmError, InputError
+from flexmvm.processes import die_with_parent
 from flexmvm.results.outdir import staged_dir
 from flexmvm.results.output import write_run
 from flexmvm.results.writers import write_summary_json
@@ -95,7 +97,7 @@ def run_main_job(scenario: Path | str | Scenario, out_dir: Path, *, model=None, 
                                       for b in sc.bodies)
     ref_sc = sc.with_kind(ModelKind.FULL) if needs_ref else None
     own_label = ModelKind(model).value if model is not None else "scenario"
-    with staged_dir(out_dir, "flexmvm run", legacy=("summary.json",)) as tmp:
+    with staged_dir(out_dir, "flexmvm run", echo=echo) as tmp:
         summary = _run_into(tmp, sc, ref_sc, own_label, fields, progress, echo, jobs)
     for line in guard_warnings(summary.get("reduced_contact_guard") or {}):
         echo(f"warning: {line}")
@@ -107,6 +109,17 @@ def run_main_job(scenario: Path | str | Scenario, out_dir: Path, *, model=None, 
         echo(f"not compared ({len(failures)}): "
              + "; ".join(f"{f['item']}: {f['reason']}" for f in failures))
     return summary
+
+
+@contextlib.contextmanager
+def _stopped_on_exit(pool: ProcessPoolExecutor):
+    """Terminate the pool's workers when the block is left by an exception (Ctrl-C, SIGTERM,
+    a failed run), instead of the pool's exit waiting for their runs to end."""
+    try:
+        yield
+    except BaseException:
+        _stop_workers(pool)
+        raise
 
 
 def _stop_workers(pool: ProcessPoolExecutor) -> None:
@@ -125,7 +138,8 @@ def _run_into(out_dir: Path, sc, ref_sc, own_label: str, fields: bool, progress:
     failures: list[dict] = []
     if needs_ref and jobs > 1:
         ctx = multiprocessing.get_context("spawn")
-        with ProcessPoolExecutor(max_workers=2, mp_context=ctx) as pool:
+        with ProcessPoolExecutor(max_workers=2, mp_context=ctx, initializer=die_with_parent,
+                                 initargs=(os.getpid(),)) as pool, _stopped_on_exit(pool):
             ref_future = pool.submit(_run_and_write, ref_sc, "full", out_dir / "full", fields,
                                      progress)
             own_future = pool.submit(_run_and_write, sc, own_label, out_dir, fields, False)

@@ -50,7 +50,7 @@ import numpy as np
 from flexmvm.errors import InputError, SolverError
 from flexmvm.materials import ALUMINIUM, COPPER, PA6, TUNGSTEN, Material
 from flexmvm.results.atomic import file_sha256, write_json_atomic, write_table_csv
-from flexmvm.results.outdir import make_out_dir
+from flexmvm.results.outdir import claim_study_dir
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario, scenario_from_dict
 from flexmvm.scenarios.guard import VALIDITY_KEYS, WARN_FRACTION, invalid_reason
 from flexmvm.studies.grid import (
@@ -175,7 +175,9 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
     _, _, _, modes = check_grid(sc, body, [s[0] for s in selections],
                                  [s[1] for s in selections], modes)
     check_cluster_options(scheduler, n_workers, serial)
-    make_out_dir(out)
+    claim_study_dir(out, "flexmvm study materials",
+                    own={"cases", "materials.csv", "materials.json", "fig9_materials.png",
+                         *materials})
     scen = {m: material_scenario(sc, body, m, SEED_MATERIALS[m]) for m in materials}
     ref_cases = [Case(f"ref-{m}", {"body": body, "material": m,
                                    "scenario": scen[m].model_dump(mode="json")})

@@ -68,7 +68,7 @@ from typing import Any
 from flexmvm.errors import SolverError
 from flexmvm.metrics.ncc import Comparison, Target
 from flexmvm.results.atomic import write_json_atomic
-from flexmvm.results.outdir import make_out_dir
+from flexmvm.results.outdir import claim_study_dir
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario, scenario_from_dict
 from flexmvm.scenarios.compare import compare_runs
 from flexmvm.scenarios.guard import invalid_reason, validity_fields
@@ -133,6 +133,12 @@ SEARCH_OPEN_PER_SLOT = 2
 #: Score of a run that failed or misses a non-NCC bound of the target (below any NCC).
 FAIL_SCORE = -2.0
 _METRICS = ("ncc_force", "peak_err", "impulse_err", "duration_err")
+
+#: What a selection study writes in its directory (a study without the marker is accepted
+#: only if it holds nothing else: results.outdir.claim_study_dir).
+STUDY_FILES = frozenset({"cases", "reference", "ncc.csv", "selection.json",
+                         "selection_search.json", "fig7_ncc_map.png", "fig8_ncc_modes.png",
+                         "ncc_interface.csv", "fig_front_ncc_dof.png"})
 
 
 def run_selection_case(case: Case, reference: str | Path | None = None) -> dict:
@@ -267,7 +273,7 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     rod, layers, laps, modes = check_grid(sc, body, layers, laps, modes)
     kind = study_kind(kind)
     check_cluster_options(scheduler, n_workers, serial)
-    make_out_dir(out)
+    claim_study_dir(out, "flexmvm select", own=STUDY_FILES)
     hist, ref_made = reference_history(sc, body, out, progress=progress)
     echo(f"reference (full FE {body}): {'computed' if ref_made else 'loaded'} {hist}")
     n_nodes = {(i, j): len(rod.selection(i, j)) for i in layers for j in laps}
