@@ -19,3 +19,12 @@ class MeshError(InputError):
 
 class SolverError(FlexmvmError, RuntimeError):
     """A numerical solve failed (non-convergence, singular system) with a readable reason."""
+
+
+class SimulationFailed(SolverError):
+    """A run that stopped before its end time: the message says where and why, ``partial``
+    holds what was computed up to there (an integrate.RunResult whose ``failure`` is set)."""
+
+    def __init__(self, message: str, partial=None):
+        super().__init__(message)
+        self.partial = partial

@@ -103,6 +103,14 @@ class FlexibleBody:
         """The compact contraction of a basis that selects nodal DOFs (full FE), else None."""
         return NodalContraction.of(self.psi, self.inv.Ms, self.X)
 
+    def node_of_coordinate(self, k: int) -> tuple[int, int] | None:
+        """(mesh node, direction 0/1/2) of elastic coordinate k for a basis that selects
+        nodal DOFs (full FE), else None."""
+        nodal = self.nodal
+        if nodal is None or not 0 <= k < len(nodal.node):
+            return None
+        return int(nodal.node[k]), int(nodal.comp[k])
+
     def carried_contractions(self, x: np.ndarray, pool=None) -> np.ndarray:
         """L(x) in the form an integrator carries: Y(x) (3, n nodes) for a basis selecting
         nodal DOFs (bodies.nodal_contraction), else L(x) (3, 3, nq). Linear in x either way;

@@ -25,6 +25,10 @@ from scipy.spatial import cKDTree
 from flexmvm.errors import InputError, SolverError
 from flexmvm.mesh.mesh import FacetSet
 
+#: closest_facets' tie margin of an outside projection's distance (relative, absolute [m]):
+#: an inside projection wins a tie to round-off.
+TIE_REL, TIE_ABS = 1e-9, 1e-15
+
 NEWTON_MAX_ITER = 20  # quadratic convergence from the centre takes ~4; the rest fold outside
 LINE_SEARCH_HALVINGS = 12
 FAR_CHECK_ITER, FAR_XI = 4, 2.0  # after 4 iterations, |xi| > 2 is far outside the facet
@@ -371,14 +375,18 @@ def project_points(
 
 
 def closest_facets(proj: Projection) -> Projection:
-    """One pair per slave point: the inside pair with the smallest |gap|, else the pair
-    whose facet (clamped projection) is closest, reported with inside=False.
+    """One pair per slave point: the closest facet, its distance |gap| for an inside
+    projection and the distance to the clamped facet for an outside one (reported with
+    inside=False); a tie to round-off (TIE_REL, TIE_ABS) goes to the inside pair.
 
-    A point just outside one facet's edge and inside its neighbour so gets the neighbour.
+    The true closest point, not "inside first": off a convex surface (a sphere) the prisms of
+    the near facets leave gaps where a point projects inside none of them, while it projects
+    inside facets on the far side, behind it, with a large negative gap. A point just outside
+    one facet's edge and inside its neighbour gets the neighbour (it is closer).
     Returns the filtered Projection, sorted by point index.
     """
-    score = np.where(proj.inside, np.abs(proj.gap), proj.distance)
-    order = np.lexsort((score, ~proj.inside, proj.point))
+    score = np.where(proj.inside, np.abs(proj.gap), proj.distance * (1.0 + TIE_REL) + TIE_ABS)
+    order = np.lexsort((~proj.inside, score, proj.point))
     _, first = np.unique(proj.point[order], return_index=True)
     return proj.take(order[first])
 

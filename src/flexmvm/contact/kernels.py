@@ -34,6 +34,8 @@ from flexmvm.contact.geometry import (
     LINE_SEARCH_HALVINGS,
     NEWTON_MAX_ITER,
     NEWTON_TOL,
+    TIE_ABS,
+    TIE_REL,
     XI_BOUND,
 )
 
@@ -437,19 +439,28 @@ def _candidates(i, p, reach, rho, geo, lists, ref, mark, tag, cand, lb):
 
 
 @numba.njit(cache=True)
+def _score(rec):
+    """A projection's distance to its facet [m] for closest_facets' order: |gap| inside, the
+    distance to the clamped facet outside, the latter raised by a round-off margin
+    (TIE_REL, TIE_ABS) so that an inside projection wins a tie."""
+    if rec[REC_IN] == 1.0:
+        return abs(rec[REC_GAP])
+    return rec[REC_DIST] * (1.0 + TIE_REL) + TIE_ABS
+
+
+@numba.njit(cache=True)
 def _better(rec, g, best, best_g):
-    """closest_facets' order: inside first, then the smaller score (|gap| inside, distance
-    outside), then the lower facet index."""
+    """closest_facets' order: the closer facet (_score), then an inside projection, then the
+    lower facet index."""
     if best_g < 0:
         return True
+    sa, sb = _score(rec), _score(best)
+    if sa != sb:
+        return sa < sb
     a_in = rec[REC_IN] == 1.0
     b_in = best[REC_IN] == 1.0
     if a_in != b_in:
         return a_in
-    sa = abs(rec[REC_GAP]) if a_in else rec[REC_DIST]
-    sb = abs(best[REC_GAP]) if b_in else best[REC_DIST]
-    if sa != sb:
-        return sa < sb
     return g < best_g
 
 
@@ -529,10 +540,10 @@ def _closest(i, xs, n, cand, lb, mark, tag, f0, adj_ptr, adj_idx, geo, u_max, xm
         g = cand[k]
         if mark[g] != tag:
             continue
-        if best_g >= 0 and best[REC_IN] == 1.0:
+        if best_g >= 0:
             R = geo[g, 3]
             margin = u_max * (1.0 + 1e-5) + 1e-5 * R + 1e-9 * (lb[k] + R) + 1e-15
-            if lb[k] - margin > abs(best[REC_GAP]):
+            if lb[k] - margin > _score(best):
                 continue
         status, best_g = _try(g, i, xs, xm, conn, n_quads, params, work, memo, best, best_g)
         mark[g] = tag + 1

@@ -3,7 +3,9 @@
 
 Time runs on an integer grid of ticks of dt_s, so output times are hit exactly. Steps are
 dt * 2^k <= dt_max (a handful of step sizes, each factored once): the smallest near contact,
-doubling every few steps in free flight, never past the next output time.
+doubling every few steps in free flight, never past the next output time. A step that fails
+is cut in halves inside its tick span (_advance), down to dt_s / 2^MAX_STEP_CUTS. A run that
+cannot go on raises SimulationFailed carrying the histories up to the last good output.
 """
 
 from __future__ import annotations
@@ -13,13 +15,17 @@ import time
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from flexmvm.errors import InputError, SolverError
+from flexmvm.errors import InputError, SimulationFailed, SolverError
 from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
 from flexmvm.integrate.run_result import FrictionSummary, RunResult, StepHistory, TimeGrid
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import System
 
 GROW_AFTER_STEPS = 4
+# A failed step is retried as two halves, down to dt_s / 2^MAX_STEP_CUTS (_advance): deep
+# enough for a stiff transient (a corner node slipping off its facet, an active-set change),
+# shallow enough that a run that cannot go on stops in seconds, not hours.
+MAX_STEP_CUTS = 6
 # Start of a run: a node more than this inside the other contact surface is an overlap of the
 # bodies (InputError). 1e-9 m: the constraint pass's gap tolerance (contact.pairs gap_tol_m);
 # seven orders above the round-off of metre-scale coordinates, far below any physical overlap.
@@ -139,6 +145,25 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
     friction = (FrictionSummary() if any(c.mu > 0 for c in system.contacts)
                 else None)   # runs with friction report it even if no contact closes
     wall0 = time.perf_counter()
+    h_min = grid.dt_s / (1 << MAX_STEP_CUTS)
+    cuts = [0, grid.dt_s]     # steps cut in two, smallest step taken [s]
+
+    def finish(failure: str | None = None) -> RunResult:
+        nfac = sum(s.n_factorizations for s in integ.solvers)
+        depth = pen.depth if pen.measured else max_pen
+        return rec.result(contact_intervals=[tuple(iv) for iv in intervals],
+                          max_penetration_m=max(depth, 0.0), max_penetration_at=pen.at,
+                          max_penetration_by_direction_m=pen.by_direction,
+                          max_joint_drift=drift, n_steps=n_steps,
+                          n_factorizations=nfac, n_nonrotating_steps=integ.n_nonrotating_steps,
+                          steps_not_converged=n_loose, newton_residual_max=worst_res,
+                          lcp_residual_max=worst_lcp, momentum_residual=p_res,
+                          wall_time_s=time.perf_counter() - wall0,
+                          friction=friction, contact_row_impulses=row_impulses,
+                          steps=StepHistory(np.array(step_t), np.array(step_h),
+                                            np.array(step_impulse, dtype=float)),
+                          step_cuts=cuts[0], smallest_step_s=cuts[1], failure=failure)
+
     while tick < n_ticks:
         to_out = out_ticks - tick % out_ticks
         level = 0 if calm == 0 and n_steps else _choose_level(system, states, level, calm, k_max, dt)
@@ -148,61 +173,82 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
         h = span * dt
         t = t0 + tick * dt
         try:
-            res = integ.step(t, states, h)
+            parts = _advance(integ, t, states, h, h_min, cuts)
         except SolverError as exc:
-            raise SolverError(f"at t = {t:.6g} s (step {n_steps + 1}, h = {h:.3g} s): {exc}"
-                              ) from exc
-        states = res.states
-        n_steps += 1
-        drift = max(drift, res.joint_drift)
-        n_loose += not res.converged
-        worst_res = max(worst_res, res.residual)
-        worst_lcp = max(worst_lcp, res.lcp_residual)
-        if res.translation_residual is not None:
-            p_res += res.translation_residual
+            message = (f"at t = {t:.6g} s (step {n_steps + 1}, h = {h:.3g} s, cut down to "
+                       f"{h_min:.3g} s): {exc}")
+            if bar is not None:
+                bar.close()
+            raise SimulationFailed(message, finish(message)) from exc
+        for t_s, h_s, res in parts:
+            states = res.states
+            n_steps += 1
+            drift = max(drift, res.joint_drift)
+            n_loose += not res.converged
+            worst_res = max(worst_res, res.residual)
+            worst_lcp = max(worst_lcp, res.lcp_residual)
+            if res.translation_residual is not None:
+                p_res += res.translation_residual
+            f = res.contact.normal_impulse(res.contact_impulses)
+            if res.contact.friction is not None:
+                friction = (friction or FrictionSummary()).add(res.contact, res.contact_impulses,
+                                                               h_s)
+            if not pen.measured and res.contact.gaps.size:
+                max_pen = max(max_pen, float(-res.contact.gaps.min()))
+            pen.after_step(states, t_s + h_s)
+            in_contact = f > 0.0
+            calm = 0 if (in_contact or res.contact.rows.m) else calm + 1
+            _track_intervals(intervals, in_contact, t_s, t_s + h_s)
+            impulse += f
+            jimpulse += res.joint_impulses
+            if f > 0.0:
+                _add_row_impulses(row_impulses, res.contact, res.contact_impulses, t_s + h_s)
+            step_t.append(t_s + h_s)
+            step_h.append(h_s)
+            step_impulse.append(f)
         tick += span
-        f = res.contact.normal_impulse(res.contact_impulses)
-        if res.contact.friction is not None:
-            friction = (friction or FrictionSummary()).add(res.contact, res.contact_impulses, h)
-        if not pen.measured and res.contact.gaps.size:
-            max_pen = max(max_pen, float(-res.contact.gaps.min()))
-        pen.after_step(states, t0 + tick * dt)
-        in_contact = f > 0.0
-        calm = 0 if (in_contact or res.contact.rows.m) else calm + 1
-        _track_intervals(intervals, in_contact, t, t + h)
-        impulse += f
-        jimpulse += res.joint_impulses
-        if f > 0.0:
-            _add_row_impulses(row_impulses, res.contact, res.contact_impulses, t0 + tick * dt)
-        step_t.append(t0 + tick * dt)
-        step_h.append(h)
-        step_impulse.append(f)
         fine = fine_ticks is not None and level == 0 and tick % fine_ticks == 0
         if tick % out_ticks == 0 or tick >= n_ticks or fine:
             span_t = (tick - last_out) * dt
             last_out = tick
             rec.record(t0 + tick * dt, states, impulse / span_t, jimpulse / span_t, integ.carried,
                        integ.carried_products)
-            _check_finite(rec.rows[-1], system, t0 + tick * dt)
+            try:
+                _check_finite(rec.rows[-1], system, t0 + tick * dt)
+            except SolverError as exc:
+                rec.rows.pop()
+                raise SimulationFailed(str(exc), finish(str(exc))) from exc
             impulse, jimpulse = 0.0, np.zeros_like(jimpulse)
             if bar is not None:
                 bar.update(min(tick, n_ticks) - bar.n)
     if bar is not None:
         bar.close()
-    wall = time.perf_counter() - wall0
-    nfac = sum(s.n_factorizations for s in integ.solvers)
-    if pen.measured:
-        max_pen = pen.depth
-    return rec.result(contact_intervals=[tuple(iv) for iv in intervals],
-                      max_penetration_m=max(max_pen, 0.0), max_penetration_at=pen.at,
-                      max_penetration_by_direction_m=pen.by_direction,
-                      max_joint_drift=drift, n_steps=n_steps,
-                      n_factorizations=nfac, n_nonrotating_steps=integ.n_nonrotating_steps,
-                      steps_not_converged=n_loose, newton_residual_max=worst_res,
-                      lcp_residual_max=worst_lcp, momentum_residual=p_res, wall_time_s=wall,
-                      friction=friction, contact_row_impulses=row_impulses,
-                      steps=StepHistory(np.array(step_t), np.array(step_h),
-                                        np.array(step_impulse, dtype=float)))
+    return finish()
+
+
+def _advance(integ, t: float, states, h: float, h_min: float, cuts: list
+             ) -> list[tuple[float, float, object]]:
+    """Steps from t over h: [(start, size, StepResult)]. A step whose Newton iteration fails,
+    or ends above its tolerance on the round-off floor, is taken as two halves instead
+    (recursively, down to h_min = dt_s / 2^MAX_STEP_CUTS), as implicit codes cut their step;
+    the next step is back at the grid's size. At h_min a floor result is accepted (the run
+    counts it in steps_not_converged) and a failure raises SolverError. cuts = [number of
+    steps cut, smallest step taken [s]], updated."""
+    try:
+        res = integ.step(t, states, h)
+        failure = None
+    except SolverError as exc:
+        res, failure = None, exc
+    if res is not None and (res.converged or h * 0.5 < h_min * (1 - 1e-9)):
+        cuts[1] = min(cuts[1], h)
+        return [(t, h, res)]
+    if h * 0.5 < h_min * (1 - 1e-9):
+        raise failure
+    cuts[0] += 1
+    half = 0.5 * h
+    first = _advance(integ, t, states, half, h_min, cuts)
+    second = _advance(integ, t + half, first[-1][2].states, half, h_min, cuts)
+    return first + second
 
 
 def _add_row_impulses(acc: dict, crows, lam: np.ndarray, t: float) -> None:

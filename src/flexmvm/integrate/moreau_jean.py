@@ -68,6 +68,7 @@ from flexmvm.integrate.body_solver import BodySolver
 from flexmvm.integrate.compliance import DenseCompliance
 from flexmvm.integrate.coulomb import solve_contact_impulses
 from flexmvm.integrate.massless import MasslessCoordinates, equilibrate
+from flexmvm.integrate.relaxation import ACTIVATE_RATIO, AitkenRelaxation
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import ContactRows, System
 from flexmvm.threads import ENV_THREADS, worker_threads  # noqa: F401 (ENV_THREADS re-exported)
@@ -192,6 +193,9 @@ class MoreauJeanIntegrator:
         self._massless = [MasslessCoordinates.of(b) for b in system.bodies]
         # bodies whose k_hat dq_dot comes from W_qq dq_dot (full FE, undamped)
         self._images = _WImages({b for b in sparse if system.bodies[b].c_hat is None})
+        # relaxation of a step whose iteration stalls (integrate.relaxation)
+        self._relax = AitkenRelaxation([float(np.ptp(body.X, axis=0).max()) if len(body.X)
+                                        else 1.0 for body in system.bodies])
         for provider in system.contacts:
             sides = (getattr(provider, "slave", None), getattr(provider, "master", None))
             if (getattr(provider, "law", None) is ContactLaw.VELOCITY
@@ -406,7 +410,11 @@ class MoreauJeanIntegrator:
         lam = np.zeros(n_j + m_c)
         last_norm = last_rel = np.inf
         lcp_max = 0.0
+        relax = self._relax
+        relax.start()
+        relaxed = stalled = False
         for it in range(self.max_iter + 1):
+            v_before, image_before = v_plus, dict(images.plus)
             R, mids, ends, scales = self._residuals(t, states, v_plus, h)
             phi, jrows = self._joint_rows(t, h, mids, ends)
             Gj = {b: jrows.body_matrix(b) for b in jrows.blocks} if n_j else {}
@@ -426,6 +434,7 @@ class MoreauJeanIntegrator:
                 # Not accepted: a residual over the tolerance only in its translational rows
                 # whose balance (below) would bring it within (ff81900 did; after the
                 # separation it raised the seed's 2-ms momentum error 5.8e-11 -> 2.1e-10)
+                stalled = it >= 2 and rel > ACTIVATE_RATIO * last_rel
                 last_rel = rel
             if it == SLOW_ITERATIONS or (it > 1 and res_norm > last_norm):
                 self._prepare(mids, h, refresh_tol=0.0)
@@ -439,8 +448,9 @@ class MoreauJeanIntegrator:
             last_norm = res_norm
             if it == self.max_iter:
                 raise SolverError(f"Moreau-Jean step at t = {t:.6e} s (h = {h:.3e} s) did "
-                                  f"not converge in {self.max_iter} iterations")
-            if it > 0 and not refreshed:
+                                  f"not converge in {self.max_iter} iterations: "
+                                  + self._stall_report(res, scales, crows, lam[n_j:], n_j))
+            if it > 0 and not refreshed and not relaxed:
                 # bodies whose residual is all in the frame rows: v_free of the last iterate
                 # minus W^-1 [R_f; 0] (with the constraint impulses of the last iterate in
                 # R_f); the others as on the first iterate, v+ - W^-1 R
@@ -456,6 +466,7 @@ class MoreauJeanIntegrator:
             if n_j + m_c == 0:
                 v_plus = v_free
                 images.plus = dict(images.free)
+                v_plus, relaxed = self._relaxed(relax, v_before, v_plus, image_before, stalled)
                 continue
             Yj = self._apply_inverse(jrows, h) if n_j else {}
             D = np.zeros((n_j + m_c, n_j + m_c))
@@ -482,6 +493,7 @@ class MoreauJeanIntegrator:
                 dv = cb.velocity(lam[n_j:])
                 v_plus[b] = v_plus[b] + dv
                 images.impulses(b, self.solvers[b], crows.rows, lam[n_j:], dv)
+            v_plus, relaxed = self._relaxed(relax, v_before, v_plus, image_before, stalled)
         if not n_j:
             rel, res_t = self._balance_translation(self._balanced(res, scales, mids),
                                                    ends, v_plus, h, rel, res_t)
@@ -496,6 +508,52 @@ class MoreauJeanIntegrator:
         return StepResult(new_states, lam[:n_j], crows, lam[n_j:], it, drift,
                           converged=rel <= self.rtol, residual=rel, translation_residual=res_t,
                           lcp_residual=lcp_max)
+
+    def _stall_report(self, res, scales, crows: ContactRows, lam_c, n_j) -> str:
+        """Where a step's iteration stalled, in one line: the body and row of the largest
+        relative residual (frame translation / rotation, or elastic coordinate; for a nodal
+        basis the mesh node and direction), and the contact pairs of the step's rows
+        (contact, slave node, master facet) with their impulses."""
+        worst = max(range(len(res)), key=lambda b: float(np.abs(res[b]).max())
+                    / max(scales[b], 1e-300))
+        body, r = self.system.bodies[worst], res[worst]
+        i = int(np.argmax(np.abs(r)))
+        rel = float(abs(r[i])) / max(scales[worst], 1e-300)
+        if i < 3:
+            row = f"frame translation {'xyz'[i]}"
+        elif i < 6:
+            row = f"frame rotation {'xyz'[i - 3]}"
+        else:
+            row = f"elastic coordinate {i - 6}"
+            node = body.node_of_coordinate(i - 6)
+            if node is not None:
+                row += f" (node {node[0]} {'xyz'[node[1]]})"
+        text = f"largest residual {rel:.2e} (of rtol {self.rtol:.0e}) in body {body.name!r}, {row}"
+        m = crows.rows.m
+        if m:
+            keys = crows.keys
+            on = [k for k, x in zip(keys, lam_c) if x > 0.0]
+            shown = ", ".join(f"{k[0]} node {k[1]} on facet {k[2]}" if len(k) >= 3 else str(k)
+                              for k in (on or keys)[:3])
+            text += (f"; {m} contact row(s), {len(on)} carrying impulse ({shown}"
+                     + (" ..." if len(on or keys) > 3 else "") + ")")
+        if n_j:
+            text += f"; {n_j} joint row(s)"
+        return text
+
+    def _relaxed(self, relax: AitkenRelaxation, before, after, image_before, stalled):
+        """(v_plus, relaxed): the iterate ``after`` = G(``before``), or once the step has
+        stalled Aitken's relaxed one before + w (after - before) (integrate.relaxation),
+        the W-images of the full-FE bodies relaxed alike (they are linear in v_plus)."""
+        w = relax.factor(before, after, stalled)
+        if w == 1.0:
+            return after, False
+        images = self._images
+        for b, img in images.plus.items():
+            old = image_before.get(b)
+            if old is not None:
+                images.plus[b] = old + w * (img - old)
+        return [a + w * (c - a) for a, c in zip(before, after)], True
 
     def _equilibrate_massless(self, t, h, states, new_states, crows: Rows, lam_c,
                               jrows: Rows | None = None, lam_j=None) -> None:
@@ -643,7 +701,17 @@ class MoreauJeanIntegrator:
             c = self._carried[b]
             Lq = c.Lq if (c is not None and c.q is st.q) else None
             solver.refresh_coupling(h, body.rotational_coupling(st.q, Lq), tol, defer)
-        J = body.frame_inertia_first_order(st.q)
+        if body.nodal is not None:
+            # a nodal (full-FE) body: its frame Schur complement is the inertia near the 3-2-1
+            # nodes only (~1e-5 of the body), of the size of J's quadratic part q^T G2 q once
+            # the body vibrates, so the first-order J leaves the iteration with a factor
+            # near -1 (a free tet10 beam struck at mid-span stalled in its frame rows, at every
+            # h); its exact J costs O(nodes) from the compact contraction
+            c = self._carried[b]
+            Lc = c.Lq if (c is not None and c.q is st.q) else body.carried_contractions(st.q)
+            J = body.inertia_terms(st.q, Lc)[1]
+        else:
+            J = body.frame_inertia_first_order(st.q)
         solver.prepare(h, st.A, body.frame_mass(st.A, body.first_moment(st.q), J))
 
     def _relative_residual(self, R, Gj, crows: Rows, lam, n_j, scales) -> tuple:

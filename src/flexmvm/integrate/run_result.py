@@ -130,6 +130,9 @@ class RunResult:
     # linear-momentum change the scheme's solves left unbalanced (a free system's error)
     wall_time_s: float = 0.0
     friction: FrictionSummary | None = None  # None: no contact with friction in the system
+    step_cuts: int = 0             # steps retried as two halves (driver.MAX_STEP_CUTS deep)
+    smallest_step_s: float = 0.0   # the smallest step taken [s] (below dt_s only after cuts)
+    failure: str | None = None     # a run that stopped early: why (the histories end there)
 
     @property
     def total_energy(self) -> np.ndarray:

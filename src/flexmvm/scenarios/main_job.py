@@ -4,9 +4,11 @@ The scenario's own run and the full-FE reference are independent single-threaded
 with jobs = 2 they run side by side in two processes (one per core), each writing its own
 files, so the job takes about as long as the longer of the two instead of their sum.
 
-No partial output: everything is written into a temporary sibling ``DIR.partial-<pid>`` that
-becomes ``DIR`` only when the job has finished (flexmvm.results.outdir.staged_dir). If the
-scenario's run or its full-FE reference fails, ``DIR`` is left as it was.
+Everything is written into a temporary sibling ``DIR.partial-<pid>`` that becomes ``DIR``
+only when the job has finished (flexmvm.results.outdir.staged_dir). A run that stops before
+its end time (a step that does not converge at the smallest step) keeps what it computed:
+its history, fields and summary (``status = "failed"``, the reason in ``failure``) become
+``DIR`` and the job exits non-zero. Any other failure leaves ``DIR`` as it was.
 
 Nothing is dropped quietly: a comparison that cannot be made (a
 theory that does not apply to the scenario, a probe or force that cannot be compared) is
@@ -23,7 +25,7 @@ from concurrent.futures import FIRST_EXCEPTION, ProcessPoolExecutor, wait
 from pathlib import Path
 
 from flexmvm.bodies.build import ModelKind
-from flexmvm.errors import FlexmvmError, InputError
+from flexmvm.errors import FlexmvmError, InputError, SimulationFailed, SolverError
 from flexmvm.processes import die_with_parent
 from flexmvm.results.outdir import staged_dir
 from flexmvm.results.output import write_run
@@ -66,9 +68,23 @@ def _labelled(label: str, exc: BaseException) -> BaseException:
     return exc
 
 
+class RunStopped(SolverError):
+    """A run that stopped before its end time, its histories up to there written (summary
+    status "failed"): the job writes what it has and exits non-zero."""
+
+
 def _run_and_write(sc, label: str, out_dir: Path, fields: bool, progress: bool):
-    """Run sc, write its files into out_dir; returns (summary, curves, n_steps, wall [s])."""
-    run = run_scenario(sc, label=label, progress=progress, warn=False)
+    """Run sc, write its files into out_dir; returns (summary, curves, n_steps, wall [s]).
+    A run that stops early (SimulationFailed) writes what it computed, then raises
+    RunStopped."""
+    try:
+        run = run_scenario(sc, label=label, progress=progress, warn=False)
+    except SimulationFailed as exc:
+        if exc.partial is None:
+            raise
+        write_run(out_dir, exc.partial, fields=fields)
+        raise RunStopped(f"{exc} (histories up to t = {exc.partial.result.t[-1]:.6g} s "
+                         "written, summary status 'failed')") from None
     write_run(out_dir, run, fields=fields)
     if "pendulum" in run.summary:      # scenarios.run.summarize: a pendulum release
         _plot_event(out_dir / f"{sc.name}_event.png", run, f"{sc.name} ({label})")
@@ -97,8 +113,14 @@ def run_main_job(scenario: Path | str | Scenario, out_dir: Path, *, model=None, 
                                       for b in sc.bodies)
     ref_sc = sc.with_kind(ModelKind.FULL) if needs_ref else None
     own_label = ModelKind(model).value if model is not None else "scenario"
+    stopped = None
     with staged_dir(out_dir, "flexmvm run", echo=echo) as tmp:
-        summary = _run_into(tmp, sc, ref_sc, own_label, fields, progress, echo, jobs)
+        try:
+            summary = _run_into(tmp, sc, ref_sc, own_label, fields, progress, echo, jobs)
+        except RunStopped as exc:   # what was computed is kept: DIR gets it, marked failed
+            stopped = exc
+    if stopped is not None:
+        raise SolverError(f"{stopped}; in {out_dir}") from stopped
     for line in guard_warnings(summary.get("reduced_contact_guard") or {}):
         echo(f"warning: {line}")
     line = energy_gain_warning(summary)

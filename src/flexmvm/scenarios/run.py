@@ -9,6 +9,7 @@ from pathlib import Path
 import numpy as np
 
 from flexmvm.constraints.contact import ContactLaw
+from flexmvm.errors import SimulationFailed
 from flexmvm.integrate.driver import simulate
 from flexmvm.integrate.run_result import ProbeHistory, RunResult, StepHistory
 from flexmvm.scenarios import pendulum
@@ -71,9 +72,19 @@ class EnergyGainWarning(UserWarning):
 def run_scenario(sc, label: str = "run", progress: bool = False, warn: bool = True
                  ) -> ScenarioRun:
     """Build and simulate scenario sc; returns the run with its summary. warn: issue a
-    ReducedBasisWarning when the validity guard fires (summary reduced_contact_guard)."""
+    ReducedBasisWarning when the validity guard fires (summary reduced_contact_guard).
+
+    Raises SimulationFailed when the run stops before its end time (a step that did not
+    converge at the smallest step): its ``partial`` is the ScenarioRun up to the failure,
+    whose summary has ``status = "failed"`` and the reason in ``failure``."""
     built = build_scenario(sc)
-    res = simulate(built.system, built.states, built.grid, built.probes, progress=progress)
+    try:
+        res = simulate(built.system, built.states, built.grid, built.probes, progress=progress)
+    except SimulationFailed as exc:
+        if not isinstance(exc.partial, RunResult):
+            raise
+        partial = ScenarioRun(label, built, exc.partial, summarize(exc.partial, built))
+        raise SimulationFailed(str(exc), partial) from exc
     summary = summarize(res, built)
     if warn:
         for line in guard_warnings(summary["reduced_contact_guard"]):
@@ -110,6 +121,10 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
     gain = (float(max(0.0, (E - E[0]).max()) / abs(E[0]))
             if E[0] != 0 and not built.system.loads else None)
     return {
+        # "completed", or "failed" with the reason: the histories then end at the failure
+        "status": "completed" if res.failure is None else "failed",
+        **({"failure": res.failure} if res.failure is not None else {}),
+        "t_end_reached_s": float(res.t[-1]),
         "max_contact_force_N": float(res.contact_force.max()) if res.contact_force.size else 0.0,
         "min_contact_force_N": float(res.contact_force.min()) if res.contact_force.size else 0.0,
         "contact_intervals_s": [[float(a), float(b)] for a, b in res.contact_intervals],
@@ -139,7 +154,12 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         "max_penetration_at": res.max_penetration_at,
         "max_penetration_by_direction_m": dict(res.max_penetration_by_direction_m),
         "max_joint_drift": float(res.max_joint_drift),
+        # steps accepted on the Newton iteration's round-off floor above rtol, at the
+        # smallest step (integrate.driver: such a step is first cut in halves)
         "steps_not_converged": int(res.steps_not_converged),
+        # steps retried as two halves, and the smallest step taken [s]
+        "step_cuts": int(res.step_cuts),
+        "smallest_step_s": float(res.smallest_step_s),
         "newton_residual_max": float(res.newton_residual_max),
         "lcp_residual_max": float(res.lcp_residual_max),
         # the momentum the solves left unbalanced, relative to the initial momentum: what
