@@ -286,3 +286,26 @@ def test_rod_skin_is_its_three_surfaces(tmp_path):
     assert np.all(np.isin(back.facet_set("surface").nodes, parts))
     assert 4 * back.facet_set("surface").n_facets == sum(
         rm.mesh.facet_set(s).n_facets for s in ("end_a", "end_b", "side"))
+
+
+def test_abaqus_sets_by_name(tmp_path):
+    """Other meshio formats: an Abaqus .inp's element sets of triangles become facet sets
+    (oriented outward: 'slope' is the face x + y + z = 1 of the upper tet, normal +(1, 1, 1)),
+    overlapping sets keep every member ('both' holds 'slope' too), a set of volume cells
+    ('lower') the node set of its nodes, an NSET ('apex') a node set."""
+    pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 0, -1]], dtype=float)
+    none = np.zeros(0, dtype=int)
+    m = meshio.Mesh(pts, [("tetra", np.array([[0, 1, 2, 3], [0, 2, 1, 4]])),
+                          ("triangle", np.array([[1, 3, 2], [0, 3, 1]]))],
+                    cell_sets={"slope": [none, np.array([0])], "both": [none, np.array([0, 1])],
+                               "lower": [np.array([1]), none]},
+                    point_sets={"apex": np.array([3])})
+    path = tmp_path / "two.inp"
+    meshio.write(path, m)
+    mesh = read_mesh(path)
+    slope = mesh.nodes[mesh.facet_set("slope").tris[0]]
+    assert np.cross(slope[1] - slope[0], slope[2] - slope[0]) @ np.ones(3) > 0
+    assert mesh.facet_set("both").n_facets == 2
+    assert mesh.node_set("lower").tolist() == [0, 1, 2, 4]
+    assert mesh.node_set("apex").tolist() == [3]
+    assert mesh.facet_set("surface").n_facets == 6
