@@ -3,9 +3,9 @@ way, the outer skin.
 
 A mesh file can hold every cell with a positive Jacobian (mesh/quality.py) and still be wrong
 for the FE model: a cell written twice doubles its stiffness and mass (gmsh's MSH 2 format
-writes an element once per physical volume it belongs to; one duplicated hex27 in the tiny
-case's target rod raised the peak contact force by 10.6 %), and two cells folded onto each
-other overlap. Both are seen on the faces: every interior face of a conforming mesh belongs to
+writes an element once per physical volume it belongs to; tests/test_cli_failures.py has the
+issue's case, a hexahedron27 of a rod written twice), and two cells folded onto each other
+overlap. Both are seen on the faces: every interior face of a conforming mesh belongs to
 exactly two cells lying on opposite sides of it (their outward face normals opposite), every
 boundary face to one. The faces met once are the outer skin, the facet set ``surface``.
 

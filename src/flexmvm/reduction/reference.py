@@ -153,8 +153,8 @@ def three_two_one(mesh: Mesh, node_ids: np.ndarray) -> ReferenceCondition:
 AUTO_FAR_SHARES = (0.9, 0.8, 0.6, 0.4, 0.2, 0.0)
 
 #: Largest scaled rigid-mode condition number (see _rigid_condition) of an automatic support:
-#: a triangle whose height is 1/20 of its base (a slender beam's end-to-end support) measures
-#: ~1e2, three nodes of one straight edge are singular (inf).
+#: a compact triangle measures ~3, one spanning a slender beam (height 1/20 of its base) ~30,
+#: three nodes of one straight edge are singular (inf).
 AUTO_COND_MAX = 1e4
 
 
