@@ -276,7 +276,8 @@ def test_rod_skin_is_its_three_surfaces(tmp_path):
     """A rod mesh (hexahedron27) read back from .vtu passes every integrity check and its
     skin 'surface' is its end_a, end_b and side surfaces together: the rod's facet sets split
     each hexahedron27 face into 4 quads through its midside nodes, the skin keeps the face's
-    4 corners, so the skin has a quarter of their facets and its nodes are among theirs."""
+    4 corners, so the skin has a quarter of their facets and its nodes are among theirs. The
+    rod mesh itself has the skin too: facet set and node set 'surface', the three together."""
     rm = rod_mesh(RodSpec(length_m=0.2, end_a="hemisphere"))
     path = tmp_path / "rod.vtu"
     write_mesh(path, rm.mesh)
@@ -284,7 +285,10 @@ def test_rod_skin_is_its_three_surfaces(tmp_path):
     parts = np.unique(np.concatenate([rm.mesh.facet_set(s).nodes
                                       for s in ("end_a", "end_b", "side")]))
     assert np.all(np.isin(back.facet_set("surface").nodes, parts))
-    assert 4 * back.facet_set("surface").n_facets == sum(
+    assert np.array_equal(rm.mesh.facet_set("surface").nodes, parts)
+    assert np.array_equal(rm.mesh.node_set("surface"), np.unique(np.concatenate(
+        [rm.mesh.node_set(s) for s in ("end_a", "end_b", "side")])))
+    assert 4 * back.facet_set("surface").n_facets == rm.mesh.facet_set("surface").n_facets == sum(
         rm.mesh.facet_set(s).n_facets for s in ("end_a", "end_b", "side"))
 
 
