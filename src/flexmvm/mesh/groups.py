@@ -68,8 +68,8 @@ def _from_cell_sets(m: meshio.Mesh) -> dict[str, list[tuple[int, np.ndarray]]]:
 def _from_physical_tags(m: meshio.Mesh) -> dict[str, list[tuple[int, np.ndarray]]]:
     tags = m.cell_data.get("gmsh:physical")
     out: dict[str, list[tuple[int, np.ndarray]]] = {}
-    if tags is None:
-        return out
+    if tags is None or len(tags) != len(m.cells):  # MSH 4 through meshio: untagged blocks
+        return out                                  # are left out (its cell_sets serve)
     for name, (tag, dim) in _gmsh_names(m).items():
         members = out.setdefault(name, [])
         for k, (block, block_tags) in enumerate(zip(m.cells, tags)):

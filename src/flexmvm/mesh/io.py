@@ -60,6 +60,8 @@ def _volume_blocks(m: meshio.Mesh, where: str) -> list[tuple[CellBlock, np.ndarr
     """Volume cells grouped by type (meshio may split a type over several blocks), each with
     the gmsh physical tag of every cell (-1 where the file gives none)."""
     tags = m.cell_data.get("gmsh:physical")
+    if tags is not None and len(tags) != len(m.cells):  # meshio leaves untagged blocks out
+        tags = None
     by_type: dict[CellType, list[tuple[np.ndarray, np.ndarray]]] = {}
     for k, block in enumerate(m.cells):
         if block.type in _VOLUME_TYPES:
