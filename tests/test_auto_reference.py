@@ -90,3 +90,16 @@ def test_sphere_scenarios_start(name, model):
     assert run.contact_force.max() > 0
     assert run.summary["momentum_rel_error"] < 1e-6
     assert run.summary["max_penetration_m"] < 1e-6
+
+
+def test_flexible_sphere_reference_at_its_back():
+    """A flexible sphere (the shipped rigid one made full FE) whose contact surface is its
+    ``front`` cap (within 30 degrees of the -z pole) gets its automatic support at the
+    opposite side: all three nodes at z >= 0.8 R in its own frame."""
+    from flexmvm import full
+
+    sc = load_scenario(SCENARIOS / "sphere_block.toml").with_model("ball", full())
+    assert sc.body("ball").model.reference == "auto"
+    built = build_scenario(sc)
+    z = built.info[0].mesh.nodes[_reference_nodes(built.system.bodies[0]), 2]
+    assert np.all(z >= 0.8 * 0.010)
