@@ -313,3 +313,27 @@ def test_abaqus_sets_by_name(tmp_path):
     assert mesh.node_set("lower").tolist() == [0, 1, 2, 4]
     assert mesh.node_set("apex").tolist() == [3]
     assert mesh.facet_set("surface").n_facets == 6
+
+
+@pytest.mark.parametrize(("tags", "kept"), [((1, 2), True), ((1, 1), False)])
+def test_copies_in_two_physical_volumes_kept_once(tmp_path, tags, kept):
+    """MSH 2.2 writes an element once per physical volume it is in: two copies of a tet with
+    different physical tags are one element in two groups (kept once, volume 1/6, each group's
+    node set has its nodes); two copies with the same tag are a true duplicate, refused."""
+    pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
+    conn = np.array([[0, 1, 2, 3], [0, 1, 2, 3]])
+    m = meshio.Mesh(pts, [("tetra", conn)],
+                    cell_data={"gmsh:physical": [np.array(tags)],
+                               "gmsh:geometrical": [np.array([1, 1])]},
+                    field_data={"a": np.array([1, 3]), "b": np.array([2, 3])})
+    path = tmp_path / "two.msh"
+    meshio.write(path, m, file_format="gmsh22", binary=False)
+    if not kept:
+        with pytest.raises(MeshError, match="tetra cell 0 is written 2 times .*both in physical "
+                                            "group 1"):
+            read_mesh(path)
+        return
+    mesh = read_mesh(path)
+    assert mesh.n_cells == 1
+    assert mesh_volume(mesh) == pytest.approx(1 / 6, rel=1e-14)
+    assert mesh.node_set("a").tolist() == mesh.node_set("b").tolist() == [0, 1, 2, 3]
