@@ -267,16 +267,16 @@ def arm(path: str | os.PathLike, length_m: float, width_m: float, thickness_m: f
 
 
 #: The meshes of the shipped scenarios (scenarios/sphere_block.toml, sphere_beam.toml): file
-#: name and how it is made. tet4, coarse away from the contact point and ~1 mm at it (the
-#: Hertz contact radius of the steel sphere at 0.5 m/s on aluminium is ~0.4 mm: these meshes
-#: run quickly, they do not resolve the Hertz zone).
+#: name and how it is made. tet4, 0.4 mm within 0.8 mm of the contact point (about the Hertz
+#: contact radius of the steel sphere at 0.5 m/s on aluminium, 0.4 mm), growing to 2.5 mm
+#: (sphere), 12 mm (block), 5 mm (beam): a few hundred nodes each.
 SCENARIO_MESHES: tuple[tuple[str, Callable[[Path], Path]], ...] = (
     ("sphere_r10.msh", lambda p: sphere(p, 0.010, 0.0025, refine=Refinement(
-        (0.0, 0.0, -0.010), 1.0e-3, 1.5e-3, 6.0e-3))),
+        (0.0, 0.0, -0.010), 0.4e-3, 0.8e-3, 6.0e-3))),
     ("block_60x60x30.msh", lambda p: block(p, 0.060, 0.060, 0.030, 0.012, refine=Refinement(
-        (0.0, 0.0, 0.0), 1.0e-3, 2.0e-3, 20.0e-3))),
+        (0.0, 0.0, 0.0), 0.4e-3, 0.8e-3, 20.0e-3))),
     ("beam_200x10x10.msh", lambda p: beam(p, 0.200, 0.010, 0.010, 0.005, refine=Refinement(
-        (0.100, 0.0, 0.0), 1.0e-3, 2.0e-3, 10.0e-3))),
+        (0.100, 0.0, 0.0), 0.4e-3, 0.8e-3, 10.0e-3))),
 )
 
 
