@@ -91,8 +91,10 @@ def test_out_dir_holding_other_files_is_refused(tmp_path):
     assert _tree(out) == {"notes.txt": b"keep me"}
 
 
-def _bad_connectivity_scenario(tmp_path: Path) -> Path:
-    """tiny_impact.toml with b2 read from a VTU whose first cell names a node past the end."""
+def _bad_connectivity_scenario(tmp_path: Path, duplicate: bool = False) -> Path:
+    """tiny_impact.toml with b2 read from a VTU whose first cell names a node past the end
+    (``duplicate``: whose cell 3 is written twice instead, its node sets kept: the file is
+    otherwise fine)."""
     from flexmvm.mesh.io import write_mesh
     from flexmvm.mesh.rod import RodSpec, rod_mesh
 
@@ -101,8 +103,12 @@ def _bad_connectivity_scenario(tmp_path: Path) -> Path:
     write_mesh(tmp_path / "good.vtu", rm.mesh)
     m = meshio.read(tmp_path / "good.vtu")
     conn = m.cells[0].data.copy()
-    conn[0, 0] = len(m.points) + 5
-    meshio.write(tmp_path / "bad.vtu", meshio.Mesh(m.points, [(m.cells[0].type, conn)]))
+    if duplicate:
+        conn = np.vstack([conn, conn[3:4]])
+    else:
+        conn[0, 0] = len(m.points) + 5
+    meshio.write(tmp_path / "bad.vtu", meshio.Mesh(m.points, [(m.cells[0].type, conn)],
+                                                   point_data=m.point_data if duplicate else {}))
     text = TINY.read_text()
     i = text.index('name = "b2"')
     b2 = text[i:]
@@ -121,6 +127,17 @@ def test_out_of_range_mesh_connectivity(tmp_path):
     p = _flexmvm("run", scenario, "--out", tmp_path / "out", *RUN_FAST)
     line = _one_line(p.stderr, 2, p.returncode, "bad.vtu", "refer to node")
     assert str(len(meshio.read(tmp_path / "good.vtu").points) + 5) in line
+    assert sorted(x.name for x in tmp_path.iterdir()) == before
+
+
+def test_duplicated_mesh_cell(tmp_path):
+    """A mesh body with one hexahedron27 written twice (issue "Nothing lost", item 2: it raised
+    the tiny case's peak force by 10.6 % and exited 0): one line naming the file and the cell,
+    exit 2, nothing written."""
+    scenario = _bad_connectivity_scenario(tmp_path, duplicate=True)
+    before = sorted(x.name for x in tmp_path.iterdir())
+    p = _flexmvm("run", scenario, "--out", tmp_path / "out", *RUN_FAST)
+    _one_line(p.stderr, 2, p.returncode, "bad.vtu", "hexahedron27 cell 3 is written 2 times")
     assert sorted(x.name for x in tmp_path.iterdir()) == before
 
 

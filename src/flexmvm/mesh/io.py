@@ -1,7 +1,8 @@
-"""Mesh files through meshio: read volume meshes (with gmsh surface groups), write atomically.
+"""Mesh files through meshio: read volume meshes (with their named groups), write atomically.
 
 Node sets survive a write/read round trip as point-data masks named ``node_set:<name>``;
-facet sets are not written (VTU has no named surfaces); gmsh physical surface groups are read.
+facet sets are not written (VTU has no named surfaces); gmsh physical groups and other
+formats' cell sets are read (flexmvm.mesh.groups), the outer skin is always ``surface``.
 """
 
 from __future__ import annotations
@@ -10,6 +11,7 @@ import contextlib
 import io
 import os
 import tempfile
+import warnings
 from collections.abc import Mapping
 from pathlib import Path
 
@@ -17,6 +19,8 @@ import meshio
 import numpy as np
 
 from flexmvm.errors import InputError, MeshError
+from flexmvm.mesh.groups import Group, cell_dim, group_nodes, point_sets, read_groups
+from flexmvm.mesh.integrity import check_faces, duplicate_cells, face_table, skin
 from flexmvm.mesh.mesh import CellBlock, CellType, FacetSet, Mesh
 from flexmvm.mesh.quality import check_quality
 
@@ -29,23 +33,13 @@ NODE_SET_PREFIX = "node_set:"
 
 _VOLUME_TYPES = {ct.value: ct for ct in CellType}
 _SURFACE_CORNERS = {"triangle": 3, "triangle6": 3, "quad": 4, "quad8": 4, "quad9": 4}
-_LOWER_DIM_PREFIXES = ("vertex", "line", "triangle", "quad", "polygon")
 
-# Corner faces of each volume type (node-local ids), oriented outward for a valid cell.
-_FACES: dict[CellType, list[list[int]]] = {
-    CellType.TET4: [[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
-    CellType.HEX8: [
-        [0, 3, 2, 1],
-        [4, 5, 6, 7],
-        [0, 1, 5, 4],
-        [1, 2, 6, 5],
-        [2, 3, 7, 6],
-        [0, 4, 7, 3],
-    ],
-    CellType.WEDGE6: [[0, 2, 1], [3, 4, 5], [0, 1, 4, 3], [1, 2, 5, 4], [0, 3, 5, 2]],
-}
-_FACES[CellType.TET10] = _FACES[CellType.TET4]
-_FACES[CellType.HEX27] = _FACES[CellType.HEX8]
+#: Name of the facet set and node set of the outer skin that read_mesh always adds.
+SKIN = "surface"
+
+
+class MeshWarning(UserWarning):
+    """A mesh file was read with a change the user should know of (nodes dropped)."""
 
 
 def _read(path: Path) -> meshio.Mesh:
@@ -62,64 +56,74 @@ def _read(path: Path) -> meshio.Mesh:
         raise MeshError(f"cannot read mesh file {str(path)!r}: {detail}") from exc
 
 
-def _volume_blocks(m: meshio.Mesh, path: Path) -> list[CellBlock]:
-    """Volume cells grouped by type (meshio may split a type over several blocks)."""
-    by_type: dict[CellType, list[np.ndarray]] = {}
-    for block in m.cells:
+def _volume_blocks(m: meshio.Mesh, where: str) -> list[tuple[CellBlock, np.ndarray]]:
+    """Volume cells grouped by type (meshio may split a type over several blocks), each with
+    the gmsh physical tag of every cell (-1 where the file gives none)."""
+    tags = m.cell_data.get("gmsh:physical")
+    if tags is not None and len(tags) != len(m.cells):  # meshio leaves untagged blocks out
+        tags = None
+    by_type: dict[CellType, list[tuple[np.ndarray, np.ndarray]]] = {}
+    for k, block in enumerate(m.cells):
         if block.type in _VOLUME_TYPES:
-            by_type.setdefault(_VOLUME_TYPES[block.type], []).append(np.asarray(block.data))
-        elif not block.type.startswith(_LOWER_DIM_PREFIXES):
+            data = np.asarray(block.data)
+            tag = (np.asarray(tags[k], dtype=np.int64) if tags is not None
+                   else np.full(len(data), -1, dtype=np.int64))
+            by_type.setdefault(_VOLUME_TYPES[block.type], []).append((data, tag))
+        elif cell_dim(block.type) == 3:
             raise MeshError(
-                f"mesh file {str(path)!r} has unsupported cell type {block.type!r}; expected "
+                f"{where} has unsupported cell type {block.type!r}; expected "
                 f"{', '.join(_VOLUME_TYPES)}"
             )
     if not by_type:
         found = ", ".join(sorted({b.type for b in m.cells})) or "none"
-        raise MeshError(f"mesh file {str(path)!r} has no volume cells (found: {found})")
-    return [CellBlock(ct, np.concatenate(parts)) for ct, parts in by_type.items()]
+        raise MeshError(f"{where} has no volume cells (found: {found})")
+    return [(CellBlock(ct, np.concatenate([d for d, _ in parts])),
+             np.concatenate([t for _, t in parts])) for ct, parts in by_type.items()]
 
 
-def _surface_groups(m: meshio.Mesh) -> dict[str, list[np.ndarray]]:
-    """gmsh physical surface groups: name -> corner-node facets (file numbering)."""
-    tags = m.cell_data.get("gmsh:physical")
-    if tags is None:
-        return {}
-    names = {int(v[0]): k for k, v in m.field_data.items() if len(v) >= 2 and int(v[1]) == 2}
-    groups: dict[str, list[np.ndarray]] = {}
-    for block, block_tags in zip(m.cells, tags):
-        n_corner = _SURFACE_CORNERS.get(block.type)
-        if n_corner is None:
-            continue
-        data = np.asarray(block.data)[:, :n_corner]
-        block_tags = np.asarray(block_tags)
-        for tag, name in names.items():
-            sel = block_tags == tag
-            if np.any(sel):
-                groups.setdefault(name, []).append(data[sel])
-    return groups
+def _drop_group_copies(blocks: list[tuple[CellBlock, np.ndarray]], where: str) -> list[CellBlock]:
+    """The cells with every element once.
+
+    gmsh's MSH 2 format writes an element once per physical volume it belongs to, so a mesh
+    whose volume groups overlap holds copies of one element, each with another physical tag:
+    the element is kept once (its copies are the same element; each group still names it).
+    Any other repetition of a node set is refused: copies with no physical tag or the same tag
+    (a mesh written twice, a merge gone wrong) would double the cell's stiffness and mass, and
+    copies whose node order differs (another orientation or midside numbering) leave no way to
+    tell which one is meant. MeshError (one line) names both cells.
+    """
+    out = []
+    for block, tags in blocks:
+        keep = np.ones(len(block.connectivity), dtype=bool)
+        for cell_type, ids in duplicate_cells([block]):
+            conn, t = block.connectivity[ids], tags[ids]
+            a, b = int(ids[0]), int(ids[1])
+            same_order = bool(np.all(conn == conn[0]))
+            if not same_order:
+                raise MeshError(
+                    f"{where}: {cell_type.value} cells {a} and {b} have the same nodes in a "
+                    f"different order ({conn[0].tolist()} vs {conn[1].tolist()}); expected each "
+                    f"element once")
+            if np.any(t < 0) or len(np.unique(t)) != len(t):
+                why = ("no physical group" if np.any(t < 0)
+                       else f"both in physical group {int(t[0])}")
+                raise MeshError(
+                    f"{where}: {cell_type.value} cell {a} is written {len(ids)} times (also cell "
+                    f"{b}; {why}); expected each element once (a repeated cell doubles its "
+                    f"stiffness and mass)")
+            keep[ids[1:]] = False
+        out.append(CellBlock(block.cell_type, block.connectivity[keep]))
+    return out
 
 
-def _face_table(nodes: np.ndarray, blocks: list[CellBlock]) -> tuple[np.ndarray, np.ndarray]:
-    """All cell faces as sorted keys (F, 4), -1 padded, and the owning cell centroids (F, 3)."""
-    keys, cents = [], []
-    for block in blocks:
-        conn = block.connectivity
-        centroid = nodes[conn].mean(axis=1)
-        for face in _FACES[block.cell_type]:
-            k = np.full((len(conn), 4), -1, dtype=np.int64)
-            k[:, : len(face)] = conn[:, face]
-            keys.append(np.sort(k, axis=1))
-            cents.append(centroid)
-    return np.vstack(keys), np.vstack(cents)
-
-
-def _orient_outward(
-    nodes: np.ndarray, facets: np.ndarray, keys: np.ndarray, cents: np.ndarray, name: str
-) -> np.ndarray:
-    """Facets (n, 3|4) reordered so their right-hand normals point out of their owning cell."""
+def _orient_outward(facets: np.ndarray, faces: tuple[np.ndarray, np.ndarray], name: str,
+                    where: str) -> np.ndarray:
+    """Facets (n, 3|4) in the outward order of the cell face they match (integrity.face_table's
+    keys and faces); MeshError if a facet is no cell face."""
+    keys, oriented = faces
     k = np.full((len(facets), 4), -1, dtype=np.int64)
     k[:, : facets.shape[1]] = facets
-    k = np.sort(k, axis=1)
+    k = np.unique(np.sort(k, axis=1), axis=0)
     _, inv = np.unique(np.vstack([keys, k]), axis=0, return_inverse=True)
     inv = inv.ravel()
     owner = np.full(inv.max() + 1, -1, dtype=np.int64)
@@ -127,73 +131,136 @@ def _orient_outward(
     match = owner[inv[len(keys) :]]
     if np.any(match < 0):
         raise MeshError(
-            f"surface {name!r}: {int(np.sum(match < 0))} facet(s) are not faces of any volume "
-            "cell; expected boundary facets of the volume mesh"
+            f"{where}: surface {name!r}: {int(np.sum(match < 0))} facet(s) are not faces of any "
+            "volume cell; expected boundary facets of the volume mesh"
         )
-    p = nodes[facets]
-    if facets.shape[1] == 4:
-        normal = np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 1])
-    else:
-        normal = np.cross(p[:, 1] - p[:, 0], p[:, 2] - p[:, 0])
-    outward = np.einsum("ij,ij->i", normal, p.mean(axis=1) - cents[match]) > 0
-    return np.where(outward[:, None], facets, facets[:, ::-1])
+    return oriented[match, : facets.shape[1]]
 
 
-def read_mesh(path: str | os.PathLike, node_sets: Mapping[str, np.ndarray] | None = None) -> Mesh:
-    """Read a volume mesh with meshio and check its quality.
+def _facet_set(m: meshio.Mesh, group: Group, new_id: np.ndarray, faces, where: str) -> FacetSet:
+    """A dim-2 group's facets (corner nodes, renumbered), once each, outward."""
+    by_kind: dict[int, list[np.ndarray]] = {3: [], 4: []}
+    for k, idx in group.members:
+        n_corner = _SURFACE_CORNERS.get(m.cells[k].type)
+        if n_corner is None:
+            raise MeshError(f"{where}: surface {group.name!r} has {m.cells[k].type!r} cells; "
+                            f"expected {', '.join(_SURFACE_CORNERS)}")
+        mapped = new_id[np.asarray(m.cells[k].data)[idx][:, :n_corner]]
+        if np.any(mapped < 0):
+            raise MeshError(f"{where}: surface {group.name!r} uses nodes of no volume cell")
+        by_kind[n_corner].append(mapped)
+    out = {n: (_orient_outward(np.vstack(parts), faces, group.name, where) if parts
+               else np.zeros((0, n), dtype=np.int64)) for n, parts in by_kind.items()}
+    return FacetSet(quads=out[4], tris=out[3])
 
-    Volume cells: tetra, tetra10, hexahedron, hexahedron27, wedge. Lower-dimensional cells are
-    ignored, except gmsh physical surface groups (triangle/quad cells with ``gmsh:physical``
-    cell data named in field_data), which become facet sets (oriented outward) and node sets of
-    the same name. Point-data masks ``node_set:<name>`` (see write_mesh) become node sets.
-    node_sets: extra name -> node ids in the file's numbering. Nodes used by no volume cell are
-    dropped and the rest renumbered in order. Raises MeshError (one line) if the file is
-    missing or unreadable, has no volume cells or an unsupported volume type, or a bad cell.
-    """
-    path = Path(path)
-    m = _read(path)
-    blocks = _volume_blocks(m, path)
+
+def _named_sets(m: meshio.Mesh, new_id: np.ndarray, faces, where: str
+                ) -> tuple[dict[str, np.ndarray], dict[str, FacetSet]]:
+    """Node sets and facet sets of the file's groups (groups.read_groups): a surface group
+    gives a facet set and the node set of its corners, a group of volume, line or point cells
+    the node set of its nodes, an empty group an empty set of each kind."""
+    node_sets: dict[str, np.ndarray] = {}
+    facet_sets: dict[str, FacetSet] = {}
+    for group in read_groups(m):
+        if group.dim == 2 or group.empty:
+            fs = _facet_set(m, group, new_id, faces, where)
+            facet_sets[group.name] = fs
+            node_sets[group.name] = fs.nodes
+        else:
+            ids = new_id[group_nodes(m, group)]
+            node_sets[group.name] = ids[ids >= 0]
+    return node_sets, facet_sets
+
+
+def _renumbered(m: meshio.Mesh, blocks: list[CellBlock], where: str
+                ) -> tuple[np.ndarray, list[CellBlock], np.ndarray]:
+    """Nodes used by a volume cell (in file order), the blocks renumbered to them, and the map
+    file id -> new id (-1: unused). The unused nodes are stated in a MeshWarning."""
     n_points = len(m.points)
     for b in blocks:
         c = b.connectivity
         if c.size and (c.min() < 0 or c.max() >= n_points):
             bad = int(c.min()) if c.min() < 0 else int(c.max())
-            raise MeshError(f"mesh file {str(path)!r}: {b.cell_type.value} cells refer to node "
-                            f"{bad}; expected node ids 0..{n_points - 1}")
+            raise MeshError(f"{where}: {b.cell_type.value} cells refer to node {bad}; expected "
+                            f"node ids 0..{n_points - 1}")
     used = np.unique(np.concatenate([b.connectivity.ravel() for b in blocks]))
-    new_id = np.full(len(m.points), -1, dtype=np.int64)
+    if len(used) < n_points:
+        unused = np.setdiff1d(np.arange(n_points), used)
+        listed = ", ".join(map(str, unused[:5].tolist())) + (", ..." if len(unused) > 5 else "")
+        warnings.warn(f"{where}: {len(unused)} node(s) used by no volume cell dropped "
+                      f"(file ids {listed}); the rest renumbered in file order",
+                      MeshWarning, stacklevel=3)
+    new_id = np.full(n_points, -1, dtype=np.int64)
     new_id[used] = np.arange(len(used))
     nodes = np.asarray(m.points, dtype=float)[used]
     if nodes.shape[1] == 2:
         nodes = np.column_stack([nodes, np.zeros(len(nodes))])
-    blocks = [CellBlock(b.cell_type, new_id[b.connectivity]) for b in blocks]
-    keys, cents = _face_table(nodes, blocks)
-    facet_sets: dict[str, FacetSet] = {}
-    for name, parts in _surface_groups(m).items():
-        by_kind = {3: [], 4: []}
-        for facets in parts:
-            mapped = new_id[facets]
-            if np.any(mapped < 0):
-                raise MeshError(f"surface {name!r} uses nodes of no volume cell in {str(path)!r}")
-            by_kind[mapped.shape[1]].append(_orient_outward(nodes, mapped, keys, cents, name))
-        facet_sets[name] = FacetSet(
-            quads=np.vstack(by_kind[4] or [np.zeros((0, 4), dtype=np.int64)]),
-            tris=np.vstack(by_kind[3] or [np.zeros((0, 3), dtype=np.int64)]),
-        )
-    sets = {name: fs.nodes for name, fs in facet_sets.items()}
+    return nodes, [CellBlock(b.cell_type, new_id[b.connectivity]) for b in blocks], new_id
+
+
+def read_mesh(path: str | os.PathLike, node_sets: Mapping[str, np.ndarray] | None = None) -> Mesh:
+    """Read a volume mesh with meshio and check it: quality, duplicates, faces, skin.
+
+    Volume cells: tetra, tetra10, hexahedron, hexahedron27, wedge. Named groups (gmsh physical
+    groups, other formats' cell sets: flexmvm.mesh.groups) become sets by name: a surface group
+    a facet set (oriented outward) and the node set of its corners, a volume, line or point
+    group the node set of its nodes; an element in two groups is in both; an empty group gives
+    an empty set (Mesh.node_set/facet_set say "empty"). meshio point sets and point-data masks
+    ``node_set:<name>`` (see write_mesh) become node sets. node_sets: extra name -> node ids in
+    the file's numbering. The outer skin (faces of one cell) is always the facet set and node
+    set ``surface``; a file group of that name must be that skin.
+
+    Checks, each a one-line MeshError naming the file: missing or unreadable file, no volume
+    cells or an unsupported volume type, a node id out of range, an element written twice
+    (_drop_group_copies: kept once when the copies belong to different gmsh physical volumes,
+    refused otherwise), an inverted or degenerate cell (quality.check_quality: an inconsistently
+    oriented cell is refused, not repaired: which nodes to swap is a guess), a face shared by
+    more than two cells or by two cells on the same side of it (integrity.check_faces). Nodes
+    used by no volume cell are dropped, the rest renumbered in order, and a MeshWarning says
+    how many.
+    """
+    path = Path(path)
+    where = f"mesh file {str(path)!r}"
+    m = _read(path)
+    blocks = _drop_group_copies(_volume_blocks(m, where), where)
+    nodes, blocks, new_id = _renumbered(m, blocks, where)
+    try:
+        check_quality(Mesh(nodes=nodes, cells=tuple(blocks)))
+    except MeshError as exc:
+        raise MeshError(f"{where}: {exc}") from None
+    boundary = check_faces(nodes, blocks, where)
+    keys, faces, _, _ = face_table(nodes, blocks)
+    sets, facet_sets = _named_sets(m, new_id, (keys, faces), where)
+    surface = skin(boundary)
+    if SKIN in facet_sets and not _same_facets(facet_sets[SKIN], surface):
+        raise MeshError(f"{where}: group {SKIN!r} is not the outer skin; expected the name "
+                        f"{SKIN!r} for the whole boundary only (rename the group)")
+    facet_sets[SKIN], sets[SKIN] = surface, surface.nodes
+    for name, ids in point_sets(m).items():
+        sets[name] = new_id[ids[(ids >= 0) & (ids < len(new_id))]]
     for key, values in m.point_data.items():
         if key.startswith(NODE_SET_PREFIX):
             sets[key[len(NODE_SET_PREFIX) :]] = new_id[np.flatnonzero(np.asarray(values) != 0)]
     for name, ids in (node_sets or {}).items():
         ids = np.asarray(ids, dtype=np.int64)
-        if ids.size and (ids.min() < 0 or ids.max() >= n_points):
+        if ids.size and (ids.min() < 0 or ids.max() >= len(m.points)):
             raise MeshError(f"node set {name!r} refers to nodes outside {str(path)!r} "
-                            f"(0..{n_points - 1})")
+                            f"(0..{len(m.points) - 1})")
         sets[name] = new_id[ids]
     sets = {k: v[v >= 0] for k, v in sets.items()}
-    mesh = Mesh(nodes=nodes, cells=tuple(blocks), node_sets=sets, facet_sets=facet_sets)
-    check_quality(mesh)
-    return mesh
+    return Mesh(nodes=nodes, cells=tuple(blocks), node_sets=sets, facet_sets=facet_sets)
+
+
+def _same_facets(a: FacetSet, b: FacetSet) -> bool:
+    """Whether two facet sets hold the same facets (as node sets, whatever their order)."""
+    def keys(fs: FacetSet) -> np.ndarray:
+        k = np.full((fs.n_facets, 4), -1, dtype=np.int64)
+        k[: len(fs.quads)] = fs.quads
+        k[len(fs.quads) :, :3] = fs.tris
+        return np.unique(np.sort(k, axis=1), axis=0)
+
+    ka, kb = keys(a), keys(b)
+    return ka.shape == kb.shape and bool(np.all(ka == kb))
 
 
 def _cell_data_blocks(mesh: Mesh, cell_data: Mapping[str, np.ndarray]) -> dict[str, list]:

@@ -128,19 +128,29 @@ class Mesh:
         return sum(len(b.connectivity) for b in self.cells)
 
     def node_set(self, name: str) -> np.ndarray:
-        """Node ids of a named set; MeshError naming the known sets if absent."""
+        """Node ids of a named set; MeshError naming the known sets if absent, or saying it
+        is empty (a mesh file's group with no node in the mesh)."""
         try:
-            return self.node_sets[name]
+            ids = self.node_sets[name]
         except KeyError:
             raise MeshError(
                 f"unknown node set {name!r}; known: {', '.join(sorted(self.node_sets)) or 'none'}"
             ) from None
+        if ids.size == 0:
+            raise MeshError(f"node set {name!r} is empty (a group with no node in the mesh); "
+                            "expected at least one node")
+        return ids
 
     def facet_set(self, name: str) -> FacetSet:
-        """Facets of a named surface; MeshError naming the known surfaces if absent."""
+        """Facets of a named surface; MeshError naming the known surfaces if absent, or
+        saying it is empty (a mesh file's physical surface with no facet)."""
         try:
-            return self.facet_sets[name]
+            fs = self.facet_sets[name]
         except KeyError:
             raise MeshError(
                 f"unknown surface {name!r}; known: {', '.join(sorted(self.facet_sets)) or 'none'}"
             ) from None
+        if fs.n_facets == 0:
+            raise MeshError(f"surface {name!r} is empty (a group with no facet in the mesh); "
+                            "expected at least one facet")
+        return fs

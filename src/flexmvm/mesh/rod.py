@@ -352,7 +352,8 @@ def rod_mesh(spec: RodSpec = RodSpec()) -> RodMesh:
 
     Node id = station * m + section id (m section nodes, numbered by lap). Returns a RodMesh whose
     mesh has node sets end_a, end_b, end_a_centre, end_b_centre, side and facet sets end_a,
-    end_b, side (2x2 linear sub-quads of the quadratic faces, outward normals).
+    end_b, side (2x2 linear sub-quads of the quadratic faces, outward normals), and the skin
+    ``surface`` (the three together, node set and facet set) as read_mesh gives every mesh.
     """
     sec = _section(spec)
     m = len(sec.points)
@@ -373,6 +374,8 @@ def rod_mesh(spec: RodSpec = RodSpec()) -> RodMesh:
         "end_b": _surface(sec.quads + last),
         "side": _surface(side_grid.reshape(-1, 3, 3)),
     }
+    surfaces["surface"] = tuple(np.vstack([part[k] for part in surfaces.values()])
+                                for k in range(2))  # the skin, as read_mesh names it
     outer = np.flatnonzero(sec.lap == sec.lap.max())
     node_sets = {
         "end_a": np.arange(m),
@@ -381,6 +384,8 @@ def rod_mesh(spec: RodSpec = RodSpec()) -> RodMesh:
         "end_b_centre": np.array([last]),
         "side": (np.arange(len(x))[:, None] * m + outer[None]).ravel(),
     }
+    node_sets["surface"] = np.unique(np.concatenate([node_sets[k] for k in ("end_a", "end_b",
+                                                                             "side")]))
     mesh = Mesh(
         nodes=nodes,
         cells=(CellBlock(CellType.HEX27, conn.reshape(-1, 27)),),

@@ -3,7 +3,8 @@
 The body frame is attached to the body by clamping six displacement components of three
 nodes A, B, C (Shabana, Dynamics of Multibody Systems, ch. 5): A all three, B two, C one.
 Every basis of flexmvm.reduction has zero rows at these DOFs, so the elastic coordinates q
-carry no rigid-body motion. Choose the nodes far from any contact (for a rod: end B).
+carry no rigid-body motion. Choose the nodes far from any contact (for a rod: end B; for a
+mesh body without a named set: far_reference, the nodes farthest from its contact surfaces).
 """
 
 from __future__ import annotations
@@ -11,6 +12,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from scipy.spatial import cKDTree
 
 from flexmvm.errors import InputError
 from flexmvm.mesh.mesh import Mesh
@@ -144,4 +146,54 @@ def three_two_one(mesh: Mesh, node_ids: np.ndarray) -> ReferenceCondition:
     return ref
 
 
-__all__ = ["RIGID_COND_MAX", "ReferenceCondition", "rigid_body_modes", "three_two_one"]
+#: Shares of the largest node distance from the contacts that a support node must reach, tried
+#: in turn (the first that gives a well-conditioned support wins): 0.9 keeps the support in
+#: the far zone of a body; the lower ones serve bodies whose far zone is a point or a line
+#: (a sphere whose whole skin is a contact surface: its centre).
+AUTO_FAR_SHARES = (0.9, 0.8, 0.6, 0.4, 0.2, 0.0)
+
+#: Largest scaled rigid-mode condition number (see _rigid_condition) of an automatic support:
+#: a compact triangle measures ~3, one spanning a slender beam (height 1/20 of its base) ~30,
+#: three nodes of one straight edge are singular (inf).
+AUTO_COND_MAX = 1e4
+
+
+def far_reference(mesh: Mesh, contact_nodes: np.ndarray) -> ReferenceCondition:
+    """A 3-2-1 support chosen far from the contacts, for a body without a named reference set.
+
+    d_k = distance [m] of node k from the nearest of ``contact_nodes`` (the nodes of the
+    body's contact surfaces; none given: the distance from the nodes' centroid, a support on
+    the body's periphery). For each share s of AUTO_FAR_SHARES in turn, the candidates are the
+    nodes with d_k >= s max(d), and three_two_one picks A, B, C among them (A nearest their
+    centroid, B farthest from A, C spanning the largest triangle); the first support whose
+    scaled rigid-mode condition number is <= AUTO_COND_MAX (three non-collinear nodes, a
+    triangle not too slender to fix the frame's rotation) is returned. Far nodes because the
+    frame must not follow the contact's local deformation (DESIGN.md, Bodies). Raises
+    InputError if no share gives such a support (a mesh whose nodes are all on one line).
+    """
+    x = mesh.nodes
+    ids = np.unique(np.asarray(contact_nodes, dtype=np.int64).ravel())
+    if ids.size:
+        d = cKDTree(x[ids]).query(x)[0]
+    else:
+        d = np.linalg.norm(x - x.mean(axis=0), axis=1)
+    best = np.inf
+    for share in AUTO_FAR_SHARES:
+        candidates = np.flatnonzero(d >= share * d.max())
+        if candidates.size < 3:
+            continue
+        try:
+            ref = three_two_one(mesh, candidates)
+        except InputError:
+            continue
+        cond = _rigid_condition(mesh, ref.fixed_dofs)
+        if cond <= AUTO_COND_MAX:
+            return ref
+        best = min(best, cond)
+    raise InputError(f"no well-conditioned 3-2-1 support far from the contacts: best scaled "
+                     f"condition number {best:.3g}, expected <= {AUTO_COND_MAX:g} (nodes on one "
+                     f"line?); name a reference node set instead")
+
+
+__all__ = ["AUTO_COND_MAX", "AUTO_FAR_SHARES", "RIGID_COND_MAX", "ReferenceCondition",
+           "far_reference", "rigid_body_modes", "three_two_one"]

@@ -44,6 +44,10 @@ from flexmvm.scenarios.problems import problem, validate_part
 
 _SELECTION_RE = re.compile(r"^(\d+)-(\d+)$")
 
+#: ``model.reference`` of a mesh_file body that names no set: the builder chooses a 3-2-1
+#: support far from the body's contact surfaces (reduction.reference.far_reference).
+AUTO_REFERENCE = "auto"
+
 
 class MaterialSpec(Frozen):
     """Inline material table; ranges checked by :class:`flexmvm.materials.Material`."""
@@ -307,6 +311,24 @@ class BodyConfig(Frozen):
             raise problem(f"no such mesh file {str(path)!r}")
         return path
 
+    @model_validator(mode="before")
+    @classmethod
+    def _default_reference(cls, data: Any) -> Any:
+        """A mesh_file body's model without a ``reference`` gets AUTO_REFERENCE (a 3-2-1
+        support far from its contacts, chosen by the builder); a rod's keeps ModelConfig's
+        default, end_b (so the dumps, and the study keys made of them, of rod scenarios do not
+        change)."""
+        if not isinstance(data, dict) or data.get("mesh_file") is None or data.get("rod") is not None:
+            return data
+        model = data.get("model")
+        if model is None:
+            return {**data, "model": {"reference": AUTO_REFERENCE}}
+        if isinstance(model, dict) and "reference" not in model:
+            return {**data, "model": {**model, "reference": AUTO_REFERENCE}}
+        if isinstance(model, ModelConfig) and "reference" not in model.model_fields_set:
+            return {**data, "model": model.model_copy(update={"reference": AUTO_REFERENCE})}
+        return data
+
     @model_validator(mode="after")
     def _check(self) -> BodyConfig:
         if (self.rod is None) == (self.mesh_file is None):
@@ -333,9 +355,15 @@ class BodyConfig(Frozen):
         return Material(E=m.E_pa, nu=m.nu, rho=m.rho_kg_m3, name=m.name or self.name)
 
 
-def full(reference: str = "end_b") -> ModelConfig:
+def _given(reference: str | None) -> dict[str, str]:
+    """The reference key of a constructor: none when not given, so that the body decides
+    (end_b for a rod, auto for a mesh_file body: BodyConfig._default_reference)."""
+    return {} if reference is None else {"reference": reference}
+
+
+def full(reference: str | None = None) -> ModelConfig:
     """Full FE model: every nodal DOF but the reference condition's six."""
-    return validate_part(ModelConfig, {"kind": ModelKind.FULL, "reference": reference}, "full()")
+    return validate_part(ModelConfig, {"kind": ModelKind.FULL, **_given(reference)}, "full()")
 
 
 def rigid() -> ModelConfig:
@@ -343,27 +371,27 @@ def rigid() -> ModelConfig:
     return validate_part(ModelConfig, {"kind": ModelKind.RIGID}, "rigid()")
 
 
-def modal(modes: int, reference: str = "end_b") -> ModelConfig:
+def modal(modes: int, reference: str | None = None) -> ModelConfig:
     """The first ``modes`` modes of the body supported by its reference condition."""
     return validate_part(ModelConfig, {"kind": ModelKind.MODAL, "modes": modes,
-                                       "reference": reference}, f"modal({modes!r})")
+                                       **_given(reference)}, f"modal({modes!r})")
 
 
 def interface(patch_radii_m=(), modes: int = 0, *, mode_choice: str = "participation",
               patch_surface: str = "end_a", patch_centre_m=None, mode_pool: int | None = None,
-              reference: str = "end_b") -> ModelConfig:
+              reference: str | None = None) -> ModelConfig:
     """Interface model (reduction/interface.py): one static Hertz-patch vector per radius in
     ``patch_radii_m`` [m] about the centre of ``patch_surface`` (or ``patch_centre_m``), plus
     ``modes`` free-free modes chosen by ``mode_choice`` (participation or frequency)."""
     data = {"kind": ModelKind.INTERFACE, "patch_radii_m": tuple(patch_radii_m), "modes": modes,
             "mode_choice": mode_choice, "patch_surface": patch_surface,
-            "patch_centre_m": patch_centre_m, "mode_pool": mode_pool, "reference": reference}
+            "patch_centre_m": patch_centre_m, "mode_pool": mode_pool, **_given(reference)}
     return validate_part(ModelConfig, data,
                          f"interface({list(patch_radii_m)!r}, modes={modes!r})")
 
 
 def mvm(selection: str | tuple[int, int] | None = None, modes: int = 0, *,
-        region: RegionSpec | None = None, reference: str = "end_b",
+        region: RegionSpec | None = None, reference: str | None = None,
         seed_eq4: bool = False, kind: ModelKind | None = None) -> ModelConfig:
     """MVM model: the nodes of ``selection`` (the seed's layers-laps 'i-j' or (i, j)) or of
     ``region`` kept as nodal coordinates, plus ``modes`` modes: Craig-Bampton fixed-interface
@@ -374,5 +402,5 @@ def mvm(selection: str | tuple[int, int] | None = None, modes: int = 0, *,
     if kind is None:
         kind = ModelKind.MVM_SEED if seed_eq4 else ModelKind.MVM
     data = {"kind": kind, "selection": selection, "region": region, "modes": modes,
-            "reference": reference}
+            **_given(reference)}
     return validate_part(ModelConfig, data, f"mvm({selection!r}, modes={modes!r})")

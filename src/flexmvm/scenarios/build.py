@@ -62,8 +62,8 @@ from flexmvm.reduction.interface import (
     patch_nodes,
     relieved_statics,
 )
-from flexmvm.reduction.reference import three_two_one
 from flexmvm.reduction.rod_reference import rod_reference
+from flexmvm.scenarios.body_reference import reference_label, support
 from flexmvm.scenarios.sag import quasi_static_sag
 
 DEFAULT_SEARCH_RADIUS_M = 2e-4  # broad-phase margin beyond the distance closed in one step
@@ -145,12 +145,14 @@ def fe_model_for(key, material: Material) -> FEModel:
 
 
 def reference_condition(key, mesh: Mesh, ref_set: str):
-    """A rod's default (end_b) reference is rod_reference; otherwise a 3-2-1 on the set."""
+    """A rod's default (end_b) reference is rod_reference; otherwise the support of reference
+    label ``ref_set`` (body_reference.support: a 3-2-1 on the named set, or far from the
+    contact surfaces of an automatic label)."""
     if isinstance(key, ContactMass):
         key = key.key
     if isinstance(key, RodSpec) and ref_set == "end_b":
         return rod_reference(cached_rod_mesh(key))
-    return three_two_one(mesh, mesh.node_set(ref_set))
+    return support(mesh, ref_set)
 
 
 _MODE_FLOOR = [0]
@@ -373,22 +375,30 @@ def contact_nodes(sc, body: str, mesh: Mesh) -> np.ndarray:
     return np.unique(np.concatenate(ids)) if ids else np.zeros(0, np.int64)
 
 
-def _build_body(cfg, massless: np.ndarray | None = None) -> tuple[FlexibleBody, BodyInfo]:
+def contact_surfaces(sc, body: str) -> tuple[str, ...]:
+    """The facet sets of ``body`` named in the scenario's contacts, as slave or master."""
+    names = [surface for c in sc.contacts
+             for who, surface in ((c.slave_body, c.slave_surface), (c.master_body, c.master_surface))
+             if who == body]
+    return tuple(dict.fromkeys(names))
+
+
+def _build_body(cfg, massless: np.ndarray | None = None,
+                surfaces: tuple[str, ...] = ()) -> tuple[FlexibleBody, BodyInfo]:
     """The body of ``cfg``; ``massless``: its contact nodes whose mass is redistributed
-    (retained ones only for the MVM kinds, none for a modal or rigid model)."""
+    (retained ones only for the MVM kinds, none for a modal or rigid model); ``surfaces``: its
+    contact surfaces, which an automatic reference keeps away from. A rigid body has no
+    reference condition (nothing to support: no elastic coordinates)."""
     where = f"bodies[{cfg.name}]"
     material = cfg.material_obj()
     key = _mesh_key(cfg)
     rod = cached_rod_mesh(key) if cfg.rod is not None else None
     mesh = _mesh(key)
     kind = cfg.model.kind
-    try:
-        mesh.node_set(cfg.model.reference)
-    except MeshError as exc:
-        raise InputError(f"{where}.model.reference: {exc}") from None
     if kind.basis is None:
         body = rigid_body_from_fe(cfg.name, fe_model_for(key, material))
         return body, BodyInfo(cfg.name, kind, mesh, material, 6, 0, 0, rod)
+    ref_set = reference_label(cfg.model.reference, mesh, surfaces, f"{where}.model.reference")
     retained: tuple = ()
     if kind.retains_nodes:
         retained = tuple(int(i) for i in _retained_nodes(cfg.model, mesh, rod, f"{where}.model"))
@@ -399,7 +409,7 @@ def _build_body(cfg, massless: np.ndarray | None = None) -> tuple[FlexibleBody, 
         nodes = massless if kind is ModelKind.FULL else np.intersect1d(massless, retained)
         if nodes.size:
             key = ContactMass(key, tuple(int(i) for i in nodes))
-    args = (key, material, kind.basis, retained, modes, cfg.model.reference, interface)
+    args = (key, material, kind.basis, retained, modes, ref_set, interface)
     body = body_from_parts(cfg.name, mesh, basis_for(*args), body_parts_for(*args))
     n_ret = len(retained) if kind.retains_nodes else (mesh.n_nodes if kind is ModelKind.FULL
                                                       else 0)
@@ -478,7 +488,7 @@ def build_scenario(sc) -> BuiltScenario:
         massless = None
         if any(c.redistribute_mass for c in sc.contacts):
             massless = contact_nodes(sc, cfg.name, _mesh(_mesh_key(cfg)))
-        body, info = _build_body(cfg, massless)
+        body, info = _build_body(cfg, massless, contact_surfaces(sc, cfg.name))
         bodies.append(body)
         infos.append(info)
         states.append(_initial_state(body, cfg.placement))

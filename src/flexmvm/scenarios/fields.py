@@ -11,8 +11,8 @@ from pydantic import BaseModel, BeforeValidator, ConfigDict, Strict, StringConst
 
 from flexmvm.scenarios.problems import problem
 
-ROD_NODE_SETS = ("end_a", "end_b", "end_a_centre", "end_b_centre", "side")
-ROD_FACET_SETS = ("end_a", "end_b", "side")
+ROD_NODE_SETS = ("end_a", "end_b", "end_a_centre", "end_b_centre", "side", "surface")
+ROD_FACET_SETS = ("end_a", "end_b", "side", "surface")
 ZERO3 = (0.0, 0.0, 0.0)
 
 

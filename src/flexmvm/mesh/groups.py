@@ -1,0 +1,118 @@
+"""Named groups of a mesh file as meshio reads them: gmsh physical groups, Abaqus/MED sets.
+
+A group is a name and the cells it holds, block by block of the meshio mesh. Two sources,
+the first found is used:
+
+- ``cell_sets`` (gmsh MSH 4 through meshio, Abaqus ELSET, MED families): name -> per-block
+  arrays of cell indices. An element in two groups is listed in both (in MSH 4 an entity
+  carries all its physical tags; the cell data ``gmsh:physical`` keeps only the first, which
+  is why a surface in two physical groups used to lose one).
+- ``gmsh:physical`` cell data with ``field_data`` names (gmsh MSH 2): one tag per cell; MSH 2
+  writes an element once per physical group it is in, so each copy carries one of its tags.
+
+A name in ``field_data`` (gmsh's physical names) with no cell in the file is an empty group,
+kept so that asking for it says "empty" rather than "unknown". ``point_sets`` (Abaqus NSET)
+are node sets as they are.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import meshio
+import numpy as np
+
+_DIM_BY_PREFIX = (("vertex", 0), ("line", 1), ("triangle", 2), ("quad", 2), ("polygon", 2))
+
+
+def cell_dim(cell_type: str) -> int:
+    """Topological dimension of a meshio cell type (3 for every volume type)."""
+    for prefix, dim in _DIM_BY_PREFIX:
+        if cell_type.startswith(prefix):
+            return dim
+    return 3
+
+
+@dataclass(frozen=True)
+class Group:
+    """A named group: dim (0..3, of its cells; -1 if empty and of unknown dimension) and
+    members, (meshio block index, cell indices in that block) pairs (none when empty)."""
+
+    name: str
+    dim: int
+    members: tuple[tuple[int, np.ndarray], ...]
+
+    @property
+    def empty(self) -> bool:
+        return not any(len(idx) for _, idx in self.members)
+
+
+def _gmsh_names(m: meshio.Mesh) -> dict[str, tuple[int, int]]:
+    """gmsh physical names: name -> (tag, dim)."""
+    return {k: (int(v[0]), int(v[1])) for k, v in m.field_data.items()
+            if np.ndim(v) == 1 and len(v) >= 2}
+
+
+def _from_cell_sets(m: meshio.Mesh) -> dict[str, list[tuple[int, np.ndarray]]]:
+    out: dict[str, list[tuple[int, np.ndarray]]] = {}
+    for name, per_block in m.cell_sets.items():
+        if name.startswith("gmsh:"):
+            continue
+        members = out.setdefault(name, [])
+        for k, idx in enumerate(per_block):
+            if idx is not None and k < len(m.cells) and len(idx):
+                members.append((k, np.asarray(idx, dtype=np.int64)))
+    return out
+
+
+def _from_physical_tags(m: meshio.Mesh) -> dict[str, list[tuple[int, np.ndarray]]]:
+    tags = m.cell_data.get("gmsh:physical")
+    out: dict[str, list[tuple[int, np.ndarray]]] = {}
+    if tags is None or len(tags) != len(m.cells):  # MSH 4 through meshio: untagged blocks
+        return out                                  # are left out (its cell_sets serve)
+    for name, (tag, dim) in _gmsh_names(m).items():
+        members = out.setdefault(name, [])
+        for k, (block, block_tags) in enumerate(zip(m.cells, tags)):
+            if cell_dim(block.type) != dim:
+                continue
+            idx = np.flatnonzero(np.asarray(block_tags) == tag)
+            if idx.size:
+                members.append((k, idx))
+    return out
+
+
+def read_groups(m: meshio.Mesh) -> list[Group]:
+    """The named cell groups of a meshio mesh, in name order (see the module docstring).
+
+    A group whose cells span several dimensions keeps the highest dimension's cells only
+    (gmsh groups have one dimension; other formats rarely mix)."""
+    named = _from_cell_sets(m)
+    if not any(named.values()):
+        named = _from_physical_tags(m) | {k: v for k, v in named.items() if v}
+    gmsh = _gmsh_names(m)
+    for name in gmsh:
+        named.setdefault(name, [])
+    groups = []
+    for name in sorted(named):
+        members = named[name]
+        dims = {cell_dim(m.cells[k].type) for k, _ in members}
+        dim = max(dims) if dims else gmsh.get(name, (0, -1))[1]
+        kept = tuple((k, idx) for k, idx in members if cell_dim(m.cells[k].type) == dim)
+        groups.append(Group(name, dim, kept))
+    return groups
+
+
+def group_nodes(m: meshio.Mesh, group: Group, corners: int | None = None) -> np.ndarray:
+    """Sorted node ids (file numbering) of a group's cells; ``corners``: only the first
+    ``corners`` nodes of each cell (the corners of a quadratic facet)."""
+    parts = [np.asarray(m.cells[k].data)[idx][:, :corners].ravel() for k, idx in group.members]
+    return np.unique(np.concatenate(parts)) if parts else np.zeros(0, dtype=np.int64)
+
+
+def point_sets(m: meshio.Mesh) -> dict[str, np.ndarray]:
+    """meshio point_sets (Abaqus NSET and the like): name -> node ids (file numbering)."""
+    return {name: np.asarray(ids, dtype=np.int64).ravel()
+            for name, ids in m.point_sets.items() if not name.startswith("gmsh:")}
+
+
+__all__ = ["Group", "cell_dim", "group_nodes", "point_sets", "read_groups"]

@@ -1,0 +1,307 @@
+"""Parts meshed with gmsh: sphere, block, beam, arm with a pivot hub, as MSH 4.1 files.
+
+Every part is a tetrahedral mesh (tet4, or tet10 with ``order = 2``) with physical groups
+named after its natural faces, which read_mesh turns into facet and node sets (and the skin
+``surface``, always added by read_mesh). The element size is ``size_m`` everywhere, or, with a
+``Refinement``, ``fine_m`` within ``radius_m`` of a point, growing linearly to ``size_m`` at
+``radius_m + grow_m`` (a gmsh Threshold field on the distance to the point): the contact zone
+fine, the rest coarse, so that a full-FE body stays small. Units: metres. Coordinates are the
+part's own (body) frame, stated per part. gmsh is an optional dependency, imported when a part
+is meshed; without it an InputError says so in one line.
+
+``python -m flexmvm.mesh.parts [DIR]`` regenerates the meshes of the shipped scenarios
+(``scenarios/meshes/`` by default; see SCENARIO_MESHES).
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from flexmvm.errors import InputError, MeshError
+
+
+@dataclass(frozen=True)
+class Refinement:
+    """Local refinement: element size fine_m [m] within radius_m [m] of point_m (body frame),
+    growing linearly to the part's size_m over a further grow_m [m]."""
+
+    point_m: tuple[float, float, float]
+    fine_m: float
+    radius_m: float
+    grow_m: float
+
+
+def _gmsh():
+    """The gmsh module, or a one-line InputError if the optional dependency is missing."""
+    try:
+        import gmsh
+    except ImportError:
+        raise InputError("meshing a part needs the optional dependency gmsh, which is not "
+                         "installed; expected `pip install gmsh` (or flexmvm[gmsh])") from None
+    return gmsh
+
+
+def _positive(**values: float) -> None:
+    for name, value in values.items():
+        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
+            raise InputError(f"part: {name} must be a finite number > 0, got {value!r}")
+
+
+def _mesh_and_write(gmsh, path: Path, size_m: float, order: int,
+                    refine: Refinement | None) -> Path:
+    """Size field, 3D mesh of the given order, MSH 4.1 (ASCII) written to ``path``."""
+    if order not in (1, 2):
+        raise InputError(f"part: order must be 1 (tet4) or 2 (tet10), got {order!r}")
+    gmsh.option.setNumber("Mesh.MeshSizeMax", size_m)
+    gmsh.option.setNumber("Mesh.MeshSizeMin", size_m if refine is None else refine.fine_m)
+    if refine is not None:
+        _positive(fine_m=refine.fine_m, radius_m=refine.radius_m, grow_m=refine.grow_m)
+        x, y, z = refine.point_m
+        dist = gmsh.model.mesh.field.add("MathEval")
+        gmsh.model.mesh.field.setString(
+            dist, "F", f"Sqrt((x-({x!r}))^2+(y-({y!r}))^2+(z-({z!r}))^2)")
+        th = gmsh.model.mesh.field.add("Threshold")
+        gmsh.model.mesh.field.setNumber(th, "InField", dist)
+        gmsh.model.mesh.field.setNumber(th, "SizeMin", refine.fine_m)
+        gmsh.model.mesh.field.setNumber(th, "SizeMax", size_m)
+        gmsh.model.mesh.field.setNumber(th, "DistMin", refine.radius_m)
+        gmsh.model.mesh.field.setNumber(th, "DistMax", refine.radius_m + refine.grow_m)
+        gmsh.model.mesh.field.setAsBackgroundMesh(th)
+        for key in ("MeshSizeExtendFromBoundary", "MeshSizeFromPoints", "MeshSizeFromCurvature"):
+            gmsh.option.setNumber(f"Mesh.{key}", 0)
+    gmsh.option.setNumber("Mesh.ElementOrder", order)
+    gmsh.option.setNumber("Mesh.SecondOrderLinear", 0)
+    gmsh.option.setNumber("Mesh.Optimize", 1)
+    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
+    gmsh.option.setNumber("Mesh.Binary", 0)
+    gmsh.model.mesh.generate(3)
+    path.parent.mkdir(parents=True, exist_ok=True)
+    gmsh.write(str(path))
+    return path
+
+
+def _run(path: str | os.PathLike, size_m: float, order: int, refine: Refinement | None,
+         build: Callable) -> Path:
+    """Start gmsh, build the geometry and its physical groups (``build(gmsh)``), mesh, write,
+    stop gmsh. A gmsh failure becomes a one-line MeshError."""
+    gmsh = _gmsh()
+    _positive(size_m=size_m)
+    path = Path(path)
+    started = not gmsh.isInitialized()
+    if started:
+        gmsh.initialize(interruptible=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.model.add(path.stem)
+        build(gmsh)
+        return _mesh_and_write(gmsh, path, size_m, order, refine)
+    except Exception as exc:
+        if isinstance(exc, InputError):
+            raise
+        detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
+        raise MeshError(f"gmsh failed meshing {str(path)!r}: {detail}") from None
+    finally:
+        gmsh.model.remove()
+        if started:
+            gmsh.finalize()
+
+
+def _faces(gmsh, test: Callable[[tuple[float, ...], tuple[float, ...]], bool]) -> list[int]:
+    """Surface tags whose (centre of mass, bounding box) satisfy ``test``."""
+    out = []
+    for dim, tag in gmsh.model.getEntities(2):
+        com = gmsh.model.occ.getCenterOfMass(dim, tag)
+        box = gmsh.model.getBoundingBox(dim, tag)
+        if test(com, box):
+            out.append(tag)
+    return out
+
+
+def _group(gmsh, dim: int, tags: list[int], name: str) -> None:
+    if not tags:
+        raise MeshError(f"part: physical group {name!r} found no entity (geometry changed?)")
+    gmsh.model.addPhysicalGroup(dim, tags, name=name)
+
+
+def _close(a: float, b: float, scale: float) -> bool:
+    """a == b up to 1e-4 of the part's size (OCC pads bounding boxes by its tolerance)."""
+    return abs(a - b) <= 1e-4 * scale
+
+
+def sphere(path: str | os.PathLike, radius_m: float, size_m: float, *, order: int = 1,
+           refine: Refinement | None = None, cap_deg: float = 30.0) -> Path:
+    """Sphere of radius_m centred at the origin. Groups: ``front``, the spherical cap within
+    cap_deg of the -z pole (where it strikes when moving along -z), ``back``, the rest of the
+    sphere's surface, volume ``sphere``. Returns the path written."""
+    _positive(radius_m=radius_m)
+    if not 0.0 < cap_deg < 90.0:
+        raise InputError(f"sphere: cap_deg must be in (0, 90) degrees, got {cap_deg!r}")
+    r, z_cap = radius_m, -radius_m * math.cos(math.radians(cap_deg))
+
+    def build(gmsh) -> None:
+        occ = gmsh.model.occ
+        ball = occ.addSphere(0.0, 0.0, 0.0, r)
+        slab = occ.addBox(-r, -r, -r, 2 * r, 2 * r, z_cap + r)
+        cap, _ = occ.intersect([(3, ball)], [(3, slab)], removeObject=False, removeTool=True)
+        occ.fragment([(3, ball)], cap)
+        occ.synchronize()
+        curved = [t for _, t in gmsh.model.getEntities(2) if gmsh.model.getType(2, t) != "Plane"]
+        front = [t for t in curved if gmsh.model.occ.getCenterOfMass(2, t)[2] < z_cap]
+        _group(gmsh, 2, front, "front")
+        _group(gmsh, 2, [t for t in curved if t not in front], "back")
+        _group(gmsh, 3, [t for _, t in gmsh.model.getEntities(3)], "sphere")
+
+    return _run(path, size_m, order, refine, build)
+
+
+def block(path: str | os.PathLike, lx_m: float, ly_m: float, lz_m: float, size_m: float, *,
+          order: int = 1, refine: Refinement | None = None) -> Path:
+    """Block x in [-lx/2, lx/2], y in [-ly/2, ly/2], z in [-lz, 0] (top face centre at the
+    origin). Groups: ``top`` (z = 0), ``bottom`` (z = -lz), ``side`` (the four lateral faces),
+    volume ``block``. Returns the path written."""
+    _positive(lx_m=lx_m, ly_m=ly_m, lz_m=lz_m)
+    scale = max(lx_m, ly_m, lz_m)
+
+    def build(gmsh) -> None:
+        vol = gmsh.model.occ.addBox(-lx_m / 2, -ly_m / 2, -lz_m, lx_m, ly_m, lz_m)
+        gmsh.model.occ.synchronize()
+        top = _faces(gmsh, lambda com, box: _close(com[2], 0.0, scale))
+        bottom = _faces(gmsh, lambda com, box: _close(com[2], -lz_m, scale))
+        _group(gmsh, 2, top, "top")
+        _group(gmsh, 2, bottom, "bottom")
+        _group(gmsh, 2, _faces(gmsh, lambda com, box: not (_close(com[2], 0.0, scale)
+                                                          or _close(com[2], -lz_m, scale))),
+               "side")
+        _group(gmsh, 3, [vol], "block")
+
+    return _run(path, size_m, order, refine, build)
+
+
+def beam(path: str | os.PathLike, length_m: float, width_m: float, height_m: float,
+         size_m: float, *, patch_m: float | None = None, order: int = 1,
+         refine: Refinement | None = None) -> Path:
+    """Beam x in [0, length], y in [-width/2, width/2], z in [-height, 0] (top face at z = 0).
+    Groups: ``top``, ``bottom``, ``side`` (y = +-width/2), ``end_a`` (x = 0), ``end_b``
+    (x = length), ``mid_top`` (the top face within patch_m/2 of mid-length, default patch_m =
+    width: a patch of ``top``, in both groups), volume ``beam``. Returns the path written."""
+    _positive(length_m=length_m, width_m=width_m, height_m=height_m)
+    patch = width_m if patch_m is None else patch_m
+    _positive(patch_m=patch)
+    if patch >= length_m:
+        raise InputError(f"beam: patch_m must be < length_m = {length_m!r} m, got {patch!r}")
+    x0, x1, scale = (length_m - patch) / 2, (length_m + patch) / 2, length_m
+
+    def build(gmsh) -> None:
+        occ = gmsh.model.occ
+        parts = [occ.addBox(a, -width_m / 2, -height_m, b - a, width_m, height_m)
+                 for a, b in ((0.0, x0), (x0, x1), (x1, length_m))]
+        occ.fragment([(3, parts[0])], [(3, p) for p in parts[1:]])
+        occ.synchronize()
+        top = _faces(gmsh, lambda com, box: _close(box[2], 0.0, scale) and _close(box[5], 0.0, scale))
+        _group(gmsh, 2, top, "top")
+        _group(gmsh, 2, [t for t in top if x0 < gmsh.model.occ.getCenterOfMass(2, t)[0] < x1],
+               "mid_top")
+        _group(gmsh, 2, _faces(gmsh, lambda com, box: _close(box[2], -height_m, scale)
+                               and _close(box[5], -height_m, scale)), "bottom")
+        _group(gmsh, 2, _faces(gmsh, lambda com, box: _close(abs(com[1]), width_m / 2, scale)),
+               "side")
+        _group(gmsh, 2, _faces(gmsh, lambda com, box: _close(box[3], 0.0, scale)), "end_a")
+        _group(gmsh, 2, _faces(gmsh, lambda com, box: _close(box[0], length_m, scale)), "end_b")
+        _group(gmsh, 3, [t for _, t in gmsh.model.getEntities(3)], "beam")
+
+    return _run(path, size_m, order, refine, build)
+
+
+def arm(path: str | os.PathLike, length_m: float, width_m: float, thickness_m: float,
+        hub_radius_m: float, hole_radius_m: float, size_m: float, *, leg_m: float = 0.0,
+        order: int = 1, refine: Refinement | None = None) -> Path:
+    """Arm with a pivot hub: a plate of thickness_m (z in [0, thickness]) made of a hub disk
+    of hub_radius_m about the origin with a hole of hole_radius_m (the pivot), a bar x in
+    [0, length], y in [-width/2, width/2], and with leg_m > 0 a leg at the bar's end, x in
+    [length - width, length], y from width/2 down to -width/2 - leg (an L). Groups: ``hub``
+    (the hole's cylindrical face: where a revolute joint acts), ``tip`` (the free end face:
+    x = length for a straight arm, y = -width/2 - leg for an L), ``top`` (z = thickness),
+    ``bottom`` (z = 0), volume ``arm``. Returns the path written."""
+    _positive(length_m=length_m, width_m=width_m, thickness_m=thickness_m,
+              hub_radius_m=hub_radius_m, hole_radius_m=hole_radius_m)
+    if not hole_radius_m < hub_radius_m < length_m or width_m / 2 <= hole_radius_m:
+        raise InputError(f"arm: expected hole_radius_m < hub_radius_m < length_m and "
+                         f"hole_radius_m < width_m / 2, got {hole_radius_m!r}, {hub_radius_m!r}, "
+                         f"{length_m!r}, {width_m!r}")
+    if leg_m < 0:
+        raise InputError(f"arm: leg_m must be >= 0 m, got {leg_m!r}")
+    scale = length_m + leg_m
+    tip_y = -width_m / 2 - leg_m
+
+    def build(gmsh) -> None:
+        occ = gmsh.model.occ
+        shapes = [(2, occ.addDisk(0.0, 0.0, 0.0, hub_radius_m, hub_radius_m)),
+                  (2, occ.addRectangle(0.0, -width_m / 2, 0.0, length_m, width_m))]
+        if leg_m > 0:
+            shapes.append((2, occ.addRectangle(length_m - width_m, tip_y, 0.0, width_m,
+                                               width_m + leg_m)))
+        plate, _ = occ.fuse(shapes[:1], shapes[1:])
+        hole = occ.addDisk(0.0, 0.0, 0.0, hole_radius_m, hole_radius_m)
+        plate, _ = occ.cut(plate, [(2, hole)])
+        occ.extrude(plate, 0.0, 0.0, thickness_m)
+        occ.synchronize()
+        rim = hole_radius_m + 1e-4 * scale
+        _group(gmsh, 2, _faces(gmsh, lambda com, box: max(map(abs, box[:2] + box[3:5])) <= rim),
+               "hub")
+        if leg_m > 0:
+            tip = _faces(gmsh, lambda com, box: _close(box[4], tip_y, scale))
+        else:
+            tip = _faces(gmsh, lambda com, box: _close(box[0], length_m, scale))
+        _group(gmsh, 2, tip, "tip")
+        _group(gmsh, 2, _faces(gmsh, lambda com, box: _close(box[2], thickness_m, scale)
+                               and _close(box[5], thickness_m, scale)), "top")
+        _group(gmsh, 2, _faces(gmsh, lambda com, box: _close(box[5], 0.0, scale)), "bottom")
+        _group(gmsh, 3, [t for _, t in gmsh.model.getEntities(3)], "arm")
+
+    return _run(path, size_m, order, refine, build)
+
+
+#: The meshes of the shipped scenarios (scenarios/sphere_block.toml, sphere_beam.toml): file
+#: name and how it is made. tet4, 0.4 mm within 0.8 mm of the contact point (about the Hertz
+#: contact radius of the steel sphere at 0.5 m/s on aluminium, 0.4 mm), growing to 2.5 mm
+#: (sphere), 12 mm (block), 5 mm (beam): a few hundred nodes each.
+SCENARIO_MESHES: tuple[tuple[str, Callable[[Path], Path]], ...] = (
+    ("sphere_r10.msh", lambda p: sphere(p, 0.010, 0.0025, refine=Refinement(
+        (0.0, 0.0, -0.010), 0.4e-3, 0.8e-3, 6.0e-3))),
+    ("block_60x60x30.msh", lambda p: block(p, 0.060, 0.060, 0.030, 0.012, refine=Refinement(
+        (0.0, 0.0, 0.0), 0.4e-3, 0.8e-3, 20.0e-3))),
+    ("beam_200x10x10.msh", lambda p: beam(p, 0.200, 0.010, 0.010, 0.005, refine=Refinement(
+        (0.100, 0.0, 0.0), 0.4e-3, 0.8e-3, 10.0e-3))),
+)
+
+
+def write_scenario_meshes(directory: str | os.PathLike) -> list[Path]:
+    """Mesh every part of SCENARIO_MESHES into ``directory``; returns the paths written."""
+    return [make(Path(directory) / name) for name, make in SCENARIO_MESHES]
+
+
+def main(argv: list[str] | None = None) -> int:
+    """``python -m flexmvm.mesh.parts [DIR]``: regenerate the scenario meshes (default
+    scenarios/meshes); prints one line per file, or one error line and returns 2."""
+    args = sys.argv[1:] if argv is None else argv
+    directory = Path(args[0]) if args else Path("scenarios") / "meshes"
+    try:
+        for path in write_scenario_meshes(directory):
+            print(f"wrote {path} ({path.stat().st_size / 1e6:.2f} MB)")
+    except InputError as exc:
+        print(f"flexmvm.mesh.parts: error: {exc}", file=sys.stderr)
+        return 2
+    return 0
+
+
+__all__ = ["SCENARIO_MESHES", "Refinement", "arm", "beam", "block", "main", "sphere",
+           "write_scenario_meshes"]
+
+
+if __name__ == "__main__":
+    sys.exit(main())
