@@ -17,8 +17,14 @@ MODELS = ["full", "mvm", "mvm-seed", "mvm-seed-fixed", "modal", "interface", "ri
               help="Output directory (created; an earlier run's output there is replaced at "
                    "the end).")
 @click.option("--model", type=click.Choice(MODELS), default=None,
-              help="Model of every non-rigid body. Default: the scenario's models AND a full-FE "
-                   "reference, plotted together (seed fig. 5).")
+              help="Model of every non-rigid body (then no full-FE reference runs). Default: "
+                   "the scenario's models.")
+@click.option("--reference/--no-reference", default=None,
+              help="Also run a full-FE copy of the reduced bodies and compare (default: the "
+                   "scenario's [compare] full_reference; the seed scenarios ask for it).")
+@click.option("--theory/--no-theory", default=None,
+              help="Lay the 1D wave solution of a two-rod impact over the run (default: the "
+                   "scenario's [compare] theory).")
 @click.option("--t-end", "t_end", type=float, default=None, help="End time [s].")
 @click.option("--dt", type=float, default=None, help="Time step near contact [s].")
 @click.option("--no-fields", is_flag=True, help="Skip results.h5 and the ParaView series.")
@@ -26,7 +32,8 @@ MODELS = ["full", "mvm", "mvm-seed", "mvm-seed-fixed", "modal", "interface", "ri
 @click.option("--jobs", type=click.IntRange(1, 2), default=2, show_default=True,
               help="Processes for the scenario's run and its full-FE reference (2: side by "
                    "side, one per core).")
-def command(scenario, out_dir, model, t_end, dt, no_fields, progress, jobs) -> None:
+def command(scenario, out_dir, model, reference, theory, t_end, dt, no_fields, progress,
+            jobs) -> None:
     """Simulate SCENARIO; write history.csv, summary.json, results.h5, ParaView series, PNG.
 
     Everything is written into a temporary DIR.partial-<pid> beside DIR and renamed to DIR
@@ -38,7 +45,7 @@ def command(scenario, out_dir, model, t_end, dt, no_fields, progress, jobs) -> N
 
     summary = run_main_job(scenario, out_dir, model=model, t_end=t_end, dt=dt,
                            fields=not no_fields, progress=progress, echo=click.echo,
-                           jobs=jobs)
+                           jobs=jobs, reference=reference, theory=theory)
     keys = ("max_contact_force_N", "momentum_rel_error", "energy_rel_error", "max_penetration_m",
             "wall_time_s")
     click.echo("  ".join(f"{k} = {summary[k]:.4g}" for k in keys if summary.get(k) is not None))

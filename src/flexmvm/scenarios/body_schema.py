@@ -191,6 +191,9 @@ class ModelConfig(Frozen):
     patch_centre_m: Vec3 | None = None
     mode_choice: ModeChoice = ModeChoice.PARTICIPATION
     mode_pool: Count | None = None
+    # build a reduced body even when its dense matrices would take more memory than the
+    # full-FE body's sparse ones (scenarios.cost; refused by default)
+    allow_costly: bool = False
 
     @field_validator("selection")
     @classmethod

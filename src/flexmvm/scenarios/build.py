@@ -64,6 +64,7 @@ from flexmvm.reduction.interface import (
 )
 from flexmvm.reduction.rod_reference import rod_reference
 from flexmvm.scenarios.body_reference import reference_label, support
+from flexmvm.scenarios.cost import check_cost, reduced_cost
 from flexmvm.scenarios.sag import quasi_static_sag
 
 DEFAULT_SEARCH_RADIUS_M = 2e-4  # broad-phase margin beyond the distance closed in one step
@@ -409,6 +410,10 @@ def _build_body(cfg, massless: np.ndarray | None = None,
         nodes = massless if kind is ModelKind.FULL else np.intersect1d(massless, retained)
         if nodes.size:
             key = ContactMass(key, tuple(int(i) for i in nodes))
+    if kind.retains_nodes:
+        fe = fe_model_for(_mesh_key(cfg), material)
+        cost = reduced_cost(cfg.name, mesh.n_nodes, 3 * len(retained) + modes, fe.K.nnz)
+        check_cost(cost, cfg.model.allow_costly, f"{where}.model")
     args = (key, material, kind.basis, retained, modes, ref_set, interface)
     body = body_from_parts(cfg.name, mesh, basis_for(*args), body_parts_for(*args))
     n_ret = len(retained) if kind.retains_nodes else (mesh.n_nodes if kind is ModelKind.FULL

@@ -101,22 +101,28 @@ def _plot_event(path: Path, run, title: str) -> None:
 
 
 def run_main_job(scenario: Path | str | Scenario, out_dir: Path, *, model=None, t_end=None,
-                 dt=None, fields=True, progress=True, echo=print, jobs: int = 2) -> dict:
-    """Run ``scenario`` (a Scenario or a scenario file) and write its files into out_dir; with
-    no model also a full-FE reference (jobs = 2: in a second process, at the same time);
-    returns the top-level summary. ``model`` (a ModelKind or its value) sets every non-rigid
-    body's kind, ``t_end``, ``dt`` [s] the end time and contact step."""
+                 dt=None, fields=True, progress=True, echo=print, jobs: int = 2,
+                 reference: bool | None = None, theory: bool | None = None) -> dict:
+    """Run ``scenario`` (a Scenario or a scenario file) as written and write its files into
+    out_dir; returns the top-level summary. A full-FE reference of its reduced bodies (jobs =
+    2: in a second process, at the same time) and the 1D theory run where the scenario's
+    ``[compare]`` asks for them, or where ``reference`` / ``theory`` say so (None: the
+    scenario decides). ``model`` (a ModelKind or its value) sets every non-rigid body's kind
+    (and then no reference runs), ``t_end``, ``dt`` [s] the end time and contact step."""
     out_dir = Path(out_dir)
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     sc = sc.with_overrides(model=model, t_end_s=t_end, dt_s=dt)
-    needs_ref = model is None and any(b.model.kind not in (ModelKind.FULL, ModelKind.RIGID)
-                                      for b in sc.bodies)
+    want_ref = sc.compare.full_reference if reference is None else reference
+    want_theory = sc.compare.theory if theory is None else theory
+    needs_ref = want_ref and model is None and any(
+        b.model.kind not in (ModelKind.FULL, ModelKind.RIGID) for b in sc.bodies)
     ref_sc = sc.with_kind(ModelKind.FULL) if needs_ref else None
     own_label = ModelKind(model).value if model is not None else "scenario"
     stopped = None
     with staged_dir(out_dir, "flexmvm run", echo=echo) as tmp:
         try:
-            summary = _run_into(tmp, sc, ref_sc, own_label, fields, progress, echo, jobs)
+            summary = _run_into(tmp, sc, ref_sc, own_label, fields, progress, echo, jobs,
+                                want_theory)
         except RunStopped as exc:   # what was computed is kept: DIR gets it, marked failed
             stopped = exc
     if stopped is not None:
@@ -152,7 +158,7 @@ def _stop_workers(pool: ProcessPoolExecutor) -> None:
 
 
 def _run_into(out_dir: Path, sc, ref_sc, own_label: str, fields: bool, progress: bool, echo,
-              jobs: int) -> dict:
+              jobs: int, want_theory: bool = True) -> dict:
     """The job proper, writing into out_dir (the staging directory)."""
     needs_ref = ref_sc is not None
     own_what = f"{own_label} run"
@@ -166,7 +172,7 @@ def _run_into(out_dir: Path, sc, ref_sc, own_label: str, fields: bool, progress:
                                      progress)
             own_future = pool.submit(_run_and_write, sc, own_label, out_dir, fields, False)
             # while the two runs go: the theory and the figure module (matplotlib: ~1 s)
-            theory = _theory(sc, failures)
+            theory = _theory(sc, failures) if want_theory else None
             import flexmvm.plots.figures  # noqa: F401
             wait([own_future, ref_future], return_when=FIRST_EXCEPTION)
             failed = [(f, what) for f, what in ((own_future, own_what), (ref_future, ref_what))
@@ -187,7 +193,7 @@ def _run_into(out_dir: Path, sc, ref_sc, own_label: str, fields: bool, progress:
                    if needs_ref else None)
         except Exception as exc:
             raise _labelled(ref_what, exc) from exc
-        theory = _theory(sc, failures)
+        theory = _theory(sc, failures) if want_theory else None
     own_summary, own_curves, n_own, wall_own = own
     echo(f"{own_label}: {n_own} steps in {wall_own:.1f} s")
     summary = dict(own_summary)

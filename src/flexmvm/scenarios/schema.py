@@ -262,6 +262,15 @@ class TimeConfig(Frozen):
         return self
 
 
+class CompareConfig(Frozen):
+    """What `flexmvm run` lays beside the scenario's own run: a full-FE copy of every reduced
+    body (``full_reference``) and the 1D wave solution of a two-rod impact (``theory``).
+    Neither runs unless asked: on a user's part a full-FE copy can cost hours."""
+
+    full_reference: bool = False
+    theory: bool = False
+
+
 class Scenario(Frozen):
     """A validated scenario (docs/scenario_format.md). Build one with :func:`load_scenario`."""
 
@@ -273,6 +282,7 @@ class Scenario(Frozen):
     contacts: tuple[ContactConfig, ...] = ()
     joints: tuple[JointConfig, ...] = ()
     probes: tuple[ProbeConfig, ...] = ()
+    compare: CompareConfig = CompareConfig()
     _source: str = PrivateAttr(default="scenario")
 
     @model_validator(mode="after")

@@ -1,0 +1,68 @@
+"""What a reduced body will cost before it is built, against its full-FE body.
+
+A reduced (Craig-Bampton MVM) body of nq elastic coordinates holds dense matrices: its basis
+Psi (3 n x nq), m_hat and k_hat (nq x nq) and the six distinct G2 inertia blocks (nq x nq
+each) of the floating frame's invariants (bodies.invariants) -- 8 nq^2 + 3 n nq numbers.
+The full-FE body holds sparse M and K and the L D L^T factor of M + h^2/4 K, about
+FILL_PER_NNZ times the nonzeros of K. A retained region of a few thousand nodes (a wide
+ball on a fine tet10 mesh) makes the reduced body cost many times the full one: a 2 mm ball
+on a 28,000-DOF block kept 3,090 nodes, 9,289 coordinates, 18.6 GB against 1.2 GB for full
+FE. Such a body is refused unless ``model.allow_costly`` is set; the right size of a region
+is a few Hertz contact radii (DESIGN.md, "Sizing a reduced region").
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from flexmvm.errors import InputError
+
+#: Nonzeros of the L D L^T factor of M + h^2/4 K per nonzero of K (fe.cholesky's symbolic
+#: analysis with the package's ordering): measured 3.7 on a tet10 beam of 29,340 DOF and 2.5
+#: on the seed's rods (25,000 DOF); taken as 4, with M and K themselves (2 nnz) on top: an
+#: estimate of the order of the memory, not a budget.
+FILL_PER_NNZ = 4.0
+_BYTES = 8
+
+
+@dataclass(frozen=True)
+class BodyCost:
+    """Generalized coordinates and the estimated memory [bytes] of one body's matrices,
+    reduced as asked and as full FE."""
+
+    name: str
+    dof: int
+    bytes: float
+    full_dof: int
+    full_bytes: float
+
+    def line(self) -> str:
+        return (f"body {self.name!r}: reduced model {self.dof} DOF, ~{_mb(self.bytes)} of "
+                f"dense matrices; full FE {self.full_dof} DOF, ~{_mb(self.full_bytes)}")
+
+    def as_dict(self) -> dict:
+        return {"dof": self.dof, "memory_MB": self.bytes / 1e6, "full_fe_dof": self.full_dof,
+                "full_fe_memory_MB": self.full_bytes / 1e6}
+
+
+def _mb(x: float) -> str:
+    return f"{x / 1e9:.1f} GB" if x >= 1e9 else f"{x / 1e6:.0f} MB"
+
+
+def reduced_cost(name: str, n_nodes: int, nq: int, k_nnz: int) -> BodyCost:
+    """The cost of a reduced body of nq elastic coordinates on a mesh of n_nodes nodes whose
+    stiffness matrix has k_nnz nonzeros (module doc)."""
+    dense = _BYTES * (8.0 * nq * nq + 3.0 * n_nodes * nq)
+    full = _BYTES * (2.0 + FILL_PER_NNZ) * k_nnz
+    return BodyCost(name, 6 + nq, dense, 6 + 3 * n_nodes - 6, full)
+
+
+def check_cost(cost: BodyCost, allow: bool, where: str) -> None:
+    """InputError (one line) when the reduced body would cost more memory than its full-FE
+    body and ``allow`` (model.allow_costly) is not set."""
+    if cost.bytes > cost.full_bytes and not allow:
+        raise InputError(
+            f"{where}: the reduced model would cost more than full FE ({cost.dof} DOF, "
+            f"~{_mb(cost.bytes)} of dense matrices, against {cost.full_dof} DOF and "
+            f"~{_mb(cost.full_bytes)} for kind 'full'); expected a smaller region (a few Hertz "
+            "contact radii), kind 'full', or allow_costly = true")
