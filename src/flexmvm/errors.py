@@ -19,3 +19,16 @@ class MeshError(InputError):
 
 class SolverError(FlexmvmError, RuntimeError):
     """A numerical solve failed (non-convergence, singular system) with a readable reason."""
+
+
+class StaleDataWarning(UserWarning):
+    """Stored data (a setup-cache entry, a study's reference or case, a validation case) that
+    failed its check and is recomputed: one line, what was found and that it is recomputed."""
+
+
+def announce_recompute(message: str) -> None:
+    """Say in one line that stored data failed its check and is recomputed (StaleDataWarning;
+    the CLI prints it as ``flexmvm: note: <message>``)."""
+    import warnings
+
+    warnings.warn(message, StaleDataWarning, stacklevel=3)

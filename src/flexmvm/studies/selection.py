@@ -92,7 +92,7 @@ from flexmvm.studies.interface import (
     run_interface_case,
     write_interface_csv,
 )
-from flexmvm.studies.reference import case_reference, reference_history
+from flexmvm.studies.reference import case_reference, reference_history, study_version
 from flexmvm.studies.report import (
     echo_summary,
     failed_case_row,
@@ -103,7 +103,6 @@ from flexmvm.studies.report import (
 )
 from flexmvm.studies.runner import (
     Case,
-    case_path,
     check_cluster_options,
     cluster_slots,
     run_cases,
@@ -191,19 +190,20 @@ class _Batches:
     one line), so it is listed, and scored as failed, like a run whose solver failed."""
 
     def __init__(self, out_dir: Path, address: str | None, serial: bool, progress: bool,
-                 fn: Callable[[Case], dict], failed_row: Callable[[Case, str], dict]) -> None:
+                 fn: Callable[[Case], dict], failed_row: Callable[[Case, str], dict],
+                 version: dict, echo: Callable[[str], Any]) -> None:
         self.out_dir, self.address, self.serial, self.progress = out_dir, address, serial, progress
-        self.fn, self.failed_row = fn, failed_row
+        self.fn, self.failed_row, self.version, self.echo = fn, failed_row, version, echo
         self.made: set[str] = set()
         self.loaded: set[str] = set()
         self.rows: dict[str, dict] = {}
 
     def __call__(self, cases: Sequence[Case]) -> list[dict]:
-        stored = {c.key for c in cases if case_path(self.out_dir, c.key).is_file()}
         kw: dict[str, Any] = {"serial": True} if self.serial else {"scheduler": self.address}
         failures: dict[str, str] = {}
+        stored: set[str] = set()
         res = run_cases(cases, self.fn, self.out_dir, progress=self.progress, failures=failures,
-                        **kw)
+                        version=self.version, loaded=stored, announce=self.echo, **kw)
         for c in cases:
             (self.loaded if c.key in stored else self.made).add(c.key)
             self.rows[c.key] = (res[c.key] if c.key in res
@@ -268,8 +268,9 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     kind = study_kind(kind)
     check_cluster_options(scheduler, n_workers, serial)
     make_out_dir(out)
-    hist, ref_made = reference_history(sc, body, out, progress=progress)
+    hist, ref_made = reference_history(sc, body, out, progress=progress, announce=echo)
     echo(f"reference (full FE {body}): {'computed' if ref_made else 'loaded'} {hist}")
+    version = study_version(sc, hist)
     n_nodes = {(i, j): len(rod.selection(i, j)) for i in layers for j in laps}
     case_of: dict[Candidate, Case] = {}
     for c in selection_cases(sc, body, layers, laps, modes, reference=hist, kind=kind):
@@ -288,7 +289,7 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     with study_cluster(scheduler, n_workers, serial) as address:
         batches = _Batches(out, address, serial, progress,
                            functools.partial(run_study_case, reference=str(hist)),
-                           lambda c, line: _failed_row(c, line, n_nodes))
+                           lambda c, line: _failed_row(c, line, n_nodes), version, echo)
 
         def evaluate(batch: Sequence[Candidate]) -> list[float]:
             rows = batches([case_of[c] for c in batch])
