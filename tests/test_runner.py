@@ -159,9 +159,10 @@ def test_case_of_another_version_is_recomputed_and_named(tmp_path):
     """A case stored under another version (a code change: studies pass the provenance
     stamp) is recomputed, not mixed with the new rows, in one line naming its file and what
     changed; under the same version it is loaded."""
-    from flexmvm.scenarios.provenance import stamp
-    from flexmvm.scenarios import load_scenario
     from pathlib import Path
+
+    from flexmvm.scenarios import load_scenario
+    from flexmvm.scenarios.provenance import stamp
 
     sc = load_scenario(Path(__file__).parent / "data" / "tiny_impact.toml")
     old = stamp(sc) | {"code": "0" * 16, "key": "0" * 32}
@@ -197,8 +198,8 @@ def test_edited_result_is_recomputed(tmp_path):
     again = run_cases(cases, chain_eigenvalues, tmp_path, serial=True, progress=False,
                       announce=notes.append)
     assert again == reference
-    assert notes == [f"{path}: result differs from the SHA-256 written with it (edited or "
-                     "damaged): recomputed"]
+    assert notes == [(f"{path}: result differs from the SHA-256 written with it (edited or "
+                      "damaged): recomputed")]
 
 
 def test_stored_case_with_other_params_refused(tmp_path):

@@ -14,8 +14,8 @@ import pytest
 import scipy.sparse as sp
 
 from flexmvm import setup_cache
-from flexmvm.errors import StaleDataWarning
 from flexmvm.bodies.build import body_from_fe, body_from_parts, body_parts
+from flexmvm.errors import StaleDataWarning
 from flexmvm.fe.assembly import assemble
 from flexmvm.materials import ALUMINIUM, Material
 from flexmvm.mesh.rod import RodSpec, rod_mesh

@@ -12,8 +12,7 @@ import pytest
 import flexmvm.scenarios.run as run_module
 from flexmvm import validation
 from flexmvm.errors import StaleDataWarning
-from flexmvm.scenarios import provenance
-from flexmvm.scenarios import ModelConfig, load_scenario, scenario_from_dict
+from flexmvm.scenarios import ModelConfig, load_scenario, provenance, scenario_from_dict
 
 TINY = Path(__file__).parent / "data" / "tiny_impact.toml"
 
@@ -56,7 +55,8 @@ def test_key_holds_the_library_versions(monkeypatch):
     assert set(validation.case_inputs(sc)["libraries"]) == {"numpy", "scipy", "numba"}
     for lib in ("numpy", "scipy", "numba"):
         real = provenance.library_versions()
-        monkeypatch.setattr(provenance, "library_versions", lambda: real | {lib: "0.0"})
+        monkeypatch.setattr(provenance, "library_versions",
+                            lambda real=real, lib=lib: real | {lib: "0.0"})
         assert validation.case_key(sc) != base, lib
         monkeypatch.undo()
 
