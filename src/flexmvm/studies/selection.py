@@ -17,8 +17,10 @@ floating-frame coordinates (``BodyInfo.dof`` counts them) are reported as ``dof_
 Files of a study directory ``DIR``:
 
 - ``reference/history.csv`` (+ ``reference/reference.json``: the scenario it was run from, so a
-  rerun reuses it only for the same scenario), the full-FE reference;
-- ``cases/<key>.json`` one per MVM run (flexmvm.studies.runner: atomic, a rerun resumes), key
+  rerun reuses it only for the same scenario, its provenance stamp and the history's record,
+  checked before reuse: studies/reference.py), the full-FE reference;
+- ``cases/<key>.json`` one per MVM run (flexmvm.studies.runner: atomic, a rerun resumes; a case
+  of another code version or reference, or a damaged one, is recomputed and said), key
   ``l<i>-j<j>-m<m>``;
 - ``ncc.csv``: ``layers,laps,nodes,modes,dof,ncc_force,ncc_<probe>...,peak_err,impulse_err,
   duration_err,wall_time_s``, one row per evaluated case sorted by (layers, laps, modes); empty
