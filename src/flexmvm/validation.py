@@ -410,8 +410,9 @@ python -m pytest -m validation          # the acceptance checks on the same (sto
 ```
 
 A stored case is reused only when its key matches: a hash of the package source (every module
-but the report writer) and of the whole resolved scenario (meshes, models, contacts, probes,
-t_end, dt, theta). Full-FE runs of the 1 m rods are two 25,000-DOF bodies (minutes each).
+but the report writer), of the numpy, scipy and numba versions and of the whole resolved
+scenario (meshes, models, contacts, probes, t_end, dt, theta), and when its history and summary
+are those written with it (their SHA-256, samples and window in key.json). Full-FE runs of the 1 m rods are two 25,000-DOF bodies (minutes each).
 Seed runs: Moreau-Jean theta = {report['theta']}, h = {_us(DT)}, output every 2 us, default
 meshes (Hex27, first axial element 0.3 mm at the contact end, growth 1.6). Wall times are those
 of this report's runs on a machine shared with other jobs: indicative only (docs/performance.md
