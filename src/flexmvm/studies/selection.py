@@ -67,7 +67,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from flexmvm.errors import SolverError
+from flexmvm.errors import SolverError, announce_recompute
 from flexmvm.metrics.ncc import Comparison, Target
 from flexmvm.results.atomic import write_json_atomic
 from flexmvm.results.outdir import make_out_dir
@@ -238,7 +238,7 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
                   modes: Iterable[int] = range(7, 44, 6), target: Target | None = None, *,
                   search: bool = False, scheduler: str | None = None,
                   n_workers: int | None = None, serial: bool = False, progress: bool = False,
-                  echo: Callable[[str], Any] = lambda _line: None,
+                  echo: Callable[[str], Any] | None = None,
                   kind: ModelKind | str = ModelKind.MVM,
                   patches: Sequence[Sequence[float]] | None = None,
                   interface_modes: Iterable[int] = (5, 10, 20)) -> SelectionStudy:
@@ -249,6 +249,8 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     Brute force runs every case of the grid (one batch); ``search=True`` runs
     studies.search.smallest_passing with SEARCH_OPEN_PER_SLOT families open per case the
     cluster runs at once, each round's batch through run_cases (parallel, resumable).
+    ``echo``: the console lines (none by default); a stored reference or case that fails its
+    check is recomputed and said through it (default: errors.announce_recompute, a warning).
     ``scheduler``: address of a Dask scheduler; otherwise one LocalCluster of ``n_workers``
     processes for the whole study, or in-process with ``serial=True``. ``kind``:
     the candidates' model (grid.study_kind: mvm, the default, mvm-seed or mvm-seed-fixed).
@@ -270,7 +272,9 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     kind = study_kind(kind)
     check_cluster_options(scheduler, n_workers, serial)
     make_out_dir(out)
-    hist, ref_made = reference_history(sc, body, out, progress=progress, announce=echo)
+    announce = announce_recompute if echo is None else echo
+    echo = echo or (lambda _line: None)
+    hist, ref_made = reference_history(sc, body, out, progress=progress, announce=announce)
     echo(f"reference (full FE {body}): {'computed' if ref_made else 'loaded'} {hist}")
     version = study_version(sc, hist)
     n_nodes = {(i, j): len(rod.selection(i, j)) for i in layers for j in laps}
@@ -291,7 +295,7 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     with study_cluster(scheduler, n_workers, serial) as address:
         batches = _Batches(out, address, serial, progress,
                            functools.partial(run_study_case, reference=str(hist)),
-                           lambda c, line: _failed_row(c, line, n_nodes), version, echo)
+                           lambda c, line: _failed_row(c, line, n_nodes), version, announce)
 
         def evaluate(batch: Sequence[Candidate]) -> list[float]:
             rows = batches([case_of[c] for c in batch])
