@@ -99,3 +99,30 @@ def test_cases_of_another_code_version_are_recomputed_and_named(first, tmp_path,
     assert (res["runs_made"], res["runs_loaded"], res["reference_computed"]) == (1, 1, False)
     assert any(s.startswith(str(case)) and "SHA-256" in s for s in lines), lines
     assert _ncc(tmp_path) == ncc
+
+
+def test_material_reference_cut_short_is_recomputed(tmp_path):
+    """The material study: a material's reference history cut short, with its reference case
+    stored intact, is announced and recomputed, and the material's run is compared with the
+    whole reference again (the same row as before the cut)."""
+    import csv
+
+    from flexmvm.errors import StaleDataWarning
+    from flexmvm.studies.materials import run_materials_study
+
+    def study() -> list[dict]:
+        run_materials_study(TINY, tmp_path, materials=["Al"], selections=[(1, 1)], modes=[7],
+                            serial=True, progress=False, echo=lambda s: None)
+        with open(tmp_path / "materials.csv", newline="") as fh:
+            return [{k: v for k, v in r.items() if k != "wall_time_s"}
+                    for r in csv.DictReader(fh)]
+
+    rows = study()
+    hist = tmp_path / "Al" / "reference" / "history.csv"
+    whole = hist.read_text()
+    hist.write_text("".join(whole.splitlines(keepends=True)[:8]))
+    with pytest.warns(StaleDataWarning, match=r"Al/reference history.csv: 7 of \d+ samples, "
+                                              r"last at .* \(expected window 0..30 us\): "
+                                              "recomputed"):
+        again = study()
+    assert again == rows and hist.read_text() == whole
