@@ -13,8 +13,8 @@ Cases (the full-FE seed runs are two 25,000-DOF rods, several minutes each):
    the impact against the seed case, the momenta after it against the rigid pendulum;
 7. conservation of every run: momentum and energy errors, penetration, no tensile force.
 
-A finished case is stored in DIR/<case>/ (history.csv, summary.json, key.json) and reused only
-if its key matches: scenarios.provenance.run_key, the one key of every stored run (a SHA-256
+A finished case is stored in DIR/<case>/ (history.csv, summary.json, key.json;
+scenarios/stored_run.py) and reused only if its key matches: scenarios.provenance.run_key, the one key of every stored run (a SHA-256
 of the package source but this report writer, the numpy, scipy and numba versions and the
 whole resolved scenario: every body, mesh parameter, model, contact, joint, probe and time
 setting, t_end, dt, theta; mesh files by content hash), and if its outputs are those written
@@ -29,28 +29,19 @@ from __future__ import annotations
 
 import argparse
 import datetime as _dt
-import json
 import subprocess
-from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 
-from flexmvm.errors import announce_recompute
 from flexmvm.materials import ALUMINIUM, BRASS
-from flexmvm.results.atomic import file_sha256, write_json_atomic, write_text_atomic
-from flexmvm.results.history import history_problem, history_record, read_history, write_history
+from flexmvm.results.atomic import write_json_atomic, write_text_atomic
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario
 from flexmvm.scenarios import mvm as mvm_model
 from flexmvm.scenarios.compare import compare_runs
-from flexmvm.scenarios.provenance import (
-    run_code_version,
-    run_inputs,
-    run_key,
-    stamp,
-    stamp_mismatch,
-)
+from flexmvm.scenarios.provenance import run_code_version, run_inputs, run_key
+from flexmvm.scenarios.stored_run import StoredRun, load_or_run
 from flexmvm.theory.scenario import theory_histories
 from flexmvm.theory.wave import Rod1D, st_venant_force
 
@@ -90,79 +81,17 @@ def case_key(sc: Scenario) -> str:
     return run_key(sc)
 
 
-@dataclass
-class Case:
-    t: np.ndarray
-    force: np.ndarray
-    probes: dict
-    summary: dict
-    meta: dict
-
-    @property
-    def curves(self):
-        return self.t, self.force, self.probes
-
-
-def _outputs(d: Path) -> dict:
-    """What key.json keeps to check a case's files: history.csv's record (SHA-256, samples,
-    window), summary.json's SHA-256."""
-    return {"history.csv": history_record(d / "history.csv"),
-            "summary.json": file_sha256(d / "summary.json")}
-
-
-def stored_case_problem(d: Path, sc: Scenario) -> str | None:
-    """Why the stored case in ``d`` cannot be used for ``sc`` (one line), or None if it can;
-    "absent" when there is no key.json."""
-    try:
-        meta = json.loads((d / "key.json").read_text())
-    except FileNotFoundError:
-        return "absent"
-    except (OSError, ValueError):
-        return "key.json unreadable"
-    current = stamp(sc)
-    if not isinstance(meta, dict) or meta.get("key") != current["key"]:
-        return stamp_mismatch(meta.get("provenance") if isinstance(meta, dict) else None,
-                              current)
-    outputs = meta.get("outputs")
-    if not isinstance(outputs, dict):
-        return "key.json has no record of its outputs"
-    bad = history_problem(d / "history.csv", outputs.get("history.csv"), sc.time.t_end_s)
-    if bad is not None:
-        return f"history.csv: {bad}"
-    try:
-        if file_sha256(d / "summary.json") != outputs.get("summary.json"):
-            return "summary.json: content differs from the SHA-256 in key.json"
-    except OSError:
-        return "summary.json: missing"
-    return None
+#: A stored case (scenarios.stored_run).
+Case = StoredRun
 
 
 def run_case(out: Path, name: str, sc: Scenario, recompute: bool = False,
              progress: bool = True) -> Case:
     """Run scenario ``sc`` as case ``name`` under ``out``, or load it if a stored case has the
-    same key (scenarios.provenance.run_key) and its outputs pass their check (module doc); a
-    stored case that fails is recomputed and announced in one line."""
-    d = out / name
-    problem = None if recompute else stored_case_problem(d, sc)
-    if problem is None and not recompute:
-        t, f, p = read_history(d / "history.csv")
-        return Case(t, f, p, json.loads((d / "summary.json").read_text()),
-                    json.loads((d / "key.json").read_text()))
-    if problem not in (None, "absent"):
-        announce_recompute(f"validation case {name}: {problem}: recomputed")
-    from flexmvm.scenarios.run import run_scenario
-    r = run_scenario(sc, progress=progress)
-    t, f, p = r.result.curves()
-    d.mkdir(parents=True, exist_ok=True)
-    (d / "key.json").unlink(missing_ok=True)  # a half-rewritten case never matches a key
-    write_history(d / "history.csv", t, f, p)
-    write_json_atomic(d / "summary.json", r.summary)
-    prov = stamp(sc)
-    meta = {"key": prov["key"], "provenance": prov, "code_version": prov["code"],
-            "commit": git_commit(), "computed_utc": _now(), "inputs": case_inputs(sc),
-            "outputs": _outputs(d)}
-    write_json_atomic(d / "key.json", meta)
-    return Case(t, f, p, r.summary, meta)
+    same key (scenarios.provenance.run_key) and its outputs pass their check (module doc,
+    scenarios.stored_run); a stored case that fails is recomputed and announced in one line."""
+    return load_or_run(out / name, sc, f"validation case {name}", recompute, progress,
+                       lambda: {"commit": git_commit(), "computed_utc": _now()})
 
 
 def _now() -> str:
