@@ -400,11 +400,17 @@ def test_comparisons_that_cannot_be_made_are_listed(tmp_path, capsys, monkeypatc
 
 def test_stale_data_note_is_one_line(capsys):
     """A recomputation of stored data (StaleDataWarning) reaches a CLI user as one stderr line,
-    ``flexmvm: note: <message>``, not Python's two-line warning with a source line."""
-    from flexmvm.cli import main as cli_main
-    from flexmvm.errors import StaleDataWarning
+    ``flexmvm: note: <message>``, not Python's two-line warning with a source line (the CLI
+    and the main job's worker processes install this display: errors.notes_as_lines)."""
+    import warnings
 
-    cli_main._show_note(StaleDataWarning("setup cache fe-0.npz: holds NaN or inf in M_data: "
-                                         "evicted and rebuilt"), StaleDataWarning, "x.py", 1)
+    from flexmvm.errors import StaleDataWarning, notes_as_lines
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        notes_as_lines()
+        notes_as_lines()   # once is enough: a second call adds nothing
+        warnings.warn("setup cache fe-0.npz: holds NaN or inf in M_data: evicted and rebuilt",
+                      StaleDataWarning, stacklevel=1)
     assert capsys.readouterr().err == ("flexmvm: note: setup cache fe-0.npz: holds NaN or inf "
                                        "in M_data: evicted and rebuilt\n")

@@ -32,3 +32,26 @@ def announce_recompute(message: str) -> None:
     import warnings
 
     warnings.warn(message, StaleDataWarning, stacklevel=3)
+
+
+def notes_as_lines() -> None:
+    """From now on show every StaleDataWarning of this process as one stderr line,
+    ``flexmvm: note: <message>``, not Python's two lines with the source line; other warnings
+    as before. The CLI calls it, and the worker processes of a run's main job."""
+    import sys
+    import warnings
+
+    previous = warnings.showwarning
+    if getattr(previous, "flexmvm_notes", False):
+        return
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, StaleDataWarning):
+            text = " ".join(str(message).split())
+            print(f"flexmvm: note: {text}", file=sys.stderr if file is None else file,
+                  flush=True)
+        else:
+            previous(message, category, filename, lineno, file, line)
+
+    show.flexmvm_notes = True
+    warnings.showwarning = show

@@ -16,12 +16,11 @@ from __future__ import annotations
 
 import os
 import sys
-import warnings
 
 import click
 
 from flexmvm import __version__
-from flexmvm.errors import FlexmvmError, StaleDataWarning
+from flexmvm.errors import FlexmvmError, notes_as_lines
 
 #: Environment variable that turns on --debug (any value but "", "0", "false", "no").
 DEBUG_ENV = "FLEXMVM_DEBUG"
@@ -89,21 +88,11 @@ def describe(exc: BaseException, command: str) -> str:
     return f"flexmvm: error: {command}: {type(exc).__name__}" + (f": {message}" if message else "")
 
 
-def _show_note(message, category, filename, lineno, file=None, line=None,
-               _default=warnings.showwarning) -> None:
-    """A StaleDataWarning (stored data failed its check, recomputed) as one stderr line,
-    ``flexmvm: note: <message>``; other warnings as Python shows them."""
-    if issubclass(category, StaleDataWarning):
-        click.echo(f"flexmvm: note: {one_line(str(message))}", err=True)
-    else:
-        _default(message, category, filename, lineno, file, line)
-
-
 def main(argv: list[str] | None = None) -> None:
     """Entry point: runs the CLI; every failure is one stderr line and a non-zero exit status
     (module doc), unless --debug / FLEXMVM_DEBUG asks for the traceback."""
     _register()
-    warnings.showwarning = _show_note
+    notes_as_lines()
     args = list(sys.argv[1:] if argv is None else argv)
     debug = debug_enabled(args)
     try:

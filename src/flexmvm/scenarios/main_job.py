@@ -22,7 +22,7 @@ from concurrent.futures import FIRST_EXCEPTION, ProcessPoolExecutor, wait
 from pathlib import Path
 
 from flexmvm.bodies.build import ModelKind
-from flexmvm.errors import FlexmvmError, InputError
+from flexmvm.errors import FlexmvmError, InputError, notes_as_lines
 from flexmvm.results.outdir import staged_dir
 from flexmvm.results.output import write_run
 from flexmvm.results.writers import write_summary_json
@@ -125,7 +125,8 @@ def _run_into(out_dir: Path, sc, ref_sc, own_label: str, fields: bool, progress:
     failures: list[dict] = []
     if needs_ref and jobs > 1:
         ctx = multiprocessing.get_context("spawn")
-        with ProcessPoolExecutor(max_workers=2, mp_context=ctx) as pool:
+        with ProcessPoolExecutor(max_workers=2, mp_context=ctx,
+                                 initializer=notes_as_lines) as pool:
             ref_future = pool.submit(_run_and_write, ref_sc, "full", out_dir / "full", fields,
                                      progress)
             own_future = pool.submit(_run_and_write, sc, own_label, out_dir, fields, False)
