@@ -317,3 +317,20 @@ def test_cluster_slots_counts_the_cases_run_at_once():
         cluster_slots("tcp://127.0.0.1:1", None, True)
     with pytest.raises(InputError, match="positive integer"):
         cluster_slots(None, 0, False)
+
+
+def test_case_compared_with_another_reference_is_recomputed(tmp_path):
+    """A study's version holds the SHA-256 of the reference history its cases are compared
+    with: after the reference was recomputed to other bits, the cases are recomputed (not
+    refused as another study, not kept against the old reference), said in one line."""
+    cases = make_cases(2)
+    run_cases(cases, chain_eigenvalues, tmp_path, serial=True, progress=False,
+              version={"reference_sha256": "a" * 64})
+    notes: list[str] = []
+    loaded: set[str] = set()
+    run_cases(cases, chain_eigenvalues, tmp_path, serial=True, progress=False,
+              version={"reference_sha256": "b" * 64}, loaded=loaded, announce=notes.append)
+    assert loaded == set()
+    first = case_path(tmp_path, cases[0].key)
+    assert notes == [f"{first} and 1 other case(s): compared with another reference history: "
+                     "recomputed"]

@@ -19,6 +19,7 @@ from typing import Any
 
 from flexmvm.errors import InputError
 from flexmvm.results.atomic import canonical_json
+from flexmvm.scenarios.provenance import stamp_mismatch
 
 __all__ = ["CASES_DIR", "Case", "Params", "announce_stale", "case_path", "collect", "error_path",
            "load_stored", "read_record", "result_sha256"]
@@ -143,6 +144,10 @@ def result_sha256(result: Mapping[str, Any]) -> str:
     return hashlib.sha256(canonical_json(dict(result)).encode()).hexdigest()
 
 
+#: How a changed entry of a study's ``version`` is said.
+_VERSION_WORDS = {"reference_sha256": "compared with another reference history"}
+
+
 def _version_change(stored: Any, current: Any) -> str | None:
     """None if the stored ``version`` is ``current``; else what differs, in words (a
     ``provenance`` entry by scenarios.provenance.stamp_mismatch, any other by its name)."""
@@ -150,15 +155,15 @@ def _version_change(stored: Any, current: Any) -> str | None:
         return None
     if not isinstance(stored, Mapping) or not isinstance(current, Mapping):
         return "stored without a code version (made before cases were keyed)"
-    from flexmvm.scenarios.provenance import stamp_mismatch
-
     what = []
     for name in sorted(set(stored) | set(current)):
         a, b = stored.get(name), current.get(name)
         if canonical_json(a) == canonical_json(b):
             continue
-        what.append(stamp_mismatch(a, b) if name == "provenance" and isinstance(b, Mapping)
-                    else f"another {name}")
+        if name == "provenance" and isinstance(b, Mapping):
+            what.append(stamp_mismatch(a, b))
+        else:
+            what.append(_VERSION_WORDS.get(name, f"another {name}"))
     return "; ".join(what)
 
 
@@ -191,7 +196,7 @@ def load_stored(case: Case, out_dir: Path, version: Any) -> tuple[dict | None, s
 
 
 def announce_stale(stale: dict[str, list[str]], out_dir: Path,
-                    announce: Callable[[str], Any]) -> None:
+                   announce: Callable[[str], Any]) -> None:
     """One line per reason: the first case file, how many others, why, "recomputed"."""
     for why, keys in stale.items():
         more = f" and {len(keys) - 1} other case(s)" if len(keys) > 1 else ""
