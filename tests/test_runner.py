@@ -332,5 +332,5 @@ def test_case_compared_with_another_reference_is_recomputed(tmp_path):
               version={"reference_sha256": "b" * 64}, loaded=loaded, announce=notes.append)
     assert loaded == set()
     first = case_path(tmp_path, cases[0].key)
-    assert notes == [f"{first} and 1 other case(s): compared with another reference history: "
-                     "recomputed"]
+    why = "compared with another reference history"
+    assert notes == [f"{first} and 1 other case(s): {why}: recomputed"]
