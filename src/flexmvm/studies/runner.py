@@ -28,7 +28,7 @@ from typing import Any
 
 from tqdm import tqdm
 
-from flexmvm.errors import InputError, SolverError, announce_recompute
+from flexmvm.errors import InputError, SolverError, announce_recompute, notes_as_lines
 from flexmvm.results.atomic import canonical_json, write_json_atomic, write_text_atomic
 from flexmvm.studies.case_store import (
     CASES_DIR,
@@ -239,6 +239,7 @@ def _run_dask(
     else:
         client = _connect(scheduler)
     try:
+        client.run(notes_as_lines)  # a recomputed setup-cache entry: one line on the worker
         run_id = uuid.uuid4().hex[:12]
         by_key = {}
         futures = []
