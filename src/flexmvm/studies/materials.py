@@ -12,8 +12,11 @@ retains the selection's nodes (studies.grid.study_kind): ``mvm`` (Craig-Bampton,
 ``mvm``, so the keys and params of the Craig-Bampton studies stored before stay valid; a study
 directory holds one kind (a rerun with another kind is refused: its stored params differ).
 
-- ``DIR/<material>/reference/history.csv``: the reference of each material (case ``ref-<mat>``);
-- ``DIR/cases/<mat>-l<i>-j<j>-m<m>.json``: the MVM runs (studies.selection.run_selection_case);
+- ``DIR/<material>/reference/history.csv``: the reference of each material (case ``ref-<mat>``;
+  one that fails its check, studies.reference.reference_problem, is announced and recomputed);
+- ``DIR/cases/<mat>-l<i>-j<j>-m<m>.json``: the MVM runs (studies.selection.run_selection_case),
+  keyed by the material scenario's provenance stamp and its reference's SHA-256 (a case of
+  another code version or reference is recomputed, said in one line);
 - ``DIR/materials.csv``: ``material,kind,E_pa,nu,rho_kg_m3,selection,nodes,modes,dof,ncc_force,
   ncc_<probe>...,peak_err,impulse_err,duration_err,guard_outside_fraction,energy_gain_rel_max,
   wall_time_s``
