@@ -9,7 +9,10 @@ stores it (DIR/reference/history.csv), so a selection study with --out DIR reuse
 Each candidate b2 model is a name (model_of: 'mvm:1-3:25', 'interface:0.46:10' = one patch
 of radius 0.46 mm + 10 modes by participation, 'interface:0.2,0.46,0.9:20:frequency', or an
 alias of ALIASES, e.g. p1+10); a finished one is kept in
-DIR/front.json and not rerun. Prints and writes (DIR/front.csv) DOF (elastic coordinates of
+DIR/front.json with its provenance stamp (flexmvm.scenarios.provenance: package source,
+numpy/scipy/numba, resolved scenario, mesh files) and the reference's SHA-256, and not rerun
+while both are the same; a row of another code version or reference is rerun, said in one
+line. Prints and writes (DIR/front.csv) DOF (elastic coordinates of
 b2), force NCC, peak / impulse / duration errors, the NCC of the two b2 probe velocities and
 the wall time.
 """
@@ -24,8 +27,10 @@ import time
 from pathlib import Path
 
 import flexmvm as fm
+from flexmvm.results.atomic import file_sha256
 from flexmvm.results.history import read_history
 from flexmvm.scenarios.compare import compare_runs
+from flexmvm.scenarios.provenance import stamp, stamp_mismatch
 from flexmvm.scenarios.run import run_scenario
 from flexmvm.studies.grid import study_scenario
 from flexmvm.studies.reference import reference_history
@@ -74,6 +79,13 @@ def _commit() -> str:
         return "unknown"
 
 
+def _stale(row: dict, current: dict) -> str | None:
+    """Why a stored front.json row cannot be reused, or None (same code, scenario, reference)."""
+    if row.get("reference_sha256") != current["reference_sha256"]:
+        return "compared with another reference history"
+    return stamp_mismatch(row.get("provenance"), current["provenance"])
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--out", type=Path, required=True)
@@ -98,16 +110,21 @@ def main() -> None:
     commit = _commit()
     store = args.out / "front.json"
     rows = json.loads(store.read_text()) if store.is_file() else {}
+    ref_sha = file_sha256(hist)
     for name in args.models:
-        if name in rows:
-            continue
         model = models[name]
+        current = {"provenance": stamp(sc.with_model("b2", model)), "reference_sha256": ref_sha}
+        if name in rows:
+            why = _stale(rows[name], current)
+            if why is None:
+                continue
+            print(f"{store.name} row {name}: {why}: recomputed", flush=True)
         t0 = time.perf_counter()
         run = run_scenario(sc.with_model("b2", model))
         info = next(b for b in run.built.info if b.name == "b2")
         cmp = compare_runs(t_ref, f_ref, probes_ref, *run.result.curves())
         row = {"model": model.label, "dof": info.dof - 6, "commit": commit,
-               "wall_time_s": round(time.perf_counter() - t0, 1)}
+               "wall_time_s": round(time.perf_counter() - t0, 1)} | current
         row |= {k: v for k, v in cmp.items() if isinstance(v, float)}
         guard = run.summary.get("reduced_contact_guard")
         if guard is not None:

@@ -415,3 +415,21 @@ def test_comparisons_that_cannot_be_made_are_listed(tmp_path, capsys, monkeypatc
     assert "two coaxial rods" in items["comparison_vs_theory"]
     assert "comparison_vs_theory" not in summary and "comparison_vs_full" in summary
     assert "not compared" in stdout and "two coaxial rods" in stdout
+
+
+def test_stale_data_note_is_one_line(capsys):
+    """A recomputation of stored data (StaleDataWarning) reaches a CLI user as one stderr line,
+    ``flexmvm: note: <message>``, not Python's two-line warning with a source line (the CLI
+    and the main job's worker processes install this display: errors.notes_as_lines)."""
+    import warnings
+
+    from flexmvm.errors import StaleDataWarning, notes_as_lines
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("always")
+        notes_as_lines()
+        notes_as_lines()   # once is enough: a second call adds nothing
+        warnings.warn("setup cache fe-0.npz: holds NaN or inf in M_data: evicted and rebuilt",
+                      StaleDataWarning, stacklevel=1)
+    assert capsys.readouterr().err == ("flexmvm: note: setup cache fe-0.npz: holds NaN or inf "
+                                       "in M_data: evicted and rebuilt\n")

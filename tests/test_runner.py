@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import hashlib
 import json
 import os
 import pickle
@@ -10,8 +11,8 @@ import numpy as np
 import pytest
 from _study_cases import CountingCase, chain_eigenvalues, computed_keys, computing_pids
 
-from flexmvm.errors import InputError, SolverError
-from flexmvm.results.atomic import atomic_path, write_json_atomic
+from flexmvm.errors import InputError, SolverError, StaleDataWarning
+from flexmvm.results.atomic import atomic_path, canonical_json, write_json_atomic
 from flexmvm.studies.runner import (
     Case,
     case_path,
@@ -58,6 +59,9 @@ def test_serial_stores_every_case_and_returns_json_form(tmp_path):
             "key": case.key,
             "params": case.params.to_dict(),
             "result": results[case.key],
+            "result_sha256": hashlib.sha256(canonical_json(results[case.key]).encode()
+                                            ).hexdigest(),
+            "version": None,
         }
         expected = chain_eigenvalues(case)
         np.testing.assert_allclose(results[case.key]["lowest"], expected["lowest"], rtol=0)
@@ -129,11 +133,73 @@ def test_corrupt_case_file_is_recomputed(tmp_path):
     path.write_text(path.read_text()[:40])  # a truncated file, as a non-atomic writer leaves
     log = tmp_path / "log"
     log.mkdir()
-    with pytest.warns(UserWarning, match="recomputing"):
+    with pytest.warns(StaleDataWarning, match="unreadable or incomplete case file: recomputed"):
         again = run_cases(cases, CountingCase(log), tmp_path, serial=True, progress=False)
     assert computed_keys(log) == [cases[1].key]
     assert again == reference
     assert json.loads(path.read_text())["result"] == reference[cases[1].key]
+
+
+def test_corrupt_case_is_counted_as_computed_not_loaded(tmp_path):
+    """The keys run_cases reports loaded are those read from their files: a corrupt file's
+    case is recomputed, so it is not among them (a study counted it as loaded)."""
+    cases = make_cases(3)
+    run_cases(cases, chain_eigenvalues, tmp_path, serial=True, progress=False)
+    path = case_path(tmp_path, cases[0].key)
+    path.write_text(path.read_text()[:40])
+    loaded: set[str] = set()
+    notes: list[str] = []
+    run_cases(cases, chain_eigenvalues, tmp_path, serial=True, progress=False, loaded=loaded,
+              announce=notes.append)
+    assert loaded == {cases[1].key, cases[2].key}
+    assert notes == [f"{path}: unreadable or incomplete case file: recomputed"]
+
+
+def test_case_of_another_version_is_recomputed_and_named(tmp_path):
+    """A case stored under another version (a code change: studies pass the provenance
+    stamp) is recomputed, not mixed with the new rows, in one line naming its file and what
+    changed; under the same version it is loaded."""
+    from pathlib import Path
+
+    from flexmvm.scenarios import load_scenario
+    from flexmvm.scenarios.provenance import stamp
+
+    sc = load_scenario(Path(__file__).parent / "data" / "tiny_impact.toml")
+    old = stamp(sc) | {"code": "0" * 16, "key": "0" * 32}
+    cases = make_cases(3)
+    run_cases(cases, chain_eigenvalues, tmp_path, serial=True, progress=False,
+              version={"provenance": old})
+    log = tmp_path / "log"
+    log.mkdir()
+    notes: list[str] = []
+    loaded: set[str] = set()
+    run_cases(cases, CountingCase(log), tmp_path, serial=True, progress=False,
+              version={"provenance": stamp(sc)}, loaded=loaded, announce=notes.append)
+    assert computed_keys(log) == sorted(c.key for c in cases) and loaded == set()
+    assert len(notes) == 1
+    assert notes[0].startswith(f"{case_path(tmp_path, cases[0].key)} and 2 other case(s): "
+                               f"run under code version {'0' * 16} (now ")
+    assert notes[0].endswith(": recomputed")
+    run_cases(cases, CountingCase(log), tmp_path, serial=True, progress=False,
+              version={"provenance": stamp(sc)}, loaded=loaded, announce=notes.append)
+    assert len(computed_keys(log)) == 3 and loaded == {c.key for c in cases} and len(notes) == 1
+
+
+def test_edited_result_is_recomputed(tmp_path):
+    """A stored result edited after it was written (valid JSON, params unchanged) fails its
+    SHA-256 and is recomputed, said in one line."""
+    cases = make_cases(2)
+    reference = run_cases(cases, chain_eigenvalues, tmp_path, serial=True, progress=False)
+    path = case_path(tmp_path, cases[1].key)
+    record = json.loads(path.read_text())
+    record["result"]["trace"] += 1.0
+    path.write_text(json.dumps(record))
+    notes: list[str] = []
+    again = run_cases(cases, chain_eigenvalues, tmp_path, serial=True, progress=False,
+                      announce=notes.append)
+    assert again == reference
+    assert notes == [(f"{path}: result differs from the SHA-256 written with it (edited or "
+                      "damaged): recomputed")]
 
 
 def test_stored_case_with_other_params_refused(tmp_path):
@@ -251,3 +317,20 @@ def test_cluster_slots_counts_the_cases_run_at_once():
         cluster_slots("tcp://127.0.0.1:1", None, True)
     with pytest.raises(InputError, match="positive integer"):
         cluster_slots(None, 0, False)
+
+
+def test_case_compared_with_another_reference_is_recomputed(tmp_path):
+    """A study's version holds the SHA-256 of the reference history its cases are compared
+    with: after the reference was recomputed to other bits, the cases are recomputed (not
+    refused as another study, not kept against the old reference), said in one line."""
+    cases = make_cases(2)
+    run_cases(cases, chain_eigenvalues, tmp_path, serial=True, progress=False,
+              version={"reference_sha256": "a" * 64})
+    notes: list[str] = []
+    loaded: set[str] = set()
+    run_cases(cases, chain_eigenvalues, tmp_path, serial=True, progress=False,
+              version={"reference_sha256": "b" * 64}, loaded=loaded, announce=notes.append)
+    assert loaded == set()
+    first = case_path(tmp_path, cases[0].key)
+    why = "compared with another reference history"
+    assert notes == [f"{first} and 1 other case(s): {why}: recomputed"]

@@ -15,6 +15,7 @@ import scipy.sparse as sp
 
 from flexmvm import setup_cache
 from flexmvm.bodies.build import body_from_fe, body_from_parts, body_parts
+from flexmvm.errors import StaleDataWarning
 from flexmvm.fe.assembly import assemble
 from flexmvm.materials import ALUMINIUM, Material
 from flexmvm.mesh.rod import RodSpec, rod_mesh
@@ -152,6 +153,73 @@ def test_malformed_entry_is_rebuilt(rod, fe, cache):
     np.savez(entry, psi=np.zeros(3))
     rebuilt, builder = _cb(fe, rod)
     assert builder.calls == 1 and np.array_equal(rebuilt.psi, fresh.psi)
+
+
+def _nan_copy(entry, checksum: bool) -> None:
+    """Rewrite ``entry`` as a valid .npz with its arrays but every float NaN (with a checksum
+    of that content when ``checksum``, as setup_cache.save would write it)."""
+    with np.load(entry) as z:
+        arrays = {k: (np.full_like(z[k], np.nan) if z[k].dtype.kind == "f" else z[k])
+                  for k in z.files if k != "__sha256__"}  # setup_cache.CHECKSUM
+    if checksum:
+        arrays[setup_cache.CHECKSUM] = np.array(setup_cache.checksum(arrays))
+    np.savez(entry, **arrays)
+
+
+@pytest.mark.parametrize("checksum", [False, True])
+def test_nan_entry_is_evicted_rebuilt_and_announced(rod, fe, cache, checksum):
+    """A valid .npz holding NaN (with or without a matching checksum) fails the entry's
+    check: evicted, rebuilt (the fresh basis) and said in one line naming the entry."""
+    fresh, _ = _cb(fe, rod)
+    (entry,) = cache.glob("basis-*.npz")
+    _nan_copy(entry, checksum)
+    with pytest.warns(StaleDataWarning, match=rf"setup cache {entry.name}: holds NaN or inf "
+                                              r"in \w+: evicted and rebuilt"):
+        rebuilt, builder = _cb(fe, rod)
+    assert builder.calls == 1 and np.array_equal(rebuilt.psi, fresh.psi)
+    hit, again = _cb(fe, rod)
+    assert again.calls == 0 and np.array_equal(hit.psi, fresh.psi)
+
+
+def test_edited_entry_fails_its_checksum(rod, fe, cache):
+    """One value of a stored basis changed (finite, the file still valid): the checksum
+    written with it differs, so it is evicted and rebuilt."""
+    fresh, _ = _cb(fe, rod)
+    (entry,) = cache.glob("basis-*.npz")
+    with np.load(entry) as z:
+        arrays = {k: z[k].copy() for k in z.files}
+    arrays["psi"].flat[7] += 1e-3
+    np.savez(entry, **arrays)
+    with pytest.warns(StaleDataWarning, match="content differs from its checksum"):
+        rebuilt, builder = _cb(fe, rod)
+    assert builder.calls == 1 and np.array_equal(rebuilt.psi, fresh.psi)
+
+
+def test_run_after_nan_entries_succeeds_and_names_them(cache):
+    """Every setup-cache entry of a run rewritten as a valid .npz of NaN: the next process
+    (cleared per-process caches) evicts each, says so, and gives the first run's history
+    (before: every later run failed on the iteration matrix, never naming the cache)."""
+    from pathlib import Path
+
+    from flexmvm.scenarios import load_scenario
+    from flexmvm.scenarios.run import run_scenario
+
+    sc = load_scenario(Path(__file__).parent / "data" / "tiny_impact.toml").with_overrides(
+        t_end_s=2e-6)
+    _clear_process_caches()
+    first = run_scenario(sc, warn=False).result
+    entries = sorted(cache.glob("*.npz"))
+    assert entries
+    for entry in entries:
+        _nan_copy(entry, checksum=False)
+    _clear_process_caches()
+    with pytest.warns(StaleDataWarning) as notes:
+        again = run_scenario(sc, warn=False).result
+    named = {str(w.message).split(":")[0].removeprefix("setup cache ") for w in notes
+             if issubclass(w.category, StaleDataWarning)}
+    assert named and named <= {e.name for e in entries}
+    assert np.array_equal(again.contact_force, first.contact_force)
+    _clear_process_caches()
 
 
 def test_info_and_clear(rod, fe, cache):

@@ -7,9 +7,12 @@ import json
 import re
 from pathlib import Path
 
+import pytest
+
 import flexmvm.scenarios.run as run_module
 from flexmvm import validation
-from flexmvm.scenarios import ModelConfig, load_scenario, scenario_from_dict
+from flexmvm.errors import StaleDataWarning
+from flexmvm.scenarios import ModelConfig, load_scenario, provenance, scenario_from_dict
 
 TINY = Path(__file__).parent / "data" / "tiny_impact.toml"
 
@@ -40,8 +43,22 @@ def test_key_changes_with_every_setting_and_the_code(monkeypatch):
                 sc.with_overrides(body_models={"b2": ModelConfig(kind="modal", modes=5)})]
     keys = [validation.case_key(v) for v in variants]
     assert base not in keys and len(set(keys)) == len(keys)
-    monkeypatch.setattr(validation, "run_code_version", lambda: "0" * 16)
+    monkeypatch.setattr(provenance, "run_code_version", lambda: "0" * 16)
     assert validation.case_key(sc) != base
+
+
+def test_key_holds_the_library_versions(monkeypatch):
+    """numpy, scipy and numba versions are in the key: another version of one is another
+    key (a new kernel can change a history's last bits)."""
+    sc = _tiny()
+    base = validation.case_key(sc)
+    assert set(validation.case_inputs(sc)["libraries"]) == {"numpy", "scipy", "numba"}
+    for lib in ("numpy", "scipy", "numba"):
+        real = provenance.library_versions()
+        monkeypatch.setattr(provenance, "library_versions",
+                            lambda real=real, lib=lib: real | {lib: "0.0"})
+        assert validation.case_key(sc) != base, lib
+        monkeypatch.undo()
 
 
 def test_stored_case_reused_only_under_its_key(tmp_path, monkeypatch):
@@ -64,11 +81,46 @@ def test_stored_case_reused_only_under_its_key(tmp_path, monkeypatch):
     assert len(calls) == 1 and (again.force == first.force).all()
     validation.run_case(tmp_path, "c", _tiny(theta=0.6), progress=False)  # same folder
     assert len(calls) == 2
-    monkeypatch.setattr(validation, "run_code_version", lambda: "f" * 16)
-    validation.run_case(tmp_path, "c", _tiny(theta=0.6), progress=False)
+    monkeypatch.setattr(provenance, "run_code_version", lambda: "f" * 16)
+    with pytest.warns(StaleDataWarning, match=r"validation case c: run under code version "
+                                              r"[0-9a-f]{16} \(now f{16}\): recomputed"):
+        validation.run_case(tmp_path, "c", _tiny(theta=0.6), progress=False)
     assert len(calls) == 3
     (tmp_path / "c" / "key.json").write_text("{not json")
     validation.run_case(tmp_path, "c", _tiny(theta=0.6), progress=False)
     assert len(calls) == 4
     validation.run_case(tmp_path, "c", _tiny(theta=0.6), progress=False, recompute=True)
     assert len(calls) == 5
+
+
+def test_edited_or_cut_history_is_recomputed_not_checked(tmp_path, monkeypatch):
+    """A stored case whose history.csv was edited (one force value) or cut short, or whose
+    summary.json was edited, under a matching key, fails the check of its outputs (their
+    SHA-256 and window in key.json) and is recomputed, said in one line naming the case."""
+    calls = []
+    real = run_module.run_scenario
+    monkeypatch.setattr(run_module, "run_scenario",
+                        lambda sc, **kw: calls.append(sc) or real(sc, **kw))
+    sc = _tiny()
+    first = validation.run_case(tmp_path, "c", sc, progress=False)
+    hist = tmp_path / "c" / "history.csv"
+    lines = hist.read_text().splitlines(keepends=True)
+    t, f = lines[-1].split(",")[:2]
+    lines[-1] = lines[-1].replace(f"{t},{f},", f"{t},{float(f) + 1.0!r},", 1)
+    hist.write_text("".join(lines))
+    with pytest.warns(StaleDataWarning, match="validation case c: history.csv: content "
+                                              "differs from the SHA-256"):
+        again = validation.run_case(tmp_path, "c", sc, progress=False)
+    assert len(calls) == 2 and (again.force == first.force).all()
+    hist.write_text("".join(hist.read_text().splitlines(keepends=True)[:3]))
+    with pytest.warns(StaleDataWarning, match=r"validation case c: history.csv: 2 of \d+ "
+                                              r"samples, last at .* \(expected window 0..2 us\)"):
+        validation.run_case(tmp_path, "c", sc, progress=False)
+    assert len(calls) == 3
+    summary = tmp_path / "c" / "summary.json"
+    summary.write_text(summary.read_text().replace('"n_steps": ', '"n_steps": 1'))
+    with pytest.warns(StaleDataWarning, match="summary.json: content differs"):
+        validation.run_case(tmp_path, "c", sc, progress=False)
+    assert len(calls) == 4
+    validation.run_case(tmp_path, "c", sc, progress=False)
+    assert len(calls) == 4

@@ -28,3 +28,39 @@ class SimulationFailed(SolverError):
     def __init__(self, message: str, partial=None):
         super().__init__(message)
         self.partial = partial
+
+
+class StaleDataWarning(UserWarning):
+    """Stored data (a setup-cache entry, a study's reference or case, a validation case) that
+    failed its check and is recomputed: one line, what was found and that it is recomputed."""
+
+
+def announce_recompute(message: str) -> None:
+    """Say in one line that stored data failed its check and is recomputed (StaleDataWarning;
+    the CLI prints it as ``flexmvm: note: <message>``)."""
+    import warnings
+
+    warnings.warn(message, StaleDataWarning, stacklevel=3)
+
+
+def notes_as_lines() -> None:
+    """From now on show every StaleDataWarning of this process as one stderr line,
+    ``flexmvm: note: <message>``, not Python's two lines with the source line; other warnings
+    as before. The CLI calls it, and the worker processes of a run's main job."""
+    import sys
+    import warnings
+
+    previous = warnings.showwarning
+    if getattr(previous, "flexmvm_notes", False):
+        return
+
+    def show(message, category, filename, lineno, file=None, line=None):
+        if issubclass(category, StaleDataWarning):
+            text = " ".join(str(message).split())
+            print(f"flexmvm: note: {text}", file=sys.stderr if file is None else file,
+                  flush=True)
+        else:
+            previous(message, category, filename, lineno, file, line)
+
+    show.flexmvm_notes = True
+    warnings.showwarning = show

@@ -12,8 +12,12 @@ arrays) named ``<kind>-<key>.npz``. The key is a SHA-256 of the canonical JSON o
 the entry depends on (mesh: rod spec or mesh-file content hash; material E, nu, rho; basis
 kind, retained nodes, modes, reference set and DOFs) and of the code version, a hash of the
 source files that produce it (CODE_SOURCES; body parts: BODY_SOURCES, which adds the body
-modules, so editing them rebuilds only body entries). Entries are written atomically; an unreadable or
-malformed entry is ignored and rebuilt, an unwritable cache directory is ignored.
+modules, so editing them rebuilds only body entries). Entries are written atomically, with the
+SHA-256 of their arrays (names, dtypes, shapes, bytes) as one more array (CHECKSUM). An entry
+is used only if it passes its check: readable, that checksum matches, every float array finite
+(nothing setup stores holds NaN or inf) and its decoder accepts its shapes. One that fails is
+evicted (deleted), announced in one line (``setup cache basis-....npz: holds NaN or inf in
+psi: evicted and rebuilt``) and rebuilt; an unwritable cache directory is ignored.
 
 Location: ``$FLEXMVM_CACHE_DIR`` if set, else the platform user cache directory
 (``~/.cache/flexmvm`` on Linux). ``FLEXMVM_NO_CACHE=1`` bypasses the cache (no read, no
@@ -39,7 +43,7 @@ import scipy.sparse as sp
 import flexmvm
 from flexmvm.bodies.build import BodyParts
 from flexmvm.bodies.invariants import InertiaInvariants
-from flexmvm.errors import InputError
+from flexmvm.errors import InputError, announce_recompute
 from flexmvm.fe.assembly import FEModel
 from flexmvm.materials import Material
 from flexmvm.mesh.mesh import Mesh
@@ -58,7 +62,10 @@ CODE_SOURCES = ("mesh", "fe", "reduction", "materials.py")
 BODY_SOURCES = CODE_SOURCES + ("bodies/invariants.py", "bodies/build.py")
 
 #: Format of the stored arrays; bump when the layout of an entry changes.
-FORMAT = 1
+FORMAT = 2
+
+#: Name of the array holding an entry's checksum (checksum()).
+CHECKSUM = "__sha256__"
 
 #: What reading or decoding a corrupt, truncated or foreign entry raises (treated as a miss).
 _UNREADABLE = (OSError, EOFError, ValueError, KeyError, TypeError, IndexError,
@@ -131,26 +138,72 @@ def material_inputs(material: Material) -> dict:
     return {"E": float(material.E), "nu": float(material.nu), "rho": float(material.rho)}
 
 
+def checksum(arrays: Mapping[str, np.ndarray]) -> str:
+    """SHA-256 (hex) of an entry's arrays: each name, dtype, shape and C-order bytes, in
+    name order (the CHECKSUM array itself left out)."""
+    digest = hashlib.sha256()
+    for name in sorted(n for n in arrays if n != CHECKSUM):
+        a = np.ascontiguousarray(arrays[name])
+        digest.update(f"{name}\0{a.dtype.str}\0{a.shape}\0".encode())
+        digest.update(a.tobytes())
+    return digest.hexdigest()
+
+
+def entry_problem(arrays: Mapping[str, np.ndarray]) -> str | None:
+    """Why the arrays read from an entry cannot be used (one line), or None: no checksum, a
+    checksum that differs from its content, a float array holding NaN or inf."""
+    for name in sorted(arrays):
+        a = arrays[name]
+        if a.dtype.kind in "fc" and not np.all(np.isfinite(a)):
+            return f"holds NaN or inf in {name}"
+    if CHECKSUM not in arrays:
+        return "no checksum (written by another version or another program)"
+    if str(arrays[CHECKSUM]) != checksum(arrays):
+        return "content differs from its checksum"
+    return None
+
+
+def _evict(path: Path, why: str) -> None:
+    """Delete a failing entry and say so in one line."""
+    try:
+        path.unlink()
+    except OSError:  # gone already, or a read-only cache: rebuilt all the same
+        pass
+    announce_recompute(f"setup cache {path.name}: {why}: evicted and rebuilt")
+
+
 def load(key: str) -> dict[str, np.ndarray] | None:
-    """The arrays of entry ``key``, or None if absent, disabled or unreadable."""
+    """The arrays of entry ``key`` (CHECKSUM left out), or None if absent or disabled; an
+    entry that is unreadable or fails its check (entry_problem) is evicted, announced, None."""
     if not enabled():
         return None
+    path = cache_dir() / (key + SUFFIX)
     try:
-        with np.load(cache_dir() / (key + SUFFIX), allow_pickle=False) as z:
-            return {name: z[name] for name in z.files}
-    except _UNREADABLE:  # a corrupt or foreign file is a miss, rebuilt and overwritten
+        with np.load(path, allow_pickle=False) as z:
+            arrays = {name: z[name] for name in z.files}
+    except (FileNotFoundError, NotADirectoryError):
         return None
+    except _UNREADABLE as exc:  # a corrupt or foreign file: evicted, rebuilt and overwritten
+        _evict(path, f"unreadable ({type(exc).__name__})")
+        return None
+    why = entry_problem(arrays)
+    if why is not None:
+        _evict(path, why)
+        return None
+    arrays.pop(CHECKSUM)
+    return arrays
 
 
 def save(key: str, arrays: Mapping[str, np.ndarray]) -> None:
-    """Write entry ``key`` atomically; silently skipped if disabled or unwritable."""
+    """Write entry ``key`` atomically with its checksum; silently skipped if disabled or
+    unwritable."""
     if not enabled():
         return
     directory = cache_dir()
     try:
         directory.mkdir(parents=True, exist_ok=True)
         with atomic_path(directory / (key + SUFFIX)) as tmp, open(tmp, "wb") as f:
-            np.savez(f, **arrays)
+            np.savez(f, **arrays, **{CHECKSUM: np.array(checksum(arrays))})
     except (OSError, InputError, ValueError):  # a read-only or full disk must not stop a run
         return
 
@@ -215,7 +268,8 @@ def _decoded(key: str, decode: Callable[[Mapping[str, np.ndarray]], object]):
         return None
     try:
         return decode(arrays)
-    except _UNREADABLE:
+    except _UNREADABLE as exc:
+        _evict(cache_dir() / (key + SUFFIX), f"malformed ({exc})")
         return None
 
 
@@ -442,8 +496,8 @@ def cached_body(source: Mapping | None, material: Material, kind: BasisKind,
     return parts
 
 
-__all__ = ["BODY_SOURCES", "CODE_SOURCES", "ENV_DIR", "ENV_OFF", "CacheInfo", "basis_key",
+__all__ = ["BODY_SOURCES", "CHECKSUM", "CODE_SOURCES", "ENV_DIR", "ENV_OFF", "CacheInfo", "basis_key",
            "body_key", "cache_dir", "cached_basis", "cached_body", "cached_fe",
-           "cached_free_modes", "cached_patch_statics", "clear", "code_version", "enabled",
-           "fe_key", "file_source", "free_modes_key", "info", "load", "make_key",
-           "material_inputs", "patch_statics_key", "rod_source", "save"]
+           "cached_free_modes", "cached_patch_statics", "checksum", "clear", "code_version",
+           "enabled", "entry_problem", "fe_key", "file_source", "free_modes_key", "info",
+           "load", "make_key", "material_inputs", "patch_statics_key", "rod_source", "save"]

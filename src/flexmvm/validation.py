@@ -13,36 +13,35 @@ Cases (the full-FE seed runs are two 25,000-DOF rods, several minutes each):
    the impact against the seed case, the momenta after it against the rigid pendulum;
 7. conservation of every run: momentum and energy errors, penetration, no tensile force.
 
-A finished case is stored in DIR/<case>/ (history.csv, summary.json, key.json) and reused only
-if its key matches: a SHA-256 of the code version (a hash of every source file of the package
-but this report writer, flexmvm.setup_cache.code_version) and of the whole resolved scenario
-(every body, mesh parameter, model, contact, joint, probe and time setting, t_end, dt, theta;
-mesh files by content hash). ``--recompute`` ignores stored cases. The report states the git
-commit it was made at ("-dirty" if the package source or the scenarios had uncommitted changes).
+A finished case is stored in DIR/<case>/ (history.csv, summary.json, key.json;
+scenarios/stored_run.py) and reused only if its key matches: scenarios.provenance.run_key, the one key of every stored run (a SHA-256
+of the package source but this report writer, the numpy, scipy and numba versions and the
+whole resolved scenario: every body, mesh parameter, model, contact, joint, probe and time
+setting, t_end, dt, theta; mesh files by content hash), and if its outputs are those written
+with it (key.json "outputs": history.csv's SHA-256, samples and window, summary.json's
+SHA-256): an edited or cut history is recomputed, never checked. Each recomputation of a
+stored case is announced in one line. ``--recompute`` ignores stored cases. The report states
+the git commit it was made at ("-dirty" if the package source or the scenarios had
+uncommitted changes).
 """
 
 from __future__ import annotations
 
 import argparse
 import datetime as _dt
-import hashlib
-import json
 import subprocess
-from dataclasses import dataclass
 from pathlib import Path
 from types import SimpleNamespace
 
 import numpy as np
 
-import flexmvm
-from flexmvm.errors import InputError
 from flexmvm.materials import ALUMINIUM, BRASS
-from flexmvm.results.atomic import canonical_json, write_json_atomic, write_text_atomic
-from flexmvm.results.history import read_history, write_history
+from flexmvm.results.atomic import write_json_atomic, write_text_atomic
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario
 from flexmvm.scenarios import mvm as mvm_model
 from flexmvm.scenarios.compare import compare_runs
-from flexmvm.setup_cache import code_version
+from flexmvm.scenarios.provenance import run_code_version, run_inputs, run_key
+from flexmvm.scenarios.stored_run import StoredRun, load_or_run
 from flexmvm.theory.scenario import theory_histories
 from flexmvm.theory.wave import Rod1D, st_venant_force
 
@@ -50,9 +49,6 @@ ROOT = Path(__file__).resolve().parents[2]
 SCENARIOS = ROOT / "scenarios"
 #: What the runs depend on: a change here (uncommitted) marks the commit stamp "-dirty".
 RUN_INPUTS = ("src", "scenarios", "pyproject.toml")
-#: Format of a stored case; bump when what is stored changes.
-CASE_FORMAT = 1
-
 #: The seed runs' settings (docs/validation.md): contact step, seed window, flat window.
 DT = 0.5e-6
 T_SEED = 1.0e-3
@@ -60,16 +56,6 @@ T_FLAT = 0.5e-3
 T_STEP = 2.0e-4
 #: The short case: its own file's t_end covers the contact (0..185 us) and the release.
 SHORT_FINE_MESH = {"first_element_m": 0.15e-3, "core_elements": 4}
-
-
-def run_code_version() -> str:
-    """Hash (16 hex) of every package source file except this report writer: what a run's
-    numbers depend on."""
-    root = Path(flexmvm.__file__).parent
-    names = tuple(sorted(p.name for p in root.iterdir()
-                         if p.name != "validation.py" and p.name != "__pycache__"
-                         and (p.is_dir() or p.suffix == ".py")))
-    return code_version(names)
 
 
 def git_commit(root: Path = ROOT) -> str:
@@ -86,58 +72,26 @@ def git_commit(root: Path = ROOT) -> str:
 
 
 def case_inputs(sc: Scenario) -> dict:
-    """Everything a run depends on: the code version, the resolved scenario, mesh file hashes."""
-    data = sc.model_dump(mode="json")
-    files = {}
-    for b in sc.bodies:
-        if b.mesh_file is not None:
-            files[b.name] = hashlib.sha256(Path(b.mesh_file).read_bytes()).hexdigest()
-    return {"format": CASE_FORMAT, "code": run_code_version(), "scenario": data,
-            "mesh_files": files}
+    """Everything a run depends on (scenarios.provenance.run_inputs)."""
+    return run_inputs(sc)
 
 
 def case_key(sc: Scenario) -> str:
-    return hashlib.sha256(canonical_json(case_inputs(sc)).encode()).hexdigest()[:32]
+    """The key of a stored case (scenarios.provenance.run_key)."""
+    return run_key(sc)
 
 
-@dataclass
-class Case:
-    t: np.ndarray
-    force: np.ndarray
-    probes: dict
-    summary: dict
-    meta: dict
-
-    @property
-    def curves(self):
-        return self.t, self.force, self.probes
+#: A stored case (scenarios.stored_run).
+Case = StoredRun
 
 
 def run_case(out: Path, name: str, sc: Scenario, recompute: bool = False,
              progress: bool = True) -> Case:
     """Run scenario ``sc`` as case ``name`` under ``out``, or load it if a stored case has the
-    same key (code version + every setting of the run)."""
-    d = out / name
-    key = case_key(sc)
-    if not recompute:
-        try:
-            meta = json.loads((d / "key.json").read_text())
-            if meta.get("key") == key:
-                t, f, p = read_history(d / "history.csv")
-                return Case(t, f, p, json.loads((d / "summary.json").read_text()), meta)
-        except (OSError, ValueError, InputError):
-            pass  # absent, stale or unreadable: recompute
-    from flexmvm.scenarios.run import run_scenario
-    r = run_scenario(sc, progress=progress)
-    t, f, p = r.result.curves()
-    meta = {"key": key, "code_version": run_code_version(), "commit": git_commit(),
-            "computed_utc": _now(), "inputs": case_inputs(sc)}
-    d.mkdir(parents=True, exist_ok=True)
-    (d / "key.json").unlink(missing_ok=True)  # a half-rewritten case never matches a key
-    write_history(d / "history.csv", t, f, p)
-    write_json_atomic(d / "summary.json", r.summary)
-    write_json_atomic(d / "key.json", meta)
-    return Case(t, f, p, r.summary, meta)
+    same key (scenarios.provenance.run_key) and its outputs pass their check (module doc,
+    scenarios.stored_run); a stored case that fails is recomputed and announced in one line."""
+    return load_or_run(out / name, sc, f"validation case {name}", recompute, progress,
+                       lambda: {"commit": git_commit(), "computed_utc": _now()})
 
 
 def _now() -> str:
@@ -385,8 +339,9 @@ python -m pytest -m validation          # the acceptance checks on the same (sto
 ```
 
 A stored case is reused only when its key matches: a hash of the package source (every module
-but the report writer) and of the whole resolved scenario (meshes, models, contacts, probes,
-t_end, dt, theta). Full-FE runs of the 1 m rods are two 25,000-DOF bodies (minutes each).
+but the report writer), of the numpy, scipy and numba versions and of the whole resolved
+scenario (meshes, models, contacts, probes, t_end, dt, theta), and when its history and summary
+are those written with it (their SHA-256, samples and window in key.json). Full-FE runs of the 1 m rods are two 25,000-DOF bodies (minutes each).
 Seed runs: Moreau-Jean theta = {report['theta']}, h = {_us(DT)}, output every 2 us, default
 meshes (Hex27, first axial element 0.3 mm at the contact end, growth 1.6). Wall times are those
 of this report's runs on a machine shared with other jobs: indicative only (docs/performance.md

@@ -21,7 +21,7 @@ import sys
 import click
 
 from flexmvm import __version__
-from flexmvm.errors import FlexmvmError
+from flexmvm.errors import FlexmvmError, notes_as_lines
 from flexmvm.processes import Terminated, sigterm_as_exit
 
 #: Environment variable that turns on --debug (any value but "", "0", "false", "no").
@@ -94,6 +94,7 @@ def main(argv: list[str] | None = None) -> None:
     """Entry point: runs the CLI; every failure is one stderr line and a non-zero exit status
     (module doc), unless --debug / FLEXMVM_DEBUG asks for the traceback."""
     _register()
+    notes_as_lines()
     args = list(sys.argv[1:] if argv is None else argv)
     debug = debug_enabled(args)
     try:

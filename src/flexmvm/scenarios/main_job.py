@@ -25,7 +25,13 @@ from concurrent.futures import FIRST_EXCEPTION, ProcessPoolExecutor, wait
 from pathlib import Path
 
 from flexmvm.bodies.build import ModelKind
-from flexmvm.errors import FlexmvmError, InputError, SimulationFailed, SolverError
+from flexmvm.errors import (
+    FlexmvmError,
+    InputError,
+    SimulationFailed,
+    SolverError,
+    notes_as_lines,
+)
 from flexmvm.processes import die_with_parent
 from flexmvm.results.outdir import staged_dir
 from flexmvm.results.output import write_run
@@ -139,6 +145,13 @@ def run_main_job(scenario: Path | str | Scenario, out_dir: Path, *, model=None, 
     return summary
 
 
+def _worker_init(parent_pid: int) -> None:
+    """A pool worker: it dies with the job (processes.die_with_parent) and prints its
+    notes as one line each (errors.notes_as_lines)."""
+    die_with_parent(parent_pid)
+    notes_as_lines()
+
+
 @contextlib.contextmanager
 def _stopped_on_exit(pool: ProcessPoolExecutor):
     """Terminate the pool's workers when the block is left by an exception (Ctrl-C, SIGTERM,
@@ -166,7 +179,7 @@ def _run_into(out_dir: Path, sc, ref_sc, own_label: str, fields: bool, progress:
     failures: list[dict] = []
     if needs_ref and jobs > 1:
         ctx = multiprocessing.get_context("spawn")
-        with ProcessPoolExecutor(max_workers=2, mp_context=ctx, initializer=die_with_parent,
+        with ProcessPoolExecutor(max_workers=2, mp_context=ctx, initializer=_worker_init,
                                  initargs=(os.getpid(),)) as pool, _stopped_on_exit(pool):
             ref_future = pool.submit(_run_and_write, ref_sc, "full", out_dir / "full", fields,
                                      progress)

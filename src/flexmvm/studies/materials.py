@@ -12,8 +12,11 @@ retains the selection's nodes (studies.grid.study_kind): ``mvm`` (Craig-Bampton,
 ``mvm``, so the keys and params of the Craig-Bampton studies stored before stay valid; a study
 directory holds one kind (a rerun with another kind is refused: its stored params differ).
 
-- ``DIR/<material>/reference/history.csv``: the reference of each material (case ``ref-<mat>``);
-- ``DIR/cases/<mat>-l<i>-j<j>-m<m>.json``: the MVM runs (studies.selection.run_selection_case);
+- ``DIR/<material>/reference/history.csv``: the reference of each material (case ``ref-<mat>``;
+  one that fails its check, studies.reference.reference_problem, is announced and recomputed);
+- ``DIR/cases/<mat>-l<i>-j<j>-m<m>.json``: the MVM runs (studies.selection.run_selection_case),
+  keyed by the material scenario's provenance stamp and its reference's SHA-256 (a case of
+  another code version or reference is recomputed, said in one line);
 - ``DIR/materials.csv``: ``material,kind,E_pa,nu,rho_kg_m3,selection,nodes,modes,dof,ncc_force,
   ncc_<probe>...,peak_err,impulse_err,duration_err,guard_outside_fraction,energy_gain_rel_max,
   wall_time_s``
@@ -47,12 +50,13 @@ from typing import Any
 
 import numpy as np
 
-from flexmvm.errors import InputError, SolverError
+from flexmvm.errors import InputError, SolverError, announce_recompute
 from flexmvm.materials import ALUMINIUM, COPPER, PA6, TUNGSTEN, Material
 from flexmvm.results.atomic import file_sha256, write_json_atomic, write_table_csv
 from flexmvm.results.outdir import claim_study_dir
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario, scenario_from_dict
 from flexmvm.scenarios.guard import VALIDITY_KEYS, WARN_FRACTION, invalid_reason
+from flexmvm.scenarios.provenance import stamp
 from flexmvm.studies.grid import (
     SEED_SCHEME_NOTE,
     check_grid,
@@ -62,9 +66,15 @@ from flexmvm.studies.grid import (
     study_kind,
     study_scenario,
 )
-from flexmvm.studies.reference import reference_history
+from flexmvm.studies.reference import reference_history, reference_problem
 from flexmvm.studies.report import echo_failures, failed_case_row, failure_list
-from flexmvm.studies.runner import Case, check_cluster_options, run_cases, study_cluster
+from flexmvm.studies.runner import (
+    Case,
+    case_path,
+    check_cluster_options,
+    run_cases,
+    study_cluster,
+)
 from flexmvm.studies.selection import run_selection_case
 
 __all__ = ["SEED_MATERIALS", "SEED_ORDER", "MaterialStudy", "material_scenario", "material_study",
@@ -148,6 +158,19 @@ class MaterialStudy:
     columns: list[str]
 
 
+def _drop_failing_reference(sc: Scenario, body: str, mat_dir: Path, record: Path) -> None:
+    """A stored reference of one material that fails its check (studies.reference
+    reference_problem: another code version, cut short, edited) is announced and removed with
+    its case record, so that its case computes it again."""
+    problem = reference_problem(sc, body, mat_dir)
+    if problem is None:
+        return
+    announce_recompute(f"{mat_dir.name}/{problem}: recomputed")
+    for name in ("reference.json", "history.csv"):
+        (mat_dir / "reference" / name).unlink(missing_ok=True)
+    record.unlink(missing_ok=True)
+
+
 def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
                    materials: Iterable[str] = SEED_ORDER,
                    selections: Sequence[tuple[int, int]] | str = ((1, 1), (2, 2)),
@@ -183,13 +206,17 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
                                    "scenario": scen[m].model_dump(mode="json")})
                  for m in materials]
     ref_paths = {m: str(out / m / "reference" / "history.csv") for m in materials}
+    for m, case in zip(materials, ref_cases, strict=True):
+        _drop_failing_reference(scen[m], body, out / m, case_path(out, case.key))
+    stamps = {m: stamp(scen[m]) for m in materials}
     kind_param = {} if kind is ModelKind.MVM else {"kind": kind.value}  # as selection_cases
     kw: dict[str, Any]
     with study_cluster(scheduler, n_workers, serial) as address:
         kw = {"serial": True} if serial else {"scheduler": address}
         ref_failed: dict[str, str] = {}
         refs = run_cases(ref_cases, partial(run_reference_case, out_dir=str(out)), out,
-                         progress=progress, failures=ref_failed, **kw)
+                         progress=progress, failures=ref_failed,
+                         version=lambda c: {"provenance": stamps[c.params["material"]]}, **kw)
         cases = [Case(f"{m}-l{i}-j{j}-m{n}",
                       {"body": body, "layers": i, "laps": j, "modes": n, "material": m,
                        "modes_max": max(modes), "scenario": scen[m].model_dump(mode="json"),
@@ -198,7 +225,10 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
                  for (i, j) in selections for n in modes]
         case_failed: dict[str, str] = {}
         results = run_cases(cases, partial(run_material_case, references=ref_paths), out,
-                            progress=progress, failures=case_failed, **kw)
+                            progress=progress, failures=case_failed,
+                            version=lambda c: {"provenance": stamps[c.params["material"]],
+                                               "reference_sha256": c.params["reference_sha256"]},
+                            **kw)
     probes = [p.name for p in sc.probes]
     cols = (["material", "kind", "E_pa", "nu", "rho_kg_m3", "selection", "nodes", "modes", "dof",
              "ncc_force"] + [f"ncc_{p}" for p in probes]

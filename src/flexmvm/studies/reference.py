@@ -1,39 +1,101 @@
 """The full-FE reference of a study: run once, stored as ``reference/history.csv`` with the
-scenario it was run from (``reference/reference.json``), reused while the study is the same."""
+scenario it was run from (``reference/reference.json``), reused while the study is the same.
+
+reference.json holds {identity (body, scenario), provenance (scenarios.provenance.stamp of
+the reference run: package source, numpy/scipy/numba, resolved scenario, mesh files), history
+(results.history.history_record: SHA-256, samples, first and last time), summary}. A stored
+reference of another study (identity) is refused; one run under another code version, one
+without that record, or a history that fails its check (cut short, edited) is recomputed,
+and that is announced in one line (``reference history.csv: 7 of 31 samples (expected
+window 0..30 us): recomputed``).
+"""
 
 from __future__ import annotations
 
 import json
+from collections.abc import Callable
 from pathlib import Path
+from typing import Any
 
-from flexmvm.errors import InputError
+from flexmvm.errors import InputError, announce_recompute
 from flexmvm.results.atomic import canonical_json, file_sha256, write_json_atomic
-from flexmvm.results.history import read_history, write_history
+from flexmvm.results.history import history_problem, history_record, read_history, write_history
 from flexmvm.scenarios import Scenario
+from flexmvm.scenarios.provenance import stamp, stamp_mismatch
 
 
-def reference_history(sc: Scenario, body: str, out_dir: Path, progress: bool = False
-                      ) -> tuple[Path, bool]:
-    """The full-FE reference history of the study (computed once, reused while the scenario is
-    the same). Returns (path of history.csv, True if it was computed now)."""
+def _read_meta(meta: Path) -> dict | None:
+    try:
+        stored = json.loads(meta.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError, json.JSONDecodeError):
+        return None
+    return stored if isinstance(stored, dict) else None
+
+
+def reference_problem(sc: Scenario, body: str, out_dir: Path) -> str | None:
+    """Why the stored reference of the study (``sc``, ``body``) in ``out_dir`` cannot be
+    reused, one line naming the file ("reference history.csv: 7 of 31 samples (expected
+    window 0..30 us)"); None if it can, or if there is none (nothing to announce).
+
+    Raises:
+        InputError: the stored reference is of another scenario or body (another study).
+    """
+    from flexmvm.studies.grid import reference_scenario
+
+    ref_dir = Path(out_dir) / "reference"
+    hist, meta = ref_dir / "history.csv", ref_dir / "reference.json"
+    if not hist.exists() and not meta.exists():
+        return None
+    stored = _read_meta(meta) if meta.exists() else None
+    if stored is None:
+        return f"reference {meta.name}: missing or unreadable"
+    ident = {"body": body, "scenario": sc.model_dump(mode="json")}
+    if canonical_json(stored.get("identity")) != canonical_json(ident):
+        raise InputError(f"{meta}: the stored reference was run from another scenario or body; "
+                         "expected the same study (use another --out or delete the directory)")
+    stale = stamp_mismatch(stored.get("provenance"), stamp(reference_scenario(sc, body)))
+    if stale is not None:
+        return f"reference {hist.name}: {stale}"
+    if not hist.exists():
+        return f"reference {hist.name}: missing"
+    bad = history_problem(hist, stored.get("history"), sc.time.t_end_s)
+    return None if bad is None else f"reference {hist.name}: {bad}"
+
+
+def reference_history(sc: Scenario, body: str, out_dir: Path, progress: bool = False,
+                      announce: Callable[[str], Any] = announce_recompute) -> tuple[Path, bool]:
+    """The full-FE reference history of the study (computed once, reused while the scenario,
+    the code and the file are the same; module doc). A stored reference that fails its check
+    is recomputed and ``announce``d (one line). Returns (path of history.csv, True if it was
+    computed now). InputError if the stored reference is of another study."""
     from flexmvm.scenarios.run import run_scenario
     from flexmvm.studies.grid import reference_scenario
 
     ref_dir = Path(out_dir) / "reference"
     hist, meta = ref_dir / "history.csv", ref_dir / "reference.json"
-    ident = {"body": body, "scenario": sc.model_dump(mode="json")}
-    if hist.is_file() and meta.is_file():
-        stored = json.loads(meta.read_text(encoding="utf-8"))
-        if canonical_json(stored.get("identity")) == canonical_json(ident):
-            return hist, False
-        raise InputError(f"{meta}: the stored reference was run from another scenario or body; "
-                         "expected the same study (use another --out or delete the directory)")
+    problem = reference_problem(sc, body, out_dir)
+    if problem is None and hist.is_file():
+        return hist, False
+    if problem is not None:
+        announce(f"{problem}: recomputed")
     ref_dir.mkdir(parents=True, exist_ok=True)
-    run = run_scenario(reference_scenario(sc, body), label="full", progress=progress)
+    meta.unlink(missing_ok=True)   # a half-rewritten reference never passes its check
+    ref = reference_scenario(sc, body)
+    run = run_scenario(ref, label="full", progress=progress)
     t, f, probes = run.result.curves()
     write_history(hist, t, f, probes)
-    write_json_atomic(meta, {"identity": ident, "summary": run.summary})
+    write_json_atomic(meta, {"identity": {"body": body, "scenario": sc.model_dump(mode="json")},
+                             "provenance": stamp(ref), "history": history_record(hist),
+                             "summary": run.summary})
     return hist, True
+
+
+def study_version(sc: Scenario, reference: Path) -> dict:
+    """The ``version`` of a study's cases (runner.run_cases): the provenance stamp of the study
+    scenario ``sc`` (package source, numpy/scipy/numba, resolved scenario, mesh files) and the
+    SHA-256 of the reference history they are compared with; a case stored under another is
+    recomputed."""
+    return {"provenance": stamp(sc), "reference_sha256": file_sha256(reference)}
 
 
 def case_reference(case, reference=None):

@@ -2,8 +2,13 @@
 
 A study is a list of :class:`Case` objects (a stable key and JSON parameters) and a case
 function ``fn(case) -> mapping``. :func:`run_cases` stores every finished case at once,
-atomically, in ``out_dir/cases/<key>.json`` as ``{"key", "params", "result"}``; a rerun loads
-the stored cases and computes only the others, so a killed sweep resumes where it stopped.
+atomically, in ``out_dir/cases/<key>.json`` as ``{"key", "params", "result", "result_sha256",
+"version"}``; a rerun loads the stored cases and computes only the others, so a killed sweep
+resumes where it stopped. A stored case is loaded only if it passes its check: readable, its
+``version`` (what the study passes: studies key theirs by scenarios.provenance.stamp, the
+package source, numpy/scipy/numba, the resolved scenario and mesh files, and by their reference
+history) the current one, and its result the one whose SHA-256 was written with it; otherwise
+it is recomputed and that is announced in one line per reason.
 Cases run on Dask distributed: a local process cluster by default, an existing cluster when
 a scheduler address is given, or in-process with ``serial=True``.
 """
@@ -13,160 +18,33 @@ from __future__ import annotations
 import contextlib
 import json
 import os
-import re
 import sys
 import traceback
 import uuid
 import warnings
 from collections.abc import Callable, Iterator, Mapping, Sequence
-from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
 from tqdm import tqdm
 
-from flexmvm.errors import InputError, SolverError
+from flexmvm.errors import InputError, SolverError, announce_recompute, notes_as_lines
 from flexmvm.results.atomic import canonical_json, write_json_atomic, write_text_atomic
+from flexmvm.studies.case_store import (
+    CASES_DIR,
+    Case,
+    Params,
+    announce_stale,
+    case_path,
+    collect,
+    error_path,
+    load_stored,
+    result_sha256,
+)
 from flexmvm.threads import ENV_THREADS
 
 __all__ = ["Case", "Params", "case_path", "check_cluster_options", "cluster_slots", "collect",
            "error_path", "local_cluster", "run_cases", "study_cluster", "worker_env"]
-
-_KEY_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,199}")
-_CASES_DIR = "cases"
-
-
-class Params(Mapping[str, Any]):
-    """Read-only, hashable, picklable mapping of JSON parameters.
-
-    Built from any JSON-serialisable mapping; values are stored in their JSON form (tuples
-    become lists, numpy scalars Python numbers), and a nested list or dict is returned as a
-    copy so the parameters cannot change after construction. Equality and hash follow the
-    canonical JSON text, so ``1`` and ``1.0`` are different parameters, as in the stored file.
-
-    Raises:
-        InputError: a key is not a string, or a value is not JSON (NaN/inf included).
-    """
-
-    __slots__ = ("_canonical", "_data")
-
-    def __init__(self, data: Mapping[str, Any]) -> None:
-        if not isinstance(data, Mapping):
-            raise InputError(f"case params: received {type(data).__name__}, expected a mapping")
-        bad = [k for k in data if not isinstance(k, str)]
-        if bad:
-            raise InputError(f"case params: received key {bad[0]!r}, expected string keys")
-        canonical = canonical_json(dict(data))
-        self._canonical = canonical
-        self._data: dict[str, Any] = json.loads(canonical)
-
-    def __getitem__(self, key: str) -> Any:
-        value = self._data[key]
-        return json.loads(json.dumps(value)) if isinstance(value, (list, dict)) else value
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self._data)
-
-    def __len__(self) -> int:
-        return len(self._data)
-
-    def __eq__(self, other: object) -> bool:
-        if isinstance(other, Params):
-            return self._canonical == other._canonical
-        if isinstance(other, Mapping):
-            return self._data == dict(other)
-        return NotImplemented
-
-    def __hash__(self) -> int:
-        return hash(self._canonical)
-
-    def __reduce__(self) -> tuple[Any, ...]:
-        return (Params, (self._data,))
-
-    def __repr__(self) -> str:
-        return f"Params({self._canonical})"
-
-    def to_dict(self) -> dict[str, Any]:
-        """A fresh plain ``dict`` of the parameters (JSON form)."""
-        return json.loads(self._canonical)
-
-    @property
-    def canonical(self) -> str:
-        """Canonical JSON text (sorted keys, no spaces beyond ``json.dumps`` defaults)."""
-        return self._canonical
-
-
-@dataclass(frozen=True)
-class Case:
-    """One run of a study: a stable, file-name-safe ``key`` and JSON ``params``.
-
-    ``key`` names the stored file (``cases/<key>.json``); it must match
-    ``[A-Za-z0-9][A-Za-z0-9._-]*`` (at most 200 characters), e.g. ``"l2-j3-m13"``. ``params``
-    is converted to a read-only, hashable :class:`Params`, so cases can be set members and
-    dictionary keys and are cheap to send to Dask workers.
-
-    Raises:
-        InputError: the key is not file-name-safe, or the params are not JSON.
-    """
-
-    key: str
-    params: Mapping[str, Any]
-
-    def __post_init__(self) -> None:
-        if not isinstance(self.key, str) or not _KEY_RE.fullmatch(self.key):
-            raise InputError(
-                f"case key {self.key!r}: expected a file-name-safe string "
-                "[A-Za-z0-9][A-Za-z0-9._-]* of at most 200 characters"
-            )
-        if not isinstance(self.params, Params):
-            object.__setattr__(self, "params", Params(self.params))
-
-
-def case_path(out_dir: str | os.PathLike[str], key: str) -> Path:
-    """Path of the stored result of case ``key``: ``out_dir/cases/<key>.json``."""
-    return Path(out_dir) / _CASES_DIR / f"{key}.json"
-
-
-def error_path(out_dir: str | os.PathLike[str], key: str) -> Path:
-    """Path of the failure record of case ``key``: ``out_dir/cases/<key>.error.txt``."""
-    return Path(out_dir) / _CASES_DIR / f"{key}.error.txt"
-
-
-def _read_record(path: Path) -> dict[str, Any] | None:
-    """The stored ``{"key", "params", "result"}`` record, or None if absent or unreadable."""
-    try:
-        record = json.loads(path.read_text(encoding="utf-8"))
-    except FileNotFoundError:
-        return None
-    except (OSError, UnicodeDecodeError, json.JSONDecodeError):
-        return None
-    if not isinstance(record, dict) or not {"key", "params", "result"} <= record.keys():
-        return None
-    if not isinstance(record["params"], dict) or not isinstance(record["result"], dict):
-        return None
-    return record
-
-
-def _load_stored(case: Case, out_dir: Path) -> dict[str, Any] | None:
-    """The stored result of ``case``; None if it must be computed (missing or corrupt file).
-
-    Raises:
-        InputError: the stored file holds other params (or another key) for this key.
-    """
-    path = case_path(out_dir, case.key)
-    record = _read_record(path)
-    if record is None:
-        if path.exists():
-            warnings.warn(f"{path}: unreadable or incomplete case file; recomputing", stacklevel=3)
-        return None
-    stored = canonical_json(record["params"])
-    assert isinstance(case.params, Params)
-    if record["key"] != case.key or stored != case.params.canonical:
-        raise InputError(
-            f"{path}: stored params {stored} differ from case params {case.params.canonical}; "
-            "expected the same study (use another out_dir or delete the file)"
-        )
-    return record["result"]
 
 
 def _validate(cases: Sequence[Case]) -> None:
@@ -189,10 +67,12 @@ def _one_line(exc: BaseException) -> str:
 class _Recorder:
     """Driver-side bookkeeping: writes each outcome at once and updates the progress bar."""
 
-    def __init__(self, out_dir: Path, results: dict[str, dict], bar: Any) -> None:
+    def __init__(self, out_dir: Path, results: dict[str, dict], bar: Any,
+                 version_of: Callable[[Case], Any]) -> None:
         self.out_dir = out_dir
         self.results = results
         self.bar = bar
+        self.version_of = version_of
         self.failed: list[tuple[str, str]] = []
 
     def success(self, case: Case, result: Any) -> None:
@@ -203,8 +83,10 @@ class _Recorder:
             self.failure(case, err, "")
             return
         assert isinstance(case.params, Params)
-        record = {"key": case.key, "params": case.params.to_dict(), "result": dict(result)}
         try:
+            plain = json.loads(canonical_json({"result": dict(result)}))["result"]
+            record = {"key": case.key, "params": case.params.to_dict(), "result": plain,
+                      "result_sha256": result_sha256(plain), "version": self.version_of(case)}
             text = canonical_json(record)
         except InputError as exc:
             self.failure(case, exc, "")
@@ -357,6 +239,7 @@ def _run_dask(
     else:
         client = _connect(scheduler)
     try:
+        client.run(notes_as_lines)  # a recomputed setup-cache entry: one line on the worker
         run_id = uuid.uuid4().hex[:12]
         by_key = {}
         futures = []
@@ -391,13 +274,18 @@ def run_cases(
     progress: bool = True,
     serial: bool = False,
     failures: dict[str, str] | None = None,
+    version: Mapping[str, Any] | Callable[[Case], Mapping[str, Any]] | None = None,
+    loaded: set[str] | None = None,
+    announce: Callable[[str], Any] = announce_recompute,
 ) -> dict[str, dict]:
     """Run ``fn`` on every case not already stored in ``out_dir``; return all results.
 
-    Storage: ``out_dir/cases/<key>.json`` holds ``{"key", "params", "result"}`` (sorted keys,
-    indent 2), written atomically by the driver as soon as the case finishes, so a killed run
-    keeps every finished case. On start, a case whose file exists with the same params is
-    loaded, not recomputed; an unreadable or incomplete file (unparsable JSON) is recomputed.
+    Storage: ``out_dir/cases/<key>.json`` holds ``{"key", "params", "result", "result_sha256",
+    "version"}`` (sorted keys, indent 2), written atomically by the driver as soon as the case
+    finishes, so a killed run keeps every finished case. On start, a case whose file exists
+    with the same params and ``version`` and whose result has the SHA-256 written with it is
+    loaded, not recomputed; an unreadable or incomplete file, one of another ``version`` and
+    an edited result are recomputed, each reason ``announce``d in one line (module doc).
 
     Execution: with ``serial=True`` in this process, no Dask. Otherwise on Dask distributed:
     ``scheduler=None`` starts a ``LocalCluster`` of ``n_workers`` processes (default
@@ -427,6 +315,11 @@ def run_cases(
         serial: run in this process without Dask.
         failures: if given, filled with ``{key: one line}`` of the failed cases, which do not
             raise (see Failures).
+        version: what the results depend on beyond the params (JSON; a mapping for every case
+            or a function of the case); a stored case of another version is recomputed.
+        loaded: if given, filled with the keys of the cases loaded from their files (the
+            others were computed now).
+        announce: called with the one-line notice of each recomputation of stored cases.
 
     Returns:
         ``{key: result}`` for every case, loaded and computed (without the failed ones when
@@ -442,16 +335,23 @@ def run_cases(
     _validate(cases)
     check_cluster_options(scheduler, n_workers, serial)
     out = Path(out_dir)
-    (out / _CASES_DIR).mkdir(parents=True, exist_ok=True)
+    (out / CASES_DIR).mkdir(parents=True, exist_ok=True)
 
+    version_of = version if callable(version) else (lambda _case: version)
     results: dict[str, dict] = {}
     pending: list[Case] = []
+    stale: dict[str, list[str]] = {}
     for case in cases:
-        stored = _load_stored(case, out)
+        stored, why = load_stored(case, out, version_of(case))
         if stored is None:
             pending.append(case)
+            if why is not None:
+                stale.setdefault(why, []).append(case.key)
         else:
             results[case.key] = stored
+    if loaded is not None:
+        loaded.update(results)
+    announce_stale(stale, out, announce)
 
     with tqdm(
         total=len(cases),
@@ -462,7 +362,7 @@ def run_cases(
         file=sys.stderr,
         dynamic_ncols=True,
     ) as bar:
-        rec = _Recorder(out, results, bar)
+        rec = _Recorder(out, results, bar, version_of)
         if pending and serial:
             _run_serial(pending, fn, rec)
         elif pending:
@@ -475,29 +375,6 @@ def run_cases(
         key, line = rec.failed[0]
         raise SolverError(
             f"{len(rec.failed)} of {len(cases)} cases failed (first: {key}: {line}); "
-            f"see {out / _CASES_DIR}/<key>.error.txt"
+            f"see {out / CASES_DIR}/<key>.error.txt"
         )
     return {case.key: results[case.key] for case in cases}
-
-
-def collect(out_dir: str | os.PathLike[str]) -> list[dict[str, Any]]:
-    """All stored cases of the study in ``out_dir``, as ``{"key", "params", "result"}`` dicts,
-    sorted by key. Unreadable case files are skipped with a warning (a rerun recomputes them).
-
-    Raises:
-        InputError: ``out_dir/cases`` does not exist.
-    """
-    cases_dir = Path(out_dir) / _CASES_DIR
-    if not cases_dir.is_dir():
-        raise InputError(f"collect: {cases_dir} does not exist; expected a study directory")
-    rows = []
-    for path in sorted(cases_dir.glob("*.json")):
-        if path.name.startswith("."):
-            continue
-        record = _read_record(path)
-        if record is None:
-            warnings.warn(f"{path}: unreadable or incomplete case file; skipped", stacklevel=2)
-            continue
-        rows.append({"key": record["key"], "params": record["params"], "result": record["result"]})
-    rows.sort(key=lambda row: row["key"])
-    return rows

@@ -17,8 +17,10 @@ floating-frame coordinates (``BodyInfo.dof`` counts them) are reported as ``dof_
 Files of a study directory ``DIR``:
 
 - ``reference/history.csv`` (+ ``reference/reference.json``: the scenario it was run from, so a
-  rerun reuses it only for the same scenario), the full-FE reference;
-- ``cases/<key>.json`` one per MVM run (flexmvm.studies.runner: atomic, a rerun resumes), key
+  rerun reuses it only for the same scenario, its provenance stamp and the history's record,
+  checked before reuse: studies/reference.py), the full-FE reference;
+- ``cases/<key>.json`` one per MVM run (flexmvm.studies.runner: atomic, a rerun resumes; a case
+  of another code version or reference, or a damaged one, is recomputed and said), key
   ``l<i>-j<j>-m<m>``;
 - ``ncc.csv``: ``layers,laps,nodes,modes,dof,ncc_force,ncc_<probe>...,peak_err,impulse_err,
   duration_err,wall_time_s``, one row per evaluated case sorted by (layers, laps, modes); empty
@@ -65,7 +67,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from flexmvm.errors import SolverError
+from flexmvm.errors import SolverError, announce_recompute
 from flexmvm.metrics.ncc import Comparison, Target
 from flexmvm.results.atomic import write_json_atomic
 from flexmvm.results.outdir import claim_study_dir
@@ -92,7 +94,7 @@ from flexmvm.studies.interface import (
     run_interface_case,
     write_interface_csv,
 )
-from flexmvm.studies.reference import case_reference, reference_history
+from flexmvm.studies.reference import case_reference, reference_history, study_version
 from flexmvm.studies.report import (
     echo_summary,
     failed_case_row,
@@ -103,7 +105,6 @@ from flexmvm.studies.report import (
 )
 from flexmvm.studies.runner import (
     Case,
-    case_path,
     check_cluster_options,
     cluster_slots,
     run_cases,
@@ -197,19 +198,20 @@ class _Batches:
     one line), so it is listed, and scored as failed, like a run whose solver failed."""
 
     def __init__(self, out_dir: Path, address: str | None, serial: bool, progress: bool,
-                 fn: Callable[[Case], dict], failed_row: Callable[[Case, str], dict]) -> None:
+                 fn: Callable[[Case], dict], failed_row: Callable[[Case, str], dict],
+                 version: dict, echo: Callable[[str], Any]) -> None:
         self.out_dir, self.address, self.serial, self.progress = out_dir, address, serial, progress
-        self.fn, self.failed_row = fn, failed_row
+        self.fn, self.failed_row, self.version, self.echo = fn, failed_row, version, echo
         self.made: set[str] = set()
         self.loaded: set[str] = set()
         self.rows: dict[str, dict] = {}
 
     def __call__(self, cases: Sequence[Case]) -> list[dict]:
-        stored = {c.key for c in cases if case_path(self.out_dir, c.key).is_file()}
         kw: dict[str, Any] = {"serial": True} if self.serial else {"scheduler": self.address}
         failures: dict[str, str] = {}
+        stored: set[str] = set()
         res = run_cases(cases, self.fn, self.out_dir, progress=self.progress, failures=failures,
-                        **kw)
+                        version=self.version, loaded=stored, announce=self.echo, **kw)
         for c in cases:
             (self.loaded if c.key in stored else self.made).add(c.key)
             self.rows[c.key] = (res[c.key] if c.key in res
@@ -242,7 +244,7 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
                   modes: Iterable[int] = range(7, 44, 6), target: Target | None = None, *,
                   search: bool = False, scheduler: str | None = None,
                   n_workers: int | None = None, serial: bool = False, progress: bool = False,
-                  echo: Callable[[str], Any] = lambda _line: None,
+                  echo: Callable[[str], Any] | None = None,
                   kind: ModelKind | str = ModelKind.MVM,
                   patches: Sequence[Sequence[float]] | None = None,
                   interface_modes: Iterable[int] = (5, 10, 20)) -> SelectionStudy:
@@ -253,6 +255,8 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     Brute force runs every case of the grid (one batch); ``search=True`` runs
     studies.search.smallest_passing with SEARCH_OPEN_PER_SLOT families open per case the
     cluster runs at once, each round's batch through run_cases (parallel, resumable).
+    ``echo``: the console lines (none by default); a stored reference or case that fails its
+    check is recomputed and said through it (default: errors.announce_recompute, a warning).
     ``scheduler``: address of a Dask scheduler; otherwise one LocalCluster of ``n_workers``
     processes for the whole study, or in-process with ``serial=True``. ``kind``:
     the candidates' model (grid.study_kind: mvm, the default, mvm-seed or mvm-seed-fixed).
@@ -274,8 +278,11 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     kind = study_kind(kind)
     check_cluster_options(scheduler, n_workers, serial)
     claim_study_dir(out, "flexmvm select", own=STUDY_FILES)
-    hist, ref_made = reference_history(sc, body, out, progress=progress)
+    announce = announce_recompute if echo is None else echo
+    echo = echo or (lambda _line: None)
+    hist, ref_made = reference_history(sc, body, out, progress=progress, announce=announce)
     echo(f"reference (full FE {body}): {'computed' if ref_made else 'loaded'} {hist}")
+    version = study_version(sc, hist)
     n_nodes = {(i, j): len(rod.selection(i, j)) for i in layers for j in laps}
     case_of: dict[Candidate, Case] = {}
     for c in selection_cases(sc, body, layers, laps, modes, reference=hist, kind=kind):
@@ -294,7 +301,7 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     with study_cluster(scheduler, n_workers, serial) as address:
         batches = _Batches(out, address, serial, progress,
                            functools.partial(run_study_case, reference=str(hist)),
-                           lambda c, line: _failed_row(c, line, n_nodes))
+                           lambda c, line: _failed_row(c, line, n_nodes), version, announce)
 
         def evaluate(batch: Sequence[Candidate]) -> list[float]:
             rows = batches([case_of[c] for c in batch])
