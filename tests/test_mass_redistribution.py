@@ -73,3 +73,23 @@ def test_scenario_option_acts_on_the_retained_contact_nodes():
     assert all(np.all(np.asarray(g)[:75] == 0.0) for row in b2.inv.G1 for g in row)
     assert all(np.all(np.asarray(g)[:75] == 0.0) for row in b2.inv.G2 for g in row)
     assert MasslessCoordinates.of(b2).s.tolist() == list(range(75))
+
+
+def test_a_contact_surface_too_large_says_what_to_change():
+    """The whole side of the tiny rod as the contact surface (240 nodes, 38 % of its mass):
+    refused in one line that says how much mass the surface carries and what to change."""
+    from pathlib import Path
+
+    import flexmvm as fm
+    from flexmvm.errors import InputError
+    from flexmvm.fe.mass_redistribution import redistribute_mass
+    from flexmvm.scenarios.build import _mesh_key, fe_model_for
+
+    sc = fm.load_scenario(Path(__file__).parent / "data" / "tiny_impact.toml")
+    cfg = sc.body("b2")
+    fe = fe_model_for(_mesh_key(cfg), cfg.material_obj())
+    with pytest.raises(InputError) as info:
+        redistribute_mass(fe.M_scalar, fe.mesh.nodes, fe.mesh.node_set("side"))
+    msg = str(info.value)
+    assert "\n" not in msg and "carry 38 % of the body's mass" in msg
+    assert "patch about the expected contact point" in msg and "redistribute_mass = false" in msg

@@ -87,8 +87,13 @@ def redistribute_mass(M_scalar: sp.spmatrix, X: np.ndarray, nodes) -> sp.csr_mat
     change = lumped * (A.T @ y)
     worst = float(np.abs(change / lumped).max())
     if worst > MAX_RELATIVE_CHANGE:
+        share = float(target[0] / max(lumped.sum() + target[0], 1e-300))
         raise InputError(f"mass redistribution: keeping the moments needs a change of "
-                         f"{worst:.2g} of a node's mass (at most {MAX_RELATIVE_CHANGE:g})")
+                         f"{worst:.2g} of a node's mass (at most {MAX_RELATIVE_CHANGE:g}): the "
+                         f"{B.size} contact nodes carry {100 * share:.2g} % of the body's mass; "
+                         "expected a contact surface the size of the contact (a patch about "
+                         "the expected contact point, e.g. a gmsh physical group) or "
+                         "redistribute_mass = false")
     d[free] += change
     out = M_kept + sp.diags(d)
     return sp.csr_matrix(out)
