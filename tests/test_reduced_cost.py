@@ -27,7 +27,15 @@ def _wide(allow: bool):
     return fm.scenario_from_dict(data, base_dir=TINY.parent)
 
 
-def test_a_region_holding_the_whole_body_is_refused_in_one_line():
+def test_a_region_holding_the_whole_body_is_refused_in_one_line(monkeypatch):
+    """The reduced tiny rod (1,892 DOF, ~266 MB against ~20 MB for full FE): refused above
+    the floor of the refusal (256 MB), a warning below it."""
+    import flexmvm.scenarios.cost as cost
+
+    monkeypatch.setattr(cost, "REFUSE_ABOVE_BYTES", 1e12)
+    with pytest.warns(cost.ReducedCostWarning, match="costs more than full FE"):
+        build_scenario(_wide(False).with_time(t_end_s=1e-6))
+    monkeypatch.setattr(cost, "REFUSE_ABOVE_BYTES", 1e6)
     with pytest.raises(InputError) as info:
         build_scenario(_wide(False))
     msg = str(info.value)

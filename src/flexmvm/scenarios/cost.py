@@ -57,9 +57,26 @@ def reduced_cost(name: str, n_nodes: int, nq: int, k_nnz: int) -> BodyCost:
     return BodyCost(name, 6 + nq, dense, 6 + 3 * n_nodes - 6, full)
 
 
+#: Below this much memory [bytes] a reduced body that costs more than its full-FE body is
+#: built with a ReducedCostWarning instead of refused: on a small mesh (a few thousand DOF)
+#: nothing is at stake but the warning's point, that full FE is as cheap.
+REFUSE_ABOVE_BYTES = 256e6
+
+
+class ReducedCostWarning(UserWarning):
+    """A reduced body that costs more than its full-FE body (small enough to be built)."""
+
+
 def check_cost(cost: BodyCost, allow: bool, where: str) -> None:
     """InputError (one line) when the reduced body would cost more memory than its full-FE
-    body and ``allow`` (model.allow_costly) is not set."""
+    body, above REFUSE_ABOVE_BYTES, and ``allow`` (model.allow_costly) is not set; below, a
+    ReducedCostWarning."""
+    if cost.bytes > cost.full_bytes and not allow and cost.bytes <= REFUSE_ABOVE_BYTES:
+        import warnings
+
+        warnings.warn(f"{where}: the reduced model costs more than full FE "
+                      f"({cost.line()})", ReducedCostWarning, stacklevel=3)
+        return
     if cost.bytes > cost.full_bytes and not allow:
         raise InputError(
             f"{where}: the reduced model would cost more than full FE ({cost.dof} DOF, "
