@@ -136,6 +136,8 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
     step_t, step_h, step_impulse = [], [], []
     row_impulses: dict = {}   # normal contact row key -> [impulse [N s], first time [s]]
     n_loose, worst_res, worst_lcp, p_res = 0, 0.0, 0.0, np.zeros(3)
+    shift = np.zeros(3)          # the momentum the balance of the steps added so far [N s]
+    shifts = [shift.copy()]      # ... at every output time
     friction = (FrictionSummary() if any(c.mu > 0 for c in system.contacts)
                 else None)   # runs with friction report it even if no contact closes
     wall0 = time.perf_counter()
@@ -160,6 +162,8 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
         worst_lcp = max(worst_lcp, res.lcp_residual)
         if res.translation_residual is not None:
             p_res += res.translation_residual
+        if res.momentum_shift is not None:
+            shift += res.momentum_shift
         tick += span
         f = res.contact.normal_impulse(res.contact_impulses)
         if res.contact.friction is not None:
@@ -184,6 +188,7 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
             rec.record(t0 + tick * dt, states, impulse / span_t, jimpulse / span_t, integ.carried,
                        integ.carried_products)
             _check_finite(rec.rows[-1], system, t0 + tick * dt)
+            shifts.append(shift.copy())
             impulse, jimpulse = 0.0, np.zeros_like(jimpulse)
             if bar is not None:
                 bar.update(min(tick, n_ticks) - bar.n)
@@ -200,6 +205,7 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
                       n_factorizations=nfac, n_nonrotating_steps=integ.n_nonrotating_steps,
                       steps_not_converged=n_loose, newton_residual_max=worst_res,
                       lcp_residual_max=worst_lcp, momentum_residual=p_res, wall_time_s=wall,
+                      momentum_shift=np.array(shifts),
                       friction=friction, contact_row_impulses=row_impulses,
                       steps=StepHistory(np.array(step_t), np.array(step_h),
                                         np.array(step_impulse, dtype=float)))
