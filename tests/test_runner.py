@@ -251,3 +251,57 @@ def test_cluster_slots_counts_the_cases_run_at_once():
         cluster_slots("tcp://127.0.0.1:1", None, True)
     with pytest.raises(InputError, match="positive integer"):
         cluster_slots(None, 0, False)
+
+
+def _as_main(monkeypatch, tmp_path, source: str | None):
+    """Make a module with file tmp_path/script.py holding ``source`` (None: no file, as in
+    an interactive session) the __main__ module."""
+    import sys
+    import types
+
+    main = types.ModuleType("__main__")
+    if source is not None:
+        path = tmp_path / "script.py"
+        path.write_text(source, encoding="utf-8")
+        main.__file__ = str(path)
+    monkeypatch.setitem(sys.modules, "__main__", main)
+    return main
+
+
+@pytest.mark.parametrize("source, unguarded", [
+    ("import flexmvm\nflexmvm.select('x.toml', 'b2')\n", True),
+    ("import flexmvm\nif __name__ == '__main__':\n    flexmvm.select('x.toml', 'b2')\n", False),
+    ("def main():\n    pass\nif '__main__' == __name__:\n    main()\n", False),
+    ("if __name__ != '__main__':\n    pass\n", True),
+    (None, False),
+])
+def test_unguarded_main_script_is_recognised(monkeypatch, tmp_path, source, unguarded):
+    """A script whose top level has no `if __name__ == "__main__":` block is named (spawned
+    workers would re-run it); a guarded one, or no script at all, is not."""
+    from flexmvm.studies.runner import unguarded_main_script
+
+    _as_main(monkeypatch, tmp_path, source)
+    found = unguarded_main_script()
+    assert (found == str(tmp_path / "script.py")) if unguarded else found is None
+
+
+def test_unguarded_script_studies_run_in_process(monkeypatch, tmp_path):
+    """From an unguarded script: no workers asked -> in-process with one warning line that
+    names the guard to add; workers asked -> a one-line InputError, before any process."""
+    from flexmvm.studies.runner import (
+        InProcessStudyWarning,
+        in_process_by_default,
+        local_cluster,
+    )
+
+    _as_main(monkeypatch, tmp_path, "import flexmvm\n")
+    with pytest.warns(InProcessStudyWarning, match='if __name__ == "__main__":') as seen:
+        assert in_process_by_default(None, None, False)
+    assert "\n" not in str(seen[0].message)
+    assert not in_process_by_default(None, 2, False)
+    assert not in_process_by_default("tcp://127.0.0.1:1", None, False)
+    with pytest.raises(InputError, match="no main guard") as exc:
+        local_cluster(2)
+    assert "\n" not in str(exc.value)
+    _as_main(monkeypatch, tmp_path, None)
+    assert not in_process_by_default(None, None, False)
