@@ -19,3 +19,7 @@ class MeshError(InputError):
 
 class SolverError(FlexmvmError, RuntimeError):
     """A numerical solve failed (non-convergence, singular system) with a readable reason."""
+
+
+class OutputError(FlexmvmError, OSError):
+    """A result file could not be written (disk full, no permission): names the file."""

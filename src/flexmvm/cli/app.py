@@ -1,4 +1,5 @@
-"""The ``flexmvm`` command: a click group; each sub-command lives in its own module.
+"""The ``flexmvm`` command: a click group; each sub-command lives in its own module. The entry
+point (cli/main.py) imports this module inside its own Ctrl-C handler.
 
 No command ends in a traceback:
 
@@ -20,6 +21,7 @@ import sys
 import click
 
 from flexmvm import __version__
+from flexmvm.cli.main import INTERRUPTED
 from flexmvm.errors import FlexmvmError
 
 #: Environment variable that turns on --debug (any value but "", "0", "false", "no").
@@ -88,13 +90,13 @@ def describe(exc: BaseException, command: str) -> str:
     return f"flexmvm: error: {command}: {type(exc).__name__}" + (f": {message}" if message else "")
 
 
-def main(argv: list[str] | None = None) -> None:
-    """Entry point: runs the CLI; every failure is one stderr line and a non-zero exit status
-    (module doc), unless --debug / FLEXMVM_DEBUG asks for the traceback."""
-    _register()
+def run(argv: list[str] | None = None) -> None:
+    """Runs the CLI; every failure is one stderr line and a non-zero exit status (module doc),
+    unless --debug / FLEXMVM_DEBUG asks for the traceback."""
     args = list(sys.argv[1:] if argv is None else argv)
     debug = debug_enabled(args)
     try:
+        _register()     # the sub-commands' imports (numpy, scipy, ...): a Ctrl-C is caught
         cli.main(args=args, prog_name="flexmvm", standalone_mode=False)
     except click.exceptions.Exit as exc:
         sys.exit(exc.exit_code)
@@ -102,8 +104,7 @@ def main(argv: list[str] | None = None) -> None:
         click.echo(f"flexmvm: error: {one_line(exc.format_message())}", err=True)
         sys.exit(2)
     except (click.exceptions.Abort, KeyboardInterrupt):
-        click.echo("flexmvm: interrupted; finished study cases are kept, an unfinished run "
-                   "leaves its output directory as it was", err=True)
+        click.echo(INTERRUPTED, err=True)
         sys.exit(130)
     except FlexmvmError as exc:
         if debug:
@@ -116,6 +117,3 @@ def main(argv: list[str] | None = None) -> None:
         click.echo(describe(exc, command_path(args)), err=True)
         sys.exit(1)
 
-
-if __name__ == "__main__":
-    main()

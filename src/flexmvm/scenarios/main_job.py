@@ -24,7 +24,7 @@ from pathlib import Path
 from flexmvm.bodies.build import ModelKind
 from flexmvm.errors import FlexmvmError, InputError
 from flexmvm.results.outdir import staged_dir
-from flexmvm.results.output import write_run
+from flexmvm.results.output import write_run, writing
 from flexmvm.results.writers import write_summary_json
 from flexmvm.scenarios import pendulum
 from flexmvm.scenarios.compare import compare_runs
@@ -69,7 +69,8 @@ def _run_and_write(sc, label: str, out_dir: Path, fields: bool, progress: bool):
     run = run_scenario(sc, label=label, progress=progress, warn=False)
     write_run(out_dir, run, fields=fields)
     if "pendulum" in run.summary:      # scenarios.run.summarize: a pendulum release
-        _plot_event(out_dir / f"{sc.name}_event.png", run, f"{sc.name} ({label})")
+        with writing(out_dir / f"{sc.name}_event.png"):
+            _plot_event(out_dir / f"{sc.name}_event.png", run, f"{sc.name} ({label})")
     return run.summary, run.result.curves(), run.result.n_steps, run.result.wall_time_s
 
 
@@ -170,12 +171,14 @@ def _run_into(out_dir: Path, sc, ref_sc, own_label: str, fields: bool, progress:
         summary["speedup_vs_full"] = wall_ref / max(wall_own, 1e-12)
         curves = {"FE": ref_curves, **curves}
     summary["failures"] = failures
-    write_summary_json(out_dir / "summary.json", summary)
+    with writing(out_dir / "summary.json"):
+        write_summary_json(out_dir / "summary.json", summary)
     th = (theory[0], theory[1], theory[2]) if theory is not None else None
     from flexmvm.plots.figures import plot_run  # matplotlib: 2 s of import, only here
 
-    plot_run(out_dir / f"{sc.name}.png", curves, theory=th,
-             title=f"{sc.name}: contact force and axial velocities")
+    with writing(out_dir / f"{sc.name}.png"):
+        plot_run(out_dir / f"{sc.name}.png", curves, theory=th,
+                 title=f"{sc.name}: contact force and axial velocities")
     return summary
 
 
