@@ -278,7 +278,7 @@ def _as_main(monkeypatch, tmp_path, source: str | None):
 def test_unguarded_main_script_is_recognised(monkeypatch, tmp_path, source, unguarded):
     """A script whose top level has no `if __name__ == "__main__":` block is named (spawned
     workers would re-run it); a guarded one, or no script at all, is not."""
-    from flexmvm.studies.runner import unguarded_main_script
+    from flexmvm.studies.main_guard import unguarded_main_script
 
     _as_main(monkeypatch, tmp_path, source)
     found = unguarded_main_script()
@@ -288,11 +288,8 @@ def test_unguarded_main_script_is_recognised(monkeypatch, tmp_path, source, ungu
 def test_unguarded_script_studies_run_in_process(monkeypatch, tmp_path):
     """From an unguarded script: no workers asked -> in-process with one warning line that
     names the guard to add; workers asked -> a one-line InputError, before any process."""
-    from flexmvm.studies.runner import (
-        InProcessStudyWarning,
-        in_process_by_default,
-        local_cluster,
-    )
+    from flexmvm.studies.main_guard import InProcessStudyWarning, in_process_by_default
+    from flexmvm.studies.runner import local_cluster
 
     _as_main(monkeypatch, tmp_path, "import flexmvm\n")
     with pytest.warns(InProcessStudyWarning, match='if __name__ == "__main__":') as seen:

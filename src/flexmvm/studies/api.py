@@ -13,8 +13,8 @@ from pathlib import Path
 from flexmvm.metrics.ncc import Target
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario
 from flexmvm.studies import materials as material_studies
+from flexmvm.studies.main_guard import in_process_by_default
 from flexmvm.studies.materials import SEED_ORDER, MaterialStudy
-from flexmvm.studies.runner import in_process_by_default
 from flexmvm.studies.selection import SelectionStudy, select_models
 
 __all__ = ["material_study", "select"]

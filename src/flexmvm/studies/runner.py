@@ -10,7 +10,6 @@ a scheduler address is given, or in-process with ``serial=True``.
 
 from __future__ import annotations
 
-import ast
 import contextlib
 import json
 import os
@@ -28,11 +27,11 @@ from tqdm import tqdm
 
 from flexmvm.errors import InputError, SolverError
 from flexmvm.results.atomic import canonical_json, write_json_atomic, write_text_atomic
+from flexmvm.studies.main_guard import main_guard_advice, unguarded_main_script
 from flexmvm.threads import ENV_THREADS
 
-__all__ = ["Case", "InProcessStudyWarning", "Params", "case_path", "check_cluster_options",
-           "cluster_slots", "collect", "error_path", "in_process_by_default", "local_cluster",
-           "run_cases", "study_cluster", "unguarded_main_script", "worker_env"]
+__all__ = ["Case", "Params", "case_path", "check_cluster_options", "cluster_slots", "collect",
+           "error_path", "local_cluster", "run_cases", "study_cluster", "worker_env"]
 
 _KEY_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,199}")
 _CASES_DIR = "cases"
@@ -263,58 +262,6 @@ def _local_workers(n_workers: int | None) -> int:
     return n_workers or os.cpu_count() or 1
 
 
-class InProcessStudyWarning(UserWarning):
-    """A library study from a script without a main guard, no workers asked: run in-process."""
-
-
-def _is_main_test(test: ast.expr) -> bool:
-    """True for ``__name__ == "__main__"`` (either side)."""
-    if not (isinstance(test, ast.Compare) and len(test.ops) == 1
-            and isinstance(test.ops[0], ast.Eq)):
-        return False
-    sides = (test.left, test.comparators[0])
-    return (any(isinstance(x, ast.Name) and x.id == "__name__" for x in sides)
-            and any(isinstance(x, ast.Constant) and x.value == "__main__" for x in sides))
-
-
-def unguarded_main_script() -> str | None:
-    """The path of the ``__main__`` module when it is a Python file whose top level has no
-    ``if __name__ == "__main__":`` block, else None (an interactive session, ``python -c``,
-    pytest, the flexmvm command). A local cluster's worker processes are started by spawn,
-    which re-imports that file in each of them: its top level, a study call included, would
-    run again in every worker (multiprocessing's "bootstrapping phase" RuntimeError)."""
-    path = getattr(sys.modules.get("__main__"), "__file__", None)
-    if not path:
-        return None
-    try:
-        tree = ast.parse(Path(path).read_text(encoding="utf-8"))
-    except (OSError, SyntaxError, UnicodeDecodeError, ValueError):
-        return None
-    if any(isinstance(node, ast.If) and _is_main_test(node.test) for node in tree.body):
-        return None
-    return str(path)
-
-
-def _main_guard_advice(script: str) -> str:
-    return (f"put the code of {script} under 'if __name__ == \"__main__\":' (worker processes "
-            "re-import the script and would run it again)")
-
-
-def in_process_by_default(scheduler: str | None, n_workers: int | None, serial: bool,
-                          stacklevel: int = 3) -> bool:
-    """``serial`` as a library study takes it: also True when neither workers nor a
-    scheduler are asked for and the main script has no main guard (unguarded_main_script),
-    with an InProcessStudyWarning of one line saying what to add for worker processes."""
-    if serial or scheduler is not None or n_workers is not None:
-        return serial
-    script = unguarded_main_script()
-    if script is None:
-        return False
-    warnings.warn(f"study run in this process, not on worker processes: to use them, "
-                  f"{_main_guard_advice(script)}", InProcessStudyWarning, stacklevel=stacklevel)
-    return True
-
-
 def local_cluster(n_workers: int):
     """A LocalCluster of n_workers single-threaded processes that hands each worker one case
     at a time (worker-saturation 1.0: with the default 1.1 a one-thread worker is sent two
@@ -324,7 +271,7 @@ def local_cluster(n_workers: int):
     script = unguarded_main_script()
     if script is not None:
         raise InputError(f"a local Dask cluster was asked for from {script}, which has no "
-                         f"main guard; {_main_guard_advice(script)}, or pass serial=True")
+                         f"main guard; {main_guard_advice(script)}, or pass serial=True")
     import dask
     from distributed import LocalCluster
 
