@@ -144,10 +144,12 @@ def test_static_stiffness_of_the_contact_node(b2):
 def test_seed_mesh_case_runs_against_its_full_fe(tmp_path):
     """The main job on the first 0.5 ms (the whole first contact: 0..435 us in full FE), in one
     process: b2 eq. (4) 1-1 + 37 against b2 full FE on the same mesh. Measured: force NCC
-    0.9675 (0.9914 over the default 2 ms, whose zero tail raises it), peak +7.1 %, duration
-    -2.7 %, max penetration 4.7e-8 m = h (1 - theta) v0 (the first step closes at the impact
-    speed). Tolerances: NCC >= 0.95, peak within 10 %, duration within 5 %, penetration below
-    1e-7 m (twice the first-step bound). Its speed is measured by benchmarks/, not here."""
+    over the contact window 0.9243 (over the whole 0.5 ms 0.9675, over the default 2 ms
+    0.9914: the zero tails raise it), peak +7.1 %, duration -2.7 %, max penetration 4.7e-8 m
+    = h (1 - theta) v0 (the first step closes at the impact speed). Tolerances: NCC >= 0.90
+    (1 - r may grow 1.3 x), the whole-window NCC above it, peak within 10 %, duration within
+    5 %, penetration below 1e-7 m (twice the first-step bound). Its speed is measured by
+    benchmarks/, not here."""
     lines: list[str] = []
     s = run_main_job(SEED_MESH, tmp_path / "out", t_end=5e-4, fields=False, progress=False,
                      echo=lines.append, jobs=1)
@@ -155,7 +157,8 @@ def test_seed_mesh_case_runs_against_its_full_fe(tmp_path):
     assert s["model"] == {"b1": "full", "b2": "mvm-seed"}
     assert s["reference_full"]["dof"] == {"b1": 2337, "b2": 2337}
     c = s["comparison_vs_full"]
-    assert c["ncc_force"] >= 0.95, c
+    assert c["ncc_force"] >= 0.90, c
+    assert c["ncc_force_whole"] > c["ncc_force"], c
     assert abs(c["peak_err"]) <= 0.10, c
     assert abs(c["duration_err"]) <= 0.05, c
     theta, h, v0 = 0.55, 0.5e-6, 0.21
