@@ -354,7 +354,7 @@ def test_staged_dir_replaces_an_earlier_output_as_a_whole(tmp_path):
         (tmp / "a.txt").write_text("1")
         (tmp / "stale.txt").write_text("old")
         assert not out.exists()
-    files = lambda: {k: v for k, v in _tree(out).items() if k != MARKER}  # noqa: E731
+    files = lambda: {k: v for k, v in _tree(out).items() if k != MARKER}
     assert files() == {"a.txt": b"1", "stale.txt": b"old"}
     assert set(json.loads((out / MARKER).read_text())["files"]) == {"a.txt", "stale.txt"}
     with staged_dir(out, "flexmvm test") as tmp:

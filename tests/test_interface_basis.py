@@ -224,7 +224,10 @@ def test_guard_silent_on_the_seed_selection_and_the_patch(short_runs):
 
 def test_selection_study_sweeps_the_interface_kind_beside_the_nodes(tmp_path):
     """--patches adds the interface grid: its rows (DOF = patches + modes), its winner, the
-    smaller winner over both kinds and the NCC-DOF front figure."""
+    smaller winner over both kinds and the NCC-DOF front figure. Target NCC >= 0.99 with the
+    peak within 2 %, where the winner is not the smallest candidate: measured, the one-patch
+    model (4 DOF) NCC 0.99998827, peak +8.6 %, fails; the two-patch one (5 DOF) NCC
+    0.99999974, peak +1.2 %, passes; the node model 1-1 + 7 (10 DOF) peak -0.17 %."""
     from flexmvm.cli.select_cmd import command  # noqa: F401 - the CLI option parses
     from flexmvm.studies.interface import parse_patches
     from flexmvm.studies.selection import run_selection_study
@@ -234,8 +237,9 @@ def test_selection_study_sweeps_the_interface_kind_beside_the_nodes(tmp_path):
         parse_patches("0.2,x")
     tiny = ROOT / "tests" / "data" / "tiny_impact.toml"
     res = run_selection_study(tiny, "b2", tmp_path, layers=[1], laps=[1], modes=[7],
-                              target=fm.Target(0.99), serial=True, progress=False,
-                              echo=lambda s: None, patches=[(0.2 * MM,), (0.2 * MM, 0.4 * MM)],
+                              target=fm.Target(0.99, peak_err_max=0.02), serial=True,
+                              progress=False, echo=lambda s: None,
+                              patches=[(0.2 * MM,), (0.2 * MM, 0.4 * MM)],
                               interface_modes=[3])
     rows = (tmp_path / "ncc_interface.csv").read_text().splitlines()
     assert len(rows) == 3 and rows[0].startswith("model,n_patch,modes,mode_pool,dof,ncc_force")
@@ -244,9 +248,10 @@ def test_selection_study_sweeps_the_interface_kind_beside_the_nodes(tmp_path):
         assert all(int(r["mode_pool"]) >= 4 * 3 + 6 for r in csv.DictReader(fh))
     ie = res["interface"]
     assert ie["runs"] == 2 and not ie["failures"]
-    assert ie["passed"] and ie["dof"] == 4          # 1 patch + 3 modes, the smaller passing
-    assert 0.99 <= ie["ncc_force"] <= 1.0
-    assert res["best_overall"]["dof"] == min(ie["dof"], res["dof"] if res["passed"] else 10**9)
+    assert ie["passed"] and ie["dof"] == 5          # 2 patches + 3 modes: 1 patch fails
+    assert ie["ncc_force"] >= 0.99 and abs(ie["peak_err"]) <= 0.02
+    assert res["passed"] and res["dof"] == 10
+    assert res["best_overall"]["dof"] == 5
     assert (tmp_path / "fig_front_ncc_dof.png").stat().st_size > 1000
     stored = sorted(p.name for p in (tmp_path / "cases").glob("if-*.json"))
     assert stored == ["if-r200-m3.json", "if-r200_400-m3.json"]

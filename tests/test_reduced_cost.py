@@ -30,7 +30,7 @@ def _wide(allow: bool):
 def test_a_region_holding_the_whole_body_is_refused_in_one_line(monkeypatch):
     """The reduced tiny rod (1,892 DOF, ~266 MB against ~20 MB for full FE): refused above
     the floor of the refusal (256 MB), a warning below it."""
-    import flexmvm.scenarios.cost as cost
+    from flexmvm.scenarios import cost
 
     monkeypatch.setattr(cost, "REFUSE_ABOVE_BYTES", 1e12)
     with pytest.warns(cost.ReducedCostWarning, match="costs more than full FE"):

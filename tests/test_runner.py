@@ -334,3 +334,54 @@ def test_case_compared_with_another_reference_is_recomputed(tmp_path):
     first = case_path(tmp_path, cases[0].key)
     why = "compared with another reference history"
     assert notes == [f"{first} and 1 other case(s): {why}: recomputed"]
+
+
+def _as_main(monkeypatch, tmp_path, source: str | None):
+    """Make a module with file tmp_path/script.py holding ``source`` (None: no file, as in
+    an interactive session) the __main__ module."""
+    import sys
+    import types
+
+    main = types.ModuleType("__main__")
+    if source is not None:
+        path = tmp_path / "script.py"
+        path.write_text(source, encoding="utf-8")
+        main.__file__ = str(path)
+    monkeypatch.setitem(sys.modules, "__main__", main)
+    return main
+
+
+@pytest.mark.parametrize("source, unguarded", [
+    ("import flexmvm\nflexmvm.select('x.toml', 'b2')\n", True),
+    ("import flexmvm\nif __name__ == '__main__':\n    flexmvm.select('x.toml', 'b2')\n", False),
+    ("def main():\n    pass\nif '__main__' == __name__:\n    main()\n", False),
+    ("if __name__ != '__main__':\n    pass\n", True),
+    (None, False),
+])
+def test_unguarded_main_script_is_recognised(monkeypatch, tmp_path, source, unguarded):
+    """A script whose top level has no `if __name__ == "__main__":` block is named (spawned
+    workers would re-run it); a guarded one, or no script at all, is not."""
+    from flexmvm.studies.main_guard import unguarded_main_script
+
+    _as_main(monkeypatch, tmp_path, source)
+    found = unguarded_main_script()
+    assert (found == str(tmp_path / "script.py")) if unguarded else found is None
+
+
+def test_unguarded_script_studies_run_in_process(monkeypatch, tmp_path):
+    """From an unguarded script: no workers asked -> in-process with one warning line that
+    names the guard to add; workers asked -> a one-line InputError, before any process."""
+    from flexmvm.studies.main_guard import InProcessStudyWarning, in_process_by_default
+    from flexmvm.studies.runner import local_cluster
+
+    _as_main(monkeypatch, tmp_path, "import flexmvm\n")
+    with pytest.warns(InProcessStudyWarning, match='if __name__ == "__main__":') as seen:
+        assert in_process_by_default(None, None, False)
+    assert "\n" not in str(seen[0].message)
+    assert not in_process_by_default(None, 2, False)
+    assert not in_process_by_default("tcp://127.0.0.1:1", None, False)
+    with pytest.raises(InputError, match="no main guard") as exc:
+        local_cluster(2)
+    assert "\n" not in str(exc.value)
+    _as_main(monkeypatch, tmp_path, None)
+    assert not in_process_by_default(None, None, False)

@@ -7,7 +7,6 @@ Measured values (docs/seed_reproduction.md) are quoted at each check with its to
 from __future__ import annotations
 
 import math
-import time
 from pathlib import Path
 
 import numpy as np
@@ -145,20 +144,21 @@ def test_static_stiffness_of_the_contact_node(b2):
 def test_seed_mesh_case_runs_against_its_full_fe(tmp_path):
     """The main job on the first 0.5 ms (the whole first contact: 0..435 us in full FE), in one
     process: b2 eq. (4) 1-1 + 37 against b2 full FE on the same mesh. Measured: force NCC
-    0.9675 (0.9914 over the default 2 ms, whose zero tail raises it), peak +7.1 %, duration
-    -2.7 %, max penetration 4.7e-8 m = h (1 - theta) v0 (the first step closes at the impact
-    speed). Tolerances: NCC >= 0.95, peak within 10 %, duration within 5 %, penetration below
-    1e-7 m (twice the first-step bound); cold cache well under 60 s (measured ~24 s)."""
-    t0 = time.perf_counter()
+    over the contact window 0.9243 (over the whole 0.5 ms 0.9675, over the default 2 ms
+    0.9914: the zero tails raise it), peak +7.1 %, duration -2.7 %, max penetration 4.7e-8 m
+    = h (1 - theta) v0 (the first step closes at the impact speed). Tolerances: NCC >= 0.90
+    (1 - r may grow 1.3 x), the whole-window NCC above it, peak within 10 %, duration within
+    5 %, penetration below 1e-7 m (twice the first-step bound). Its speed is measured by
+    benchmarks/, not here."""
     lines: list[str] = []
     s = run_main_job(SEED_MESH, tmp_path / "out", t_end=5e-4, fields=False, progress=False,
                      echo=lines.append, jobs=1)
-    wall = time.perf_counter() - t0
     assert s["dof"] == {"b1": 2337, "b2": 46}
     assert s["model"] == {"b1": "full", "b2": "mvm-seed"}
     assert s["reference_full"]["dof"] == {"b1": 2337, "b2": 2337}
     c = s["comparison_vs_full"]
-    assert c["ncc_force"] >= 0.95, c
+    assert c["ncc_force"] >= 0.90, c
+    assert c["ncc_force_whole"] > c["ncc_force"], c
     assert abs(c["peak_err"]) <= 0.10, c
     assert abs(c["duration_err"]) <= 0.05, c
     theta, h, v0 = 0.55, 0.5e-6, 0.21
@@ -166,7 +166,6 @@ def test_seed_mesh_case_runs_against_its_full_fe(tmp_path):
     assert s["reference_full"]["max_penetration_m"] <= 2 * h * (1 - theta) * v0
     assert s["failures"] == [] or all("theory" in f["item"] for f in s["failures"])
     assert (tmp_path / "out" / "summary.json").is_file()
-    assert wall < 90.0, wall
 
 
 @pytest.mark.parametrize("kind, sel, rtol", [(BasisKind.SEED_FIXED, (1, 1), 1e-10),

@@ -19,7 +19,7 @@ from flexmvm.metrics.ncc import ncc
 
 pytest.importorskip("gmsh")
 
-import _gmsh_meshes  # noqa: E402
+import _gmsh_meshes
 
 V0 = 0.5          # impact speed [m/s]
 R = 0.01          # sphere radius [m]

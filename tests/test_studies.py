@@ -3,6 +3,12 @@
 One brute-force sweep (layers 1..2 x laps 1..2 x modes {7, 13}, serial) is shared by the tests;
 the others copy its reference (and cases, where a test is about loading them) to avoid
 recomputing what does not matter for the test.
+
+Its target is force NCC >= 0.99999 (TARGET), where the answer is not the smallest candidate:
+measured over the contact window (2026-11-27), the four 7-mode models score 1 - r = 1.8e-5 to
+2.2e-5 and fail, the four 13-mode ones 1.4e-7 to 7.2e-7 and pass, so the smallest passing
+model is 1-1 + 13 (16 DOF) while 1-1 + 7 (10 DOF) and 2-1 + 7 (13 DOF) are smaller. At 0.99
+every model passes and any selection rule that returns the smallest candidate would pass.
 """
 
 from __future__ import annotations
@@ -28,6 +34,7 @@ from flexmvm.studies.selection import run_selection_study
 
 TINY = Path(__file__).parent / "data" / "tiny_impact.toml"
 GRID = {"layers": [1, 2], "laps": [1, 2], "modes": [7, 13]}
+TARGET = Target(0.99999)
 
 
 def _table(out: Path, drop=("wall_time_s",)) -> list[dict]:
@@ -56,7 +63,7 @@ def _copy_reference(src: Path, dst: Path, cases: bool = False) -> None:
 @pytest.fixture(scope="module")
 def brute(tmp_path_factory) -> tuple[Path, dict]:
     out = tmp_path_factory.mktemp("brute")
-    res = run_selection_study(TINY, "b2", out, **GRID, target=Target(0.99), serial=True,
+    res = run_selection_study(TINY, "b2", out, **GRID, target=TARGET, serial=True,
                               progress=False, echo=lambda s: None)
     return out, res
 
@@ -75,11 +82,15 @@ def test_brute_force_writes_table_json_and_figures(brute):
         [(i, j, m) for i in (1, 2) for j in (1, 2) for m in (7, 13)]
     for r in rows:  # dof = 3 x nodes + modes (elastic coordinates, seed count)
         assert int(r["dof"]) == 3 * int(r["nodes"]) + int(r["modes"])
-        assert 0.9 < float(r["ncc_force"]) <= 1.0
+        # measured 1 - r <= 2.2e-5 (module doc): a broken reduction or coupling reads far below
+        assert 0.9999 < float(r["ncc_force"]) <= 1.0
     assert {r["nodes"] for r in rows if r["layers"] == "1" and r["laps"] == "1"} == {"1"}
     assert res["runs"] == res["runs_made"] == 8 and res["runs_loaded"] == 0
     assert res["reference_computed"] is True
-    assert (res["layers"], res["laps"], res["modes"], res["dof"]) == (1, 1, 7, 10)
+    # the smallest model reaching TARGET (module doc): not the smallest candidate
+    assert (res["layers"], res["laps"], res["modes"], res["dof"]) == (1, 1, 13, 16)
+    assert min(int(r["dof"]) for r in rows) == 10
+    assert all(float(r["ncc_force"]) < TARGET.ncc_min for r in rows if int(r["dof"]) < 16)
     assert res["dof_total"] == res["dof"] + 6
     for fig in ("fig7_ncc_map.png", "fig8_ncc_modes.png"):
         assert (out / fig).read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
@@ -218,7 +229,12 @@ def test_materials_study_two_materials(tmp_path):
     assert float(rows[0]["E_pa"]) == 344.70e9 and float(rows[1]["rho_kg_m3"]) == 2700.0
     w, al = (res["materials"][m]["mean_ncc_force"] for m in ("W", "Al"))
     assert w == pytest.approx(float(rows[0]["ncc_force"]))
-    assert res["seed_ordering_holds"] is (w > al)
+    # the seed's ordering, as physics: at equal selection the reduction error is in b2's
+    # contact compliance, whose share of the Hertz compliance is 0.23 for W, 0.58 for Al
+    # (docs/studies.md): measured 1 - r = 6.4e-6 (W) against 1.8e-5 (Al), ratio 0.35 (the
+    # shares' ratio 0.40); required below 0.6
+    assert 1.0 - w < 0.6 * (1.0 - al)
+    assert res["seed_ordering_holds"] is True
     # the validity verdict per run, and the means over the models valid for every material
     outside = {b["case"] for b in res["guard_outside_validity"]}
     bad = [float(r["guard_outside_fraction"]) > WARN_FRACTION

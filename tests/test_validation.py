@@ -31,16 +31,22 @@ def test_flat_variant_full_fe_against_st_venant():
 
 
 def test_seed_full_fe_and_mvm_against_theory_and_each_other():
-    """Seed case: full FE vs 1D wave-Hertz: NCC >= 0.98 (force) and >= 0.99 (b2 free end), peak
-    within 3 %, end of contact within 5 %; MVM (b2 <= 150 DOF) vs full FE: force NCC >= 0.99."""
+    """Seed case: full FE vs 1D wave-Hertz: force NCC over the contact >= 0.999 (measured
+    0.99957 on the stored histories, 0.99960 over the whole 1 ms window; the bound allows
+    1 - r to grow 2.3 x: a contact law off by a few percent in stiffness, a mesh one level
+    coarser (the short case's coarse-vs-refined 1 - r is 2.7e-3) or a lost wave reflection
+    breaks it), b2 free-end NCC >= 0.999 (measured 0.99965), peak within 3 %, end of contact
+    within 5 %; MVM (b2 <= 150 DOF) vs full FE: force NCC >= 0.9995 (measured 0.99981 over
+    the contact, 0.99992 over the window; 1-1 + 37, the seed's model, reads 0.8976 here, and a
+    basis missing its constraint modes (eq. 4) 0.84 on the short case)."""
     r = validation.seed_vs_theory(OUT, 1.0e-3, 0.5e-6)
     th = r["full_vs_theory"]
-    assert th["ncc_force"] >= 0.98
-    assert th["ncc_b2_free_end"] >= 0.99
+    assert th["ncc_force"] >= 0.999
+    assert th["ncc_b2_free_end"] >= 0.999
     assert abs(th["peak_err"]) < 0.03
     assert abs(th["duration_err"]) < 0.05
     assert r["mvm_dof"]["b2"] <= 150 + 6
-    assert r["mvm_vs_full"]["ncc_force"] >= 0.99
+    assert r["mvm_vs_full"]["ncc_force"] >= 0.9995
     for key in ("full", "mvm"):
         assert r[key]["momentum_rel_error"] < 1e-9
         # every LCP solved (a tensile impulse or one on an opening gap reads ~1) and every
@@ -74,13 +80,16 @@ def test_pendulum_whole_event():
       separation (measured 2e-6 and 6e-6: the rods' vibration moves their centres of mass by
       micrometres, the swing by 4.5 ms of a 1.4 s period);
     - string drift below 1e-9 m (position-level joints: measured 4.0e-13 m); the LCPs solved;
-      every Newton step to within 100 x its rtol 1e-10 (measured: all converged but one of
-      2,881 stopped at the round-off floor, residual 1.4e-10)."""
+      every Newton step within 2 x its rtol 1e-10 and at most 10 of them stopped on the
+      round-off floor (measured: all converged but one of 2,881, residual 1.4e-10; a step
+      that stalls is accepted up to ROUNDOFF_FLOOR = 1e-7, so the former bound of 100 x rtol
+      let a Newton iteration stall at 1e-8 on every step unseen)."""
     r = validation.pendulum_case(OUT)
     assert abs(r["impact_speed_err"]) < 0.005
     assert r["vs_seed"]["ncc_force"] >= 0.995
     for b in ("b1", "b2"):
         assert abs(r["momenta"][b]["p_end_rel_err_x"]) < 1e-3
     assert r["max_joint_drift_m"] < 1e-9
-    assert r["newton_residual_max"] < 1e-8
+    assert r["newton_residual_max"] < 2e-10
+    assert r["steps_not_converged"] <= 10
     assert r["lcp_residual_max"] <= 1e-8

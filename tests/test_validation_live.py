@@ -167,8 +167,9 @@ def _check_sane(run, e_min: float = 0.99) -> None:
 # --- 1. the short seed case ------------------------------------------------------------------
 
 def test_short_full_fe_against_wave_hertz_theory():
-    """Full FE vs 1D wave-Hertz on the short case (measured on the scenario's scheme: NCC
-    0.99719, peak +3.78 %, impulse -0.93 %, contact duration +0.52 %, b2 free-end NCC 0.99984):
+    """Full FE vs 1D wave-Hertz on the short case (measured on the scenario's scheme: force NCC
+    over the contact 0.99617 (0.99719 over the whole window), peak +3.78 %, impulse -0.93 %,
+    contact duration +0.52 %, b2 free-end NCC 0.99984):
     - force NCC >= 0.995: the gap to 1 is the contact-patch discretisation (coarse vs refined
       mesh NCC 0.9973; refined vs theory 0.9994);
     - peak within 6 %: +2.8 % 1D/3D limit (refined mesh) + 1.0 % mesh, 1.5x margin;
@@ -229,16 +230,20 @@ def test_mvm_seed_body_in_contact():
     FE (impulse within 0.5 %, measured -0.07 %), but it is much stiffer at the contact than the
     Craig-Bampton model with the same nodes and modes: region II is joined to region I only
     through fixed-interface modes, with no static (constraint) modes, so measured against the
-    full FE: force NCC 0.836, peak +28 %, contact 20 % shorter (CB: NCC 1 - 1e-7). Required:
-    NCC >= 0.7 and a peak above the full FE's (a regression to the CB form or a broken basis
-    would show)."""
+    full FE: force NCC over the contact 0.7735 (0.836 over the whole window), peak +27.6 %,
+    contact 20.3 % shorter (CB with the same nodes and modes: NCC 1 - 1e-6, peak -0.03 %).
+    Required: NCC in [0.70, 0.85], peak +20 % to +35 %, contact 15 % to 25 % shorter: a
+    regression to the CB form (peak and duration within 0.1 %) or a basis losing region II's
+    coupling (stiffer still, as the modal body's +44 %) falls outside; the margins are the
+    step and mesh changes of these numbers (a few percent of the peak)."""
     full, run = _short("full"), _short("mvm-seed")
     assert run.summary["model"]["b2"] == "mvm-seed"
     _check_sane(run)
     c = compare_runs(*full.result.curves(), *run.result.curves())
     assert abs(c["impulse_err"]) < 0.005
-    assert c["ncc_force"] >= 0.7
-    assert 0.0 < c["peak_err"] < 0.5
+    assert 0.70 <= c["ncc_force"] <= 0.85
+    assert 0.20 < c["peak_err"] < 0.35
+    assert -0.25 < c["duration_err"] < -0.15
     # its stiffer contact field makes the contact nodes' impacts harder: penetration measured
     # 2.9e-7 m, 2.4 % of the peak Hertz approach; allowed 3 % (full FE: 1.5e-7 m within 2 %)
     _penetration_ok(run.summary, 1.5)
@@ -247,16 +252,21 @@ def test_mvm_seed_body_in_contact():
 def test_modal_body_in_contact():
     """b2 as 20 free-interface modes of the end-B-supported rod (26 DOF): its end face cannot
     take the local Hertz indentation, so only the striker's side is compliant: vs full FE peak
-    +44 %, contact 26 % shorter, NCC 0.71 (measured). What must hold: sane impact (measured
-    e = 0.9980), the same momentum transfer as full FE (impulse within 0.5 %, measured
-    -0.077 %), a stiffer contact than full FE (peak above it), and the free-end velocity
-    following the wave (NCC >= 0.9, measured 0.945)."""
+    +44.0 %, contact 25.8 % shorter, force NCC over the contact 0.607 (0.711 over the whole
+    window) (measured). What must hold: sane impact (measured e = 0.9980), the same momentum
+    transfer as full FE (impulse within 0.5 %, measured -0.077 %), the contact of a rigid
+    face on the striker's Hertz compliance: peak +35 % to +55 % and contact 20 % to 30 %
+    shorter (a rigid face removes b2's share 0.58 of the Hertz compliance: E* x 2.38, and a
+    Hertz impact's peak scales as E*^(2/5), its duration as E*^(-2/5): +41 % and -29 %; a
+    face that indents, as full FE or MVM, reads within a few percent), and
+    the free-end velocity following the wave (NCC >= 0.9, measured 0.945)."""
     full, run = _short("full"), _short("modal")
     assert run.summary["model"]["b2"] == "modal" and run.summary["dof"]["b2"] == 26
     _check_sane(run)
     c = compare_runs(*full.result.curves(), *run.result.curves())
     assert abs(c["impulse_err"]) < 0.005
-    assert 0.0 < c["peak_err"] < 1.0
+    assert 0.35 < c["peak_err"] < 0.55
+    assert -0.30 < c["duration_err"] < -0.20
     assert c["ncc_b2_free_end"] >= 0.9
     _penetration_ok(run.summary)
 

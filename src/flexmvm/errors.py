@@ -64,3 +64,7 @@ def notes_as_lines() -> None:
 
     show.flexmvm_notes = True
     warnings.showwarning = show
+
+
+class OutputError(FlexmvmError, OSError):
+    """A result file could not be written (disk full, no permission): names the file."""

@@ -99,7 +99,8 @@ def _now() -> str:
 
 
 def _cons(s: dict) -> dict:
-    return {k: s.get(k) for k in ("momentum_rel_error", "momentum_residual_rel",
+    return {k: s.get(k) for k in ("momentum_rel_error", "momentum_rel_error_converged",
+                                  "momentum_residual_rel",
                                   "energy_rel_error", "max_penetration_m", "max_penetration_at",
                                   "max_penetration_by_direction_m", "lcp_residual_max",
                                   "steps_not_converged", "newton_residual_max",

@@ -6,6 +6,8 @@ import math
 
 import numpy as np
 
+from flexmvm.errors import SolverError
+
 
 def cross3(a, b) -> np.ndarray:
     """a x b for two 3-vectors (np.cross is slow for single vectors)."""
@@ -22,12 +24,16 @@ def expm_so3(theta: np.ndarray) -> np.ndarray:
     """exp(theta~) by Rodrigues' formula (theta: rotation vector [rad], shape (3,)):
     I + (sin a / a) K + ((1 - cos a) / a^2) K^2, a = |theta|, K = theta~, K^2 = theta theta^T -
     a^2 I; below a = 1e-8 the series I + K + K^2 / 2. Written out on scalars: it runs several
-    times per body and time step, where numpy's eye, norm and 3 x 3 products cost ~17 us."""
+    times per body and time step, where numpy's eye, norm and 3 x 3 products cost ~17 us.
+    SolverError when theta is not finite (a run whose motion overflowed)."""
     x, y, z = float(theta[0]), float(theta[1]), float(theta[2])
     xx, yy, zz = x * x, y * y, z * z
     angle = math.sqrt(xx + yy + zz)
     if angle < 1e-8:
         s, c = 1.0, 0.5
+    elif not angle < math.inf:     # inf or NaN: the state has overflowed
+        raise SolverError(f"rotation vector {[x, y, z]} is not finite: the motion overflowed "
+                          "(expected finite angular velocities and forces)")
     else:
         s, c = math.sin(angle) / angle, (1.0 - math.cos(angle)) / angle**2
     xy, xz, yz = c * (x * y), c * (x * z), c * (y * z)

@@ -1,128 +1,46 @@
-"""The ``flexmvm`` command: a click group; each sub-command lives in its own module.
+"""The entry point of the ``flexmvm`` command (pyproject: ``flexmvm.cli.main:main``).
 
-No command ends in a traceback:
-
-- errors meant for the user (:class:`flexmvm.errors.FlexmvmError`) become one line on stderr,
-  ``flexmvm: error: <message>``, and exit status 2;
-- any other exception (a bug, or an OS error nobody turned into a message) becomes one line,
-  ``flexmvm: error: <command>: <ExceptionType>: <message>``, and exit status 1;
-- a keyboard interrupt exits with 130, SIGTERM with 143 (both after cleaning up: staging
-  directories removed, worker processes stopped).
-
-``flexmvm --debug ...`` or the environment variable ``FLEXMVM_DEBUG=1`` re-raises instead, so
-Python prints the full traceback.
+It imports nothing but ``sys`` before :func:`main` runs, and :func:`main` imports the command
+(cli/app.py: click, the sub-commands, numpy, scipy, ...) inside a Ctrl-C handler: an interrupt
+at any moment of the start, the seconds of imports included, is one line on stderr and exit
+status 130, never a traceback. The command's names (``cli``, ``command_path``, ...) are
+reachable here as before, imported on first use.
 """
 
 from __future__ import annotations
 
-import os
 import sys
 
-import click
-
-from flexmvm import __version__
-from flexmvm.errors import FlexmvmError, notes_as_lines
-from flexmvm.processes import Terminated, sigterm_as_exit
-
-#: Environment variable that turns on --debug (any value but "", "0", "false", "no").
-DEBUG_ENV = "FLEXMVM_DEBUG"
-_MAX_MESSAGE = 500
-
-
-@click.group(context_settings={"help_option_names": ["-h", "--help"]})
-@click.version_option(__version__, prog_name="flexmvm")
-@click.option("--debug", is_flag=True,
-              help=f"Show the Python traceback of a failure (also: {DEBUG_ENV}=1).")
-def cli(debug: bool) -> None:
-    """Contact and impact of flexible bodies with the multi-variable method (MVM)."""
-
-
-def _register() -> None:
-    """Attach the sub-commands; each module defines one click command or group."""
-    if cli.commands:
-        return
-    for name in ("mesh_cmd", "run_cmd", "theory_cmd", "select_cmd", "study_cmd", "cache_cmd"):
-        try:
-            module = __import__(f"flexmvm.cli.{name}", fromlist=["command"])
-        except ModuleNotFoundError as exc:
-            if exc.name != f"flexmvm.cli.{name}":
-                raise
-            continue
-        cli.add_command(module.command)
-
-
-def debug_enabled(argv: list[str]) -> bool:
-    """--debug among the group's options (before the sub-command) or FLEXMVM_DEBUG set."""
-    if os.environ.get(DEBUG_ENV, "").strip().lower() not in ("", "0", "false", "no"):
-        return True
-    for arg in argv:
-        if arg == "--debug":
-            return True
-        if not arg.startswith("-"):
-            return False  # the sub-command: later words are its own
-    return False
-
-
-def command_path(argv: list[str]) -> str:
-    """The sub-command words of argv ('mesh rod', 'run'), or 'flexmvm' if none."""
-    words: list[str] = []
-    group: click.Command = cli
-    for arg in argv:
-        if arg.startswith("-"):
-            continue
-        sub = group.commands.get(arg) if isinstance(group, click.Group) else None
-        if sub is None:
-            break
-        words.append(arg)
-        group = sub
-    return " ".join(words) or "flexmvm"
-
-
-def one_line(text: str) -> str:
-    """Newlines and runs of spaces collapsed; cut to a readable length."""
-    line = " ".join(str(text).split())
-    return line if len(line) <= _MAX_MESSAGE else line[: _MAX_MESSAGE - 3] + "..."
-
-
-def describe(exc: BaseException, command: str) -> str:
-    """The one stderr line of an unexpected exception: command, type, message."""
-    message = one_line(str(exc))
-    return f"flexmvm: error: {command}: {type(exc).__name__}" + (f": {message}" if message else "")
+#: The one line of a Ctrl-C (exit status 130), during the imports and during the run (app.py).
+INTERRUPTED = ("flexmvm: interrupted; finished study cases are kept, an unfinished run leaves "
+               "its output directory as it was")
+#: The one line of a SIGTERM (exit status 143, processes.sigterm_as_exit in app.py).
+TERMINATED = ("flexmvm: terminated (SIGTERM); finished study cases are kept, an unfinished run "
+              "leaves its output directory as it was")
 
 
 def main(argv: list[str] | None = None) -> None:
-    """Entry point: runs the CLI; every failure is one stderr line and a non-zero exit status
-    (module doc), unless --debug / FLEXMVM_DEBUG asks for the traceback."""
-    _register()
-    notes_as_lines()
-    args = list(sys.argv[1:] if argv is None else argv)
-    debug = debug_enabled(args)
+    """Run the command (cli/app.py ``run``); Ctrl-C during its imports exits 130 with the
+    same one line as during the run."""
     try:
-        with sigterm_as_exit():
-            cli.main(args=args, prog_name="flexmvm", standalone_mode=False)
-    except click.exceptions.Exit as exc:
-        sys.exit(exc.exit_code)
-    except click.ClickException as exc:
-        click.echo(f"flexmvm: error: {one_line(exc.format_message())}", err=True)
-        sys.exit(2)
-    except (click.exceptions.Abort, KeyboardInterrupt) as exc:
-        if not isinstance(exc, Terminated) and not isinstance(exc.__context__, Terminated):
-            click.echo("flexmvm: interrupted; finished study cases are kept, an unfinished run "
-                       "leaves its output directory as it was", err=True)
-            sys.exit(130)
-        click.echo("flexmvm: terminated (SIGTERM); finished study cases are kept, an unfinished "
-                   "run leaves its output directory as it was", err=True)
-        sys.exit(143)
-    except FlexmvmError as exc:
-        if debug:
-            raise
-        click.echo(f"flexmvm: error: {one_line(str(exc))}", err=True)
-        sys.exit(2)
-    except Exception as exc:  # the last line of defence: no traceback
-        if debug:
-            raise
-        click.echo(describe(exc, command_path(args)), err=True)
-        sys.exit(1)
+        from flexmvm.cli import app
+    except KeyboardInterrupt:
+        sys.stderr.write(INTERRUPTED + "\n")
+        sys.exit(130)
+    try:
+        app.run(argv)
+    except KeyboardInterrupt:     # between app's own handler and the exit
+        sys.stderr.write(INTERRUPTED + "\n")
+        sys.exit(130)
+
+
+def __getattr__(name: str):
+    """The command's module-level names (cli, _register, command_path, ...) from cli/app.py."""
+    if name.startswith("__"):
+        raise AttributeError(name)
+    from flexmvm.cli import app
+
+    return getattr(app, name)
 
 
 if __name__ == "__main__":

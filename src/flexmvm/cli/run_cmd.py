@@ -46,8 +46,8 @@ def command(scenario, out_dir, model, reference, theory, t_end, dt, no_fields, p
     summary = run_main_job(scenario, out_dir, model=model, t_end=t_end, dt=dt,
                            fields=not no_fields, progress=progress, echo=click.echo,
                            jobs=jobs, reference=reference, theory=theory)
-    keys = ("max_contact_force_N", "momentum_rel_error", "energy_rel_error", "max_penetration_m",
-            "wall_time_s")
+    keys = ("max_contact_force_N", "momentum_rel_error", "momentum_rel_error_converged",
+            "energy_rel_error", "max_penetration_m", "wall_time_s")
     click.echo("  ".join(f"{k} = {summary[k]:.4g}" for k in keys if summary.get(k) is not None))
     click.echo("dof (6 frame + elastic): " + ", ".join(
         f"{name} = {dof} ({summary['model'][name]})" for name, dof in summary["dof"].items()))

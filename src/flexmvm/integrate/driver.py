@@ -142,6 +142,8 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
     step_t, step_h, step_impulse = [], [], []
     row_impulses: dict = {}   # normal contact row key -> [impulse [N s], first time [s]]
     n_loose, worst_res, worst_lcp, p_res = 0, 0.0, 0.0, np.zeros(3)
+    shift = np.zeros(3)          # the momentum the balance of the steps added so far [N s]
+    shifts = [shift.copy()]      # ... at every output time
     friction = (FrictionSummary() if any(c.mu > 0 for c in system.contacts)
                 else None)   # runs with friction report it even if no contact closes
     wall0 = time.perf_counter()
@@ -162,7 +164,8 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
                           friction=friction, contact_row_impulses=row_impulses,
                           steps=StepHistory(np.array(step_t), np.array(step_h),
                                             np.array(step_impulse, dtype=float)),
-                          step_cuts=cuts[0], smallest_step_s=cuts[1], failure=failure)
+                          step_cuts=cuts[0], smallest_step_s=cuts[1], failure=failure,
+                          momentum_shift=np.array(shifts))
 
     while tick < n_ticks:
         to_out = out_ticks - tick % out_ticks
@@ -206,6 +209,8 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
             step_t.append(t_s + h_s)
             step_h.append(h_s)
             step_impulse.append(f)
+            if res.momentum_shift is not None:
+                shift += res.momentum_shift
         tick += span
         fine = fine_ticks is not None and level == 0 and tick % fine_ticks == 0
         if tick % out_ticks == 0 or tick >= n_ticks or fine:
@@ -218,6 +223,7 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
             except SolverError as exc:
                 rec.rows.pop()
                 raise SimulationFailed(str(exc), finish(str(exc))) from exc
+            shifts.append(shift.copy())
             impulse, jimpulse = 0.0, np.zeros_like(jimpulse)
             if bar is not None:
                 bar.update(min(tick, n_ticks) - bar.n)

@@ -146,6 +146,9 @@ class StepResult:
     residual: float = 0.0      # largest momentum residual at exit, relative to the body's scale
     translation_residual: np.ndarray | None = None  # (3,) sum over bodies of the exit
                                                     # residual's translational rows [N s]
+    # (3,) the linear momentum _balance_translation added to the step's solution [N s]:
+    # minus the translational residual sum the step converged to, zero when not taken
+    momentum_shift: np.ndarray | None = None
     lcp_residual: float = 0.0  # largest complementarity residual of the step's LCP solves
 
 
@@ -494,9 +497,12 @@ class MoreauJeanIntegrator:
                 v_plus[b] = v_plus[b] + dv
                 images.impulses(b, self.solvers[b], crows.rows, lam[n_j:], dv)
             v_plus, relaxed = self._relaxed(relax, v_before, v_plus, image_before, stalled)
+        shift = np.zeros(3)
         if not n_j:
+            converged_t = res_t
             rel, res_t = self._balance_translation(self._balanced(res, scales, mids),
                                                    ends, v_plus, h, rel, res_t)
+            shift = res_t - converged_t
         self._after_step(parts, lam[n_j:], h)
         new_states = [e for e in ends]
         for st, vp in zip(new_states, v_plus):
@@ -507,7 +513,7 @@ class MoreauJeanIntegrator:
         drift = float(np.abs(phi).max()) if phi.size else 0.0
         return StepResult(new_states, lam[:n_j], crows, lam[n_j:], it, drift,
                           converged=rel <= self.rtol, residual=rel, translation_residual=res_t,
-                          lcp_residual=lcp_max)
+                          lcp_residual=lcp_max, momentum_shift=shift)
 
     def _stall_report(self, res, scales, crows: ContactRows, lam_c, n_j) -> str:
         """Where a step's iteration stalled, in one line: the body and row of the largest

@@ -128,6 +128,10 @@ class RunResult:
     momentum_residual: np.ndarray = field(default_factory=lambda: np.zeros(3))
     # sum over all steps of the translational momentum residuals of all bodies [N s]: the
     # linear-momentum change the scheme's solves left unbalanced (a free system's error)
+    # (n_out, 3) the linear momentum the steps' translational balance
+    # (MoreauJeanIntegrator._balance_translation) added up to each output time [N s]:
+    # momentum - momentum_shift is the momentum of the steps as converged, before the balance
+    momentum_shift: np.ndarray | None = None
     wall_time_s: float = 0.0
     friction: FrictionSummary | None = None  # None: no contact with friction in the system
     step_cuts: int = 0             # steps retried as two halves (driver.MAX_STEP_CUTS deep)

@@ -2,8 +2,12 @@
 
 from __future__ import annotations
 
+import contextlib
+import errno
+from collections.abc import Iterator
 from pathlib import Path
 
+from flexmvm.errors import OutputError
 from flexmvm.results.writers import (
     write_history_csv,
     write_paraview_series,
@@ -12,18 +16,44 @@ from flexmvm.results.writers import (
 )
 
 
+def _no_space(exc: OSError) -> bool:
+    """A full disk: ENOSPC, or HDF5's wording of it (h5py raises OSError without errno and
+    a message holding "errno = 28, error message = 'No space left on device'")."""
+    return exc.errno == errno.ENOSPC or "no space left" in str(exc).lower()
+
+
+@contextlib.contextmanager
+def writing(path: Path) -> Iterator[None]:
+    """OSError while writing ``path`` -> OutputError of one line naming the file."""
+    try:
+        yield
+    except OutputError:
+        raise
+    except OSError as exc:
+        reason = ("no space left on the device" if _no_space(exc)
+                  else exc.strerror or " ".join(str(exc).split())[:200])
+        raise OutputError(f"cannot write {path}: {reason}") from exc
+
+
 def write_run(out_dir: Path, srun, fields: bool = True) -> dict[str, Path]:
-    """Write one ScenarioRun into out_dir (created); returns the paths written."""
+    """Write one ScenarioRun into out_dir (created); returns the paths written. OutputError
+    (one line naming the file) when a file cannot be written (a full disk, ...)."""
     out_dir = Path(out_dir)
-    out_dir.mkdir(parents=True, exist_ok=True)
+    with writing(out_dir):
+        out_dir.mkdir(parents=True, exist_ok=True)
     res = srun.result
     bodies = list(srun.built.system.bodies)
     materials = [info.material for info in srun.built.info]
     paths = {"history": out_dir / "history.csv", "summary": out_dir / "summary.json",
              "results": out_dir / "results.h5"}
-    write_history_csv(paths["history"], res, probe_axis=0)
-    write_summary_json(paths["summary"], srun.summary)
+    with writing(paths["history"]):
+        write_history_csv(paths["history"], res, probe_axis=0)
+    with writing(paths["summary"]):
+        write_summary_json(paths["summary"], srun.summary)
     if fields:
-        write_results_h5(paths["results"], res, bodies)
-        paths["paraview"] = write_paraview_series(out_dir / "paraview", res, bodies, materials)
+        with writing(paths["results"]):
+            write_results_h5(paths["results"], res, bodies)
+        with writing(out_dir / "paraview"):
+            paths["paraview"] = write_paraview_series(out_dir / "paraview", res, bodies,
+                                                      materials)
     return paths

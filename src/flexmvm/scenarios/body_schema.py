@@ -31,6 +31,7 @@ from flexmvm.scenarios.fields import (
     ROD_FACET_SETS,
     ROD_NODE_SETS,
     ZERO3,
+    AngularVelocity,
     Count,
     Frozen,
     Name,
@@ -38,6 +39,7 @@ from flexmvm.scenarios.fields import (
     Positive,
     SetName,
     Vec3,
+    Velocity,
     check_rod_set,
 )
 from flexmvm.scenarios.problems import problem, validate_part
@@ -276,8 +278,8 @@ class Rotation(Frozen):
 class Placement(Frozen):
     position_m: Vec3 = ZERO3
     rotation: Rotation = Rotation()
-    velocity_mps: Vec3 = ZERO3
-    angular_velocity_radps: Vec3 = ZERO3
+    velocity_mps: Velocity = ZERO3
+    angular_velocity_radps: AngularVelocity = ZERO3
     # start in the quasi-static sag on the body's joints under gravity (at rest; scenarios/sag.py)
     sagged: Annotated[bool, Strict()] = False
 

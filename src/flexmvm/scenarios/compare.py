@@ -12,13 +12,14 @@ from flexmvm.metrics.ncc import compare_force, ncc
 
 
 def compare_runs(t_ref, f_ref, probes_ref: dict, t, f, probes: dict) -> dict:
-    """Candidate (t, f, probes) against a reference: ncc_force, peak_err, impulse_err,
-    duration_err and ncc_<probe> for every probe both have."""
+    """Candidate (t, f, probes) against a reference: ncc_force (over the contact window:
+    metrics.ncc.compare_force), ncc_force_whole (over the whole window), peak_err,
+    impulse_err, duration_err and ncc_<probe> (whole window) for every probe both have."""
     out: dict = {}
     try:
         c = compare_force(t_ref, f_ref, t, f)
-        out.update(ncc_force=c.ncc, peak_err=c.peak_err, impulse_err=c.impulse_err,
-                   duration_err=c.duration_err)
+        out.update(ncc_force=c.ncc, ncc_force_whole=c.ncc_whole, peak_err=c.peak_err,
+                   impulse_err=c.impulse_err, duration_err=c.duration_err)
     except InputError as exc:
         out["force_comparison_error"] = str(exc)
     for name, y_ref in probes_ref.items():
@@ -33,8 +34,9 @@ def compare_runs(t_ref, f_ref, probes_ref: dict, t, f, probes: dict) -> dict:
 
 @dataclass(frozen=True)
 class RunComparison:
-    """A run against a reference: force NCC and relative errors of peak, impulse and contact
-    duration (candidate - reference) / reference, NCC of every probe both runs have, and the
+    """A run against a reference: force NCC over the contact window (ncc_force; over the whole
+    window: ncc_force_whole) and relative errors of peak, impulse and contact duration
+    (candidate - reference) / reference, NCC of every probe both runs have, and the
     comparisons that could not be made (name -> reason)."""
 
     ncc_force: float | None
@@ -43,11 +45,13 @@ class RunComparison:
     duration_err: float | None
     ncc_probes: dict[str, float] = field(default_factory=dict)
     not_compared: dict[str, str] = field(default_factory=dict)
+    ncc_force_whole: float | None = None
 
     def as_dict(self) -> dict:
         """The flat form summary.json uses (ncc_force, ..., ncc_<probe>, <item>_error)."""
-        out = {k: getattr(self, k) for k in ("ncc_force", "peak_err", "impulse_err",
-                                             "duration_err") if getattr(self, k) is not None}
+        out = {k: getattr(self, k) for k in ("ncc_force", "ncc_force_whole", "peak_err",
+                                             "impulse_err", "duration_err")
+               if getattr(self, k) is not None}
         out.update({f"ncc_{k}": v for k, v in self.ncc_probes.items()})
         out.update({f"{k}_error": v for k, v in self.not_compared.items()})
         return out
@@ -67,7 +71,8 @@ def compare(candidate, reference) -> RunComparison:
     (t [s], force [N], {probe: axial velocity [m/s]}) tuple such as theory_histories gives."""
     flat = compare_runs(*_curves(reference), *_curves(candidate))
     probes = {k[4:]: v for k, v in flat.items()
-              if k.startswith("ncc_") and k != "ncc_force" and not k.endswith("_error")}
+              if k.startswith("ncc_") and k not in ("ncc_force", "ncc_force_whole")
+              and not k.endswith("_error")}
     errors = {k[: -len("_error")]: v for k, v in flat.items() if k.endswith("_error")}
     return RunComparison(flat.get("ncc_force"), flat.get("peak_err"), flat.get("impulse_err"),
-                         flat.get("duration_err"), probes, errors)
+                         flat.get("duration_err"), probes, errors, flat.get("ncc_force_whole"))

@@ -34,7 +34,7 @@ from flexmvm.errors import (
 )
 from flexmvm.processes import die_with_parent
 from flexmvm.results.outdir import staged_dir
-from flexmvm.results.output import write_run
+from flexmvm.results.output import write_run, writing
 from flexmvm.results.writers import write_summary_json
 from flexmvm.scenarios import pendulum
 from flexmvm.scenarios.compare import compare_runs
@@ -93,7 +93,8 @@ def _run_and_write(sc, label: str, out_dir: Path, fields: bool, progress: bool):
                          "written, summary status 'failed')") from None
     write_run(out_dir, run, fields=fields)
     if "pendulum" in run.summary:      # scenarios.run.summarize: a pendulum release
-        _plot_event(out_dir / f"{sc.name}_event.png", run, f"{sc.name} ({label})")
+        with writing(out_dir / f"{sc.name}_event.png"):
+            _plot_event(out_dir / f"{sc.name}_event.png", run, f"{sc.name} ({label})")
     return run.summary, run.result.curves(), run.result.n_steps, run.result.wall_time_s
 
 
@@ -225,12 +226,14 @@ def _run_into(out_dir: Path, sc, ref_sc, own_label: str, fields: bool, progress:
         summary["speedup_vs_full"] = wall_ref / max(wall_own, 1e-12)
         curves = {"FE": ref_curves, **curves}
     summary["failures"] = failures
-    write_summary_json(out_dir / "summary.json", summary)
+    with writing(out_dir / "summary.json"):
+        write_summary_json(out_dir / "summary.json", summary)
     th = (theory[0], theory[1], theory[2]) if theory is not None else None
     from flexmvm.plots.figures import plot_run  # matplotlib: 2 s of import, only here
 
-    plot_run(out_dir / f"{sc.name}.png", curves, theory=th,
-             title=f"{sc.name}: contact force and axial velocities")
+    with writing(out_dir / f"{sc.name}.png"):
+        plot_run(out_dir / f"{sc.name}.png", curves, theory=th,
+                 title=f"{sc.name}: contact force and axial velocities")
     return summary
 
 

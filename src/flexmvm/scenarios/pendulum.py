@@ -113,7 +113,8 @@ def impact_comparison(res, ref, probes=("b2_impact_end", "b2_free_end")) -> dict
     k_ref = (tr >= -1e-12) & (tr <= t[-1] + 1e-12)
     c = compare_force(tr[k_ref], ref.contact_force[k_ref], t, res.contact_force[keep])
     out = {"window_s": [0.0, float(t[-1])], "first_contact_s": float(t0),
-           "ncc_force": c.ncc, "peak_err": c.peak_err, "impulse_err": c.impulse_err,
+           "ncc_force": c.ncc, "ncc_force_whole": c.ncc_whole, "peak_err": c.peak_err,
+           "impulse_err": c.impulse_err,
            "duration_err": c.duration_err,
            "contact_duration_s": float(res.contact_intervals[-1][1] - t0),
            "contact_duration_ref_s": float(ref.contact_intervals[-1][1] - r0)}

@@ -52,11 +52,13 @@ from flexmvm.scenarios.fields import (
     ROD_FACET_SETS,
     ROD_NODE_SETS,
     ZERO3,
+    Acceleration,
     Frozen,
     Name,
     Positive,
     SetName,
     Vec3,
+    Velocity,
     check_rod_set,
 )
 from flexmvm.scenarios.problems import ScenarioError, format_error, problem, validate_part
@@ -135,7 +137,7 @@ class JointConfig(Frozen):
     point2_m: Vec3 | None = None
     axis: Vec3 | None = None
     length_m: Positive | None = None
-    velocity_mps: Vec3 | None = None
+    velocity_mps: Velocity | None = None
 
     @model_validator(mode="after")
     def _check(self) -> JointConfig:
@@ -246,6 +248,8 @@ class TimeConfig(Frozen):
 
     @model_validator(mode="after")
     def _check(self) -> TimeConfig:
+        if self.dt_s > self.t_end_s:       # first: the checks below compare with dt_s
+            raise problem(f"must be <= t_end_s = {self.t_end_s!r}, got {self.dt_s!r}", "dt_s")
         if self.dt_max_s < self.dt_s:
             raise problem(f"must be >= dt_s = {self.dt_s!r}, got {self.dt_max_s!r}", "dt_max_s")
         if self.output_dt_s < self.dt_s:
@@ -253,8 +257,6 @@ class TimeConfig(Frozen):
         if self.output_contact_dt_s is not None and self.output_contact_dt_s < self.dt_s:
             raise problem(f"must be >= dt_s = {self.dt_s!r}, got {self.output_contact_dt_s!r}",
                           "output_contact_dt_s")
-        if self.dt_s > self.t_end_s:
-            raise problem(f"must be <= t_end_s = {self.t_end_s!r}, got {self.dt_s!r}", "dt_s")
         if self.output_dt_s > self.t_end_s:
             raise problem(
                 f"must be <= t_end_s = {self.t_end_s!r}, got {self.output_dt_s!r}", "output_dt_s"
@@ -276,7 +278,7 @@ class Scenario(Frozen):
 
     name: Annotated[str, StringConstraints(pattern=r"^[A-Za-z0-9_.-]+$")]
     description: str = ""
-    gravity_mps2: Vec3 = ZERO3
+    gravity_mps2: Acceleration = ZERO3
     time: TimeConfig
     bodies: tuple[BodyConfig, ...] = Field(min_length=1)
     contacts: tuple[ContactConfig, ...] = ()

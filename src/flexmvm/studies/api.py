@@ -13,6 +13,7 @@ from pathlib import Path
 from flexmvm.metrics.ncc import Target
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario
 from flexmvm.studies import materials as material_studies
+from flexmvm.studies.main_guard import in_process_by_default
 from flexmvm.studies.materials import SEED_ORDER, MaterialStudy
 from flexmvm.studies.selection import SelectionStudy, select_models
 
@@ -46,12 +47,15 @@ def select(scenario: Scenario | str | Path, body: str, *, layers: Iterable[int] 
     eq. (4) readings mvm-seed / mvm-seed-fixed). ``target``: a Target or the force NCC to
     reach; ``search``: the pruned search instead of the whole grid. Runs on a local Dask
     cluster of ``workers`` processes (default: one per core), on ``scheduler``, or in this
-    process with ``serial``. ``patches`` (patch-radius sets [m]) adds the interface kind's
+    process with ``serial``; called from a script without ``if __name__ == "__main__":``
+    with neither ``workers`` nor ``scheduler`` given, in this process too, with a one-line
+    InProcessStudyWarning saying what to add (spawned workers would re-run the script). ``patches`` (patch-radius sets [m]) adds the interface kind's
     grid patches x ``interface_modes`` (``interface_rows``; summary ``interface`` and
     ``best_overall``), in the same brute force or the same search as the node selections.
     Returns the table (``rows``), the smallest model reaching the
     target (``best``) and the summary."""
     target = target if isinstance(target, Target) else Target(float(target))
+    serial = in_process_by_default(scheduler, workers, serial)
     with _directory(out_dir) as out:
         return select_models(_scenario(scenario), body, out, layers, laps, modes, target,
                              search=search, scheduler=scheduler, n_workers=workers,
@@ -70,7 +74,8 @@ def material_study(scenario: Scenario | str | Path, body: str = "b2", *,
     SEED_MATERIALS: W, Cu, Al, PA6), each ``kind`` model (Craig-Bampton by default, or the
     seed's eq. (4) readings mvm-seed / mvm-seed-fixed) of ``selections`` x ``modes`` against
     that material's full-FE reference. Returns the rows and the summary (per-material mean
-    NCC, the seed's ordering)."""
+    NCC, the seed's ordering); where it runs as :func:`select`."""
+    serial = in_process_by_default(scheduler, workers, serial)
     with _directory(out_dir) as out:
         return material_studies.material_study(
             _scenario(scenario), out, body, materials, selections, modes, scheduler, workers,

@@ -41,6 +41,7 @@ from flexmvm.studies.case_store import (
     load_stored,
     result_sha256,
 )
+from flexmvm.studies.main_guard import main_guard_advice, unguarded_main_script
 from flexmvm.threads import ENV_THREADS
 
 __all__ = ["Case", "Params", "case_path", "check_cluster_options", "cluster_slots", "collect",
@@ -147,7 +148,12 @@ def local_cluster(n_workers: int):
     """A LocalCluster of n_workers single-threaded processes that hands each worker one case
     at a time (worker-saturation 1.0: with the default 1.1 a one-thread worker is sent two
     cases, and with long cases one worker can sit idle while another holds two), no
-    dashboard; the workers' thread pools as worker_env."""
+    dashboard; the workers' thread pools as worker_env. InputError, before any process is
+    started, when the main script has no main guard (unguarded_main_script)."""
+    script = unguarded_main_script()
+    if script is not None:
+        raise InputError(f"a local Dask cluster was asked for from {script}, which has no "
+                         f"main guard; {main_guard_advice(script)}, or pass serial=True")
     import dask
     from distributed import LocalCluster
 
