@@ -700,7 +700,8 @@ class MoreauJeanIntegrator:
     def _prepare_body(self, b, st, h, refresh_tol, defer=False):
         body, solver = self.system.bodies[b], self.solvers[b]
         # an iteration matrix: M_wq exact (thin rods' frame Schur complement depends on
-        # it), J to first order in q (its quadratic part is (|u|/L)^2 of it)
+        # it), J exact where it is cheap (below), else to first order in q (its quadratic
+        # part is (|u|/L)^2 of it)
         if body.nq:
             tol = refresh_tol if refresh_tol is not None else (
                 0.0 if body.nq <= SMALL_BASIS else COUPLING_TOL)
@@ -716,6 +717,11 @@ class MoreauJeanIntegrator:
             c = self._carried[b]
             Lc = c.Lq if (c is not None and c.q is st.q) else body.carried_contractions(st.q)
             J = body.inertia_terms(st.q, Lc)[1]
+        elif body.nq and self._carried[b] is not None and self._carried[b].q is st.q:
+            # a reduced body whose q is carried: its exact J costs O(9 nq) (a reduced arm
+            # swung into a stop lost the positive definiteness of its joint rows' D with the
+            # first-order J after the rebound)
+            J = body.inertia_terms(st.q, self._carried[b].Lq)[1]
         else:
             J = body.frame_inertia_first_order(st.q)
         solver.prepare(h, st.A, body.frame_mass(st.A, body.first_moment(st.q), J))
