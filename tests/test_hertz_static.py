@@ -42,7 +42,6 @@ contact) it measured F / F_Hertz = 0.970-1.035 (C = -1.15e-9 m/N; without C 1.00
 from __future__ import annotations
 
 import numpy as np
-import pytest
 
 from flexmvm.fe.assembly import assemble
 from flexmvm.fe.cholesky import ldl_factor

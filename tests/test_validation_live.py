@@ -28,7 +28,6 @@ import math
 from pathlib import Path
 
 import numpy as np
-import pytest
 
 from flexmvm import validation
 from flexmvm.integrate.driver import simulate
