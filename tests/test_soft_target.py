@@ -66,7 +66,8 @@ def test_no_recovery_holds_the_same_model(runs):
 def test_default_and_no_recovery_agree(runs):
     """With the recovery capped, beta moves the force of the held model by little: force NCC
     between beta = 0.2 and 0 >= 0.9999 and peaks within 1 % (as the full-FE references of
-    the material study did with the uncapped recovery: NCC 0.999999, peak 0.01 %)."""
+    the material study did with the uncapped recovery: NCC 0.999999, peak 0.01 %); measured
+    NCC 0.9999964, peak 0.07 %."""
     a, b = runs[None][0].result, runs[0.0][0].result
     c = compare_runs(*b.curves(), *a.curves())
     assert c["ncc_force"] >= 0.9999 and abs(c["peak_err"]) < 0.01, c
