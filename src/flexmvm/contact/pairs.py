@@ -9,7 +9,8 @@ within the step (g + h u_N <= gap_tol) become rows of Phi_c,
 
 with the Moreau condition u_N(v+) >= min(beta max(0, -g)/h, max(0, -u_N-)), lambda >= 0 (see
 integrate.moreau_jean): Moreau's impact law (restitution 0) with a penetration recovery capped
-by the pair's closing speed u_N- (the normal velocity at the start of the step; `_lower`), or, with law = "position", the gap at the end of the step held instead (Signorini at t + h):
+by the pair's closing speed u_N- (the normal velocity at the start of the step; `_lower`), or,
+with law = "position", the gap at the end of the step held instead (Signorini at t + h):
 g + h (theta u_N+ + (1 - theta) u_N-) >= 0, i.e. u_N+ >= -(g + h (1 - theta) u_N-) / (theta h),
 with u_N- the pair's normal velocity at the start of the step (the law of mass-redistributed
 contact nodes: Khenous, Laborde and Renard 2008). Its rows are the pairs whose gap g is within

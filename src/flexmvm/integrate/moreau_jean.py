@@ -39,8 +39,8 @@ approach speed, which the ringing of the contact nodes can make several times th
 speed: there is no a-priori bound in terms of the impact speed. The constraint holds slave
 nodes only; master surface nodes sit inside the slave facets by the chord error of the slave
 face over the curved master (about a^2 / (8 R), facet size a, master radius R), independent
-of h. Measured at h = 0.5 us, theta = 0.55, impact speed v0 = 0.21 m/s (h (1 - theta) v0 =
-4.7e-8 m), slave nodes into master / master nodes into slave: flat faces, b1 full FE and b2
+of h. Measured (with the recovery uncapped) at h = 0.5 us, theta = 0.55, impact speed
+v0 = 0.21 m/s (h (1 - theta) v0 = 4.7e-8 m), slave nodes into master / master nodes into slave: flat faces, b1 full FE and b2
 MVM 1-3: 4.7e-8 / 4.7e-8 m, at the first step; both MVM: 5.2e-7 / 5.2e-7 m, 1.5 us into a
 re-impact at 66.5 us (the reduced faces chatter); seed case (hemispherical b1), b1 full FE: 3.5e-7 / 1.8e-6 m; both MVM: 1.5e-7 /
 1.8e-6 m, at 190 us (of 660 us of contact; peak Hertz approach 21 um). The short full-FE flat
