@@ -99,9 +99,10 @@ def _reference_rows(bodies, prov, states, h):
     reach = prov.search_radius + 2 * kin.speed * h
     proj = ref.projection(kin, states[0], prov.surface, prov.broad, prov._box, reach)
     if proj is None:
-        return None, None
+        return None, (None, None)
     u_n = ref.normal_velocity(kin, proj)
-    return proj, proj.take(proj.gap + h * u_n <= prov.gap_tol)
+    keep = proj.gap + h * u_n <= prov.gap_tol
+    return proj, (proj.take(keep), u_n[keep])
 
 
 def test_provider_matches_reference_along_a_trajectory():
@@ -117,7 +118,7 @@ def test_provider_matches_reference_along_a_trajectory():
     for t in np.linspace(0.0, 1.0, 40):
         states = _states(rng, t, A)
         crows = prov.candidate_rows(bodies, states, h)
-        proj, act = _reference_rows(bodies, prov, states, h)
+        proj, (act, u_n) = _reference_rows(bodies, prov, states, h)
         if proj is None:
             assert (prov._facet < 0).all() and crows.rows.m == 0
             continue
@@ -134,7 +135,10 @@ def test_provider_matches_reference_along_a_trajectory():
         if not len(act):
             continue
         assert crows.keys == [(prov.name, int(prov.slave_nodes[p]), int(f)) for p, f in zip(act.point, act.facet)]
-        np.testing.assert_allclose(crows.lower, PENETRATION_RECOVERY * np.maximum(0.0, -act.gap) / h, atol=1e-9)
+        # the velocity law's recovery, capped by the pair's closing speed
+        recovery = PENETRATION_RECOVERY * np.maximum(0.0, -act.gap) / h
+        np.testing.assert_allclose(crows.lower, np.minimum(recovery, np.maximum(0.0, -u_n)),
+                                   atol=1e-9)
         _check_rows(bodies, states, prov, crows, act)
     # ties: a node beside a shared edge scores the same on both facets (the closest-distance
     # rule, geometry.closest_facets); 3 of the 288 row-carrying projections here

@@ -213,10 +213,11 @@ def test_law_default_and_checks():
 
 
 def test_penetration_recovery_option():
-    """penetration_recovery (the velocity law's beta, u_N+ >= beta max(0, -g) / h) reaches the
-    contact rows: default contact.pairs.PENETRATION_RECOVERY and absent from the dump; 0 gives
-    a penetrated row the lower bound 0 (hold, do not push out); out of [0, 1] and with the
-    position law it is refused with the key named."""
+    """penetration_recovery (the velocity law's beta, u_N+ >= min(beta max(0, -g) / h,
+    max(0, -u_N-))) reaches the contact rows: default contact.pairs.PENETRATION_RECOVERY and
+    absent from the dump; 0 gives a penetrated row the lower bound 0 (hold, do not push out);
+    the recovery is capped by the pair's closing speed -u_N- (none for a pair at rest or
+    opening); out of [0, 1] and with the position law it is refused with the key named."""
     from flexmvm.contact.pairs import PENETRATION_RECOVERY
 
     sc = load_scenario(CASE)
@@ -227,11 +228,12 @@ def test_penetration_recovery_option():
     data["contacts"][0]["penetration_recovery"] = 0.0
     c = build_scenario(scenario_from_dict(data)).system.contacts[0]
     assert c.beta == 0.0
-    gaps, h = np.array([-1e-6, 0.0, 2e-6]), 1e-6
-    assert np.all(c._lower(gaps, None, h) == 0.0)
+    gaps, h = np.array([-1e-6, -1e-6, -1e-6, -1e-6, 0.0, 2e-6]), 1e-6
+    closing = np.array([-10.0, -0.2, 0.0, 0.3, -1.0, -1.0])   # u_N- [m/s]
+    assert np.all(c._lower(gaps, closing, h) == 0.0)
     data["contacts"][0]["penetration_recovery"] = 0.5
     c = build_scenario(scenario_from_dict(data)).system.contacts[0]
-    assert c._lower(gaps, None, h) == pytest.approx([0.5, 0.0, 0.0])
+    assert c._lower(gaps, closing, h) == pytest.approx([0.5, 0.2, 0.0, 0.0, 0.0, 0.0])
     for bad, law in ((-0.1, "velocity"), (1.5, "velocity"), (0.1, "position")):
         data["contacts"][0].update(penetration_recovery=bad, law=law)
         with pytest.raises(ScenarioError, match="penetration_recovery"):

@@ -1,10 +1,18 @@
 """The time step's fast paths against the general one and against the code before them.
 
-- Histories unchanged: three short cases (tests/data) against histories made by commit 9bfd055,
-  the last commit before the speed work (2026-11-23: stored in tests/data/
-  step_regression_9bfd055.npz by the script in the module docstring of make_regression below).
-  Tolerance: force NCC >= 0.99999 and peak within 0.01 % (issue 10's acceptance); measured
-  differences are ~1e-10 relative, the Newton tolerance.
+- Histories unchanged: three short cases (tests/data) against stored histories
+  (tests/data/step_regression_2026-11-27.npz, written by make_reference below). Tolerance:
+  force NCC >= 0.99999 and peak within 0.01 % (issue 10's acceptance); measured differences are
+  ~1e-10 relative, the Newton tolerance. Dated reasons of the reference:
+  2026-11-23: made by commit 9bfd055, the last commit before the speed work, which the step's
+  fast paths then reproduced to the tolerance (the test passed up to the change below).
+  2026-11-27: remade by the code at hand after the velocity law's penetration recovery was
+  capped by each pair's closing speed (contact/pairs.py), a change of the physics: against
+  the 2026-11-23 histories, flat force NCC 0.99967, peak -5.0 % (the first-step overshoot
+  172 -> 164 N; the plateau -1.2 % of St Venant's 154.8 N in both), axial probe velocities by
+  3.8 % of their range; tiny and tiny_mvm NCC 0.999996, peak -0.30 %, axial probe velocities
+  by 4.6 % and 5.0 % of their range (the one-node contact of these coarse meshes re-closes,
+  and the uncapped recovery pushed it out each time).
 - The non-rotating step (integrate.nonrotating) against the general Newton step on a case where
   it applies (flat-on-flat: no moment on either frame): the same history to 1e-8 of the peak,
   since both solve the same equations, one exactly, the other to rtol = 1e-10.
@@ -30,7 +38,7 @@ from flexmvm.scenarios.build import build_scenario
 from flexmvm.scenarios.run import run_scenario
 
 DATA = Path(__file__).parent / "data"
-REFERENCE = DATA / "step_regression_9bfd055.npz"
+REFERENCE = DATA / "step_regression_2026-11-27.npz"
 CASES = {"tiny": ("tiny_impact.toml", None), "tiny_mvm": ("tiny_impact.toml", "mvm"),
          "flat": ("short_flat_impact.toml", None)}
 
@@ -41,10 +49,22 @@ def _run(key: str):
     return run_scenario(load_scenario(DATA / f).with_overrides(model=model)).result
 
 
+def make_reference(path: Path = REFERENCE) -> None:
+    """Write the histories of CASES (time grid, contact force, probe velocities) as the code
+    at hand makes them: from the repository root, PYTHONPATH=src python -c "import sys;
+    sys.path.insert(0, 'tests'); import test_step_paths as t; t.make_reference()". Only for a
+    change of the physics, with its dated reason in the module docstring."""
+    out = {}
+    for key in sorted(CASES):
+        res = _run(key)
+        out.update({key + "_t": res.t, key + "_F": res.contact_force, key + "_pv": res.probe_v})
+    np.savez(path, **out)
+
+
 @pytest.mark.parametrize("key", sorted(CASES))
 def test_histories_unchanged_against_pre_speedup_code(key):
     """Force NCC >= 0.99999, peak within 0.01 %, the same time grid and axial probe
-    velocities within 1e-6 of their range as commit 9bfd055 (see module docstring). Lateral
+    velocities within 1e-6 of their range as the stored reference (see module docstring). Lateral
     probe velocities within 1e-5 of the axial range: on the flat case they are round-off noise
     of the LCP on redundant contact rows, 3e-6 of the axial speed in both codes (measured
     8.7e-7 and 8.4e-7 m/s), which a different (equally exact) step draws differently."""

@@ -26,8 +26,9 @@ class ContactKind(StrEnum):
 class ContactLaw(StrEnum):
     """The lower bound of a frictionless normal row (values: the scenario file's ``law``).
 
-    velocity (default): u_N+ >= beta max(0, -g) / h (Moreau's impact law, restitution 0, with a
-    Baumgarte-like recovery of a penetration); position: the gap at the end of the step
+    velocity (default): u_N+ >= min(beta max(0, -g) / h, max(0, -u_N-)) (Moreau's impact law,
+    restitution 0, with a Baumgarte-like recovery of a penetration capped by the pair's
+    closing speed u_N-, so that it adds no restitution); position: the gap at the end of the step
     g + h (theta u_N+ + (1 - theta) u_N-) >= 0 (Signorini at t + h), i.e.
     u_N+ >= -(g + h (1 - theta) u_N-) / (theta h), for massless contact nodes (mass
     redistribution, Khenous, Laborde and Renard 2008)."""

@@ -7,8 +7,10 @@ within the step (g + h u_N <= gap_tol) become rows of Phi_c,
 
     Phi_c v = n . (x_dot_S - sum_P N^P x_dot_P)      (normal relative velocity u_N)
 
-with the Moreau condition u_N(v+) >= beta max(0, -g)/h, lambda >= 0 (see integrate.moreau_jean),
-or, with law = "position", the gap at the end of the step held instead (Signorini at t + h):
+with the Moreau condition u_N(v+) >= min(beta max(0, -g)/h, max(0, -u_N-)), lambda >= 0 (see
+integrate.moreau_jean): Moreau's impact law (restitution 0) with a penetration recovery capped
+by the pair's closing speed u_N- (the normal velocity at the start of the step; `_lower`), or,
+with law = "position", the gap at the end of the step held instead (Signorini at t + h):
 g + h (theta u_N+ + (1 - theta) u_N-) >= 0, i.e. u_N+ >= -(g + h (1 - theta) u_N-) / (theta h),
 with u_N- the pair's normal velocity at the start of the step (the law of mass-redistributed
 contact nodes: Khenous, Laborde and Renard 2008). Its rows are the pairs whose gap g is within
@@ -74,7 +76,8 @@ class _Active:
 
 
 #: beta: the fraction of a penetration (or a bond's drift) the rows push back per step,
-#: u_N(v+) >= beta max(0, -g) / h (Moreau-Jean with a Baumgarte-like position correction)
+#: u_N(v+) >= min(beta max(0, -g) / h, max(0, -u_N-)) (Moreau-Jean with a Baumgarte-like
+#: position correction, capped by the closing speed so that it adds no restitution)
 PENETRATION_RECOVERY = 0.2
 
 #: law = "position": pairs are rows when g <= gap_tol + POSITION_REACH h u_reach
@@ -261,16 +264,24 @@ class PointToSurfaceContact:
             rows = Rows(m_n, {})
             self._fill_rows(rows, states, s_pairs, m_pairs, normal)
             return ContactRows(rows, lower, keys, gaps, 0, np.ones(m_n))
-        return self._rows_with_bonds(bodies, states, h, eq, idx, m_nodes, m_w, normal, gaps)
+        return self._rows_with_bonds(bodies, states, h, eq, idx, m_nodes, m_w, normal, gaps, u_n)
 
     def _lower(self, gaps: np.ndarray, u_n: np.ndarray, h: float) -> np.ndarray:
-        """Lower bounds of u_N+ of normal rows with gaps g and start normal velocities u_N-:
-        beta max(0, -g) / h (velocity law) or -(g + h (1 - theta) u_N-) / (theta h), the end
-        gap g + h (theta u_N+ + (1 - theta) u_N-) >= 0 (position law)."""
+        """Lower bounds of u_N+ of normal rows with gaps g and start normal velocities u_N-.
+
+        Velocity law: min(beta max(0, -g) / h, max(0, -u_N-)), Moreau's impact law (u_N+ >= 0,
+        restitution 0) with a penetration recovery capped by the pair's closing speed: a pair
+        leaves a penetration no faster than it arrived, and one at rest relative to its master
+        (u_N- >= 0, the step after its impact) is held, not pushed out. Uncapped, the
+        recovery turned the impact's own penetration h (1 - theta) |u_N-| into a separation
+        velocity beta (1 - theta) |u_N-| the next step: restitution 0.09 between rigid bodies
+        at theta = 0.55 instead of 0, and energy fed into reduced contact faces (the PA6 chatter
+        of docs/studies.md). Position law: -(g + h (1 - theta) u_N-) / (theta h), the end gap
+        g + h (theta u_N+ + (1 - theta) u_N-) >= 0."""
         if self.law is ContactLaw.POSITION:
             th = self.theta
             return -(gaps + (h * (1.0 - th)) * u_n) / (th * h)
-        return self.beta * np.maximum(0.0, -gaps) / h
+        return np.minimum(self.beta * np.maximum(0.0, -gaps) / h, np.maximum(0.0, -u_n))
 
     def _friction_rows(self, states, slave_pairs, master_pairs, normal, lower, keys, gaps):
         """Rows [normal (m_n) | tangent 1 (m_n) | tangent 2 (m_n)] of the active pairs: the
@@ -299,7 +310,7 @@ class PointToSurfaceContact:
             if sel is not None:
                 rows.nodal[b] = sel
 
-    def _rows_with_bonds(self, bodies, states, h, eq, idx, m_nodes, m_w, normal, gaps):
+    def _rows_with_bonds(self, bodies, states, h, eq, idx, m_nodes, m_w, normal, gaps, u_n):
         """Bonded path (rare): the bond equality rows, then the normal rows, built with the
         numpy row builder."""
         eq_nodes, eq_w, eq_dirs, eq_lower, eq_keys = eq
@@ -318,7 +329,7 @@ class PointToSurfaceContact:
             rows.nodal[self.slave] = ssel
         if msel is not None:
             rows.nodal[self.master] = -msel
-        lower_n = self._lower(gaps, None, h)   # bonded contact: the velocity law
+        lower_n = self._lower(gaps, u_n, h)   # bonded contact: the velocity law
         keys = eq_keys + list(zip([self.name] * len(idx), self.slave_nodes[idx].tolist(),
                                   self._facet[idx].tolist()))
         weight = np.ones(m)

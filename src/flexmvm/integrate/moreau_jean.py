@@ -20,23 +20,27 @@ cannot resolve decays as exp(-t / tau) at every h (docs/contact_law.md).
 
 Constraints (seed eq. 11, at impulse level):
 - joints: phi(x(t + h)) = 0 (position level: no drift), rows Phi_v at x_m;
-- contacts (Moreau 1988, Jean 1999): for candidate pairs, u_N(v+) >= max(0, -g)/h * beta,
-  lambda_N >= 0, complementary: an impact is an impulse with Newton restitution 0 at the
-  contact node, persistent contact keeps u_N = 0, release happens when lambda would turn
-  tensile.
+- contacts (Moreau 1988, Jean 1999): for candidate pairs, u_N(v+) >= min(beta max(0, -g)/h,
+  max(0, -u_N-)), lambda_N >= 0, complementary: an impact is an impulse with Newton
+  restitution 0 at the contact node, persistent contact keeps u_N = 0, release happens when
+  lambda would turn tensile. The penetration recovery is capped by the closing speed u_N-
+  (contact.pairs): uncapped, it turned the impact's own penetration h (1 - theta) |u_N-| into
+  a separation speed beta (1 - theta) |u_N-| the next step (two rigid rods: restitution
+  0.09 at theta = 0.55).
 
 Penetration (measured after every step on both surfaces, contact.penetration). For a pair that
 is a row at the start of a step, g(t + h) = g + h (theta u_N+ + (1 - theta) u_N-) with
-u_N+ >= beta max(0, -g)/h: a node arriving with u_N- < 0 goes in by h (1 - theta) |u_N-| (not
-h |u_N-| / 2: that is theta = 1/2), then a penetration shrinks by the factor (1 - theta beta)
-per step while the pair stays in contact. A node that is not a row at the start of a step (its
+u_N+ >= min(beta max(0, -g)/h, max(0, -u_N-)): a node arriving with u_N- < 0 goes in by
+h (1 - theta) |u_N-| (not h |u_N-| / 2: that is theta = 1/2); a pair held at rest keeps that
+penetration (its recovery is capped by its closing speed, 0), and one that closes again
+recovers at most its closing speed. A node that is not a row at the start of a step (its
 predicted gap g + h u_N above gap_tol) is not held during it, and |u_N-| is the pair's own
 approach speed, which the ringing of the contact nodes can make several times the impact
 speed: there is no a-priori bound in terms of the impact speed. The constraint holds slave
 nodes only; master surface nodes sit inside the slave facets by the chord error of the slave
 face over the curved master (about a^2 / (8 R), facet size a, master radius R), independent
-of h. Measured at h = 0.5 us, theta = 0.55, impact speed v0 = 0.21 m/s (h (1 - theta) v0 =
-4.7e-8 m), slave nodes into master / master nodes into slave: flat faces, b1 full FE and b2
+of h. Measured (with the recovery uncapped) at h = 0.5 us, theta = 0.55, impact speed
+v0 = 0.21 m/s (h (1 - theta) v0 = 4.7e-8 m), slave nodes into master / master nodes into slave: flat faces, b1 full FE and b2
 MVM 1-3: 4.7e-8 / 4.7e-8 m, at the first step; both MVM: 5.2e-7 / 5.2e-7 m, 1.5 us into a
 re-impact at 66.5 us (the reduced faces chatter); seed case (hemispherical b1), b1 full FE: 3.5e-7 / 1.8e-6 m; both MVM: 1.5e-7 /
 1.8e-6 m, at 190 us (of 660 us of contact; peak Hertz approach 21 um). The short full-FE flat
