@@ -143,7 +143,8 @@ def test_duplicated_mesh_cell(tmp_path):
 
 def test_nan_reaching_the_lcp_names_the_time(tmp_path, capsys, monkeypatch):
     """A NaN in the contact LCP: SolverError at its source, the step's time added by the
-    driver; one line, exit 2, no output directory."""
+    driver (after the step was cut down to its smallest size); one line, exit 2, and what was
+    computed before it kept in the output directory, marked failed."""
     from flexmvm.integrate import coulomb, lcp
 
     def poisoned(D, c, n_eq, *args, **kwargs):
@@ -152,8 +153,10 @@ def test_nan_reaching_the_lcp_names_the_time(tmp_path, capsys, monkeypatch):
     # both steps (general and non-rotating) solve through coulomb.solve_contact_impulses
     monkeypatch.setattr(coulomb, "solve_checked", poisoned)
     code, _, err = _in_process(["run", TINY, "--out", tmp_path / "out", *RUN_FAST], capsys)
-    _one_line(err, 2, code, "at t = ", "non-finite", "LCP")
-    assert list(tmp_path.iterdir()) == []
+    _one_line(err, 2, code, "at t = ", "non-finite", "LCP", "histories up to t = 0 s")
+    assert [p.name for p in tmp_path.iterdir()] == ["out"]
+    summary = json.loads((tmp_path / "out" / "summary.json").read_text())
+    assert summary["status"] == "failed" and "non-finite" in summary["failure"]
 
 
 def test_unexpected_exception_is_one_line_with_exit_1(tmp_path, capsys, monkeypatch):

@@ -2,7 +2,8 @@
 a folder of a user's files given as --out, the run killed (SIGTERM, SIGKILL) or one of its
 workers killed. Each holds: the user's files survive, exit status non-zero with one line, no
 worker outlives its parent, no staging folder is left (or the next run removes it and says so).
-Corrupt cache entries and cut stored histories: tests/test_stored_integrity.py."""
+Corrupt cache entries: tests/test_setup_cache.py (NaN and edited entries evicted, named,
+rebuilt); cut or edited stored histories: tests/test_study_stored.py, tests/test_validation_cache.py."""
 
 from __future__ import annotations
 

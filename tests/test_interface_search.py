@@ -72,7 +72,10 @@ def _copy(src: Path, dst: Path, cases: bool) -> Path:
 
 def test_brute_force_table_is_monotone_in_the_modes(brute):
     """The search's assumption on this grid: within a family the NCC does not drop with the
-    modes (checked, not assumed, so that the comparison below tests the search)."""
+    modes (checked, not assumed, so that the comparison below tests the search), to 1e-7: a
+    family's NCCs near 1 - 1e-5 differ by a few 1e-8 where an added mode changes nothing the
+    contact sees (measured: -2.2e-8 between two mode counts of one family), the size of the
+    runs' own tolerances on the force (Newton 1e-10, LCP 1e-8 of the velocity scale)."""
     _, rows = brute
     assert len(rows) == 13
     fams = {}
@@ -80,7 +83,7 @@ def test_brute_force_table_is_monotone_in_the_modes(brute):
         fams.setdefault((r[0], r[1]), []).append((r[2], r[4]))
     for pts in fams.values():
         nccs = [n for _, n in sorted(pts)]
-        assert nccs == sorted(nccs)
+        assert all(b >= a - 1e-7 for a, b in zip(nccs, nccs[1:])), nccs
 
 
 def test_search_over_both_kinds_makes_fewer_runs_for_the_same_answer(brute, tmp_path):

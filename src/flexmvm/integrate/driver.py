@@ -234,22 +234,23 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
 
 def _advance(integ, t: float, states, h: float, h_min: float, cuts: list
              ) -> list[tuple[float, float, object]]:
-    """Steps from t over h: [(start, size, StepResult)]. A step whose Newton iteration fails,
-    or ends above its tolerance on the round-off floor, is taken as two halves instead
-    (recursively, down to h_min = dt_s / 2^MAX_STEP_CUTS), as implicit codes cut their step;
-    the next step is back at the grid's size. At h_min a floor result is accepted (the run
-    counts it in steps_not_converged) and a failure raises SolverError. cuts = [number of
-    steps cut, smallest step taken [s]], updated."""
+    """Steps from t over h: [(start, size, StepResult)]. A step whose Newton iteration fails
+    (it diverges, or has not reached the tolerance or the round-off floor in max_iter
+    iterates) is taken as two halves instead, recursively down to h_min = dt_s /
+    2^MAX_STEP_CUTS, as implicit codes cut their step; the next step is back at the grid's
+    size; a failure at h_min raises SolverError. A step that stops on the round-off floor
+    (below moreau_jean.ROUNDOFF_FLOOR, no longer decreasing) is accepted, and the run counts
+    it in steps_not_converged and warns: cutting it would cost up to 2^MAX_STEP_CUTS steps
+    for a residual that is round-off. cuts = [number of steps cut, smallest step taken [s]],
+    updated."""
     try:
         res = integ.step(t, states, h)
-        failure = None
-    except SolverError as exc:
-        res, failure = None, exc
-    if res is not None and (res.converged or h * 0.5 < h_min * (1 - 1e-9)):
+    except SolverError:
+        if h * 0.5 < h_min * (1 - 1e-9):
+            raise
+    else:
         cuts[1] = min(cuts[1], h)
         return [(t, h, res)]
-    if h * 0.5 < h_min * (1 - 1e-9):
-        raise failure
     cuts[0] += 1
     half = 0.5 * h
     first = _advance(integ, t, states, half, h_min, cuts)
