@@ -395,26 +395,48 @@ def _distance(p, c):
 
 
 @numba.njit(cache=True)
-def _refresh_list(i, p, reach, rho, geo, lists, ref):
+def _refresh_list(i, p, reach, rho, geo, lists, ref, gmeta, gdims, gstart, gfacets):
     """Candidate superset of node i: facets g with |p - c_g| - R_g <= reach + rho (geo (nf, 4):
     centroid, circumradius), stored in lists[i] (count first; -1 when it overflows: all
-    facets then); ref[i] = (p, reach + rho)."""
+    facets then); ref[i] = (p, reach + rho). The facets come from the cells of the facet grid
+    (nodes.facet_grid: gmeta = origin, cell edge, largest R; gdims; CSR gstart, gfacets) within
+    reach + rho + R_max of p: a node's rebuild reads the facets about it, not all of them."""
     radius = reach + rho
     cap = lists.shape[1] - 1
     n = 0
-    for g in range(geo.shape[0]):
-        if _distance(p, geo[g]) - geo[g, 3] <= radius:
-            if n == cap:
-                n = -1
+    edge = gmeta[3]
+    lo = np.empty(3, dtype=np.int64)
+    hi = np.empty(3, dtype=np.int64)
+    for j in range(3):
+        top = gdims[j] - 1.0
+        # clipped to the grid in floating point, then truncated (= floor of a value >= 0)
+        lo[j] = np.int64(min(max((p[j] - radius - gmeta[4] - gmeta[j]) / edge, 0.0), top))
+        hi[j] = np.int64(min(max((p[j] + radius + gmeta[4] - gmeta[j]) / edge, 0.0), top))
+    overflow = False
+    for ci in range(lo[0], hi[0] + 1):
+        for cj in range(lo[1], hi[1] + 1):
+            for ck in range(lo[2], hi[2] + 1):
+                cell = (ci * gdims[1] + cj) * gdims[2] + ck
+                for e in range(gstart[cell], gstart[cell + 1]):
+                    g = gfacets[e]
+                    if _distance(p, geo[g]) - geo[g, 3] <= radius:
+                        if n == cap:
+                            overflow = True
+                            break
+                        lists[i, 1 + n] = g
+                        n += 1
+                if overflow:
+                    break
+            if overflow:
                 break
-            lists[i, 1 + n] = g
-            n += 1
-    lists[i, 0] = n
+        if overflow:
+            break
+    lists[i, 0] = -1 if overflow else n
     ref[i, 0], ref[i, 1], ref[i, 2], ref[i, 3] = p[0], p[1], p[2], radius
 
 
 @numba.njit(cache=True)
-def _candidates(i, p, reach, rho, geo, lists, ref, mark, tag, cand, lb):
+def _candidates(i, p, reach, rho, geo, lists, ref, mark, tag, cand, lb, grid):
     """Broad-phase candidates of node i, exactly BroadPhase.query's set {g : |p - c_g| <=
     reach + R_g}, from its cached superset; the superset is rebuilt when the node has moved
     so far (|p - p_ref| + reach > radius_ref, with a round-off margin) that it may miss one.
@@ -423,7 +445,7 @@ def _candidates(i, p, reach, rho, geo, lists, ref, mark, tag, cand, lb):
     radius = ref[i, 3]
     moved = _distance(p, ref[i, :3])
     if radius < 0.0 or moved + reach > radius - (1e-12 + 1e-9 * radius):
-        _refresh_list(i, p, reach, rho, geo, lists, ref)
+        _refresh_list(i, p, reach, rho, geo, lists, ref, grid[0], grid[1], grid[2], grid[3])
     n_list = lists[i, 0]
     n_all = geo.shape[0] if n_list < 0 else n_list
     n = 0
@@ -586,7 +608,8 @@ def _finish(i, g, best, xs, vs, xm, vm, conn, n_quads, out):
 
 @numba.njit(cache=True)
 def _search_node(i, xs, xm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_quads, adj_ptr,
-                 adj_idx, params, lists, ref, prev, mark, counter, cand, lb, work, memo, best, p):
+                 adj_idx, params, lists, ref, prev, mark, counter, cand, lb, grid, work, memo,
+                 best, p):
     """Closest facet of node i of xs, shared by scan_nodes and penetration_scan: the box test
     in the facet body's frame (r_m, A_m), the candidate superset, the closest projection.
     Returns (searched: False when outside the box or without candidates, status, facet)."""
@@ -599,7 +622,7 @@ def _search_node(i, xs, xm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_quads
         return False, 0, -1
     counter[0] += 2
     tag = counter[0]
-    n = _candidates(i, p, reach, rho, geo, lists, ref, mark, tag, cand, lb)
+    n = _candidates(i, p, reach, rho, geo, lists, ref, mark, tag, cand, lb, grid)
     if n == 0:
         return False, 0, -1
     status, g = _closest(i, xs[i], n, cand, lb, mark, tag, prev[i], adj_ptr, adj_idx, geo,
@@ -609,7 +632,8 @@ def _search_node(i, xs, xm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_quads
 
 @numba.njit(cache=True)
 def scan_nodes(xs, vs, xm, vm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_quads, adj_ptr,
-               adj_idx, params, lists, ref, prev, mark, counter, cand, lb, facet, out,
+               adj_idx, params, lists, ref, prev, mark, counter, cand, lb, gmeta, gdims,
+               gstart, gfacets, facet, out,
                memo_fac, memo_count, memo_rec, memo_ver, ver_s, ver_m):
     """Closest facet of every slave node within reach, as PointToSurfaceContact's numpy path
     (box test in the master frame, BroadPhase candidates, project_points, closest_facets,
@@ -621,7 +645,8 @@ def scan_nodes(xs, vs, xm, vm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_qu
     u_max [m] largest master node displacement; geo (nf, 4) facet centroid and circumradius;
     conn (nf, 4) local master node ids; adj_ptr, adj_idx facet adjacency (CSR).
     State kept between calls: lists (ns, cap + 1), ref (ns, 4), prev (ns,) last facet per node.
-    Work: mark (nf,), counter (1,), cand (nf,), lb (nf,). Output: facet (ns,) (-1: none),
+    Work: mark (nf,), counter (1,), cand (nf,), lb (nf,); the facet grid gmeta, gdims,
+    gstart, gfacets (nodes.facet_grid). Output: facet (ns,) (-1: none),
     out (ns, 11) as in _finish. Projections kept for the positions of versions ver_s[0],
     ver_m[0] of the two node sets (ContactNodes.version): memo_fac (ns, k), memo_count (ns,),
     memo_rec (ns, k, REC_LEN), memo_ver (2,) (contact.nodes.ProjectionMemo; _try).
@@ -637,7 +662,8 @@ def scan_nodes(xs, vs, xm, vm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_qu
         facet[i] = -1
         searched, status, g = _search_node(i, xs, xm, r_m, A_m, box, reach, rho, u_max, geo,
                                            conn, n_quads, adj_ptr, adj_idx, params, lists, ref,
-                                           prev, mark, counter, cand, lb, work, memo, best,
+                                           prev, mark, counter, cand, lb,
+                                           (gmeta, gdims, gstart, gfacets), work, memo, best,
                                            p)
         if not searched:
             continue
@@ -859,6 +885,7 @@ def _sort_row(idx, val, lo, hi):
 @numba.njit(cache=True)
 def penetration_scan(xs, xm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_quads, adj_ptr,
                      adj_idx, params, edge_tol, floor, lists, ref, prev, mark, counter, cand, lb,
+                     gmeta, gdims, gstart, gfacets,
                      memo_fac, memo_count, memo_rec, memo_ver, ver_s, ver_m):
     """Deepest penetration of the nodes xs (ns, 3) [m] into the facet surface xm (nm, 3) (local
     node ids in conn), searched as scan_nodes does (box test in the facet body's frame r_m,
@@ -901,7 +928,8 @@ def penetration_scan(xs, xm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_quad
                 continue
         searched, status, g = _search_node(i, xs, xm, r_m, A_m, box, reach, rho, u_max, geo,
                                            conn, n_quads, adj_ptr, adj_idx, params, lists, ref,
-                                           prev, mark, counter, cand, lb, work, memo, best,
+                                           prev, mark, counter, cand, lb,
+                                           (gmeta, gdims, gstart, gfacets), work, memo, best,
                                            p)
         if not searched:
             continue

@@ -92,9 +92,12 @@ class ContactNodes:
 class SearchState:
     """Search state of kernels.scan_nodes / kernels.penetration_scan for n nodes against nf
     facets: per node its candidate superset (lists, ref) and last facet (prev); work arrays
-    (mark, counter, cand, lb)."""
+    (mark, counter, cand, lb); and a uniform grid of the facets (facet_grid of their
+    undeformed centroids and circumradii geo (nf, 4)), so that a node's superset is rebuilt
+    from the cells about it, not from every facet: the search's cost follows the facets near
+    the nodes, not the surface's size (benchmarks/bench_search.py)."""
 
-    def __init__(self, n: int, nf: int, cap: int = 256):
+    def __init__(self, n: int, nf: int, cap: int = 256, geo: np.ndarray | None = None):
         self.lists = np.zeros((n, min(nf, cap) + 1), dtype=np.int64)
         self.ref = np.full((n, 4), -1.0)
         self.prev = np.full(n, -1, dtype=np.int64)
@@ -102,9 +105,45 @@ class SearchState:
         self.counter = np.zeros(1, dtype=np.int64)
         self.cand = np.zeros(nf, dtype=np.int64)
         self.lb = np.zeros(nf)
+        self.grid = facet_grid(np.zeros((nf, 4)) if geo is None else np.asarray(geo, float))
 
     def arrays(self):
-        return self.lists, self.ref, self.prev, self.mark, self.counter, self.cand, self.lb
+        return (self.lists, self.ref, self.prev, self.mark, self.counter, self.cand, self.lb,
+                *self.grid)
+
+
+#: Cells of a facet grid per facet, at most (the cell edge grows until it holds).
+GRID_CELLS_PER_FACET = 2.0
+
+
+def facet_grid(geo: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """A uniform grid over facet centroids geo[:, :3] [m] (circumradii geo[:, 3]): (meta
+    (5,) = origin xyz, cell edge [m], largest circumradius [m]; dims (3,) cells per axis;
+    start (n_cells + 1,) and facets (nf,): the facets of cell c, in CSR, by increasing index).
+    The cell edge is twice the median circumradius, grown until the grid has at most
+    GRID_CELLS_PER_FACET cells per facet; no facets: one empty cell."""
+    geo = np.asarray(geo, dtype=np.float64)
+    nf = len(geo)
+    if nf == 0:
+        return (np.array([0.0, 0.0, 0.0, 1.0, 0.0]), np.ones(3, dtype=np.int64),
+                np.zeros(2, dtype=np.int64), np.zeros(0, dtype=np.int64))
+    c, r = geo[:, :3], geo[:, 3]
+    lo, hi = c.min(axis=0), c.max(axis=0)
+    span = np.maximum(hi - lo, 0.0)
+    edge = max(2.0 * float(np.median(r)), 1e-12 * max(float(span.max()), 1e-300), 1e-300)
+    while True:
+        dims = np.maximum(np.floor(span / edge).astype(np.int64) + 1, 1)
+        if float(np.prod(dims.astype(float))) <= max(GRID_CELLS_PER_FACET * nf, 1.0):
+            break
+        edge *= 1.5
+    ijk = np.minimum(((c - lo) / edge).astype(np.int64), dims - 1)
+    cell = (ijk[:, 0] * dims[1] + ijk[:, 1]) * dims[2] + ijk[:, 2]
+    order = np.argsort(cell, kind="stable")
+    start = np.zeros(int(np.prod(dims)) + 1, dtype=np.int64)
+    np.add.at(start, cell + 1, 1)
+    np.cumsum(start, out=start)
+    meta = np.array([lo[0], lo[1], lo[2], edge, float(r.max())])
+    return meta, dims, start, order.astype(np.int64)
 
 
 class ProjectionMemo:

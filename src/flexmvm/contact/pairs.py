@@ -163,7 +163,7 @@ class PointToSurfaceContact:
         self._rho = max(self.search_radius, 0.5 * float(np.median(self.broad.circumradius)))
         self._params = kernels.projection_params()
         ns, nf = len(self.slave_nodes), self.surface.n_facets
-        self._search = SearchState(ns, nf, _LIST_CAP)
+        self._search = SearchState(ns, nf, _LIST_CAP, self._geo)
         self._memo = ProjectionMemo(self._s, self._m, self._conn, self._params)
         self._facet = np.full(ns, -1, dtype=np.int64)
         self._out = np.zeros((ns, 11))

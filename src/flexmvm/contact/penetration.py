@@ -73,7 +73,7 @@ class _Direction:
         self.search_radius = search_radius
         self.rho = max(search_radius, 0.5 * float(np.median(broad.circumradius)))
         self.params = kernels.projection_params()
-        self.search = SearchState(len(self.node_ids), surface.n_facets)
+        self.search = SearchState(len(self.node_ids), surface.n_facets, geo=self.geo)
         # projections kept at the current positions: the constraint pass's memo when it serves
         # this scan (all nodes of its node set against its facets: the next step's search
         # reads what this measure projected), else none (keeping costs more than the few
@@ -88,7 +88,8 @@ class _Direction:
         x = self.node_set.x if self.rows is None else self.node_set.x[self.rows]
         st = states[self.against]
         if deep:  # the start check: reach over both surfaces, a throwaway search state
-            reach, search = self.search_radius + u_max_facets + self.extent, SearchState(len(x), len(self.geo))
+            reach = self.search_radius + u_max_facets + self.extent
+            search = SearchState(len(x), len(self.geo), geo=self.geo)
         else:
             reach, search = self.search_radius + u_max_facets, self.search
         status, bad, depth, i, g = kernels.penetration_scan(
