@@ -26,7 +26,7 @@ from flexmvm.contact.nodes import facet_grid
 
 
 def square(n: int, width: float = 0.3):
-    k = int(round(np.sqrt(n)))
+    k = round(float(np.sqrt(n)))
     x = np.linspace(-width / 2, width / 2, k)
     X, Y = np.meshgrid(x, x, indexing="ij")
     xm = np.column_stack([X.ravel(), Y.ravel(), np.zeros(k * k)])

@@ -11,6 +11,7 @@ runs); the other targets replay both from the stored cases (no run made).
 from __future__ import annotations
 
 import csv
+import itertools
 import shutil
 from pathlib import Path
 
@@ -83,7 +84,7 @@ def test_brute_force_table_is_monotone_in_the_modes(brute):
         fams.setdefault((r[0], r[1]), []).append((r[2], r[4]))
     for pts in fams.values():
         nccs = [n for _, n in sorted(pts)]
-        assert all(b >= a - 1e-7 for a, b in zip(nccs, nccs[1:])), nccs
+        assert all(b >= a - 1e-7 for a, b in itertools.pairwise(nccs)), nccs
 
 
 def test_search_over_both_kinds_makes_fewer_runs_for_the_same_answer(brute, tmp_path):
