@@ -16,36 +16,15 @@ import time
 from pathlib import Path
 
 import pytest
+from test_cli_failures import RUN_FAST, TINY, _in_process, _one_line, _tree
 
-from flexmvm.cli import main as cli_main
 from flexmvm.errors import InputError
 from flexmvm.results.outdir import MARKER, claim_study_dir, staged_dir
 
-TINY = Path(__file__).parent / "data" / "tiny_impact.toml"
-RUN_FAST = ["--t-end", "3e-6", "--no-fields", "--no-progress", "--jobs", "1"]
-
-
-def _in_process(argv, capsys) -> tuple[int, str, str]:
-    code = 0
-    try:
-        cli_main.main([str(a) for a in argv])
-    except SystemExit as exc:
-        code = exc.code
-    out = capsys.readouterr()
-    return code, out.out, out.err
-
-
-def _tree(path: Path) -> dict[str, bytes]:
-    return {str(p.relative_to(path)): p.read_bytes() for p in sorted(path.rglob("*"))
-            if p.is_file()}
-
 
 def _refused(code: int, err: str, *words: str) -> None:
-    assert code == 2, err
-    lines = err.strip().splitlines()
-    assert len(lines) == 1 and lines[0].startswith("flexmvm: error:"), err
-    for w in words:
-        assert w in lines[0], lines[0]
+    """One stderr line, exit 2, naming every word (test_cli_failures._one_line)."""
+    _one_line(err, 2, code, *words)
 
 
 # ------------------------------------------------------------------------------------------
