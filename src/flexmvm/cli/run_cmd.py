@@ -37,9 +37,10 @@ def command(scenario, out_dir, model, reference, theory, t_end, dt, no_fields, p
     """Simulate SCENARIO; write history.csv, summary.json, results.h5, ParaView series, PNG.
 
     Everything is written into a temporary DIR.partial-<pid> beside DIR and renamed to DIR
-    at the end: a run that fails (the scenario's run or its full-FE reference) leaves DIR as
-    it was. An existing DIR is replaced as a whole, and only if it is empty or an earlier
-    output of `flexmvm run`. Comparisons that cannot be made are printed and listed in
+    at the end. A run that stops early (a step that fails even when cut) still writes what it
+    computed, up to the failure, with status "failed" in summary.json, and exits with status
+    2; a run interrupted or killed leaves DIR as it was. An existing DIR is replaced as a
+    whole, and only if it is empty or an unchanged earlier output of `flexmvm run`. Comparisons that cannot be made are printed and listed in
     summary.json under "failures"."""
     from flexmvm.scenarios.main_job import run_main_job
 
