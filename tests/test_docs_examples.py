@@ -11,6 +11,12 @@ makes this test run the block with OLD replaced by NEW (each OLD must occur in t
 stale marker fails). The comment sits in the Markdown source beside the block it shortens; the
 page shows the block as written. ``FLEXMVM_DOCS_FULL=1`` in the environment (read by this test
 only, never by flexmvm) runs every block as written.
+
+The pages are README.md and every page of the documentation site (the Markdown sources in
+docs/, lab notes in docs/notes/ included); the site's build does not run them again. A block
+that occurs on several pages (the first script of README.md and docs/getting_started.md) runs
+once. Tutorial code shown from a file (```{literalinclude} ../examples/NAME.py```) is run by
+tests/test_examples.py, which runs every script of examples/.
 """
 
 from __future__ import annotations
@@ -24,7 +30,8 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-PAGES = [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]
+PAGES = [ROOT / "README.md",
+         *sorted(p for p in (ROOT / "docs").rglob("*.md") if "_build" not in p.parts)]
 MARKER = re.compile(r"^<!-- docs-test: replace `([^`]+)` with `([^`]*)` -->$")
 # Each block's wall-time budget [s]. The longest, README's (two runs and an 8-case selection
 # study on 20 us of the short seed case), took 51 s on the shared 2-core machine at load 8;
@@ -51,14 +58,53 @@ def _blocks(page: Path) -> list[tuple[str, str, list[tuple[str, str]]]]:
     return out
 
 
-BLOCKS = [b for page in PAGES for b in _blocks(page)]
+def _unique(blocks):
+    """The blocks whose code (after the replacements) differs from every earlier one."""
+    seen, out = set(), []
+    for label, code, subs in blocks:
+        key = (code, tuple(subs))
+        if key not in seen:
+            seen.add(key)
+            out.append((label, code, subs))
+    return out
+
+
+ALL_BLOCKS = [b for page in PAGES for b in _blocks(page)]
+BLOCKS = _unique(ALL_BLOCKS)
+INCLUDE = re.compile(r"^```\{literalinclude\} (\S+)$")
 
 
 def test_the_pages_have_python_blocks():
-    """README's library example and the scenario-format page's are found (a broken extraction
-    would make the test below vacuous)."""
-    labels = {label.split(":")[0] for label, _, _ in BLOCKS}
-    assert {"README.md", "docs/scenario_format.md"} <= labels
+    """README's library example, the getting-started page's and the scenario-format page's
+    are found (a broken extraction would make the test below vacuous)."""
+    labels = {label.split(":")[0] for label, _, _ in ALL_BLOCKS}
+    assert {"README.md", "docs/scenario_format.md", "docs/getting_started.md"} <= labels
+
+
+def test_tutorial_code_is_run_by_a_test():
+    """Every file a page shows by ``literalinclude`` is a script of examples/, which
+    tests/test_examples.py runs (it checks that it covers every one); the tutorials show at
+    least the three examples. Reads the pages only: well under a second."""
+    shown = set()
+    for page in PAGES:
+        for line in page.read_text(encoding="utf-8").splitlines():
+            if m := INCLUDE.match(line.strip()):
+                path = (page.parent / m.group(1)).resolve()
+                assert path.parent == ROOT / "examples" and path.suffix == ".py", \
+                    f"{page.relative_to(ROOT)} shows {m.group(1)}, not a script of examples/"
+                assert path.is_file(), f"{page.relative_to(ROOT)} shows {m.group(1)}: no such file"
+                shown.add(path.name)
+    assert shown >= {"rod_impact.py", "selection_study.py", "pendulum_joints.py"}
+
+
+def test_api_reference_lists_the_fm_surface():
+    """docs/api_reference.md has an autodoc entry for every name of ``flexmvm.__all__`` (the
+    docs build checks the same; this catches it in the test run). Well under a second."""
+    import flexmvm
+
+    page = (ROOT / "docs" / "api_reference.md").read_text(encoding="utf-8")
+    missing = [n for n in flexmvm.__all__ if f":: flexmvm.{n}\n" not in page]
+    assert not missing, f"docs/api_reference.md: no entry for {missing}"
 
 
 @pytest.mark.parametrize("label, code, subs", BLOCKS, ids=[b[0] for b in BLOCKS])

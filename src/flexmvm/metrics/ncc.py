@@ -219,8 +219,9 @@ _KEYS = {"ncc": (">=", "ncc_min"), "peak": ("<=", "peak_err_max"),
 
 @dataclass(frozen=True)
 class Target:
-    """Accuracy target: NCC at least ncc_min and, when given, |relative error| at most
-    peak_err_max, impulse_err_max, duration_err_max. Raises InputError on values out of range."""
+    """Accuracy target: NCC at least ncc_min and, when given, the magnitude of the relative
+    error at most peak_err_max, impulse_err_max, duration_err_max. Raises InputError on
+    values out of range."""
 
     ncc_min: float = 0.99
     peak_err_max: float | None = None

@@ -337,7 +337,7 @@ class Scenario(Frozen):
 
     @property
     def source(self) -> str:
-        """Where the scenario came from (a file path, or what made it): named in errors."""
+        """Where the scenario came from (a file path, or what made it), named in errors."""
         return self._source
 
     def _copy(self, what: str, **fields: Any) -> Scenario:
