@@ -65,6 +65,21 @@ def _check_api_reference(app) -> None:
             "api_reference.md: no entry for flexmvm.%s", ", flexmvm.".join(missing))
 
 
+def _check_cli_reference(app) -> None:
+    """Every sub-command of ``flexmvm`` has its sphinx-click entry in cli.md."""
+    from sphinx.util import logging
+
+    from flexmvm.cli import app as cli_app
+
+    cli_app._register()  # the sub-commands are attached on first use (cli/app.py)
+    page = (app.srcdir / "cli.md").read_text(encoding="utf-8")
+    missing = [n for n in cli_app.cli.commands if f":prog: flexmvm {n}\n" not in page]
+    if missing:
+        logging.getLogger(__name__).warning("cli.md: no entry for flexmvm %s",
+                                            ", flexmvm ".join(missing))
+
+
 def setup(app):
     app.connect("builder-inited", _check_api_reference)
+    app.connect("builder-inited", _check_cli_reference)
     return {"parallel_read_safe": True}

@@ -33,9 +33,10 @@ ROOT = Path(__file__).resolve().parents[1]
 PAGES = [ROOT / "README.md",
          *sorted(p for p in (ROOT / "docs").rglob("*.md") if "_build" not in p.parts)]
 MARKER = re.compile(r"^<!-- docs-test: replace `([^`]+)` with `([^`]*)` -->$")
-# Each block's wall-time budget [s]. The longest, README's (two runs and an 8-case selection
-# study on 20 us of the short seed case), took 51 s on the shared 2-core machine at load 8;
-# 6 x that leaves room for a cold numba and setup cache.
+# Each block's wall-time budget [s]. The longest, README's first script (two runs on 20 us of
+# the short seed case; the same block on docs/getting_started.md runs once), took 27-54 s on the
+# shared 2-core machine at load 13-21 with the kernels compiled; 300 s leaves room for a cold
+# numba and setup cache on a quieter machine.
 BUDGET_S = 300.0
 
 
