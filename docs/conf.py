@@ -6,6 +6,12 @@ commands by sphinx-click, and the API reference from the docstrings of the ``fm`
 autodoc, all within one tool that numpy, scipy and scikit-fem use. ``-W`` makes every broken
 link, reference or missing API entry an error (``.ci/run``).
 
+Writing pages: a new page goes into a toctree of index.md (a page outside every toctree fails
+``-W``; docs/notes/ is globbed, so a lab note needs nothing); link other pages and their
+sections with relative Markdown links (``[text](page.md#section)``), and name repository files
+outside docs/ as code (``src/flexmvm/...``): a Markdown link to them is a broken reference
+in the built site.
+
 The Python blocks of the pages are run by ``tests/test_docs_examples.py`` (as scripts, in a
 subprocess), not again by this build: the build stays cheap, the test owns the time budget.
 
