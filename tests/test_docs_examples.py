@@ -60,7 +60,7 @@ def _blocks(page: Path) -> list[tuple[str, str, list[tuple[str, str]]]]:
 
 
 def _unique(blocks):
-    """The blocks whose code (after the replacements) differs from every earlier one."""
+    """The blocks whose code and replacements differ from those of every earlier block."""
     seen, out = set(), []
     for label, code, subs in blocks:
         key = (code, tuple(subs))
