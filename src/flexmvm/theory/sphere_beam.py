@@ -201,9 +201,15 @@ def sphere_beam_histories(sc, dt: float | None = None
                           ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], dict]:
     """(t, contact force, {probe: global x velocity}, info) of the beam theory of scenario sc
     over its end time, sampled every dt [s] (default 0.25 us) from the first touch on."""
-    case = sphere_beam_case(sc)
+    return case_histories(sphere_beam_case(sc), sc.time.t_end_s, dt)
+
+
+def case_histories(case: SphereBeamCase, t_end: float, dt: float | None = None
+                   ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], dict]:
+    """sphere_beam_histories of a case (one whose impact may be changed, e.g. its beam's
+    modulus or its local law) up to t_end [s]."""
     dt = 0.25e-6 if dt is None else float(dt)
-    t_end, t0 = sc.time.t_end_s, case.t_first_touch_s
+    t0 = case.t_first_touch_s
     if not t0 < t_end:
         raise InputError(f"theory: the sphere touches the beam at {t0:.4g} s, after the end "
                          f"time {t_end:.4g} s")
@@ -228,4 +234,5 @@ def sphere_beam_histories(sc, dt: float | None = None
     return t, np.concatenate([pad, sol.force]), probes, info
 
 
-__all__ = ["LAW", "SphereBeamCase", "sphere_beam_case", "sphere_beam_histories"]
+__all__ = ["LAW", "SphereBeamCase", "case_histories", "sphere_beam_case",
+           "sphere_beam_histories"]

@@ -26,6 +26,7 @@ beam (translation, rotation) come out of the same eigenproblem at zero frequency
 
 from __future__ import annotations
 
+import itertools
 import math
 from dataclasses import dataclass
 
@@ -168,7 +169,7 @@ def beam_nodes(length_m: float, n_elements: int, through: tuple[float, ...] = ()
     if cuts[0] < 0.0 or cuts[-1] > length_m:
         raise InputError(f"node positions {through!r} m: expected within [0, {length_m!r}] m")
     parts = [np.linspace(a, b, max(1, round(n_elements * (b - a) / length_m)) + 1)[:-1]
-             for a, b in zip(cuts[:-1], cuts[1:]) if b > a]
+             for a, b in itertools.pairwise(cuts) if b > a]
     return np.concatenate([*parts, [length_m]])
 
 
