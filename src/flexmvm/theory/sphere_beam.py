@@ -131,8 +131,9 @@ def _beam_frame(cfg, mesh):
                          "differs from its bounding box's)")
     axis = int(np.argmax(ext))
     if ext[axis] < _SLENDER * np.delete(ext, axis).max():
-        raise InputError(f"theory: body {cfg.name!r} is {ext[axis] / np.delete(ext, axis).max():.3g}"
-                         f" times longer than wide; beam theory needs >= {_SLENDER:g}")
+        ratio = ext[axis] / np.delete(ext, axis).max()
+        raise InputError(f"theory: body {cfg.name!r} is not a beam: its length is {ratio:.3g} "
+                         f"times its largest section side, beam theory needs >= {_SLENDER:g}")
     return lo, hi, axis
 
 
@@ -226,7 +227,7 @@ def case_histories(case: SphereBeamCase, t_end: float, dt: float | None = None
         else:
             v = np.concatenate([pad, sol.probe_w_t[:, k] * n_x - eta * sol.probe_psi_t[:, k] * e_x])
             k += 1
-        probes[name] = v
+        probes[name] = v + 0.0       # no -0.0 in the history
     info = {"law": LAW, "v0_mps": case.impact.speed_mps, "striker": case.sphere,
             "target": case.beam, "t_first_touch_s": t0,
             "contacts_s": [(t0 + a, t0 + b) for a, b in sol.contacts],
