@@ -1,6 +1,6 @@
 """The Timoshenko beam + Hertz reference of a sphere striking a free beam
 (flexmvm.theory.timoshenko, beam_impact): its beam against closed-form frequencies, its
-impact against the conservation laws and against Hertz's half-space impact. About 3 s in all
+impact against the conservation laws and against Hertz's half-space impact. About 6 s in all
 (1D matrices of a few hundred DOF; the impacts over 0.2 ms)."""
 
 from __future__ import annotations

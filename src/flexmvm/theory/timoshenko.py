@@ -17,11 +17,15 @@ contact and the probes) and the static flexibility of the modes left out is need
 The two-node "interdependent interpolation" element (cubic w, quadratic psi tied by the
 homogeneous equilibrium E I psi'' + kappa G A (w' - psi) = 0; Reddy 1997, Comput. Methods
 Appl. Mech. Eng. 149, 113; the stiffness of Przemieniecki 1968, "Theory of Matrix Structural
-Analysis", sect. 5.6) is free of shear locking, exact in statics at its nodes, and with its
-consistent mass converges fast in frequency: one element per mm (200 on this beam) puts the
-first 40 frequencies within 1e-6 (tests/test_timoshenko.py checks the element against the
-closed-form frequencies of the simply supported beam). The two rigid-body modes of the free
-beam (translation, rotation) come out of the same eigenproblem at zero frequency.
+Analysis", sect. 5.6) is free of shear locking and exact in statics at its nodes (so the
+static flexibility at a node is exact); with its consistent mass the frequencies converge as
+h^2 (one constant shear strain per element; h^4 without shear): on the 200 mm beam, 200
+elements put the first free-free frequency within 3e-7, the 5th within 5e-5, the 10th (48
+kHz) within 4e-4 (tests/test_timoshenko.py checks the element against the closed-form
+frequencies of the simply supported beam). The contact history needs no more: the modes
+above a few tens of kHz answer the pulse quasi-statically (theory.beam_impact). The two
+rigid-body modes of the free beam (translation, rotation) come out of the same eigenproblem
+at zero frequency.
 """
 
 from __future__ import annotations
