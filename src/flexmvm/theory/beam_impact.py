@@ -100,8 +100,11 @@ class SphereOnBeam:
         return (self.hertz_k, 1.5) if self.local_law is None else (
             float(self.local_law[0]), float(self.local_law[1]))
 
-    def modes(self, probes_x_m: tuple[float, ...] = ()) -> BeamModes:
-        return free_free_modes(self.beam, self.n_elements, (self.contact_x_m, *probes_x_m))
+    def modes(self) -> BeamModes:
+        """All free-free modes of the beam's n_elements elements, a node at the contact (a
+        point load at a node: the static flexibility there is exact); probes elsewhere are
+        read through the element's interpolation."""
+        return free_free_modes(self.beam, self.n_elements, (self.contact_x_m,))
 
     def solve(self, t_end_s: float, dt_out_s: float, *, probes_x_m: tuple[float, ...] = (),
               rtol: float = 1e-10, method: str = "DOP853") -> BeamImpactSolution:
@@ -151,7 +154,7 @@ class _Model:
     """The kept modes at the contact and the probes, and the contact law (module doc)."""
 
     def __init__(self, imp: SphereOnBeam, probes_x_m: tuple[float, ...]):
-        modes = imp.modes(probes_x_m)
+        modes = imp.modes()
         n = imp.n_modes
         shapes, omega = modes.shapes, modes.omega
         phi_all = (modes.at([imp.contact_x_m])[0] @ shapes)[0]
