@@ -23,8 +23,9 @@ MODELS = ["full", "mvm", "mvm-seed", "mvm-seed-fixed", "modal", "interface", "ri
               help="Also run a full-FE copy of the reduced bodies and compare (default: the "
                    "scenario's [compare] full_reference; the seed scenarios ask for it).")
 @click.option("--theory/--no-theory", default=None,
-              help="Lay the 1D wave solution of a two-rod impact over the run (default: the "
-                   "scenario's [compare] theory).")
+              help="Lay the theory over the run: the 1D wave solution of a two-rod impact, or "
+                   "a Timoshenko beam with a Hertz spring for a sphere on a beam (default: "
+                   "the scenario's [compare] theory).")
 @click.option("--t-end", "t_end", type=float, default=None, help="End time [s].")
 @click.option("--dt", type=float, default=None, help="Time step near contact [s].")
 @click.option("--no-fields", is_flag=True, help="Skip results.h5 and the ParaView series.")

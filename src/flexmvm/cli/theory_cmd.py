@@ -1,4 +1,5 @@
-"""`flexmvm theory SCENARIO --out DIR`: the 1D wave solution in the run's history format."""
+"""`flexmvm theory SCENARIO --out DIR`: the scenario's theory (1D waves of two rods, or a
+Timoshenko beam + Hertz for a sphere on a beam) in the run's history format."""
 
 from __future__ import annotations
 
@@ -12,9 +13,10 @@ import click
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
               help="Output directory (history.csv is written there; an earlier theory output "
                    "there is replaced at the end).")
-@click.option("--dt", type=float, default=None, help="Grid step of the 1D solution [s].")
+@click.option("--dt", type=float, default=None, help="Grid step of the solution [s].")
 def command(scenario: Path, out_dir: Path, dt: float | None) -> None:
-    """1D wave solution of a two-rod scenario: St Venant (flat end) or wave + Hertz (hemisphere).
+    """1D wave solution of a two-rod scenario: St Venant (flat end) or wave + Hertz
+    (hemisphere); for a sphere on a beam, a Timoshenko beam with a Hertz spring.
 
     Written into a temporary DIR.partial-<pid> renamed to DIR at the end: a failure leaves DIR
     as it was. An existing DIR is replaced, if it is empty or an earlier theory output."""

@@ -51,7 +51,7 @@ def _theory(sc, failures: list[dict]):
         t, f, probes, info = theory_histories(sc)
     except InputError as exc:
         failures.append({"item": "comparison_vs_theory",
-                         "reason": f"the 1D theory does not apply: {exc}"})
+                         "reason": f"no theory applies: {exc}"})
         return None
     return t, f, probes, info
 
@@ -112,10 +112,11 @@ def run_main_job(scenario: Path | str | Scenario, out_dir: Path, *, model=None, 
                  reference: bool | None = None, theory: bool | None = None) -> dict:
     """Run ``scenario`` (a Scenario or a scenario file) as written and write its files into
     out_dir; returns the top-level summary. A full-FE reference of its reduced bodies (jobs =
-    2: in a second process, at the same time) and the 1D theory run where the scenario's
-    ``[compare]`` asks for them, or where ``reference`` / ``theory`` say so (None: the
-    scenario decides). ``model`` (a ModelKind or its value) sets every non-rigid body's kind
-    (and then no reference runs), ``t_end``, ``dt`` [s] the end time and contact step."""
+    2: in a second process, at the same time) and the theory (flexmvm.theory.scenario: two
+    rods, or a sphere on a beam) run where the scenario's ``[compare]`` asks for them, or
+    where ``reference`` / ``theory`` say so (None: the scenario decides). ``model`` (a
+    ModelKind or its value) sets every non-rigid body's kind (and then no reference runs),
+    ``t_end``, ``dt`` [s] the end time and contact step."""
     out_dir = Path(out_dir)
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     sc = sc.with_overrides(model=model, t_end_s=t_end, dt_s=dt)

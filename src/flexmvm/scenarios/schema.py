@@ -266,7 +266,8 @@ class TimeConfig(Frozen):
 
 class CompareConfig(Frozen):
     """What `flexmvm run` lays beside the scenario's own run: a full-FE copy of every reduced
-    body (``full_reference``) and the 1D wave solution of a two-rod impact (``theory``).
+    body (``full_reference``) and the theory (``theory``: the 1D wave solution of a two-rod
+    impact, or a Timoshenko beam + Hertz for a sphere on a beam; flexmvm.theory.scenario).
     Neither runs unless asked: on a user's part a full-FE copy can cost hours."""
 
     full_reference: bool = False

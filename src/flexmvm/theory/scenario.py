@@ -98,8 +98,23 @@ def rod_impact(sc, body: str | None = None) -> RodImpact:
 
 def theory_histories(sc, dt: float | None = None
                      ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], dict]:
-    """(t, contact_force, {probe: velocity along global x}, info) of the 1D solution of
-    scenario sc over its end time (module doc: the mapping)."""
+    """(t, contact_force, {probe: velocity along global x}, info) of the theory of scenario
+    sc over its end time: the 1D wave solution of two rods (module doc: the mapping), or for
+    two mesh bodies the Timoshenko beam + Hertz solution of a sphere on a beam
+    (flexmvm.theory.sphere_beam). InputError where neither applies."""
+    kinds = {sc.body(b).rod is not None for c in sc.contacts[:1]
+             for b in (c.slave_body, c.master_body)}
+    if kinds == {False}:
+        from flexmvm.theory.sphere_beam import sphere_beam_histories
+
+        return sphere_beam_histories(sc, dt)
+    if kinds == {True, False}:
+        raise InputError("theory: a rod against a mesh body; theory covers two rods or a "
+                         "sphere on a beam")
+    return _rod_histories(sc, dt)
+
+
+def _rod_histories(sc, dt: float | None):
     imp = rod_impact(sc)
     sol = imp.solve(sc.time.t_end_s, dt=dt)
     probes = {}
