@@ -16,7 +16,13 @@ from __future__ import annotations
 
 import pytest
 
-from flexmvm.scenarios.hertz_block import SPHERE_BLOCK, compare_with_hertz
+from flexmvm.errors import InputError
+from flexmvm.scenarios.hertz_block import (
+    SPHERE_BLOCK,
+    compare_with_hertz,
+    hertz_block_check,
+    hertz_reference,
+)
 from flexmvm.scenarios.load import load_scenario
 
 
@@ -34,3 +40,12 @@ def test_peak_force_and_duration_within_3_percent_of_hertz(check):
 
 def test_energy_through_the_impact(check):
     assert abs(check["energy_rel_error"]) < 5e-3, check
+
+
+def test_bad_input_is_one_line():
+    """A mesh size that cannot resolve the contact radius, a body the scenario lacks: one-line
+    InputErrors (no mesh is made, nothing runs)."""
+    with pytest.raises(InputError, match=r"fine_m must be in \(0, 1e-3\] m, got 0.002"):
+        hertz_block_check(2e-3)
+    with pytest.raises(InputError, match="no body 'anvil'"):
+        hertz_reference(load_scenario(SPHERE_BLOCK), target="anvil")
