@@ -160,8 +160,9 @@ def _facet_set(m: meshio.Mesh, group: Group, new_id: np.ndarray, faces, quadrati
 def _named_sets(m: meshio.Mesh, new_id: np.ndarray, faces, quadratic: QuadraticFaces, where: str
                 ) -> tuple[dict[str, np.ndarray], dict[str, FacetSet]]:
     """Node sets and facet sets of the file's groups (groups.read_groups): a surface group
-    gives a facet set and the node set of its facets' nodes (mid-side nodes included), a group of volume, line or point cells
-    the node set of its nodes, an empty group an empty set of each kind."""
+    gives a facet set and the node set of its facets' nodes (mid-side nodes included), a
+    group of volume, line or point cells the node set of its nodes, an empty group an empty
+    set of each kind."""
     node_sets: dict[str, np.ndarray] = {}
     facet_sets: dict[str, FacetSet] = {}
     for group in read_groups(m):
