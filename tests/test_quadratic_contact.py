@@ -23,7 +23,7 @@ The tolerance, F / F_Hertz in [0.99, 1.06]: the block is clamped 30 mm below the
 stiffer than a half-space by ~F / (pi E* 30 mm) in d, +0.5 % on F; node-to-surface contact
 adds rings of nodes one at a time (a staircase about Hertz's curve, tests/test_hertz_static.py:
 up to +6 % for a / h < 2); below 0.99 would be a soft face, which is what corners alone give.
-About 3 s (one sparse factorization of 11,748 DOF, 57 solves).
+About 5 s (one sparse factorization of 11,748 DOF, 57 solves, the imports).
 """
 
 from __future__ import annotations
