@@ -254,8 +254,9 @@ def test_gmsh_empty_group_is_empty_not_unknown(tmp_path):
 def test_surface_set_is_the_boundary(tmp_path, order):
     """The facet set 'surface' is the whole skin of the box: on each of its six faces the
     facets are outward and cover the face's area (to 1e-12), 'top' is the part on z = 0.5, and
-    node set 'surface' is every corner node on the boundary (tet10 midside nodes excluded, as
-    for every facet set's nodes)."""
+    node set 'surface' is every node on the boundary (tet10 mid-side nodes included: each
+    6-node face is 4 linear sub-triangles, 4 times the facets of the tet4 mesh's count per
+    face)."""
     path = tmp_path / "box.msh"
     _gmsh_box(path, order)
     mesh = read_mesh(path)
@@ -268,16 +269,20 @@ def test_surface_set_is_the_boundary(tmp_path, order):
     assert faces[2, 0.5][0] == mesh.facet_set("top").n_facets
     x = mesh.nodes
     on_box = np.any(np.isclose(x, 0.0) | np.isclose(x, [2.0, 1.0, 0.5]), axis=1)
-    corners = np.unique(mesh.cells[0].connectivity[:, :4])
-    assert np.array_equal(mesh.node_set("surface"), np.intersect1d(np.flatnonzero(on_box), corners))
+    assert np.array_equal(mesh.node_set("surface"), np.flatnonzero(on_box))
+    assert np.array_equal(mesh.node_set("top"), np.flatnonzero(np.isclose(x[:, 2], 0.5)))
+    if order == 2:
+        corners = np.unique(mesh.cells[0].connectivity[:, :4])
+        assert not np.all(np.isin(mesh.node_set("top"), corners))  # mid-side nodes are in
 
 
 def test_rod_skin_is_its_three_surfaces(tmp_path):
     """A rod mesh (hexahedron27) read back from .vtu passes every integrity check and its
     skin 'surface' is its end_a, end_b and side surfaces together: the rod's facet sets split
-    each hexahedron27 face into 4 quads through its midside nodes, the skin keeps the face's
-    4 corners, so the skin has a quarter of their facets and its nodes are among theirs. The
-    rod mesh itself has the skin too: facet set and node set 'surface', the three together."""
+    each hexahedron27 face into 4 quads through its midside nodes, and read_mesh splits the
+    skin's faces the same way (mesh/subfacets.py): the same sub-quads, in the same winding
+    (outward). The rod mesh itself has the skin too: facet set and node set 'surface', the
+    three together."""
     rm = rod_mesh(RodSpec(length_m=0.2, end_a="hemisphere"))
     path = tmp_path / "rod.vtu"
     write_mesh(path, rm.mesh)
@@ -288,8 +293,17 @@ def test_rod_skin_is_its_three_surfaces(tmp_path):
     assert np.array_equal(rm.mesh.facet_set("surface").nodes, parts)
     assert np.array_equal(rm.mesh.node_set("surface"), np.unique(np.concatenate(
         [rm.mesh.node_set(s) for s in ("end_a", "end_b", "side")])))
-    assert 4 * back.facet_set("surface").n_facets == rm.mesh.facet_set("surface").n_facets == sum(
+    assert back.facet_set("surface").n_facets == rm.mesh.facet_set("surface").n_facets == sum(
         rm.mesh.facet_set(s).n_facets for s in ("end_a", "end_b", "side"))
+    assert np.array_equal(back.node_set("surface"), parts)
+
+    def cyclic(quads):  # each quad from its smallest node id: same winding, same rows
+        start = np.argmin(quads, axis=1)
+        rolled = np.array([np.roll(q, -k) for q, k in zip(quads, start)])
+        return rolled[np.lexsort(rolled.T[::-1])]
+
+    assert np.array_equal(cyclic(back.facet_set("surface").quads),
+                          cyclic(rm.mesh.facet_set("surface").quads))
 
 
 def test_abaqus_sets_by_name(tmp_path):

@@ -23,6 +23,7 @@ from flexmvm.mesh.groups import Group, cell_dim, group_nodes, point_sets, read_g
 from flexmvm.mesh.integrity import check_faces, duplicate_cells, face_table, skin
 from flexmvm.mesh.mesh import CellBlock, CellType, FacetSet, Mesh
 from flexmvm.mesh.quality import check_quality
+from flexmvm.mesh.subfacets import QuadraticFaces
 
 # The mode a plain open() gives a new file (0o666 minus the umask, read once at import).
 _UMASK = os.umask(0)
@@ -137,8 +138,10 @@ def _orient_outward(facets: np.ndarray, faces: tuple[np.ndarray, np.ndarray], na
     return oriented[match, : facets.shape[1]]
 
 
-def _facet_set(m: meshio.Mesh, group: Group, new_id: np.ndarray, faces, where: str) -> FacetSet:
-    """A dim-2 group's facets (corner nodes, renumbered), once each, outward."""
+def _facet_set(m: meshio.Mesh, group: Group, new_id: np.ndarray, faces, quadratic: QuadraticFaces,
+               where: str) -> FacetSet:
+    """A dim-2 group's facets (renumbered), once each, outward; the faces of quadratic cells
+    as linear sub-facets through all their nodes (mesh/subfacets.py)."""
     by_kind: dict[int, list[np.ndarray]] = {3: [], 4: []}
     for k, idx in group.members:
         n_corner = _SURFACE_CORNERS.get(m.cells[k].type)
@@ -151,19 +154,20 @@ def _facet_set(m: meshio.Mesh, group: Group, new_id: np.ndarray, faces, where: s
         by_kind[n_corner].append(mapped)
     out = {n: (_orient_outward(np.vstack(parts), faces, group.name, where) if parts
                else np.zeros((0, n), dtype=np.int64)) for n, parts in by_kind.items()}
-    return FacetSet(quads=out[4], tris=out[3])
+    return quadratic.split(FacetSet(quads=out[4], tris=out[3]))
 
 
-def _named_sets(m: meshio.Mesh, new_id: np.ndarray, faces, where: str
+def _named_sets(m: meshio.Mesh, new_id: np.ndarray, faces, quadratic: QuadraticFaces, where: str
                 ) -> tuple[dict[str, np.ndarray], dict[str, FacetSet]]:
     """Node sets and facet sets of the file's groups (groups.read_groups): a surface group
-    gives a facet set and the node set of its corners, a group of volume, line or point cells
-    the node set of its nodes, an empty group an empty set of each kind."""
+    gives a facet set and the node set of its facets' nodes (mid-side nodes included), a
+    group of volume, line or point cells the node set of its nodes, an empty group an empty
+    set of each kind."""
     node_sets: dict[str, np.ndarray] = {}
     facet_sets: dict[str, FacetSet] = {}
     for group in read_groups(m):
         if group.dim == 2 or group.empty:
-            fs = _facet_set(m, group, new_id, faces, where)
+            fs = _facet_set(m, group, new_id, faces, quadratic, where)
             facet_sets[group.name] = fs
             node_sets[group.name] = fs.nodes
         else:
@@ -203,12 +207,14 @@ def read_mesh(path: str | os.PathLike, node_sets: Mapping[str, np.ndarray] | Non
 
     Volume cells: tetra, tetra10, hexahedron, hexahedron27, wedge. Named groups (gmsh physical
     groups, other formats' cell sets: flexmvm.mesh.groups) become sets by name: a surface group
-    a facet set (oriented outward) and the node set of its corners, a volume, line or point
+    a facet set (oriented outward) and the node set of its nodes, a volume, line or point
     group the node set of its nodes; an element in two groups is in both; an empty group gives
     an empty set (Mesh.node_set/facet_set say "empty"). meshio point sets and point-data masks
     ``node_set:<name>`` (see write_mesh) become node sets. node_sets: extra name -> node ids in
     the file's numbering. The outer skin (faces of one cell) is always the facet set and node
-    set ``surface``; a file group of that name must be that skin.
+    set ``surface``; a file group of that name must be that skin. The faces of quadratic cells
+    (tetra10, hexahedron27) become linear sub-facets through all their nodes, mid-side nodes
+    included (mesh/subfacets.py): 4 triangles per 6-node triangle, 4 quads per 9-node quad.
 
     Checks, each a one-line MeshError naming the file: missing or unreadable file, no volume
     cells or an unsupported volume type, a node id out of range, an element written twice
@@ -230,8 +236,9 @@ def read_mesh(path: str | os.PathLike, node_sets: Mapping[str, np.ndarray] | Non
         raise MeshError(f"{where}: {exc}") from None
     boundary = check_faces(nodes, blocks, where)
     keys, faces, _, _ = face_table(nodes, blocks)
-    sets, facet_sets = _named_sets(m, new_id, (keys, faces), where)
-    surface = skin(boundary)
+    quadratic = QuadraticFaces(blocks)
+    sets, facet_sets = _named_sets(m, new_id, (keys, faces), quadratic, where)
+    surface = quadratic.split(skin(boundary))
     if SKIN in facet_sets and not _same_facets(facet_sets[SKIN], surface):
         raise MeshError(f"{where}: group {SKIN!r} is not the outer skin; expected the name "
                         f"{SKIN!r} for the whole boundary only (rename the group)")

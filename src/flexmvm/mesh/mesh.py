@@ -54,8 +54,8 @@ class CellBlock:
 class FacetSet:
     """Boundary facets of a surface, oriented with outward normals (right-hand rule).
 
-    quads (n_q, 4) and tris (n_t, 3) hold node ids; linear facets only (for tet10 the
-    corner nodes).
+    quads (n_q, 4) and tris (n_t, 3) hold node ids; linear facets only (the faces of
+    quadratic cells as linear sub-facets through all their nodes: mesh/subfacets.py).
     """
 
     quads: np.ndarray = field(default_factory=lambda: np.zeros((0, 4), dtype=np.int64))

@@ -266,20 +266,48 @@ def arm(path: str | os.PathLike, length_m: float, width_m: float, thickness_m: f
     return _run(path, size_m, order, refine, build)
 
 
+#: Element size [m] at the contact point of the sphere_block meshes (hertz_block_part): the
+#: coarse form (scenarios/meshes/, the default tests) and the finer one of the validation.
+HERTZ_BLOCK_COARSE_M = 0.3e-3
+HERTZ_BLOCK_FINE_M = 0.2e-3
+
+
+def hertz_block_part(path: str | os.PathLike, fine_m: float = HERTZ_BLOCK_COARSE_M) -> Path:
+    """The aluminium block of scenarios/sphere_block.toml, 60 x 60 x 30 mm (``block``), in
+    tet10: fine_m [m] within 1 mm of the top face's centre, growing to 8 mm over 10 mm.
+
+    Sized by the Hertz contact radius of the steel sphere's impact, a = 0.39 mm: the contact
+    is carried by the block's face nodes (it is the slave side), corner and mid-side, whose
+    spacing is fine_m / 2; a static indentation measured F / F_Hertz = 1.036 at fine_m = 0.3 mm
+    (a / h = 2.6 with h the node spacing) and 1.022 at 0.2 mm (tests/test_quadratic_contact.py,
+    docs/notes/2026-11-27-hertz-block.md). 8 mm elsewhere: the block's rigid recoil and its
+    global compliance (~0.5 % of the approach) need no more."""
+    _positive(fine_m=fine_m)
+    return block(path, 0.060, 0.060, 0.030, 8.0e-3, order=2,
+                 refine=Refinement((0.0, 0.0, 0.0), fine_m, 1.0e-3, 10.0e-3))
+
+
+def hertz_sphere_part(path: str | os.PathLike) -> Path:
+    """The rigid sphere of scenarios/sphere_block.toml, R 10 mm (``sphere``), tet4: 0.1 mm
+    within 0.6 mm of its -z pole, growing to 2.5 mm over 6 mm. It is the master surface: its
+    facets stand for the sphere where the block's nodes touch it, so they must follow its
+    curvature on the scale of the contact radius (0.39 mm): a chord of 0.1 mm lies 0.13 um
+    inside the sphere (s^2 / 8 R), 1 % of the approach; with 0.4 mm facets (sphere_r10.msh)
+    the contact lasted 5 % longer than Hertz's."""
+    return sphere(path, 0.010, 0.0025, refine=Refinement((0.0, 0.0, -0.010), 0.1e-3, 0.6e-3,
+                                                         6.0e-3))
+
+
 #: The meshes of the shipped scenarios (scenarios/sphere_block.toml, sphere_beam.toml): file
-#: name and how it is made. tet4, 0.4 mm within 0.8 mm of the contact point (about the Hertz
-#: contact radius of the steel sphere at 0.5 m/s on aluminium, 0.4 mm), growing to 2.5 mm
-#: (sphere), 12 mm (block), 5 mm (beam): a few hundred nodes each.
+#: name and how it is made. sphere_r10 and the beam: tet4, 0.4 mm within 0.8-1 mm of the
+#: contact point (about the Hertz contact radius of the steel sphere at 0.5 m/s on aluminium,
+#: 0.4 mm), growing to 2.5 mm (sphere), 5 mm (beam); sphere_block's pair: hertz_sphere_part
+#: and hertz_block_part (tet10, 11,748 DOF), a Hertz check.
 SCENARIO_MESHES: tuple[tuple[str, Callable[[Path], Path]], ...] = (
     ("sphere_r10.msh", lambda p: sphere(p, 0.010, 0.0025, refine=Refinement(
         (0.0, 0.0, -0.010), 0.4e-3, 0.8e-3, 6.0e-3))),
-    # tet4 targets fine at the contact (0.4 mm within 1 mm, about the Hertz contact radius
-    # of the impact) and 2-3 mm elsewhere: 14,286 and 11,478 DOF, where a reduced body pays
-    # off. Not tet10: its faces contact by their corner nodes only, a poor load (the block's
-    # peak force came 18 % below Hertz on a tet10 mesh of 0.6 mm at the contact)
-    ("block_60x60x30.msh", lambda p: block(p, 0.060, 0.060, 0.030, 0.003,
-                                           refine=Refinement((0.0, 0.0, 0.0), 0.4e-3, 1.0e-3,
-                                                             12.0e-3))),
+    ("sphere_r10_cap.msh", hertz_sphere_part),
+    ("block_60x60x30.msh", hertz_block_part),
     ("beam_200x10x10.msh", lambda p: beam(p, 0.200, 0.010, 0.010, 0.002,
                                           refine=Refinement((0.100, 0.0, 0.0), 0.4e-3, 1.0e-3,
                                                             6.0e-3))),
@@ -305,7 +333,8 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-__all__ = ["SCENARIO_MESHES", "Refinement", "arm", "beam", "block", "main", "sphere",
+__all__ = ["HERTZ_BLOCK_COARSE_M", "HERTZ_BLOCK_FINE_M", "SCENARIO_MESHES", "Refinement", "arm",
+           "beam", "block", "hertz_block_part", "hertz_sphere_part", "main", "sphere",
            "write_scenario_meshes"]
 
 
