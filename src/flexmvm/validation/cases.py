@@ -11,9 +11,9 @@
    against the seed case, the momenta after it against the rigid pendulum.
 Every run also reports its conservation (runs.conservation).
 
-To add a case: a function ``(out, recompute, plot) -> dict`` of its numbers (each stored run
-through runs.run_case, its meta under "cases"), an entry in CASES, its rows in
-acceptance.ACCEPTANCE and a section template in templates/ (report.py).
+To add a case: a function ``(out, recompute) -> dict`` of its numbers (each stored run through
+runs.run_case, its meta under "cases"), an entry in CASES, its rows in acceptance.ACCEPTANCE,
+and its section of the page: a template in templates/ and its renderer in report.SECTIONS.
 """
 
 from __future__ import annotations

@@ -212,12 +212,17 @@ def _pendulum(pend: dict) -> str:
         met=_met(acc.met(pend, "pendulum", stated)))
 
 
+#: The page's sections in order: (case key in the report, its renderer); a case the report
+#: does not hold is left out.
+SECTIONS = (("seed", _seed), ("flat_vs_st_venant", _flat), ("step_convergence", _step),
+            ("short", _short), ("pendulum", _pendulum))
+
+
 def render(report: dict) -> str:
     """docs/validation.md's text from the report dict (validation.json)."""
-    sections = [_header(report), _seed(report["seed"]), _flat(report["flat_vs_st_venant"]),
-                _step(report["step_convergence"]), _short(report["short"])]
-    if report.get("pendulum") is not None:
-        sections.append(_pendulum(report["pendulum"]))
+    sections = [_header(report)]
+    sections += [section(report[key]) for key, section in SECTIONS
+                 if report.get(key) is not None]
     sections.append(_template("closing").substitute())
     cases = "".join(f"| {name} | `{m['commit']}` | {m['computed_utc']} | `{m['code_version']}` |\n"
                     for name, m in sorted(report["cases"].items()))
@@ -229,4 +234,4 @@ def write_report_md(path: Path, report: dict) -> None:
     write_text_atomic(path, render(report))
 
 
-__all__ = ["render", "write_report_md"]
+__all__ = ["SECTIONS", "render", "write_report_md"]
