@@ -1,4 +1,4 @@
-"""fe.cholesky: the supernodal multifrontal L D L^T against dense Cholesky and SuperLU.
+"""fe.solvers.cholesky: the supernodal multifrontal L D L^T against dense Cholesky and SuperLU.
 
 Tolerances: the factor of a matrix of condition ~1e3 (the Hex27 tube's W = M + (theta h)^2 K)
 agrees with LAPACK's dense Cholesky of the same ordered matrix to 1e-12 of the largest entry
@@ -17,9 +17,12 @@ from test_fe import tube_hex27
 
 from flexmvm.errors import SolverError
 from flexmvm.fe import assemble
-from flexmvm.fe.cholesky import SymbolicFactor, cholesky_ldl, mmd_order, numeric_factor
-from flexmvm.fe.ldl import SPLIT_MIN_N
-from flexmvm.fe.modes import SPD_LU
+from flexmvm.fe.solvers import spd
+from flexmvm.fe.solvers.cholesky import cholesky_ldl, numeric_factor
+from flexmvm.fe.solvers.ldl import SPLIT_MIN_N, SupernodalLDL
+from flexmvm.fe.solvers.ordering import mmd_order
+from flexmvm.fe.solvers.superlu import SPD_LU
+from flexmvm.fe.solvers.symbolic import SymbolicFactor
 from flexmvm.materials import ALUMINIUM
 
 
@@ -88,7 +91,7 @@ def test_structure_is_the_exact_symbolic_factor(tube_w):
 
 def test_mmd_order_is_superlus():
     """mmd_order reads SuperLU's minimum-degree ordering without a factorization: the same
-    permutation as splu's with fe.modes.SPD_LU."""
+    permutation as splu's with fe.solvers.superlu.SPD_LU."""
     fe = assemble(tube_hex27(n_theta=8, n_r=1, n_x=4), ALUMINIUM)
     A = sp.csc_matrix(fe.M + 1e-12 * fe.K)
     perm_c = np.asarray(spla.splu(A, **SPD_LU).perm_c)
@@ -173,3 +176,51 @@ def test_not_positive_definite_is_a_solver_error(tube_w, bad):
         match = "non-finite"
     with pytest.raises(SolverError, match=match):
         cholesky_ldl(A)
+
+
+def test_cholesky_backend_setting(monkeypatch):
+    """FLEXMVM_CHOLESKY picks spd_solver's Cholesky: unset is the supernodal default, an unknown
+    value is a one-line SolverError naming the choices, and "cholmod" without its package is a
+    SolverError naming the extra to install (no silent fallback to another factorization)."""
+    monkeypatch.delenv(spd.ENV_CHOLESKY, raising=False)
+    assert spd.cholesky_backend() is spd.CholeskyBackend.SUPERNODAL
+    monkeypatch.setenv(spd.ENV_CHOLESKY, "pardiso")
+    with pytest.raises(SolverError, match=r"FLEXMVM_CHOLESKY must be one of supernodal, "
+                                          r"cholmod, got 'pardiso'"):
+        spd.spd_solver(sp.identity(3, format="csc"))
+    from flexmvm.fe.solvers import cholmod
+    monkeypatch.setattr(cholmod, "available", lambda: False)
+    monkeypatch.setenv(spd.ENV_CHOLESKY, "cholmod")
+    with pytest.raises(SolverError, match=r"needs the cholespy package \(pip install "
+                                          r"flexmvm\[cholmod\]\)"):
+        spd.spd_solver(sp.identity(3, format="csc"))
+
+
+def test_cholmod_backend_against_the_default(tube_w, monkeypatch):
+    """CHOLMOD behind the same seam (spd_solver, FLEXMVM_CHOLESKY=cholmod), where cholespy is
+    installed: on the tube's W (4,680 DOFs, above CHOLESKY_MIN_N) both backends solve one and
+    eight right-hand sides to a backward error of 1e-14, and agree with each other to 1e-11 of
+    the solution's size (two orderings, two rounding paths: their difference is bounded by
+    cond(W) ~1e3 times their backward errors ~1e-16, so ~1e-13 is expected; 1e-11 leaves
+    room without letting a wrong factor pass). An unsymmetric matrix, of which CHOLMOD reads
+    one triangle, fails its backward-error check and goes to SuperLU's LU, as the default's
+    does. Runtime ~1 s."""
+    from flexmvm.fe.solvers import cholmod
+    if not cholmod.available():
+        pytest.skip("cholespy (the CHOLMOD backend, flexmvm[cholmod]) is not installed")
+    b = np.random.default_rng(5).standard_normal((tube_w.shape[0], 8))
+    monkeypatch.setenv(spd.ENV_CHOLESKY, "cholmod")
+    chol = spd.spd_solver(tube_w)
+    assert isinstance(chol.__self__, cholmod.CholmodFactor)
+    default = spd.spd_solver(tube_w, backend=spd.CholeskyBackend.SUPERNODAL)
+    assert isinstance(default.__self__, SupernodalLDL)
+    for rhs in (b[:, 0], b):
+        x_chol, x_default = chol(rhs), default(rhs)
+        assert x_chol.shape == rhs.shape
+        assert _backward(tube_w, x_chol, rhs) < 1e-14
+        assert _backward(tube_w, x_default, rhs) < 1e-14
+        assert np.abs(x_chol - x_default).max() <= 1e-11 * np.abs(x_default).max()
+    U = sp.csc_matrix(tube_w + 1e-3 * sp.triu(tube_w, 1))
+    refused = spd.spd_solver(U)
+    assert not isinstance(refused.__self__, cholmod.CholmodFactor)
+    assert _backward(U, refused(b[:, 0]), b[:, 0]) < 1e-14

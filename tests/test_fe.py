@@ -308,8 +308,8 @@ def test_spd_solver_choice(monkeypatch):
     indefinite one (a pivot not positive) or an unsymmetric one (its lower triangle factors,
     but the solve's backward error against the matrix fails the check). Every choice solves
     the system to a backward error of 1e-12 (stable solves give ~1e-16)."""
-    from flexmvm.fe import modes
-    from flexmvm.fe.ldl import SupernodalLDL
+    from flexmvm.fe.solvers import spd as modes
+    from flexmvm.fe.solvers.ldl import SupernodalLDL
 
     fe = assemble(box_hex(n=(4, 2, 2)), STEEL)
     free = np.arange(12, fe.n_dof)

@@ -1,4 +1,4 @@
-"""fe.ldl: the supernodal L D L^T solve (of fe.cholesky's factor) equals SuperLU's solve.
+"""fe.solvers.ldl: the supernodal L D L^T solve (of fe.solvers.cholesky's factor) equals SuperLU's solve.
 
 Both solve the same matrix with the same ordering, so they agree to round-off: the
 tolerance 1e-12 relative is ~1e3 machine epsilons, the growth of rounding through a
@@ -16,9 +16,10 @@ from test_fe import tube_hex27
 
 from flexmvm.errors import SolverError
 from flexmvm.fe import assemble
-from flexmvm.fe.cholesky import SymbolicFactor, cholesky_ldl, ldl_factor
-from flexmvm.fe.ldl import BACKWARD_RTOL, SPLIT_MIN_N
-from flexmvm.fe.modes import superlu_spd
+from flexmvm.fe.solvers.cholesky import cholesky_ldl, ldl_factor
+from flexmvm.fe.solvers.ldl import BACKWARD_RTOL, SPLIT_MIN_N
+from flexmvm.fe.solvers.superlu import superlu_spd
+from flexmvm.fe.solvers.symbolic import SymbolicFactor
 from flexmvm.materials import ALUMINIUM
 
 
@@ -101,7 +102,7 @@ def test_halves_are_whole_subtrees(iteration_matrix, kind):
     """What makes the halves independent: every row a supernode of one half updates (its
     rectangle's rows) is a column of the same half or of the top, never of the other half.
     A dense matrix (one supernode) has nothing to split."""
-    from flexmvm.fe.ldl import etree_halves
+    from flexmvm.fe.solvers.ldl import etree_halves
 
     n = 60
     A = {"tube": iteration_matrix,

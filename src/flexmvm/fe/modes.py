@@ -1,9 +1,10 @@
 """Undamped eigenmodes K phi = omega^2 M phi by sparse shift-invert Lanczos (ARPACK eigsh).
 
 Nothing full-size is ever densified: the shifted matrix K - sigma M is factored sparsely
-(fe.cholesky's supernodal L D L^T, solved by fe.ldl, when it is positive definite: spd_solver)
+(fe.solvers.spd_solver: the supernodal L D L^T of fe.solvers.cholesky, solved by
+fe.solvers.ldl, when it is positive definite)
 and handed to eigsh as ``OPinv``. Seed rod, 43 fixed-interface modes of the 1-3 selection's
-K_ii (24,966 DOFs, one BLAS thread): eigsh 2.1 s with SuperLU's solves, 1.0 s with fe.ldl's
+K_ii (24,966 DOFs, one BLAS thread): eigsh 2.1 s with SuperLU's solves, 1.0 s with fe.solvers.ldl's
 (88 solves of ~7 ms on two threads against ~19 ms).
 Modes are M-normalised (phi^T M phi = 1).
 Eigenvalues are checked, never abs()-ed: a negative omega^2 with
@@ -13,10 +14,6 @@ a zero-energy mode and clipped to 0; anything more negative raises SolverError.
 
 from __future__ import annotations
 
-from collections.abc import Callable, Iterator
-from concurrent.futures import ThreadPoolExecutor
-from contextlib import contextmanager
-
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
@@ -24,7 +21,11 @@ import scipy.sparse.linalg as spla
 
 from flexmvm.errors import InputError, SolverError
 from flexmvm.fe.assembly import FEModel
-from flexmvm.threads import worker_threads
+
+# The sparse solvers live in fe.solvers; their names stay importable from here for the
+# modules that took them from fe.modes before (reduction, scenarios, cli).
+from flexmvm.fe.solvers.spd import CHOLESKY_MIN_N, solver_pool, spd_solver
+from flexmvm.fe.solvers.superlu import SPD_LU, Solve, factor, superlu_spd
 
 #: Relative size of a negative omega^2 accepted as round-off of a zero eigenvalue.
 NEG_RTOL = 1e-6
@@ -33,8 +34,6 @@ NEG_RTOL = 1e-6
 #: highest squared mesh frequency): small enough that the lowest elastic modes are near it.
 FREE_SHIFT_REL = 1e-9
 
-Solve = Callable[[np.ndarray], np.ndarray]
-
 #: Seed of the Lanczos start vector: ARPACK's own start is random, so two builds of one basis
 #: differed (signs, vectors within a degenerate pair); a fixed random start makes them
 #: repeatable (and a cached basis equal to a fresh one). Random, not ones: a symmetric start
@@ -42,79 +41,9 @@ Solve = Callable[[np.ndarray], np.ndarray]
 V0_SEED = 20140101
 
 
-#: SuperLU options for symmetric positive definite matrices (all this package factors: K_ii,
-#: K - sigma M with sigma <= 0, M + theta^2 h^2 K): minimum-degree ordering of A^T + A, no
-#: pivoting off the diagonal. SuperLU's default (COLAMD, partial pivoting) orders for an
-#: unsymmetric A, and its fill on our meshes is erratic: 108 million factor entries (28 s)
-#: against 22 million (1.2 s) for K_ii of the seed rod with the 3-4 selection retained.
 #: Every mode of a problem (n_modes = its DOFs) comes from a dense solve up to this size
 #: (memory 2 m^2 doubles: 400 MB at 5,000).
 DENSE_MAX_DOF = 5000
-
-SPD_LU = {"permc_spec": "MMD_AT_PLUS_A", "diag_pivot_thresh": 0.0,
-          "options": {"SymmetricMode": True}}
-
-
-@contextmanager
-def solver_pool() -> Iterator[ThreadPoolExecutor | None]:
-    """A one-worker thread pool for the second elimination-tree half of an LDL^T solve
-    (spd_solver), or None when FLEXMVM_THREADS allows one thread only (flexmvm.threads)."""
-    if worker_threads() < 2:
-        yield None
-        return
-    with ThreadPoolExecutor(max_workers=1, thread_name_prefix="flexmvm-ldl") as pool:
-        yield pool
-
-
-#: From this many rows spd_solver factors with fe.cholesky (0.6 s for a seed rod's K_ii,
-#: 24,972 DOFs, against 1.1 s for SuperLU's LU and 0.5 s more to solve it as L D L^T); below,
-#: SuperLU (milliseconds, less than loading fe.cholesky's kernels in a fresh process, ~0.2 s).
-CHOLESKY_MIN_N = 2000
-
-
-def spd_solver(a: sp.spmatrix, pool: ThreadPoolExecutor | None = None) -> Solve:
-    """x = solve(b) for the SPD sparse matrix a (b (n,) or (n, k)): from CHOLESKY_MIN_N rows
-    the supernodal L D L^T of fe.cholesky, solved by fe.ldl (several right-hand sides in one
-    pass over the factor, the two elimination-tree halves on two threads with a pool); below,
-    SuperLU with the symmetric ordering SPD_LU. SuperLU's LU is also taken when fe.cholesky
-    refuses a (a pivot not positive: a is not positive definite), so a symmetric indefinite
-    or unsymmetric matrix still solves, or fails there as factor does (SolverError)."""
-    if a.shape[0] < CHOLESKY_MIN_N:
-        return superlu_spd(a).solve
-    from flexmvm.fe.cholesky import cholesky_ldl
-    try:
-        return cholesky_ldl(a, pool).solve
-    except SolverError:
-        return superlu_spd(a).solve
-
-
-def factor(a: sp.spmatrix, spd: bool = True) -> Solve:
-    """Sparse LU of a square matrix; returns x = solve(b) for b (n,) or (n, k).
-
-    spd: the matrix is symmetric positive definite (symmetric ordering, diagonal pivots,
-    SPD_LU); False: SuperLU's general defaults.
-    Raises SolverError if the matrix is singular or holds NaN/inf.
-    """
-    return _superlu(a, SPD_LU if spd else {}).solve
-
-
-def superlu_spd(a: sp.spmatrix):
-    """SuperLU's factor object of the SPD matrix a with the symmetric ordering SPD_LU (below
-    CHOLESKY_MIN_N rows, and where fe.cholesky refuses a). Raises SolverError as factor does."""
-    return _superlu(a, SPD_LU)
-
-
-def _superlu(a: sp.spmatrix, options: dict):
-    data = a.data if sp.issparse(a) else np.asarray(a)
-    if not np.isfinite(data).all():
-        raise SolverError(f"sparse LU of a {a.shape[0]}x{a.shape[0]} matrix: it holds a "
-                          "non-finite number (NaN/inf)")
-    try:
-        return spla.splu(sp.csc_matrix(a), **options)
-    except RuntimeError as exc:
-        raise SolverError(
-            f"sparse LU of a {a.shape[0]}x{a.shape[0]} matrix failed: {exc}"
-        ) from None
 
 
 def shift_invert_modes(M: sp.spmatrix, K: sp.spmatrix, n_modes: int, sigma: float,
@@ -231,11 +160,13 @@ __all__ = [
     "NEG_RTOL",
     "SPD_LU",
     "V0_SEED",
+    "Solve",
     "constrained_modes",
     "factor",
     "free_modes",
     "shift_invert_modes",
     "solver_pool",
     "spd_solver",
+    "superlu_spd",
     "to_hz",
 ]

@@ -8,7 +8,7 @@ canonical JSON, 32 hex digits) and :func:`stamp` is the compact record a stored 
 beside its key, so that :func:`stamp_mismatch` can say *which* of them changed.
 
 The package source is :func:`run_code_version`: a hash of every source file of flexmvm but
-the validation report writer (validation.py), whose edits change no run. The libraries are
+the validation package (flexmvm/validation/), whose edits change no run. The libraries are
 numpy, scipy and numba (LIBRARIES): a new BLAS kernel or a new compiled kernel can change the
 last bits of a history.
 """
@@ -35,12 +35,12 @@ FORMAT = 2
 #: The libraries whose versions are part of the key.
 LIBRARIES = ("numpy", "scipy", "numba")
 
-#: Package files whose edits change no run (the report writer).
-_NOT_RUN_CODE = ("validation.py", "__pycache__")
+#: Package files whose edits change no run (the validation package: cases, report, command).
+_NOT_RUN_CODE = ("validation", "__pycache__")
 
 
 def run_code_version() -> str:
-    """Hash (16 hex) of every package source file except the validation report writer: what
+    """Hash (16 hex) of every package source file except the validation package: what
     a run's numbers depend on."""
     root = Path(flexmvm.__file__).parent
     names = tuple(sorted(p.name for p in root.iterdir()

@@ -1,0 +1,30 @@
+"""Physics validation: the cases (cases.py) against closed forms, the 1D wave-Hertz solution
+and each other, their stored runs (runs.py), the one acceptance table (acceptance.py) that the
+report (report.py, templates/) and the tests read, and the command that runs them all
+(suite.py; ``flexmvm validate`` or ``python -m flexmvm.validation``, cli/validate_cmd.py).
+
+The scenarios come with the package (paths.py), so the command runs from a wheel as well as
+from a checkout; its default outputs, docs/validation.md and docs/validation/, are the
+checkout's.
+"""
+
+from flexmvm.validation.cases import (
+    CASES,
+    DT,
+    SHORT_FINE_MESH,
+    T_FLAT,
+    T_SEED,
+    T_STEP,
+    flat_vs_st_venant,
+    pendulum_case,
+    seed_vs_theory,
+    short_case,
+    short_scenario,
+    step_convergence,
+)
+from flexmvm.validation.paths import git_commit
+from flexmvm.validation.runs import Case, case_inputs, case_key, run_case
+
+__all__ = ["CASES", "DT", "SHORT_FINE_MESH", "T_FLAT", "T_SEED", "T_STEP", "Case", "case_inputs",
+           "case_key", "flat_vs_st_venant", "git_commit", "pendulum_case", "run_case",
+           "seed_vs_theory", "short_case", "short_scenario", "step_convergence"]
