@@ -85,4 +85,4 @@ def test_command_help_and_unknown_case(tmp_path, capsys, monkeypatch):
     assert done.value.code == 2 and captured.out == ""
     assert captured.err.strip().splitlines() == [
         ("flexmvm: error: unknown validation case 'nope'; expected one of flat_vs_st_venant, "
-         "seed, step_convergence, short, pendulum")]
+         "seed, step_convergence, short, pendulum, hertz_block")]

@@ -17,9 +17,9 @@ import click
                    "docs/validation.md in a checkout).")
 @click.option("--case", "cases", multiple=True, metavar="KEY",
               help="Run only this case (repeatable): flat_vs_st_venant, seed, step_convergence, "
-                   "short or pendulum (flexmvm.validation.cases.CASES). The report page needs "
-                   "every case, so only validation.json is written. 'short' (0.1 m rods) "
-                   "takes a few minutes.")
+                   "short, pendulum or hertz_block (flexmvm.validation.cases.CASES). The report "
+                   "page needs every case, so only validation.json is written. 'short' (0.1 m "
+                   "rods) and 'hertz_block' (a sphere on a block) take a few minutes.")
 @click.option("--recompute", is_flag=True, help="Ignore stored cases.")
 def command(out_dir: Path | None, md: Path | None, cases: tuple[str, ...],
             recompute: bool) -> None:

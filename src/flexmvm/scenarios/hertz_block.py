@@ -65,20 +65,16 @@ def hertz_reference(sc: Scenario, sphere: str = "ball", target: str = "block") -
                         mat_block.rho * mesh_volume(block_mesh))
 
 
-def compare_with_hertz(sc: Scenario, t_end_s: float = T_END_S) -> dict:
-    """Run ``sc`` (fm.run) over t_end_s and compare its first contact with
-    :func:`hertz_reference`: peak_N, duration_s (of the first contact interval, from the
-    steps with contact: to one step), the Hertz values hertz_peak_N and hertz_duration_s,
-    the relative errors peak_err and duration_err, dof (of the target), energy_rel_error,
-    steps_not_converged and the contact radius hertz_contact_radius_m."""
-    from flexmvm.scenarios.run import run_scenario
-
-    hz = hertz_reference(sc)
-    run = run_scenario(sc.with_time(t_end_s=t_end_s), warn=False)
-    s = run.summary
-    intervals = s["contact_intervals_s"]
+def hertz_comparison(hz: HertzImpact, force_N: np.ndarray, summary: dict,
+                     target: str = "block") -> dict:
+    """A run's first contact against the Hertz impact ``hz``: peak_N (of the contact force
+    history force_N), duration_s (of the summary's first contact interval, from the steps with
+    contact: to one step), the Hertz values hertz_peak_N and hertz_duration_s, the relative
+    errors peak_err and duration_err, the contact radius hertz_contact_radius_m, and of the
+    summary the target's dof, energy_rel_error, steps_not_converged and status."""
+    intervals = summary["contact_intervals_s"]
     duration = intervals[0][1] - intervals[0][0] if intervals else 0.0
-    peak = float(np.max(run.contact_force))
+    peak = float(np.max(force_N))
     return {
         "peak_N": peak,
         "hertz_peak_N": hz.force_max_n,
@@ -87,22 +83,34 @@ def compare_with_hertz(sc: Scenario, t_end_s: float = T_END_S) -> dict:
         "hertz_duration_s": hz.duration_s,
         "duration_err": duration / hz.duration_s - 1.0,
         "hertz_contact_radius_m": hz.contact_radius_m,
-        "dof": s["dof"]["block"],
-        "energy_rel_error": s["energy_rel_error"],
-        "steps_not_converged": s["steps_not_converged"],
-        "status": s["status"],
+        "dof": summary["dof"][target],
+        "energy_rel_error": summary["energy_rel_error"],
+        "steps_not_converged": summary["steps_not_converged"],
+        "status": summary["status"],
     }
 
 
-def sphere_block_scenario(block_mesh: str | Path | None = None) -> Scenario:
-    """scenarios/sphere_block.toml, with the block's mesh replaced by ``block_mesh`` if
-    given (the sphere's committed mesh kept)."""
-    data = tomllib.loads(SPHERE_BLOCK.read_text(encoding="utf-8"))
+def compare_with_hertz(sc: Scenario, t_end_s: float = T_END_S) -> dict:
+    """Run ``sc`` (fm.run) over t_end_s and compare its first contact with
+    :func:`hertz_reference` (:func:`hertz_comparison`'s dict)."""
+    from flexmvm.scenarios.run import run_scenario
+
+    hz = hertz_reference(sc)
+    run = run_scenario(sc.with_time(t_end_s=t_end_s), warn=False)
+    return hertz_comparison(hz, run.contact_force, run.summary)
+
+
+def sphere_block_scenario(block_mesh: str | Path | None = None,
+                          path: str | Path = SPHERE_BLOCK) -> Scenario:
+    """The scenario file ``path`` (default scenarios/sphere_block.toml), with the block's mesh
+    replaced by ``block_mesh`` if given (the sphere's committed mesh kept)."""
+    path = Path(path)
+    data = tomllib.loads(path.read_text(encoding="utf-8"))
     if block_mesh is not None:
         for body in data["bodies"]:
             if body["name"] == "block":
                 body["mesh_file"] = str(Path(block_mesh).resolve())
-    return scenario_from_dict(data, source=str(SPHERE_BLOCK), base_dir=SPHERE_BLOCK.parent)
+    return scenario_from_dict(data, source=str(path), base_dir=path.parent)
 
 
 def hertz_block_check(fine_m: float = HERTZ_BLOCK_FINE_M,
@@ -122,5 +130,5 @@ def hertz_block_check(fine_m: float = HERTZ_BLOCK_FINE_M,
     return {**out, "fine_m": float(fine_m), "node_spacing_m": float(fine_m) / 2.0}
 
 
-__all__ = ["SPHERE_BLOCK", "T_END_S", "compare_with_hertz", "hertz_block_check",
+__all__ = ["SPHERE_BLOCK", "T_END_S", "compare_with_hertz", "hertz_block_check", "hertz_comparison",
            "hertz_reference", "sphere_block_scenario"]

@@ -8,7 +8,9 @@
 4. the short seed case (0.1 m rods, rod_impact_short.toml) that the default test run checks
    live: full FE and MVM against theory, and its mesh and step convergence;
 5. the pendulum release (pendulum_release.toml), the whole event: impact speed, the impact
-   against the seed case, the momenta after it against the rigid pendulum.
+   against the seed case, the momenta after it against the rigid pendulum;
+6. a rigid sphere on a meshed block (sphere_block.toml) against Hertz at two element sizes at
+   the contact: the committed block and one meshed finer by gmsh at run time.
 Every run also reports its conservation (runs.conservation).
 
 To add a case: a function ``(out, recompute) -> dict`` of its numbers (each stored run through
@@ -196,6 +198,46 @@ def pendulum_case(out: Path, recompute: bool = False) -> dict:
             "cases": {"pendulum": case_meta(c), "seed": case_meta(ref)}}
 
 
+#: The Hertz block case's element sizes at the contact [m]: the committed block's and a finer
+#: one meshed at run time (mesh/parts.py hertz_block_part).
+HERTZ_BLOCK_SIZES_M = {"coarse": None, "fine": 0.2e-3}
+
+
+def _hertz_block_mesh(out: Path, fine_m: float) -> Path:
+    """The block meshed at fine_m under out/meshes/, made once (written beside and renamed:
+    a run killed while gmsh writes leaves no partial mesh to be read next time)."""
+    from flexmvm.mesh.parts import hertz_block_part
+    path = out / "meshes" / f"block_{fine_m * 1e6:.0f}um.msh"
+    if not path.exists():
+        path.parent.mkdir(parents=True, exist_ok=True)
+        tmp = hertz_block_part(path.with_suffix(".partial.msh"), fine_m)
+        tmp.replace(path)
+    return path
+
+
+def hertz_block_case(out: Path, recompute: bool = False) -> dict:
+    """A rigid steel sphere (R 10 mm, 0.5 m/s) on a free aluminium block (sphere_block.toml)
+    against Hertz with the block's recoil (scenarios.hertz_block): peak force and duration of
+    the first contact, with the committed block (coarse) and one meshed finer at run time."""
+    from flexmvm.scenarios.hertz_block import (
+        T_END_S,
+        hertz_comparison,
+        hertz_reference,
+        sphere_block_scenario,
+    )
+    numbers: dict = {"cases": {}}
+    for label, fine_m in HERTZ_BLOCK_SIZES_M.items():
+        block = None if fine_m is None else _hertz_block_mesh(out, fine_m)
+        sc = sphere_block_scenario(block, path=scenario_path("sphere_block.toml"))
+        sc = sc.with_time(t_end_s=T_END_S)
+        c = run_case(out, f"hertz_block_{label}", sc, recompute)
+        numbers[label] = {**conservation(c.summary),
+                          **hertz_comparison(hertz_reference(sc), c.force, c.summary),
+                          "element_m": fine_m if fine_m is not None else "committed"}
+        numbers["cases"][label] = case_meta(c)
+    return numbers
+
+
 @dataclass(frozen=True)
 class ValidationCase:
     """A case of the report: its key in validation.json, how the full report runs it
@@ -222,6 +264,8 @@ CASES: tuple[ValidationCase, ...] = (
                     "short_dt_half": "dt_half"}),
     ValidationCase("pendulum", lambda out, rc: pendulum_case(out, recompute=rc),
                    {"pendulum": "pendulum"}),
+    ValidationCase("hertz_block", lambda out, rc: hertz_block_case(out, recompute=rc),
+                   {"hertz_block_coarse": "coarse", "hertz_block_fine": "fine"}),
 )
 
 
@@ -245,6 +289,6 @@ def case(key: str) -> ValidationCase:
     return next(c for c in CASES if c.key == key)
 
 
-__all__ = ["CASES", "DT", "SHORT_FINE_MESH", "T_FLAT", "T_SEED", "T_STEP", "ValidationCase",
-           "case", "flat_vs_st_venant", "pendulum_case", "seed_vs_theory", "short_case",
+__all__ = ["CASES", "DT", "HERTZ_BLOCK_SIZES_M", "SHORT_FINE_MESH", "T_FLAT", "T_SEED", "T_STEP", "ValidationCase",
+           "case", "flat_vs_st_venant", "hertz_block_case", "pendulum_case", "seed_vs_theory", "short_case",
            "short_scenario", "step_convergence", "stored_cases"]

@@ -212,10 +212,27 @@ def _pendulum(pend: dict) -> str:
         met=_met(acc.met(pend, "pendulum", stated)))
 
 
+def _hertz_block(hb: dict) -> str:
+    rows = []
+    for label in ("coarse", "fine"):
+        c = hb[label]
+        size = ("committed (0.3 mm)" if c["element_m"] == "committed"
+                else f"{1e3 * c['element_m']:g} mm, meshed at run time")
+        rows.append(f"| {size} | {c['dof']:,} | {c['peak_N']:.1f} N | {_p(c['peak_err'])} | "
+                    f"{1e6 * c['duration_s']:.1f} us | {_p(c['duration_err'])} | "
+                    f"{_e(c['energy_rel_error'])} | {c['steps_not_converged']} |")
+    c = hb["coarse"]
+    return _template("hertz_block").substitute(
+        hertz_peak=f"{c['hertz_peak_N']:.1f}", hertz_duration=f"{1e6 * c['hertz_duration_s']:.1f}",
+        contact_radius=f"{1e3 * c['hertz_contact_radius_m']:.2f}", rows="\n".join(rows),
+        bound=_pct(acc.threshold("hertz_block", ("fine", "peak_err"), "sphere on block")),
+        met=_met(acc.met(hb, "hertz_block", "sphere on block")))
+
+
 #: The page's sections in order: (case key in the report, its renderer); a case the report
 #: does not hold is left out.
 SECTIONS = (("seed", _seed), ("flat_vs_st_venant", _flat), ("step_convergence", _step),
-            ("short", _short), ("pendulum", _pendulum))
+            ("short", _short), ("pendulum", _pendulum), ("hertz_block", _hertz_block))
 
 
 def render(report: dict) -> str:
