@@ -190,11 +190,11 @@ class BodySolver:
             # the Schur complement of the current M_wq to first order in the drift dM_w of
             # the one in W (exact in the omega-translation blocks, since Z_r is exact; the
             # omitted dM_w W_qq^-1 dM_w^T is below COUPLING_TOL^2 of M_w Z_w). S is small for
-            # full FE (module docstring of moreau_jean), so a stale M_w changes it by
+            # full FE (module docstring of iteration_matrix), so a stale M_w changes it by
             # several per cent (later iterates then converge by ~1/16 per iterate). The
             # bordered solve itself keeps the refreshed M_w (in M_fq~ y and Z), so its
             # elastic part misses W_qq^-1 dM_w^T x_w, first order in the drift: hence the
-            # small COUPLING_TOL (moreau_jean)
+            # small COUPLING_TOL (iteration_matrix)
             dr, dw = self._dMw @ f.Zr, self._dMw @ f.Zw
             MZ[:3, 3:] += A @ dr.T
             MZ[3:, :3] += dr @ A.T
@@ -222,7 +222,7 @@ class BodySolver:
         """B^T xf (nq,) for a frame vector xf (6,), B = [A S1; M_wq] the frame-elastic block
         of the W that solve(), solve_frame() and the contact columns use (with the A and
         M_wq of the last prepare / refresh_coupling). For x = W^-1 b: W_qq x_q = b_q - B^T x_f
-        (what integrate.moreau_jean takes k_hat dq_dot from)."""
+        (what integrate.w_images takes k_hat dq_dot from)."""
         self._flush()
         return self.body.inv.S1.T @ (self._A.T @ xf[:3]) + self._mw(self._f).T @ xf[3:6]
 
