@@ -12,6 +12,7 @@ translation with constant M_wq, approximate otherwise; the residual is always ex
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -46,13 +47,15 @@ class _Factor:
 class BodySolver:
     """Solves W x = b for one body; factorizations cached per step size."""
 
-    def __init__(self, body: FlexibleBody, theta: float = 0.5, max_cached: int = MAX_CACHED,
-                 pool=None):
+    def __init__(self, body: FlexibleBody, theta: float | Callable[[float], float] = 0.5,
+                 max_cached: int = MAX_CACHED, pool=None):
         self.body = body
         # a thread pool for the back-substitutions of a sparse W (fe.ldl: two etree halves
         # on two threads); None: on the calling thread
         self.pool = pool
         self._symbolic: SymbolicFactor | None = None   # of W's pattern, made by the first _factor
+        # theta of the step size h: a fixed one, or a function of h (integrate.theta); W is
+        # factored once per h either way
         self.theta = theta
         self._cache: dict[float, _Factor] = {}
         self._order: list[float] = []
@@ -74,7 +77,7 @@ class BodySolver:
                 self._order.append(h)
             return f
         b = self.body
-        th = self.theta
+        th = self.theta(h) if callable(self.theta) else self.theta
         W = b.inv.M_qq + (th * th * h * h) * b.k_hat
         if b.c_hat is not None:
             W = W + (th * h) * b.c_hat

@@ -135,9 +135,9 @@ class AcceptedStep:
 
 def moreau_jean(exploit_nonrotating: bool = True) -> IntegratorFactory:
     """The default integrator: the Moreau-Jean scheme (moreau_jean.py) with the grid's
-    theta."""
+    theta of each step size (TimeGrid.theta_rule)."""
     def make(system: System, grid: TimeGrid) -> Integrator:
-        return MoreauJeanIntegrator(system, theta=grid.theta,
+        return MoreauJeanIntegrator(system, theta=grid.theta_rule(),
                                     exploit_nonrotating=exploit_nonrotating)
 
     return make

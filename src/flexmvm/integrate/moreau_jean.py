@@ -1,6 +1,7 @@
 """Moreau-Jean theta scheme (Jean 1999) with position-level joints: the implicit midpoint rule
 at theta = 1/2 (second order), first order for a fixed theta > 1/2 (DEFAULT_THETA, the only
-default of theta in the package).
+default of theta in the package), second order with theta(h) = 1/2 + h / (4 tau) computed for
+each step (integrate.theta).
 
 For every body, with v- the velocity at t, v+ at t + h, v_m = theta v+ + (1 - theta) v- and the
 configuration x_m = x(t) (+) theta h v_m (Lie-group update of A):
@@ -14,9 +15,10 @@ part exactly. theta > 1/2 (Jean 1999) damps the components with omega h >> 1 (am
 (1 - theta)/theta at infinity) at a first-order cost (damping ratio ~ (theta - 1/2) omega h / 2
 for the resolved modes): it removes the step-to-step ringing of the contact nodes that makes
 Lagrange-multiplier contact chatter. With theta - 1/2 proportional to the step (a scenario's
-time.hf_damping_time_s tau: theta = 1/2 + h / (4 tau)) the local
-error (theta - 1/2) h^2 y'' is O(h^3), so the scheme stays second order while what the step
-cannot resolve decays as exp(-t / tau) at every h (docs/contact_law.md).
+time.hf_damping_time_s tau: theta(h) = 1/2 + h / (4 tau) for every step size h the driver
+takes, capped at 1: integrate.theta) the local error (theta - 1/2) h^2 y'' is O(h^3), so the
+scheme stays second order while what the step cannot resolve decays as exp(-t / tau) at
+every h, never slower (docs/contact_law.md).
 
 Constraints (seed eq. 11, at impulse level):
 - joints: phi(x(t + h)) = 0 (position level: no drift), rows Phi_v at x_m;
@@ -84,6 +86,7 @@ from flexmvm.integrate.stall_report import stall_report
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.step import StepResult
 from flexmvm.integrate.system import ContactRows, System
+from flexmvm.integrate.theta import ThetaRule
 from flexmvm.integrate.w_images import WImages
 
 __all__ = ["MoreauJeanIntegrator", "StepResult"]
@@ -118,25 +121,29 @@ class _Iteration:
 
 
 class MoreauJeanIntegrator:
-    """The Moreau-Jean theta scheme: `step(t, states, h)`. `order` is its order of accuracy
-    for smooth motion: 2 at theta = 1/2 (implicit midpoint), 1 for theta > 1/2 (error
-    ~ (theta - 1/2) h); tests/test_theta_scheme.py measures both."""
+    """The Moreau-Jean theta scheme: `step(t, states, h)`. theta: a fixed theta, or a
+    ThetaRule (theta of each step size). `order` is its order of accuracy for smooth motion:
+    2 at theta = 1/2 (implicit midpoint) or with theta(h) - 1/2 = O(h), 1 for a fixed
+    theta > 1/2 (error ~ (theta - 1/2) h); tests/test_theta_scheme.py measures them."""
 
-    def __init__(self, system: System, *, theta: float = DEFAULT_THETA, rtol: float = 1e-10,
-                 max_iter: int = 40, exploit_nonrotating: bool = True):
-        if not 0.5 <= theta <= 1.0:
-            raise SolverError(f"theta must be in [0.5, 1], got {theta!r}")
+    def __init__(self, system: System, *, theta: float | ThetaRule = DEFAULT_THETA,
+                 rtol: float = 1e-10, max_iter: int = 40, exploit_nonrotating: bool = True):
+        if not isinstance(theta, ThetaRule):
+            if not 0.5 <= theta <= 1.0:
+                raise SolverError(f"theta must be in [0.5, 1], got {theta!r}")
+            theta = ThetaRule(theta)
         self.system = system
-        self.theta = theta
+        self.theta_rule = theta
+        self.theta = theta.theta       # the fixed theta (with a damping time: not used)
         bodies = system.bodies
         self.threads = BodyThreads(bodies)
-        self.solvers = [BodySolver(body, theta, pool=pool)
+        self.solvers = [BodySolver(body, theta.at, pool=pool)
                         for body, pool in zip(bodies, self.threads.solve_pool)]
         self.rtol = rtol
         self.max_iter = max_iter
         self.n_joint_rows = sum(j.n_rows for j in system.joints)
         self.exploit_nonrotating = exploit_nonrotating
-        self.order = 2 if theta == 0.5 else 1
+        self.order = theta.order
         self.n_nonrotating_steps = 0
         self.loads: dict[int, list] = {}
         for load in system.loads:
@@ -174,19 +181,19 @@ class MoreauJeanIntegrator:
         return c.Kq, c.Mqd
 
     # ---------------------------------------------------------------- the momentum balance
-    def _residuals(self, t, states, v_plus, h):
+    def _residuals(self, t, states, v_plus, h, th):
         """Momentum residuals without constraint forces, midpoint and end configurations
-        (per body, on threads when several bodies are full FE: integrate.body_threads)."""
-        out = self.threads.each(lambda b: self._residual(b, t, states[b], v_plus[b], h),
+        (per body, on threads when several bodies are full FE: integrate.body_threads);
+        th: the step's theta."""
+        out = self.threads.each(lambda b: self._residual(b, t, states[b], v_plus[b], h, th),
                                 range(len(states)))
         R, mids, ends, scales = zip(*(out[b] for b in range(len(states))))
         return list(R), list(mids), list(ends), list(scales)
 
-    def _residual(self, b, t, st, vp, h):
+    def _residual(self, b, t, st, vp, h, th):
         """Body b's residual M(x_m) (v+ - v-) - h F(x_m, v_m), its midpoint and end states
         and its momentum scale."""
         body, g = self.system.bodies[b], self.gravity
-        th = self.theta
         vm = th * vp + (1.0 - th) * st.v
         mid = st.advanced(vm, th * h)
         end = st.advanced(vm, h)
@@ -269,18 +276,19 @@ class MoreauJeanIntegrator:
         """One step from t to t + h. Frames that do not rotate (omega = 0, no joints) take the
         linear step of integrate.nonrotating, verified against the rotational rows; any other
         step, or one whose verification fails, the general modified-Newton step."""
+        th = self.theta_rule.at(h)
         crows, parts = self._candidate_rows(states, h)
         if self.exploit_nonrotating and nonrotating.applies(self.system, states):
-            out = nonrotating.nonrotating_step(self.system, self.solvers, self.theta, self.rtol,
+            out = nonrotating.nonrotating_step(self.system, self.solvers, th, self.rtol,
                                                self.loads, t, states, h, crows)
             if out is not None:
                 self.n_nonrotating_steps += 1
                 new_states, lam_c, res_t, lcp_res = out
-                self._equilibrate_massless(t, h, states, new_states, [(crows.rows, lam_c)])
+                self._equilibrate_massless(t, h, th, states, new_states, [(crows.rows, lam_c)])
                 self._after_step(parts, lam_c, h)
                 return StepResult(new_states, np.zeros(0), crows, lam_c, 1, 0.0,
                                   translation_residual=res_t, lcp_residual=lcp_res)
-        return self._newton_step(t, states, h, crows, parts)
+        return self._newton_step(t, states, h, th, crows, parts)
 
     def _candidate_rows(self, states, h):
         """The step's contact rows (all providers merged) and per provider (provider, its
@@ -298,7 +306,7 @@ class MoreauJeanIntegrator:
         for provider, part, offset in parts:
             provider.after_step(part, lam_c[offset : offset + part.rows.m], h)
 
-    def _newton_step(self, t, states, h, crows, parts) -> StepResult:
+    def _newton_step(self, t, states, h, th, crows, parts) -> StepResult:
         """The modified Newton iteration: v_free = v+ - W^-1 R(v+), then the constraint
         impulses of the LCP on D = Phi W^-1 Phi^T, v+ = v_free + W^-1 Phi^T lambda, until
         the residual with the impulses is within rtol (or on the round-off floor)."""
@@ -312,7 +320,7 @@ class MoreauJeanIntegrator:
         self.relax.start()
         for it in range(self.max_iter + 1):
             v_before, image_before = s.v_plus, dict(self.images.plus)
-            R, mids, ends, scales = self._residuals(t, states, s.v_plus, h)
+            R, mids, ends, scales = self._residuals(t, states, s.v_plus, h, th)
             phi, jrows = self._joint_rows(t, h, mids, ends)
             jacobian = {b: jrows.body_matrix(b) for b in jrows.blocks} if n_j else {}
             res_norm = max(float(np.abs(r).max()) for r in R) if it else np.inf
@@ -333,11 +341,11 @@ class MoreauJeanIntegrator:
                                                                    s.v_free, s.v_plus, self.rtol)
             else:
                 s.v_free = self.matrices.free_velocities(R, s.v_plus)
-            self._impulses(s, it, h, crows, phi, jrows, jacobian)
+            self._impulses(s, it, h, th, crows, phi, jrows, jacobian)
             s.v_plus, s.relaxed = relaxed_iterate(self.relax, self.images.plus, v_before,
                                                   s.v_plus, image_before, s.stalled)
-        return self._end_of_step(s, it, t, h, states, crows, parts, phi, jrows, mids, ends,
-                                 scales)
+        return self._end_of_step(s, it, t, h, th, states, crows, parts, phi, jrows, mids,
+                                 ends, scales)
 
     def _accepted(self, s: _Iteration, it, R, jacobian, crows, phi, scales) -> bool:
         """Convergence test of iterate it > 0: the residual with the last impulses within
@@ -378,7 +386,7 @@ class MoreauJeanIntegrator:
         s.contact_delassus = sum((c.D for c in s.contact_compliance.values()),
                                  np.zeros((m_c, m_c)))
 
-    def _impulses(self, s: _Iteration, it, h, crows, phi, jrows, jacobian) -> None:
+    def _impulses(self, s: _Iteration, it, h, th, crows, phi, jrows, jacobian) -> None:
         """v+ = v_free + W^-1 Phi^T lambda with the impulses lambda of the mixed LCP on
         D = Phi W^-1 Phi^T (joints: equalities closing phi at the step's end; contacts:
         u_N(v+) >= the lower bounds of contact.pairs, lambda_N >= 0, complementary)."""
@@ -400,7 +408,7 @@ class MoreauJeanIntegrator:
         D[:n_j, n_j:] = D[n_j:, :n_j].T
         c = np.zeros(n_j + m_c)
         if n_j:
-            c[:n_j] = jrows.times(s.v_free) - jrows.times(s.v_plus) + phi / (self.theta * h)
+            c[:n_j] = jrows.times(s.v_free) - jrows.times(s.v_plus) + phi / (th * h)
         if m_c:
             c[n_j:] = crows.rows.times(s.v_free) - crows.lower
         s.lam, lcp_res = solve_contact_impulses(D, c, n_j, crows, s.lam if it else None)
@@ -418,8 +426,8 @@ class MoreauJeanIntegrator:
             images.impulses(b, self.solvers[b], crows.rows, lam[n_j:], dv)
         s.v_plus = v_plus
 
-    def _end_of_step(self, s: _Iteration, it, t, h, states, crows, parts, phi, jrows, mids,
-                     ends, scales) -> StepResult:
+    def _end_of_step(self, s: _Iteration, it, t, h, th, states, crows, parts, phi, jrows,
+                     mids, ends, scales) -> StepResult:
         """The accepted iterate as the step's result: translational rows balanced (no
         joints), end states with v+, carried contractions advanced, massless coordinates
         to equilibrium."""
@@ -431,26 +439,26 @@ class MoreauJeanIntegrator:
             converged_t = res_t
             rel, res_t = balance_translation(
                 balanced_residuals(self.system.bodies, s.residuals, scales, mids), ends,
-                v_plus, self.theta * h, rel, res_t, self.rtol)
+                v_plus, th * h, rel, res_t, self.rtol)
             shift = res_t - converged_t
         self._after_step(parts, lam[n_j:], h)
         new_states = [e for e in ends]
         for st, vp in zip(new_states, v_plus):
             st.v = vp
         self.carried_state.advance(states, new_states, h)
-        self._equilibrate_massless(t, h, states, new_states,
+        self._equilibrate_massless(t, h, th, states, new_states,
                                    [(crows.rows, lam[n_j:]), (jrows if n_j else None, lam[:n_j])])
         drift = float(np.abs(phi).max()) if phi.size else 0.0
         return StepResult(new_states, lam[:n_j], crows, lam[n_j:], it, drift,
                           converged=rel <= self.rtol, residual=rel, translation_residual=res_t,
                           lcp_residual=s.lcp_max, momentum_shift=shift)
 
-    def _equilibrate_massless(self, t, h, states, new_states, held) -> None:
+    def _equilibrate_massless(self, t, h, th, states, new_states, held) -> None:
         """Massless coordinates to equilibrium at the step's end (integrate.massless); the
         carried k_hat q and k_hat q_dot follow (the mass-weighted contractions do not see
         massless coordinates)."""
         for b, dq, dv in equilibrate_step_end(self.massless, self.system.bodies, self.loads,
-                                              t + self.theta * h, h, states, new_states, held):
+                                              t + th * h, h, states, new_states, held):
             c = self.carried_state.of_state(b, new_states[b])
             if c is not None:
                 K_cols = self.massless[b].K_cols
