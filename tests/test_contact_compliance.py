@@ -188,11 +188,11 @@ def test_nodal_selector_equals_its_csr_bit_for_bit(kind, sort):
 
 @pytest.mark.parametrize("sort", [True, False])
 def test_transpose_times_through_the_selector(sort):
-    """Phi^T lambda of a full-FE body's rows (moreau_jean._transpose_times: N^T lambda summed
+    """Phi^T lambda of a full-FE body's rows (row_products.body_impulse: N^T lambda summed
     entry by entry and gathered at each coordinate's DOF, no transposed matrices) equals the
     dense block's bq^T lambda, bit for bit against the scipy transpose product it replaced,
     for a NodalSelector (repeated nodes, explicit zeros, -0.0, unsorted columns) and its csr."""
-    from flexmvm.integrate.moreau_jean import _transpose_times
+    from flexmvm.integrate.row_products import body_impulse
 
     body = _body("select", n=30, seed=9)
     assert body.nodal is not None
@@ -205,6 +205,6 @@ def test_transpose_times_through_the_selector(sort):
     want = np.concatenate([bf.T @ lam, bq.T @ lam])
     old = np.asarray(body.psi.T @ (csr.T @ lam)).ravel()
     for sel in (NodalSelector(data, idx, ptr, shape), csr):
-        got = _transpose_times(Rows(m, {0: (bf, bq)}, {0: sel}), 0, body, lam)
+        got = body_impulse(Rows(m, {0: (bf, bq)}, {0: sel}), 0, body, lam)
         np.testing.assert_allclose(got, want, rtol=0, atol=1e-14 * np.abs(want).max())
         np.testing.assert_array_equal(got[6:], old)

@@ -356,7 +356,7 @@ def test_merged_contacts_keep_their_cones():
     resultant tangential impulse is the sum of the parts'."""
     from flexmvm.constraints.contact import ContactRows, FrictionRows
     from flexmvm.constraints.rows import Rows
-    from flexmvm.integrate.moreau_jean import _merge_contacts
+    from flexmvm.integrate.row_products import merge_contacts
 
     def rows(m, friction):
         r = Rows(m, {0: (np.ones((m, 6)), np.zeros((m, 0)))})
@@ -369,7 +369,7 @@ def test_merged_contacts_keep_their_cones():
     a = rows(3, FrictionRows(np.array([0]), np.array([[1, 2]]), np.array([0.2]), t))
     b = rows(1, None)
     c = rows(3, FrictionRows(np.array([0]), np.array([[1, 2]]), np.array([0.5]), t))
-    merged = _merge_contacts(_merge_contacts(a, b), c)
+    merged = merge_contacts(merge_contacts(a, b), c)
     assert merged.rows.m == 7
     np.testing.assert_array_equal(merged.friction.normal, [0, 4])
     np.testing.assert_array_equal(merged.friction.tangent, [[1, 2], [5, 6]])

@@ -7,6 +7,7 @@ threshold inside a time window), so that the policy is tested apart from any one
 
 from __future__ import annotations
 
+import itertools
 import json
 from pathlib import Path
 
@@ -99,3 +100,44 @@ def test_flexmvm_run_writes_the_history_up_to_the_failure(tmp_path, monkeypatch,
 
 def test_cut_limit_is_stated():
     assert driver.MAX_STEP_CUTS == 6
+
+
+def test_the_hook_sees_every_accepted_step_of_the_integrator_the_call_chose():
+    """simulate(integrator=..., on_step=...): the run steps with the integrator the factory
+    makes (here the Moreau-Jean one whose steps in [2, 3) us fail above dt/2, so each of those
+    4 steps is cut once into 2 halves), and the hook is called once per accepted step, cut
+    halves included, in order: each step starts from the states the last one ended with (the
+    same objects), at the time it ended (to round-off of the tick grid, 1e-12 relative), and
+    the hook's step sizes and impulses are the run's step history exactly. ~3 s."""
+    from flexmvm.scenarios.build import build_scenario
+
+    built = build_scenario(_tiny())
+    dt = built.grid.dt_s
+    made = []
+
+    def factory(system, grid):
+        integ = MoreauJeanIntegrator(system, theta=grid.theta)
+        real = integ.step
+
+        def step(t, states, h):
+            if 2e-6 <= t < 3e-6 and h > 0.5 * dt * (1 + 1e-9):
+                raise SolverError("injected")
+            return real(t, states, h)
+
+        integ.step = step
+        made.append(integ)
+        return integ
+
+    seen = []
+    run = driver.simulate(built.system, built.states, built.grid, built.probes,
+                          integrator=factory, on_step=seen.append)
+    assert len(made) == 1 and run.step_cuts == 4
+    assert len(seen) == run.n_steps == 24 + 4
+    np.testing.assert_array_equal([s.h_s for s in seen], run.steps.h_s)
+    np.testing.assert_array_equal([s.t_end_s for s in seen], run.steps.t_s)
+    np.testing.assert_array_equal([s.result.contact.normal_impulse(s.result.contact_impulses)
+                                   for s in seen], run.steps.contact_impulse_Ns)
+    for last, step in itertools.pairwise(seen):
+        assert step.start is last.states
+        assert step.t_s == pytest.approx(last.t_end_s, rel=1e-12)
+    assert seen[-1].t_end_s == pytest.approx(T_END, rel=1e-12)

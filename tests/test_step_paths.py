@@ -145,18 +145,29 @@ def test_translation_solve_equals_dense_solve(sparse):
 
 
 def test_body_threads_setting(monkeypatch):
-    """FLEXMVM_THREADS: unset = the cores, 1 = no pool, junk = a clear SolverError."""
-    from flexmvm.errors import SolverError
-    from flexmvm.integrate import moreau_jean as mj
+    """FLEXMVM_THREADS: unset = the cores, 1 = no pool, junk = a clear SolverError; two
+    full-FE bodies put their per-body work on the threads, one its back-substitutions."""
+    from types import SimpleNamespace
 
-    monkeypatch.setenv(mj.ENV_THREADS, "1")
-    assert mj._thread_pool() is None
-    monkeypatch.setenv(mj.ENV_THREADS, "2")
-    assert mj._thread_pool() is not None
+    from flexmvm.errors import SolverError
+    from flexmvm.integrate.body_threads import BodyThreads
+    from flexmvm.threads import ENV_THREADS
+
+    full = SimpleNamespace(nq=9, is_sparse=True, contracts_in_halves=False)
+    rigid = SimpleNamespace(nq=0, is_sparse=False, contracts_in_halves=False)
+    monkeypatch.setenv(ENV_THREADS, "1")
+    assert BodyThreads([full, full]).executor is None
+    monkeypatch.setenv(ENV_THREADS, "2")
+    two = BodyThreads([full, full, rigid])
+    assert two.executor is not None and two.threaded == {0, 1}
+    assert two.solve_pool == [None, None, None] and two.contraction_pool is None
+    one = BodyThreads([rigid, full])
+    assert one.threaded == set() and one.solve_pool == [None, one.executor]
+    assert one.executor is not None
     for bad in ("two", "0"):
-        monkeypatch.setenv(mj.ENV_THREADS, bad)
+        monkeypatch.setenv(ENV_THREADS, bad)
         with pytest.raises(SolverError, match="FLEXMVM_THREADS"):
-            mj._thread_pool()
+            BodyThreads([full, full])
 
 
 def test_threads_do_not_change_the_history(monkeypatch):
@@ -207,7 +218,7 @@ def test_one_full_fe_body_splits_its_solves_without_changing_the_history(monkeyp
 
 @pytest.mark.parametrize("key", ["tiny", "flat"])
 def test_k_dq_from_w_images_agrees_with_the_product(monkeypatch, key):
-    """Full-FE bodies take k_hat dq_dot from W_qq dq_dot (moreau_jean._WImages). Checked on
+    """Full-FE bodies take k_hat dq_dot from W_qq dq_dot (integrate.w_images). Checked on
     every residual here (IMAGE_CHECK_STEPS = 1): the image and the product agree within
     IMAGE_RTOL (1e-11) of the largest term summed on every step of a case with one (tiny) and
     two (flat) full-FE bodies, so no body falls back; and the check can fail: with the impulse
@@ -216,8 +227,9 @@ def test_k_dq_from_w_images_agrees_with_the_product(monkeypatch, key):
     leaves). (The flat case's contact steps are mostly non-rotating steps, which need no
     k_hat dq_dot.)"""
     from flexmvm.integrate import moreau_jean as mj
+    from flexmvm.integrate import w_images
 
-    monkeypatch.setattr(mj, "IMAGE_CHECK_STEPS", 1)
+    monkeypatch.setattr(w_images, "IMAGE_CHECK_STEPS", 1)
     made = []
     init = mj.MoreauJeanIntegrator.__init__
 
@@ -230,13 +242,13 @@ def test_k_dq_from_w_images_agrees_with_the_product(monkeypatch, key):
     sc = load_scenario(DATA / f).with_overrides(model=model)
     good = run_scenario(sc).result
     (integ,) = made
-    assert integ._images.bodies and integ._images.n_fallbacks == 0
+    assert integ.images.bodies and integ.images.n_fallbacks == 0
     if key != "tiny":
         return
     made.clear()
-    monkeypatch.setattr(mj._WImages, "impulses", lambda *args: None)
+    monkeypatch.setattr(w_images.WImages, "impulses", lambda *args: None)
     bad = run_scenario(sc).result
     (integ,) = made
-    assert integ._images.n_fallbacks >= 1 and not integ._images.bodies
+    assert integ.images.n_fallbacks >= 1 and not integ.images.bodies
     peak = np.abs(good.contact_force).max()
     assert np.abs(good.contact_force - bad.contact_force).max() <= 1e-9 * peak

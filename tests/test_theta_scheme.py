@@ -1,5 +1,5 @@
-"""The Moreau-Jean theta scheme is what its name and `order` say, at theta = 1/2 and at the seed
-scenarios' theta = 0.55.
+"""The Moreau-Jean theta scheme is what its name and `order` say, at theta = 1/2, at the default
+theta = 0.55 and with theta(h) = 1/2 + h / (4 tau) taken for each step size (integrate.theta).
 
 Test system: one elastic coordinate, a breathing mode of two point masses m on the x axis
 (psi moves them apart symmetrically: no rigid-body content, no frame coupling), so the frame
@@ -24,6 +24,7 @@ from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
 from flexmvm.integrate.run_result import TimeGrid
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import System
+from flexmvm.integrate.theta import ThetaRule
 from flexmvm.scenarios import TimeConfig
 from flexmvm.scenarios.load import load_scenario
 from flexmvm.scenarios.run import run_scenario
@@ -161,3 +162,34 @@ def test_theta_proportional_to_the_step_is_second_order():
     for x in (0.01, 0.05, 0.1):           # h / tau
         theta = theta_for_damping_time(x, 1.0)
         assert abs(np.log((1 - theta) / theta) + x) <= x**3 / 12 * 1.01
+
+
+def test_theta_is_a_property_of_the_step():
+    """With a damping time tau (TimeGrid.hf_damping_time_s) every step of size h takes
+    theta(h) = 1/2 + h / (4 tau), not the value at dt_s: a run whose steps are all 4 dt_s (no
+    contact: the driver takes dt_max_s = 4 dt_s throughout) follows the theta map of
+    theta(4 dt_s) = 0.6 to 1e-9 of the amplitude (Newton rtol 1e-10 per step over 100 steps),
+    and is far (> 1e-3 of the amplitude) from the map of theta(dt_s) = 0.525 that a theta fixed
+    at dt_s would give. The rule is second order (test_theta_proportional_to_the_step_is_second
+    _order) and capped at 1 from h = 2 tau on, where -(1 - theta) / theta = 0 <= exp(-h / tau):
+    what the step cannot resolve never decays slower than exp(-t / tau). ~1 s."""
+    tau = PERIOD / 20
+    H = PERIOD / 50                       # the step taken: theta(H) = 1/2 + (1/50) / (4/20)
+    rule = ThetaRule(damping_time_s=tau)
+    assert rule.at(H) == pytest.approx(0.6, rel=1e-14) and rule.at(H / 4) == pytest.approx(0.525)
+    grid = TimeGrid(2.0 * PERIOD, H / 4, dt_max_s=H, output_dt_s=H, theta=rule.at(H / 4),
+                    hf_damping_time_s=tau)
+    v = np.zeros(7)
+    v[6] = 1.0
+    res = simulate(_oscillator(), [BodyState(np.zeros(3), np.eye(3), np.zeros(1), v)], grid)
+    assert set(res.steps.h_s) == {H}
+    amp = 1.0 / OMEGA
+    for theta, close in ((rule.at(H), True), (rule.at(H / 4), False)):
+        P, x, expect = _scheme_map(theta, H), np.array([0.0, 1.0]), [0.0]
+        for _ in range(len(res.t) - 1):
+            x = P @ x
+            expect.append(x[0])
+        err = np.abs(res.q[0][:, 0] - np.array(expect)).max()
+        assert (err <= 1e-9 * amp) if close else (err > 1e-3 * amp), (theta, err)
+    assert MoreauJeanIntegrator(_oscillator(), theta=rule).order == 2
+    assert rule.at(2.0 * tau) == 1.0 and rule.at(20.0 * tau) == 1.0

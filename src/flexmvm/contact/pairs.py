@@ -45,6 +45,7 @@ surface nodes against the slave facets too (given `slave_surface`).
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -103,7 +104,8 @@ class PointToSurfaceContact:
                  gap_tol_m: float = 1e-9, name: str = "contact",
                  slave_surface: MasterSurface | None = None,
                  beta: float = PENETRATION_RECOVERY, friction_coefficient: float = 0.0,
-                 law: ContactLaw = ContactLaw.VELOCITY, theta: float | None = None):
+                 law: ContactLaw = ContactLaw.VELOCITY,
+                 theta: float | Callable[[float], float] | None = None):
         if slave == master:
             raise InputError(f"{name}: slave and master must be different bodies")
         mu = float(friction_coefficient)
@@ -134,15 +136,16 @@ class PointToSurfaceContact:
         if not 0.0 <= beta <= 1.0:
             raise InputError(f"{name}: penetration recovery beta must be in [0, 1], got {beta!r}")
         self.beta = float(beta)
-        # law = position: theta must be the integrator's (the end gap is g + h v_m . n)
+        # law = position: theta must be the integrator's (the end gap is g + h v_m . n), a
+        # number or the integrator's theta of the step size h (integrate.theta.ThetaRule)
         self.law = ContactLaw(law)
         if self.law is ContactLaw.POSITION:
-            if theta is None or not 0.5 <= theta <= 1.0:
+            if theta is None or (not callable(theta) and not 0.5 <= theta <= 1.0):
                 raise InputError(f"{name}: the position law needs the scheme's theta in "
                                  f"[0.5, 1], got {theta!r}")
             if kind is ContactKind.BONDED:
                 raise InputError(f"{name}: the position law is not for bonded contact")
-        self.theta = None if theta is None else float(theta)
+        self.theta = None if theta is None else (theta if callable(theta) else float(theta))
         self.name = name
         self._bonds: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._setup(bodies)
@@ -279,7 +282,7 @@ class PointToSurfaceContact:
         of docs/studies.md). Position law: -(g + h (1 - theta) u_N-) / (theta h), the end gap
         g + h (theta u_N+ + (1 - theta) u_N-) >= 0."""
         if self.law is ContactLaw.POSITION:
-            th = self.theta
+            th = self.theta(h) if callable(self.theta) else self.theta
             return -(gaps + (h * (1.0 - th)) * u_n) / (th * h)
         return np.minimum(self.beta * np.maximum(0.0, -gaps) / h, np.maximum(0.0, -u_n))
 

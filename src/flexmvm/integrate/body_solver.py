@@ -12,6 +12,7 @@ translation with constant M_wq, approximate otherwise; the residual is always ex
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -46,13 +47,15 @@ class _Factor:
 class BodySolver:
     """Solves W x = b for one body; factorizations cached per step size."""
 
-    def __init__(self, body: FlexibleBody, theta: float = 0.5, max_cached: int = MAX_CACHED,
-                 pool=None):
+    def __init__(self, body: FlexibleBody, theta: float | Callable[[float], float] = 0.5,
+                 max_cached: int = MAX_CACHED, pool=None):
         self.body = body
         # a thread pool for the back-substitutions of a sparse W (fe.ldl: two etree halves
         # on two threads); None: on the calling thread
         self.pool = pool
         self._symbolic: SymbolicFactor | None = None   # of W's pattern, made by the first _factor
+        # theta of the step size h: a fixed one, or a function of h (integrate.theta); W is
+        # factored once per h either way
         self.theta = theta
         self._cache: dict[float, _Factor] = {}
         self._order: list[float] = []
@@ -74,7 +77,7 @@ class BodySolver:
                 self._order.append(h)
             return f
         b = self.body
-        th = self.theta
+        th = self.theta(h) if callable(self.theta) else self.theta
         W = b.inv.M_qq + (th * th * h * h) * b.k_hat
         if b.c_hat is not None:
             W = W + (th * h) * b.c_hat
@@ -190,11 +193,11 @@ class BodySolver:
             # the Schur complement of the current M_wq to first order in the drift dM_w of
             # the one in W (exact in the omega-translation blocks, since Z_r is exact; the
             # omitted dM_w W_qq^-1 dM_w^T is below COUPLING_TOL^2 of M_w Z_w). S is small for
-            # full FE (module docstring of moreau_jean), so a stale M_w changes it by
+            # full FE (module docstring of iteration_matrix), so a stale M_w changes it by
             # several per cent (later iterates then converge by ~1/16 per iterate). The
             # bordered solve itself keeps the refreshed M_w (in M_fq~ y and Z), so its
             # elastic part misses W_qq^-1 dM_w^T x_w, first order in the drift: hence the
-            # small COUPLING_TOL (moreau_jean)
+            # small COUPLING_TOL (iteration_matrix)
             dr, dw = self._dMw @ f.Zr, self._dMw @ f.Zw
             MZ[:3, 3:] += A @ dr.T
             MZ[3:, :3] += dr @ A.T
@@ -222,7 +225,7 @@ class BodySolver:
         """B^T xf (nq,) for a frame vector xf (6,), B = [A S1; M_wq] the frame-elastic block
         of the W that solve(), solve_frame() and the contact columns use (with the A and
         M_wq of the last prepare / refresh_coupling). For x = W^-1 b: W_qq x_q = b_q - B^T x_f
-        (what integrate.moreau_jean takes k_hat dq_dot from)."""
+        (what integrate.w_images takes k_hat dq_dot from)."""
         self._flush()
         return self.body.inv.S1.T @ (self._A.T @ xf[:3]) + self._mw(self._f).T @ xf[3:6]
 

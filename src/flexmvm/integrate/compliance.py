@@ -19,7 +19,7 @@ selector restricted to them (m, n_d):
 with P_dd = psi_d W_qq^-1 psi_d^T (n_d, n_d). Per cached column are kept S1 c_j, M_w c_j and
 the rows psi_j Z_r, psi_j Z_w of Z at its DOF. By symmetry of W_qq the latter equal the former
 to round-off, but both are kept so that every product is rounded as in the explicit columns:
-S is nearly singular for a full FE body (~1e-5 of the mass, see moreau_jean.py), and M_fq~ y must
+S is nearly singular for a full FE body (~1e-5 of the mass, see iteration_matrix.py), and M_fq~ y must
 be consistent with the S1 Z_r, M_w Z_w in S. The translational step (3 x 3 Schur complement,
 frame rotation frozen) drops the M_w and Z_w terms. A step then costs small gathers and one
 weighted sum of n_d cached columns instead of dense (nq, m) blocks.

@@ -1,5 +1,7 @@
 """The time loop: step-size policy, outputs, contact bookkeeping. The scheme is separate
-(moreau_jean.py); this file decides which step to take and what to keep.
+(moreau_jean.py, the default; simulate's ``integrator`` chooses another, behind the contract
+of step.py); this file decides which step to take and what to keep, and calls simulate's
+``on_step`` hook after every accepted step.
 
 Time runs on an integer grid of ticks of dt_s, so output times are hit exactly. Steps are
 dt * 2^k <= dt_max (a handful of step sizes, each factored once): the smallest near contact,
@@ -11,6 +13,8 @@ cannot go on raises SimulationFailed carrying the histories up to the last good 
 from __future__ import annotations
 
 import time
+from collections.abc import Callable
+from dataclasses import dataclass
 
 import numpy as np
 from threadpoolctl import threadpool_limits
@@ -19,6 +23,7 @@ from flexmvm.errors import InputError, SimulationFailed, SolverError
 from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
 from flexmvm.integrate.run_result import FrictionSummary, RunResult, StepHistory, TimeGrid
 from flexmvm.integrate.state import BodyState
+from flexmvm.integrate.step import Integrator, StepResult
 from flexmvm.integrate.system import System
 
 GROW_AFTER_STEPS = 4
@@ -101,9 +106,47 @@ class _Recorder:
         )
 
 
+#: What chooses the integrator of a run: (system, grid) -> an integrator (integrate.step's
+#: Integrator contract: step, order, counters), made once per run.
+IntegratorFactory = Callable[[System, TimeGrid], Integrator]
+
+
+@dataclass(frozen=True)
+class AcceptedStep:
+    """One accepted step, as simulate's per-step hook sees it: start time t_s and size h_s
+    [s], the states at t_s (``start``) and the step's result (end states ``result.states``,
+    constraint rows and impulses [N s], iteration report: iterations, converged, residual).
+    The states are the run's own: read them, do not change them."""
+
+    t_s: float
+    h_s: float
+    start: list[BodyState]
+    result: StepResult
+
+    @property
+    def t_end_s(self) -> float:
+        return self.t_s + self.h_s
+
+    @property
+    def states(self) -> list[BodyState]:
+        """The states at t_s + h_s."""
+        return self.result.states
+
+
+def moreau_jean(exploit_nonrotating: bool = True) -> IntegratorFactory:
+    """The default integrator: the Moreau-Jean scheme (moreau_jean.py) with the grid's
+    theta of each step size (TimeGrid.theta_rule)."""
+    def make(system: System, grid: TimeGrid) -> Integrator:
+        return MoreauJeanIntegrator(system, theta=grid.theta_rule(),
+                                    exploit_nonrotating=exploit_nonrotating)
+
+    return make
+
+
 def simulate(system: System, states: list[BodyState], grid: TimeGrid, probes=(),
              progress: bool = False, t0: float = 0.0, exploit_nonrotating: bool = True,
-             check_overlap: bool = True) -> RunResult:
+             check_overlap: bool = True, integrator: IntegratorFactory | None = None,
+             on_step: Callable[[AcceptedStep], None] | None = None) -> RunResult:
     """Integrate from t0 over grid.t_end_s; returns histories at every output time.
 
     check_overlap: InputError when a node of a contact surface is more than OVERLAP_TOL_M
@@ -112,22 +155,101 @@ def simulate(system: System, states: list[BodyState], grid: TimeGrid, probes=(),
 
     exploit_nonrotating: let steps whose frames do not rotate take the linear one-solve step
     (integrate.nonrotating; verified against the full equations). False forces the general
-    Newton step everywhere (for comparison).
+    Newton step everywhere (for comparison). For the default integrator only.
+
+    integrator: the factory of the run's integrator (default: moreau_jean()).
+    on_step: called after every accepted step with an AcceptedStep (custom output,
+    monitoring); what it raises stops the run.
 
     BLAS runs single-threaded inside the loop: its operations are small (vectors of nq,
     matrices of a few hundred), where thread start-up costs more than it saves (measured: a
     25,000-long dot product 7.6 ms with two OpenBLAS threads on a loaded 2-core machine, 12 us
     with one)."""
+    make = integrator if integrator is not None else moreau_jean(exploit_nonrotating)
     with threadpool_limits(limits=1, user_api="blas"):
-        return _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
+        return _simulate(system, states, grid, probes, progress, t0, make, on_step,
                          check_overlap)
 
 
-def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
+class _Tally:
+    """What a run adds up over its accepted steps (RunResult's counters and histories
+    besides the outputs)."""
+
+    def __init__(self, system: System, n_joint_rows: int, pen: _Penetrations, dt_s: float):
+        self.pen = pen
+        self.n_steps, self.calm = 0, 0
+        self.impulse, self.jimpulse = 0.0, np.zeros(n_joint_rows)
+        self.intervals: list[list[float]] = []
+        self.max_pen, self.drift = 0.0, 0.0
+        self.step_t, self.step_h, self.step_impulse = [], [], []
+        self.row_impulses: dict = {}   # normal contact row key -> [impulse [N s], first time [s]]
+        self.n_loose, self.worst_res, self.worst_lcp = 0, 0.0, 0.0
+        self.p_res = np.zeros(3)
+        self.shift = np.zeros(3)      # the momentum the balance of the steps added so far [N s]
+        self.shifts = [self.shift.copy()]   # ... at every output time
+        self.friction = (FrictionSummary() if any(c.mu > 0 for c in system.contacts)
+                         else None)   # runs with friction report it even if no contact closes
+        self.cuts = [0, dt_s]         # steps cut in two, smallest step taken [s]
+
+    def add(self, t_s: float, h_s: float, res: StepResult) -> None:
+        """One accepted step from t_s over h_s; its end states measured for penetration."""
+        self.n_steps += 1
+        self.drift = max(self.drift, res.joint_drift)
+        self.n_loose += not res.converged
+        self.worst_res = max(self.worst_res, res.residual)
+        self.worst_lcp = max(self.worst_lcp, res.lcp_residual)
+        if res.translation_residual is not None:
+            self.p_res += res.translation_residual
+        f = res.contact.normal_impulse(res.contact_impulses)
+        if res.contact.friction is not None:
+            self.friction = (self.friction or FrictionSummary()).add(
+                res.contact, res.contact_impulses, h_s)
+        if not self.pen.measured and res.contact.gaps.size:
+            self.max_pen = max(self.max_pen, float(-res.contact.gaps.min()))
+        self.pen.after_step(res.states, t_s + h_s)
+        in_contact = f > 0.0
+        self.calm = 0 if (in_contact or res.contact.rows.m) else self.calm + 1
+        _track_intervals(self.intervals, in_contact, t_s, t_s + h_s)
+        self.impulse += f
+        self.jimpulse += res.joint_impulses
+        if f > 0.0:
+            _add_row_impulses(self.row_impulses, res.contact, res.contact_impulses, t_s + h_s)
+        self.step_t.append(t_s + h_s)
+        self.step_h.append(h_s)
+        self.step_impulse.append(f)
+        if res.momentum_shift is not None:
+            self.shift += res.momentum_shift
+
+    def output(self) -> None:
+        """An output was recorded: the impulses start again, the momentum shift is kept."""
+        self.shifts.append(self.shift.copy())
+        self.impulse, self.jimpulse = 0.0, np.zeros_like(self.jimpulse)
+
+    def result(self, rec: _Recorder, integ, wall0: float, failure: str | None = None
+               ) -> RunResult:
+        pen = self.pen
+        depth = pen.depth if pen.measured else self.max_pen
+        return rec.result(contact_intervals=[tuple(iv) for iv in self.intervals],
+                          max_penetration_m=max(depth, 0.0), max_penetration_at=pen.at,
+                          max_penetration_by_direction_m=pen.by_direction,
+                          max_joint_drift=self.drift, n_steps=self.n_steps,
+                          n_factorizations=integ.n_factorizations,
+                          n_nonrotating_steps=integ.n_nonrotating_steps,
+                          steps_not_converged=self.n_loose, newton_residual_max=self.worst_res,
+                          lcp_residual_max=self.worst_lcp, momentum_residual=self.p_res,
+                          wall_time_s=time.perf_counter() - wall0,
+                          friction=self.friction, contact_row_impulses=self.row_impulses,
+                          steps=StepHistory(np.array(self.step_t), np.array(self.step_h),
+                                            np.array(self.step_impulse, dtype=float)),
+                          step_cuts=self.cuts[0], smallest_step_s=self.cuts[1],
+                          failure=failure, momentum_shift=np.array(self.shifts))
+
+
+def _simulate(system, states, grid, probes, progress, t0, make_integrator, on_step,
               check_overlap) -> RunResult:
     n_ticks, out_ticks, k_max = grid.ticks()
     fine_ticks = grid.contact_output_ticks()
-    integ = MoreauJeanIntegrator(system, theta=grid.theta, exploit_nonrotating=exploit_nonrotating)
+    integ = make_integrator(system, grid)
     dt = grid.dt_s
     rec = _Recorder(system, probes, n_ticks // out_ticks + 2, integ.n_joint_rows)
     states = [s.copy() for s in states]
@@ -135,101 +257,51 @@ def _simulate(system, states, grid, probes, progress, t0, exploit_nonrotating,
     pen.start(states, t0, check_overlap)
     rec.record(t0, states, 0.0, np.zeros(integ.n_joint_rows))
     bar = _progress(progress, n_ticks)
-    tick, level, calm, last_out = 0, 0, 0, 0
-    impulse, jimpulse = 0.0, np.zeros(integ.n_joint_rows)
-    intervals: list[list[float]] = []
-    max_pen, n_steps, drift = 0.0, 0, 0.0
-    step_t, step_h, step_impulse = [], [], []
-    row_impulses: dict = {}   # normal contact row key -> [impulse [N s], first time [s]]
-    n_loose, worst_res, worst_lcp, p_res = 0, 0.0, 0.0, np.zeros(3)
-    shift = np.zeros(3)          # the momentum the balance of the steps added so far [N s]
-    shifts = [shift.copy()]      # ... at every output time
-    friction = (FrictionSummary() if any(c.mu > 0 for c in system.contacts)
-                else None)   # runs with friction report it even if no contact closes
+    tally = _Tally(system, integ.n_joint_rows, pen, grid.dt_s)
     wall0 = time.perf_counter()
     h_min = grid.dt_s / (1 << MAX_STEP_CUTS)
-    cuts = [0, grid.dt_s]     # steps cut in two, smallest step taken [s]
-
-    def finish(failure: str | None = None) -> RunResult:
-        nfac = sum(s.n_factorizations for s in integ.solvers)
-        depth = pen.depth if pen.measured else max_pen
-        return rec.result(contact_intervals=[tuple(iv) for iv in intervals],
-                          max_penetration_m=max(depth, 0.0), max_penetration_at=pen.at,
-                          max_penetration_by_direction_m=pen.by_direction,
-                          max_joint_drift=drift, n_steps=n_steps,
-                          n_factorizations=nfac, n_nonrotating_steps=integ.n_nonrotating_steps,
-                          steps_not_converged=n_loose, newton_residual_max=worst_res,
-                          lcp_residual_max=worst_lcp, momentum_residual=p_res,
-                          wall_time_s=time.perf_counter() - wall0,
-                          friction=friction, contact_row_impulses=row_impulses,
-                          steps=StepHistory(np.array(step_t), np.array(step_h),
-                                            np.array(step_impulse, dtype=float)),
-                          step_cuts=cuts[0], smallest_step_s=cuts[1], failure=failure,
-                          momentum_shift=np.array(shifts))
-
+    tick, level, last_out = 0, 0, 0
     while tick < n_ticks:
         to_out = out_ticks - tick % out_ticks
-        level = 0 if calm == 0 and n_steps else _choose_level(system, states, level, calm, k_max, dt)
+        level = (0 if tally.calm == 0 and tally.n_steps
+                 else _choose_level(system, states, level, tally.calm, k_max, dt))
         span = 1 << level
         while span > to_out or tick + span > n_ticks and span > 1:
             span >>= 1
         h = span * dt
         t = t0 + tick * dt
         try:
-            parts = _advance(integ, t, states, h, h_min, cuts)
+            parts = _advance(integ, t, states, h, h_min, tally.cuts)
         except SolverError as exc:
-            message = (f"at t = {t:.6g} s (step {n_steps + 1}, h = {h:.3g} s, cut down to "
-                       f"{h_min:.3g} s): {exc}")
+            message = (f"at t = {t:.6g} s (step {tally.n_steps + 1}, h = {h:.3g} s, cut down "
+                       f"to {h_min:.3g} s): {exc}")
             if bar is not None:
                 bar.close()
-            raise SimulationFailed(message, finish(message)) from exc
+            raise SimulationFailed(message, tally.result(rec, integ, wall0, message)) from exc
         for t_s, h_s, res in parts:
-            states = res.states
-            n_steps += 1
-            drift = max(drift, res.joint_drift)
-            n_loose += not res.converged
-            worst_res = max(worst_res, res.residual)
-            worst_lcp = max(worst_lcp, res.lcp_residual)
-            if res.translation_residual is not None:
-                p_res += res.translation_residual
-            f = res.contact.normal_impulse(res.contact_impulses)
-            if res.contact.friction is not None:
-                friction = (friction or FrictionSummary()).add(res.contact, res.contact_impulses,
-                                                               h_s)
-            if not pen.measured and res.contact.gaps.size:
-                max_pen = max(max_pen, float(-res.contact.gaps.min()))
-            pen.after_step(states, t_s + h_s)
-            in_contact = f > 0.0
-            calm = 0 if (in_contact or res.contact.rows.m) else calm + 1
-            _track_intervals(intervals, in_contact, t_s, t_s + h_s)
-            impulse += f
-            jimpulse += res.joint_impulses
-            if f > 0.0:
-                _add_row_impulses(row_impulses, res.contact, res.contact_impulses, t_s + h_s)
-            step_t.append(t_s + h_s)
-            step_h.append(h_s)
-            step_impulse.append(f)
-            if res.momentum_shift is not None:
-                shift += res.momentum_shift
+            start, states = states, res.states
+            tally.add(t_s, h_s, res)
+            if on_step is not None:
+                on_step(AcceptedStep(t_s, h_s, start, res))
         tick += span
         fine = fine_ticks is not None and level == 0 and tick % fine_ticks == 0
         if tick % out_ticks == 0 or tick >= n_ticks or fine:
             span_t = (tick - last_out) * dt
             last_out = tick
-            rec.record(t0 + tick * dt, states, impulse / span_t, jimpulse / span_t, integ.carried,
-                       integ.carried_products)
+            rec.record(t0 + tick * dt, states, tally.impulse / span_t, tally.jimpulse / span_t,
+                       integ.carried, integ.carried_products)
             try:
                 _check_finite(rec.rows[-1], system, t0 + tick * dt)
             except SolverError as exc:
                 rec.rows.pop()
-                raise SimulationFailed(str(exc), finish(str(exc))) from exc
-            shifts.append(shift.copy())
-            impulse, jimpulse = 0.0, np.zeros_like(jimpulse)
+                raise SimulationFailed(str(exc), tally.result(rec, integ, wall0, str(exc))
+                                       ) from exc
+            tally.output()
             if bar is not None:
                 bar.update(min(tick, n_ticks) - bar.n)
     if bar is not None:
         bar.close()
-    return finish()
+    return tally.result(rec, integ, wall0)
 
 
 def _advance(integ, t: float, states, h: float, h_min: float, cuts: list

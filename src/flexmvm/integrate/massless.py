@@ -36,6 +36,7 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
+from flexmvm.constraints.contact import ContactLaw
 from flexmvm.errors import SolverError
 from flexmvm.fe.cholesky import ldl_factor
 from flexmvm.integrate.lcp import regularised_cho
@@ -112,3 +113,66 @@ def equilibrate(parts: list[tuple[MasslessCoordinates, np.ndarray, np.ndarray, n
     rhs = sum((P @ d for (_, _, _, P), d in zip(parts, dq0)), np.zeros(m))
     mu = sla.cho_solve(regularised_cho(0.5 * (D + D.T), "massless-node"), rhs)
     return [d - y @ mu for d, y in zip(dq0, Y)]
+
+
+def check_contact_law(system, massless: list[MasslessCoordinates | None]) -> None:
+    """SolverError when a contact under the velocity law touches a body with massless
+    coordinates (massless: per body, MasslessCoordinates.of)."""
+    for provider in system.contacts:
+        sides = (getattr(provider, "slave", None), getattr(provider, "master", None))
+        if (getattr(provider, "law", None) is ContactLaw.VELOCITY
+                and any(b is not None and massless[b] is not None for b in sides)):
+            raise SolverError("massless (mass-redistributed) contact nodes need the position "
+                              "contact law: under the velocity law their velocities flip "
+                              "every step (docs/contact_law.md)")
+
+
+def equilibrate_step_end(massless, bodies, loads: dict, t_theta: float, h: float, states,
+                         new_states, held) -> list[tuple[int, np.ndarray, np.ndarray]]:
+    """Massless coordinates of every body to equilibrium at the step's end (module doc),
+    under the step's constraint impulses as forces lambda / h and the point loads acting at
+    t_theta = t + theta h, with the rows that carried an impulse held; their velocity the
+    step's mean velocity. new_states are changed in place. held: [(rows, lambda)] of the
+    step's constraints (contact, joints). Returns [(body, dq_s, dq_dot_s)], the changes made
+    (for quantities carried with the state: k_hat q and k_hat q_dot)."""
+    todo = [b for b, ml in enumerate(massless) if ml is not None]
+    if not todo:
+        return []
+    held = [(rows, lam, np.flatnonzero(lam != 0.0)) for rows, lam in held
+            if rows is not None and lam is not None and len(lam)]
+    parts = [_step_end_part(massless[b], b, bodies[b], new_states[b], loads.get(b, ()),
+                            t_theta, h, held) for b in todo]
+    # rows with no massless column in any body impose nothing here
+    if parts and parts[0][3].shape[0]:
+        keep = np.any(np.hstack([p[3] for p in parts]) != 0.0, axis=1)
+        parts = [(ml, q, f, P[keep]) for ml, q, f, P in parts]
+    changes = []
+    for b, (ml, q, _, _), dq in zip(todo, parts, equilibrate(parts)):
+        st, new = states[b], new_states[b]
+        q[ml.s] += dq
+        qd = new.v[6:]
+        v_s = (q[ml.s] - st.q[ml.s]) / h
+        dv = v_s - qd[ml.s]
+        qd[ml.s] = v_s
+        changes.append((b, dq, dv))
+    return changes
+
+
+def _step_end_part(ml: MasslessCoordinates, b: int, body, new, loads, t_theta: float,
+                   h: float, held) -> tuple:
+    """(coordinates, q, force on them, held rows' columns) of body b for equilibrate."""
+    force = np.zeros(len(ml.s))    # on the massless coordinates only
+    Phi = [np.zeros((len(on), len(ml.s))) for _, _, on in held]
+    for k, (rows, lam, on) in enumerate(held):
+        blk = rows.blocks.get(b)
+        if blk is not None:
+            cols = blk[1][:, ml.s]
+            force += cols.T @ lam
+            Phi[k] = cols[on]
+    force /= h
+    for load in loads:
+        if t_theta >= load.t_start_s:
+            force += body.point_jacobian(load.node, new.A, new.q,
+                                         np.asarray(load.force_n, float))[1][ml.s]
+    P = np.vstack(Phi) if Phi else np.zeros((0, len(ml.s)))
+    return ml, new.q, force, P

@@ -76,3 +76,18 @@ class AitkenRelaxation:
             self.omega = min(max(w, OMEGA_MIN), OMEGA_MAX) if np.isfinite(w) else 0.5
         self.n_relaxed += 1
         return self.omega
+
+
+def relaxed_iterate(relax: AitkenRelaxation, images: dict, before, after, image_before: dict,
+                    stalled: bool) -> tuple[list[np.ndarray], bool]:
+    """(v_plus, relaxed): the iterate ``after`` = G(``before``), or once the step has stalled
+    Aitken's relaxed one before + w (after - before); images (the W-images of the full-FE
+    bodies, integrate.w_images: linear in v_plus) relaxed alike, in place, from image_before."""
+    w = relax.factor(before, after, stalled)
+    if w == 1.0:
+        return after, False
+    for b, img in images.items():
+        old = image_before.get(b)
+        if old is not None:
+            images[b] = old + w * (img - old)
+    return [a + w * (c - a) for a, c in zip(before, after)], True

@@ -12,12 +12,15 @@ import numpy as np
 
 from flexmvm.errors import InputError
 from flexmvm.integrate import DEFAULT_THETA
+from flexmvm.integrate.theta import ThetaRule
 
 
 @dataclass(frozen=True)
 class TimeGrid:
     """t_end_s, dt_s (smallest step), dt_max_s (largest), output_dt_s; all [s]; theta of the
-    Moreau-Jean scheme (1/2: implicit midpoint; default flexmvm.integrate.DEFAULT_THETA)."""
+    Moreau-Jean scheme (1/2: implicit midpoint; default flexmvm.integrate.DEFAULT_THETA), or
+    with hf_damping_time_s tau [s] theta(h) = min(1, 1/2 + h / (4 tau)) for each step size h
+    the driver takes (integrate.theta; theta is then the value at dt_s, not used)."""
 
     t_end_s: float
     dt_s: float
@@ -28,6 +31,13 @@ class TimeGrid:
     # the contact step dt_s (a contact active or predicted within the step horizon), on top of
     # the output_dt_s grid: a long approach recorded coarsely, the impact finely. None: off.
     output_contact_dt_s: float | None = None
+    hf_damping_time_s: float | None = None
+
+    def theta_rule(self) -> ThetaRule:
+        """theta of each step size (integrate.theta)."""
+        if self.hf_damping_time_s is None:
+            return ThetaRule(self.theta)
+        return ThetaRule(self.theta, self.hf_damping_time_s)
 
     def contact_output_ticks(self) -> int | None:
         """Ticks between the contact-phase outputs (None: none); InputError if not a whole

@@ -498,14 +498,15 @@ def build_scenario(sc) -> BuiltScenario:
         infos.append(info)
         states.append(_initial_state(body, cfg.placement))
     index = {cfg.name: i for i, cfg in enumerate(sc.bodies)}
-    contacts = tuple(_contact(c, k, bodies, infos, index, sc.time.theta)
+    t = sc.time
+    grid = TimeGrid(t.t_end_s, t.dt_s, t.dt_max_s, t.output_dt_s, t.theta, t.output_contact_dt_s,
+                    t.hf_damping_time_s)
+    contacts = tuple(_contact(c, k, bodies, infos, index, grid.theta_rule())
                      for k, c in enumerate(sc.contacts))
     joints = []
     for k, j in enumerate(sc.joints):
         joints.extend(_joint(j, f"joints[{k}]", bodies, infos, index, states))
     probes = [_probe(p, f"probes[{k}]", infos, index) for k, p in enumerate(sc.probes)]
-    t = sc.time
-    grid = TimeGrid(t.t_end_s, t.dt_s, t.dt_max_s, t.output_dt_s, t.theta, t.output_contact_dt_s)
     grid.ticks()
     grid.contact_output_ticks()
     bodies = [_with_elimination_order(b) for b in bodies]
@@ -531,8 +532,9 @@ def _with_elimination_order(body: FlexibleBody) -> FlexibleBody:
 
 
 def _contact(c, k, bodies, infos, index, theta):
-    """The contact provider of contacts[k]; theta: the scheme's (time.theta), which the
-    position law's bound needs (the end gap is g + h (theta u_N+ + (1 - theta) u_N-))."""
+    """The contact provider of contacts[k]; theta: the scheme's theta of each step size
+    (TimeGrid.theta_rule), which the position law's bound needs (the end gap is
+    g + h (theta u_N+ + (1 - theta) u_N-))."""
     where = f"contacts[{k}]"
     s, m = index[c.slave_body], index[c.master_body]
     try:

@@ -41,6 +41,7 @@ from flexmvm.bodies.build import ModelKind
 from flexmvm.constraints.contact import ContactKind, ContactLaw
 from flexmvm.constraints.joints import JointType
 from flexmvm.integrate import DEFAULT_THETA
+from flexmvm.integrate.theta import theta_for_damping_time as damped_theta
 from flexmvm.materials import Material
 from flexmvm.scenarios.body_schema import (
     BodyConfig,
@@ -184,11 +185,12 @@ class ProbeConfig(Frozen):
 
 def theta_for_damping_time(dt_s: float, tau_s: float) -> float:
     """The Moreau-Jean theta whose step damps what it cannot resolve with time constant tau_s
-    [s]: theta = 1/2 + dt_s / (4 tau_s). Per step the amplification at omega h >> 1 is
+    [s]: theta = 1/2 + dt_s / (4 tau_s) (integrate.theta, which applies it to every step size
+    the driver takes, capped at 1). Per step the amplification at omega h >> 1 is
     -(1 - theta) / theta = -exp(-dt_s / tau_s) (1 + O((dt_s / tau_s)^3)); for resolved
     motion the local error (theta - 1/2) h^2 y'' is O(h^3), so the scheme stays second
     order as dt_s -> 0 (a theta fixed above 1/2 is first order)."""
-    return 0.5 + dt_s / (4.0 * tau_s)
+    return damped_theta(dt_s, tau_s)
 
 
 def _damped_theta(data: dict) -> Any:
@@ -221,9 +223,11 @@ class TimeConfig(Frozen):
     theta: Annotated[float, Strict(), Ge(0.5), Le(1.0)] = DEFAULT_THETA
     # extra outputs this often while the step is dt_s (contact active or near); None: none
     output_contact_dt_s: Positive | None = None
-    # tau [s]: theta = 1/2 + dt_s / (4 tau) instead of a fixed theta (theta_for_damping_time):
-    # what the step cannot resolve decays as exp(-t / tau) whatever dt_s, and theta - 1/2 =
-    # O(dt_s) keeps the scheme second order (docs/contact_law.md, "theta = 1/2 + h / (4 tau)")
+    # tau [s]: theta(h) = 1/2 + h / (4 tau) for each step size h the driver takes (dt_s up to
+    # dt_max_s; capped at 1), instead of a fixed theta; theta is then its value at dt_s
+    # (theta_for_damping_time): what the step cannot resolve decays as exp(-t / tau) whatever
+    # the step, and theta - 1/2 = O(h) keeps the scheme second order (integrate.theta;
+    # docs/contact_law.md, "theta = 1/2 + h / (4 tau)")
     hf_damping_time_s: Positive | None = None
 
     @model_validator(mode="before")
