@@ -25,6 +25,7 @@ import pytest
 
 import flexmvm as fm
 from flexmvm.errors import InputError
+from flexmvm.studies.region import DEFAULT_FACTOR
 from flexmvm.theory.hertz import effective_modulus, hertz_impact
 
 pytest.importorskip("gmsh")
@@ -113,7 +114,7 @@ def test_estimate_against_hertz(scenario_file):
     m_beam = AL["rho_kg_m3"] * 0.1 * 0.01 * 0.01
     exact = hertz_impact(R, V0, effective_modulus(210e9, 0.3, 70e9, 0.33), m_ball, m_beam)
     assert est.contact_radius_m == pytest.approx(exact.contact_radius_m, rel=0.02)
-    assert est.radius_m == pytest.approx(3.0 * est.contact_radius_m, rel=1e-12)
+    assert est.radius_m == pytest.approx(DEFAULT_FACTOR * est.contact_radius_m, rel=1e-12)
     # its nodes and DOF are those of the region it states, as the builder selects it
     from flexmvm.scenarios import RegionSpec
     from flexmvm.scenarios.build import build_scenario
@@ -235,7 +236,8 @@ def test_region_command_prints_the_region(scenario_file, capsys):
 
     run(["region", str(scenario_file), "--body", "beam", "--json"])
     est = json.loads(capsys.readouterr().out)
-    assert est["region"]["ball"]["radius_m"] == pytest.approx(3 * est["contact_radius_m"])
+    assert est["region"]["ball"]["radius_m"] == pytest.approx(
+        DEFAULT_FACTOR * est["contact_radius_m"], rel=1e-12)
     assert est["nodes"] >= 1 and est["dof"] == 3 * est["nodes"] + est["modes"]
     with pytest.raises(SystemExit) as exc:
         run(["region", str(scenario_file), "--body", "ball", "--factor", "-1"])

@@ -13,7 +13,7 @@ import click
 @click.argument("scenario", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--body", required=True, help="The body to reduce.")
 @click.option("--factor", type=float, default=None,
-              help="Region radius per Hertz contact radius [default: 3, studies/region.py].")
+              help="Region radius per Hertz contact radius [default: 2, studies/region.py].")
 @click.option("--radius-mm", "radius_mm", type=float, default=None,
               help="Equivalent curvature radius of the two surfaces [mm], instead of the fit "
                    "(needed for flat or line contacts).")

@@ -14,8 +14,9 @@ Steps (all at the scenario's initial placements, in SI units):
    outward normal.
 3. The relative curvature: each surface's nodes nearest that point (NEIGHBOURS of them) are
    fitted by a height over the tangent plane, h = c0 + c1 u + c2 v - (k_uu u^2 + 2 k_uv u v
-   + k_vv v^2) / 2 + higher terms (convex positive: the curvatures k); the two curvature tensors are added (Johnson,
-   *Contact Mechanics*, 1985, sect. 4.1: A + B) and its principal curvatures 1/R', 1/R'' give
+   + k_vv v^2) / 2 + higher terms (convex positive: the curvatures k); the two curvature
+   tensors are added (Johnson, *Contact Mechanics*, 1985, sect. 4.1: A + B) and the sum's
+   principal curvatures 1/R', 1/R'' give
    the equivalent radius R_e = sqrt(R' R'') (Johnson eq. 4.29, the circular contact of the
    same area). A sum without curvature (flat on flat, a cylinder's line contact, conforming
    surfaces) has no Hertz point contact: the estimate then needs ``radius_m``.
@@ -28,10 +29,14 @@ Steps (all at the scenario's initial placements, in SI units):
 6. The region: the ball of radius ``factor x a`` about the contact point (body-local
    coordinates), its nodes, its DOF 3 x nodes + modes and its memory (scenarios/cost.py).
 
-The factor. DEFAULT_FACTOR = 3 comes from the sphere-on-beam showcase's selection study by
-ball radius (docs/notes/2026-11-27-select-on-meshes.md): the force NCC against full FE over
-1 ms reached its plateau at about 3 a; smaller balls leave the contact's static field to the
-modes, wider ones cost nodes for nothing.
+The factor. The ball must hold every node of the facets the contact circle touches: they
+reach about one element beyond a, and a mesh sized for the contact has elements of about a
+(docs/your_own_part.md), hence DEFAULT_FACTOR = 2. Measured on the sphere-on-beam showcase over
+1 ms, force NCC of MVM against full FE by ball radius (docs/notes/2026-11-27-select-on-meshes.md;
+a = 0.379 mm here): 0.66 a (2 nodes) has a third of the contact outside its region and stays
+at NCC 0.977 / 0.966 with 30 / 60 modes; from 1.06 a (4 nodes) up, the radius no longer
+matters (0.9969-0.9988 at 30 modes for 1.06 to 4.2 a; 0.999998 and 0.999996 at 60 modes for
+1.06 a and 3.2 a): the modes do.
 """
 
 from __future__ import annotations
@@ -49,7 +54,7 @@ from flexmvm.theory.hertz import HertzImpact, effective_modulus, hertz_impact
 __all__ = ["DEFAULT_FACTOR", "RegionEstimate", "estimate_region"]
 
 #: Region radius per Hertz contact radius (module doc: measured on the sphere-on-beam case).
-DEFAULT_FACTOR = 3.0
+DEFAULT_FACTOR = 2.0
 #: Surface nodes about the contact point fitted for the curvature (>= 6 unknowns of the fit).
 NEIGHBOURS = 30
 #: Below this curvature x fit radius a surface counts as flat: a deviation from its tangent
@@ -132,6 +137,10 @@ class RegionEstimate:
              f"nodes, {self.dof} DOF with {self.modes} modes"),
             self.cost.line(),
         ]
+        if self.nodes == 0:
+            lines.append("the ball holds no node of the mesh: its elements are coarser than "
+                         "the contact (elements of about a resolve the force); refine the mesh "
+                         "about the contact point or raise the factor")
         if self.cost.bytes > self.cost.full_bytes:
             lines.append("this region costs more than full FE: a smaller factor (or a coarser "
                          "mesh about the contact), or kind 'full'")
