@@ -237,6 +237,49 @@ def _point_velocity(cfg, x: np.ndarray) -> np.ndarray:
         np.asarray(p.angular_velocity_radps, float), x - np.asarray(p.position_m, float))
 
 
+def _first_contact(x: np.ndarray, fs, px: np.ndarray, pfs) -> tuple[np.ndarray, np.ndarray]:
+    """(expected first contact point (3,), the body's outward unit normal there (3,)), global,
+    from the body's nodes ``x`` and surface ``fs`` and the partner's ``px``, ``pfs`` (module
+    doc, step 2)."""
+    from scipy.spatial import cKDTree
+
+    mine, theirs = fs.nodes, pfs.nodes
+    normals = _node_normals(x, fs)
+    nearest = mine[cKDTree(x[mine]).query(px[theirs])[1]]
+    gap = np.einsum("ij,ij->i", px[theirs] - x[nearest], normals[nearest])
+    # ties (a flat face on a flat face): the tied node nearest the middle of the tied ones
+    tied = np.flatnonzero(gap <= gap.min() + 1e-9 * np.ptp(px[theirs], axis=0).max())
+    mid = px[theirs[tied]].mean(axis=0)
+    j = int(tied[np.argmin(np.linalg.norm(px[theirs[tied]] - mid, axis=1))])
+    node, pnode = int(nearest[j]), int(theirs[j])
+    n = normals[node]
+    return px[pnode] - float((px[pnode] - x[node]) @ n) * n, n
+
+
+def _equivalent_radius(body_points: np.ndarray, partner_points: np.ndarray,
+                       point: np.ndarray, n: np.ndarray, what: str
+                       ) -> tuple[float, tuple[float, float]]:
+    """(R_e [m], principal radii (R', R'') [m]) of the two surfaces' summed curvature at
+    ``point`` (module doc, step 3); InputError naming ``what`` without curvature."""
+    curv_b, rho_b = _curvature(body_points, point, n)
+    curv_p, rho_p = _curvature(partner_points, point, -n)
+    T = np.linalg.svd(np.eye(3) - np.outer(n, n))[0][:, :2]
+    kappa = np.linalg.eigvalsh(T.T @ (curv_b + curv_p) @ T)
+    if kappa[0] * max(rho_b, rho_p) < FLAT:
+        raise InputError(
+            f"{what} have no relative curvature at the expected contact point (principal "
+            f"curvatures {kappa[0]:.3g}, {kappa[1]:.3g} 1/m: a flat, line or conforming "
+            "contact); give the equivalent curvature radius (radius_m, --radius-mm)")
+    principal = (1.0 / kappa[1], 1.0 / kappa[0])
+    return math.sqrt(principal[0] * principal[1]), principal
+
+
+def _positive_or_none(name: str, value: float | None) -> float | None:
+    if value is not None and not (math.isfinite(value) and value > 0):
+        raise InputError(f"{name}: expected a number > 0, got {value!r}")
+    return None if value is None else float(value)
+
+
 def estimate_region(sc: Scenario, body: str, *, factor: float = DEFAULT_FACTOR,
                     radius_m: float | None = None, speed_mps: float | None = None,
                     modes: int | None = None, contact: int | None = None) -> RegionEstimate:
@@ -258,66 +301,39 @@ def estimate_region(sc: Scenario, body: str, *, factor: float = DEFAULT_FACTOR,
     """
     from flexmvm.scenarios.build import free_modes_source
 
-    if not (math.isfinite(factor) and factor > 0):
-        raise InputError(f"factor: expected a number > 0, got {factor!r}")
+    _positive_or_none("factor", factor)
+    radius_m = _positive_or_none("radius_m", radius_m)
+    speed_mps = _positive_or_none("speed_mps", speed_mps)
+    if modes is not None and int(modes) < 0:
+        raise InputError(f"modes: expected an integer >= 0, got {modes!r}")
     k = _contact_of(sc, body, contact)
-    c = sc.contacts[k]
+    c, where = sc.contacts[k], f"contacts[{k}]"
     mine = c.slave_body == body
-    surface = c.slave_surface if mine else c.master_surface
-    partner = c.master_body if mine else c.slave_body
-    other_surface = c.master_surface if mine else c.slave_surface
+    surface, partner, other_surface = ((c.slave_surface, c.master_body, c.master_surface) if mine
+                                       else (c.master_surface, c.slave_body, c.slave_surface))
     cfg, pcfg = sc.body(body), sc.body(partner)
     fe, pfe = free_modes_source(cfg)[0], free_modes_source(pcfg)[0]
-    where = f"contacts[{k}]"
     try:
         fs, pfs = fe.mesh.facet_set(surface), pfe.mesh.facet_set(other_surface)
     except MeshError as exc:  # an unknown or empty surface, said in one line
         raise InputError(f"{where}: {exc}") from None
     x, A, r = _placed(cfg, fe.mesh.nodes)
-    px, _, _ = _placed(pcfg, pfe.mesh.nodes)
-    mine_ids, theirs = fs.nodes, pfs.nodes
-    from scipy.spatial import cKDTree
-
-    normals = _node_normals(x, fs)
-    nearest = mine_ids[cKDTree(x[mine_ids]).query(px[theirs])[1]]
-    gap = np.einsum("ij,ij->i", px[theirs] - x[nearest], normals[nearest])
-    # ties (a flat face on a flat face): the tied node nearest the middle of the tied ones
-    tied = np.flatnonzero(gap <= gap.min() + 1e-9 * np.ptp(px[theirs], axis=0).max())
-    mid = px[theirs[tied]].mean(axis=0)
-    j = int(tied[np.argmin(np.linalg.norm(px[theirs[tied]] - mid, axis=1))])
-    node, pnode = int(nearest[j]), int(theirs[j])
-    n = normals[node]
-    point = px[pnode] - float((px[pnode] - x[node]) @ n) * n
-    curv_b, rho_b = _curvature(x[mine_ids], point, n)
-    curv_p, rho_p = _curvature(px[theirs], point, -n)
-    T = np.linalg.svd(np.eye(3) - np.outer(n, n))[0][:, :2]
-    kappa = np.linalg.eigvalsh(T.T @ (curv_b + curv_p) @ T)
-    rho = max(rho_b, rho_p)
+    px = _placed(pcfg, pfe.mesh.nodes)[0]
+    point, n = _first_contact(x, fs, px, pfs)
     if radius_m is None:
-        if kappa[0] * rho < FLAT:
-            raise InputError(
-                f"{where}: {body}.{surface} and {partner}.{other_surface} have no relative "
-                f"curvature at the expected contact point (principal curvatures "
-                f"{kappa[0]:.3g}, {kappa[1]:.3g} 1/m: a flat, line or conforming contact); "
-                "give the equivalent curvature radius (radius_m, --radius-mm)")
-        principal = (1.0 / kappa[1], 1.0 / kappa[0])
-        R = math.sqrt(principal[0] * principal[1])
+        R, principal = _equivalent_radius(x[fs.nodes], px[pfs.nodes], point, n,
+                                          f"{where}: {body}.{surface} and {partner}."
+                                          f"{other_surface}")
     else:
-        R = float(radius_m)
-        principal = (R, R)
-        if not (math.isfinite(R) and R > 0):
-            raise InputError(f"radius_m: expected a number > 0, got {radius_m!r}")
-    if speed_mps is None:
+        R, principal = radius_m, (radius_m, radius_m)
+    v = speed_mps
+    if v is None:
         v = float((_point_velocity(cfg, point) - _point_velocity(pcfg, point)) @ n)
         if not v > 0:
             raise InputError(
                 f"{where}: {body} and {partner} do not close at the expected contact point "
                 f"(normal relative speed {-v:.3g} m/s at their placements); give the closing "
                 "speed (speed_mps, --speed)")
-    else:
-        v = float(speed_mps)
-        if not (math.isfinite(v) and v > 0):
-            raise InputError(f"speed_mps: expected a number > 0, got {speed_mps!r}")
     m_body, m_partner = _mass(sc, cfg), _mass(sc, pcfg)
     if math.isinf(m_body) and math.isinf(m_partner):
         raise InputError(f"{where}: {body} and {partner} are both held to the ground; the "
@@ -329,8 +345,6 @@ def estimate_region(sc: Scenario, body: str, *, factor: float = DEFAULT_FACTOR,
     radius = factor * hertz.contact_radius_m
     n_nodes = int(np.count_nonzero(np.linalg.norm(fe.mesh.nodes - centre, axis=1) <= radius))
     m = int(modes) if modes is not None else (cfg.model.modes or DEFAULT_MODES)
-    if m < 0:
-        raise InputError(f"modes: expected an integer >= 0, got {modes!r}")
     cost = reduced_cost(body, fe.mesh.n_nodes, 3 * n_nodes + m, fe.K.nnz)
     return RegionEstimate(
         body, k, partner, surface, tuple(float(a) for a in centre),
