@@ -76,8 +76,9 @@ def check_study_scheme(sc: Scenario, body: str) -> None:
 def check_grid(sc: Scenario, body: str, layers, laps, modes):
     if sc.body(body).rod is None:
         raise InputError(f"body {body!r} is a mesh body: its selection study varies region "
-                         "families, ball radii or node sets (--radii, --node-sets; regions=); "
-                         "the i-j layers x laps grid is a rod's")
+                         "families, ball radii or node sets (fm.select radii_m= / node_sets=, "
+                         "flexmvm select --radii / --node-sets); the i-j layers x laps grid is "
+                         "a rod's")
     rod = rod_of(sc, body)
     check_study_scheme(sc, body)
     layers, laps, modes = _ints("layers", layers), _ints("laps", laps), _ints("modes", modes)

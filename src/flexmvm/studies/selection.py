@@ -10,6 +10,11 @@ the study body's reduction). Each run is compared with a reference
 run in which the study body is full FE (the other bodies unchanged), computed once before the
 sweep and stored in ``DIR/reference/history.csv``.
 
+A body of any mesh (issue 34) has no i-j rings: its families are *regions*, balls of given
+radii about one centre or node sets of its mesh (studies/regions.py), x the same mode counts,
+with the same reference, cases, resume, search and guard; its ncc.csv rows carry ``region``
+instead of ``layers, laps`` and its figure is the NCC-DOF front (fig_front_ncc_dof.png).
+
 DOF convention. ``dof`` is the number of *elastic* generalized coordinates of the study body,
 ``3 x retained nodes + modes`` (the seed's count: 1-1 with 37 modes = 40 DOF). The six
 floating-frame coordinates (``BodyInfo.dof`` counts them) are reported as ``dof_total = dof + 6``.
