@@ -49,6 +49,7 @@ _API = {
     "material_study": "flexmvm.studies.api",
     "estimate_selection": "flexmvm.studies.estimate",
     "estimate_interface": "flexmvm.studies.estimate",
+    "estimate_region": "flexmvm.studies.region",
     # per-process caches
     "clear_caches": "flexmvm.scenarios.build",
     "set_cache_sizes": "flexmvm.scenarios.build",
@@ -76,6 +77,7 @@ __all__ = [
     "clear_caches",
     "compare",
     "estimate_interface",
+    "estimate_region",
     "estimate_selection",
     "full",
     "interface",

@@ -43,8 +43,8 @@ def _register() -> None:
     """Attach the sub-commands; each module defines one click command or group."""
     if cli.commands:
         return
-    for name in ("mesh_cmd", "run_cmd", "theory_cmd", "select_cmd", "study_cmd", "cache_cmd",
-                 "validate_cmd"):
+    for name in ("mesh_cmd", "run_cmd", "theory_cmd", "select_cmd", "region_cmd", "study_cmd",
+                 "cache_cmd", "validate_cmd"):
         try:
             module = __import__(f"flexmvm.cli.{name}", fromlist=["command"])
         except ModuleNotFoundError as exc:

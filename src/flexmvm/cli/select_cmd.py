@@ -1,4 +1,5 @@
-"""`flexmvm select SCENARIO --body NAME --out DIR`: the selection study (seed section 3.2)."""
+"""`flexmvm select SCENARIO --body NAME --out DIR`: the selection study (seed section 3.2),
+of a rod's i-j selections or, with --radii / --node-sets, of any body's region families."""
 
 from __future__ import annotations
 
@@ -38,6 +39,17 @@ def parse_range(text: str, name: str = "range") -> list[int]:
                      "(stop included) or one integer >= 1")
 
 
+def parse_point(text: str, name: str) -> list[float]:
+    """'100,0,0' (mm) -> [0.1, 0.0, 0.0] [m]. InputError (one line) on anything else."""
+    try:
+        xyz = [float(a) * 1e-3 for a in text.split(",")]
+    except ValueError:
+        xyz = []
+    if len(xyz) != 3:
+        raise InputError(f"--{name} {text!r}: expected three coordinates in mm, 'x,y,z'")
+    return xyz
+
+
 @click.command("select")
 @click.argument("scenario", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--body", required=True, help="The body to reduce (the seed's b2).")
@@ -54,6 +66,19 @@ def parse_range(text: str, name: str = "range") -> list[int]:
               help="Also sweep the interface kind (docs/interface_basis.md): patch-radius sets "
                    "in mm, comma-separated, sets separated by ';' (e.g. '0.46;0.2,0.46,0.9'; "
                    "'-': no patch vector).")
+@click.option("--radii", default=None,
+              help="Region families of a mesh body: ball radii in mm, comma-separated (e.g. "
+                   "'0.4,0.8,1.2'), about --centre; replace --layers x --laps "
+                   "(`flexmvm region` estimates the radius a contact needs).")
+@click.option("--node-sets", "node_sets", default=None,
+              help="Region families: node-set names of the body's mesh, comma-separated.")
+@click.option("--centre", default=None,
+              help="Centre of the --radii balls in mm, body coordinates 'x,y,z' (default: the "
+                   "body's region ball centre in the scenario, else the expected first contact "
+                   "point).")
+@click.option("--patch-surface", "patch_surface", default=None,
+              help="Facet set of the interface kind's patches (with --patches; default: a mesh "
+                   "body's contact surface, a rod's end_a).")
 @click.option("--interface-modes", default="5:20:5", show_default=True,
               help="Mode counts of the interface kind (with --patches): a..b, start:stop:step.")
 @click.option("--search", is_flag=True,
@@ -64,14 +89,22 @@ def parse_range(text: str, name: str = "range") -> list[int]:
 @click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
               help="Study directory (a rerun resumes).")
 @click.option("--progress/--no-progress", default=True, show_default=True)
-def command(scenario, body, layers, laps, modes, target, kind, patches, interface_modes, search,
-            scheduler, workers, serial, t_end, dt, other, out_dir, progress) -> None:
+def command(scenario, body, layers, laps, modes, target, kind, patches, radii, node_sets, centre,
+            patch_surface, interface_modes, search, scheduler, workers, serial, t_end, dt, other,
+            out_dir, progress) -> None:
     """Selection study: node selections x mode counts of BODY against the full-FE force;
     writes ncc.csv, selection.json, fig7_ncc_map.png, fig8_ncc_modes.png (with --patches
-    also ncc_interface.csv and fig_front_ncc_dof.png, the NCC-DOF front of both kinds)."""
+    also ncc_interface.csv and fig_front_ncc_dof.png, the NCC-DOF front of both kinds). With
+    --radii / --node-sets (a body of any mesh): ncc.csv per region x modes and
+    fig_front_ncc_dof.png."""
     from flexmvm.metrics.ncc import Target
     from flexmvm.studies.interface import parse_patches
+    from flexmvm.studies.regions import parse_node_sets, parse_radii
     from flexmvm.studies.selection import run_selection_study
+
+    regions = ((parse_radii(radii) if radii is not None else [])
+               + (parse_node_sets(node_sets) if node_sets is not None else [])) or None
+    centre_m = parse_point(centre, "centre") if centre is not None else None
 
     grid = (parse_range(layers, "layers"), parse_range(laps, "laps"), parse_range(modes, "modes"))
     patch_sets = parse_patches(patches) if patches is not None else None
@@ -82,5 +115,6 @@ def command(scenario, body, layers, laps, modes, target, kind, patches, interfac
                         scheduler=scheduler, n_workers=workers, progress=progress, t_end_s=t_end,
                         dt_s=dt, other=other,
                         serial=serial, echo=click.echo, kind=kind, patches=patch_sets,
-                        interface_modes=if_modes)
+                        interface_modes=if_modes, regions=regions, centre_m=centre_m,
+                        patch_surface=patch_surface)
     click.echo(f"wrote {out_dir}")

@@ -330,6 +330,13 @@ def set_cache_sizes(**sizes: int) -> None:
         _parts_cached = rewrap(_parts_cached, "body_parts")
 
 
+def retained_nodes(model, mesh: Mesh, rod: RodMesh | None, where: str) -> np.ndarray:
+    """The node ids ``model`` (a ModelConfig) retains on ``mesh`` (``rod``: the body's RodMesh,
+    for an i-j selection): its selection or region; InputError (one line) if it selects none.
+    The selection study counts its candidates' nodes with it (studies/regions.py)."""
+    return _retained_nodes(model, mesh, rod, where)
+
+
 def _retained_nodes(model, mesh: Mesh, rod: RodMesh | None, where: str) -> np.ndarray:
     if model.selection_ij is not None:
         if rod is None:

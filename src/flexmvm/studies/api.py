@@ -15,6 +15,7 @@ from flexmvm.scenarios import ModelKind, Scenario, load_scenario
 from flexmvm.studies import materials as material_studies
 from flexmvm.studies.main_guard import in_process_by_default
 from flexmvm.studies.materials import SEED_ORDER, MaterialStudy
+from flexmvm.studies.regions import RegionFamily
 from flexmvm.studies.selection import SelectionStudy, select_models
 
 __all__ = ["material_study", "select"]
@@ -40,7 +41,10 @@ def select(scenario: Scenario | str | Path, body: str, *, layers: Iterable[int] 
            scheduler: str | None = None, serial: bool = False,
            progress: bool = False, kind: ModelKind | str = ModelKind.MVM,
            patches: Sequence[Sequence[float]] | None = None,
-           interface_modes: Iterable[int] = (5, 10, 20)) -> SelectionStudy:
+           interface_modes: Iterable[int] = (5, 10, 20),
+           radii_m: Sequence[float] | None = None, node_sets: Sequence[str] | None = None,
+           centre_m: Sequence[float] | None = None,
+           patch_surface: str | None = None) -> SelectionStudy:
     """Selection study of ``body`` (studies/selection.py): every ``layers`` x ``laps`` x
     ``modes`` Craig-Bampton model of it against its full-FE reference, the other bodies as in
     the scenario (``kind``: the candidates' model, Craig-Bampton by default, or the seed's
@@ -52,15 +56,23 @@ def select(scenario: Scenario | str | Path, body: str, *, layers: Iterable[int] 
     InProcessStudyWarning saying what to add (spawned workers would re-run the script). ``patches`` (patch-radius sets [m]) adds the interface kind's
     grid patches x ``interface_modes`` (``interface_rows``; summary ``interface`` and
     ``best_overall``), in the same brute force or the same search as the node selections.
+    A body of any mesh: ``radii_m`` (ball radii [m] about ``centre_m``, default the body's
+    region ball centre or the expected contact point, studies/regions.py) and/or
+    ``node_sets`` (node-set names of its mesh) replace ``layers`` x ``laps``; rows then carry
+    ``region``. ``patch_surface``: the facet set of the interface kind's patches (default: a
+    mesh body's contact surface, about the regions' centre).
     Returns the table (``rows``), the smallest model reaching the
     target (``best``) and the summary."""
     target = target if isinstance(target, Target) else Target(float(target))
     serial = in_process_by_default(scheduler, workers, serial)
+    regions = ([RegionFamily(radius_m=float(r)) for r in radii_m or ()]
+               + [RegionFamily(node_set=str(n)) for n in node_sets or ()]) or None
     with _directory(out_dir) as out:
         return select_models(_scenario(scenario), body, out, layers, laps, modes, target,
                              search=search, scheduler=scheduler, n_workers=workers,
                              serial=serial, progress=progress, kind=kind, patches=patches,
-                             interface_modes=interface_modes)
+                             interface_modes=interface_modes, regions=regions,
+                             centre_m=centre_m, patch_surface=patch_surface)
 
 
 def material_study(scenario: Scenario | str | Path, body: str = "b2", *,

@@ -26,7 +26,7 @@ from flexmvm.scenarios import Scenario
 from flexmvm.studies.grid import rod_of
 from flexmvm.studies.report import target_dict
 
-__all__ = ["estimate_interface", "estimate_selection", "median_ncc"]
+__all__ = ["contact_surface", "estimate_interface", "estimate_selection", "median_ncc"]
 
 
 def estimate_selection(sc: Scenario, body: str, target: Target | None = None, *, k: float = 3.0,
@@ -76,7 +76,7 @@ def estimate_selection(sc: Scenario, body: str, target: Target | None = None, *,
                     "the laps inside the Hertz contact radius at the window's peak force"}
 
 
-def _contact_surface(sc: Scenario, body: str) -> str:
+def contact_surface(sc: Scenario, body: str) -> str:
     """The facet set of ``body`` in its (first) contact."""
     for c in sc.contacts:
         if body in (c.slave_body, c.master_body):
@@ -132,7 +132,7 @@ def estimate_interface(sc: Scenario, body: str, target: Target | None = None, *,
                          f"(law {pulse['law']}, flat on flat); the interface rule needs one")
     window = min(pulse["contact_duration_s"], sc.time.t_end_s)
     f_max = k / window
-    surface = _contact_surface(sc, body)
+    surface = contact_surface(sc, body)
     fe, free = free_modes_source(cfg)   # the setup cache's mode pools, shared with the bases
     patch = contact_patch(fe.mesh, surface)
     load = hertz_load(fe.mesh, surface, patch, a)

@@ -62,8 +62,8 @@ def seed_scheme(sc: Scenario, body: str) -> Scenario:
     return scenario_from_dict(data, source=f"{data.get('name', 'scenario')} (study scheme)")
 
 
-def check_grid(sc: Scenario, body: str, layers, laps, modes):
-    rod = rod_of(sc, body)
+def check_study_scheme(sc: Scenario, body: str) -> None:
+    """InputError unless ``sc`` is on the study scheme for ``body`` (seed_scheme)."""
     for k in redistributing_contacts(sc, body):
         # a massless retained node adds static columns (reduction/basis.py), so a case's
         # DOF would not be 3 x nodes + modes, the count the grid and the search rank by
@@ -71,6 +71,16 @@ def check_grid(sc: Scenario, body: str, layers, laps, modes):
         raise InputError(f"contacts[{k}] redistributes the mass of {body!r}'s contact nodes;"
                          " a selection study counts 3 x nodes + modes coordinates: run it on "
                          "studies.grid.seed_scheme(scenario, body)")
+
+
+def check_grid(sc: Scenario, body: str, layers, laps, modes):
+    if sc.body(body).rod is None:
+        raise InputError(f"body {body!r} is a mesh body: its selection study varies region "
+                         "families, ball radii or node sets (fm.select radii_m= / node_sets=, "
+                         "flexmvm select --radii / --node-sets); the i-j layers x laps grid is "
+                         "a rod's")
+    rod = rod_of(sc, body)
+    check_study_scheme(sc, body)
     layers, laps, modes = _ints("layers", layers), _ints("laps", laps), _ints("modes", modes)
     for name, vals, top in (("layers", layers, rod.n_layers), ("laps", laps, rod.n_laps)):
         if vals[-1] > top:

@@ -4,7 +4,8 @@ the node selections against the same full-FE reference, and the smallest model o
 
 Keys ``if-r<radii in um, '_'-joined>-m<modes>`` (``if-r-m10``: no patch vector); params
 {body, kind: "interface", patch_radii_m, modes, mode_choice, mode_pool, scenario,
-reference_sha256}. Rows: {model, patch_radii_m, n_patch, modes, mode_pool, dof (= patches +
+reference_sha256} (+ patch_surface, patch_centre_m where given: any facet set of a mesh
+body, patch_place). Rows: {model, patch_radii_m, n_patch, modes, mode_pool, dof (= patches +
 modes, elastic coordinates), dof_total, ncc_force, ncc_<probe>..., peak_err, impulse_err,
 duration_err, wall_time_s, guard_outside_fraction} (ncc_interface.csv: the evaluated cases).
 
@@ -72,12 +73,33 @@ def is_interface_key(key: str) -> bool:
     return key.startswith("if-")
 
 
+def patch_place(sc: Scenario, body: str, surface: str | None = None,
+                centre_m: Sequence[float] | None = None) -> dict:
+    """Where the interface kind's patches of ``body`` lie, as interface_cases' keywords: on a
+    mesh body the facet set ``surface`` (default: the body's surface in its first contact)
+    about ``centre_m`` (default: the centre of that set); on a rod ``surface`` if given (the
+    rod's default is end_a, and its cases' params stay as before)."""
+    cfg = sc.body(body)
+    if cfg.rod is not None and surface is None:
+        return {}
+    if surface is None:
+        from flexmvm.studies.estimate import contact_surface
+
+        surface = contact_surface(sc, body)
+    out: dict[str, Any] = {"patch_surface": surface}
+    if centre_m is not None:
+        out["patch_centre_m"] = [float(a) for a in centre_m]
+    return out
+
+
 def interface_cases(sc: Scenario, body: str, patches: Iterable[Sequence[float]],
                     modes: Iterable[int], reference: str | Path | None = None,
-                    mode_choice: str = "participation") -> list[Case]:
+                    mode_choice: str = "participation", patch_surface: str | None = None,
+                    patch_centre_m: Sequence[float] | None = None) -> list[Case]:
     """The cases patch sets x mode counts of ``body`` as an interface model, each patch set's
     with one ``mode_pool`` (module doc; computing it solves the free-free eigenproblem of the
-    body, stored in the setup cache for the runs)."""
+    body, stored in the setup cache for the runs). ``patch_surface`` / ``patch_centre_m``:
+    the patches' facet set and centre (patch_place), in the params only when given."""
     cfg = sc.body(body)
     patches = [tuple(float(a) for a in radii) for radii in patches]
     for radii in patches:
@@ -95,19 +117,25 @@ def interface_cases(sc: Scenario, body: str, patches: Iterable[Sequence[float]],
                                  "gives no column")
     data = sc.model_dump(mode="json")
     sha = file_sha256(reference) if reference is not None else None
+    place: dict[str, Any] = {}
+    if patch_surface is not None:
+        place["patch_surface"] = patch_surface
+    if patch_centre_m is not None:
+        place["patch_centre_m"] = [float(a) for a in patch_centre_m]
     cases = []
     for radii in patches:
-        pools = mode_pools(cfg, radii, counts, mode_choice)
+        pools = mode_pools(cfg, radii, counts, mode_choice, place)
         for m in counts:
             cases.append(Case(interface_key(radii, m), {
                 "body": body, "kind": "interface", "patch_radii_m": [float(a) for a in radii],
                 "modes": m, "mode_choice": mode_choice, "mode_pool": pools[m],
-                "scenario": data, "reference_sha256": sha}))
+                "scenario": data, "reference_sha256": sha} | place))
     return cases
 
 
 def mode_pools(cfg, radii: Sequence[float], counts: Sequence[int],
-               mode_choice: str = "participation") -> dict[int, int | None]:
+               mode_choice: str = "participation",
+               place: dict | None = None) -> dict[int, int | None]:
     """The ``mode_pool`` of each mode count of patch set ``radii`` of body ``cfg`` (module
     doc): the pool of the largest count whose pool exists, for that count and the smaller ones
     (0 excluded); None for the others and for the frequency choice."""
@@ -119,7 +147,7 @@ def mode_pools(cfg, radii: Sequence[float], counts: Sequence[int],
     for top in sorted((m for m in counts if m > 0), reverse=True):
         # the spec of the case's own model (as run_interface_case makes it), default pool
         spec = _model({"patch_radii_m": list(radii), "modes": top,
-                       "mode_choice": mode_choice}).interface_spec()
+                       "mode_choice": mode_choice, **(place or {})}).interface_spec()
         try:
             pool = interface_mode_pool(cfg, spec, top)
         except InputError:  # too few excited modes within MAX_POOL: those cases fail alone
@@ -131,7 +159,9 @@ def mode_pools(cfg, radii: Sequence[float], counts: Sequence[int],
 def _model(p, reference: str = "end_b") -> Any:
     """The interface model of case params ``p`` (its ``mode_pool`` included)."""
     return interface(list(p["patch_radii_m"]), int(p["modes"]), mode_choice=p["mode_choice"],
-                     mode_pool=p.get("mode_pool"), reference=reference)
+                     mode_pool=p.get("mode_pool"), reference=reference,
+                     patch_surface=p.get("patch_surface", "end_a"),
+                     patch_centre_m=p.get("patch_centre_m"))
 
 
 def run_interface_case(case: Case, reference: str | Path | None = None) -> dict:

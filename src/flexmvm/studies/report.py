@@ -90,7 +90,9 @@ def echo_summary(echo: Callable[[str], Any], result: dict, target: Target, where
             "loaded)")
     exact = result.get("exact", True)
     if result["passed"]:
-        model = (f"{result['layers']}-{result['laps']} with {result['modes']} modes, "
+        where = (result["region"] if "region" in result
+                 else f"{result['layers']}-{result['laps']}")
+        model = (f"{where} with {result['modes']} modes, "
                  f"{result['dof']} DOF ({result['nodes']} nodes), NCC {result['ncc_force']:.6f}")
         echo(f"smallest model reaching {t}: {model}; {runs}" if exact else
              f"node selections, best run reaching {t}: {model} ({beyond}); {runs}")

@@ -7,8 +7,10 @@ with ``--patches``, over the interface kind's patch-radius sets x mode counts be
 same answer as running the whole grid (:func:`brute_force`) with far fewer runs
 (:func:`smallest_passing`).
 
-Families. A candidate belongs to one *family*: a node selection ``(layers, laps)`` (node
-kind) or a patch-radius set (interface kind); within a family only the mode count varies.
+Families. A candidate belongs to one *family*: a node selection ``(layers, laps)`` of a rod or
+a region family of any body (a ball radius or a node set, studies/regions.py; node kind: one
+study has either, never both) or a patch-radius set (interface kind); within a family only
+the mode count varies.
 
 Assumption (Rayleigh-Ritz): within a family the score is non-decreasing in the number of
 modes, because adding modes enlarges the trial subspace (node selection: the fixed-interface
@@ -95,8 +97,11 @@ class Candidate:
         modes: number of modes of the basis (>= 0).
         dof: number of generalised coordinates of the model (>= 1), the cost to minimise.
         patch_radii_m: the interface kind's patch-radius set [m] (distinct radii > 0, may be
-            empty: modes only); None for a node selection. Exactly one of ``selection`` and
-            ``patch_radii_m`` is given.
+            empty: modes only); None for a node selection.
+        region: a region family of a mesh body (studies/regions.py): ``("ball", radius_m)``
+            or ``("set", node_set_name)``, a node family like ``selection`` (its DOF 3 x
+            nodes + modes). Exactly one of ``selection``, ``patch_radii_m`` and ``region``
+            is given.
 
     Raises:
         InputError: a field has the wrong type or range, or both or neither family is given.
@@ -106,14 +111,26 @@ class Candidate:
     modes: int
     dof: int
     patch_radii_m: tuple[float, ...] | None = None
+    region: tuple[str, float | str] | None = None
 
     def __post_init__(self) -> None:
-        if (self.selection is None) == (self.patch_radii_m is None):
+        given = [v is not None for v in (self.selection, self.patch_radii_m, self.region)]
+        if sum(given) != 1:
             raise InputError(
-                f"Candidate selection {self.selection!r}, patch_radii_m {self.patch_radii_m!r}: "
-                "expected exactly one (a node selection or an interface patch set)"
+                f"Candidate selection {self.selection!r}, patch_radii_m {self.patch_radii_m!r}, "
+                f"region {self.region!r}: expected exactly one (a node selection, an "
+                "interface patch set or a region family)"
             )
-        if self.selection is not None:
+        if self.region is not None:
+            reg = tuple(self.region)
+            ok = len(reg) == 2 and ((reg[0] == "ball" and isinstance(reg[1], float)
+                                     and math.isfinite(reg[1]) and reg[1] > 0)
+                                    or (reg[0] == "set" and isinstance(reg[1], str) and reg[1]))
+            if not ok:
+                raise InputError(f"Candidate region {self.region!r}: expected ('ball', radius "
+                                 "> 0 [m]) or ('set', node-set name)")
+            object.__setattr__(self, "region", reg)
+        elif self.selection is not None:
             sel = tuple(self.selection)
             if len(sel) != 2 or not all(isinstance(v, int) and v >= 1 for v in sel):
                 raise InputError(
@@ -142,18 +159,22 @@ class Candidate:
 
     @property
     def kind(self) -> FamilyKind:
-        return FamilyKind.NODES if self.selection is not None else FamilyKind.INTERFACE
+        return FamilyKind.INTERFACE if self.patch_radii_m is not None else FamilyKind.NODES
 
     @property
     def family(self) -> tuple:
         """Sortable, hashable key of the family: (kind order, selection or patch radii)."""
-        member = self.selection if self.selection is not None else self.patch_radii_m
+        member = next(m for m in (self.selection, self.patch_radii_m, self.region)
+                      if m is not None)
         return (_KIND_ORDER[self.kind], member)
 
     @property
     def family_label(self) -> str:
         if self.selection is not None:
             return f"selection {self.selection}"
+        if self.region is not None:
+            what, value = self.region
+            return f"region ball {value * 1e3:g} mm" if what == "ball" else f"region set {value}"
         return "patch set (" + ", ".join(f"{a * 1e3:g}" for a in self.patch_radii_m) + ") mm"
 
 

@@ -10,6 +10,11 @@ the study body's reduction). Each run is compared with a reference
 run in which the study body is full FE (the other bodies unchanged), computed once before the
 sweep and stored in ``DIR/reference/history.csv``.
 
+A body of any mesh (issue 34) has no i-j rings: its families are *regions*, balls of given
+radii about one centre or node sets of its mesh (studies/regions.py), x the same mode counts,
+with the same reference, cases, resume, search and guard; its ncc.csv rows carry ``region``
+instead of ``layers, laps`` and its figure is the NCC-DOF front (fig_front_ncc_dof.png).
+
 DOF convention. ``dof`` is the number of *elastic* generalized coordinates of the study body,
 ``3 x retained nodes + modes`` (the seed's count: 1-1 with 37 modes = 40 DOF). The six
 floating-frame coordinates (``BodyInfo.dof`` counts them) are reported as ``dof_total = dof + 6``.
@@ -78,6 +83,7 @@ from flexmvm.studies.grid import (
     SEED_SCHEME_NOTE,
     case_key,
     check_grid,
+    check_study_scheme,
     mvm_scenario,
     redistributing_contacts,
     rod_of,
@@ -91,10 +97,22 @@ from flexmvm.studies.interface import (
     interface_cases,
     interface_summary,
     is_interface_key,
+    patch_place,
     run_interface_case,
     write_interface_csv,
 )
 from flexmvm.studies.reference import case_reference, reference_history, study_version
+from flexmvm.studies.regions import (
+    RegionFamily,
+    RegionGrid,
+    failed_region_row,
+    front_points,
+    region_key,
+    region_winner,
+    row_order,
+    run_region_case,
+    write_region_csv,
+)
 from flexmvm.studies.report import (
     echo_summary,
     failed_case_row,
@@ -235,8 +253,9 @@ class SelectionStudy:
         """The smallest-DOF row reaching the target (None if none does)."""
         if not self.summary["passed"]:
             return None
-        key = (self.summary["layers"], self.summary["laps"], self.summary["modes"])
-        return next(r for r in self.rows if (r["layers"], r["laps"], r["modes"]) == key)
+        fields = ("region", "modes") if "region" in self.summary else ("layers", "laps", "modes")
+        key = tuple(self.summary[k] for k in fields)
+        return next(r for r in self.rows if tuple(r[k] for k in fields) == key)
 
 
 def select_models(sc: Scenario, body: str, out_dir: str | Path,
@@ -247,7 +266,10 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
                   echo: Callable[[str], Any] | None = None,
                   kind: ModelKind | str = ModelKind.MVM,
                   patches: Sequence[Sequence[float]] | None = None,
-                  interface_modes: Iterable[int] = (5, 10, 20)) -> SelectionStudy:
+                  interface_modes: Iterable[int] = (5, 10, 20),
+                  regions: Sequence[RegionFamily] | None = None,
+                  centre_m: Sequence[float] | None = None,
+                  patch_surface: str | None = None) -> SelectionStudy:
     """The selection study of ``body`` in scenario ``sc`` (module doc), its cases and reference
     stored in ``out_dir`` (a rerun resumes); no table, figure or console output (see
     :func:`run_selection_study`).
@@ -267,6 +289,11 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     both kinds (search.rank_key), and ``summary["grid_size"]`` / ``summary["exact"]`` the node
     kind's (``exact`` false: ``--search`` stopped that kind at best_overall's DOF, see
     ``exact_note`` and search.kind_exact).
+    ``regions`` (studies/regions.py: ball radii about ``centre_m`` or node sets) replaces the
+    i-j grid by region families x ``modes``, for a body of any mesh (``layers`` and ``laps``
+    are then ignored; rows carry ``region``, ``nodes``, ``modes``); ``patch_surface``: the
+    facet set of the interface kind's patches (default: a mesh body's contact surface, about
+    the regions' centre; a rod's end_a).
     Raises InputError for a bad body / grid / options, SolverError if the reference fails.
     Failed runs are listed in ``summary["failures"]``; they count as not reaching the target.
     """
@@ -274,8 +301,16 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     out = Path(out_dir).resolve()
     sc.body(body)
     sc = seed_scheme(sc, body)
-    rod, layers, laps, modes = check_grid(sc, body, layers, laps, modes)
     kind = study_kind(kind)
+    grid = None
+    if regions:
+        check_study_scheme(sc, body)
+        grid = RegionGrid(sc, body, regions, modes, centre_m, kind)
+        modes = grid.modes
+    else:
+        rod, layers, laps, modes = check_grid(sc, body, layers, laps, modes)
+    where = patch_place(sc, body, patch_surface, centre_m if grid is None else grid.centre) \
+        if patches else {}
     check_cluster_options(scheduler, n_workers, serial)
     claim_study_dir(out, "flexmvm select", own=STUDY_FILES)
     announce = announce_recompute if echo is None else echo
@@ -283,13 +318,18 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     hist, ref_made = reference_history(sc, body, out, progress=progress, announce=announce)
     echo(f"reference (full FE {body}): {'computed' if ref_made else 'loaded'} {hist}")
     version = study_version(sc, hist)
-    n_nodes = {(i, j): len(rod.selection(i, j)) for i in layers for j in laps}
     case_of: dict[Candidate, Case] = {}
-    for c in selection_cases(sc, body, layers, laps, modes, reference=hist, kind=kind):
-        i, j, m = c.params["layers"], c.params["laps"], c.params["modes"]
-        case_of[Candidate((i, j), m, 3 * n_nodes[(i, j)] + m)] = c
+    n_nodes: dict[tuple[int, int], int] = {}
+    if grid is not None:
+        for c in grid.cases(sc, hist):
+            case_of[grid.candidate(c)] = c
+    else:
+        n_nodes = {(i, j): len(rod.selection(i, j)) for i in layers for j in laps}
+        for c in selection_cases(sc, body, layers, laps, modes, reference=hist, kind=kind):
+            i, j, m = c.params["layers"], c.params["laps"], c.params["modes"]
+            case_of[Candidate((i, j), m, 3 * n_nodes[(i, j)] + m)] = c
     t0 = time.perf_counter()
-    if_cases = (interface_cases(sc, body, patches, interface_modes, reference=hist)
+    if_cases = (interface_cases(sc, body, patches, interface_modes, reference=hist, **where)
                 if patches else [])
     pools = sorted({c.params["mode_pool"] for c in if_cases} - {None})
     if pools:
@@ -317,10 +357,20 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
         else:
             best, scores = brute_force(list(case_of), evaluate, passes)
     made, loaded = _Counts(batches.made), _Counts(batches.loaded)
-    rows = {(r["layers"], r["laps"], r["modes"]): r for k, r in batches.rows.items()
-            if not is_interface_key(k)}
-    table = sorted(rows.values(), key=lambda r: (r["layers"], r["laps"], r["modes"]))
-    summary = winner_dict(best_passing(scores, passes, FamilyKind.NODES), rows) | {
+    node_best = best_passing(scores, passes, FamilyKind.NODES)
+    if grid is not None:
+        keyed = {k: r for k, r in batches.rows.items() if not is_interface_key(k)}
+        table = sorted(keyed.values(), key=row_order)
+        summary = region_winner(node_best, keyed) | {"grid": grid.grid_dict()}
+        failed = [(region_key(r), r) for r in table]
+    else:
+        rows = {(r["layers"], r["laps"], r["modes"]): r for k, r in batches.rows.items()
+                if not is_interface_key(k)}
+        table = sorted(rows.values(), key=lambda r: (r["layers"], r["laps"], r["modes"]))
+        summary = winner_dict(node_best, rows) | {
+            "grid": {"layers": layers, "laps": laps, "modes": modes}}
+        failed = [(case_key(r["layers"], r["laps"], r["modes"]), r) for r in table]
+    summary |= {
         "body": body, "kind": kind.value, "search": bool(search),
         "target": target_dict(target),
         "runs": sum(c.kind is FamilyKind.NODES for c in scores), "runs_made": made.nodes,
@@ -328,13 +378,11 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
         "runs_note": "runs = MVM cases evaluated for this answer = runs_made (computed in this "
                      "invocation) + runs_loaded (found stored in cases/); the full-FE reference "
                      "is not counted",
-        "reference_computed": ref_made, "grid": {"layers": layers, "laps": laps, "modes": modes},
+        "reference_computed": ref_made,
         "dof_note": "dof = 3 x retained nodes + modes (elastic coordinates, seed count); "
                     "dof_total adds the 6 floating-frame coordinates",
-        "failed_cases": sorted(case_key(r["layers"], r["laps"], r["modes"])
-                               for r in table if "failed" in r),
-        "failures": failure_list((case_key(r["layers"], r["laps"], r["modes"]), r)
-                                 for r in table),
+        "failed_cases": sorted(k for k, r in failed if "failed" in r),
+        "failures": failure_list(failed),
         "failures_note": "failures: the runs that gave no comparison (the solver failed, the "
                          "case raised: see cases/<key>.error.txt, a rerun tries it again; or a "
                          "metric could not be computed); they count as not reaching the target",
@@ -365,16 +413,21 @@ EXACT_NOTE = ("exact: this kind's entry is its smallest model reaching the targe
 
 
 def run_study_case(case: Case, reference: str | Path | None = None) -> dict:
-    """One run of a selection study, of either kind: the interface kind's (params ``kind``
-    "interface", studies/interface.py) or a node selection's (:func:`run_selection_case`)."""
+    """One run of a selection study, of any kind: the interface kind's (params ``kind``
+    "interface", studies/interface.py), a region family's (params ``region``,
+    studies/regions.py) or a node selection's (:func:`run_selection_case`)."""
     if case.params.get("kind") == "interface":
         return run_interface_case(case, reference=reference)
+    if "region" in case.params:
+        return run_region_case(case, reference=reference)
     return run_selection_case(case, reference=reference)
 
 
 def _failed_row(case: Case, line: str, n_nodes: dict[tuple[int, int], int]) -> dict:
     if case.params.get("kind") == "interface":
         return failed_interface_row(case, line)
+    if "region" in case.params:
+        return failed_region_row(case, line)
     return failed_case_row(case, line, n_nodes[(case.params["layers"], case.params["laps"])])
 
 
@@ -395,6 +448,8 @@ def _best_overall(best: Candidate | None, case_of: dict[Candidate, Case],
     r = rows[case_of[best].key]
     if best.kind is FamilyKind.INTERFACE:
         model, name = r["model"], "interface"
+    elif best.region is not None:
+        model, name = f"{kind.value} {r['region']} + {r['modes']}", kind.value
     else:
         model, name = f"{kind.value} {r['layers']}-{r['laps']} + {r['modes']}", kind.value
     return {"kind": name, "model": model, "dof": r["dof"], "ncc_force": r.get("ncc_force")}
@@ -414,12 +469,18 @@ def run_selection_study(scenario: str | Path | Scenario, body: str, out_dir: str
                         echo: Callable[[str], Any] = print,
                         kind: ModelKind | str = ModelKind.MVM,
                         patches: Sequence[Sequence[float]] | None = None,
-                        interface_modes: Iterable[int] = (5, 10, 20)) -> dict:
+                        interface_modes: Iterable[int] = (5, 10, 20),
+                        regions: Sequence[RegionFamily] | None = None,
+                        centre_m: Sequence[float] | None = None,
+                        patch_surface: str | None = None) -> dict:
     """The selection study of ``body`` in ``scenario`` (a Scenario or a scenario file) with
     its files and console lines (module doc): :func:`select_models`, then ncc.csv,
     selection.json, the two figures and the summary line. ``t_end_s``, ``dt_s`` override the
     scenario's end time and contact step, ``other`` the model of the other bodies
-    (grid.study_scenario). Returns the selection.json content.
+    (grid.study_scenario). With ``regions`` (region families of any body, studies/regions.py)
+    ncc.csv has a row per region x modes and the figure is fig_front_ncc_dof.png (force NCC
+    against DOF per region family, and the interface kind's with ``patches``). Returns the
+    selection.json content.
 
     Raises InputError for a bad body / grid / options, SolverError if the reference fails or,
     after everything is written, if every run failed.
@@ -429,34 +490,38 @@ def run_selection_study(scenario: str | Path | Scenario, body: str, out_dir: str
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     switched = bool(redistributing_contacts(sc, body))
     sc = study_scenario(sc, body, t_end_s=t_end_s, dt_s=dt_s, other=other)
-    check_grid(sc, body, layers, laps, modes)
+    if not regions:
+        check_grid(sc, body, layers, laps, modes)
     if switched:
         echo(SEED_SCHEME_NOTE)
     study = select_models(sc, body, out, layers, laps, modes, target, search=search,
                           scheduler=scheduler, n_workers=n_workers, serial=serial,
                           progress=progress, echo=echo, kind=kind, patches=patches,
-                          interface_modes=interface_modes)
+                          interface_modes=interface_modes, regions=regions,
+                          centre_m=centre_m, patch_surface=patch_surface)
     result = study.summary
-    write_ncc_csv(out / "ncc.csv", study.rows, study.probes)
-    write_json_atomic(out / "selection.json", result)
-    from flexmvm.plots.study_figures import plot_ncc_map, plot_ncc_modes
+    from flexmvm.plots.study_figures import plot_ncc_dof_fronts, plot_ncc_map, plot_ncc_modes
 
-    if study.rows:  # none when --search closed every node selection (an interface winner)
+    if regions:
+        write_region_csv(out / "ncc.csv", study.rows, study.probes)
+        pts = front_points(study.rows)
+    else:
+        write_ncc_csv(out / "ncc.csv", study.rows, study.probes)
+        pts = {f"node selections ({kind_name(result)})":
+               [(r["dof"], r["ncc_force"]) for r in study.rows if "ncc_force" in r]}
+    write_json_atomic(out / "selection.json", result)
+    if study.rows and not regions:  # none when --search closed every node selection
         plot_ncc_map(out / "fig7_ncc_map.png", study.rows,
                      title=f"{sc.name}: NCC of the contact force")
         plot_ncc_modes(out / "fig8_ncc_modes.png", study.rows,
                        title=f"{sc.name}: NCC against modes")
     if study.interface_rows:
         write_interface_csv(out / "ncc_interface.csv", study.interface_rows, study.probes)
-        from flexmvm.plots.study_figures import plot_ncc_dof_fronts
-
-        pts = {f"node selections ({kind_name(result)})":
-               [(r["dof"], r["ncc_force"]) for r in study.rows if "ncc_force" in r],
-               "interface": [(r["dof"], r["ncc_force"]) for r in study.interface_rows
-                             if "ncc_force" in r]}
-        if any(pts.values()):
-            plot_ncc_dof_fronts(out / "fig_front_ncc_dof.png", pts, target=target.ncc_min,
-                                title=f"{sc.name}: force NCC against DOF of {body}")
+        pts["interface"] = [(r["dof"], r["ncc_force"]) for r in study.interface_rows
+                            if "ncc_force" in r]
+    if (study.interface_rows or regions) and any(pts.values()):
+        plot_ncc_dof_fronts(out / "fig_front_ncc_dof.png", pts, target=target.ncc_min,
+                            title=f"{sc.name}: force NCC against DOF of {body}")
     echo_summary(echo, result, target, out / "selection.json")
     failures = result["failures"] + result.get("interface", {}).get("failures", [])
     if failures and len(failures) == result["runs"] + result.get("interface", {}).get("runs", 0):

@@ -1,0 +1,46 @@
+"""`flexmvm region SCENARIO --body NAME`: the retained region a contact needs (the Hertz
+estimate of studies/region.py) and what it costs on the body's mesh."""
+
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+import click
+
+
+@click.command("region")
+@click.argument("scenario", type=click.Path(dir_okay=False, path_type=Path))
+@click.option("--body", required=True, help="The body to reduce.")
+@click.option("--factor", type=float, default=None,
+              help="Region radius per Hertz contact radius [default: 2, studies/region.py].")
+@click.option("--radius-mm", "radius_mm", type=float, default=None,
+              help="Equivalent curvature radius of the two surfaces [mm], instead of the fit "
+                   "(needed for flat or line contacts).")
+@click.option("--speed", type=float, default=None,
+              help="Closing speed [m/s], instead of the placements' (needed when the bodies "
+                   "start at rest).")
+@click.option("--modes", type=int, default=None,
+              help="Mode count of the costed model [default: the body's model's, else 30].")
+@click.option("--contact", type=int, default=None,
+              help="Index of the contact in the scenario [default: the body's first].")
+@click.option("--json", "as_json", is_flag=True, help="Print the estimate as JSON.")
+def command(scenario: Path, body: str, factor: float | None, radius_mm: float | None,
+            speed: float | None, modes: int | None, contact: int | None, as_json: bool) -> None:
+    """Estimate the region BODY needs: a ball about the expected first contact point of
+    radius factor x the Hertz contact radius of the expected impact, its nodes, DOF and
+    memory against full FE. Prints the scenario's `region` line to use."""
+    from flexmvm.scenarios import load_scenario
+    from flexmvm.studies.region import DEFAULT_FACTOR, estimate_region
+
+    sc = load_scenario(scenario)
+    est = estimate_region(sc, body, factor=DEFAULT_FACTOR if factor is None else factor,
+                          radius_m=None if radius_mm is None else radius_mm * 1e-3,
+                          speed_mps=speed, modes=modes, contact=contact)
+    if as_json:
+        click.echo(json.dumps(est.as_dict(), indent=2))
+        return
+    for line in est.lines():
+        click.echo(line)
+    c = ", ".join(f"{a:.6g}" for a in est.centre_m)
+    click.echo(f"region = {{ ball = {{ centre_m = [{c}], radius_m = {est.radius_m:.4g} }} }}")
