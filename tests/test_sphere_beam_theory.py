@@ -1,7 +1,7 @@
 """The beam theory of the shipped sphere_beam scenario (flexmvm.theory.sphere_beam): what it
 reads off the scenario's meshes and placements, the histories it lays over a run, and the
-one line where it does not apply, and the resolution of its contact. About 5 s of CPU (reading the
-beam's mesh: 3,423 nodes)."""
+one line where it does not apply, and the resolution of its contact. About 5 s of CPU
+(reading the beam's mesh: 3,423 nodes)."""
 
 from __future__ import annotations
 
