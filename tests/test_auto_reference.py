@@ -25,9 +25,10 @@ def _reference_nodes(body) -> np.ndarray:
 
 
 def _beam_scenario(surface: str) -> dict:
-    """The shipped sphere_beam scenario with the contact on beam facet set ``surface``."""
+    """The shipped sphere_beam scenario with the contact on beam facet set ``surface`` (the
+    beam is the contact's slave side)."""
     data = tomllib.loads((SCENARIOS / "sphere_beam.toml").read_text())
-    data["contacts"][0]["master"] = f"beam.{surface}"
+    data["contacts"][0]["slave"] = f"beam.{surface}"
     return data
 
 

@@ -1,6 +1,7 @@
 """The beam theory of the shipped sphere_beam scenario (flexmvm.theory.sphere_beam): what it
 reads off the scenario's meshes and placements, the histories it lays over a run, and the
-one line where it does not apply. About 6 s (reading the beam's mesh: 3,826 nodes)."""
+one line where it does not apply, and the resolution of its contact. About 5 s of CPU
+(reading the beam's mesh: 3,423 nodes)."""
 
 from __future__ import annotations
 
@@ -80,3 +81,35 @@ def test_where_no_theory_applies_the_run_says_so_in_one_line(scenario, tmp_path)
     assert "\n" not in failures[0]["reason"]
     with pytest.raises(InputError, match="not normal to a long face"):
         sphere_beam_case(sc)
+
+
+def test_the_shipped_contact_is_resolved_at_the_hertz_scale(scenario):
+    """The theory's Hertz law is what the 3D run computes only if the contact is resolved
+    (docs/notes/2026-11-27-hertz-block.md): the beam (slave) has >= 2.5 face nodes per contact
+    radius a and the sphere's facets (master) are no longer than a / 2 near the pole. a =
+    (3 F R / 4 E*)^(1/3) at F = 245 N, the theory's first peak (Johnson eq. 4.22): 0.28 mm.
+    Bounds: 2.5 is the ratio at which sphere_block meets Hertz within 1.4 % (coarser node
+    spacing made the contact stiffer); facets of a / 2 lie within 0.25 um of the sphere
+    (s^2 / 8 R), 3 % of the approach at that force, where 0.4 mm facets made contacts last 5 %
+    longer. The slave spacing needs the tet10 mid-side nodes (the corners are 0.2 mm apart).
+    ~1 s (two meshes read)."""
+    from scipy.spatial import cKDTree
+
+    from flexmvm.mesh.io import read_mesh
+
+    contact = scenario.contacts[0]
+    assert (contact.slave, contact.master) == ("beam.mid_top", "ball.front")
+    case = sphere_beam_case(scenario)
+    imp = case.impact
+    a = (3.0 * 245.0 * imp.sphere_radius_m / (4.0 * imp.e_star_pa)) ** (1.0 / 3.0)
+    beam = read_mesh(scenario.body("beam").mesh_file)
+    x = beam.nodes[beam.facet_set("mid_top").nodes]
+    inside = x[np.linalg.norm(x - [imp.contact_x_m, 0.0, 0.0], axis=1) < a]
+    spacing, _ = cKDTree(x).query(inside, k=2)
+    assert len(inside) >= math.pi * 2.5**2 and spacing[:, 1].max() <= a / 2.5
+    ball = read_mesh(scenario.body("ball").mesh_file)
+    tris = ball.facet_set("front").tris
+    y = ball.nodes
+    near = np.linalg.norm(y[tris].mean(axis=1) - [0.0, 0.0, -imp.sphere_radius_m], axis=1) < a
+    edges = np.linalg.norm(y[tris[near]] - y[np.roll(tris[near], 1, axis=1)], axis=2)
+    assert near.sum() > 0 and edges.max() <= a / 2.0
