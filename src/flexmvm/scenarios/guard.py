@@ -110,12 +110,12 @@ def outside_validity(fraction: float | None, threshold: float = WARN_FRACTION) -
 #: A run without applied loads whose total energy rises above its start by more than this
 #: share gets a warning. Nothing in it can add energy: the Moreau-Jean step with theta >= 1/2
 #: and frictionless or Coulomb contact, joints and gravity (in the potential) keep or lose it;
-#: what can is the velocity law's penetration recovery, which pushes a penetrated node out at
-#: beta (-g) / h whatever its mass: on reduced bodies whose contact reaches the edge of the
-#: retained nodes it feeds chatter (docs/studies.md, "Material study": PA6 on 1-4 gains 2.6 %).
-#: The recovery also lifts the energy a little in clean runs: up to 3.2e-4 in the full-FE
-#: references of the material study, 1.3e-3 in its 48 reduced runs that do not chatter, against
-#: 1.1e-2 to 5.6 in those that do (commit 275a325); 0.5 % lies between.
+#: what could was the velocity law's penetration recovery when it pushed a penetrated node out
+#: at beta (-g) / h whatever its mass: on reduced bodies whose contact reached the edge of the
+#: retained nodes it fed chatter (PA6 on 1-4 gained 2.6 %), and it lifted clean runs' energy by
+#: up to 1.3e-3 against 1.1e-2 to 5.6 in those that chattered (docs/notes: the material study
+#: before the cap); capped by the pair's closing speed (contact/pairs.py) it adds none. 0.5 %
+#: lies between: a gain above it is a defect to report, not round-off.
 ENERGY_GAIN_WARN = 5e-3
 
 
