@@ -37,7 +37,7 @@ def redistributing_contacts(sc: Scenario, body: str) -> list[int]:
             if c.redistribute_mass and body in (c.slave_body, c.master_body)]
 
 
-#: The console line of a study whose scenario's contact is on the undamped scheme.
+#: The console line of a study whose scenario's contact redistributes the study body's mass.
 SEED_SCHEME_NOTE = ("study scheme: the study body's contact on the velocity law without mass "
                     "redistribution, theta = 0.55 (the seed's models: 3 x nodes + modes "
                     "coordinates; studies.grid.seed_scheme)")
@@ -46,10 +46,11 @@ SEED_SCHEME_NOTE = ("study scheme: the study body's contact on the velocity law 
 def seed_scheme(sc: Scenario, body: str) -> Scenario:
     """The scheme a study of ``body`` runs: the seed's models, whose coordinates a study counts
     as 3 x nodes + modes. A contact that redistributes the mass of ``body``'s contact nodes
-    (the undamped scheme of docs/contact_law.md: theta = 1/2, position law, massless contact
-    nodes, whose Craig-Bampton constraint modes split and add static columns) goes back to the
-    velocity law without redistribution, and the scheme to theta = DEFAULT_THETA (0.55: the
-    velocity law's contact nodes carry mass and ring undamped at theta = 1/2). ``sc`` itself
+    (the seed scenarios' scheme, docs/contact_law.md: position law, massless contact nodes,
+    whose Craig-Bampton constraint modes split and add static columns, theta(h) = 1/2 +
+    h / (4 tau) from hf_damping_time_s: 0.51 at their 0.5 us step) goes back to the velocity law
+    without redistribution, and the scheme to a fixed theta = DEFAULT_THETA (0.55: the velocity
+    law's contact nodes carry mass and ring at theta near 1/2). ``sc`` itself
     when no contact redistributes ``body``'s mass."""
     touched = redistributing_contacts(sc, body)
     if not touched:
