@@ -7,7 +7,9 @@ candidates, rebuilt from a grid of the facets (search_state.facet_grid), and a w
 from the facet chosen at the previous step, with facets pruned by a distance bound (see
 :func:`_closest`). What it reads and keeps comes in three typed tuples (contact.search_state):
 the facets (FacetSurface), the per-node state (SearchState) and the kept projections
-(MemoArrays).
+(MemoArrays); the two scans, :func:`scan_nodes` (the constraint pass) and
+:func:`penetration_scan` (the penetration measure, contact.penetration), unpack them once
+and hand their arrays to the per-node helpers (see :func:`_search_node` for why).
 
 Projections made at unchanged node positions are kept and read again (search_state.
 ProjectionMemo, :func:`_try`): the penetration measure at the end of a step and the next
@@ -44,15 +46,14 @@ def _distance(p, c):
 
 
 @numba.njit(cache=True)
-def _refresh_list(i, p, reach, surface, lists, ref):
-    """Candidate superset of node i: facets g with |p - c_g| - R_g <= reach + rho (surface.geo
-    (nf, 4): centroid, circumradius), stored in lists[i] (count first; -1 when it overflows:
-    all facets then); ref[i] = (p, reach + rho). The facets come from the cells of the facet
-    grid (search_state.facet_grid) within reach + rho + R_max of p: a node's rebuild reads the
-    facets about it, not all of them."""
-    radius = reach + surface.rho
-    geo = surface.geo
-    gmeta, gdims, gstart, gfacets = surface.grid
+def _refresh_list(i, p, reach, rho, geo, lists, ref, gmeta, gdims, gstart, gfacets):
+    """Candidate superset of node i: facets g with |p - c_g| - R_g <= reach + rho (geo (nf, 4):
+    centroid, circumradius), stored in lists[i] (count first; -1 when it overflows: all
+    facets then); ref[i] = (p, reach + rho). The facets come from the cells of the facet grid
+    (search_state.FacetGrid: gmeta = origin, cell edge, largest R; gdims; CSR gstart,
+    gfacets) within reach + rho + R_max of p: a node's rebuild reads the facets about it,
+    not all of them."""
+    radius = reach + rho
     cap = lists.shape[1] - 1
     n = 0
     edge = gmeta[3]
@@ -87,18 +88,16 @@ def _refresh_list(i, p, reach, surface, lists, ref):
 
 
 @numba.njit(cache=True)
-def _candidates(i, p, reach, surface, state, tag):
+def _candidates(i, p, reach, rho, geo, lists, ref, mark, tag, cand, lb, grid):
     """Broad-phase candidates of node i, exactly BroadPhase.query's set {g : |p - c_g| <=
     reach + R_g}, from its cached superset; the superset is rebuilt when the node has moved
     so far (|p - p_ref| + reach > radius_ref, with a round-off margin) that it may miss one.
-    Marks state.mark[g] = tag, writes state.cand[:n] and lower bounds state.lb[:n] =
-    |p - c_g| - R_g [m]. Returns n."""
-    geo, lists, ref = surface.geo, state.lists, state.ref
-    mark, cand, lb = state.mark, state.cand, state.lb
+    Marks mark[g] = tag, writes cand[:n] and lower bounds lb[:n] = |p - c_g| - R_g [m].
+    Returns n."""
     radius = ref[i, 3]
     moved = _distance(p, ref[i, :3])
     if radius < 0.0 or moved + reach > radius - (1e-12 + 1e-9 * radius):
-        _refresh_list(i, p, reach, surface, lists, ref)
+        _refresh_list(i, p, reach, rho, geo, lists, ref, grid[0], grid[1], grid[2], grid[3])
     n_list = lists[i, 0]
     n_all = geo.shape[0] if n_list < 0 else n_list
     n = 0
@@ -151,15 +150,14 @@ def _memo_begin(memo):
 
 
 @numba.njit(cache=True)
-def _try(g, i, xs, xm, surface, work, memo, best, best_g):
-    """Project xs (3,) (node i) on facet g; keep it in best when it beats best_g. Returns
-    (status, best_g). memo (MemoArrays): up to k projections of node i at the current
-    positions (_memo_begin), read instead of projecting again (project_pair writes every
-    entry of a record and depends on xs, the facet's nodes and params only: the same record
-    bit for bit); k = 0: none kept."""
+def _try(g, i, xs, xm, conn, n_quads, params, work, memo, best, best_g):
+    """Project xs (node i) on facet g; keep it in best when it beats best_g. Returns (status,
+    best_g). memo = (facets (n, k), count (n,), records (n, k, REC_LEN)) of MemoArrays: up to k
+    projections of node i at the current positions (_memo_begin), read instead of projecting
+    again (project_pair writes every entry of a record and depends on xs, the facet's nodes
+    and params only: the same record bit for bit); k = 0: none kept."""
     C, t, r, P, rec = work
-    conn = surface.conn
-    m_fac, m_count, m_rec = memo.facets, memo.count, memo.records
+    m_fac, m_count, m_rec = memo[0], memo[1], memo[2]
     kept = -1
     for k in range(m_count[i]):
         if m_fac[i, k] == g:
@@ -172,7 +170,7 @@ def _try(g, i, xs, xm, surface, work, memo, best, best_g):
         for a in range(4):
             for j in range(3):
                 P[a, j] = xm[conn[g, a], j]
-        status = project_pair(xs, P, g < surface.n_quads, surface.params, C, t, r, rec)
+        status = project_pair(xs, P, g < n_quads, params, C, t, r, rec)
         c = m_count[i]
         if status == 0 and c < m_fac.shape[1]:
             m_fac[i, c] = g
@@ -185,21 +183,21 @@ def _try(g, i, xs, xm, surface, work, memo, best, best_g):
 
 
 @numba.njit(cache=True)
-def _closest(i, xs, n, tag, u_max, xm, surface, state, work, memo, best):
-    """Closest facet to xs (3,) (node i) among the n candidates (marked state.mark[g] ==
-    tag): the previous facet f0 = state.prev[i] first (warm start), its neighbours next
-    unless f0 holds an inside projection, then the rest. Once an inside projection with score
+def _closest(i, xs, n, cand, lb, mark, tag, f0, adj_ptr, adj_idx, geo, u_max, xm, conn,
+             n_quads, params, work, memo, best):
+    """Closest facet among the n candidates (marked mark[g] == tag): the previous facet f0
+    first (warm start), its neighbours next unless f0 holds an inside projection, then the
+    rest. Once an inside projection with score
     |gap| is known, a candidate g is skipped when the lower bound of its distance,
     |p - c_g| - R_g - u_max (undeformed facet moved by at most the largest master node
     displacement u_max), minus a margin for the inside tolerance and round-off, exceeds that
     score: an inside projection on g has |gap| = distance >= that bound, so g cannot win.
     Returns (status, facet; -1 when none)."""
-    mark, cand, lb, f0 = state.mark, state.cand, state.lb, state.prev[i]
-    adj_ptr, adj_idx, geo = surface.adj_ptr, surface.adj_idx, surface.geo
     best_g = -1
     if f0 >= 0:
         if mark[f0] == tag:
-            status, best_g = _try(f0, i, xs, xm, surface, work, memo, best, best_g)
+            status, best_g = _try(f0, i, xs, xm, conn, n_quads, params, work, memo, best,
+                                  best_g)
             mark[f0] = tag + 1
             if status:
                 return status, f0
@@ -207,7 +205,8 @@ def _closest(i, xs, n, tag, u_max, xm, surface, state, work, memo, best):
         for k in range(start, adj_ptr[f0 + 1]):
             g = adj_idx[k]
             if mark[g] == tag:
-                status, best_g = _try(g, i, xs, xm, surface, work, memo, best, best_g)
+                status, best_g = _try(g, i, xs, xm, conn, n_quads, params, work, memo, best,
+                                      best_g)
                 mark[g] = tag + 1
                 if status:
                     return status, g
@@ -220,11 +219,12 @@ def _closest(i, xs, n, tag, u_max, xm, surface, state, work, memo, best):
             margin = u_max * (1.0 + 1e-5) + 1e-5 * R + 1e-9 * (lb[k] + R) + 1e-15
             if lb[k] - margin > _score(best):
                 continue
-        status, best_g = _try(g, i, xs, xm, surface, work, memo, best, best_g)
+        status, best_g = _try(g, i, xs, xm, conn, n_quads, params, work, memo, best, best_g)
         mark[g] = tag + 1
         if status:
             return status, g
     return 0, best_g
+
 
 
 @numba.njit(cache=True)
@@ -260,12 +260,17 @@ def _finish(i, g, best, xs, vs, xm, vm, conn, n_quads, out):
 
 
 @numba.njit(cache=True)
-def _search_node(i, xs, xm, r_m, A_m, reach, u_max, surface, state, work, memo, best, p):
-    """Closest facet of node i of xs, shared by scan_nodes and penetration.penetration_scan:
-    the box test in the facet body's frame (r_m, A_m), the candidate superset, the closest
-    projection. p (3,) work. Returns (searched: False when outside the box or without
-    candidates, status, facet)."""
-    box = surface.box
+def _search_node(i, xs, xm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_quads, adj_ptr,
+                 adj_idx, params, lists, ref, prev, mark, counter, cand, lb, grid, work, memo,
+                 best, p):
+    """Closest facet of node i of xs, shared by scan_nodes and penetration_scan: the box test
+    in the facet body's frame (r_m, A_m), the candidate superset, the closest projection.
+    Returns (searched: False when outside the box or without candidates, status, facet).
+
+    The per-node helpers take the fields of FacetSurface and SearchState (unpacked once per
+    scan), not the named tuples: a field read from a tuple passed in takes a reference count
+    (an atomic increment and decrement per array): passed down to here and to _try, they
+    made a scan a quarter slower (docs/notes/2026-11-27-contact-kernels-split.md)."""
     inside_box = True
     for j in range(3):
         p[j] = ((xs[i, 0] - r_m[0]) * A_m[0, j] + (xs[i, 1] - r_m[1]) * A_m[1, j]) + (
@@ -273,13 +278,15 @@ def _search_node(i, xs, xm, r_m, A_m, reach, u_max, surface, state, work, memo, 
         inside_box = inside_box and box[0, j] - reach <= p[j] <= box[1, j] + reach
     if not inside_box:
         return False, 0, -1
-    state.counter[0] += 2
-    tag = state.counter[0]
-    n = _candidates(i, p, reach, surface, state, tag)
+    counter[0] += 2
+    tag = counter[0]
+    n = _candidates(i, p, reach, rho, geo, lists, ref, mark, tag, cand, lb, grid)
     if n == 0:
         return False, 0, -1
-    status, g = _closest(i, xs[i], n, tag, u_max, xm, surface, state, work, memo, best)
+    status, g = _closest(i, xs[i], n, cand, lb, mark, tag, prev[i], adj_ptr, adj_idx, geo,
+                         u_max, xm, conn, n_quads, params, work, memo, best)
     return True, status, g
+
 
 
 @numba.njit(cache=True)
@@ -305,18 +312,23 @@ def scan_nodes(xs, vs, xm, vm, r_m, A_m, reach, u_max, surface, state, memo, fac
     Returns (status, facet of the failure, number of pairs)."""
     work, best, p = work_arrays()
     _memo_begin(memo)
+    kept = (memo.facets, memo.count, memo.records)
+    geo, conn, n_quads, adj_ptr, adj_idx, box, rho, params, grid = surface
+    lists, ref, prev, mark, counter, cand, lb = state
     n_pairs = 0
     for i in range(xs.shape[0]):
         facet[i] = -1
-        searched, status, g = _search_node(i, xs, xm, r_m, A_m, reach, u_max, surface, state,
-                                           work, memo, best, p)
+        searched, status, g = _search_node(i, xs, xm, r_m, A_m, box, reach, rho, u_max, geo,
+                                           conn, n_quads, adj_ptr, adj_idx, params, lists, ref,
+                                           prev, mark, counter, cand, lb, grid, work, kept, best,
+                                           p)
         if not searched:
             continue
         if status:
             return status, g, n_pairs
         facet[i] = g
-        state.prev[i] = g
-        _finish(i, g, best, xs[i], vs[i], xm, vm, surface.conn, surface.n_quads, out)
+        prev[i] = g
+        _finish(i, g, best, xs[i], vs[i], xm, vm, conn, n_quads, out)
         n_pairs += 1
     return 0, -1, n_pairs
 
@@ -351,30 +363,35 @@ def penetration_scan(xs, xm, r_m, A_m, reach, u_max, surface, state, memo, edge_
     deepest node)."""
     work, best, p = work_arrays()
     _memo_begin(memo)
+    kept = (memo.facets, memo.count, memo.records)
+    geo, conn, n_quads, adj_ptr, adj_idx, box, rho, params, grid = surface
+    lists, ref, prev, mark, counter, cand, lb = state
     depth, node, at = floor, -1, -1
     for i in range(xs.shape[0]):
-        f0 = state.prev[i]
+        f0 = prev[i]
         if f0 >= 0:
-            status, g = _try(f0, i, xs[i], xm, surface, work, memo, best, -1)
+            status, g = _try(f0, i, xs[i], xm, conn, n_quads, params, work, kept, best, -1)
             if status:
                 return status, f0, 0.0, -1, -1
             if best[REC_IN] == 1.0 and best[REC_GAP] >= -depth:
                 continue
-        searched, status, g = _search_node(i, xs, xm, r_m, A_m, reach, u_max, surface, state,
-                                           work, memo, best, p)
+        searched, status, g = _search_node(i, xs, xm, r_m, A_m, box, reach, rho, u_max, geo,
+                                           conn, n_quads, adj_ptr, adj_idx, params, lists, ref,
+                                           prev, mark, counter, cand, lb, grid, work, kept, best,
+                                           p)
         if not searched:
             continue
         if status:
             return status, g, 0.0, -1, -1
         if g < 0:
             continue
-        state.prev[i] = g
+        prev[i] = g
         gap = best[REC_GAP]
         if gap >= 0.0:
             continue
         if best[REC_IN] == 0.0:
             lateral2 = best[REC_DIST] ** 2 - gap * gap
-            if lateral2 > (edge_tol * surface.geo[g, 3]) ** 2:
+            if lateral2 > (edge_tol * geo[g, 3]) ** 2:
                 continue
         if -gap > depth:
             depth, node, at = -gap, i, g

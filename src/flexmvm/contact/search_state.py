@@ -36,7 +36,7 @@ class FacetGrid(NamedTuple):
 
     meta: np.ndarray     # (5,) origin xyz [m], cell edge [m], largest circumradius [m]
     dims: np.ndarray     # (3,) int64 cells per axis
-    start: np.ndarray    # (n_cells + 1,) int64: the facets of cell c are facets[start[c]:start[c+1]]
+    start: np.ndarray    # (n_cells + 1,) int64: cell c holds facets[start[c]:start[c + 1]]
     facets: np.ndarray   # (nf,) int64 facet ids, by cell, increasing within a cell
 
 
