@@ -1,6 +1,6 @@
-"""Contact search on large surfaces: the cost of kernels.scan_nodes (broad phase, candidate
+"""Contact search on large surfaces: the cost of search.scan_nodes (broad phase, candidate
 supersets, closest-point projection) against the size of the master surface, with the facet
-grid (contact.nodes.facet_grid) and with one cell holding every facet (the search before the
+grid (contact.search_state.facet_grid) and with one cell holding every facet (the search before the
 grid: a node's superset rebuilt from all facets).
 
     python benchmarks/bench_search.py [--sizes 10000 100000] [--slave 2000]
@@ -20,9 +20,16 @@ import time
 
 import numpy as np
 
-from flexmvm.contact import kernels
 from flexmvm.contact.geometry import facet_adjacency
-from flexmvm.contact.nodes import facet_grid
+from flexmvm.contact.projection import REC_LEN, projection_params
+from flexmvm.contact.search import scan_nodes
+from flexmvm.contact.search_state import (
+    FacetGrid,
+    FacetSurface,
+    MemoArrays,
+    SearchState,
+    facet_grid,
+)
 
 
 def square(n: int, width: float = 0.3):
@@ -60,28 +67,23 @@ def scan_ms(xs, xm, conn, geo, one_cell: bool, reach: float = 2e-4) -> tuple[flo
     if one_cell:
         lo = geo[:, :3].min(axis=0)
         span = float((geo[:, :3].max(axis=0) - lo).max()) + 1.0
-        grid = (np.array([*lo, span, float(geo[:, 3].max())]), np.ones(3, np.int64),
-                np.array([0, nf], np.int64), np.arange(nf, dtype=np.int64))
+        grid = FacetGrid(np.array([*lo, span, float(geo[:, 3].max())]), np.ones(3, np.int64),
+                         np.array([0, nf], np.int64), np.arange(nf, dtype=np.int64))
     else:
         grid = facet_grid(geo)
-    params = kernels.projection_params()
+    surface = FacetSurface(geo, conn, 0, *adj, box, rho, projection_params(), grid)
     times = {True: [], False: []}
     for rep in range(5):
-        lists = np.zeros((ns, min(nf, 256) + 1), np.int64)
-        ref = np.full((ns, 4), -1.0)
-        prev = np.full(ns, -1, np.int64)
-        work = (np.zeros(nf, np.int64), np.zeros(1, np.int64), np.zeros(nf, np.int64),
-                np.zeros(nf))
-        memo = (np.zeros((ns, 0), np.int64), np.zeros(ns, np.int64),
-                np.zeros((ns, 0, kernels.REC_LEN)), np.full(2, -1, np.int64))
+        state = SearchState.empty(ns, nf, 256)
         facet, out = np.full(ns, -1, np.int64), np.zeros((ns, 11))
         for cold, shift in ((True, 0.0), (False, 1e-6)):
             x = xs + shift
+            memo = MemoArrays(np.zeros((ns, 0), np.int64), np.zeros(ns, np.int64),
+                              np.zeros((ns, 0, REC_LEN)), np.full(2, -1, np.int64),
+                              np.array([rep * 2 + cold], np.int64), np.zeros(1, np.int64))
             t0 = time.perf_counter()
-            kernels.scan_nodes(x, np.zeros_like(x), xm, np.zeros_like(xm), np.zeros(3),
-                               np.eye(3), box, reach, rho, 0.0, geo, conn, 0, *adj, params,
-                               lists, ref, prev, *work, *grid, facet, out, *memo,
-                               np.array([rep * 2 + cold], np.int64), np.zeros(1, np.int64))
+            scan_nodes(x, np.zeros_like(x), xm, np.zeros_like(xm), np.zeros(3), np.eye(3),
+                       reach, 0.0, surface, state, memo, facet, out)
             times[cold].append(1e3 * (time.perf_counter() - t0))
     return float(np.median(times[True])), float(np.median(times[False]))
 

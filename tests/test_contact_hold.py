@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from _recording import simulate_recording
 
-from flexmvm.contact import kernels
+from flexmvm.contact.held_pairs import gap_offsets, hold_pairs
 from flexmvm.scenarios import load_scenario, scenario_from_dict
 from flexmvm.scenarios.build import build_scenario
 
@@ -52,8 +52,8 @@ def test_held_pair_gap_is_linear_in_the_node_positions():
     out = np.zeros((1, 11))
     out[0, 4:6] = (0.7, -0.1)
     out[0, 9] = 2.0e-9          # the scan's exact gap: d = 0.5e-9, within tol of held_d
-    anew, released = kernels.hold_pairs(held, held_w, held_n, held_off, held_d, facet, out, xs,
-                                        vs, xm, vm, A, conn, 1e-9, 1e-8)
+    anew, released = hold_pairs(held, held_w, held_n, held_off, held_d, facet, out, xs,
+                                vs, xm, vm, A, conn, 1e-9, 1e-8)
     assert (anew, released) == (0, 0) and held[0] == 0 and facet[0] == 0
     assert out[0, :4] == pytest.approx(w, abs=0)
     assert out[0, 6:9] == pytest.approx(n, abs=1e-15)
@@ -77,8 +77,8 @@ def test_held_pair_takes_the_scan_geometry_without_a_jump():
     held_off, held_d = np.array([1.5e-9]), np.zeros(1)
     out = np.zeros((1, 11))
     out[0, :4], out[0, 6:9], out[0, 9] = w_new, n, 3e-9    # the scan: exact gap 3 nm
-    anew, released = kernels.hold_pairs(held, held_w, held_n, held_off, held_d, facet, out, xs,
-                                        vs, xm, vm, A, conn, 1e-9, 1e-8)
+    anew, released = hold_pairs(held, held_w, held_n, held_off, held_d, facet, out, xs,
+                                vs, xm, vm, A, conn, 1e-9, 1e-8)
     assert (anew, released) == (1, 0) and held[0] == 0
     assert out[0, 9] == pytest.approx(4.5e-9, rel=1e-6)    # the linear gap, unchanged
     assert held_w[0] == pytest.approx(w_new, abs=0)
@@ -101,9 +101,9 @@ def test_held_pair_released(exact_gap, scanned_facet):
     out = np.zeros((1, 11))
     out[0, 9] = exact_gap
     before = out.copy()
-    anew, released = kernels.hold_pairs(held, w[None, :].copy(), np.array([[1.0, 0.0, 0.0]]),
-                                        np.zeros(1), np.zeros(1), facet, out, xs,
-                                        np.zeros((1, 3)), xm, vm, A, conn, 1e-9, 1e-8)
+    anew, released = hold_pairs(held, w[None, :].copy(), np.array([[1.0, 0.0, 0.0]]),
+                                np.zeros(1), np.zeros(1), facet, out, xs, np.zeros((1, 3)), xm,
+                                vm, A, conn, 1e-9, 1e-8)
     assert (anew, released) == (0, 1) and held[0] == -1 and facet[0] == scanned_facet
     assert np.array_equal(out, before)
 
@@ -120,7 +120,7 @@ def test_gap_offsets():
     offsets = np.empty(1)
     for scan_gap, expected in ((3e-9, 0.0), (4e-9, 1e-9)):
         out[0, 9] = scan_gap
-        kernels.gap_offsets(np.array([0]), np.array([0]), out, xs, xm, conn, offsets)
+        gap_offsets(np.array([0]), np.array([0]), out, xs, xm, conn, offsets)
         assert offsets[0] == pytest.approx(expected, abs=1e-22)
 
 

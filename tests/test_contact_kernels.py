@@ -14,16 +14,18 @@ import pytest
 import scipy.sparse as sp
 
 from flexmvm.bodies.body import FlexibleBody
-from flexmvm.contact import kernels
 from flexmvm.contact import reference as ref
 from flexmvm.contact.geometry import MasterSurface, project_points
-from flexmvm.contact.nodes import ContactNodes, ProjectionMemo
+from flexmvm.contact.kinematics import body_kinematics
+from flexmvm.contact.nodes import ContactNodes
 from flexmvm.contact.pairs import PENETRATION_RECOVERY, PointToSurfaceContact
+from flexmvm.contact.projection import REC_LEN, project_pair, projection_params
+from flexmvm.contact.search_state import ProjectionMemo
 
 
 def _project_one(xs, P, quad):
-    C, t, r, rec = np.empty((4, 3)), np.empty((2, 3)), np.empty(3), np.empty(kernels.REC_LEN)
-    status = kernels.project_pair(xs, P, quad, kernels.projection_params(), C, t, r, rec)
+    C, t, r, rec = np.empty((4, 3)), np.empty((2, 3)), np.empty(3), np.empty(REC_LEN)
+    status = project_pair(xs, P, quad, projection_params(), C, t, r, rec)
     assert status == 0
     return rec
 
@@ -201,9 +203,9 @@ def test_kinematics_kept_while_the_state_is_unchanged():
 
     def check(cn, fresh, st, reused):
         got = cn.update(st)
-        want = kernels.body_kinematics(fresh.X, fresh.psi_c, fresh.indptr, fresh.indices,
-                                       fresh.data, fresh.dense, st.q, st.v, st.r, st.A,
-                                       fresh.u, fresh.ud, fresh.s, fresh.x, fresh.xd)
+        want = body_kinematics(fresh.X, fresh.psi_c, fresh.indptr, fresh.indices, fresh.data,
+                               fresh.dense, st.q, st.v, st.r, st.A, fresh.u, fresh.ud, fresh.s,
+                               fresh.x, fresh.xd)
         assert got == want
         if reused:
             assert (cn.x == -7.0).all()
@@ -244,7 +246,7 @@ def test_projection_memo_changes_nothing():
     provs = [PointToSurfaceContact(bodies, 1, np.arange(25), 0, surf, search_radius_m=0.05,
                                    slave_surface=_slave_quads()) for _ in range(2)]
     bare = provs[1]
-    bare._memo = ProjectionMemo(bare._s, bare._m, bare._conn, bare._params, k=0)
+    bare._memo = ProjectionMemo(bare._s, bare._m, bare._conn, bare._facets.params, k=0)
     bare._measure.directions[0].memo = bare._memo
     assert provs[0]._measure.directions[0].memo is provs[0]._memo
     h, hits = 1e-3, 0
@@ -258,7 +260,7 @@ def test_projection_memo_changes_nothing():
             seq.append(p.candidate_rows(bodies, states, h))
             states[0].q[1] /= 1.0 + 1e-9
             got.append((seq, p._facet.copy(), p._out.copy()))
-            hits += p is provs[0] and int(p._memo.count.sum())
+            hits += p is provs[0] and int(p._memo.arrays.count.sum())
         (a, fa, oa), (b, fb, ob) = got
         np.testing.assert_array_equal(fa, fb)
         np.testing.assert_array_equal(oa, ob)
@@ -285,7 +287,7 @@ def test_measure_shares_the_search_node_sets_when_equal():
                                  slave_surface=slave_surf)
     assert prov._measure._s is prov._s and prov._measure._m is prov._m
     assert prov._measure.directions[0].memo is prov._memo
-    assert prov._measure.directions[1].memo.fac.shape[1] == 0
+    assert prov._measure.directions[1].memo.arrays.facets.shape[1] == 0
     prov = PointToSurfaceContact(bodies, 1, np.arange(5, 25), 0, surf, search_radius_m=0.05,
                                  slave_surface=slave_surf)
     assert prov._measure._s is not prov._s and prov._measure._m is prov._m

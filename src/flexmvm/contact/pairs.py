@@ -52,16 +52,18 @@ import numpy as np
 
 from flexmvm.constraints.contact import ContactKind, ContactLaw, ContactRows, FrictionRows
 from flexmvm.constraints.rows import Rows
-from flexmvm.contact import kernels
-from flexmvm.contact.geometry import BroadPhase, MasterSurface, facet_adjacency
-from flexmvm.contact.nodes import ContactNodes, ProjectionMemo, SearchState
+from flexmvm.contact.geometry import BroadPhase, MasterSurface
+from flexmvm.contact.held_pairs import gap_offsets, hold_pairs
+from flexmvm.contact.nodes import ContactNodes
+from flexmvm.contact.pair_rows import active_pairs, predicted_min_gap
 from flexmvm.contact.penetration import Penetration, SurfaceMeasure
+from flexmvm.contact.projection import DEGENERATE_QUAD, DEGENERATE_TRI
 from flexmvm.contact.reference import body_rows
+from flexmvm.contact.search import scan_nodes
+from flexmvm.contact.search_state import ProjectionMemo, SearchState, facet_surface
 from flexmvm.errors import InputError, SolverError
 
 __all__ = ["PointToSurfaceContact", "body_rows", "tangent_basis"]
-
-_LIST_CAP = 256  # candidate supersets longer than this fall back to a scan of all facets
 
 
 
@@ -93,8 +95,8 @@ class PointToSurfaceContact:
     """Contact of slave nodes (body `slave`) with master facets (body `master`).
 
     Per call the contact-node kinematics, the search and the rows run in compiled kernels
-    (contact.kernels) on arrays kept here; the result equals the numpy reference
-    (contact.reference) to round-off. Search state kept between calls, which never changes a
+    (contact.kinematics, contact.search, contact.pair_rows) on arrays kept here; the result
+    equals the numpy reference (contact.reference) to round-off. Search state kept between calls, which never changes a
     result: per slave node a superset of its broad-phase candidates, rebuilt once the node
     has moved far enough to leave it, and the facet chosen last time, tried first.
     """
@@ -156,18 +158,15 @@ class PointToSurfaceContact:
                                        shared=(self._s, self._m, self._memo))
 
     def _setup(self, bodies) -> None:
-        """Gathered node data, facet geometry and the search state (see kernels.scan_nodes)."""
+        """Gathered node data, facet geometry and the search state (see search.scan_nodes)."""
         self._s = ContactNodes(bodies[self.slave], self.slave_nodes)
         self._m = ContactNodes(bodies[self.master], self.master_nodes)
         self._conn = np.searchsorted(self.master_nodes, self.surface.connectivity).astype(np.int64)
-        self._geo = np.column_stack([self.broad.centroids, self.broad.circumradius])
-        self._adj = facet_adjacency(self.surface.connectivity)
-        self._box2 = np.vstack(self._box).astype(np.float64)
-        self._rho = max(self.search_radius, 0.5 * float(np.median(self.broad.circumradius)))
-        self._params = kernels.projection_params()
+        self._facets = facet_surface(bodies[self.master].X, self.surface, self._conn, self.broad,
+                                     self.search_radius)
         ns, nf = len(self.slave_nodes), self.surface.n_facets
-        self._search = SearchState(ns, nf, _LIST_CAP, self._geo)
-        self._memo = ProjectionMemo(self._s, self._m, self._conn, self._params)
+        self._search = SearchState.empty(ns, nf)
+        self._memo = ProjectionMemo(self._s, self._m, self._conn, self._facets.params)
         self._facet = np.full(ns, -1, dtype=np.int64)
         self._out = np.zeros((ns, 11))
         self._idx = np.zeros(ns, dtype=np.int64)
@@ -197,11 +196,9 @@ class PointToSurfaceContact:
         self._facet, self._out); returns the number of nodes with a facet."""
         sm = states[self.master]
         m = self._m
-        status, facet, n = kernels.scan_nodes(
-            self._s.x, self._s.xd, m.x, m.xd, sm.r, sm.A, self._box2, reach, self._rho,
-            self._u_max, self._geo, self._conn, self.surface.n_quads, *self._adj, self._params,
-            *self._search.arrays(),
-            self._facet, self._out, *self._memo.arrays())
+        status, facet, n = scan_nodes(self._s.x, self._s.xd, m.x, m.xd, sm.r, sm.A, reach,
+                                      self._u_max, self._facets, self._search, self._memo.arrays,
+                                      self._facet, self._out)
         if status:
             raise SolverError(_failure(status, facet))
         return n
@@ -212,7 +209,7 @@ class PointToSurfaceContact:
             return np.inf
         if self._bonds:
             return -np.inf
-        return float(kernels.predicted_min_gap(self._facet, self._out, horizon_s))
+        return float(predicted_min_gap(self._facet, self._out, horizon_s))
 
     # -- penetration ----------------------------------------------------------------------------
     def penetration(self, bodies, states, deep: bool = False, floors=None) -> list[Penetration]:
@@ -233,16 +230,15 @@ class PointToSurfaceContact:
         self._scan(states, self.search_radius + 2 * speed * h)
         A_m = states[self.master].A
         if self._holds:
-            kernels.hold_pairs(self._held, self._held_w, self._held_n, self._held_off,
-                               self._held_d, self._facet, self._out, self._s.x, self._s.xd,
-                               self._m.x, self._m.xd, A_m, self._conn, self.gap_tol,
-                               HOLD_DRIFT_MAX * self.gap_tol)
+            hold_pairs(self._held, self._held_w, self._held_n, self._held_off, self._held_d,
+                       self._facet, self._out, self._s.x, self._s.xd, self._m.x, self._m.xd, A_m,
+                       self._conn, self.gap_tol, HOLD_DRIFT_MAX * self.gap_tol)
         if self.law is ContactLaw.POSITION:
             # g <= gap_tol + POSITION_REACH h u_reach, whatever u_N- (see the module doc)
             hp, tol = 0.0, self.gap_tol + POSITION_REACH * h * speed
         else:
             hp, tol = h, self.gap_tol
-        m_n, idx, slave_ids, facets, normal, gaps, u_n, s_pairs, m_pairs = kernels.active_pairs(
+        m_n, idx, slave_ids, facets, normal, gaps, u_n, s_pairs, m_pairs = active_pairs(
             self._facet, self._out, hp, tol, self._bonded, self._idx, self._conn,
             self.surface.n_quads, self.slave_nodes)
         eq = self._bond_rows(h) if self._bonds else None
@@ -256,8 +252,7 @@ class PointToSurfaceContact:
         self._last = ((idx, m_nodes, m_w, normal), 0 if eq is None else len(eq[4]))
         if self._holds:
             off = np.empty(m_n)
-            kernels.gap_offsets(idx, self._facet, self._out, self._s.x, self._m.x, self._conn,
-                                off)
+            gap_offsets(idx, self._facet, self._out, self._s.x, self._m.x, self._conn, off)
             self._row_geometry = (idx, facets, m_w, normal, off, A_m.copy())
         if eq is None:
             lower = self._lower(gaps, u_n, h)
@@ -416,9 +411,9 @@ def tangent_basis(normal: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _failure(status: int, facet: int) -> str:
-    """Message of a kernel failure status (contact.kernels) on facet `facet`."""
-    if status == kernels.DEGENERATE_QUAD:
+    """Message of a kernel failure status (contact.projection) on facet `facet`."""
+    if status == DEGENERATE_QUAD:
         return f"quad facet {facet} degenerate (zero area at the centre) when deformed"
-    if status == kernels.DEGENERATE_TRI:
+    if status == DEGENERATE_TRI:
         return f"triangle facet {facet} has zero area in the deformed state"
     return f"facet {facet} is degenerate at the contact point (tangents parallel)"

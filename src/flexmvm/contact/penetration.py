@@ -3,8 +3,8 @@
 The constraint pass (contact.pairs) sees slave nodes against master facets, for the pairs it
 built rows for. The measure here looks both ways after every step: every slave node against
 the master facets, and every master surface node against the slave facets, with the compiled
-closest-point search of the constraint pass (contact.kernels.penetration_scan: cached
-candidate supersets, warm start from the last facet, pruning).
+closest-point search of the constraint pass (contact.search.penetration_scan:
+cached candidate supersets, warm start from the last facet, pruning).
 
 Definition. A node penetrates the other surface by d = -g > 0 when its closest facet of that
 surface (within reach) has a projection that is inside the facet, to the constraint pass's
@@ -23,9 +23,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flexmvm.contact import kernels
-from flexmvm.contact.geometry import BroadPhase, MasterSurface, facet_adjacency
-from flexmvm.contact.nodes import ContactNodes, ProjectionMemo, SearchState
+from flexmvm.contact.geometry import BroadPhase, MasterSurface
+from flexmvm.contact.nodes import ContactNodes
+from flexmvm.contact.search import penetration_scan
+from flexmvm.contact.search_state import ProjectionMemo, SearchState, facet_surface
 
 EDGE_TOL = 0.01  # lateral offset beyond a facet edge, per facet circumradius, still counted:
                  # covers the round-off and the differential Poisson expansion of two faces
@@ -57,30 +58,26 @@ class _Direction:
         self.node_set, self.facet_set = node_set, facet_set
         self.rows = None if len(rows) == len(node_set.nodes) else np.asarray(rows, np.int64)
         self.node_ids = node_set.nodes if self.rows is None else node_set.nodes[self.rows]
-        broad = BroadPhase(bodies[against].X, surface)
-        self.geo = np.column_stack([broad.centroids, broad.circumradius])
         local = np.full(len(bodies[against].X), -1, dtype=np.int64)
         local[facet_set.nodes] = np.arange(len(facet_set.nodes))
-        self.conn = local[surface.connectivity]
-        if self.conn.min() < 0:
+        conn = local[surface.connectivity]
+        if conn.min() < 0:
             raise ValueError("facet nodes missing from the facet node set")
-        self.n_quads = surface.n_quads
-        self.adj = facet_adjacency(surface.connectivity)
+        self.surface = facet_surface(bodies[against].X, surface, conn,
+                                     BroadPhase(bodies[against].X, surface), search_radius)
         Xs = bodies[against].X[surface.nodes()]
-        self.box = np.vstack([Xs.min(axis=0), Xs.max(axis=0)]).astype(np.float64)
         Xn = bodies[body].X[self.node_ids]
         self.extent = float(np.linalg.norm(np.ptp(Xs, axis=0)) + np.linalg.norm(np.ptp(Xn, axis=0)))
         self.search_radius = search_radius
-        self.rho = max(search_radius, 0.5 * float(np.median(broad.circumradius)))
-        self.params = kernels.projection_params()
-        self.search = SearchState(len(self.node_ids), surface.n_facets, geo=self.geo)
+        self.search = SearchState.empty(len(self.node_ids), surface.n_facets)
         # projections kept at the current positions: the constraint pass's memo when it serves
         # this scan (all nodes of its node set against its facets: the next step's search
         # reads what this measure projected), else none (keeping costs more than the few
         # projections a measure repeats itself)
-        if memo is None or self.rows is not None or not memo.serves(node_set, facet_set,
-                                                                    self.conn, self.params):
-            memo = ProjectionMemo(node_set, facet_set, self.conn, self.params, k=0)
+        if memo is None or self.rows is not None or not memo.serves(
+                node_set, facet_set, self.surface.conn, self.surface.params):
+            memo = ProjectionMemo(node_set, facet_set, self.surface.conn, self.surface.params,
+                                  k=0)
         self.memo = memo
 
     def measure(self, states, u_max_facets: float, deep: bool, floor: float
@@ -89,13 +86,12 @@ class _Direction:
         st = states[self.against]
         if deep:  # the start check: reach over both surfaces, a throwaway search state
             reach = self.search_radius + u_max_facets + self.extent
-            search = SearchState(len(x), len(self.geo), geo=self.geo)
+            search = SearchState.empty(len(x), len(self.surface.geo))
         else:
             reach, search = self.search_radius + u_max_facets, self.search
-        status, bad, depth, i, g = kernels.penetration_scan(
-            x, self.facet_set.x, st.r, st.A, self.box, reach, self.rho, u_max_facets, self.geo,
-            self.conn, self.n_quads, *self.adj, self.params, EDGE_TOL, floor, *search.arrays(),
-            *self.memo.arrays())
+        status, bad, depth, i, g = penetration_scan(
+            x, self.facet_set.x, st.r, st.A, reach, u_max_facets, self.surface, search,
+            self.memo.arrays, EDGE_TOL, floor)
         node = int(self.node_ids[i]) if i >= 0 else -1
         return status, bad, Penetration(float(depth), self.body, node, self.against, int(g))
 
@@ -130,7 +126,7 @@ class SurfaceMeasure:
     def measure(self, states, deep: bool = False, floors=None) -> list[tuple[int, int, Penetration]]:
         """(status, failing facet, Penetration) per direction at the given states. floors
         (per direction, [m]; default 0): only depths above are sought, a shallower one reads 0
-        (kernels.penetration_scan): the caller passes the deepest it has seen so far. Depths
+        (penetration_scan): the caller passes the deepest it has seen so far. Depths
         up to RESOLUTION_M always read 0."""
         _, u_s = self._s.update(states[self.slave])
         _, u_m = self._m.update(states[self.master])
@@ -145,3 +141,4 @@ def _same_set(nodes: ContactNodes | None, ids: np.ndarray) -> ContactNodes | Non
     if nodes is not None and np.array_equal(nodes.nodes, np.asarray(ids, dtype=np.int64)):
         return nodes
     return None
+

@@ -1,6 +1,6 @@
 """Numpy reference of one contact step: node kinematics, projection, constraint rows.
 
-The specification the compiled path (contact.kernels, contact.nodes, contact.pairs) is
+The specification the compiled path (contact.search, contact.nodes, contact.pairs) is
 tested against, and the row builder of the rare bonded path. Everything is recomputed from
 the states on every call: positions and velocities of the contact nodes through psi,
 BroadPhase candidates, project_points, closest_facets, clamping of outside projections.

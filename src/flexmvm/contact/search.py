@@ -1,0 +1,398 @@
+"""Closest facet of each node, compiled (numba): broad phase, warm start, pruning.
+
+The numpy path (geometry.BroadPhase, geometry.project_points, geometry.closest_facets, the
+clamping of outside projections in pairs) is the specification, reproduced pair by pair to
+round-off. What differs is the search: per slave node a cached superset of its broad-phase
+candidates, rebuilt from a grid of the facets (search_state.facet_grid), and a warm start
+from the facet chosen at the previous step, with facets pruned by a distance bound (see
+:func:`_closest`). What it reads and keeps comes in three typed tuples (contact.search_state):
+the facets (FacetSurface), the per-node state (SearchState) and the kept projections
+(MemoArrays); the two scans, :func:`scan_nodes` (the constraint pass) and
+:func:`penetration_scan` (the penetration measure, contact.penetration), unpack them once
+and hand their arrays to the per-node helpers (see :func:`_search_node` for why).
+
+Projections made at unchanged node positions are kept and read again (search_state.
+ProjectionMemo, :func:`_try`): the penetration measure at the end of a step and the next
+step's search project the same pairs at the same positions. The small helpers of the search
+(_try, _closest, _candidates, ...) are separate compiled functions, not inlined: inlining them
+into the scans (numba ``inline="always"``, same results bit for bit) saved 2.6 % of an
+all-MVM seed run but doubled the first-run compilation of the MVM path (20 s -> 39 s).
+
+Units: metres, seconds. Node arrays hold the contact nodes of one body only ("local" node
+indices 0..n_c-1); facets refer to local node indices of the body that carries them.
+"""
+
+from __future__ import annotations
+
+import numba
+import numpy as np
+
+from flexmvm.contact.geometry import TIE_ABS, TIE_REL
+from flexmvm.contact.projection import (
+    REC_DIST,
+    REC_GAP,
+    REC_IN,
+    REC_LEN,
+    REC_N,
+    REC_W,
+    REC_XI,
+    project_pair,
+)
+
+
+@numba.njit(cache=True)
+def _distance(p, c):
+    return np.sqrt((p[0] - c[0]) ** 2 + (p[1] - c[1]) ** 2 + (p[2] - c[2]) ** 2)
+
+
+@numba.njit(cache=True)
+def _refresh_list(i, p, reach, rho, geo, lists, ref, gmeta, gdims, gstart, gfacets):
+    """Candidate superset of node i: facets g with |p - c_g| - R_g <= reach + rho (geo (nf, 4):
+    centroid, circumradius), stored in lists[i] (count first; -1 when it overflows: all
+    facets then); ref[i] = (p, reach + rho). The facets come from the cells of the facet grid
+    (search_state.FacetGrid: gmeta = origin, cell edge, largest R; gdims; CSR gstart,
+    gfacets) within reach + rho + R_max of p: a node's rebuild reads the facets about it,
+    not all of them."""
+    radius = reach + rho
+    cap = lists.shape[1] - 1
+    n = 0
+    edge = gmeta[3]
+    lo = np.empty(3, dtype=np.int64)
+    hi = np.empty(3, dtype=np.int64)
+    for j in range(3):
+        top = gdims[j] - 1.0
+        # clipped to the grid in floating point, then truncated (= floor of a value >= 0)
+        lo[j] = np.int64(min(max((p[j] - radius - gmeta[4] - gmeta[j]) / edge, 0.0), top))
+        hi[j] = np.int64(min(max((p[j] + radius + gmeta[4] - gmeta[j]) / edge, 0.0), top))
+    overflow = False
+    for ci in range(lo[0], hi[0] + 1):
+        for cj in range(lo[1], hi[1] + 1):
+            for ck in range(lo[2], hi[2] + 1):
+                cell = (ci * gdims[1] + cj) * gdims[2] + ck
+                for e in range(gstart[cell], gstart[cell + 1]):
+                    g = gfacets[e]
+                    if _distance(p, geo[g]) - geo[g, 3] <= radius:
+                        if n == cap:
+                            overflow = True
+                            break
+                        lists[i, 1 + n] = g
+                        n += 1
+                if overflow:
+                    break
+            if overflow:
+                break
+        if overflow:
+            break
+    lists[i, 0] = -1 if overflow else n
+    ref[i, 0], ref[i, 1], ref[i, 2], ref[i, 3] = p[0], p[1], p[2], radius
+
+
+@numba.njit(cache=True)
+def _candidates(i, p, reach, rho, geo, lists, ref, mark, tag, cand, lb, grid):
+    """Broad-phase candidates of node i, exactly BroadPhase.query's set {g : |p - c_g| <=
+    reach + R_g}, from its cached superset; the superset is rebuilt when the node has moved
+    so far (|p - p_ref| + reach > radius_ref, with a round-off margin) that it may miss one.
+    Marks mark[g] = tag, writes cand[:n] and lower bounds lb[:n] = |p - c_g| - R_g [m].
+    Returns n."""
+    radius = ref[i, 3]
+    moved = _distance(p, ref[i, :3])
+    if radius < 0.0 or moved + reach > radius - (1e-12 + 1e-9 * radius):
+        _refresh_list(i, p, reach, rho, geo, lists, ref, grid[0], grid[1], grid[2], grid[3])
+    n_list = lists[i, 0]
+    n_all = geo.shape[0] if n_list < 0 else n_list
+    n = 0
+    for k in range(n_all):
+        g = k if n_list < 0 else lists[i, 1 + k]
+        d = _distance(p, geo[g])
+        if d <= reach + geo[g, 3]:
+            mark[g] = tag
+            cand[n] = g
+            lb[n] = d - geo[g, 3]
+            n += 1
+    return n
+
+
+@numba.njit(cache=True)
+def _score(rec):
+    """A projection's distance to its facet [m] for closest_facets' order: |gap| inside, the
+    distance to the clamped facet outside, the latter raised by a round-off margin
+    (TIE_REL, TIE_ABS) so that an inside projection wins a tie."""
+    if rec[REC_IN] == 1.0:
+        return abs(rec[REC_GAP])
+    return rec[REC_DIST] * (1.0 + TIE_REL) + TIE_ABS
+
+
+@numba.njit(cache=True)
+def _better(rec, g, best, best_g):
+    """closest_facets' order: the closer facet (_score), then an inside projection, then the
+    lower facet index."""
+    if best_g < 0:
+        return True
+    sa, sb = _score(rec), _score(best)
+    if sa != sb:
+        return sa < sb
+    a_in = rec[REC_IN] == 1.0
+    b_in = best[REC_IN] == 1.0
+    if a_in != b_in:
+        return a_in
+    return g < best_g
+
+
+@numba.njit(cache=True)
+def _memo_begin(memo):
+    """Forget the kept projections of memo (search_state.MemoArrays) unless the node and
+    facet positions are still those they were made at (their ContactNodes versions)."""
+    count, versions = memo.count, memo.versions
+    ver_s, ver_m = memo.node_version, memo.facet_version
+    if versions[0] != ver_s[0] or versions[1] != ver_m[0]:
+        count[:] = 0
+        versions[0], versions[1] = ver_s[0], ver_m[0]
+
+
+@numba.njit(cache=True)
+def _try(g, i, xs, xm, conn, n_quads, params, work, memo, best, best_g):
+    """Project xs (node i) on facet g; keep it in best when it beats best_g. Returns (status,
+    best_g). memo = (facets (n, k), count (n,), records (n, k, REC_LEN)) of MemoArrays: up to k
+    projections of node i at the current positions (_memo_begin), read instead of projecting
+    again (project_pair writes every entry of a record and depends on xs, the facet's nodes
+    and params only: the same record bit for bit); k = 0: none kept."""
+    C, t, r, P, rec = work
+    m_fac, m_count, m_rec = memo[0], memo[1], memo[2]
+    kept = -1
+    for k in range(m_count[i]):
+        if m_fac[i, k] == g:
+            kept = k
+            break
+    if kept >= 0:
+        rec[:] = m_rec[i, kept]
+        status = 0
+    else:
+        for a in range(4):
+            for j in range(3):
+                P[a, j] = xm[conn[g, a], j]
+        status = project_pair(xs, P, g < n_quads, params, C, t, r, rec)
+        c = m_count[i]
+        if status == 0 and c < m_fac.shape[1]:
+            m_fac[i, c] = g
+            m_rec[i, c] = rec
+            m_count[i] = c + 1
+    if status == 0 and _better(rec, g, best, best_g):
+        best[:] = rec
+        best_g = g
+    return status, best_g
+
+
+@numba.njit(cache=True)
+def _closest(i, xs, n, cand, lb, mark, tag, f0, adj_ptr, adj_idx, geo, u_max, xm, conn,
+             n_quads, params, work, memo, best):
+    """Closest facet among the n candidates (marked mark[g] == tag): the previous facet f0
+    first (warm start), its neighbours next unless f0 holds an inside projection, then the
+    rest. Once an inside projection with score
+    |gap| is known, a candidate g is skipped when the lower bound of its distance,
+    |p - c_g| - R_g - u_max (undeformed facet moved by at most the largest master node
+    displacement u_max), minus a margin for the inside tolerance and round-off, exceeds that
+    score: an inside projection on g has |gap| = distance >= that bound, so g cannot win.
+    Returns (status, facet; -1 when none)."""
+    best_g = -1
+    if f0 >= 0:
+        if mark[f0] == tag:
+            status, best_g = _try(f0, i, xs, xm, conn, n_quads, params, work, memo, best,
+                                  best_g)
+            mark[f0] = tag + 1
+            if status:
+                return status, f0
+        start = adj_ptr[f0 + 1] if best_g >= 0 and best[REC_IN] == 1.0 else adj_ptr[f0]
+        for k in range(start, adj_ptr[f0 + 1]):
+            g = adj_idx[k]
+            if mark[g] == tag:
+                status, best_g = _try(g, i, xs, xm, conn, n_quads, params, work, memo, best,
+                                      best_g)
+                mark[g] = tag + 1
+                if status:
+                    return status, g
+    for k in range(n):
+        g = cand[k]
+        if mark[g] != tag:
+            continue
+        if best_g >= 0:
+            R = geo[g, 3]
+            margin = u_max * (1.0 + 1e-5) + 1e-5 * R + 1e-9 * (lb[k] + R) + 1e-15
+            if lb[k] - margin > _score(best):
+                continue
+        status, best_g = _try(g, i, xs, xm, conn, n_quads, params, work, memo, best, best_g)
+        mark[g] = tag + 1
+        if status:
+            return status, g
+    return 0, best_g
+
+
+
+@numba.njit(cache=True)
+def _finish(i, g, best, xs, vs, xm, vm, conn, n_quads, out):
+    """Row i of out (ns, 11): weights (4), xi (2), normal (3), gap [m], normal velocity u_N
+    [m/s]. A projection outside its facet is clamped as pairs._clamp does: local coordinates
+    clamped to the facet, weights and gap recomputed there, the normal kept."""
+    e, h = best[REC_XI], best[REC_XI + 1]
+    w = out[i, 0:4]
+    w[:] = best[REC_W:REC_W + 4]
+    gap = best[REC_GAP]
+    if best[REC_IN] == 0.0:
+        if g < n_quads:
+            e, h = min(max(e, -1.0), 1.0), min(max(h, -1.0), 1.0)
+            w[0], w[1] = 0.25 * ((1 - e) * (1 - h)), 0.25 * ((1 + e) * (1 - h))
+            w[2], w[3] = 0.25 * ((1 + e) * (1 + h)), 0.25 * ((1 - e) * (1 + h))
+        else:
+            b0, b1, b2 = max((1 - e) - h, 0.0), max(e, 0.0), max(h, 0.0)
+            total = (b0 + b1) + b2
+            w[0], w[1], w[2], w[3] = b0 / total, b1 / total, b2 / total, 0.0
+            e, h = w[1], w[2]
+        gap = 0.0
+        for k in range(3):
+            xc = ((w[0] * xm[conn[g, 0], k] + w[1] * xm[conn[g, 1], k]) + w[2] * xm[conn[g, 2], k])
+            gap += best[REC_N + k] * (xs[k] - (xc + w[3] * xm[conn[g, 3], k]))
+    un = 0.0
+    for k in range(3):
+        vc = ((w[0] * vm[conn[g, 0], k] + w[1] * vm[conn[g, 1], k]) + w[2] * vm[conn[g, 2], k])
+        un += best[REC_N + k] * (vs[k] - (vc + w[3] * vm[conn[g, 3], k]))
+    out[i, 4], out[i, 5] = e, h
+    out[i, 6:9] = best[REC_N:REC_N + 3]
+    out[i, 9], out[i, 10] = gap, un
+
+
+@numba.njit(cache=True)
+def _search_node(i, xs, xm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_quads, adj_ptr,
+                 adj_idx, params, lists, ref, prev, mark, counter, cand, lb, grid, work, memo,
+                 best, p):
+    """Closest facet of node i of xs, shared by scan_nodes and penetration_scan: the box test
+    in the facet body's frame (r_m, A_m), the candidate superset, the closest projection.
+    Returns (searched: False when outside the box or without candidates, status, facet).
+
+    The per-node helpers take the fields of FacetSurface and SearchState (unpacked once per
+    scan), not the named tuples: a field read from a tuple passed in takes a reference count
+    (an atomic increment and decrement per array): passed down to here and to _try, they
+    made a scan a quarter slower (docs/notes/2026-11-27-contact-kernels-split.md)."""
+    inside_box = True
+    for j in range(3):
+        p[j] = ((xs[i, 0] - r_m[0]) * A_m[0, j] + (xs[i, 1] - r_m[1]) * A_m[1, j]) + (
+            xs[i, 2] - r_m[2]) * A_m[2, j]
+        inside_box = inside_box and box[0, j] - reach <= p[j] <= box[1, j] + reach
+    if not inside_box:
+        return False, 0, -1
+    counter[0] += 2
+    tag = counter[0]
+    n = _candidates(i, p, reach, rho, geo, lists, ref, mark, tag, cand, lb, grid)
+    if n == 0:
+        return False, 0, -1
+    status, g = _closest(i, xs[i], n, cand, lb, mark, tag, prev[i], adj_ptr, adj_idx, geo,
+                         u_max, xm, conn, n_quads, params, work, memo, best)
+    return True, status, g
+
+
+
+@numba.njit(cache=True)
+def work_arrays():
+    """The work arrays of a scan: (C (4, 3), t (2, 3), r (3,), P (4, 3), rec (REC_LEN,)) for
+    _try and project_pair, best (REC_LEN,), p (3,)."""
+    C, t, r = np.empty((4, 3)), np.empty((2, 3)), np.empty(3)
+    P, rec, best = np.empty((4, 3)), np.empty(REC_LEN), np.empty(REC_LEN)
+    return (C, t, r, P, rec), best, np.empty(3)
+
+
+@numba.njit(cache=True)
+def scan_nodes(xs, vs, xm, vm, r_m, A_m, reach, u_max, surface, state, memo, facet, out):
+    """Closest facet of every slave node within reach, as PointToSurfaceContact's numpy path
+    (box test in the master frame, BroadPhase candidates, project_points, closest_facets,
+    clamping) and its normal velocity.
+
+    xs, vs (ns, 3) slave node positions [m] / velocities [m/s]; xm, vm (nm, 3) master surface
+    nodes; r_m (3,), A_m (3, 3) master frame; reach [m]; u_max [m] largest master node
+    displacement; surface (FacetSurface) the master facets; state (SearchState, ns nodes)
+    kept between calls; memo (MemoArrays) the projections kept at the current positions
+    (_try). Output: facet (ns,) (-1: none), out (ns, 11) as in _finish.
+    Returns (status, facet of the failure, number of pairs)."""
+    work, best, p = work_arrays()
+    _memo_begin(memo)
+    kept = (memo.facets, memo.count, memo.records)
+    geo, conn, n_quads, adj_ptr, adj_idx, box, rho, params, grid = surface
+    lists, ref, prev, mark, counter, cand, lb = state
+    n_pairs = 0
+    for i in range(xs.shape[0]):
+        facet[i] = -1
+        searched, status, g = _search_node(i, xs, xm, r_m, A_m, box, reach, rho, u_max, geo,
+                                           conn, n_quads, adj_ptr, adj_idx, params, lists, ref,
+                                           prev, mark, counter, cand, lb, grid, work, kept, best,
+                                           p)
+        if not searched:
+            continue
+        if status:
+            return status, g, n_pairs
+        facet[i] = g
+        prev[i] = g
+        _finish(i, g, best, xs[i], vs[i], xm, vm, conn, n_quads, out)
+        n_pairs += 1
+    return 0, -1, n_pairs
+
+
+# -- the penetration measure (contact.penetration) ------------------------------------------------
+@numba.njit(cache=True)
+def penetration_scan(xs, xm, r_m, A_m, reach, u_max, surface, state, memo, edge_tol, floor):
+    """Deepest penetration of the nodes xs (ns, 3) [m] into the facets of `surface`
+    (search_state.FacetSurface) over the nodes xm (nm, 3), searched as search.scan_nodes does
+    (box test in the facet body's frame r_m, A_m; candidate supersets, warm start, pruning;
+    the same search state and memo). u_max [m]: the facet body's largest node displacement.
+
+    A node counts when the closest facet's projection is inside it (surface.params[6], the
+    local coordinate tolerance of the constraint pass) or outside it by a lateral offset
+    sqrt(distance^2 - gap^2) <= edge_tol * R_g (R_g the facet's circumradius), with a
+    negative normal gap; its depth is -gap [m]. Nodes beyond reach of every facet are not
+    seen: reach bounds the depth that can be measured.
+
+    floor [m]: only depths above it are sought (0, -1 when none). Warm start: a node whose
+    last facet (state.prev) still holds an inside projection with gap >= -depth (depth: the
+    floor, or the deepest found so far in this call) is taken at that reading, without a
+    search. With gap <= 0 that is exact: a facet that beats it in the search has an inside
+    projection with a smaller |gap|, no deeper. With gap = g0 > 0 (in front of the facet),
+    another facet could only win with an inside projection behind it at a distance < g0,
+    i.e. if the other surface folded back over the facet within g0 of the node (a sheet
+    thinner than the node's gap); at a ridge (convex edge) of plane facets the projection
+    on the far facet is outside it. Contact surfaces do not fold so: the search is skipped.
+    Projections kept as in scan_nodes (memo): the warm start's projection is not made again
+    in the node's search, nor, with the constraint pass's memo at the same positions, in the
+    next step's scan_nodes.
+    Returns (status, facet of a failure, depth [m], node (-1 when none), facet of the
+    deepest node)."""
+    work, best, p = work_arrays()
+    _memo_begin(memo)
+    kept = (memo.facets, memo.count, memo.records)
+    geo, conn, n_quads, adj_ptr, adj_idx, box, rho, params, grid = surface
+    lists, ref, prev, mark, counter, cand, lb = state
+    depth, node, at = floor, -1, -1
+    for i in range(xs.shape[0]):
+        f0 = prev[i]
+        if f0 >= 0:
+            status, g = _try(f0, i, xs[i], xm, conn, n_quads, params, work, kept, best, -1)
+            if status:
+                return status, f0, 0.0, -1, -1
+            if best[REC_IN] == 1.0 and best[REC_GAP] >= -depth:
+                continue
+        searched, status, g = _search_node(i, xs, xm, r_m, A_m, box, reach, rho, u_max, geo,
+                                           conn, n_quads, adj_ptr, adj_idx, params, lists, ref,
+                                           prev, mark, counter, cand, lb, grid, work, kept, best,
+                                           p)
+        if not searched:
+            continue
+        if status:
+            return status, g, 0.0, -1, -1
+        if g < 0:
+            continue
+        prev[i] = g
+        gap = best[REC_GAP]
+        if gap >= 0.0:
+            continue
+        if best[REC_IN] == 0.0:
+            lateral2 = best[REC_DIST] ** 2 - gap * gap
+            if lateral2 > (edge_tol * geo[g, 3]) ** 2:
+                continue
+        if -gap > depth:
+            depth, node, at = -gap, i, g
+    return 0, -1, depth if node >= 0 else 0.0, node, at
