@@ -51,10 +51,10 @@ def fe_bending_ratio(sc, case) -> tuple[float, float]:
     """(f_FE, f_T) [Hz]: the first free-free bending frequency in the impact plane of the FE
     beam (the mode whose displacement lies most along the impact normal) and of the
     Timoshenko beam."""
-    from flexmvm.scenarios.build import free_modes_source
+    from flexmvm.scenarios.setup import default_setup
 
     cfg = sc.body(case.beam)
-    _, source = free_modes_source(cfg)
+    _, source = default_setup().free_modes_source(cfg)
     freqs, modes = source(16)
     normal = cfg.placement.rotation.matrix().T @ np.asarray(
         sc.body(case.sphere).placement.velocity_mps, dtype=float)

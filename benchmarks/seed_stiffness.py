@@ -35,7 +35,7 @@ from flexmvm.fe.modes import factor
 from flexmvm.reduction.basis import BasisKind, build_basis
 from flexmvm.reduction.rod_reference import rod_reference
 from flexmvm.scenarios import load_scenario
-from flexmvm.scenarios.build import cached_rod_mesh
+from flexmvm.scenarios.setup import default_setup
 
 ROOT = Path(__file__).resolve().parents[1]
 MESHES = {"seed": ROOT / "scenarios" / "rod_impact_seed_mesh.toml",
@@ -101,7 +101,7 @@ def reduced_response(fe, basis, f: np.ndarray) -> np.ndarray:
 def study(mesh_name: str, selections: list[tuple[int, int]], modes: int, a_m: float) -> dict:
     sc = load_scenario(MESHES[mesh_name])
     cfg = sc.body("b2")
-    rod = cached_rod_mesh(cfg.rod.spec())
+    rod = default_setup().rod_mesh(cfg.rod.spec())
     material = cfg.material_obj()
     fe = assemble(rod.mesh, material)
     ref = rod_reference(rod)

@@ -127,16 +127,21 @@ def test_compare_takes_runs_results_and_tuples(tiny_run):
 
 
 def test_caches_can_be_cleared_and_bounded():
-    from flexmvm.scenarios import build
+    """fm.set_cache_sizes bounds the caches of the process-wide setup cache that fm.run builds
+    through, fm.clear_caches empties them; a bad name or bound is one InputError line."""
+    from flexmvm.scenarios.setup import default_setup
 
+    caches = default_setup().caches
     try:
         fm.set_cache_sizes(fe_models=1, bases=2)
         assert fm.cache_sizes() == {"meshes": 8, "fe_models": 1, "bases": 2, "body_parts": 16}
-        assert build.fe_model_for.cache_info().maxsize == 1
+        assert caches.fe_model.cache_info().maxsize == 1
+        assert caches.basis.cache_info().maxsize == 2
         fm.run(fm.load_scenario(TINY).with_time(t_end_s=1e-6))
-        assert build.fe_model_for.cache_info().currsize <= 1
+        assert caches.fe_model.cache_info().currsize == 1
+        assert caches.basis.cache_info().currsize == 2  # b1 full, b2 mvm: the bound
         fm.clear_caches()
-        assert build.basis_for is not None and build.fe_model_for.cache_info().currsize == 0
+        assert caches.fe_model.cache_info().currsize == 0 == caches.basis.cache_info().currsize
         with pytest.raises(fm.InputError, match="unknown"):
             fm.set_cache_sizes(models=3)
         with pytest.raises(fm.InputError, match="integers >= 0"):

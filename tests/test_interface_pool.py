@@ -22,8 +22,10 @@ from flexmvm.reduction import interface as iface
 from flexmvm.reduction.basis import BasisKind
 from flexmvm.reduction.interface import InterfaceSpec, participation_pool
 from flexmvm.reduction.reference import three_two_one
-from flexmvm.scenarios import build
+from flexmvm.scenarios import setup as scenario_setup
 from flexmvm.studies.interface import interface_cases, mode_pools, run_interface_case
+
+SETUP = scenario_setup.default_setup()  # what fm.clear_caches empties
 
 ROOT = Path(__file__).resolve().parents[1]
 TINY = ROOT / "tests" / "data" / "tiny_impact.toml"
@@ -37,9 +39,9 @@ def cache(tmp_path, monkeypatch):
     """A fresh, enabled cache directory and empty per-process caches per test."""
     monkeypatch.setenv(setup_cache.ENV_DIR, str(tmp_path / "cache"))
     monkeypatch.delenv(setup_cache.ENV_OFF, raising=False)
-    build.clear_caches()
+    scenario_setup.clear_caches()
     yield tmp_path / "cache"
-    build.clear_caches()
+    scenario_setup.clear_caches()
 
 
 @pytest.fixture(scope="module")
@@ -48,7 +50,7 @@ def tiny():
 
 
 class Counter:
-    """Wraps a function of module ``build`` and counts its calls."""
+    """Wraps a function of module scenarios.setup and counts its calls."""
 
     def __init__(self, fn):
         self.fn, self.calls = fn, 0
@@ -59,13 +61,13 @@ class Counter:
 
 
 def _counted(monkeypatch, name: str) -> Counter:
-    counter = Counter(getattr(build, name))
-    monkeypatch.setattr(build, name, counter)
+    counter = Counter(getattr(scenario_setup, name))
+    monkeypatch.setattr(scenario_setup, name, counter)
     return counter
 
 
 def _args(sc, p: dict) -> tuple:
-    """basis_for's arguments for the interface model of study case params ``p``, as
+    """SetupCache.basis's arguments for the interface model of study case params ``p``, as
     run_interface_case builds it (the model written out: patch radii, modes, mode_pool)."""
     from flexmvm.studies.interface import _model
 
@@ -77,7 +79,7 @@ def _args(sc, p: dict) -> tuple:
 def test_cases_of_a_patch_set_share_the_pool_of_the_largest_count(tiny):
     cases = interface_cases(tiny, "b2", PATCHES, MODES)
     assert len(cases) == len(PATCHES) * len(MODES)
-    fe = build.fe_model_for(tiny.body("b2").rod.spec(), ALUMINIUM)
+    fe = SETUP.fe_model(tiny.body("b2").rod.spec(), ALUMINIUM)
     for radii in PATCHES:
         own = {c.params["modes"]: c.params["mode_pool"] for c in cases
                if tuple(c.params["patch_radii_m"]) == radii}
@@ -99,14 +101,14 @@ def test_largest_count_is_the_default_model_and_a_case_is_reproducible(tiny, cac
     cases = {(len(c.params["patch_radii_m"]), c.params["modes"]): c
              for c in interface_cases(tiny, "b2", PATCHES, MODES)}
     top = cases[(2, 6)].params
-    study = build.basis_for(*_args(tiny, top))
-    default = build.basis_for(*_args(tiny, dict(top, mode_pool=None)))
+    study = SETUP.basis(*_args(tiny, top))
+    default = SETUP.basis(*_args(tiny, dict(top, mode_pool=None)))
     assert np.array_equal(study.psi, default.psi)
     small = cases[(2, 3)].params
-    in_study = build.basis_for(*_args(tiny, small))
-    build.clear_caches()
+    in_study = SETUP.basis(*_args(tiny, small))
+    scenario_setup.clear_caches()
     monkeypatch.setenv(setup_cache.ENV_OFF, "1")
-    alone = build.basis_for(*_args(tiny, small))
+    alone = SETUP.basis(*_args(tiny, small))
     assert np.array_equal(in_study.psi, alone.psi)
     np.testing.assert_array_equal(in_study.mode_freqs_hz, alone.mode_freqs_hz)
     # the case's model is the standalone scenario's: the written-out model carries the pool
@@ -121,17 +123,17 @@ def test_a_second_mode_count_solves_no_eigenproblem(tiny, monkeypatch):
     cases = {c.params["modes"]: c for c in interface_cases(tiny, "b2", PATCHES[1:], MODES)}
     eig = _counted(monkeypatch, "free_modes")
     statics = _counted(monkeypatch, "relieved_statics")
-    build.basis_for(*_args(tiny, cases[6].params))
+    SETUP.basis(*_args(tiny, cases[6].params))
     # the pool was solved when the cases were made (interface_mode_pool): not again
     assert eig.calls == 0 and statics.calls == 1
     for m in (1, 3):
-        build.clear_caches()
-        basis = build.basis_for(*_args(tiny, cases[m].params))
+        scenario_setup.clear_caches()
+        basis = SETUP.basis(*_args(tiny, cases[m].params))
         assert basis.n_modes == m and basis.psi.shape[1] == 2 + m
     assert eig.calls == 0 and statics.calls == 1
     # a pool of another size is a miss: the counters can fail
-    build.clear_caches()
-    build.basis_for(*_args(tiny, dict(cases[3].params, mode_pool=cases[3].params["mode_pool"]
+    scenario_setup.clear_caches()
+    SETUP.basis(*_args(tiny, dict(cases[3].params, mode_pool=cases[3].params["mode_pool"]
                                       + 1)))
     assert eig.calls == 1 and statics.calls == 1
 
@@ -148,7 +150,7 @@ def test_run_interface_case_records_the_pool(tiny, tmp_path):
 
 
 def test_too_small_a_pool_is_one_line_and_the_grid_falls_back(tiny, monkeypatch):
-    fe = build.fe_model_for(tiny.body("b2").rod.spec(), ALUMINIUM)
+    fe = SETUP.fe_model(tiny.body("b2").rod.spec(), ALUMINIUM)
     spec = InterfaceSpec(radii_m=(0.2 * MM,), pool=10)
     with pytest.raises(InputError, match="or a larger mode_pool") as err:
         participation_pool(fe, spec, 10)
@@ -172,8 +174,8 @@ def test_pool_and_statics_keys_follow_their_inputs_not_the_mode_count(tiny):
             for s in (src, other) for m in (ALUMINIUM, BRASS) for k in (30, 60)}
     assert len(keys) == 8 and all(k.startswith("freemodes-") for k in keys)
     assert setup_cache.free_modes_key(src, ALUMINIUM, 30, version="0" * 16) not in keys
-    mesh = build.cached_rod_mesh(spec).mesh
-    ref_b = build.reference_condition(spec, mesh, "end_b")
+    mesh = SETUP.rod_mesh(spec).mesh
+    ref_b = SETUP.reference_condition(spec, mesh, "end_b")
     ref_3 = three_two_one(mesh, mesh.node_set("end_a"))
     base = {"source": src, "material": ALUMINIUM, "reference_set": "end_b",
             "reference": ref_b, "surface": "end_a", "node": 0, "radii_m": (0.2 * MM,)}

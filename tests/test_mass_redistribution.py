@@ -83,11 +83,12 @@ def test_a_contact_surface_too_large_says_what_to_change():
     import flexmvm as fm
     from flexmvm.errors import InputError
     from flexmvm.fe.mass_redistribution import redistribute_mass
-    from flexmvm.scenarios.build import _mesh_key, fe_model_for
+    from flexmvm.scenarios.cache_keys import mesh_key
+    from flexmvm.scenarios.setup import default_setup
 
     sc = fm.load_scenario(Path(__file__).parent / "data" / "tiny_impact.toml")
     cfg = sc.body("b2")
-    fe = fe_model_for(_mesh_key(cfg), cfg.material_obj())
+    fe = default_setup().fe_model(mesh_key(cfg), cfg.material_obj())
     with pytest.raises(InputError) as info:
         redistribute_mass(fe.M_scalar, fe.mesh.nodes, fe.mesh.node_set("side"))
     msg = str(info.value)

@@ -18,8 +18,9 @@ from flexmvm.fe.modes import constrained_modes, factor
 from flexmvm.reduction.basis import BasisKind, build_basis
 from flexmvm.reduction.rod_reference import rod_reference
 from flexmvm.scenarios import load_scenario
-from flexmvm.scenarios.build import build_scenario, cached_rod_mesh
+from flexmvm.scenarios.build import build_scenario
 from flexmvm.scenarios.main_job import run_main_job
+from flexmvm.scenarios.setup import default_setup
 
 ROOT = Path(__file__).resolve().parents[1]
 SEED_MESH = ROOT / "scenarios" / "rod_impact_seed_mesh.toml"
@@ -30,7 +31,7 @@ SEED_NODES = 798  # seed section 3.2: B2 has 798 nodes, 2,394 DOF
 def b2():
     """(rod mesh, FE model, reference condition, material) of b2 on the seed mesh."""
     cfg = load_scenario(SEED_MESH).body("b2")
-    rod = cached_rod_mesh(cfg.rod.spec())
+    rod = default_setup().rod_mesh(cfg.rod.spec())
     return rod, assemble(rod.mesh, cfg.material_obj()), rod_reference(rod), cfg
 
 
@@ -40,13 +41,13 @@ def test_node_counts_are_the_seeds_within_one_section():
     tolerance 5 % of 798, i.e. less than one section either way."""
     sc = load_scenario(SEED_MESH)
     for name in ("b1", "b2"):
-        rod = cached_rod_mesh(sc.body(name).rod.spec())
+        rod = default_setup().rod_mesh(sc.body(name).rod.spec())
         n = rod.mesh.n_nodes
         assert n == 779, (name, n)
         assert abs(n - SEED_NODES) <= 0.05 * SEED_NODES
         assert 3 * n == 2337
         assert (rod.n_layers, rod.n_laps) == (19, 6)
-    rod = cached_rod_mesh(sc.body("b2").rod.spec())
+    rod = default_setup().rod_mesh(sc.body("b2").rod.spec())
     # the seed's i-j grid (i <= 4, j <= 5) exists; 2-2 has fewer nodes than 1-5 (seed fig. 7)
     sizes = {(i, j): len(rod.selection(i, j)) for i in range(1, 5) for j in range(1, 6)}
     assert sizes[(1, 1)] == 1 and sizes[(2, 2)] == 18 and sizes[(1, 5)] == 33

@@ -22,7 +22,8 @@ from flexmvm.mesh.rod import RodSpec, rod_mesh
 from flexmvm.reduction.basis import BasisKind, build_basis
 from flexmvm.reduction.reference import three_two_one
 from flexmvm.reduction.rod_reference import rod_reference
-from flexmvm.scenarios import build
+from flexmvm.scenarios import setup as scenario_setup
+from flexmvm.scenarios.setup import SetupCache
 
 SPEC = RodSpec(length_m=0.04, radius_m=0.005, n_rings=2, first_element_m=1e-3,
                max_element_m=0.01)
@@ -197,7 +198,7 @@ def test_edited_entry_fails_its_checksum(rod, fe, cache):
 
 def test_run_after_nan_entries_succeeds_and_names_them(cache):
     """Every setup-cache entry of a run rewritten as a valid .npz of NaN: the next process
-    (cleared per-process caches) evicts each, says so, and gives the first run's history
+    (a new SetupCache: empty per-process caches) evicts each, says so, and gives the first run's history
     (before: every later run failed on the iteration matrix, never naming the cache)."""
     from pathlib import Path
 
@@ -206,20 +207,17 @@ def test_run_after_nan_entries_succeeds_and_names_them(cache):
 
     sc = load_scenario(Path(__file__).parent / "data" / "tiny_impact.toml").with_overrides(
         t_end_s=2e-6)
-    _clear_process_caches()
-    first = run_scenario(sc, warn=False).result
+    first = run_scenario(sc, warn=False, setup=SetupCache()).result
     entries = sorted(cache.glob("*.npz"))
     assert entries
     for entry in entries:
         _nan_copy(entry, checksum=False)
-    _clear_process_caches()
     with pytest.warns(StaleDataWarning) as notes:
-        again = run_scenario(sc, warn=False).result
+        again = run_scenario(sc, warn=False, setup=SetupCache()).result
     named = {str(w.message).split(":")[0].removeprefix("setup cache ") for w in notes
              if issubclass(w.category, StaleDataWarning)}
     assert named and named <= {e.name for e in entries}
     assert np.array_equal(again.contact_force, first.contact_force)
-    _clear_process_caches()
 
 
 def test_info_and_clear(rod, fe, cache):
@@ -249,27 +247,19 @@ def test_unwritable_cache_dir_is_ignored(rod, fe, tmp_path, monkeypatch):
 
 
 def test_scenario_builder_reads_the_disk_cache(cache, monkeypatch):
-    """A second process (here: cleared per-process caches) builds nothing, mode floor included."""
+    """A second process (here: a new SetupCache, empty per-process caches) builds nothing,
+    mode floor included."""
     args = (SPEC, ALUMINIUM, BasisKind.CRAIG_BAMPTON, tuple(rod_mesh(SPEC).selection(1, 2)))
-    build.clear_caches()
-    with build.craig_bampton_mode_floor(6):
-        fresh = build.basis_for(*args, 4, "end_b")
+    fresh = SetupCache().with_mode_floor(6).basis(*args, 4, "end_b")
     assert setup_cache.info().n_entries == 2
-    build.clear_caches()
 
     def refuse(*_args, **_kw):
         raise AssertionError("rebuilt although cached")
 
-    monkeypatch.setattr(build, "build_basis", refuse)
-    monkeypatch.setattr(build, "assemble", refuse)
-    with build.craig_bampton_mode_floor(6):
-        hit = build.basis_for(*args, 4, "end_b")
+    monkeypatch.setattr(scenario_setup, "build_basis", refuse)
+    monkeypatch.setattr(scenario_setup, "assemble", refuse)
+    hit = SetupCache().with_mode_floor(6).basis(*args, 4, "end_b")
     assert np.array_equal(hit.psi, fresh.psi) and hit.n_modes == 4
-    build.clear_caches()
-
-
-def _clear_process_caches():
-    build.clear_caches()
 
 
 def _assert_same_parts(a, b):
@@ -345,33 +335,33 @@ def test_body_key_and_full_bodies(rod, fe, cache):
 
 
 def test_warm_scenario_build_computes_nothing(cache, monkeypatch):
-    """A second process (cleared per-process caches) reads bases and body parts and neither
-    assembles nor loads an FE model; under a mode floor the parts are cut like the basis."""
+    """A second process (a new SetupCache: empty per-process caches) reads bases and body
+    parts and neither assembles nor loads an FE model; under a mode floor the parts are cut
+    like the basis."""
     nodes = tuple(rod_mesh(SPEC).selection(1, 2))
     args = (SPEC, ALUMINIUM, BasisKind.CRAIG_BAMPTON, nodes)
-    _clear_process_caches()
-    fresh = build.body_parts_for(*args, 6, "end_b")
-    with build.craig_bampton_mode_floor(6):
-        cut_basis, cut = build.basis_for(*args, 4, "end_b"), build.body_parts_for(*args, 4, "end_b")
-    _clear_process_caches()
+    cold = SetupCache()
+    fresh = cold.body_parts(*args, 6, "end_b")
+    floor = cold.with_mode_floor(6)
+    cut_basis, cut = floor.basis(*args, 4, "end_b"), floor.body_parts(*args, 4, "end_b")
 
     def refuse(*_args, **_kw):
         raise AssertionError("computed although cached")
 
-    for name in ("build_basis", "assemble", "body_parts", "fe_model_for"):
-        monkeypatch.setattr(build, name, refuse)
-    hit = build.body_parts_for(*args, 6, "end_b")
+    warm = SetupCache()
+    for name in ("build_basis", "assemble", "body_parts"):
+        monkeypatch.setattr(scenario_setup, name, refuse)
+    monkeypatch.setattr(warm.caches, "fe_model", refuse)
+    hit = warm.body_parts(*args, 6, "end_b")
     _assert_same_parts(hit, fresh)
-    with build.craig_bampton_mode_floor(6):
-        cut_hit = build.body_parts_for(*args, 4, "end_b")
+    cut_hit = warm.with_mode_floor(6).body_parts(*args, 4, "end_b")
     _assert_same_parts(cut_hit, cut)
     assert cut.inv.nq == cut_basis.psi.shape[1] == 3 * len(nodes) + 4
     monkeypatch.undo()
-    own = body_parts(build.fe_model_for(SPEC, ALUMINIUM), cut_basis)
+    own = body_parts(SetupCache().fe_model(SPEC, ALUMINIUM), cut_basis)
     np.testing.assert_allclose(cut.k_hat, own.k_hat, rtol=1e-12, atol=1e-9 * abs(own.k_hat).max())
     np.testing.assert_allclose(cut.inv.M_qq, own.inv.M_qq, rtol=1e-12,
                                atol=1e-12 * abs(own.inv.M_qq).max())
-    _clear_process_caches()
 
 
 def test_cli_info_and_clear(rod, cache):

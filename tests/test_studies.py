@@ -266,16 +266,16 @@ def test_materials_study_of_the_seed_eq4_kind(tmp_path, monkeypatch):
     differ) rather than mixing kinds."""
     import flexmvm as fm
     from flexmvm.reduction.basis import BasisKind
-    from flexmvm.scenarios import build
+    from flexmvm.scenarios.setup import SetupCache
 
     built = []
 
-    def recording(*args):
+    def recording(setup, *args):
         built.append((args[1].name, args[2]))
-        return basis_for(*args)
+        return basis(setup, *args)
 
-    basis_for = build.basis_for
-    monkeypatch.setattr(build, "basis_for", recording)
+    basis = SetupCache.basis
+    monkeypatch.setattr(SetupCache, "basis", recording)
     study = fm.material_study(TINY, materials=["Al"], selections="1-1", modes=[7],
                               serial=True, kind="mvm-seed", out_dir=tmp_path)
     assert ("Al", BasisKind.SEED_BLOCK) in built
@@ -345,16 +345,16 @@ def test_mode_floor_cuts_the_larger_craig_bampton_basis():
     import numpy as np
 
     from flexmvm.reduction.basis import BasisKind
-    from flexmvm.scenarios.build import basis_for, craig_bampton_mode_floor
+    from flexmvm.scenarios.setup import default_setup
 
     cfg = load_scenario(TINY).body("b2")
     spec, mat = cfg.rod.spec(), cfg.material_obj()
     from flexmvm.mesh.rod import rod_mesh
 
     sel = tuple(int(n) for n in rod_mesh(spec).selection(1, 1))
-    fresh = basis_for(spec, mat, BasisKind.CRAIG_BAMPTON, sel, 7, "end_b")
-    with craig_bampton_mode_floor(13):
-        cut = basis_for(spec, mat, BasisKind.CRAIG_BAMPTON, sel, 7, "end_b")
+    fresh = default_setup().basis(spec, mat, BasisKind.CRAIG_BAMPTON, sel, 7, "end_b")
+    cut = default_setup().with_mode_floor(13).basis(spec, mat, BasisKind.CRAIG_BAMPTON, sel, 7,
+                                                    "end_b")
     assert cut.n_modes == 7 and cut.psi.shape == fresh.psi.shape
     np.testing.assert_allclose(cut.mode_freqs_hz, fresh.mode_freqs_hz, rtol=1e-8)
     nb = 3 * len(sel)

@@ -51,9 +51,9 @@ _API = {
     "estimate_interface": "flexmvm.studies.estimate",
     "estimate_region": "flexmvm.studies.region",
     # per-process caches
-    "clear_caches": "flexmvm.scenarios.build",
-    "set_cache_sizes": "flexmvm.scenarios.build",
-    "cache_sizes": "flexmvm.scenarios.build",
+    "clear_caches": "flexmvm.scenarios.setup",
+    "set_cache_sizes": "flexmvm.scenarios.setup",
+    "cache_sizes": "flexmvm.scenarios.setup",
     # errors
     "FlexmvmError": "flexmvm.errors",
     "InputError": "flexmvm.errors",

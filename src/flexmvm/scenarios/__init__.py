@@ -1,6 +1,7 @@
 """Scenarios: the schema (schema.py, a body's tables body_schema.py; value types fields.py,
 error lines problems.py), reading
-files and dicts (load.py), building a System from a scenario (build.py), running it (run.py),
+files and dicts (load.py), building a System from a scenario (build.py, through the setup cache
+of setup.py), running it (run.py),
 comparing runs (compare.py) and the main job (main_job.py).
 
 ``load_scenario(path)`` reads and validates a file (docs/scenario_format.md) and returns a frozen

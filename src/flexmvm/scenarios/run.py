@@ -17,6 +17,7 @@ from flexmvm.scenarios.build import BuiltScenario, build_scenario
 from flexmvm.scenarios.guard import contact_guard, energy_gain_warning, guard_warnings
 from flexmvm.scenarios.load import load_scenario
 from flexmvm.scenarios.schema import Scenario
+from flexmvm.scenarios.setup import SetupCache
 
 
 @dataclass
@@ -79,15 +80,16 @@ class EnergyGainWarning(UserWarning):
     """The total energy of a run without applied loads rose (energy_gain_warning)."""
 
 
-def run_scenario(sc, label: str = "run", progress: bool = False, warn: bool = True
-                 ) -> ScenarioRun:
-    """Build and simulate scenario sc; returns the run with its summary. warn: issue a
-    ReducedBasisWarning when the validity guard fires (summary reduced_contact_guard).
+def run_scenario(sc, label: str = "run", progress: bool = False, warn: bool = True,
+                 setup: SetupCache | None = None) -> ScenarioRun:
+    """Build (through ``setup``, default: the process-wide setup cache) and simulate scenario
+    sc; returns the run with its summary. warn: issue a ReducedBasisWarning when the validity
+    guard fires (summary reduced_contact_guard).
 
     Raises SimulationFailed when the run stops before its end time (a step that did not
     converge at the smallest step): its ``partial`` is the ScenarioRun up to the failure,
     whose summary has ``status = "failed"`` and the reason in ``failure``."""
-    built = build_scenario(sc)
+    built = build_scenario(sc, setup)
     try:
         res = simulate(built.system, built.states, built.grid, built.probes, progress=progress)
     except SimulationFailed as exc:

@@ -38,7 +38,7 @@ def estimate_selection(sc: Scenario, body: str, target: Target | None = None, *,
     not depend on the NCC level (k sets the bandwidth).
     """
     from flexmvm.reduction.basis import BasisKind
-    from flexmvm.scenarios.build import basis_for
+    from flexmvm.scenarios.setup import default_setup
 
     if not k > 0:
         raise InputError(f"k: expected a number > 0, got {k!r}")
@@ -60,8 +60,8 @@ def estimate_selection(sc: Scenario, body: str, target: Target | None = None, *,
     sel = tuple(int(i) for i in rod.selection(1, laps))
     cfg = sc.body(body)
     grid = sorted(int(m) for m in modes)
-    basis = basis_for(cfg.rod.spec(), cfg.material_obj(), BasisKind.CRAIG_BAMPTON, sel,
-                   grid[-1], cfg.model.reference)
+    basis = default_setup().basis(cfg.rod.spec(), cfg.material_obj(), BasisKind.CRAIG_BAMPTON,
+                                  sel, grid[-1], cfg.model.reference)
     n_below = int(np.count_nonzero(basis.mode_freqs_hz < f_max))
     m = next((g for g in grid if g >= n_below), grid[-1])
     nodes = len(sel)
@@ -116,7 +116,7 @@ def estimate_interface(sc: Scenario, body: str, target: Target | None = None, *,
         excited_modes_below,
         hertz_load,
     )
-    from flexmvm.scenarios.build import free_modes_source
+    from flexmvm.scenarios.setup import default_setup
     from flexmvm.theory.scenario import theory_pulse
 
     if not k > 0:
@@ -133,7 +133,7 @@ def estimate_interface(sc: Scenario, body: str, target: Target | None = None, *,
     window = min(pulse["contact_duration_s"], sc.time.t_end_s)
     f_max = k / window
     surface = contact_surface(sc, body)
-    fe, free = free_modes_source(cfg)   # the setup cache's mode pools, shared with the bases
+    fe, free = default_setup().free_modes_source(cfg)   # the setup cache's mode pools, shared with the bases
     patch = contact_patch(fe.mesh, surface)
     load = hertz_load(fe.mesh, surface, patch, a)
     freqs, _ = excited_modes_below(fe, load, f_max, free=free)

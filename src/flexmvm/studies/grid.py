@@ -16,12 +16,12 @@ from flexmvm.studies.runner import Case
 
 def rod_of(sc: Scenario, body: str):
     """The (cached) RodMesh of rod body ``body``; InputError if there is no such rod body."""
-    from flexmvm.scenarios.build import cached_rod_mesh
+    from flexmvm.scenarios.setup import default_setup
 
     cfg = sc.body(body)
     if cfg.rod is None:
         raise InputError(f"body {body!r} is not a rod ([bodies.rod]); the i-j selection needs one")
-    return cached_rod_mesh(cfg.rod.spec())
+    return default_setup().rod_mesh(cfg.rod.spec())
 
 
 def _ints(name: str, values: Iterable[int]) -> list[int]:
@@ -105,7 +105,7 @@ def selection_cases(sc: Scenario, body: str, layers: Iterable[int] = range(1, 5)
 
     Keys ``l<i>-j<j>-m<m>``; params {body, layers, laps, modes, modes_max (the grid's largest
     mode count: each selection's Craig-Bampton basis is solved once with it and cut,
-    scenarios.build.craig_bampton_mode_floor), scenario (sc.model_dump(json)),
+    scenarios.setup.SetupCache.with_mode_floor), scenario (sc.model_dump(json)),
     reference_sha256 (of the reference history CSV ``reference``, or None)}. The path itself is
     not a parameter, so a study directory can be moved; it is given to the case function as
     ``functools.partial(run_selection_case, reference=path)``. Raises InputError for an

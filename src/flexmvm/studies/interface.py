@@ -139,7 +139,7 @@ def mode_pools(cfg, radii: Sequence[float], counts: Sequence[int],
     """The ``mode_pool`` of each mode count of patch set ``radii`` of body ``cfg`` (module
     doc): the pool of the largest count whose pool exists, for that count and the smaller ones
     (0 excluded); None for the others and for the frequency choice."""
-    from flexmvm.scenarios.build import interface_mode_pool
+    from flexmvm.scenarios.setup import default_setup
 
     pools: dict[int, int | None] = {m: None for m in counts}
     if ModeChoice(mode_choice) is not ModeChoice.PARTICIPATION:
@@ -149,7 +149,7 @@ def mode_pools(cfg, radii: Sequence[float], counts: Sequence[int],
         spec = _model({"patch_radii_m": list(radii), "modes": top,
                        "mode_choice": mode_choice, **(place or {})}).interface_spec()
         try:
-            pool = interface_mode_pool(cfg, spec, top)
+            pool = default_setup().interface_mode_pool(cfg, spec, top)
         except InputError:  # too few excited modes within MAX_POOL: those cases fail alone
             continue
         return pools | {m: pool for m in counts if 0 < m <= top}

@@ -224,11 +224,11 @@ def _held(sc: Scenario, body: str) -> bool:
 
 def _mass(sc: Scenario, cfg) -> float:
     """The body's mass [kg] (inf if held: module doc, step 5)."""
-    from flexmvm.scenarios.build import free_modes_source
+    from flexmvm.scenarios.setup import default_setup
 
     if _held(sc, cfg.name):
         return math.inf
-    return float(free_modes_source(cfg)[0].M_scalar.sum())
+    return float(default_setup().free_modes_source(cfg)[0].M_scalar.sum())
 
 
 def _point_velocity(cfg, x: np.ndarray) -> np.ndarray:
@@ -299,7 +299,7 @@ def estimate_region(sc: Scenario, body: str, *, factor: float = DEFAULT_FACTOR,
         InputError: a non-positive factor, radius or speed; no contact of ``body``; surfaces
             without curvature or bodies without closing speed, each saying what to give.
     """
-    from flexmvm.scenarios.build import free_modes_source
+    from flexmvm.scenarios.setup import default_setup
 
     _positive_or_none("factor", factor)
     radius_m = _positive_or_none("radius_m", radius_m)
@@ -312,7 +312,8 @@ def estimate_region(sc: Scenario, body: str, *, factor: float = DEFAULT_FACTOR,
     surface, partner, other_surface = ((c.slave_surface, c.master_body, c.master_surface) if mine
                                        else (c.master_surface, c.slave_body, c.slave_surface))
     cfg, pcfg = sc.body(body), sc.body(partner)
-    fe, pfe = free_modes_source(cfg)[0], free_modes_source(pcfg)[0]
+    setup = default_setup()
+    fe, pfe = setup.free_modes_source(cfg)[0], setup.free_modes_source(pcfg)[0]
     try:
         fs, pfs = fe.mesh.facet_set(surface), pfe.mesh.facet_set(other_surface)
     except MeshError as exc:  # an unknown or empty surface, said in one line

@@ -122,8 +122,9 @@ class RegionGrid:
     def __init__(self, sc: Scenario, body: str, families: Iterable[RegionFamily],
                  modes: Iterable[int], centre_m=None,
                  kind: ModelKind = ModelKind.MVM) -> None:
-        from flexmvm.scenarios.build import free_modes_source, retained_nodes
         from flexmvm.scenarios.cost import check_cost, reduced_cost
+        from flexmvm.scenarios.mesh_lookup import retained_nodes
+        from flexmvm.scenarios.setup import default_setup
 
         self.families = sorted(set(families), key=lambda f: f.key)
         if not self.families:
@@ -134,7 +135,7 @@ class RegionGrid:
         self.body, self.kind = body, kind
         cfg = sc.body(body)
         self.centre = _centre(sc, body, centre_m)
-        fe = free_modes_source(cfg)[0]
+        fe = default_setup().free_modes_source(cfg)[0]
         self.nodes: dict[tuple, int] = {}
         for fam in self.families:
             model = mvm(region=fam.spec(self.centre), modes=self.modes[-1])
@@ -189,8 +190,8 @@ def run_region_case(case: Case, reference: str | Path | None = None) -> dict:
     """One run of a region family's model against the stored reference history (as
     selection.run_selection_case)."""
     from flexmvm.scenarios import RegionSpec
-    from flexmvm.scenarios.build import craig_bampton_mode_floor
     from flexmvm.scenarios.run import run_scenario
+    from flexmvm.scenarios.setup import default_setup
 
     p = case.params
     sc = scenario_from_dict(p["scenario"], source=f"case {case.key}")
@@ -199,9 +200,9 @@ def run_region_case(case: Case, reference: str | Path | None = None) -> dict:
     row = _row(p)
     model = mvm(region=RegionSpec(**p["region"]), modes=m,
                 reference=sc.body(body).model.reference, kind=ModelKind(p.get("kind", "mvm")))
+    setup = default_setup().with_mode_floor(int(p.get("modes_max", m)))
     try:
-        with craig_bampton_mode_floor(int(p.get("modes_max", m))):
-            run = run_scenario(sc.with_model(body, model), warn=False)
+        run = run_scenario(sc.with_model(body, model), warn=False, setup=setup)
     except SolverError as exc:
         return row | {"failed": str(exc).splitlines()[0]}
     info = next(b for b in run.built.info if b.name == body)

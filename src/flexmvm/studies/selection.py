@@ -177,12 +177,12 @@ def run_selection_case(case: Case, reference: str | Path | None = None) -> dict:
     nodes = len(rod_of(sc, body).selection(i, j))
     row: dict[str, Any] = {"layers": i, "laps": j, "nodes": nodes, "modes": m,
                            "dof": 3 * nodes + m, "dof_total": 3 * nodes + m + 6}
-    from flexmvm.scenarios.build import craig_bampton_mode_floor
+    from flexmvm.scenarios.setup import default_setup
 
+    setup = default_setup().with_mode_floor(int(p.get("modes_max", m)))
     try:
-        with craig_bampton_mode_floor(int(p.get("modes_max", m))):
-            run = run_scenario(mvm_scenario(sc, body, i, j, m, ModelKind(p.get("kind", "mvm"))),
-                               warn=False)
+        run = run_scenario(mvm_scenario(sc, body, i, j, m, ModelKind(p.get("kind", "mvm"))),
+                           warn=False, setup=setup)
     except SolverError as exc:
         return row | {"failed": str(exc).splitlines()[0]}
     info = next(b for b in run.built.info if b.name == body)

@@ -1,235 +1,34 @@
-"""Disk cache of what setup builds: FE models (M, K, M_scalar), reduction bases (psi), the
-parts of bodies with dense bases (inertia invariants and k_hat, flexmvm.bodies.build.BodyParts)
-and the two expensive parts of an interface basis that do not depend on its mode count: the
-free-free mode pool (``freemodes-``: frequencies and M-normalised modes of the lowest k free-free
-modes, keyed by mesh, material and k; 36 MB for the seed rod's 178) and the patch vectors'
-static responses (``patchstatic-``: keyed by mesh, material, reference, surface, patch node and
-radii), so bases that differ only in ``modes`` (and share a ``mode_pool``) share them; and the
-elimination orders of large iteration matrices (``order-``: keyed by their sparsity pattern).
-
-An entry is one ``.npz`` file (``np.savez``, no pickles; sparse matrices as their CSR
-arrays) named ``<kind>-<key>.npz``. The key is a SHA-256 of the canonical JSON of every input
-the entry depends on (mesh: rod spec or mesh-file content hash; material E, nu, rho; basis
-kind, retained nodes, modes, reference set and DOFs) and of the code version, a hash of the
-source files that produce it (CODE_SOURCES; body parts: BODY_SOURCES, which adds the body
-modules, so editing them rebuilds only body entries). Entries are written atomically, with the
-SHA-256 of their arrays (names, dtypes, shapes, bytes) as one more array (CHECKSUM). An entry
-is used only if it passes its check: readable, that checksum matches, every float array finite
-(nothing setup stores holds NaN or inf) and its decoder accepts its shapes. One that fails is
-evicted (deleted), announced in one line (``setup cache basis-....npz: holds NaN or inf in
-psi: evicted and rebuilt``) and rebuilt; an unwritable cache directory is ignored.
-
-Location: ``$FLEXMVM_CACHE_DIR`` if set, else the platform user cache directory
-(``~/.cache/flexmvm`` on Linux). ``FLEXMVM_NO_CACHE=1`` bypasses the cache (no read, no
-write). Rod meshes are not stored: generating one takes ~10 ms, no more than reading it back.
+"""The entries of the setup cache's disk store (store.py): FE models, bases, body parts, the
+free-free mode pool, patch statics and elimination orders. Each has a key function (its
+inputs, under the code version) and a ``cached_<entry>`` that returns the stored entry when it
+decodes to the shapes expected, else calls its ``build`` and stores the result.
 """
 
 from __future__ import annotations
 
-import dataclasses
-import functools
 import hashlib
-import os
-import sys
-import zipfile
 from collections.abc import Callable, Mapping
-from dataclasses import dataclass
-from enum import Enum
-from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
 
-import flexmvm
 from flexmvm.bodies.build import BodyParts
 from flexmvm.bodies.invariants import InertiaInvariants
-from flexmvm.errors import InputError, announce_recompute
 from flexmvm.fe.assembly import FEModel
 from flexmvm.materials import Material
 from flexmvm.mesh.mesh import Mesh
 from flexmvm.reduction.basis import Basis, BasisKind
 from flexmvm.reduction.reference import ReferenceCondition
-from flexmvm.results.atomic import atomic_path, canonical_json
-
-ENV_DIR = "FLEXMVM_CACHE_DIR"
-ENV_OFF = "FLEXMVM_NO_CACHE"
-SUFFIX = ".npz"
-
-#: Package modules whose source makes up the code version (paths relative to flexmvm/).
-CODE_SOURCES = ("mesh", "fe", "reduction", "materials.py")
-
-#: Code version of body entries: what produces the basis, plus the body modules.
-BODY_SOURCES = CODE_SOURCES + ("bodies/invariants.py", "bodies/build.py")
-
-#: Format of the stored arrays; bump when the layout of an entry changes.
-FORMAT = 2
-
-#: Name of the array holding an entry's checksum (checksum()).
-CHECKSUM = "__sha256__"
-
-#: What reading or decoding a corrupt, truncated or foreign entry raises (treated as a miss).
-_UNREADABLE = (OSError, EOFError, ValueError, KeyError, TypeError, IndexError,
-               zipfile.BadZipFile)
-
-
-@dataclass(frozen=True)
-class CacheInfo:
-    """Summary of the cache directory: path, number of entries, total size [MB]."""
-
-    path: Path
-    n_entries: int
-    size_mb: float
-
-
-def cache_dir() -> Path:
-    """The cache directory: $FLEXMVM_CACHE_DIR, else the platform user cache dir + flexmvm."""
-    env = os.environ.get(ENV_DIR, "").strip()
-    if env:
-        return Path(env).expanduser()
-    home = Path.home()
-    if sys.platform == "win32":
-        return Path(os.environ.get("LOCALAPPDATA") or home / "AppData" / "Local") / "flexmvm"
-    if sys.platform == "darwin":
-        return home / "Library" / "Caches" / "flexmvm"
-    return Path(os.environ.get("XDG_CACHE_HOME") or home / ".cache") / "flexmvm"
-
-
-def enabled() -> bool:
-    """False when $FLEXMVM_NO_CACHE is set to 1/true/yes/on."""
-    return os.environ.get(ENV_OFF, "").strip().lower() not in ("1", "true", "yes", "on")
-
-
-@functools.lru_cache(maxsize=4)
-def code_version(sources: tuple[str, ...] = CODE_SOURCES) -> str:
-    """SHA-256 (16 hex digits) of the package source files ``sources`` (default CODE_SOURCES)."""
-    root = Path(flexmvm.__file__).parent
-    digest = hashlib.sha256()
-    for name in sources:
-        path = root / name
-        for f in sorted(path.rglob("*.py")) if path.is_dir() else [path]:
-            digest.update(f.relative_to(root).as_posix().encode() + b"\0")
-            digest.update(f.read_bytes())
-    return digest.hexdigest()[:16]
-
-
-def make_key(kind: str, inputs: Mapping, version: str | None = None) -> str:
-    """Entry name ``<kind>-<32 hex>`` of ``inputs`` (JSON-able) under a code version."""
-    doc = {"format": FORMAT, "kind": kind, "inputs": inputs,
-           "code": code_version() if version is None else version}
-    return f"{kind}-{hashlib.sha256(canonical_json(doc).encode()).hexdigest()[:32]}"
-
-
-def rod_source(spec) -> dict:
-    """Key inputs of a generated rod mesh: every RodSpec field (enums by value)."""
-    return {"rod": {k: (v.value if isinstance(v, Enum) else v)
-                    for k, v in dataclasses.asdict(spec).items()}}
-
-
-def file_source(path: str | os.PathLike[str]) -> dict | None:
-    """Key inputs of a mesh file: SHA-256 of its content; None if it cannot be read."""
-    try:
-        return {"file_sha256": hashlib.sha256(Path(path).read_bytes()).hexdigest()}
-    except OSError:
-        return None
-
-
-def material_inputs(material: Material) -> dict:
-    """Key inputs of a material: E [Pa], nu [-], rho [kg/m^3] (the name changes nothing)."""
-    return {"E": float(material.E), "nu": float(material.nu), "rho": float(material.rho)}
-
-
-def checksum(arrays: Mapping[str, np.ndarray]) -> str:
-    """SHA-256 (hex) of an entry's arrays: each name, dtype, shape and C-order bytes, in
-    name order (the CHECKSUM array itself left out)."""
-    digest = hashlib.sha256()
-    for name in sorted(n for n in arrays if n != CHECKSUM):
-        a = np.ascontiguousarray(arrays[name])
-        digest.update(f"{name}\0{a.dtype.str}\0{a.shape}\0".encode())
-        digest.update(a.tobytes())
-    return digest.hexdigest()
-
-
-def entry_problem(arrays: Mapping[str, np.ndarray]) -> str | None:
-    """Why the arrays read from an entry cannot be used (one line), or None: no checksum, a
-    checksum that differs from its content, a float array holding NaN or inf."""
-    for name in sorted(arrays):
-        a = arrays[name]
-        if a.dtype.kind in "fc" and not np.all(np.isfinite(a)):
-            return f"holds NaN or inf in {name}"
-    if CHECKSUM not in arrays:
-        return "no checksum (written by another version or another program)"
-    if str(arrays[CHECKSUM]) != checksum(arrays):
-        return "content differs from its checksum"
-    return None
-
-
-def _evict(path: Path, why: str) -> None:
-    """Delete a failing entry and say so in one line."""
-    try:
-        path.unlink()
-    except OSError:  # gone already, or a read-only cache: rebuilt all the same
-        pass
-    announce_recompute(f"setup cache {path.name}: {why}: evicted and rebuilt")
-
-
-def load(key: str) -> dict[str, np.ndarray] | None:
-    """The arrays of entry ``key`` (CHECKSUM left out), or None if absent or disabled; an
-    entry that is unreadable or fails its check (entry_problem) is evicted, announced, None."""
-    if not enabled():
-        return None
-    path = cache_dir() / (key + SUFFIX)
-    try:
-        with np.load(path, allow_pickle=False) as z:
-            arrays = {name: z[name] for name in z.files}
-    except (FileNotFoundError, NotADirectoryError):
-        return None
-    except _UNREADABLE as exc:  # a corrupt or foreign file: evicted, rebuilt and overwritten
-        _evict(path, f"unreadable ({type(exc).__name__})")
-        return None
-    why = entry_problem(arrays)
-    if why is not None:
-        _evict(path, why)
-        return None
-    arrays.pop(CHECKSUM)
-    return arrays
-
-
-def save(key: str, arrays: Mapping[str, np.ndarray]) -> None:
-    """Write entry ``key`` atomically with its checksum; silently skipped if disabled or
-    unwritable."""
-    if not enabled():
-        return
-    directory = cache_dir()
-    try:
-        directory.mkdir(parents=True, exist_ok=True)
-        with atomic_path(directory / (key + SUFFIX)) as tmp, open(tmp, "wb") as f:
-            np.savez(f, **arrays, **{CHECKSUM: np.array(checksum(arrays))})
-    except (OSError, InputError, ValueError):  # a read-only or full disk must not stop a run
-        return
-
-
-def _entries() -> list[Path]:
-    directory = cache_dir()
-    return sorted(directory.glob("*" + SUFFIX)) if directory.is_dir() else []
-
-
-def info() -> CacheInfo:
-    """Path, number of entries and total size [MB] of the cache directory."""
-    files = _entries()
-    size = sum(f.stat().st_size for f in files)
-    return CacheInfo(cache_dir(), len(files), size / 1e6)
-
-
-def clear() -> int:
-    """Delete every entry (and stray temporary files); returns the number of entries removed."""
-    files = _entries()
-    for f in files:
-        f.unlink(missing_ok=True)
-    directory = cache_dir()
-    if directory.is_dir():
-        for tmp in directory.glob(".*.tmp"):
-            tmp.unlink(missing_ok=True)
-    return len(files)
+from flexmvm.setup_cache.store import (
+    BODY_SOURCES,
+    code_version,
+    csr_arrays,
+    csr_from,
+    decoded,
+    make_key,
+    material_inputs,
+    save,
+)
 
 
 def cached_elimination_order(a: sp.spmatrix, compute: Callable[[sp.spmatrix], np.ndarray | None]
@@ -253,36 +52,12 @@ def cached_elimination_order(a: sp.spmatrix, compute: Callable[[sp.spmatrix], np
             raise ValueError("not a permutation")
         return order
 
-    got = _decoded(key, decode)
+    got = decoded(key, decode)
     if got is not None:
         return got if len(got) else None
     order = compute(a)
     save(key, {"order": np.zeros(0, np.int64) if order is None else order})
     return order
-
-
-def _decoded(key: str, decode: Callable[[Mapping[str, np.ndarray]], object]):
-    """decode(arrays of entry ``key``), or None if the entry is absent or malformed."""
-    arrays = load(key)
-    if arrays is None:
-        return None
-    try:
-        return decode(arrays)
-    except _UNREADABLE as exc:
-        _evict(cache_dir() / (key + SUFFIX), f"malformed ({exc})")
-        return None
-
-
-def _csr_arrays(prefix: str, a) -> dict[str, np.ndarray]:
-    a = sp.csr_matrix(a)
-    return {f"{prefix}_data": a.data, f"{prefix}_indices": a.indices,
-            f"{prefix}_indptr": a.indptr, f"{prefix}_shape": np.asarray(a.shape, np.int64)}
-
-
-def _csr(arrays: Mapping[str, np.ndarray], prefix: str) -> sp.csr_matrix:
-    shape = tuple(int(n) for n in arrays[f"{prefix}_shape"])
-    return sp.csr_matrix((arrays[f"{prefix}_data"], arrays[f"{prefix}_indices"],
-                          arrays[f"{prefix}_indptr"]), shape=shape)
 
 
 def fe_key(source: Mapping, material: Material) -> str:
@@ -291,7 +66,7 @@ def fe_key(source: Mapping, material: Material) -> str:
 
 
 def _fe_from(arrays: Mapping[str, np.ndarray], mesh: Mesh, material: Material) -> FEModel:
-    M, K, Ms = _csr(arrays, "M"), _csr(arrays, "K"), _csr(arrays, "M_scalar")
+    M, K, Ms = csr_from(arrays, "M"), csr_from(arrays, "K"), csr_from(arrays, "M_scalar")
     n = 3 * mesh.n_nodes
     if M.shape != (n, n) or K.shape != (n, n) or Ms.shape != (n // 3, n // 3):
         raise ValueError("stored FE model does not match the mesh")
@@ -309,12 +84,12 @@ def cached_fe(source: Mapping | None, mesh: Mesh, material: Material,
     if source is None:
         return build(mesh, material)
     key = fe_key(source, material)
-    hit = _decoded(key, lambda arrays: _fe_from(arrays, mesh, material))
+    hit = decoded(key, lambda arrays: _fe_from(arrays, mesh, material))
     if hit is not None:
         return hit
     fe = build(mesh, material)
-    save(key, {**_csr_arrays("M", fe.M), **_csr_arrays("K", fe.K),
-               **_csr_arrays("M_scalar", fe.M_scalar),
+    save(key, {**csr_arrays("M", fe.M), **csr_arrays("K", fe.K),
+               **csr_arrays("M_scalar", fe.M_scalar),
                "mass_volume": np.array([fe.mass, fe.volume])})
     return fe
 
@@ -352,7 +127,7 @@ def body_key(source: Mapping, material: Material, kind: BasisKind, reference_set
 
 def _basis_from(arrays: Mapping[str, np.ndarray], kind: BasisKind,
                 reference: ReferenceCondition, retained: np.ndarray, n_modes: int) -> Basis:
-    psi = _csr(arrays, "psi") if "psi_shape" in arrays else arrays["psi"]
+    psi = csr_from(arrays, "psi") if "psi_shape" in arrays else arrays["psi"]
     nodes, freqs = arrays["retained_nodes"], arrays["mode_freqs_hz"]
     if kind is not BasisKind.FULL and not np.array_equal(nodes, retained):
         raise ValueError("stored retained nodes differ")
@@ -370,11 +145,11 @@ def cached_basis(source: Mapping | None, material: Material, kind: BasisKind,
         return build()
     key = basis_key(source, material, kind, reference_set, reference, retained, n_modes,
                     extra=extra)
-    hit = _decoded(key, lambda arrays: _basis_from(arrays, kind, reference, retained, n_modes))
+    hit = decoded(key, lambda arrays: _basis_from(arrays, kind, reference, retained, n_modes))
     if hit is not None:
         return hit
     basis = build()
-    psi = (_csr_arrays("psi", basis.psi) if sp.issparse(basis.psi)
+    psi = (csr_arrays("psi", basis.psi) if sp.issparse(basis.psi)
            else {"psi": np.ascontiguousarray(basis.psi)})
     save(key, {**psi, "retained_nodes": basis.retained_nodes,
                "mode_freqs_hz": basis.mode_freqs_hz})
@@ -405,7 +180,7 @@ def cached_free_modes(source: Mapping | None, material: Material, n_modes: int, 
             raise ValueError("stored free-free modes are malformed")
         return f_hz, modes
 
-    hit = _decoded(key, decode)
+    hit = decoded(key, decode)
     if hit is not None:
         return hit
     f_hz, modes = build()
@@ -443,7 +218,7 @@ def cached_patch_statics(source: Mapping | None, material: Material, reference_s
             raise ValueError("stored patch statics are malformed")
         return static
 
-    hit = _decoded(key, decode)
+    hit = decoded(key, decode)
     if hit is not None:
         return hit
     static = build()
@@ -487,17 +262,10 @@ def cached_body(source: Mapping | None, material: Material, kind: BasisKind,
         return build()
     key = body_key(source, material, kind, reference_set, reference, retained, n_modes,
                    extra=extra)
-    hit = _decoded(key, lambda arrays: _parts_from(arrays, nq))
+    hit = decoded(key, lambda arrays: _parts_from(arrays, nq))
     if hit is not None:
         return hit
     parts = build()
     if parts.inv.Ms is None and not sp.issparse(parts.k_hat):
         save(key, _parts_arrays(parts))
     return parts
-
-
-__all__ = ["BODY_SOURCES", "CHECKSUM", "CODE_SOURCES", "ENV_DIR", "ENV_OFF", "CacheInfo", "basis_key",
-           "body_key", "cache_dir", "cached_basis", "cached_body", "cached_fe",
-           "cached_free_modes", "cached_patch_statics", "checksum", "clear", "code_version",
-           "enabled", "entry_problem", "fe_key", "file_source", "free_modes_key", "info",
-           "load", "make_key", "material_inputs", "patch_statics_key", "rod_source", "save"]

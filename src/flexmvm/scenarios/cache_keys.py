@@ -1,0 +1,53 @@
+"""Keys of what setup builds for a scenario's body: the mesh key of a body (a RodSpec or a mesh
+file path, wrapped in a ContactMass when its contact nodes carry no mass) and the disk-cache
+key inputs derived from it (flexmvm.setup_cache: rod spec fields or the mesh file's content
+hash, with the massless nodes; an interface basis's further parameters)."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from flexmvm import setup_cache
+from flexmvm.mesh.rod import RodSpec
+from flexmvm.reduction.interface import InterfaceSpec
+
+
+@dataclass(frozen=True)
+class ContactMass:
+    """The mesh key (a RodSpec or a mesh file path) of a body whose contact nodes ``nodes``
+    carry no mass (fe/mass_redistribution.py): a key of its own for every cache."""
+
+    key: RodSpec | str
+    nodes: tuple[int, ...]
+
+
+#: What names a body's mesh in every cache: its rod spec, its mesh file path, or either with
+#: massless contact nodes.
+MeshKey = RodSpec | str | ContactMass
+
+
+def mesh_key(cfg) -> RodSpec | str:
+    """The mesh key of a scenario's body ``cfg``: its rod spec, else its mesh file path."""
+    return cfg.rod.spec() if cfg.rod is not None else str(cfg.mesh_file)
+
+
+def plain_key(key: MeshKey) -> RodSpec | str:
+    """The mesh key without its massless contact nodes (same mesh, same reference)."""
+    return key.key if isinstance(key, ContactMass) else key
+
+
+def mesh_source(key: MeshKey) -> dict | None:
+    """Disk-cache key inputs of a rod spec or a mesh file (None: file unreadable, no caching),
+    with the massless contact nodes of a ContactMass key."""
+    if isinstance(key, ContactMass):
+        inner = mesh_source(key.key)
+        return None if inner is None else inner | {"massless_nodes": list(key.nodes)}
+    if isinstance(key, RodSpec):
+        return setup_cache.rod_source(key)
+    return setup_cache.file_source(key)
+
+
+def interface_inputs(interface: InterfaceSpec | None) -> dict | None:
+    """Further key inputs of an interface basis (None for the other kinds, whose keys then
+    stay those they had before the interface kind existed)."""
+    return None if interface is None else interface.key()
