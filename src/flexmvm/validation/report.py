@@ -96,9 +96,8 @@ def _cons_table(cols: dict[str, dict]) -> str:
 
 def _header(report: dict) -> str:
     meta = report["meta"]
-    return _template("header").substitute(
-        commit=meta["commit"], code_version=meta["code_version"], date=meta["date"],
-        machine=meta["machine"], theta=report["theta"], h=_us(DT))
+    return _template("header").substitute(date=meta["date"], machine=meta["machine"],
+                                          theta=report["theta"], h=_us(DT))
 
 
 def _mvm11_sentence(seed: dict) -> str:
@@ -241,7 +240,7 @@ def render(report: dict) -> str:
     sections += [section(report[key]) for key, section in SECTIONS
                  if report.get(key) is not None]
     sections.append(_template("closing").substitute())
-    cases = "".join(f"| {name} | `{m['commit']}` | {m['computed_utc']} | `{m['code_version']}` |\n"
+    cases = "".join(f"| {name} | {m['computed_utc']} |\n"
                     for name, m in sorted(report["cases"].items()))
     return "\n\n".join(sections) + "\n" + cases
 

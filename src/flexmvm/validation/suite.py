@@ -20,6 +20,20 @@ from flexmvm.validation.report import write_report_md
 from flexmvm.validation.runs import now
 
 
+def machine() -> str:
+    """The CPU the runs were made on: its model name (Linux /proc/cpuinfo, else the platform's
+    processor string), architecture and core count, e.g. "AMD EPYC, x86_64, 2 cores"."""
+    model = ""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as f:
+            model = next((line.split(":", 1)[1].strip() for line in f
+                          if line.startswith("model name")), "")
+    except OSError:
+        pass
+    model = model or platform.processor()
+    return ", ".join(p for p in (model, platform.machine(), f"{os.cpu_count()} cores") if p)
+
+
 def run_validation(out: Path, md: Path | None, recompute: bool = False,
                    keys: Sequence[str] | None = None,
                    echo: Callable[[str], None] = print) -> dict:
@@ -38,7 +52,7 @@ def run_validation(out: Path, md: Path | None, recompute: bool = False,
     report["theta"] = load_scenario(scenario_path("rod_impact.toml")).time.theta
     report["cases"] = stored_cases(report)
     report["meta"] = {"commit": commit, "code_version": run_code_version(), "date": now(),
-                      "machine": f"{platform.machine()}, {os.cpu_count()} cores"}
+                      "machine": machine()}
     write_json_atomic(out / "validation.json", report)
     for key in keys:
         rows = acceptance.criteria(key)
@@ -53,4 +67,4 @@ def run_validation(out: Path, md: Path | None, recompute: bool = False,
     return report
 
 
-__all__ = ["run_validation"]
+__all__ = ["machine", "run_validation"]
