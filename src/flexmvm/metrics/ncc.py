@@ -146,8 +146,9 @@ class Comparison:
     the first to the last contact of either history), the value targets and studies use;
     ncc_whole: Pearson r over the whole common window, which the zero force before and after
     the contact inflates (tests/test_seed_mesh.py gives the seed-mesh case's r over the contact,
-    over 0.5 ms and over 2 ms). The errors are relative and signed, (candidate -
-    reference)/reference, of the peak force, the impulse and the total contact duration."""
+    over 0.5 ms and over 2 ms). The errors are relative and signed,
+    (candidate - reference)/reference, of the peak force, the impulse and the total contact
+    duration."""
 
     ncc: float
     peak_err: float
