@@ -68,8 +68,10 @@ def test_energy_error_converges_with_the_step():
     """With theta = 1/2 (implicit midpoint) the elastic parts conserve energy exactly; what is
     left is the e = 0 impact law at the contact nodes: |error| 0.24 % at h = 0.25 us and 0.11 %
     at h/2 (measured). Required: below 1 %, and at least 40 % smaller on halving the step.
-    (theta > 1/2, the default of the seed scenarios, also damps the unresolved high-frequency
-    modes the impact excites: 1.3 % at theta = 0.52, 2.2 % at 0.55, not shrinking with h.)"""
+    (A theta fixed above 1/2, as this case's own 0.55, also damps the unresolved
+    high-frequency modes the impact excites: 1.3 % at theta = 0.52, 2.2 % at 0.55, not
+    shrinking with h. The seed scenarios take theta(h) = 1/2 + h / (4 tau) instead:
+    integrate.theta.)"""
     e1 = abs(_run(0.25e-6, 0.5).summary["energy_rel_error"])
     e2 = abs(_run(0.125e-6, 0.5).summary["energy_rel_error"])
     assert e1 < 0.01

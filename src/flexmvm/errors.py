@@ -23,7 +23,8 @@ class SolverError(FlexmvmError, RuntimeError):
 
 class SimulationFailed(SolverError):
     """A run that stopped before its end time: the message says where and why, ``partial``
-    holds what was computed up to there (an integrate.RunResult whose ``failure`` is set)."""
+    holds what was computed up to there (an integrate.run_result.RunResult whose ``failure``
+    is set)."""
 
     def __init__(self, message: str, partial=None):
         super().__init__(message)

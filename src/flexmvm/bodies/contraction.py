@@ -115,8 +115,8 @@ class G2Contraction:
 
     def __call__(self, x: np.ndarray, pool=None) -> np.ndarray:
         """L(x); with a thread pool (a concurrent.futures executor with a free worker) its
-        two parts run on two threads (bit for bit the same; the pass is memory-bound, b1 of
-        the seed case with a cold cache 0.80 -> 0.50 ms)."""
+        two parts run on two threads (bit for bit the same; the pass is memory-bound, so two
+        threads read the blocks faster than one: docs/notes/2026-11-27-comment-measurements.md)."""
         out = np.empty((3, 3, self.nq))
         x = np.ascontiguousarray(x, dtype=float)
         if pool is None:

@@ -10,8 +10,8 @@ midpoint configuration (A, q_m) with the carried contractions L(q_m), L(q_dot_m)
 exactly as FlexibleBody.inertia_terms, mass_times, velocity_forces and gravity_forces compute
 them in numpy (tests/test_momentum_kernel.py holds them to round-off on random inputs), but
 without forming the (3, 3, nq) array C = G1 + L(q_m) or any 6 x nq block: a step of a reduced
-body is a few hundred small numpy calls otherwise (~0.5 ms per body and iterate on the seed
-case), and the arithmetic is O(9 nq).
+body is a few hundred small numpy calls otherwise, each costing more in its call overhead
+than in its arithmetic, which is O(9 nq) (docs/notes/2026-11-27-comment-measurements.md).
 """
 
 from __future__ import annotations
@@ -150,8 +150,9 @@ def momentum_terms(A, q, dv, vm, Lq, Lqd, Kq, mqq_dv, mqq_vm, mass, S0, S1, G0, 
             force[6 + k] += S1[0, k] * gb[0] + S1[1, k] * gb[1] + S1[2, k] * gb[2]
 
 
-# no "reassoc" (as nodal_contraction._compact): its sums gather by node; 0.249 -> 0.215 ms a
-# call on the seed rod b1, round-off only (2e-18 of the largest term)
+# no "reassoc" (as nodal_contraction._compact): its sums gather by node, which LLVM's
+# vectorised reassociated sums run slower; the results differ by round-off only
+# (docs/notes/2026-11-27-comment-measurements.md)
 @numba.njit(cache=True, nogil=True, fastmath={"contract"})
 def momentum_terms_nodal(A, q, dv, vm, Yq, Yqd, Kq, mqq_dv, mqq_vm, mass, S0, S1, G0, MsX,
                          node, comp, g, inertia, force, momentum):  # pragma: no cover
@@ -166,7 +167,8 @@ def momentum_terms_nodal(A, q, dv, vm, Yq, Yqd, Kq, mqq_dv, mqq_vm, mass, S0, S1
     Other arguments as momentum_terms; MsX (n, 3) = M_s X. O(nq) work reading 3 n + 4 nq
     numbers instead of ~30 nq. The sums over k go into scalar accumulators, one branch per
     component (written out below): accumulating into small arrays indexed by c made every
-    update a store and a load (measured on b1: 0.42 ms a call against 0.22 ms)."""
+    update a store and a load, and a call about twice as slow
+    (docs/notes/2026-11-27-comment-measurements.md)."""
     nq = q.shape[0]
     # S = S0 + S1 q;  G[a, b] = G0[a, b] + G1[b][a] q + C[a][b] q, where for coordinate k
     # (component c): G1[b][a] q adds M_s X[n, b] q_k to row c, C[a][b] q adds Cq[a, n] q_k

@@ -29,8 +29,8 @@ import scipy.sparse as sp
 
 
 # fastmath without "reassoc": with it LLVM vectorises the row sums with gathers of U[j], which
-# this machine's cores run slowly (seed rod b1, 512,825 entries: 1.21 ms a call with, 0.70 ms
-# without; round-off only, 5e-16 of the largest entry)
+# the development machine's cores run slowly (a call ~1.7x slower; the results differ by
+# round-off only: docs/notes/2026-11-27-comment-measurements.md)
 @numba.njit(nogil=True, cache=True, fastmath={"contract"})
 def _compact(indptr, indices, data, node, comp, x, U, Y):  # pragma: no cover - compiled
     """Y[a] = M_s U[:, a], U[n_k, c_k] = x_k (U zeroed here), M_s given as csr arrays."""

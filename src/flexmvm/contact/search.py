@@ -15,8 +15,9 @@ Projections made at unchanged node positions are kept and read again (search_sta
 ProjectionMemo, :func:`_try`): the penetration measure at the end of a step and the next
 step's search project the same pairs at the same positions. The small helpers of the search
 (_try, _closest, _candidates, ...) are separate compiled functions, not inlined: inlining them
-into the scans (numba ``inline="always"``, same results bit for bit) saved 2.6 % of an
-all-MVM seed run but doubled the first-run compilation of the MVM path (20 s -> 39 s).
+into the scans (numba ``inline="always"``, same results bit for bit) saves a few percent of a
+run but doubles the first-run compilation of the MVM path
+(docs/notes/2026-11-27-comment-measurements.md).
 
 Units: metres, seconds. Node arrays hold the contact nodes of one body only ("local" node
 indices 0..n_c-1); facets refer to local node indices of the body that carries them.

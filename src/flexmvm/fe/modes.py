@@ -3,9 +3,9 @@
 Nothing full-size is ever densified: the shifted matrix K - sigma M is factored sparsely
 (fe.solvers.spd_solver: the supernodal L D L^T of fe.solvers.cholesky, solved by
 fe.solvers.ldl, when it is positive definite)
-and handed to eigsh as ``OPinv``. Seed rod, 43 fixed-interface modes of the 1-3 selection's
-K_ii (24,966 DOFs, one BLAS thread): eigsh 2.1 s with SuperLU's solves, 1.0 s with fe.solvers.ldl's
-(88 solves of ~7 ms on two threads against ~19 ms).
+and handed to eigsh as ``OPinv``: the Lanczos iteration is mostly those solves, and
+fe.solvers.ldl's (on two threads) take a fraction of the time of SuperLU's
+(docs/notes/2026-11-27-comment-measurements.md).
 Modes are M-normalised (phi^T M phi = 1).
 Eigenvalues are checked, never abs()-ed: a negative omega^2 with
 |omega^2| <= NEG_RTOL * scale (scale = max(|sigma|, largest computed omega^2)) is round-off of

@@ -125,8 +125,9 @@ class BodySolver:
         (relative Frobenius norm) from the one in use: 3 back-substitutions. Bodies with small
         torsional inertia (thin rods) need it: their frame Schur complement is sensitive to
         M_wq(q). defer: the 3 columns are solved with the right-hand side of the next solve()
-        (one 4-column back-substitution: 22 against 14 + 19 ms for the seed's full-FE rod,
-        where a multi-column solve reads the factor once); prepare() then waits for that solve,
+        (one 4-column back-substitution instead of a 3-column and a 1-column one: a
+        multi-column solve reads the factor once, and a full-FE rod's solve is memory-bound;
+        docs/notes/2026-11-27-comment-measurements.md); prepare() then waits for that solve,
         and any other use of W solves them first (_flush)."""
         if not self.body.nq:
             return

@@ -5,7 +5,7 @@ more such bodies each body's work in a step runs on a thread of its own (results
 the work of one body touches nothing of another). With one full-FE body the threads go to
 its back-substitutions instead (fe.ldl: two elimination-tree halves, the same results on one
 thread), and with none to a large dense (MVM) body's G2 contraction, memory-bound, in two
-halves (bodies.body.contractions; bit for bit). Up to $FLEXMVM_THREADS threads
+halves (bodies.body.FlexibleBody.contractions; bit for bit). Up to $FLEXMVM_THREADS threads
 (flexmvm.threads; default: the cores; 1: everything on the calling thread).
 """
 

@@ -162,9 +162,8 @@ def simulate(system: System, states: list[BodyState], grid: TimeGrid, probes=(),
     monitoring); what it raises stops the run.
 
     BLAS runs single-threaded inside the loop: its operations are small (vectors of nq,
-    matrices of a few hundred), where thread start-up costs more than it saves (measured: a
-    25,000-long dot product 7.6 ms with two OpenBLAS threads on a loaded 2-core machine, 12 us
-    with one)."""
+    matrices of a few hundred), where thread start-up costs more than it saves, and on a
+    loaded machine far more (docs/notes/2026-11-27-comment-measurements.md)."""
     make = integrator if integrator is not None else moreau_jean(exploit_nonrotating)
     with threadpool_limits(limits=1, user_api="blas"):
         return _simulate(system, states, grid, probes, progress, t0, make, on_step,

@@ -2,13 +2,13 @@
 so a run's linear momentum is conserved to round-off, not to the Newton tolerance.
 
 The residual is linear in each body's frame velocity r_dot+ with the midpoint mass matrix's
-columns [m I; S~ A^T; S1^T A^T] (bodies.body.mass_times; the forces do not depend on r_dot,
-the contact rows are those of the step's start), so r_dot+ += d with d = -res_t / m zeroes the
-body's translational rows exactly and moves its other rows by [S~ A^T d; S1^T A^T d], of the
-size of m d times a lever (~1e-11 relative where the rows were at the tolerance). Taken only if
-every row stays within rtol. Without it the step's linear momentum error is the translational
-residuals it was accepted with, and one-iterate steps leave them with a sign, so they add up
-over a run (docs/performance.md).
+columns [m I; S~ A^T; S1^T A^T] (bodies.body.FlexibleBody.mass_times; the forces do not
+depend on r_dot, the contact rows are those of the step's start), so r_dot+ += d with
+d = -res_t / m zeroes the body's translational rows exactly and moves its other rows by
+[S~ A^T d; S1^T A^T d], of the size of m d times a lever (~1e-11 relative where the rows were
+at the tolerance). Taken only if every row stays within rtol. Without it the step's linear
+momentum error is the translational residuals it was accepted with, and one-iterate steps
+leave them with a sign, so they add up over a run (docs/performance.md).
 """
 
 from __future__ import annotations

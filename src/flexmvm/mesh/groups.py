@@ -6,7 +6,7 @@ the first found is used:
 - ``cell_sets`` (gmsh MSH 4 through meshio, Abaqus ELSET, MED families): name -> per-block
   arrays of cell indices. An element in two groups is listed in both (in MSH 4 an entity
   carries all its physical tags; the cell data ``gmsh:physical`` keeps only the first, which
-  is why a surface in two physical groups used to lose one).
+  is why reading it alone loses one of a surface's two physical groups).
 - ``gmsh:physical`` cell data with ``field_data`` names (gmsh MSH 2): one tag per cell; MSH 2
   writes an element once per physical group it is in, so each copy carries one of its tags.
 

@@ -348,7 +348,7 @@ def build_basis(fe: FEModel, kind: BasisKind, reference: ReferenceCondition,
         raise InputError("a modal basis needs n_modes >= 1, got 0")
     # One BLAS thread: SuperLU's many-right-hand-side solve calls BLAS once per supernode;
     # threaded OpenBLAS there is no faster on idle cores and ~10x slower when other jobs share
-    # them (rod_impact b2, 88 columns: 5-8 s against 0.7 s serial, on 2 busy cores).
+    # them (docs/notes/2026-11-27-comment-measurements.md).
     with threadpool_limits(limits=1, user_api="blas"):
         if kind is BasisKind.MODAL:
             return _modal(fe, reference, int(n_modes))

@@ -118,9 +118,8 @@ def hertz_block_check(fine_m: float = HERTZ_BLOCK_FINE_M,
     """The sphere-on-block Hertz check with the block meshed (gmsh, hertz_block_part) at
     element size fine_m [m] at the contact, in ``directory`` (default: a temporary one):
     :func:`compare_with_hertz`'s dict plus fine_m and node_spacing_m (fine_m / 2: tet10).
-    Measured at fine_m = 0.2 mm: peak +0.9 %, duration -0.8 % (17,589 DOF; about 16 s of
-    one core). InputError for fine_m not in (0, 1 mm]: coarser faces cannot resolve the
-    contact radius of 0.39 mm."""
+    The errors per fine_m: docs/notes/2026-11-27-hertz-block.md. InputError for
+    fine_m not in (0, 1 mm]: coarser faces cannot resolve the contact radius of 0.39 mm."""
     if not (isinstance(fine_m, (int, float)) and math.isfinite(fine_m) and 0 < fine_m <= 1e-3):
         raise InputError(f"hertz_block_check: fine_m must be in (0, 1e-3] m, got {fine_m!r}")
     with tempfile.TemporaryDirectory() as tmp:

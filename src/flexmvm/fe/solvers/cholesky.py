@@ -1,10 +1,11 @@
 """Supernodal multifrontal L D L^T factorization of a sparse symmetric positive definite matrix.
 
 SuperLU (scipy) factors an SPD matrix as a general LU: both triangles, in its supernode-panel
-kernels, 1.14 s for the seed rod's K_ii (24,972 DOFs, 10.5 M entries in L, 6.1 GFlop of
-Cholesky arithmetic), and fe.solvers.ldl would then copy its L out (0.5 s) to solve with
-L D L^T. This module computes that L D L^T itself, in fe.solvers.ldl's packed supernodal
-layout, with the dense work of every supernode in LAPACK/BLAS (dpotrf, dtrsm, dsyrk: BLAS-3):
+kernels (for the seed rod's K_ii: 24,972 DOFs, 10.5 M entries in L, 6.1 GFlop of Cholesky
+arithmetic), and fe.solvers.ldl would then copy its L out to solve with L D L^T (timings:
+docs/notes/2026-11-27-comment-measurements.md). This module computes that L D L^T itself,
+in fe.solvers.ldl's packed supernodal layout, with the dense work of every supernode in
+LAPACK/BLAS (dpotrf, dtrsm, dsyrk: BLAS-3):
 
 1. Ordering: SuperLU's minimum degree of A^T + A (fe.solvers.ordering.mmd_order).
 2. Symbolic analysis: fe.solvers.symbolic (elimination tree, column counts, supernodes).

@@ -310,8 +310,8 @@ def _abs_row_sums(indptr, index, data, n, by_rows):  # pragma: no cover - compil
 
 
 def _inf_norm(a) -> float:
-    """max_i sum_j |a_ij| (scipy.sparse.linalg.norm(a, inf) of a CSC matrix builds abs(a)
-    and a product: 0.3 s on a seed rod's K_ii, against ~10 ms here)."""
+    """max_i sum_j |a_ij| in one pass (scipy.sparse.linalg.norm(a, inf) of a CSC matrix
+    builds abs(a) and a product: docs/notes/2026-11-27-comment-measurements.md)."""
     a = sp.csr_matrix(a) if not sp.issparse(a) or a.format not in ("csr", "csc") else a
     sums = _abs_row_sums(a.indptr, a.indices, np.asarray(a.data, float), a.shape[0],
                          a.format == "csr")

@@ -13,9 +13,9 @@ George and Liu, "Computer Solution of Large Sparse Positive Definite Systems", 1
 and 7); the level at which half the vertices have been reached is taken as the separator and
 ordered last. The two sides are ordered by SuperLU's minimum degree of the pattern with the
 separator made a clique (so the vertices next to it are eliminated late, as constrained
-minimum degree would; Liu 1989), in one ordering of the whole. Measured on the seed's rods
-(25,767 and 25,041 DOFs): factor entries +0.4 % and -0.5 % of plain minimum degree, two
-halves of ~47 % each, a solve on two threads 1.7x faster than on one.
+minimum degree would; Liu 1989), in one ordering of the whole. On the seed's rods (25,767
+and 25,041 DOFs): factor entries +0.4 % and -0.5 % of plain minimum degree, two halves of ~47 %
+each, so a solve runs on two threads (timings: docs/notes/2026-11-27-comment-measurements.md).
 """
 
 from __future__ import annotations
