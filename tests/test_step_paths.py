@@ -1,10 +1,11 @@
 """The time step's fast paths against the general one and against the code before them.
 
 - Histories unchanged: three short cases (tests/data) against stored histories
-  (tests/data/step_regression_2026-11-27.npz, written by make_reference below). Tolerance:
+  (tests/data/step_histories_tiny_flat.npz: time grid, contact force and probe velocities of
+  CASES, written by make_reference below). Tolerance:
   force NCC >= 0.99999 and peak within 0.01 % (issue 10's acceptance); measured differences are
   ~1e-10 relative, the Newton tolerance. Dated reasons of the reference:
-  2026-11-23: made by commit 9bfd055, the last commit before the speed work, which the step's
+  2026-11-23: made by the last code before the speed work, which the step's
   fast paths then reproduced to the tolerance (the test passed up to the change below).
   2026-11-27: remade by the code at hand after the velocity law's penetration recovery was
   capped by each pair's closing speed (contact/pairs.py), a change of the physics: against
@@ -38,7 +39,7 @@ from flexmvm.scenarios.build import build_scenario
 from flexmvm.scenarios.run import run_scenario
 
 DATA = Path(__file__).parent / "data"
-REFERENCE = DATA / "step_regression_2026-11-27.npz"
+REFERENCE = DATA / "step_histories_tiny_flat.npz"
 CASES = {"tiny": ("tiny_impact.toml", None), "tiny_mvm": ("tiny_impact.toml", "mvm"),
          "flat": ("short_flat_impact.toml", None)}
 
