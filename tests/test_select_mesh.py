@@ -162,7 +162,7 @@ def test_estimate_on_a_mesh_refined_for_the_contact():
     the ball a + h lies in the band measured over 1 ms with 30 modes
     (docs/notes/2026-11-27-select-on-meshes.md): from 0.3 mm (no contact outside the region)
     to 0.5 mm every ball follows full FE to force NCC >= 0.99999 with the peak within 0.3 %;
-    0.25 mm leaves 18 % of the contact outside (peak +17 %), 0.6 mm puts it +0.8 % high,
+    0.25 mm leaves 18 % of the contact impulse outside (peak +17 %), 0.6 mm puts it +0.8 % high,
     and the former 2 a (0.76 mm) keeps 624 nodes. About 2 s of CPU (the mesh, its mass)."""
     from pathlib import Path
 

@@ -42,8 +42,8 @@ free beam's peak is 258 N against the half-space's 438 N, its contact radius ~0.
 
 - tet10 beam refined for the contact (0.2 mm elements, sub-facets h = 0.115 mm), the beam's
   top as slave: a + h = 0.49 mm (1.30 a, 256 nodes, 798 DOF with 30 modes). Peak error with
-  20 / 30 modes by ball radius: 0.25 mm (0.66 a, 18-20 % of the contact outside the region)
-  +20 / +17 %; 0.3 mm (0.79 a) +3.1 / +0.05 %; 0.4 mm +1.0 / -0.08 %; 0.5 mm (~a + h) +0.09
+  20 / 30 modes by ball radius: 0.25 mm (0.66 a, 18-20 % of the contact impulse outside the
+  region) +20 / +17 %; 0.3 mm (0.79 a) +3.1 / +0.05 %; 0.4 mm +1.0 / -0.08 %; 0.5 mm (~a + h) +0.09
   / -0.01 %; 0.6 mm +4.7 / +0.8 % (more interface, the same modes). Force NCC >= 0.99999
   from 0.3 to 0.5 mm with 30 modes. a + h is where the peak no longer depends on the modes;
   2 a (0.76 mm) kept 624 nodes, 1,902 DOF.
