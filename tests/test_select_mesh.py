@@ -26,7 +26,6 @@ import pytest
 
 import flexmvm as fm
 from flexmvm.errors import InputError
-from flexmvm.studies.region import DEFAULT_FACTOR
 from flexmvm.theory.hertz import effective_modulus, hertz_impact
 
 pytest.importorskip("gmsh")
@@ -115,7 +114,10 @@ def test_estimate_against_hertz(scenario_file):
     m_beam = AL["rho_kg_m3"] * 0.1 * 0.01 * 0.01
     exact = hertz_impact(R, V0, effective_modulus(210e9, 0.3, 70e9, 0.33), m_ball, m_beam)
     assert est.contact_radius_m == pytest.approx(exact.contact_radius_m, rel=0.02)
-    assert est.radius_m == pytest.approx(DEFAULT_FACTOR * est.contact_radius_m, rel=1e-12)
+    _holds_the_touched_facets(sc, "beam", est)
+    # a given factor is the former rule, factor x a
+    assert fm.estimate_region(sc, "beam", factor=2.0).radius_m == pytest.approx(
+        2.0 * est.contact_radius_m, rel=1e-12)
     # its nodes and DOF are those of the region it states, as the builder selects it
     from flexmvm.scenarios import RegionSpec
     from flexmvm.scenarios.build import build_scenario
@@ -123,6 +125,53 @@ def test_estimate_against_hertz(scenario_file):
     sc = sc.with_model("beam", fm.mvm(region=RegionSpec(**est.region()), modes=est.modes))
     info = next(b for b in build_scenario(sc).info if b.name == "beam")
     assert info.n_retained_nodes == est.nodes and info.dof - 6 == est.dof
+
+
+def _holds_the_touched_facets(sc, body: str, est) -> None:
+    """The rule a + h (studies/region.py): h is the largest diameter of the contact facets
+    that the circle of radius a about the point meets, and the ball holds all their nodes.
+    Found here independently of the module's point-to-triangle distance: each facet sampled
+    on a barycentric grid of step 1/40 (points 1/40 of a facet apart: a facet missed would
+    reach less than h/40 into the circle)."""
+    from flexmvm.scenarios.build import free_modes_source
+
+    mesh = free_modes_source(sc.body(body))[0].mesh
+    fs, centre, a = mesh.facet_set(est.surface), np.array(est.centre_m), est.contact_radius_m
+    k = np.array([(i, j) for i in range(41) for j in range(41 - i)]) / 40.0
+    bary = np.column_stack([k, 1.0 - k.sum(axis=1)])                    # (p, 3)
+    facets = [*fs.tris, *fs.quads]
+    # a quad sampled as its two triangles
+    tris = np.concatenate([fs.tris, fs.quads[:, [0, 1, 2]], fs.quads[:, [0, 2, 3]]])
+    owner = np.concatenate([np.arange(len(fs.tris)), len(fs.tris) + np.arange(len(fs.quads)),
+                            len(fs.tris) + np.arange(len(fs.quads))])
+    x = mesh.nodes[tris]                                                 # (n, 3, 3)
+    dist = np.linalg.norm(np.einsum("pk,nkd->npd", bary, x) - centre, axis=2).min(axis=1)
+    touched = [facets[i] for i in np.unique(owner[dist <= a])]
+    assert len(touched) >= 1
+    diam = max(np.linalg.norm(mesh.nodes[i] - mesh.nodes[j]) for f in touched
+               for i in f for j in f)
+    assert est.facet_size_m == pytest.approx(diam, rel=1e-12)
+    assert est.radius_m == pytest.approx(a + est.facet_size_m, rel=1e-12)
+    nodes = np.unique(np.concatenate(touched))
+    assert np.all(np.linalg.norm(mesh.nodes[nodes] - centre, axis=1) <= est.radius_m)
+
+
+def test_estimate_on_a_mesh_refined_for_the_contact():
+    """The shipped sphere_beam (tet10 beam, 0.2 mm elements about the contact: linear
+    sub-facets of ~0.1 mm, face nodes 0.1 mm apart): h is a sub-facet, not an element, and
+    the ball a + h lies in the band measured over 1 ms with 30 modes
+    (docs/notes/2026-11-27-select-on-meshes.md): from 0.3 mm (no contact outside the region)
+    to 0.5 mm every ball follows full FE to force NCC >= 0.99999 with the peak within 0.3 %;
+    0.25 mm leaves 18 % of the contact impulse outside (peak +17 %), 0.6 mm puts it +0.8 % high,
+    and the former 2 a (0.76 mm) keeps 624 nodes. About 2 s of CPU (the mesh, its mass)."""
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "scenarios" / "sphere_beam.toml"
+    sc = fm.load_scenario(path)
+    est = fm.estimate_region(sc, "beam")
+    assert 0.09e-3 < est.facet_size_m < 0.13e-3
+    assert 0.3e-3 <= est.radius_m <= 0.5e-3
+    _holds_the_touched_facets(sc, "beam", est)
 
 
 def test_estimate_errors_say_what_to_give(scenario_file, meshes):
@@ -264,7 +313,8 @@ def test_region_command_prints_the_region(scenario_file, capsys):
     run(["region", str(scenario_file), "--body", "beam", "--json"])
     est = json.loads(capsys.readouterr().out)
     assert est["region"]["ball"]["radius_m"] == pytest.approx(
-        DEFAULT_FACTOR * est["contact_radius_m"], rel=1e-12)
+        est["contact_radius_m"] + est["facet_size_m"], rel=1e-12)
+    assert est["rule"] == "a + h" and est["factor"] is None
     assert est["nodes"] >= 1 and est["dof"] == 3 * est["nodes"] + est["modes"]
     with pytest.raises(SystemExit) as exc:
         run(["region", str(scenario_file), "--body", "ball", "--factor", "-1"])

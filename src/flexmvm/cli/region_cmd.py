@@ -13,7 +13,8 @@ import click
 @click.argument("scenario", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--body", required=True, help="The body to reduce.")
 @click.option("--factor", type=float, default=None,
-              help="Region radius per Hertz contact radius [default: 2, studies/region.py].")
+              help="Region radius per Hertz contact radius [default: none, the radius is a + h, "
+                   "h the size of the contact facets within a: studies/region.py].")
 @click.option("--radius-mm", "radius_mm", type=float, default=None,
               help="Equivalent curvature radius of the two surfaces [mm], instead of the fit "
                    "(needed for flat or line contacts).")
@@ -28,13 +29,14 @@ import click
 def command(scenario: Path, body: str, factor: float | None, radius_mm: float | None,
             speed: float | None, modes: int | None, contact: int | None, as_json: bool) -> None:
     """Estimate the region BODY needs: a ball about the expected first contact point of
-    radius factor x the Hertz contact radius of the expected impact, its nodes, DOF and
-    memory against full FE. Prints the scenario's `region` line to use."""
+    radius a + h (a the Hertz contact radius of the expected impact, h the size of the
+    contact facets within a; or --factor x a), its nodes, DOF and memory against full FE.
+    Prints the scenario's `region` line to use."""
     from flexmvm.scenarios import load_scenario
-    from flexmvm.studies.region import DEFAULT_FACTOR, estimate_region
+    from flexmvm.studies.region import estimate_region
 
     sc = load_scenario(scenario)
-    est = estimate_region(sc, body, factor=DEFAULT_FACTOR if factor is None else factor,
+    est = estimate_region(sc, body, factor=factor,
                           radius_m=None if radius_mm is None else radius_mm * 1e-3,
                           speed_mps=speed, modes=modes, contact=contact)
     if as_json:

@@ -1,6 +1,6 @@
 """The retained region a contact needs, estimated before any run: a ball about the expected
-first contact point whose radius is a multiple of the Hertz contact radius of the expected
-impact, and what that region costs on the body's mesh (DESIGN.md "Sizing a reduced region").
+first contact point whose radius is the Hertz contact radius of the expected impact plus the
+size of the body's contact facets there, and what that region costs on the body's mesh (DESIGN.md "Sizing a reduced region").
 
 Steps (all at the scenario's initial placements, in SI units):
 
@@ -26,17 +26,34 @@ Steps (all at the scenario's initial placements, in SI units):
 5. Hertz (theory/hertz.py, Johnson eq. 11.24) with E* of the two materials and the bodies'
    masses (a body on a joint to the ground other than a distance joint does not recoil:
    infinite mass, which overestimates the force and the radius) gives the contact radius a.
-6. The region: the ball of radius ``factor x a`` about the contact point (body-local
-   coordinates), its nodes, its DOF 3 x nodes + modes and its memory (scenarios/cost.py).
+6. The region: the ball of radius ``a + h`` about the contact point (body-local coordinates),
+   h the largest diameter of the body's contact facets that the circle of radius a about the
+   point touches (``facet_size_m``; the linear sub-facets of a quadratic mesh, whose nodes all
+   carry contact), or ``factor x a`` if a factor is given; its nodes, its DOF 3 x nodes +
+   modes and its memory (scenarios/cost.py).
 
-The factor. The ball must hold every node of the facets the contact circle touches: they
-reach about one element beyond a, and a mesh sized for the contact has elements of about a
-(docs/your_own_part.md), hence DEFAULT_FACTOR = 2. Measured on the sphere-on-beam showcase over
-1 ms, force NCC of MVM against full FE by ball radius (docs/notes/2026-11-27-select-on-meshes.md;
-a = 0.379 mm here): 0.66 a (2 nodes) has a third of the contact outside its region and stays
-at NCC 0.977 / 0.966 with 30 / 60 modes; from 1.06 a (4 nodes) up, the radius no longer
-matters (0.9969-0.9988 at 30 modes for 1.06 to 4.2 a; 0.999998 and 0.999996 at 60 modes for
-1.06 a and 3.2 a): the modes do.
+The rule a + h. The ball must hold every node of the facets the contact circle touches (a node
+outside the region moves only as the basis lets it: held stiff, the contact force comes out
+high). Such a node is at most a (the circle) + h (its facet's diameter) from the point, so
+a + h holds them all, on any mesh; a fixed multiple of a cannot (the former default 2 a
+assumed elements of about a). Measured over 1 ms on the sphere-on-beam showcase, MVM against
+full FE (docs/notes/2026-11-27-select-on-meshes.md; Hertz a = 0.379 mm, an upper bound: the
+free beam's peak is 258 N against the half-space's 438 N, its contact radius ~0.30 mm):
+
+- tet10 beam refined for the contact (0.2 mm elements, sub-facets h = 0.115 mm), the beam's
+  top as slave: a + h = 0.49 mm (1.30 a, 256 nodes, 798 DOF with 30 modes). Peak error with
+  20 / 30 modes by ball radius: 0.25 mm (0.66 a, 18-20 % of the contact impulse outside the
+  region) +20 / +17 %; 0.3 mm (0.79 a) +3.1 / +0.05 %; 0.4 mm +1.0 / -0.08 %; 0.5 mm (~a + h) +0.09
+  / -0.01 %; 0.6 mm +4.7 / +0.8 % (more interface, the same modes). Force NCC >= 0.99999
+  from 0.3 to 0.5 mm with 30 modes. a + h is where the peak no longer depends on the modes;
+  2 a (0.76 mm) kept 624 nodes, 1,902 DOF.
+- tet4 beam with 0.4 mm elements at the contact (h = 0.41 mm), the sphere's pole the only
+  slave: a + h = 0.78 mm (2.07 a, the former 2 a); from 1.06 a (4 nodes) on, the radius no
+  longer mattered and the modes did (NCC 0.999998 at 60 modes); 0.66 a (2 nodes) left a third
+  of the contact outside (0.977 / 0.966 with 30 / 60 modes).
+
+The estimate is a starting point: `flexmvm select` finds the smallest model that reaches an
+accuracy (here 0.3 mm + 20 modes, 221 DOF, for force NCC >= 0.999, its peak +3.1 %).
 """
 
 from __future__ import annotations
@@ -51,10 +68,8 @@ from flexmvm.scenarios import Scenario
 from flexmvm.scenarios.cost import BodyCost, reduced_cost
 from flexmvm.theory.hertz import HertzImpact, effective_modulus, hertz_impact
 
-__all__ = ["DEFAULT_FACTOR", "RegionEstimate", "estimate_region"]
+__all__ = ["RegionEstimate", "estimate_region"]
 
-#: Region radius per Hertz contact radius (module doc: measured on the sphere-on-beam case).
-DEFAULT_FACTOR = 2.0
 #: Surface nodes about the contact point fitted for the curvature (>= 6 unknowns of the fit).
 NEIGHBOURS = 30
 #: Below this curvature x fit radius a surface counts as flat: a deviation from its tangent
@@ -84,7 +99,8 @@ class RegionEstimate:
     principal_radii_m: tuple[float, float]
     radius_given: bool
     hertz: HertzImpact
-    factor: float
+    factor: float | None
+    facet_size_m: float
     radius_m: float
     nodes: int
     modes: int
@@ -110,7 +126,9 @@ class RegionEstimate:
                 "radius_given": self.radius_given, "e_star_pa": h.e_star_pa,
                 "m_star_kg": h.m_star_kg, "hertz_force_max_n": h.force_max_n,
                 "hertz_duration_s": h.duration_s, "contact_radius_m": h.contact_radius_m,
-                "factor": self.factor, "radius_m": self.radius_m, "nodes": self.nodes,
+                "factor": self.factor, "facet_size_m": self.facet_size_m,
+                "rule": "a + h" if self.factor is None else "factor x a",
+                "radius_m": self.radius_m, "nodes": self.nodes,
                 "modes": self.modes, "dof": self.dof,
                 "dof_total": self.cost.dof, "memory_MB": self.cost.bytes / 1e6,
                 "full_fe_dof": self.cost.full_dof, "full_fe_memory_MB": self.cost.full_bytes / 1e6,
@@ -133,18 +151,25 @@ class RegionEstimate:
              f"{h.e_star_pa / 1e9:.4g} GPa, m* {h.m_star_kg:.4g} kg: peak "
              f"{h.force_max_n:.4g} N, contact radius a {h.contact_radius_m * mm:.4g} mm, "
              f"duration {h.duration_s * 1e6:.4g} us"),
-            (f"region: ball of {self.factor:g} a = {self.radius_m * mm:.4g} mm: {self.nodes} "
+            (f"region: ball of {self._rule()} = {self.radius_m * mm:.4g} mm: {self.nodes} "
              f"nodes, {self.dof} DOF with {self.modes} modes"),
             self.cost.line(),
         ]
         if self.nodes == 0:
             lines.append("the ball holds no node of the mesh: its elements are coarser than "
                          "the contact (elements of about a resolve the force); refine the mesh "
-                         "about the contact point or raise the factor")
+                         "about the contact point or raise the factor (or leave it out: a + h)")
         if self.cost.bytes > self.cost.full_bytes:
-            lines.append("this region costs more than full FE: a smaller factor (or a coarser "
+            lines.append("this region costs more than full FE: a smaller region (or a coarser "
                          "mesh about the contact), or kind 'full'")
         return lines
+
+    def _rule(self) -> str:
+        mm = 1e3
+        if self.factor is not None:
+            return f"{self.factor:g} a"
+        return (f"a + h (h {self.facet_size_m * mm:.4g} mm: the largest contact facet within "
+                f"a) = {self.radius_m / self.contact_radius_m:.3g} a")
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -173,6 +198,43 @@ def _node_normals(x: np.ndarray, fs) -> np.ndarray:
             np.add.at(acc, corner, nf)
     norm = np.linalg.norm(acc, axis=1)
     return np.divide(acc, norm[:, None], out=np.zeros_like(acc), where=norm[:, None] > 0)
+
+
+def _triangle_distance(p: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """Distances [m] from point ``p`` (3,) to the triangles ``tri`` (n, 3 corners, 3): to the
+    foot of ``p`` in the plane where it falls inside, else to the nearest edge."""
+    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
+    nrm = np.cross(b - a, c - a)
+    nn = np.einsum("ij,ij->i", nrm, nrm)
+    foot = p - (np.einsum("ij,ij->i", p - a, nrm) / nn)[:, None] * nrm
+    # barycentric signs: the foot inside when it is on the inner side of all three edges
+    inside = np.ones(len(tri), bool)
+    for u, v in ((a, b), (b, c), (c, a)):
+        inside &= np.einsum("ij,ij->i", np.cross(v - u, foot - u), nrm) >= 0.0
+    d = np.where(inside, np.linalg.norm(p - foot, axis=1), np.inf)
+    for u, v in ((a, b), (b, c), (c, a)):
+        e = v - u
+        t = np.clip(np.einsum("ij,ij->i", p - u, e) / np.einsum("ij,ij->i", e, e), 0.0, 1.0)
+        d = np.minimum(d, np.linalg.norm(p - (u + t[:, None] * e), axis=1))
+    return d
+
+
+def _facet_size(nodes: np.ndarray, fs, point: np.ndarray, a: float) -> float:
+    """h of the rule a + h [m] (module doc, step 6): the largest diameter (largest node-to-node
+    distance) of the facets of ``fs`` (node positions ``nodes``) that the ball of radius ``a``
+    about ``point`` meets; the facet nearest the point if none (a mesh coarser than a)."""
+    diam, dist = [], []
+    for f in (fs.tris, fs.quads):
+        if not len(f):
+            continue
+        xf = nodes[f]                                       # (n, k, 3)
+        diam.append(np.max(np.linalg.norm(xf[:, :, None] - xf[:, None, :], axis=3),
+                           axis=(1, 2)))
+        parts = [(0, 1, 2)] if f.shape[1] == 3 else [(0, 1, 2), (0, 2, 3)]
+        dist.append(np.min([_triangle_distance(point, xf[:, list(t)]) for t in parts], axis=0))
+    diam, dist = np.concatenate(diam), np.concatenate(dist)
+    touched = dist <= a
+    return float(diam[touched].max() if touched.any() else diam[np.argmin(dist)])
 
 
 def _curvature(points: np.ndarray, x0: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, float]:
@@ -280,14 +342,15 @@ def _positive_or_none(name: str, value: float | None) -> float | None:
     return None if value is None else float(value)
 
 
-def estimate_region(sc: Scenario, body: str, *, factor: float = DEFAULT_FACTOR,
+def estimate_region(sc: Scenario, body: str, *, factor: float | None = None,
                     radius_m: float | None = None, speed_mps: float | None = None,
                     modes: int | None = None, contact: int | None = None) -> RegionEstimate:
     """The region body ``body`` of scenario ``sc`` needs for its contact (module doc).
 
     Args:
         sc, body: the scenario and the body to reduce (a mesh or rod body in a contact).
-        factor: region radius per Hertz contact radius (> 0; DEFAULT_FACTOR).
+        factor: region radius per Hertz contact radius (> 0); None (default): the radius
+            a + h, h the size of the contact facets the contact circle touches (module doc).
         radius_m: the equivalent curvature radius R_e [m] of the two surfaces, instead of the
             fit (needed for flat-on-flat, line or conforming contacts).
         speed_mps: the closing speed [m/s] instead of the placements' (needed when the
@@ -343,12 +406,14 @@ def estimate_region(sc: Scenario, body: str, *, factor: float = DEFAULT_FACTOR,
     mat, pmat = cfg.material_obj(), pcfg.material_obj()
     hertz = hertz_impact(R, v, effective_modulus(mat.E, mat.nu, pmat.E, pmat.nu), ma, mb)
     centre = np.round(A.T @ (point - r), 12) + 0.0   # placement round-off, no -0
-    radius = factor * hertz.contact_radius_m
+    a = hertz.contact_radius_m
+    h = _facet_size(fe.mesh.nodes, fs, centre, a)
+    radius = a + h if factor is None else factor * a
     n_nodes = int(np.count_nonzero(np.linalg.norm(fe.mesh.nodes - centre, axis=1) <= radius))
     m = int(modes) if modes is not None else (cfg.model.modes or DEFAULT_MODES)
     cost = reduced_cost(body, fe.mesh.n_nodes, 3 * n_nodes + m, fe.K.nnz)
     return RegionEstimate(
-        body, k, partner, surface, tuple(float(a) for a in centre),
-        tuple(float(a) for a in point), tuple(float(a) for a in n), v, speed_mps is not None,
-        R, tuple(float(a) for a in principal), radius_m is not None, hertz, float(factor),
-        radius, n_nodes, m, 3 * n_nodes + m, cost)
+        body, k, partner, surface, tuple(float(c) for c in centre),
+        tuple(float(c) for c in point), tuple(float(c) for c in n), v, speed_mps is not None,
+        R, tuple(float(r) for r in principal), radius_m is not None, hertz,
+        None if factor is None else float(factor), h, radius, n_nodes, m, 3 * n_nodes + m, cost)
