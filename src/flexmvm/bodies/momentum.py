@@ -59,15 +59,10 @@ def _frame_gravity(mass, S, g, gb, force):  # pragma: no cover - compiled
 
 
 @numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
-def momentum_terms(A, q, dv, vm, Lq, Lqd, Kq, mqq_dv, mqq_vm, mass, S0, S1, G0, G1, g,
-                   inertia, force, momentum):  # pragma: no cover - compiled
-    """Fill inertia, force, momentum (each (6 + nq,)) as described in the module docstring.
-
-    A (3, 3); q (nq,) = q_m; dv, vm (6 + nq,); Lq, Lqd (3, 3, nq) = L(q_m), L(q_dot_m); Kq =
-    k_hat q_m; mqq_dv, mqq_vm = M_qq dv_q, M_qq vm_q; S0 (3,), S1 (3, nq), G0 (3, 3), G1
-    (3, 3, nq) with G1[a, b] = inv.G1[a][b]; g (3,) gravity [m/s^2] (zeros: none)."""
+def _frame_inertia(q, Lq, S0, S1, G0, G1):  # pragma: no cover - compiled
+    """S = S0 + S1 q (3,) and the inertia tensor J = tr(Gs) I - Gs (3, 3), Gs the symmetric
+    part of G[a, b] = G0[a, b] + G1[b][a] q + C[a][b] q, C = G1 + L(q) (Shabana ch. 5)."""
     nq = q.shape[0]
-    # S = S0 + S1 q;  G[a, b] = G0[a, b] + G1[b][a] q + C[a][b] q,  C = G1 + L(q)
     S = S0.copy()
     G = G0.copy()
     for a in range(3):
@@ -84,52 +79,58 @@ def momentum_terms(A, q, dv, vm, Lq, Lqd, Kq, mqq_dv, mqq_vm, mass, S0, S1, G0, 
     J = -Gs
     for a in range(3):
         J[a, a] += tr
-    # M_wq[c] = C[a][b] - C[b][a] over cyclic (c, a, b): (3, nq), used by both products below
+    return S, J
+
+
+@numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def _rotation_coupling(Lq, G1):  # pragma: no cover - compiled
+    """M_wq (3, nq): row c = C[a][b] - C[b][a] over cyclic (c, a, b), C = G1 + L(q)."""
+    nq = Lq.shape[2]
     Mwq = np.empty((3, nq))
     for c in range(3):
         a = _CYC[c, 1]
         b = _CYC[c, 2]
         for k in range(nq):
             Mwq[c, k] = G1[a, b, k] + Lq[a, b, k] - G1[b, a, k] - Lq[b, a, k]
-    ASt = A @ _skew(S)
-    w = vm[3:6]
-    # --- inertia = M dv and momentum = M vm (M_fq = [A S1; M_wq]) -------------------------
-    for out, x, mqq_x in ((inertia, dv, mqq_dv), (momentum, vm, mqq_vm)):
-        xr, xw = x[:3], x[3:6]
-        out[:3] = mass * xr - ASt @ xw
-        out[3:6] = -(ASt.T @ xr) + J @ xw
-        # + M_fq x_q
-        s1x = np.zeros(3)
-        mw = np.zeros(3)
-        for k in range(nq):
-            xk = x[6 + k]
-            for a in range(3):
-                s1x[a] += S1[a, k] * xk
-            for c in range(3):
-                mw[c] += Mwq[c, k] * xk
-        out[:3] += A @ s1x
-        out[3:6] += mw
-        # q rows: M_fq^T x_f + M_qq x_q
-        At_xr = A.T @ xr
-        for k in range(nq):
-            acc = mqq_x[k]
-            for a in range(3):
-                acc += S1[a, k] * At_xr[a]
-            for c in range(3):
-                acc += Mwq[c, k] * xw[c]
-            out[6 + k] = acc
-    # --- quadratic-velocity forces (FlexibleBody.velocity_forces) ---------------------------
-    W = _skew(w)
-    Om = W @ W
-    qd = vm[6:]
-    S1qd = np.zeros(3)
-    H = np.zeros((3, 3))     # H[a, b] = C[a][b] . q_dot
+    return Mwq
+
+
+@numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def _mass_times(A, ASt, J, S1, Mwq, mass, x, mqq_x, out):  # pragma: no cover - compiled
+    """out = M x (6 + nq,), M = [[m I, -A S~, A S1], [., J, M_wq], [., ., M_qq]] symmetric
+    (Shabana ch. 5); ASt = A S~, mqq_x = M_qq x_q."""
+    nq = S1.shape[1]
+    xr, xw = x[:3], x[3:6]
+    out[:3] = mass * xr - ASt @ xw
+    out[3:6] = -(ASt.T @ xr) + J @ xw
+    # + M_fq x_q
+    s1x = np.zeros(3)
+    mw = np.zeros(3)
     for k in range(nq):
+        xk = x[6 + k]
         for a in range(3):
-            S1qd[a] += S1[a, k] * qd[k]
-            for b in range(3):
-                H[a, b] += (G1[a, b, k] + Lq[a, b, k]) * qd[k]
-    _frame_velocity_forces(A, S, J, w, W, Om, S1qd, H, force)
+            s1x[a] += S1[a, k] * xk
+        for c in range(3):
+            mw[c] += Mwq[c, k] * xk
+    out[:3] += A @ s1x
+    out[3:6] += mw
+    # q rows: M_fq^T x_f + M_qq x_q
+    At_xr = A.T @ xr
+    for k in range(nq):
+        acc = mqq_x[k]
+        for a in range(3):
+            acc += S1[a, k] * At_xr[a]
+        for c in range(3):
+            acc += Mwq[c, k] * xw[c]
+        out[6 + k] = acc
+
+
+@numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def _elastic_velocity_forces(w, Om, Lq, Lqd, G1, Kq, force):  # pragma: no cover - compiled
+    """The q rows of the quadratic-velocity forces (FlexibleBody.velocity_forces) minus the
+    elastic force: force[6 + k] = -Om : C[.][.][k]^T - 2 w . (L(q_dot) skew part) - Kq[k];
+    Om = w~ w~. Without spin only -Kq."""
+    nq = Kq.shape[0]
     any_w = w[0] != 0.0 or w[1] != 0.0 or w[2] != 0.0
     for k in range(nq):
         f = 0.0
@@ -142,6 +143,37 @@ def momentum_terms(A, q, dv, vm, Lq, Lqd, Kq, mqq_dv, mqq_vm, mass, S0, S1, G0, 
                 b = _CYC[c, 2]
                 f -= 2.0 * w[c] * (Lqd[a, b, k] - Lqd[b, a, k])
         force[6 + k] = f - Kq[k]
+
+
+@numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def momentum_terms(A, q, dv, vm, Lq, Lqd, Kq, mqq_dv, mqq_vm, mass, S0, S1, G0, G1, g,
+                   inertia, force, momentum):  # pragma: no cover - compiled
+    """Fill inertia, force, momentum (each (6 + nq,)) as described in the module docstring.
+
+    A (3, 3); q (nq,) = q_m; dv, vm (6 + nq,); Lq, Lqd (3, 3, nq) = L(q_m), L(q_dot_m); Kq =
+    k_hat q_m; mqq_dv, mqq_vm = M_qq dv_q, M_qq vm_q; S0 (3,), S1 (3, nq), G0 (3, 3), G1
+    (3, 3, nq) with G1[a, b] = inv.G1[a][b]; g (3,) gravity [m/s^2] (zeros: none)."""
+    nq = q.shape[0]
+    S, J = _frame_inertia(q, Lq, S0, S1, G0, G1)
+    Mwq = _rotation_coupling(Lq, G1)
+    ASt = A @ _skew(S)
+    w = vm[3:6]
+    # --- inertia = M dv and momentum = M vm (M_fq = [A S1; M_wq]) -------------------------
+    _mass_times(A, ASt, J, S1, Mwq, mass, dv, mqq_dv, inertia)
+    _mass_times(A, ASt, J, S1, Mwq, mass, vm, mqq_vm, momentum)
+    # --- quadratic-velocity forces (FlexibleBody.velocity_forces) ---------------------------
+    W = _skew(w)
+    Om = W @ W
+    qd = vm[6:]
+    S1qd = np.zeros(3)
+    H = np.zeros((3, 3))     # H[a, b] = C[a][b] . q_dot
+    for k in range(nq):
+        for a in range(3):
+            S1qd[a] += S1[a, k] * qd[k]
+            for b in range(3):
+                H[a, b] += (G1[a, b, k] + Lq[a, b, k]) * qd[k]
+    _frame_velocity_forces(A, S, J, w, W, Om, S1qd, H, force)
+    _elastic_velocity_forces(w, Om, Lq, Lqd, G1, Kq, force)
     # --- gravity (FlexibleBody.gravity_forces) -----------------------------------------------
     if g[0] != 0.0 or g[1] != 0.0 or g[2] != 0.0:
         gb = A.T @ g
@@ -154,21 +186,9 @@ def momentum_terms(A, q, dv, vm, Lq, Lqd, Kq, mqq_dv, mqq_vm, mass, S0, S1, G0, 
 # vectorised reassociated sums run slower; the results differ by round-off only
 # (docs/notes/2026-11-27-comment-measurements.md)
 @numba.njit(cache=True, nogil=True, fastmath={"contract"})
-def momentum_terms_nodal(A, q, dv, vm, Yq, Yqd, Kq, mqq_dv, mqq_vm, mass, S0, S1, G0, MsX,
-                         node, comp, g, inertia, force, momentum):  # pragma: no cover
-    """momentum_terms for a basis that selects nodal DOFs (full FE), from the compact
-    contractions Yq = Y(q_m), Yqd = Y(q_dot_m) (3, n) of bodies.nodal_contraction: coordinate
-    k is component c = comp[k] of node n = node[k], and every (3, 3, nq) array of
-    momentum_terms has one nonzero per k and row a:
-
-        C[a][b][k] = Cq[a, n] (b = c),  Cq = (M_s X)^T + Yq;    S1[a, k] = 0 for a != c;
-        M_wq[:, k]: [c1] = Cq[c2, n], [c2] = -Cq[c1, n], [c] = 0   (c1, c2 = c + 1, c + 2 mod 3)
-
-    Other arguments as momentum_terms; MsX (n, 3) = M_s X. O(nq) work reading 3 n + 4 nq
-    numbers instead of ~30 nq. The sums over k go into scalar accumulators, one branch per
-    component (written out below): accumulating into small arrays indexed by c made every
-    update a store and a load, and a call about twice as slow
-    (docs/notes/2026-11-27-comment-measurements.md)."""
+def _nodal_frame_inertia(q, Yq, S0, S1, G0, MsX, node, comp):  # pragma: no cover - compiled
+    """_frame_inertia for a nodal basis (momentum_terms_nodal's docstring): S (3,) and J
+    (3, 3) from the compact contraction Yq = Y(q_m), in scalar accumulators."""
     nq = q.shape[0]
     # S = S0 + S1 q;  G[a, b] = G0[a, b] + G1[b][a] q + C[a][b] q, where for coordinate k
     # (component c): G1[b][a] q adds M_s X[n, b] q_k to row c, C[a][b] q adds Cq[a, n] q_k
@@ -214,6 +234,29 @@ def momentum_terms_nodal(A, q, dv, vm, Yq, Yqd, Kq, mqq_dv, mqq_vm, mass, S0, S1
     J = -Gs
     for a in range(3):
         J[a, a] += tr
+    return S, J
+
+
+# long: one loop over the coordinates, its three component branches written out (docstring);
+# no "reassoc", as _nodal_frame_inertia
+@numba.njit(cache=True, nogil=True, fastmath={"contract"})
+def momentum_terms_nodal(A, q, dv, vm, Yq, Yqd, Kq, mqq_dv, mqq_vm, mass, S0, S1, G0, MsX,
+                         node, comp, g, inertia, force, momentum):  # pragma: no cover
+    """momentum_terms for a basis that selects nodal DOFs (full FE), from the compact
+    contractions Yq = Y(q_m), Yqd = Y(q_dot_m) (3, n) of bodies.nodal_contraction: coordinate
+    k is component c = comp[k] of node n = node[k], and every (3, 3, nq) array of
+    momentum_terms has one nonzero per k and row a:
+
+        C[a][b][k] = Cq[a, n] (b = c),  Cq = (M_s X)^T + Yq;    S1[a, k] = 0 for a != c;
+        M_wq[:, k]: [c1] = Cq[c2, n], [c2] = -Cq[c1, n], [c] = 0   (c1, c2 = c + 1, c + 2 mod 3)
+
+    Other arguments as momentum_terms; MsX (n, 3) = M_s X. O(nq) work reading 3 n + 4 nq
+    numbers instead of ~30 nq. The sums over k go into scalar accumulators, one branch per
+    component (written out below): accumulating into small arrays indexed by c made every
+    update a store and a load, and a call about twice as slow
+    (docs/notes/2026-11-27-comment-measurements.md)."""
+    nq = q.shape[0]
+    S, J = _nodal_frame_inertia(q, Yq, S0, S1, G0, MsX, node, comp)
     ASt = A @ _skew(S)
     w = vm[3:6]
     W = _skew(w)

@@ -41,21 +41,18 @@ A material is set by rebuilding the scenario dict with an inline material table
 
 from __future__ import annotations
 
-import itertools
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
 from typing import Any
 
-import numpy as np
-
 from flexmvm.errors import InputError, SolverError, announce_recompute
 from flexmvm.materials import ALUMINIUM, COPPER, PA6, TUNGSTEN, Material
 from flexmvm.results.atomic import file_sha256, write_json_atomic, write_table_csv
 from flexmvm.results.outdir import claim_study_dir
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario, scenario_from_dict
-from flexmvm.scenarios.guard import VALIDITY_KEYS, WARN_FRACTION, invalid_reason
+from flexmvm.scenarios.guard import WARN_FRACTION
 from flexmvm.scenarios.provenance import stamp
 from flexmvm.studies.grid import (
     SEED_SCHEME_NOTE,
@@ -66,8 +63,14 @@ from flexmvm.studies.grid import (
     study_kind,
     study_scenario,
 )
+from flexmvm.studies.material_report import (
+    material_case_key,
+    material_columns,
+    material_rows,
+    material_summary,
+)
 from flexmvm.studies.reference import reference_history, reference_problem
-from flexmvm.studies.report import echo_failures, failed_case_row, failure_list
+from flexmvm.studies.report import echo_failures
 from flexmvm.studies.runner import (
     Case,
     case_path,
@@ -118,36 +121,6 @@ def run_material_case(case: Case, references: dict[str, str]) -> dict:
     return run_selection_case(case, reference=references[case.params["material"]])
 
 
-def _theory(sc: Scenario, body: str) -> dict:
-    """1D wave-Hertz contact radius and duration of the material's scenario (no FE run)."""
-    from flexmvm.theory.scenario import theory_pulse
-
-    try:
-        p = theory_pulse(sc, body)
-    except InputError:
-        return {}
-    return {"theory_contact_radius_m": p.get("contact_radius_m"),
-            "theory_contact_duration_s": p.get("contact_duration_s"),
-            "theory_peak_force_N": p.get("peak_force_N")}
-
-
-def _radius(rod, i: int, j: int) -> float:
-    X = rod.mesh.nodes[rod.selection(i, j)]
-    return float(np.hypot(X[:, 1], X[:, 2]).max())
-
-
-def _mean(values: list[float]) -> float | None:
-    return sum(values) / len(values) if values else None
-
-
-def _case_key(row: dict) -> str:
-    return f"{row['material']}-l{row['layers']}-j{row['laps']}-m{row['modes']}"
-
-
-def _decreasing(means: list[float | None]) -> bool:
-    return all(v is not None for v in means) and all(a > b for a, b in itertools.pairwise(means))
-
-
 @dataclass(frozen=True)
 class MaterialStudy:
     """The outcome of a material study: ``rows`` (materials.csv's rows), ``summary``
@@ -186,11 +159,7 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
     fails is listed in ``failures``, not raised.
     """
     out = Path(out_dir).resolve()
-    materials = list(materials)
-    unknown = [m for m in materials if m not in SEED_MATERIALS]
-    if unknown or not materials:
-        raise InputError(f"materials: unknown {unknown or 'none given'}; expected some of "
-                         f"{', '.join(SEED_MATERIALS)}")
+    materials = _check_materials(materials)
     selections = parse_selections(selections)
     kind = study_kind(kind)
     rod = rod_of(sc, body)
@@ -202,103 +171,61 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
                     own={"cases", "materials.csv", "materials.json", "fig9_materials.png",
                          *materials})
     scen = {m: material_scenario(sc, body, m, SEED_MATERIALS[m]) for m in materials}
-    ref_cases = [Case(f"ref-{m}", {"body": body, "material": m,
-                                   "scenario": scen[m].model_dump(mode="json")})
-                 for m in materials]
+    ref_cases = _reference_cases(scen, body, out)
     ref_paths = {m: str(out / m / "reference" / "history.csv") for m in materials}
-    for m, case in zip(materials, ref_cases, strict=True):
-        _drop_failing_reference(scen[m], body, out / m, case_path(out, case.key))
     stamps = {m: stamp(scen[m]) for m in materials}
-    kind_param = {} if kind is ModelKind.MVM else {"kind": kind.value}  # as selection_cases
-    kw: dict[str, Any]
     with study_cluster(scheduler, n_workers, serial) as address:
-        kw = {"serial": True} if serial else {"scheduler": address}
+        kw: dict[str, Any] = {"serial": True} if serial else {"scheduler": address}
         ref_failed: dict[str, str] = {}
         refs = run_cases(ref_cases, partial(run_reference_case, out_dir=str(out)), out,
                          progress=progress, failures=ref_failed,
                          version=lambda c: {"provenance": stamps[c.params["material"]]}, **kw)
-        cases = [Case(f"{m}-l{i}-j{j}-m{n}",
-                      {"body": body, "layers": i, "laps": j, "modes": n, "material": m,
-                       "modes_max": max(modes), "scenario": scen[m].model_dump(mode="json"),
-                       "reference_sha256": refs[f"ref-{m}"]["sha256"]} | kind_param)
-                 for m in materials if f"ref-{m}" in refs
-                 for (i, j) in selections for n in modes]
+        cases = _material_cases(scen, body, selections, modes, refs, kind)
         case_failed: dict[str, str] = {}
         results = run_cases(cases, partial(run_material_case, references=ref_paths), out,
                             progress=progress, failures=case_failed,
                             version=lambda c: {"provenance": stamps[c.params["material"]],
                                                "reference_sha256": c.params["reference_sha256"]},
                             **kw)
-    probes = [p.name for p in sc.probes]
-    cols = (["material", "kind", "E_pa", "nu", "rho_kg_m3", "selection", "nodes", "modes", "dof",
-             "ncc_force"] + [f"ncc_{p}" for p in probes]
-            + ["peak_err", "impulse_err", "duration_err", *VALIDITY_KEYS, "wall_time_s"])
-    rows = []
-    for c in cases:
-        if c.key in results:
-            r = dict(results[c.key])
-        else:
-            nodes = len(rod.selection(c.params["layers"], c.params["laps"]))
-            r = failed_case_row(c, case_failed.get(c.key, "failed"), nodes)
-        mat = SEED_MATERIALS[c.params["material"]]
-        r.update(material=c.params["material"], kind=kind.value, E_pa=mat.E, nu=mat.nu,
-                 rho_kg_m3=mat.rho,
-                 selection=f"{r['layers']}-{r['laps']}")
-        rows.append(r)
-    reason = {_case_key(r): invalid_reason(r) for r in rows}   # None: valid
-    # the models (selection, modes) every material's run of which has an NCC and is valid
-    # (scenarios.guard.invalid_reason): the same models for every material, as the seed's
-    # ordering compares
-    model_of = lambda r: (r["selection"], int(r["modes"]))
-    common = {model_of(r) for r in rows}
-    for r in rows:
-        if "ncc_force" not in r or reason[_case_key(r)] is not None:
-            common.discard(model_of(r))
-    per = {}
-    for m in materials:
-        vals = [r["ncc_force"] for r in rows if r["material"] == m and "ncc_force" in r]
-        valid = [r["ncc_force"] for r in rows if r["material"] == m and model_of(r) in common]
-        mat = SEED_MATERIALS[m]
-        per[m] = {"mean_ncc_force": _mean(vals), "n_cases": len(vals),
-                  "mean_ncc_force_valid": _mean(valid), "n_valid": len(valid),
-                  "runs": sum(r["material"] == m for r in rows),
-                  "failed": sum(r["material"] == m and "ncc_force" not in r for r in rows),
-                  "E_pa": mat.E, "nu": mat.nu, "rho_kg_m3": mat.rho} | _theory(scen[m], body)
-        if f"ref-{m}" in ref_failed:
-            per[m]["reference_failed"] = ref_failed[f"ref-{m}"]
-    failures = ([{"case": k, "reason": f"full-FE reference failed, no MVM run of this "
-                                       f"material: {v}"} for k, v in sorted(ref_failed.items())]
-                + failure_list((_case_key(r), r) for r in rows))
-    ranked = [m for m in SEED_ORDER if m in materials]
-    holds = _decreasing([per[m]["mean_ncc_force"] for m in ranked])
-    outside = [{"case": k, "reason": why, "ncc_force": r.get("ncc_force")}
-               for (k, why), r in zip(reason.items(), rows, strict=True) if why is not None]
-    observed = sorted((m for m in materials if per[m]["mean_ncc_force"] is not None),
-                      key=lambda m: -per[m]["mean_ncc_force"])
-    result = {"body": body, "kind": kind.value,
-              "selections": [f"{i}-{j}" for i, j in selections], "modes": modes,
-              "materials": per, "seed_order": ranked, "observed_order": observed,
-              "seed_ordering_holds": bool(holds),
-              "guard_outside_validity": outside,
-              "valid_models": [f"{sel} + {n}" for sel, n in sorted(common)],
-              "seed_ordering_holds_valid": bool(_decreasing(
-                  [per[m]["mean_ncc_force_valid"] for m in ranked])),
-              "note": "seed_ordering_holds: mean NCC of the force over the same selections x "
-                      "modes strictly decreasing in the seed's order W > Cu > Al > PA6 "
-                      "(restricted to the materials run; false if a material has no mean). "
-                      "n_cases: the runs the mean covers (runs - failed). The _valid means and "
-                      "ordering: over valid_models, the models whose run is valid for every "
-                      "material (scenarios.guard.invalid_reason: at most WARN_FRACTION of the "
-                      "contact impulse on nodes the basis holds stiff, no energy rise above "
-                      "ENERGY_GAIN_WARN); guard_outside_validity: the invalid runs",
-              "failures": failures,
-              "nodes": {f"{i}-{j}": len(rod.selection(i, j)) for i, j in selections},
-              "selection_radius_m": {f"{i}-{j}": _radius(rod, i, j) for i, j in selections},
-              "radius_note": "theory_contact_radius_m (1D wave-Hertz, per material) against "
-                             "selection_radius_m (outermost retained node from the axis): a "
-                             "contact patch wider than the retained nodes puts contact rows on "
-                             "nodes the reduced basis holds stiff"}
-    return MaterialStudy(rows, result, cols)
+    rows = material_rows(cases, results, case_failed, rod, kind, SEED_MATERIALS)
+    result = material_summary(rows, ref_failed, scen, SEED_MATERIALS, SEED_ORDER, body=body,
+                              kind=kind, selections=selections, modes=modes, rod=rod)
+    return MaterialStudy(rows, result, material_columns([p.name for p in sc.probes]))
+
+
+def _check_materials(materials: Iterable[str]) -> list[str]:
+    """The material names, checked: InputError unless some, all keys of SEED_MATERIALS."""
+    materials = list(materials)
+    unknown = [m for m in materials if m not in SEED_MATERIALS]
+    if unknown or not materials:
+        raise InputError(f"materials: unknown {unknown or 'none given'}; expected some of "
+                         f"{', '.join(SEED_MATERIALS)}")
+    return materials
+
+
+def _reference_cases(scen: dict[str, Scenario], body: str, out: Path) -> list[Case]:
+    """The reference step: case ``ref-<material>`` of every material's scenario ``scen``; a
+    stored reference that fails its check is removed first (_drop_failing_reference)."""
+    ref_cases = [Case(f"ref-{m}", {"body": body, "material": m,
+                                   "scenario": sc.model_dump(mode="json")})
+                 for m, sc in scen.items()]
+    for (m, sc), case in zip(scen.items(), ref_cases, strict=True):
+        _drop_failing_reference(sc, body, out / m, case_path(out, case.key))
+    return ref_cases
+
+
+def _material_cases(scen: dict[str, Scenario], body: str, selections: Sequence[tuple[int, int]],
+                    modes: Sequence[int], refs: dict[str, dict], kind: ModelKind) -> list[Case]:
+    """The grid step: selections x modes of every material whose reference ``refs`` holds
+    (by case key ``ref-<material>``; its SHA-256 is in the case's params); ``kind`` in the
+    params only when not mvm, as studies.grid.selection_cases."""
+    kind_param = {} if kind is ModelKind.MVM else {"kind": kind.value}
+    return [Case(f"{m}-l{i}-j{j}-m{n}",
+                 {"body": body, "layers": i, "laps": j, "modes": n, "material": m,
+                  "modes_max": max(modes), "scenario": sc.model_dump(mode="json"),
+                  "reference_sha256": refs[f"ref-{m}"]["sha256"]} | kind_param)
+            for m, sc in scen.items() if f"ref-{m}" in refs
+            for (i, j) in selections for n in modes]
 
 
 def run_materials_study(scenario: str | Path | Scenario, out_dir: str | Path, body: str = "b2",
@@ -337,7 +264,7 @@ def run_materials_study(scenario: str | Path | Scenario, out_dir: str | Path, bo
 
     invalid = {b["case"] for b in result["guard_outside_validity"]}
     plot_materials(out / "fig9_materials.png",
-                   [r | {"valid": _case_key(r) not in invalid} for r in rows],
+                   [r | {"valid": material_case_key(r) not in invalid} for r in rows],
                    title=f"{sc.name}: body {body} of each material, {kind.value} models")
     echo_failures(echo, failures, len(materials) * (1 + n_per), out / "materials.json")
     echo(f"mean NCC of the force ({kind.value}): " + ", ".join(

@@ -66,7 +66,8 @@ def _one_line(exc: BaseException) -> str:
 
 
 class _Recorder:
-    """Driver-side bookkeeping: writes each outcome at once and updates the progress bar."""
+    """Driver-side bookkeeping: writes each outcome at once and updates the progress bar
+    ``bar`` (a tqdm bar; run_cases's dispatch step sets it when it opens one)."""
 
     def __init__(self, out_dir: Path, results: dict[str, dict], bar: Any,
                  version_of: Callable[[Case], Any]) -> None:
@@ -286,12 +287,9 @@ def run_cases(
 ) -> dict[str, dict]:
     """Run ``fn`` on every case not already stored in ``out_dir``; return all results.
 
-    Storage: ``out_dir/cases/<key>.json`` holds ``{"key", "params", "result", "result_sha256",
-    "version"}`` (sorted keys, indent 2), written atomically by the driver as soon as the case
-    finishes, so a killed run keeps every finished case. On start, a case whose file exists
-    with the same params and ``version`` and whose result has the SHA-256 written with it is
-    loaded, not recomputed; an unreadable or incomplete file, one of another ``version`` and
-    an edited result are recomputed, each reason ``announce``d in one line (module doc).
+    Storage (module doc): ``out_dir/cases/<key>.json`` (sorted keys, indent 2), written
+    atomically by the driver as soon as the case finishes; on start a case whose file passes
+    its check is loaded, the others recomputed, each reason ``announce``d in one line.
 
     Execution: with ``serial=True`` in this process, no Dask. Otherwise on Dask distributed:
     ``scheduler=None`` starts a ``LocalCluster`` of ``n_workers`` processes (default
@@ -342,8 +340,20 @@ def run_cases(
     check_cluster_options(scheduler, n_workers, serial)
     out = Path(out_dir)
     (out / CASES_DIR).mkdir(parents=True, exist_ok=True)
-
     version_of = version if callable(version) else (lambda _case: version)
+    results, pending = _resume(cases, out, version_of, announce)
+    if loaded is not None:
+        loaded.update(results)
+    rec = _Recorder(out, results, None, version_of)
+    _run_pending(cases, pending, fn, rec, progress, serial, scheduler, n_workers)
+    return _outcome(cases, results, rec.failed, failures, out)
+
+
+def _resume(cases: Sequence[Case], out: Path, version_of: Callable[[Case], Any],
+            announce: Callable[[str], Any]) -> tuple[dict[str, dict], list[Case]]:
+    """The resume step: the results of the cases stored in ``out`` that pass their check
+    (case_store.load_stored), by key, and the cases to run; the reasons for recomputing
+    stored ones announced (case_store.announce_stale)."""
     results: dict[str, dict] = {}
     pending: list[Case] = []
     stale: dict[str, list[str]] = {}
@@ -355,32 +365,42 @@ def run_cases(
                 stale.setdefault(why, []).append(case.key)
         else:
             results[case.key] = stored
-    if loaded is not None:
-        loaded.update(results)
     announce_stale(stale, out, announce)
+    return results, pending
 
+
+def _run_pending(cases: Sequence[Case], pending: Sequence[Case], fn: Callable[[Case], Any],
+                 rec: _Recorder, progress: bool, serial: bool, scheduler: str | None,
+                 n_workers: int | None) -> None:
+    """The dispatch step: ``pending`` in this process (``serial``) or on Dask, each outcome
+    recorded by ``rec`` as it comes, under a progress bar over all ``cases``."""
     with tqdm(
         total=len(cases),
-        initial=len(results),
+        initial=len(rec.results),
         unit="case",
         desc="cases",
         disable=not progress,
         file=sys.stderr,
         dynamic_ncols=True,
     ) as bar:
-        rec = _Recorder(out, results, bar, version_of)
+        rec.bar = bar
         if pending and serial:
             _run_serial(pending, fn, rec)
         elif pending:
             _run_dask(pending, fn, rec, scheduler, n_workers)
 
-    if rec.failed and failures is not None:
-        failures.update(rec.failed)
+
+def _outcome(cases: Sequence[Case], results: dict[str, dict], failed: list[tuple[str, str]],
+             failures: dict[str, str] | None, out: Path) -> dict[str, dict]:
+    """The report step: the results in the order of ``cases``; the ``failed`` (key, one line)
+    put in ``failures`` when given, else SolverError naming the first."""
+    if failed and failures is not None:
+        failures.update(failed)
         return {case.key: results[case.key] for case in cases if case.key in results}
-    if rec.failed:
-        key, line = rec.failed[0]
+    if failed:
+        key, line = failed[0]
         raise SolverError(
-            f"{len(rec.failed)} of {len(cases)} cases failed (first: {key}: {line}); "
+            f"{len(failed)} of {len(cases)} cases failed (first: {key}: {line}); "
             f"see {out / CASES_DIR}/<key>.error.txt"
         )
     return {case.key: results[case.key] for case in cases}

@@ -79,63 +79,39 @@ from flexmvm.results.outdir import claim_study_dir
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario, scenario_from_dict
 from flexmvm.scenarios.compare import compare_runs
 from flexmvm.scenarios.guard import invalid_reason, validity_fields
+from flexmvm.studies.batches import Batches
 from flexmvm.studies.grid import (
     SEED_SCHEME_NOTE,
-    case_key,
     check_grid,
     check_study_scheme,
     mvm_scenario,
     redistributing_contacts,
     rod_of,
     seed_scheme,
-    selection_cases,
     study_kind,
     study_scenario,
 )
 from flexmvm.studies.interface import (
     failed_interface_row,
     interface_cases,
-    interface_summary,
-    is_interface_key,
     patch_place,
     run_interface_case,
     write_interface_csv,
 )
+from flexmvm.studies.node_grid import NodeGrid
 from flexmvm.studies.reference import case_reference, reference_history, study_version
 from flexmvm.studies.regions import (
     RegionFamily,
     RegionGrid,
     failed_region_row,
     front_points,
-    region_key,
-    region_winner,
-    row_order,
     run_region_case,
     write_region_csv,
 )
-from flexmvm.studies.report import (
-    echo_summary,
-    failed_case_row,
-    failure_list,
-    target_dict,
-    winner_dict,
-    write_ncc_csv,
-)
-from flexmvm.studies.runner import (
-    Case,
-    check_cluster_options,
-    cluster_slots,
-    run_cases,
-    study_cluster,
-)
-from flexmvm.studies.search import (
-    Candidate,
-    FamilyKind,
-    best_passing,
-    brute_force,
-    kind_exact,
-    smallest_passing,
-)
+from flexmvm.studies.report import echo_summary, write_ncc_csv
+from flexmvm.studies.runner import Case, check_cluster_options, cluster_slots, study_cluster
+from flexmvm.studies.search import Candidate, brute_force, smallest_passing
+from flexmvm.studies.selection_summary import Sweep, selection_summary
 
 __all__ = ["FAIL_SCORE", "SelectionStudy", "run_selection_case", "run_selection_study",
            "run_study_case", "score", "select_models"]
@@ -210,33 +186,6 @@ def score(row: dict, target: Target) -> float:
     return float(c.ncc)
 
 
-class _Batches:
-    """Runs batches of cases through run_cases (shared cluster) and counts made/loaded runs.
-    A case that raised (not stored; a rerun tries it again) gets the row failed_row(case,
-    one line), so it is listed, and scored as failed, like a run whose solver failed."""
-
-    def __init__(self, out_dir: Path, address: str | None, serial: bool, progress: bool,
-                 fn: Callable[[Case], dict], failed_row: Callable[[Case, str], dict],
-                 version: dict, echo: Callable[[str], Any]) -> None:
-        self.out_dir, self.address, self.serial, self.progress = out_dir, address, serial, progress
-        self.fn, self.failed_row, self.version, self.echo = fn, failed_row, version, echo
-        self.made: set[str] = set()
-        self.loaded: set[str] = set()
-        self.rows: dict[str, dict] = {}
-
-    def __call__(self, cases: Sequence[Case]) -> list[dict]:
-        kw: dict[str, Any] = {"serial": True} if self.serial else {"scheduler": self.address}
-        failures: dict[str, str] = {}
-        stored: set[str] = set()
-        res = run_cases(cases, self.fn, self.out_dir, progress=self.progress, failures=failures,
-                        version=self.version, loaded=stored, announce=self.echo, **kw)
-        for c in cases:
-            (self.loaded if c.key in stored else self.made).add(c.key)
-            self.rows[c.key] = (res[c.key] if c.key in res
-                                else self.failed_row(c, failures.get(c.key, "failed")))
-        return [self.rows[c.key] for c in cases]
-
-
 @dataclass(frozen=True)
 class SelectionStudy:
     """The outcome of a selection study: ``rows`` (one per evaluated case, ncc.csv's columns,
@@ -302,15 +251,8 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     sc.body(body)
     sc = seed_scheme(sc, body)
     kind = study_kind(kind)
-    grid = None
-    if regions:
-        check_study_scheme(sc, body)
-        grid = RegionGrid(sc, body, regions, modes, centre_m, kind)
-        modes = grid.modes
-    else:
-        rod, layers, laps, modes = check_grid(sc, body, layers, laps, modes)
-    where = patch_place(sc, body, patch_surface, centre_m if grid is None else grid.centre) \
-        if patches else {}
+    grid = _study_grid(sc, body, layers, laps, modes, kind, regions, centre_m)
+    where = patch_place(sc, body, patch_surface, grid.centre) if patches else {}
     check_cluster_options(scheduler, n_workers, serial)
     claim_study_dir(out, "flexmvm select", own=STUDY_FILES)
     announce = announce_recompute if echo is None else echo
@@ -318,16 +260,39 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     hist, ref_made = reference_history(sc, body, out, progress=progress, announce=announce)
     echo(f"reference (full FE {body}): {'computed' if ref_made else 'loaded'} {hist}")
     version = study_version(sc, hist)
-    case_of: dict[Candidate, Case] = {}
-    n_nodes: dict[tuple[int, int], int] = {}
-    if grid is not None:
-        for c in grid.cases(sc, hist):
-            case_of[grid.candidate(c)] = c
-    else:
-        n_nodes = {(i, j): len(rod.selection(i, j)) for i in layers for j in laps}
-        for c in selection_cases(sc, body, layers, laps, modes, reference=hist, kind=kind):
-            i, j, m = c.params["layers"], c.params["laps"], c.params["modes"]
-            case_of[Candidate((i, j), m, 3 * n_nodes[(i, j)] + m)] = c
+    case_of, if_cases = _candidates(sc, body, grid, hist, patches, interface_modes, where, echo)
+    with study_cluster(scheduler, n_workers, serial) as address:
+        batches = Batches(out, address, serial, progress,
+                          functools.partial(run_study_case, reference=str(hist)),
+                          lambda c, line: _failed_row(c, line, grid), version, announce)
+        best, scores = _sweep(case_of, batches, target, search,
+                              lambda: cluster_slots(scheduler, n_workers, serial))
+    report = selection_summary(
+        grid, Sweep(batches.rows, batches.made, batches.loaded, case_of, best, scores),
+        body=body, kind=kind, search=search, target=target, ref_made=ref_made,
+        if_cases=if_cases, patches=patches, interface_modes=interface_modes)
+    return SelectionStudy(report.table, report.summary, [p.name for p in sc.probes],
+                          report.interface_rows)
+
+
+def _study_grid(sc: Scenario, body: str, layers: Iterable[int], laps: Iterable[int],
+                modes: Iterable[int], kind: ModelKind, regions: Sequence[RegionFamily] | None,
+                centre_m: Sequence[float] | None) -> NodeGrid | RegionGrid:
+    """The grid step: region families x ``modes`` (any body) with ``regions``, else the rod's
+    ``layers`` x ``laps`` x ``modes``; checked against the mesh (InputError)."""
+    if regions:
+        check_study_scheme(sc, body)
+        return RegionGrid(sc, body, regions, modes, centre_m, kind)
+    return NodeGrid(sc, body, layers, laps, modes, kind, centre_m)
+
+
+def _candidates(sc: Scenario, body: str, grid: NodeGrid | RegionGrid, hist: Path,
+                patches: Sequence[Sequence[float]] | None, interface_modes: Iterable[int],
+                where: dict, echo: Callable[[str], Any]
+                ) -> tuple[dict[Candidate, Case], list[Case]]:
+    """Every candidate's case against reference ``hist``: the grid's, then the interface
+    kind's of ``patches`` x ``interface_modes`` (placed as ``where``; also returned apart)."""
+    case_of = {grid.candidate(c): c for c in grid.cases(sc, hist)}
     t0 = time.perf_counter()
     if_cases = (interface_cases(sc, body, patches, interface_modes, reference=hist, **where)
                 if patches else [])
@@ -338,78 +303,25 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
              f"{time.perf_counter() - t0:.1f} s)")
     for c in if_cases:
         case_of[Candidate.interface(c.params["patch_radii_m"], c.params["modes"])] = c
-    with study_cluster(scheduler, n_workers, serial) as address:
-        batches = _Batches(out, address, serial, progress,
-                           functools.partial(run_study_case, reference=str(hist)),
-                           lambda c, line: _failed_row(c, line, n_nodes), version, announce)
-
-        def evaluate(batch: Sequence[Candidate]) -> list[float]:
-            rows = batches([case_of[c] for c in batch])
-            return [score(r, target) for r in rows]
-
-        def passes(s: float) -> bool:
-            return s >= target.ncc_min
-
-        if search:
-            open_at_once = SEARCH_OPEN_PER_SLOT * cluster_slots(scheduler, n_workers, serial)
-            best, scores = smallest_passing(list(case_of), evaluate, passes,
-                                            max_open=open_at_once)
-        else:
-            best, scores = brute_force(list(case_of), evaluate, passes)
-    made, loaded = _Counts(batches.made), _Counts(batches.loaded)
-    node_best = best_passing(scores, passes, FamilyKind.NODES)
-    if grid is not None:
-        keyed = {k: r for k, r in batches.rows.items() if not is_interface_key(k)}
-        table = sorted(keyed.values(), key=row_order)
-        summary = region_winner(node_best, keyed) | {"grid": grid.grid_dict()}
-        failed = [(region_key(r), r) for r in table]
-    else:
-        rows = {(r["layers"], r["laps"], r["modes"]): r for k, r in batches.rows.items()
-                if not is_interface_key(k)}
-        table = sorted(rows.values(), key=lambda r: (r["layers"], r["laps"], r["modes"]))
-        summary = winner_dict(node_best, rows) | {
-            "grid": {"layers": layers, "laps": laps, "modes": modes}}
-        failed = [(case_key(r["layers"], r["laps"], r["modes"]), r) for r in table]
-    summary |= {
-        "body": body, "kind": kind.value, "search": bool(search),
-        "target": target_dict(target),
-        "runs": sum(c.kind is FamilyKind.NODES for c in scores), "runs_made": made.nodes,
-        "runs_loaded": loaded.nodes,
-        "runs_note": "runs = MVM cases evaluated for this answer = runs_made (computed in this "
-                     "invocation) + runs_loaded (found stored in cases/); the full-FE reference "
-                     "is not counted",
-        "reference_computed": ref_made,
-        "dof_note": "dof = 3 x retained nodes + modes (elastic coordinates, seed count); "
-                    "dof_total adds the 6 floating-frame coordinates",
-        "failed_cases": sorted(k for k, r in failed if "failed" in r),
-        "failures": failure_list(failed),
-        "failures_note": "failures: the runs that gave no comparison (the solver failed, the "
-                         "case raised: see cases/<key>.error.txt, a rerun tries it again; or a "
-                         "metric could not be computed); they count as not reaching the target",
-    }
-    if_rows = [batches.rows[c.key] for c in if_cases if c.key in batches.rows]
-    if if_cases:
-        def exact(k: FamilyKind) -> bool:
-            return not search or kind_exact(k, best, scores, passes, list(case_of))
-
-        if_best = best_passing(scores, passes, FamilyKind.INTERFACE)
-        summary |= {"grid_size": len(case_of) - len(if_cases), "exact": exact(FamilyKind.NODES),
-                    "exact_note": EXACT_NOTE,
-                    "interface": interface_summary(
-                        batches.rows, if_cases, None if if_best is None else case_of[if_best].key,
-                        exact(FamilyKind.INTERFACE), made.interface, loaded.interface, patches,
-                        interface_modes),
-                    "best_overall": _best_overall(best, case_of, batches.rows, kind)}
-    return SelectionStudy(table, summary, [p.name for p in sc.probes],
-                          tuple(sorted(if_rows, key=lambda r: (r["dof"], r["model"]))))
+    return case_of, if_cases
 
 
-#: selection.json's note on ``exact`` (node kind) and ``interface.exact``.
-EXACT_NOTE = ("exact: this kind's entry is its smallest model reaching the target over its "
-              "whole grid (always with brute force); false after --search when the other "
-              "kind's winner (best_overall) has fewer DOF and this kind has models above that "
-              "DOF: the search then proved only that nothing of this kind passes up to "
-              "best_overall's DOF, and the entry (if any) is the best of the runs it made")
+def _sweep(case_of: dict[Candidate, Case], batches: Batches, target: Target, search: bool,
+           slots: Callable[[], int]) -> tuple[Candidate | None, dict[Candidate, float]]:
+    """The dispatch step: every candidate (brute force, one batch) or the pruned search's
+    (``search``: SEARCH_OPEN_PER_SLOT families open per one of the cluster's ``slots()``),
+    scored against ``target``; returns the winner over both kinds and the scores."""
+    def evaluate(batch: Sequence[Candidate]) -> list[float]:
+        rows = batches([case_of[c] for c in batch])
+        return [score(r, target) for r in rows]
+
+    def passes(s: float) -> bool:
+        return s >= target.ncc_min
+
+    if search:
+        return smallest_passing(list(case_of), evaluate, passes,
+                                max_open=SEARCH_OPEN_PER_SLOT * slots())
+    return brute_force(list(case_of), evaluate, passes)
 
 
 def run_study_case(case: Case, reference: str | Path | None = None) -> dict:
@@ -423,36 +335,14 @@ def run_study_case(case: Case, reference: str | Path | None = None) -> dict:
     return run_selection_case(case, reference=reference)
 
 
-def _failed_row(case: Case, line: str, n_nodes: dict[tuple[int, int], int]) -> dict:
+def _failed_row(case: Case, line: str, grid: NodeGrid | RegionGrid) -> dict:
+    """ncc.csv's row of a case of any kind that raised (``line``: the one-line reason)."""
     if case.params.get("kind") == "interface":
         return failed_interface_row(case, line)
     if "region" in case.params:
         return failed_region_row(case, line)
-    return failed_case_row(case, line, n_nodes[(case.params["layers"], case.params["laps"])])
-
-
-class _Counts:
-    """Case keys split by kind."""
-
-    def __init__(self, keys: Iterable[str]) -> None:
-        keys = list(keys)
-        self.interface = sum(map(is_interface_key, keys))
-        self.nodes = len(keys) - self.interface
-
-
-def _best_overall(best: Candidate | None, case_of: dict[Candidate, Case],
-                  rows: dict[str, dict], kind: ModelKind) -> dict | None:
-    """selection.json's best_overall: the search's (or brute force's) winner over both kinds."""
-    if best is None:
-        return None
-    r = rows[case_of[best].key]
-    if best.kind is FamilyKind.INTERFACE:
-        model, name = r["model"], "interface"
-    elif best.region is not None:
-        model, name = f"{kind.value} {r['region']} + {r['modes']}", kind.value
-    else:
-        model, name = f"{kind.value} {r['layers']}-{r['laps']} + {r['modes']}", kind.value
-    return {"kind": name, "model": model, "dof": r["dof"], "ncc_force": r.get("ncc_force")}
+    assert isinstance(grid, NodeGrid), grid
+    return grid.failed_row(case, line)
 
 
 def kind_name(summary: dict) -> str:
