@@ -84,7 +84,8 @@ def test_accepted_steps_balance_linear_momentum(monkeypatch, scheme):
 
     def checked(self, t, states, h):
         out = step(self, t, states, h)
-        R, _, _, scales = self._residuals(t, states, [s.v for s in out.states], h)
+        R, _, _, scales = self._residuals(t, states, [s.v for s in out.states], h,
+                                          self.theta_rule.at(h))
         for b, (r, sc) in enumerate(zip(R, scales)):
             if b in out.contact.rows.blocks:
                 r = r - out.contact.rows.body_matrix(b).T @ out.contact_impulses
