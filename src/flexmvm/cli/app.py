@@ -22,7 +22,7 @@ import sys
 import click
 
 from flexmvm import __version__
-from flexmvm.cli.main import INTERRUPTED, TERMINATED
+from flexmvm.cli.messages import INTERRUPTED, TERMINATED
 from flexmvm.errors import FlexmvmError, notes_as_lines
 from flexmvm.processes import Terminated, sigterm_as_exit
 

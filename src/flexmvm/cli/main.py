@@ -1,7 +1,8 @@
 """The entry point of the ``flexmvm`` command (pyproject: ``flexmvm.cli.main:main``).
 
-It imports nothing but ``sys`` before :func:`main` runs, and :func:`main` imports the command
-(cli/app.py: click, the sub-commands, numpy, scipy, ...) inside a Ctrl-C handler: an interrupt
+It imports nothing but ``sys`` and the two messages of cli/messages.py before :func:`main`
+runs, and :func:`main` imports the command (cli/app.py: click, the sub-commands, numpy, scipy,
+...) inside a Ctrl-C handler: an interrupt
 at any moment of the start, the seconds of imports included, is one line on stderr and exit
 status 130, never a traceback. The command's names (``cli``, ``command_path``, ...) are
 reachable here as before, imported on first use.
@@ -11,12 +12,7 @@ from __future__ import annotations
 
 import sys
 
-#: The one line of a Ctrl-C (exit status 130), during the imports and during the run (app.py).
-INTERRUPTED = ("flexmvm: interrupted; finished study cases are kept, an unfinished run leaves "
-               "its output directory as it was")
-#: The one line of a SIGTERM (exit status 143, processes.sigterm_as_exit in app.py).
-TERMINATED = ("flexmvm: terminated (SIGTERM); finished study cases are kept, an unfinished run "
-              "leaves its output directory as it was")
+from flexmvm.cli.messages import INTERRUPTED, TERMINATED  # noqa: F401 (names of this module)
 
 
 def main(argv: list[str] | None = None) -> None:
