@@ -298,7 +298,20 @@ def hertz_sphere_part(path: str | os.PathLike) -> Path:
                                                          6.0e-3))
 
 
-#: The meshes of the shipped scenarios (scenarios/sphere_block.toml, sphere_beam.toml): file
+def arm_stop_part(path: str | os.PathLike, size_m: float = 4.0e-3, fine_m: float = 1.0e-3,
+                  order: int = 2) -> Path:
+    """The aluminium arm of scenarios/arm_stop.toml (``arm``): 300 x 20 x 10 mm on a hub of
+    radius 15 mm with a pivot hole of radius 5 mm, tet10 (order 2); fine_m [m] within 3 mm of
+    the point of its +y side face where the stop strikes, (0.270, 0.010, 0.005), growing to
+    size_m over 12 mm. The stop's Hertz contact radius at the impact (a steel sphere R 10 mm,
+    ~700 N on aluminium) is ~0.6 mm, a few node spacings (fine_m / 2) of a tet10 face. The
+    tests use the same part at a coarse size in tet4."""
+    return arm(path, 0.300, 0.020, 0.010, 0.015, 0.005, size_m, order=order,
+               refine=Refinement((0.270, 0.010, 0.005), fine_m, 3.0e-3, 12.0e-3))
+
+
+#: The meshes of the shipped scenarios (scenarios/sphere_block.toml, sphere_beam.toml,
+#: arm_stop.toml): file
 #: name and how it is made. sphere_r10 and the beam: tet4, 0.4 mm within 0.8-1 mm of the
 #: contact point (about the Hertz contact radius of the steel sphere at 0.5 m/s on aluminium,
 #: 0.4 mm), growing to 2.5 mm (sphere), 5 mm (beam); sphere_block's pair: hertz_sphere_part
@@ -311,6 +324,7 @@ SCENARIO_MESHES: tuple[tuple[str, Callable[[Path], Path]], ...] = (
     ("beam_200x10x10.msh", lambda p: beam(p, 0.200, 0.010, 0.010, 0.002,
                                           refine=Refinement((0.100, 0.0, 0.0), 0.4e-3, 1.0e-3,
                                                             6.0e-3))),
+    ("arm_300x20x10.msh", arm_stop_part),
 )
 
 
@@ -334,6 +348,7 @@ def main(argv: list[str] | None = None) -> int:
 
 
 __all__ = ["HERTZ_BLOCK_COARSE_M", "HERTZ_BLOCK_FINE_M", "SCENARIO_MESHES", "Refinement", "arm",
+           "arm_stop_part",
            "beam", "block", "hertz_block_part", "hertz_sphere_part", "main", "sphere",
            "write_scenario_meshes"]
 
