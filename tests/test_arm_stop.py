@@ -27,7 +27,7 @@ from flexmvm.metrics.ncc import ncc
 
 pytest.importorskip("gmsh")
 
-from flexmvm.mesh import parts  # noqa: E402
+from flexmvm.mesh import parts
 
 # the coarse test arm's full-FE body (1,194 DOF) is as small as its reduced one: the
 # reduced-cost guard's warning is expected here
@@ -170,7 +170,7 @@ def test_frame_block_is_the_mass_matrix_of_its_configuration(runs):
     threads = SimpleNamespace(each=lambda fn, items: {i: fn(i) for i in items})
     mats = IterationMatrices([arm], [Solver()], threads, CarriedState([arm], None), None)
     mats.prepare([st], 1e-6, refresh_tol=0.0)
-    S, J, M_wq, _ = arm.inertia_terms(q)
+    _, J, M_wq, _ = arm.inertia_terms(q)
     scale = np.abs(J).max()
     assert np.abs(seen["Mff"][3:, 3:] - J).max() <= 1e-12 * scale
     assert np.abs(seen["M_wq"] - M_wq).max() <= 1e-12 * scale

@@ -65,8 +65,10 @@ class IterationMatrices:
         # reduced body whose modes hold the quasi-rigid motions of a 3-2-1 support on soft
         # point nodes (a Craig-Bampton arm referenced at its hub: 2.5e-10 to 3e-9 kg m^2
         # against J = 4.9e-3). A J without its quadratic part q^T G2 q (relative size
-        # (|u|/L)^2) beside an exact M_wq made S indefinite once the body vibrated, and the
-        # joint rows' D = Phi W^-1 Phi^T with it (docs/notes/2026-11-27-arm-stop.md).
+        # (|u|/L)^2) is of that size once the body vibrates: a free full-FE beam struck at
+        # mid-span stalled in its frame rows (a factor near -1 per iterate), and beside an
+        # exact M_wq the reduced arm's S went indefinite, and the joint rows' D = Phi W^-1
+        # Phi^T with it (docs/notes/2026-11-27-arm-stop.md).
         c = self.carried.of_configuration(b, st)
         Lq = c.Lq if c is not None else body.carried_contractions(st.q)
         tol = refresh_tol if refresh_tol is not None else (
