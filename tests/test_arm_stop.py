@@ -49,9 +49,9 @@ def meshes(tmp_path_factory):
     return arm, stop
 
 
-def _scenario(meshes, model: dict):
+def _data(meshes, model: dict) -> dict:
     arm, stop = meshes
-    return fm.scenario_from_dict({
+    return {
         "name": "arm_stop_coarse",
         "time": {"t_end_s": T_END, "dt_s": 1e-6, "dt_max_s": 2e-6, "output_dt_s": 1e-6,
                  "hf_damping_time_s": 12.5e-6},
@@ -69,7 +69,11 @@ def _scenario(meshes, model: dict):
                    {"type": "ground", "body": "stop"}],
         "contacts": [{"slave": "stop.front", "master": "arm.surface", "law": "position"}],
         "probes": [{"name": "tip", "body": "arm", "point_m": [0.300, -0.010, 0.0]}],
-    })
+    }
+
+
+def _scenario(meshes, model: dict):
+    return fm.scenario_from_dict(_data(meshes, model))
 
 
 MVM = {"kind": "mvm", "modes": 30,
@@ -176,3 +180,22 @@ def test_frame_block_is_the_mass_matrix_of_its_configuration(runs):
     assert np.abs(seen["M_wq"] - M_wq).max() <= 1e-12 * scale
     schur = J - M_wq @ np.linalg.solve(np.asarray(arm.inv.M_qq), M_wq.T)
     assert np.linalg.eigvalsh(0.5 * (schur + schur.T)).min() > 0.0
+
+
+@pytest.mark.parametrize(("joint", "message"), [
+    ({"type": "distance", "node_set": "hub", "ground_m": [0, 0, 0]}, "node_set: not used"),
+    ({"type": "revolute", "node_set": "hub", "point_m": [0, 0, 0], "axis": [0, 0, 1]},
+     "point_m: not used"),
+    ({"type": "revolute", "node_set": "nowhere", "axis": [0, 0, 1]}, "nowhere"),
+])
+def test_node_set_joint_errors_are_one_line(meshes, joint, message):
+    """node_set stands for point_m on fixed, spherical and revolute joints only, never
+    beside it, and names a set the body has: each a one-line error naming the key."""
+    from flexmvm.errors import InputError
+    from flexmvm.scenarios.build import build_scenario
+
+    data = _data(meshes, {"kind": "full"})
+    data["joints"][0] = {"body": "arm", **joint}
+    with pytest.raises(InputError) as info:
+        build_scenario(fm.scenario_from_dict(data))
+    assert message in str(info.value) and "\n" not in str(info.value)

@@ -158,7 +158,10 @@ class JointConfig(Frozen):
             other = {"body2", "point2_m"} if self.body2 is not None else {"ground_m"}
             need = {"point_m"} | other | ({"axis"} if t is JointType.REVOLUTE else set())
             allowed = need | ({"length_m"} if t is JointType.DISTANCE else set())
-        if self.node_set is not None and t in _NODE_SET_JOINTS:
+        if self.node_set is not None and t not in _NODE_SET_JOINTS:
+            raise problem(f"not used by a {t.value!r} joint (a node set's centroid is held by "
+                          "fixed, spherical and revolute joints; give point_m)", "node_set")
+        if self.node_set is not None:
             # ground_m optional: the centroid held where it is at t = 0
             need, allowed = need - {"point_m", "ground_m"}, (allowed - {"point_m"}) | {"node_set"}
         for key in _JOINT_FIELDS:
