@@ -110,7 +110,7 @@ def test_scenario_meshes_regenerate_small(gmsh, tmp_path, capsys):
     under 2 MB, with the groups their contacts use."""
     assert main([str(tmp_path)]) == 0
     names = {p.name for p in tmp_path.iterdir()}
-    for scenario in ("sphere_block", "sphere_beam"):
+    for scenario in ("sphere_block", "sphere_beam", "arm_stop"):
         sc = load_scenario(SCENARIOS / f"{scenario}.toml")
         for body in sc.bodies:
             assert body.mesh_file.name in names

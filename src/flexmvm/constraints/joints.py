@@ -2,8 +2,9 @@
 (seed eq. 9-11, superscript J). Every joint returns phi (m,) and Rows (m rows of Phi_v).
 
 Points are nodes of a body (for flexible bodies), points at a small body-frame offset from a
-node (carried by the node's displacement and the frame's rotation), or points fixed to a body's
-frame (body-frame coordinates); the ground is a fixed global point.
+node (carried by the node's displacement and the frame's rotation), the centroid of a node set
+(NodeSetPoint: a pin in a hole, held by the mean of the hole face's nodes), or points fixed to a
+body's frame (body-frame coordinates); the ground is a fixed global point.
 """
 
 from __future__ import annotations
@@ -78,11 +79,68 @@ class BodyPoint:
         rows.add(row, self.body, sign * fr, sign * qp, body.nq, nodal)
 
 
-Anchor = BodyPoint | np.ndarray
+@dataclass(frozen=True, eq=False)
+class NodeSetPoint:
+    """The centroid of the nodes `nodes` of body `body`, all weighted alike:
+
+        x_bar = (1/n) sum_k x_k = r + A (X_bar + psi_bar q),   psi_bar = (1/n) sum_k psi_k
+
+    (an averaging constraint, the interpolation element RBE3 of Nastran with equal weights).
+    A joint on it holds the set's mean motion and leaves the set free to deform: a pin in a
+    hole, where a joint on one node of the hole face would hold that node against the whole
+    body (a point load, singular in 3D elasticity). For a reduced body the rows are those of
+    the set's rows of psi, retained or not: the basis interpolates every node. Made by
+    :meth:`of`, which averages X (3,) and psi (3, nq, dense) once."""
+
+    body: int
+    nodes: tuple[int, ...]
+    X_bar: np.ndarray
+    psi_bar: np.ndarray
+
+    @classmethod
+    def of(cls, index: int, body, nodes) -> NodeSetPoint:
+        """The centroid of `nodes` (node ids of `body`, the body at `index` of the system)."""
+        ids = np.unique(np.asarray(nodes, np.int64))
+        if not ids.size:
+            raise InputError("a node-set point needs at least one node")
+        idx = (3 * ids[:, None] + np.arange(3)).ravel()
+        psi_bar = (np.asarray(body.psi[idx, :].todense() if hasattr(body.psi, "todense")
+                              else body.psi[idx, :]).reshape(len(ids), 3, body.nq).mean(axis=0)
+                   if body.nq else np.zeros((3, 0)))
+        return cls(index, tuple(int(k) for k in ids), body.X[ids].mean(axis=0), psi_bar)
+
+    def _local(self, q) -> np.ndarray:
+        return self.X_bar + (self.psi_bar @ q if self.psi_bar.shape[1] else 0.0)
+
+    def position(self, bodies, states) -> np.ndarray:
+        st = states[self.body]
+        return st.r + st.A @ self._local(st.q)
+
+    def add_row(self, rows: Rows, row: int, direction, sign: float, bodies, states) -> None:
+        """rows[row] += sign * d^T dx_bar/dv: frame part [d, s_bar x A^T d], elastic part
+        psi_bar^T A^T d. No nodal selector: through the cached nodal columns of W_qq^-1
+        (integrate.compliance) a row on every DOF of a hole face (900 on the shipped arm)
+        gathered those columns at every iterate, 0.35 s a step on a 38,502-DOF arm against one
+        back-substitution with the rows' columns without it."""
+        body = bodies[self.body]
+        st = states[self.body]
+        d = np.asarray(direction, float)
+        dl = st.A.T @ d
+        fr = np.concatenate([d, cross3(self._local(st.q), dl)])
+        qp = self.psi_bar.T @ dl
+        rows.add(row, self.body, sign * fr, sign * qp, body.nq, None if body.nq
+                 else _no_elastic(body))
+
+
+Anchor = BodyPoint | NodeSetPoint | np.ndarray
+
+
+def _on_body(a: Anchor) -> bool:
+    return isinstance(a, (BodyPoint, NodeSetPoint))
 
 
 def _anchor_position(a: Anchor, bodies, states) -> np.ndarray:
-    return a.position(bodies, states) if isinstance(a, BodyPoint) else np.asarray(a, float)
+    return a.position(bodies, states) if _on_body(a) else np.asarray(a, float)
 
 
 class Joint:
@@ -98,7 +156,7 @@ class Joint:
 class SphericalJoint(Joint):
     """Coincident points: x_1 - x_2 = 0 (3 rows); p2 may be a ground point."""
 
-    p1: BodyPoint
+    p1: BodyPoint | NodeSetPoint
     p2: Anchor
     n_rows: int = 3
 
@@ -107,7 +165,7 @@ class SphericalJoint(Joint):
         rows = Rows(3)
         for i, e in enumerate(np.eye(3)):
             self.p1.add_row(rows, i, e, 1.0, bodies, states)
-            if isinstance(self.p2, BodyPoint):
+            if _on_body(self.p2):
                 self.p2.add_row(rows, i, e, -1.0, bodies, states)
         return phi, rows
 
@@ -116,7 +174,7 @@ class SphericalJoint(Joint):
 class DistanceJoint(Joint):
     """A massless inextensible string or rod: |x_1 - x_2| - length = 0 (1 row)."""
 
-    p1: BodyPoint
+    p1: BodyPoint | NodeSetPoint
     p2: Anchor
     length: float
     n_rows: int = 1
@@ -131,7 +189,7 @@ class DistanceJoint(Joint):
         e = d / dist
         rows = Rows(1)
         self.p1.add_row(rows, 0, e, 1.0, bodies, states)
-        if isinstance(self.p2, BodyPoint):
+        if _on_body(self.p2):
             self.p2.add_row(rows, 0, e, -1.0, bodies, states)
         return np.array([dist - self.length]), rows
 
@@ -140,7 +198,7 @@ class DistanceJoint(Joint):
 class PrescribedMotion(Joint):
     """A point moving with a prescribed velocity: x(t) - (x0 + v t) = 0 (3 rows)."""
 
-    p1: BodyPoint
+    p1: BodyPoint | NodeSetPoint
     x0: tuple[float, float, float]
     velocity: tuple[float, float, float]
     n_rows: int = 3
@@ -202,7 +260,7 @@ def _perpendicular_pair(axis: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return b, np.cross(a, b)
 
 
-def revolute_joint(p1: BodyPoint, p2: Anchor, axis_global, states) -> list[Joint]:
+def revolute_joint(p1: BodyPoint | NodeSetPoint, p2: Anchor, axis_global, states) -> list[Joint]:
     """Spherical joint plus two orientation rows keeping body 1's axis along axis_global."""
     axis = np.asarray(axis_global, float)
     if not np.linalg.norm(axis) > 0:
@@ -210,16 +268,16 @@ def revolute_joint(p1: BodyPoint, p2: Anchor, axis_global, states) -> list[Joint
     b, c = _perpendicular_pair(axis)
     A1 = states[p1.body].A
     u = A1.T @ (axis / np.linalg.norm(axis))
-    body2 = p2.body if isinstance(p2, BodyPoint) else None
+    body2 = p2.body if _on_body(p2) else None
     A2 = states[body2].A if body2 is not None else np.eye(3)
     pairs = tuple((tuple(u), tuple(A2.T @ w)) for w in (b, c))
     return [SphericalJoint(p1, p2), OrientationLock(p1.body, body2, pairs)]
 
 
-def fixed_joint(p1: BodyPoint, p2: Anchor, states) -> list[Joint]:
+def fixed_joint(p1: BodyPoint | NodeSetPoint, p2: Anchor, states) -> list[Joint]:
     """Spherical joint plus three orientation rows: no relative rotation."""
     A1 = states[p1.body].A
-    body2 = p2.body if isinstance(p2, BodyPoint) else None
+    body2 = p2.body if _on_body(p2) else None
     A2 = states[body2].A if body2 is not None else np.eye(3)
     e = np.eye(3)
     pairs = tuple(

@@ -52,31 +52,29 @@ class IterationMatrices:
 
     def _prepare_body(self, b, st, h, refresh_tol, defer=False):
         body, solver = self.bodies[b], self.solvers[b]
-        # an iteration matrix: M_wq exact (thin rods' frame Schur complement depends on
-        # it), J exact where it is cheap (below), else to first order in q (its quadratic
-        # part is (|u|/L)^2 of it)
-        if body.nq:
-            tol = refresh_tol if refresh_tol is not None else (
-                0.0 if body.nq <= SMALL_BASIS else COUPLING_TOL)
-            c = self.carried.of_configuration(b, st)
-            solver.refresh_coupling(h, body.rotational_coupling(st.q, c.Lq if c else None),
-                                    tol, defer)
+        if not body.nq:
+            solver.prepare(h, st.A, body.frame_mass(st.A, body.first_moment(st.q),
+                                                    body.frame_inertia_first_order(st.q)))
+            return
+        # W's frame block is the mass matrix of ONE configuration: J(q) and M_wq(q) from the
+        # same contraction L(q) (the carried one, else made here: O(nodes) for full FE,
+        # 9 nq^2 for a dense basis, only where nothing is carried: the first step and the
+        # midpoint refresh of a slow iteration). The frame Schur complement
+        # S = J - M_wq W_qq^-1 M_wq^T is what the basis cannot absorb of the frame's motion:
+        # ~1e-5 of the body for full FE (the inertia near the 3-2-1 nodes), and as small for a
+        # reduced body whose modes hold the quasi-rigid motions of a 3-2-1 support on soft
+        # point nodes (a Craig-Bampton arm referenced at its hub: 2.5e-10 to 3e-9 kg m^2
+        # against J = 4.9e-3). A J without its quadratic part q^T G2 q (relative size
+        # (|u|/L)^2) is of that size once the body vibrates: a free full-FE beam struck at
+        # mid-span stalled in its frame rows (a factor near -1 per iterate), and beside an
+        # exact M_wq the reduced arm's S went indefinite, and the joint rows' D = Phi W^-1
+        # Phi^T with it (docs/notes/2026-11-27-arm-stop.md).
         c = self.carried.of_configuration(b, st)
-        if body.nodal is not None:
-            # a nodal (full-FE) body: its frame Schur complement is the inertia near the 3-2-1
-            # nodes only (~1e-5 of the body), of the size of J's quadratic part q^T G2 q once
-            # the body vibrates, so the first-order J leaves the iteration with a factor
-            # near -1 (a free tet10 beam struck at mid-span stalled in its frame rows, at every
-            # h); its exact J costs O(nodes) from the compact contraction
-            Lc = c.Lq if c is not None else body.carried_contractions(st.q)
-            J = body.inertia_terms(st.q, Lc)[1]
-        elif body.nq and c is not None:
-            # a reduced body whose q is carried: its exact J costs O(9 nq) (a reduced arm
-            # swung into a stop lost the positive definiteness of its joint rows' D with the
-            # first-order J after the rebound)
-            J = body.inertia_terms(st.q, c.Lq)[1]
-        else:
-            J = body.frame_inertia_first_order(st.q)
+        Lq = c.Lq if c is not None else body.carried_contractions(st.q)
+        tol = refresh_tol if refresh_tol is not None else (
+            0.0 if body.nq <= SMALL_BASIS else COUPLING_TOL)
+        solver.refresh_coupling(h, body.rotational_coupling(st.q, Lq), tol, defer)
+        J = body.inertia_terms(st.q, Lq)[1]
         solver.prepare(h, st.A, body.frame_mass(st.A, body.first_moment(st.q), J))
 
     def joint_columns(self, rows: Rows, h: float) -> dict:

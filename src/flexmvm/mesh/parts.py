@@ -315,15 +315,28 @@ def hertz_beam_part(path: str | os.PathLike, fine_m: float = 0.2e-3) -> Path:
                 refine=Refinement((0.100, 0.0, 0.0), fine_m, 0.6e-3, 6.0e-3))
 
 
-#: The meshes of the shipped scenarios (scenarios/sphere_block.toml, sphere_beam.toml): file
-#: name and how it is made. Both scenarios strike with the rigid sphere of hertz_sphere_part
-#: (0.1 mm facets at the cap: the master surface); the block (hertz_block_part, tet10, 11,748
-#: DOF) and the beam (hertz_beam_part, tet10) are the slave sides, fine enough at the contact
-#: for Hertz's law.
+def arm_stop_part(path: str | os.PathLike, size_m: float = 4.0e-3, fine_m: float = 1.0e-3,
+                  order: int = 2) -> Path:
+    """The aluminium arm of scenarios/arm_stop.toml (``arm``): 300 x 20 x 10 mm on a hub of
+    radius 15 mm with a pivot hole of radius 5 mm, tet10 (order 2); fine_m [m] within 3 mm of
+    the point of its +y side face where the stop strikes, (0.270, 0.010, 0.005), growing to
+    size_m over 12 mm. The stop's Hertz contact radius at the impact (a steel sphere R 10 mm,
+    ~700 N on aluminium) is ~0.6 mm, a few node spacings (fine_m / 2) of a tet10 face. The
+    tests use the same part at a coarse size in tet4."""
+    return arm(path, 0.300, 0.020, 0.010, 0.015, 0.005, size_m, order=order,
+               refine=Refinement((0.270, 0.010, 0.005), fine_m, 3.0e-3, 12.0e-3))
+
+
+#: The meshes of the shipped scenarios (scenarios/sphere_block.toml, sphere_beam.toml,
+#: arm_stop.toml): file name and how it is made. The sphere and beam scenarios strike with the
+#: rigid sphere of hertz_sphere_part (0.1 mm facets at the cap: the master surface); the block
+#: (hertz_block_part, tet10, 11,748 DOF) and the beam (hertz_beam_part, tet10) are the slave
+#: sides, fine enough at the contact for Hertz's law; the arm: arm_stop_part.
 SCENARIO_MESHES: tuple[tuple[str, Callable[[Path], Path]], ...] = (
     ("sphere_r10_cap.msh", hertz_sphere_part),
     ("block_60x60x30.msh", hertz_block_part),
     ("beam_200x10x10.msh", hertz_beam_part),
+    ("arm_300x20x10.msh", arm_stop_part),
 )
 
 
@@ -347,8 +360,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 __all__ = ["HERTZ_BLOCK_COARSE_M", "HERTZ_BLOCK_FINE_M", "SCENARIO_MESHES", "Refinement", "arm",
-           "beam", "block", "hertz_beam_part", "hertz_block_part", "hertz_sphere_part", "main",
-           "sphere", "write_scenario_meshes"]
+           "arm_stop_part", "beam", "block", "hertz_beam_part", "hertz_block_part",
+           "hertz_sphere_part", "main", "sphere", "write_scenario_meshes"]
 
 
 if __name__ == "__main__":

@@ -17,6 +17,7 @@ from flexmvm.constraints.joints import (
     BodyPoint,
     DistanceJoint,
     JointType,
+    NodeSetPoint,
     PrescribedMotion,
     SphericalJoint,
     fixed_joint,
@@ -137,6 +138,16 @@ def initial_state(body: FlexibleBody, placement) -> BodyState:
                      np.zeros(body.nq), v)
 
 
+def _node_set_point(index, body: FlexibleBody, info: BodyInfo, name: str,
+                    where: str) -> NodeSetPoint:
+    """The centroid of node set `name` of the body (constraints.joints.NodeSetPoint)."""
+    try:
+        ids = info.mesh.node_set(name)
+    except MeshError as exc:
+        raise InputError(f"{where}: {exc}") from None
+    return NodeSetPoint.of(index, body, ids)
+
+
 def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
     """Meshes, FE models, bases, bodies, joints, contacts and probes of a Scenario, built
     through ``setup`` (default: the process-wide default_setup())."""
@@ -210,15 +221,20 @@ def _joint(j, where, bodies, infos, index, states):
     t = j.type
     if t is JointType.GROUND:
         return ground_joint(b, states)
-    p1 = body_point(b, bodies[b], infos[b].mesh, j.point_m, f"{where}.point_m")
+    if j.node_set is not None:
+        p1 = _node_set_point(b, bodies[b], infos[b], j.node_set, f"{where}.node_set")
+    else:
+        p1 = body_point(b, bodies[b], infos[b].mesh, j.point_m, f"{where}.point_m")
     if t is JointType.PRESCRIBED:
         x0 = p1.position(bodies, states)
         return [PrescribedMotion(p1, tuple(x0), tuple(j.velocity_mps))]
     if j.body2 is not None:
         b2 = index[j.body2]
         p2 = body_point(b2, bodies[b2], infos[b2].mesh, j.point2_m, f"{where}.point2_m")
-    else:
+    elif j.ground_m is not None:
         p2 = np.asarray(j.ground_m, float)
+    else:  # a node set's centroid, held where it starts (schema.JointConfig)
+        p2 = p1.position(bodies, states)
     if t is JointType.DISTANCE:
         x1 = p1.position(bodies, states)
         x2 = p2.position(bodies, states) if isinstance(p2, BodyPoint) else p2
