@@ -331,8 +331,11 @@ def arm_stop_part(path: str | os.PathLike, size_m: float = 4.0e-3, fine_m: float
 #: arm_stop.toml): file name and how it is made. The sphere and beam scenarios strike with the
 #: rigid sphere of hertz_sphere_part (0.1 mm facets at the cap: the master surface); the block
 #: (hertz_block_part, tet10, 11,748 DOF) and the beam (hertz_beam_part, tet10) are the slave
-#: sides, fine enough at the contact for Hertz's law; the arm: arm_stop_part.
+#: sides, fine enough at the contact for Hertz's law; the arm: arm_stop_part, struck by the
+#: stop sphere_r10 (tet4, 0.4 mm at its -z pole, whose nodes are the slave side).
 SCENARIO_MESHES: tuple[tuple[str, Callable[[Path], Path]], ...] = (
+    ("sphere_r10.msh", lambda p: sphere(p, 0.010, 0.0025, refine=Refinement(
+        (0.0, 0.0, -0.010), 0.4e-3, 0.8e-3, 6.0e-3))),
     ("sphere_r10_cap.msh", hertz_sphere_part),
     ("block_60x60x30.msh", hertz_block_part),
     ("beam_200x10x10.msh", hertz_beam_part),
