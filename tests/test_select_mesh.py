@@ -133,9 +133,9 @@ def _holds_the_touched_facets(sc, body: str, est) -> None:
     Found here independently of the module's point-to-triangle distance: each facet sampled
     on a barycentric grid of step 1/40 (points 1/40 of a facet apart: a facet missed would
     reach less than h/40 into the circle)."""
-    from flexmvm.scenarios.build import free_modes_source
+    from flexmvm.scenarios.setup import default_setup
 
-    mesh = free_modes_source(sc.body(body))[0].mesh
+    mesh = default_setup().free_modes_source(sc.body(body))[0].mesh
     fs, centre, a = mesh.facet_set(est.surface), np.array(est.centre_m), est.contact_radius_m
     k = np.array([(i, j) for i in range(41) for j in range(41 - i)]) / 40.0
     bary = np.column_stack([k, 1.0 - k.sum(axis=1)])                    # (p, 3)
