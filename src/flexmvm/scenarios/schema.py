@@ -59,9 +59,9 @@ from flexmvm.scenarios.fields import (
     Positive,
     SetName,
     Vec3,
-    Velocity,
     check_rod_set,
 )
+from flexmvm.scenarios.joint_schema import JointConfig
 from flexmvm.scenarios.problems import ScenarioError, format_error, problem, validate_part
 
 
@@ -122,65 +122,6 @@ class ContactConfig(Frozen):
     @property
     def master_surface(self) -> str:
         return self.master.split(".")[1]
-
-
-_JOINT_FIELDS = ("point_m", "node_set", "ground_m", "body2", "point2_m", "axis", "length_m",
-                 "velocity_mps")
-# joints whose body point may be a node set's centroid (constraints.joints.NodeSetPoint)
-_NODE_SET_JOINTS = (JointType.SPHERICAL, JointType.REVOLUTE, JointType.FIXED)
-
-
-class JointConfig(Frozen):
-    """A joint; points are body-local (the nearest node is used), ``ground_m`` is global.
-    ``node_set`` instead of ``point_m`` (spherical, revolute, fixed joints): the joint holds
-    the centroid of that node set of ``body`` (a pin in a hole: the hole face's nodes); to the
-    ground, ``ground_m`` may then be left out: the centroid is held where it is at t = 0."""
-
-    type: JointType
-    body: Name
-    point_m: Vec3 | None = None
-    node_set: SetName | None = None
-    ground_m: Vec3 | None = None
-    body2: Name | None = None
-    point2_m: Vec3 | None = None
-    axis: Vec3 | None = None
-    length_m: Positive | None = None
-    velocity_mps: Velocity | None = None
-
-    @model_validator(mode="after")
-    def _check(self) -> JointConfig:
-        t = self.type
-        need: set[str] = set()
-        allowed: set[str] = set()
-        if t is JointType.PRESCRIBED:
-            need = allowed = {"point_m", "velocity_mps"}
-        elif t is not JointType.GROUND:
-            other = {"body2", "point2_m"} if self.body2 is not None else {"ground_m"}
-            need = {"point_m"} | other | ({"axis"} if t is JointType.REVOLUTE else set())
-            allowed = need | ({"length_m"} if t is JointType.DISTANCE else set())
-        if self.node_set is not None and t not in _NODE_SET_JOINTS:
-            raise problem(f"not used by a {t.value!r} joint (a node set's centroid is held by "
-                          "fixed, spherical and revolute joints; give point_m)", "node_set")
-        if self.node_set is not None:
-            # ground_m optional: the centroid held where it is at t = 0
-            need, allowed = need - {"point_m", "ground_m"}, (allowed - {"point_m"}) | {"node_set"}
-        for key in _JOINT_FIELDS:
-            given = getattr(self, key) is not None
-            if key in need and not given:
-                raise problem(
-                    f"required by a {t.value!r} joint"
-                    + (" to ground" if key == "ground_m" else ""),
-                    key,
-                )
-            if given and key not in allowed:
-                between = key == "ground_m" and self.body2 is not None
-                raise problem(
-                    f"not used by a {t.value!r} joint" + (" between two bodies" if between else ""),
-                    key,
-                )
-        if self.axis is not None and math.hypot(*self.axis) == 0.0:
-            raise problem(f"must be non-zero, got {list(self.axis)}", "axis")
-        return self
 
 
 class ProbeConfig(Frozen):
