@@ -33,9 +33,8 @@ from flexmvm.errors import InputError, SolverError
 from flexmvm.reduction.interface import ModeChoice
 from flexmvm.results.atomic import file_sha256, write_table_csv
 from flexmvm.scenarios import Scenario, interface, scenario_from_dict
-from flexmvm.scenarios.compare import compare_runs
-from flexmvm.scenarios.guard import VALIDITY_KEYS, validity_fields
-from flexmvm.studies.reference import case_reference
+from flexmvm.scenarios.guard import VALIDITY_KEYS
+from flexmvm.studies.reference import case_reference, scored_row
 from flexmvm.studies.report import failure_list
 from flexmvm.studies.runner import Case
 
@@ -184,14 +183,7 @@ def run_interface_case(case: Case, reference: str | Path | None = None) -> dict:
         run = run_scenario(sc.with_model(body, model), warn=False)
     except SolverError as exc:
         return row | {"failed": str(exc).splitlines()[0]}
-    cmp = compare_runs(t_ref, f_ref, probes_ref, *run.result.curves())
-    row.update({k: v for k, v in cmp.items() if isinstance(v, float)})
-    errors = [v for k, v in cmp.items() if k.endswith("_error")]
-    if errors:
-        row["failed"] = errors[0]
-    row.update(validity_fields(run.summary, body))
-    row["wall_time_s"] = float(run.summary["wall_time_s"])
-    return row
+    return scored_row(row, run, body, t_ref, f_ref, probes_ref)
 
 
 def failed_interface_row(case: Case, line: str) -> dict:

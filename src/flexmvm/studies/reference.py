@@ -21,6 +21,8 @@ from flexmvm.errors import InputError, announce_recompute
 from flexmvm.results.atomic import canonical_json, file_sha256, write_json_atomic
 from flexmvm.results.history import history_problem, history_record, read_history, write_history
 from flexmvm.scenarios import Scenario
+from flexmvm.scenarios.compare import compare_runs
+from flexmvm.scenarios.guard import validity_fields
 from flexmvm.scenarios.provenance import stamp, stamp_mismatch
 
 
@@ -112,3 +114,17 @@ def case_reference(case, reference=None):
         raise InputError(f"case {case.key}: {reference} is not the reference of this case "
                          "(its SHA-256 differs)")
     return read_history(Path(reference))
+
+
+def scored_row(row: dict, run, body: str, t_ref, f_ref, probes_ref) -> dict:
+    """A study case's row completed by its run against the reference histories: the
+    comparison's numbers (scenarios.compare.compare_runs), its first error as "failed", the
+    validity fields of ``body`` (scenarios.guard) and the run's wall time."""
+    cmp = compare_runs(t_ref, f_ref, probes_ref, *run.result.curves())
+    row.update({k: v for k, v in cmp.items() if isinstance(v, float)})
+    errors = [v for k, v in cmp.items() if k.endswith("_error")]
+    if errors:
+        row["failed"] = errors[0]
+    row.update(validity_fields(run.summary, body))
+    row["wall_time_s"] = float(run.summary["wall_time_s"])
+    return row

@@ -28,9 +28,8 @@ from typing import Any
 from flexmvm.errors import InputError, MeshError, SolverError
 from flexmvm.results.atomic import file_sha256, write_table_csv
 from flexmvm.scenarios import ModelKind, Scenario, mvm, scenario_from_dict
-from flexmvm.scenarios.compare import compare_runs
-from flexmvm.scenarios.guard import VALIDITY_KEYS, validity_fields
-from flexmvm.studies.reference import case_reference
+from flexmvm.scenarios.guard import VALIDITY_KEYS
+from flexmvm.studies.reference import case_reference, scored_row
 from flexmvm.studies.runner import Case
 from flexmvm.studies.search import Candidate
 
@@ -209,14 +208,7 @@ def run_region_case(case: Case, reference: str | Path | None = None) -> dict:
     if info.n_retained_nodes != row["nodes"]:
         raise SolverError(f"case {case.key}: {info.n_retained_nodes} retained nodes, the grid "
                           f"counted {row['nodes']}")
-    cmp = compare_runs(t_ref, f_ref, probes_ref, *run.result.curves())
-    row.update({k: v for k, v in cmp.items() if isinstance(v, float)})
-    errors = [v for k, v in cmp.items() if k.endswith("_error")]
-    if errors:
-        row["failed"] = errors[0]
-    row.update(validity_fields(run.summary, body))
-    row["wall_time_s"] = float(run.summary["wall_time_s"])
-    return row
+    return scored_row(row, run, body, t_ref, f_ref, probes_ref)
 
 
 def row_order(r: dict) -> tuple:

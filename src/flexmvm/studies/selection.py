@@ -77,8 +77,7 @@ from flexmvm.metrics.ncc import Comparison, Target
 from flexmvm.results.atomic import write_json_atomic
 from flexmvm.results.outdir import claim_study_dir
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario, scenario_from_dict
-from flexmvm.scenarios.compare import compare_runs
-from flexmvm.scenarios.guard import invalid_reason, validity_fields
+from flexmvm.scenarios.guard import invalid_reason
 from flexmvm.studies.batches import Batches
 from flexmvm.studies.grid import (
     SEED_SCHEME_NOTE,
@@ -99,7 +98,7 @@ from flexmvm.studies.interface import (
     write_interface_csv,
 )
 from flexmvm.studies.node_grid import NodeGrid
-from flexmvm.studies.reference import case_reference, reference_history, study_version
+from flexmvm.studies.reference import case_reference, reference_history, scored_row, study_version
 from flexmvm.studies.regions import (
     RegionFamily,
     RegionGrid,
@@ -163,14 +162,7 @@ def run_selection_case(case: Case, reference: str | Path | None = None) -> dict:
         return row | {"failed": str(exc).splitlines()[0]}
     info = next(b for b in run.built.info if b.name == body)
     assert info.dof - 6 == 3 * info.n_retained_nodes + info.n_modes == row["dof"], info
-    cmp = compare_runs(t_ref, f_ref, probes_ref, *run.result.curves())
-    row.update({k: v for k, v in cmp.items() if isinstance(v, float)})
-    errors = [v for k, v in cmp.items() if k.endswith("_error")]
-    if errors:
-        row["failed"] = errors[0]
-    row.update(validity_fields(run.summary, body))
-    row["wall_time_s"] = float(run.summary["wall_time_s"])
-    return row
+    return scored_row(row, run, body, t_ref, f_ref, probes_ref)
 
 
 def score(row: dict, target: Target) -> float:

@@ -41,17 +41,11 @@ import numpy as np
 from scipy.integrate import solve_ivp
 
 from flexmvm.errors import InputError, SolverError
+from flexmvm.theory.hertz import positive
 from flexmvm.theory.timoshenko import BeamModes, TimoshenkoBeam, free_free_modes
 
 _MAX_SEGMENTS = 1000        # contact events in one solution (each a restart of solve_ivp)
 _METHODS = ("DOP853", "RK45", "Radau", "BDF", "LSODA")
-
-
-def _positive(name: str, x: float) -> float:
-    x = float(x)
-    if not (math.isfinite(x) and x > 0):
-        raise InputError(f"{name}: expected a finite number > 0, got {x!r}")
-    return x
 
 
 @dataclass(frozen=True)
@@ -77,12 +71,12 @@ class SphereOnBeam:
 
     def __post_init__(self) -> None:
         for name in ("sphere_radius_m", "sphere_mass_kg", "e_star_pa", "speed_mps"):
-            _positive(name, getattr(self, name))
+            positive(name, getattr(self, name))
         if not 0.0 < self.contact_x_m < self.beam.length_m:
             raise InputError(f"contact_x_m: expected inside the beam (0, {self.beam.length_m}) "
                              f"m, got {self.contact_x_m!r}")
         if self.local_law is not None:
-            _positive("local_law k", self.local_law[0])
+            positive("local_law k", self.local_law[0])
             if not (math.isfinite(self.local_law[1]) and self.local_law[1] >= 1.0):
                 raise InputError(f"local_law exponent: expected >= 1, got {self.local_law[1]!r}")
         if not 2 <= self.n_modes <= 2 * (self.n_elements + 1):
@@ -111,8 +105,8 @@ class SphereOnBeam:
         """The history on t = 0, dt_out_s, ... <= t_end_s [s] (t = 0 the first touch), with
         w_t and psi_t at probes_x_m [m]. InputError on bad arguments, SolverError if the
         integration fails."""
-        t_end = _positive("t_end_s", t_end_s)
-        dt = _positive("dt_out_s", dt_out_s)
+        t_end = positive("t_end_s", t_end_s)
+        dt = positive("dt_out_s", dt_out_s)
         if method not in _METHODS:
             raise InputError(f"method: expected one of {', '.join(_METHODS)}, got {method!r}")
         if not 0 < rtol < 1e-3:

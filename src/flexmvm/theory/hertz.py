@@ -40,7 +40,8 @@ class HertzImpact:
     duration_s: float
 
 
-def _positive(name: str, x: float) -> float:
+def positive(name: str, x: float) -> float:
+    """x as a float; InputError naming ``name`` unless it is finite and > 0."""
     x = float(x)
     if not (math.isfinite(x) and x > 0):
         raise InputError(f"{name}: expected a finite number > 0, got {x!r}")
@@ -49,7 +50,7 @@ def _positive(name: str, x: float) -> float:
 
 def effective_modulus(E1: float, nu1: float, E2: float, nu2: float) -> float:
     """E* [Pa] of two elastic bodies: 1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2."""
-    return 1.0 / ((1.0 - nu1**2) / _positive("E1", E1) + (1.0 - nu2**2) / _positive("E2", E2))
+    return 1.0 / ((1.0 - nu1**2) / positive("E1", E1) + (1.0 - nu2**2) / positive("E2", E2))
 
 
 def hertz_impact(radius_m: float, speed_mps: float, e_star_pa: float, m1_kg: float,
@@ -57,11 +58,11 @@ def hertz_impact(radius_m: float, speed_mps: float, e_star_pa: float, m1_kg: flo
     """The scales of the impact (module doc) of a sphere of radius ``radius_m`` at
     ``speed_mps`` with effective modulus ``e_star_pa``, masses m1 and m2 [kg] (m2 = inf: a
     target that does not recoil). InputError for a non-positive input."""
-    R = _positive("radius_m", radius_m)
-    v = _positive("speed_mps", speed_mps)
-    E = _positive("e_star_pa", e_star_pa)
-    m1 = _positive("m1_kg", m1_kg)
-    m2 = math.inf if m2_kg == math.inf else _positive("m2_kg", m2_kg)
+    R = positive("radius_m", radius_m)
+    v = positive("speed_mps", speed_mps)
+    E = positive("e_star_pa", e_star_pa)
+    m1 = positive("m1_kg", m1_kg)
+    m2 = math.inf if m2_kg == math.inf else positive("m2_kg", m2_kg)
     m_star = m1 if m2 == math.inf else m1 * m2 / (m1 + m2)
     delta = (15.0 * m_star * v * v / (16.0 * E * math.sqrt(R))) ** 0.4
     force = 4.0 / 3.0 * E * math.sqrt(R) * delta**1.5
@@ -69,4 +70,4 @@ def hertz_impact(radius_m: float, speed_mps: float, e_star_pa: float, m1_kg: flo
                        DURATION_FACTOR * delta / v)
 
 
-__all__ = ["DURATION_FACTOR", "HertzImpact", "effective_modulus", "hertz_impact"]
+__all__ = ["DURATION_FACTOR", "HertzImpact", "effective_modulus", "hertz_impact", "positive"]

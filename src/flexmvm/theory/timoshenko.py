@@ -39,6 +39,7 @@ import scipy.linalg as sla
 from scipy.optimize import brentq
 
 from flexmvm.errors import InputError, SolverError
+from flexmvm.theory.hertz import positive
 
 #: Gauss-Legendre points and weights on [0, 1], exact to degree 9 (the mass integrand is of
 #: degree 6).
@@ -50,13 +51,6 @@ def cowper_rectangle(nu: float) -> float:
     """Shear coefficient kappa of a rectangular section, 10 (1 + nu) / (12 + 11 nu) (Cowper
     1966, table 1)."""
     return 10.0 * (1.0 + nu) / (12.0 + 11.0 * nu)
-
-
-def _positive(name: str, x: float) -> float:
-    x = float(x)
-    if not (math.isfinite(x) and x > 0):
-        raise InputError(f"{name}: expected a finite number > 0, got {x!r}")
-    return x
 
 
 @dataclass(frozen=True)
@@ -78,11 +72,11 @@ class TimoshenkoBeam:
 
     def __post_init__(self) -> None:
         for name in ("length_m", "width_m", "depth_m", "E_pa", "rho_kg_m3"):
-            _positive(name, getattr(self, name))
+            positive(name, getattr(self, name))
         if not (-1.0 < self.nu < 0.5):
             raise InputError(f"nu: expected -1 < nu < 0.5, got {self.nu!r}")
         if self.shear_coefficient is not None:
-            _positive("shear_coefficient", self.shear_coefficient)
+            positive("shear_coefficient", self.shear_coefficient)
 
     @property
     def area_m2(self) -> float:
