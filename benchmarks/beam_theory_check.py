@@ -57,7 +57,8 @@ def fe_bending_ratio(sc, case) -> tuple[float, float]:
     _, source = default_setup().free_modes_source(cfg)
     freqs, modes = source(16)
     normal = cfg.placement.rotation.matrix().T @ np.asarray(
-        sc.body(case.sphere).placement.velocity_mps, dtype=float)
+        sc.body(case.sphere).placement.velocity_mps, dtype=float
+    )
     normal = np.abs(normal) / np.linalg.norm(normal)
     for f, phi in zip(freqs[6:], modes[:, 6:].T):
         share = (phi.reshape(-1, 3) ** 2).sum(axis=0)
@@ -90,10 +91,15 @@ def depth_corrected_law(impact) -> tuple[float, float, float]:
 
 def row(name: str, t, f, probes, ref) -> dict:
     c = compare_runs(*ref, t, f, probes)
-    windows = [(round(a * 1e6, 1), round(b * 1e6, 1))
-               for a, b in contact_intervals(t, f, 0.01 * f.max())]
-    return {"model": name, "contacts_us": windows, "peak_N": round(float(f.max()), 1),
-            **{k: round(v, 4) for k, v in c.items() if isinstance(v, float)}}
+    windows = [
+        (round(a * 1e6, 1), round(b * 1e6, 1)) for a, b in contact_intervals(t, f, 0.01 * f.max())
+    ]
+    return {
+        "model": name,
+        "contacts_us": windows,
+        "peak_N": round(float(f.max()), 1),
+        **{k: round(v, 4) for k, v in c.items() if isinstance(v, float)},
+    }
 
 
 def main() -> None:
@@ -111,36 +117,51 @@ def main() -> None:
     k_d, p_d, c_d = depth_corrected_law(case.impact)
     beam = case.impact.beam
     stiffer = dataclasses.replace(beam, E_pa=beam.E_pa * (f_fe / f_t) ** 2)
-    variants = {"theory, Hertz": case.impact,
-                "theory, FE bending": dataclasses.replace(case.impact, beam=stiffer),
-                "theory, FE local law": dataclasses.replace(case.impact, local_law=(k, p)),
-                "theory, FE bending + local law": dataclasses.replace(
-                    case.impact, beam=stiffer, local_law=(k, p)),
-                "theory, Hertz less depth": dataclasses.replace(case.impact,
-                                                                local_law=(k_d, p_d))}
+    variants = {
+        "theory, Hertz": case.impact,
+        "theory, FE bending": dataclasses.replace(case.impact, beam=stiffer),
+        "theory, FE local law": dataclasses.replace(case.impact, local_law=(k, p)),
+        "theory, FE bending + local law": dataclasses.replace(
+            case.impact, beam=stiffer, local_law=(k, p)
+        ),
+        "theory, Hertz less depth": dataclasses.replace(case.impact, local_law=(k_d, p_d)),
+    }
     rows = [row("full FE", *full, full), row("MVM", *mvm, full)]
     curves = {"full FE": full, "MVM": mvm}
     for name, imp in variants.items():
         t, f, probes, _ = case_histories(dataclasses.replace(case, impact=imp), t_end)
         rows.append(row(name, t, f, probes, full))
         curves[name] = (t, f, probes)
-    info = {"fe_first_bending_hz": f_fe, "timoshenko_first_bending_hz": f_t,
-            "modulus_scale": (f_fe / f_t) ** 2, "local_law_k": k, "local_law_p": p,
-            "depth_compliance_m_per_n": c_d, "depth_law_k": k_d, "depth_law_p": p_d,
-            "hertz_k": case.impact.hertz_k, "sphere_mass_kg": case.impact.sphere_mass_kg}
+    info = {
+        "fe_first_bending_hz": f_fe,
+        "timoshenko_first_bending_hz": f_t,
+        "modulus_scale": (f_fe / f_t) ** 2,
+        "local_law_k": k,
+        "local_law_p": p,
+        "depth_compliance_m_per_n": c_d,
+        "depth_law_k": k_d,
+        "depth_law_p": p_d,
+        "hertz_k": case.impact.hertz_k,
+        "sphere_mass_kg": case.impact.sphere_mass_kg,
+    }
     print(json.dumps(info, indent=1))
-    print("| model | contacts [us] | peak [N] | force NCC (windows / whole) | peak err | "
-          "impulse err | NCC beam_mid_bottom / beam_end_a |")
+    print(
+        "| model | contacts [us] | peak [N] | force NCC (windows / whole) | peak err | "
+        "impulse err | NCC beam_mid_bottom / beam_end_a |"
+    )
     print("|---|---|---|---|---|---|---|")
     for r in rows:
-        print(f"| {r['model']} | {', '.join(f'{a}-{b}' for a, b in r['contacts_us'])} | "
-              f"{r['peak_N']} | {r['ncc_force']:.4f} / {r['ncc_force_whole']:.4f} | "
-              f"{100 * r['peak_err']:+.1f} % | {100 * r['impulse_err']:+.1f} % | "
-              f"{r['ncc_beam_mid_bottom']:.3f} / {r['ncc_beam_end_a']:.3f} |")
+        print(
+            f"| {r['model']} | {', '.join(f'{a}-{b}' for a, b in r['contacts_us'])} | "
+            f"{r['peak_N']} | {r['ncc_force']:.4f} / {r['ncc_force_whole']:.4f} | "
+            f"{100 * r['peak_err']:+.1f} % | {100 * r['impulse_err']:+.1f} % | "
+            f"{r['ncc_beam_mid_bottom']:.3f} / {r['ncc_beam_end_a']:.3f} |"
+        )
     if args.out is not None:
         args.out.mkdir(parents=True, exist_ok=True)
         (args.out / "sphere_beam_theory.json").write_text(
-            json.dumps({"info": info, "rows": rows}, indent=1) + "\n")
+            json.dumps({"info": info, "rows": rows}, indent=1) + "\n"
+        )
         plot(args.out / "sphere_beam_theory.png", curves)
 
 
@@ -151,9 +172,12 @@ def plot(path: Path, curves: dict) -> None:
     import matplotlib.pyplot as plt
 
     shown = ("full FE", "MVM", "theory, Hertz", "theory, Hertz less depth")
-    style = {"full FE": ("k", "-", 2.2), "MVM": ("tab:orange", "--", 1.4),
-             "theory, Hertz": ("tab:blue", "-", 1.2),
-             "theory, Hertz less depth": ("tab:green", ":", 1.6)}
+    style = {
+        "full FE": ("k", "-", 2.2),
+        "MVM": ("tab:orange", "--", 1.4),
+        "theory, Hertz": ("tab:blue", "-", 1.2),
+        "theory, Hertz less depth": ("tab:green", ":", 1.6),
+    }
     fig, axes = plt.subplots(2, 1, figsize=(8, 6.5), sharex=True)
     for name in shown:
         t, f, probes = curves[name]

@@ -46,12 +46,19 @@ def main() -> None:
     full = body_from_fe("full", fe, build_basis(fe, BasisKind.FULL, ref))
     t_full = time.perf_counter() - t0
     t0 = time.perf_counter()
-    mvm = body_from_fe("mvm", fe, build_basis(fe, BasisKind.CRAIG_BAMPTON, ref,
-                                               retained_nodes=rod.selection(1, 1), n_modes=37))
+    mvm = body_from_fe(
+        "mvm",
+        fe,
+        build_basis(
+            fe, BasisKind.CRAIG_BAMPTON, ref, retained_nodes=rod.selection(1, 1), n_modes=37
+        ),
+    )
     t_mvm = time.perf_counter() - t0
     r_full = _rate(full, node, args.steps)
     r_mvm = _rate(mvm, node, args.steps)
-    print(f"aluminium rod: {rod.mesh.n_nodes} nodes; full FE nq = {full.nq}, MVM 1-1+37 nq = {mvm.nq}")
+    print(
+        f"aluminium rod: {rod.mesh.n_nodes} nodes; full FE nq = {full.nq}, MVM 1-1+37 nq = {mvm.nq}"
+    )
     print(f"body build: full {t_full:.2f} s, MVM {t_mvm:.2f} s")
     print(f"steps/s: full FE {r_full:.1f}, MVM {r_mvm:.1f}, ratio MVM/full = {r_mvm / r_full:.1f}")
 

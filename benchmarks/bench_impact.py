@@ -27,9 +27,13 @@ def main() -> None:
     c = compare_runs(*full.result.curves(), *mvm.result.curves())
     tf, tm = full.result.wall_time_s, mvm.result.wall_time_s
     print(f"window {args.t_end * 1e3:.3f} ms, {full.result.n_steps} steps")
-    print(f"full FE: {tf:.1f} s ({sum(full.summary['dof'].values())} DOF); "
-          f"MVM: {tm:.2f} s ({sum(mvm.summary['dof'].values())} DOF); full/MVM = {tf / tm:.1f}")
-    print("MVM vs full FE: " + ", ".join(f"{k} {v:.4f}" for k, v in c.items() if isinstance(v, float)))
+    print(
+        f"full FE: {tf:.1f} s ({sum(full.summary['dof'].values())} DOF); "
+        f"MVM: {tm:.2f} s ({sum(mvm.summary['dof'].values())} DOF); full/MVM = {tf / tm:.1f}"
+    )
+    print(
+        "MVM vs full FE: " + ", ".join(f"{k} {v:.4f}" for k, v in c.items() if isinstance(v, float))
+    )
 
 
 if __name__ == "__main__":

@@ -38,8 +38,9 @@ def square(n: int, width: float = 0.3):
     X, Y = np.meshgrid(x, x, indexing="ij")
     xm = np.column_stack([X.ravel(), Y.ravel(), np.zeros(k * k)])
     idx = np.arange(k * k).reshape(k, k)
-    conn = np.column_stack([idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(),
-                            idx[:-1, 1:].ravel()]).astype(np.int64)
+    conn = np.column_stack(
+        [idx[:-1, :-1].ravel(), idx[1:, :-1].ravel(), idx[1:, 1:].ravel(), idx[:-1, 1:].ravel()]
+    ).astype(np.int64)
     corners = xm[conn]
     cent = corners.mean(axis=1)
     geo = np.column_stack([cent, np.linalg.norm(corners - cent[:, None], axis=2).max(axis=1)])
@@ -50,8 +51,9 @@ def cap(n: int, R: float = 0.01):
     rng = np.random.default_rng(1)
     th = np.arccos(1 - rng.random(n) * (1 - np.cos(np.radians(30))))
     ph = rng.random(n) * 2 * np.pi
-    return np.column_stack([R * np.sin(th) * np.cos(ph), R * np.sin(th) * np.sin(ph),
-                            R - R * np.cos(th)])
+    return np.column_stack(
+        [R * np.sin(th) * np.cos(ph), R * np.sin(th) * np.sin(ph), R - R * np.cos(th)]
+    )
 
 
 def spread(n: int, width: float = 0.3):
@@ -67,8 +69,12 @@ def scan_ms(xs, xm, conn, geo, one_cell: bool, reach: float = 2e-4) -> tuple[flo
     if one_cell:
         lo = geo[:, :3].min(axis=0)
         span = float((geo[:, :3].max(axis=0) - lo).max()) + 1.0
-        grid = FacetGrid(np.array([*lo, span, float(geo[:, 3].max())]), np.ones(3, np.int64),
-                         np.array([0, nf], np.int64), np.arange(nf, dtype=np.int64))
+        grid = FacetGrid(
+            np.array([*lo, span, float(geo[:, 3].max())]),
+            np.ones(3, np.int64),
+            np.array([0, nf], np.int64),
+            np.arange(nf, dtype=np.int64),
+        )
     else:
         grid = facet_grid(geo)
     surface = FacetSurface(geo, conn, 0, *adj, box, rho, projection_params(), grid)
@@ -78,12 +84,30 @@ def scan_ms(xs, xm, conn, geo, one_cell: bool, reach: float = 2e-4) -> tuple[flo
         facet, out = np.full(ns, -1, np.int64), np.zeros((ns, 11))
         for cold, shift in ((True, 0.0), (False, 1e-6)):
             x = xs + shift
-            memo = MemoArrays(np.zeros((ns, 0), np.int64), np.zeros(ns, np.int64),
-                              np.zeros((ns, 0, REC_LEN)), np.full(2, -1, np.int64),
-                              np.array([rep * 2 + cold], np.int64), np.zeros(1, np.int64))
+            memo = MemoArrays(
+                np.zeros((ns, 0), np.int64),
+                np.zeros(ns, np.int64),
+                np.zeros((ns, 0, REC_LEN)),
+                np.full(2, -1, np.int64),
+                np.array([rep * 2 + cold], np.int64),
+                np.zeros(1, np.int64),
+            )
             t0 = time.perf_counter()
-            scan_nodes(x, np.zeros_like(x), xm, np.zeros_like(xm), np.zeros(3), np.eye(3),
-                       reach, 0.0, surface, state, memo, facet, out)
+            scan_nodes(
+                x,
+                np.zeros_like(x),
+                xm,
+                np.zeros_like(xm),
+                np.zeros(3),
+                np.eye(3),
+                reach,
+                0.0,
+                surface,
+                state,
+                memo,
+                facet,
+                out,
+            )
             times[cold].append(1e3 * (time.perf_counter() - t0))
     return float(np.median(times[True])), float(np.median(times[False]))
 
@@ -94,7 +118,7 @@ def main() -> None:
     ap.add_argument("--slave", type=int, default=2000)
     args = ap.parse_args()
     print(f"CPU: {platform.processor() or platform.machine()}")
-    scan_ms(cap(10), *square(400), one_cell=False)   # compile
+    scan_ms(cap(10), *square(400), one_cell=False)  # compile
     first = {}
     for n in args.sizes:
         xm, conn, geo = square(n)
@@ -102,12 +126,16 @@ def main() -> None:
             g = scan_ms(xs, xm, conn, geo, one_cell=False)
             a = scan_ms(xs, xm, conn, geo, one_cell=True)
             first.setdefault(name, []).append(g[0])
-            print(f"master {len(xm):>7} nodes, {args.slave} slave nodes ({name}): grid first "
-                  f"{g[0]:8.1f} ms, warm {g[1]:6.2f} ms | all facets first {a[0]:9.1f} ms, "
-                  f"warm {a[1]:6.2f} ms | all/grid first {a[0] / g[0]:6.1f}")
+            print(
+                f"master {len(xm):>7} nodes, {args.slave} slave nodes ({name}): grid first "
+                f"{g[0]:8.1f} ms, warm {g[1]:6.2f} ms | all facets first {a[0]:9.1f} ms, "
+                f"warm {a[1]:6.2f} ms | all/grid first {a[0] / g[0]:6.1f}"
+            )
     for name, v in first.items():
-        print(f"{name}: grid first scan, largest / smallest master: {v[-1] / v[0]:.2f} "
-              f"(master {args.sizes[-1] / args.sizes[0]:.0f} x larger)")
+        print(
+            f"{name}: grid first scan, largest / smallest master: {v[-1] / v[0]:.2f} "
+            f"(master {args.sizes[-1] / args.sizes[0]:.0f} x larger)"
+        )
 
 
 if __name__ == "__main__":

@@ -38,13 +38,17 @@ def bench(path: str, t_end: float) -> None:
     mvm = run_scenario(sc.with_overrides(model="mvm"), warn=False)
     tf, tm = full.result.wall_time_s, mvm.result.wall_time_s
     pf, pm = full.contact_force.max(), mvm.contact_force.max()
-    print(f"{sc.name}, {t_end * 1e3:.3g} ms: full FE {tf:.1f} s ({full.summary['dof']}), "
-          f"MVM {tm:.1f} s ({mvm.summary['dof']}); full/MVM time {tf / tm:.1f}")
-    print(f"  force NCC {ncc(full.t, full.contact_force, mvm.t, mvm.contact_force):.5f}, peak "
-          f"{pf:.1f} N (full) {pm:.1f} N (MVM), {100 * (pm - pf) / pf:+.2f} %; contacts "
-          f"{len(full.summary['contact_intervals_s'])} (full) "
-          f"{len(mvm.summary['contact_intervals_s'])} (MVM); steps not converged "
-          f"{full.summary['steps_not_converged']} / {mvm.summary['steps_not_converged']}")
+    print(
+        f"{sc.name}, {t_end * 1e3:.3g} ms: full FE {tf:.1f} s ({full.summary['dof']}), "
+        f"MVM {tm:.1f} s ({mvm.summary['dof']}); full/MVM time {tf / tm:.1f}"
+    )
+    print(
+        f"  force NCC {ncc(full.t, full.contact_force, mvm.t, mvm.contact_force):.5f}, peak "
+        f"{pf:.1f} N (full) {pm:.1f} N (MVM), {100 * (pm - pf) / pf:+.2f} %; contacts "
+        f"{len(full.summary['contact_intervals_s'])} (full) "
+        f"{len(mvm.summary['contact_intervals_s'])} (MVM); steps not converged "
+        f"{full.summary['steps_not_converged']} / {mvm.summary['steps_not_converged']}"
+    )
 
 
 def main() -> None:

@@ -73,8 +73,14 @@ print(json.dumps({"basis_s": time.perf_counter() - t0, "nq": b.nq}))
 
 
 def _child(code: str, args: list[str], env: dict | None = None) -> dict:
-    out = subprocess.run([sys.executable, "-c", code, *args], capture_output=True, text=True,
-                         env={**os.environ, **(env or {})}, cwd=ROOT, check=False)
+    out = subprocess.run(
+        [sys.executable, "-c", code, *args],
+        capture_output=True,
+        text=True,
+        env={**os.environ, **(env or {})},
+        cwd=ROOT,
+        check=False,
+    )
     if out.returncode != 0:
         raise SystemExit(f"benchmark child failed: {out.stderr.strip().splitlines()[-1:]}")
     return json.loads(out.stdout.strip().splitlines()[-1])
@@ -88,21 +94,38 @@ def _sim(model: str, t_end: float, env: dict | None = None, path: Path = SCENARI
 
 def _command(args: list[str], env: dict) -> float:
     t0 = time.perf_counter()
-    out = subprocess.run(["flexmvm", *args], capture_output=True, text=True, cwd=ROOT,
-                         env={**os.environ, **env}, check=False)
+    out = subprocess.run(
+        ["flexmvm", *args],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        env={**os.environ, **env},
+        check=False,
+    )
     if out.returncode != 0:
         raise SystemExit(f"flexmvm {' '.join(args)} failed: {out.stderr.strip()[-300:]}")
     return time.perf_counter() - t0
 
 
 def _commit(repo: Path = ROOT) -> str:
-    return subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True,
-                          text=True, cwd=repo, check=False).stdout.strip() or "unknown"
+    return (
+        subprocess.run(
+            ["git", "rev-parse", "--short", "HEAD"],
+            capture_output=True,
+            text=True,
+            cwd=repo,
+            check=False,
+        ).stdout.strip()
+        or "unknown"
+    )
 
 
 def _seed_runs(t_end: float, cache: dict) -> dict:
-    out = {"all_mvm": _sim("mvm", t_end, cache), "full": _sim("full", t_end, cache),
-           "shipped": _sim("scenario", t_end, cache)}
+    out = {
+        "all_mvm": _sim("mvm", t_end, cache),
+        "full": _sim("full", t_end, cache),
+        "shipped": _sim("scenario", t_end, cache),
+    }
     out["full_over_mvm"] = out["full"]["wall_s"] / out["all_mvm"]["wall_s"]
     return out
 
@@ -117,8 +140,10 @@ def _commands(tmp: Path) -> dict:
 def _scaling(t_end: float, cache: dict, tmp: Path) -> dict:
     """ms per step of the all-MVM case with b2's selection/modes varied (b1 as shipped), and
     of the full-FE flat case against the rods' mesh (O-grid rings 1, 2, 3)."""
-    return {"b2_selection_modes": _scaling_selection(t_end, cache, tmp),
-            "full_fe_mesh": _scaling_mesh(cache, tmp)}
+    return {
+        "b2_selection_modes": _scaling_selection(t_end, cache, tmp),
+        "full_fe_mesh": _scaling_mesh(cache, tmp),
+    }
 
 
 def _scaling_mesh(cache: dict, tmp: Path) -> list[dict]:
@@ -126,26 +151,45 @@ def _scaling_mesh(cache: dict, tmp: Path) -> list[dict]:
     rows = []
     for rings in (1, 2, 3):
         path = tmp / f"mesh_rings{rings}.toml"
-        text = flat.read_text().replace("end_b = \"flat\"\n",
-                                        f"end_b = \"flat\"\nn_rings = {rings}\n")
+        text = flat.read_text().replace('end_b = "flat"\n', f'end_b = "flat"\nn_rings = {rings}\n')
         path.write_text(text)
         r = _sim("full", 1e-4, cache, path)
-        rows.append({"n_rings": rings, "dof": r["dof"], "ms_per_step": r["ms_per_step"],
-                     "nonrotating_steps": r["nonrotating_steps"], "n_steps": r["n_steps"]})
+        rows.append(
+            {
+                "n_rings": rings,
+                "dof": r["dof"],
+                "ms_per_step": r["ms_per_step"],
+                "nonrotating_steps": r["nonrotating_steps"],
+                "n_steps": r["n_steps"],
+            }
+        )
     return rows
 
 
 def _scaling_selection(t_end: float, cache: dict, tmp: Path) -> list[dict]:
     rows = []
-    for sel, modes in (("1-1", 37), ("1-3", 37), ("2-4", 37), ("4-5", 37),
-                       ("1-3", 7), ("1-3", 19), ("1-3", 43)):
+    for sel, modes in (
+        ("1-1", 37),
+        ("1-3", 37),
+        ("2-4", 37),
+        ("4-5", 37),
+        ("1-3", 7),
+        ("1-3", 19),
+        ("1-3", 43),
+    ):
         path = tmp / f"scaling_{sel}_{modes}.toml"
         text = SCENARIO.read_text().replace('selection = "1-3"', f'selection = "{sel}"')
         text = text.replace("modes = 37", f"modes = {modes}")
         path.write_text(text)
         r = _sim("mvm", t_end, cache, path)
-        rows.append({"b2_selection": sel, "b2_modes": modes, "dof": r["dof"],
-                     "ms_per_step": r["ms_per_step"]})
+        rows.append(
+            {
+                "b2_selection": sel,
+                "b2_modes": modes,
+                "dof": r["dof"],
+                "ms_per_step": r["ms_per_step"],
+            }
+        )
     return rows
 
 
@@ -157,9 +201,14 @@ def _figure(scaling: dict, path: Path) -> None:
     import matplotlib.pyplot as plt
 
     fig, (a, b) = plt.subplots(1, 2, figsize=(10, 4))
-    for rows, mark, lab in ((scaling["b2_selection_modes"][:4], "o-", "37 modes, selection 1-1..4-5"),
-                            (scaling["b2_selection_modes"][4:] + scaling["b2_selection_modes"][1:2],
-                             "s--", "selection 1-3, modes 7..43")):
+    for rows, mark, lab in (
+        (scaling["b2_selection_modes"][:4], "o-", "37 modes, selection 1-1..4-5"),
+        (
+            scaling["b2_selection_modes"][4:] + scaling["b2_selection_modes"][1:2],
+            "s--",
+            "selection 1-3, modes 7..43",
+        ),
+    ):
         rows = sorted(rows, key=lambda r: r["dof"][1])
         a.plot([r["dof"][1] for r in rows], [r["ms_per_step"] for r in rows], mark, label=lab)
     a.set_xlabel("b2 DOF (b1 MVM 3-5 + 40 fixed)")
@@ -181,8 +230,7 @@ def _figure(scaling: dict, path: Path) -> None:
 
 def _vs(rev: str, t_end: float, tmp: Path) -> dict:
     wt = tmp / "vs_worktree"
-    subprocess.run(["git", "worktree", "add", "-q", "--detach", str(wt), rev], cwd=ROOT,
-                   check=True)
+    subprocess.run(["git", "worktree", "add", "-q", "--detach", str(wt), rev], cwd=ROOT, check=True)
     try:
         env = {"PYTHONPATH": str(wt / "src"), "FLEXMVM_CACHE_DIR": str(tmp / "vs_cache")}
         _warm(env)  # the worktree's numba kernels compile here, not inside its timed runs
@@ -217,34 +265,48 @@ def _print(res: dict) -> None:
     s = res["seed_runs"]
     print(f"commit {res['commit']}, t_end {res['t_end_s'] * 1e3:g} ms, 2-core machine")
     print(f"{'quantity':58s} {'value':>12s}")
-    for key, label in (("all_mvm", "all-MVM seed run, simulation wall [s]"),
-                       ("full", "full-FE reference, simulation wall [s]"),
-                       ("shipped", "seed run as shipped (b1 full, b2 MVM) [s]")):
+    for key, label in (
+        ("all_mvm", "all-MVM seed run, simulation wall [s]"),
+        ("full", "full-FE reference, simulation wall [s]"),
+        ("shipped", "seed run as shipped (b1 full, b2 MVM) [s]"),
+    ):
         r = s[key]
-        print(f"{label:58s} {r['wall_s']:12.2f}   ({r['ms_per_step']:.2f} ms/step, "
-              f"{r['n_steps']} steps, build {r['build_s']:.1f} s)")
+        print(
+            f"{label:58s} {r['wall_s']:12.2f}   ({r['ms_per_step']:.2f} ms/step, "
+            f"{r['n_steps']} steps, build {r['build_s']:.1f} s)"
+        )
     print(f"{'full FE / all-MVM wall-time ratio':58s} {s['full_over_mvm']:12.1f}")
-    for key, label in (("kernel_compile_s", "numba kernels, first-run compilation (once) [s]"),
-                       ("all_mvm_command_first_s", "all-MVM command end to end, first run [s]"),
-                       ("all_mvm_command_second_s", "all-MVM command end to end, second run [s]"),
-                       ("basis_s", "one CB basis (1-3 + 43 modes), cold [s]"),
-                       ("main_job_s", "main job (README command 1, after install) [s]")):
+    for key, label in (
+        ("kernel_compile_s", "numba kernels, first-run compilation (once) [s]"),
+        ("all_mvm_command_first_s", "all-MVM command end to end, first run [s]"),
+        ("all_mvm_command_second_s", "all-MVM command end to end, second run [s]"),
+        ("basis_s", "one CB basis (1-3 + 43 modes), cold [s]"),
+        ("main_job_s", "main job (README command 1, after install) [s]"),
+    ):
         if key in res:
             print(f"{label:58s} {res[key]:12.2f}")
     if "vs" in res:
         v = res["vs"]
         print(f"vs {v['old']['commit']} over {v['t_end_s'] * 1e3:g} ms (simulation walls):")
         for k, _ in _VS_CASES:
-            print(f"  {k:10s} {v['old'][k]['wall_s']:8.2f} s -> {v['new'][k]['wall_s']:8.2f} s "
-                  f"({v[f'speedup_{k}']:.2f}x)")
-        print(f"  full FE on one thread {v['new']['full_one_thread']['wall_s']:.2f} s: two "
-              f"threads {v['threads_gain_full']:.2f}x")
+            print(
+                f"  {k:10s} {v['old'][k]['wall_s']:8.2f} s -> {v['new'][k]['wall_s']:8.2f} s "
+                f"({v[f'speedup_{k}']:.2f}x)"
+            )
+        print(
+            f"  full FE on one thread {v['new']['full_one_thread']['wall_s']:.2f} s: two "
+            f"threads {v['threads_gain_full']:.2f}x"
+        )
     for row in res.get("scaling", {}).get("b2_selection_modes", []):
-        print(f"  b2 {row['b2_selection']} + {row['b2_modes']:2d} modes, DOF {row['dof']}: "
-              f"{row['ms_per_step']:.2f} ms/step")
+        print(
+            f"  b2 {row['b2_selection']} + {row['b2_modes']:2d} modes, DOF {row['dof']}: "
+            f"{row['ms_per_step']:.2f} ms/step"
+        )
     for row in res.get("scaling", {}).get("full_fe_mesh", []):
-        print(f"  full FE flat case, {row['n_rings']} rings, DOF {row['dof']}: "
-              f"{row['ms_per_step']:.1f} ms/step")
+        print(
+            f"  full FE flat case, {row['n_rings']} rings, DOF {row['dof']}: "
+            f"{row['ms_per_step']:.1f} ms/step"
+        )
 
 
 def main() -> None:
@@ -272,8 +334,10 @@ def main() -> None:
         res.update(_commands(tmp))
         res.update(_child(_BASIS, [], {"FLEXMVM_NO_CACHE": "1"}))
         if args.main_job:
-            res["main_job_s"] = _command(["run", str(SCENARIO), "--out", str(tmp / "main")],
-                                         {"FLEXMVM_CACHE_DIR": str(tmp / "main_cache")})
+            res["main_job_s"] = _command(
+                ["run", str(SCENARIO), "--out", str(tmp / "main")],
+                {"FLEXMVM_CACHE_DIR": str(tmp / "main_cache")},
+            )
         if args.scaling:
             res["scaling"] = _scaling(min(t_end, 4e-4), cache, tmp)
         if args.vs:

@@ -43,10 +43,23 @@ SEED = ROOT / "scenarios" / "rod_impact.toml"
 
 
 def _commit() -> str:
-    out = subprocess.run(["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True,
-                         cwd=ROOT, check=False).stdout.strip() or "unknown"
-    dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"],
-                           capture_output=True, text=True, cwd=ROOT, check=False).stdout.strip()
+    out = (
+        subprocess.run(
+            ["git", "rev-parse", "--short", "HEAD"],
+            capture_output=True,
+            text=True,
+            cwd=ROOT,
+            check=False,
+        ).stdout.strip()
+        or "unknown"
+    )
+    dirty = subprocess.run(
+        ["git", "status", "--porcelain", "--untracked-files=no"],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+        check=False,
+    ).stdout.strip()
     return out + ("-dirty" if dirty else "")
 
 
@@ -60,55 +73,93 @@ def main() -> None:
     ap.add_argument("--subset", action="store_true")
     ap.add_argument("--out", type=Path, default=None)
     ap.add_argument("--record", type=Path, default=ROOT / "benchmarks" / "results")
-    ap.add_argument("--setup-cache", choices=("empty", "user"), default="empty",
-                    help="empty (default): a new setup cache in the output directory, so the "
-                         "study builds its bases as a first study on a machine does; user: "
-                         "the user's cache ($FLEXMVM_CACHE_DIR or the platform's), bases "
-                         "built by earlier runs reused")
+    ap.add_argument(
+        "--setup-cache",
+        choices=("empty", "user"),
+        default="empty",
+        help="empty (default): a new setup cache in the output directory, so the "
+        "study builds its bases as a first study on a machine does; user: "
+        "the user's cache ($FLEXMVM_CACHE_DIR or the platform's), bases "
+        "built by earlier runs reused",
+    )
     a = ap.parse_args()
     load0 = os.getloadavg()
     out = a.out or Path(tempfile.mkdtemp(prefix="bench_studies_"))
-    if a.setup_cache == "empty":   # inherited by the cluster's worker processes
+    if a.setup_cache == "empty":  # inherited by the cluster's worker processes
         os.environ[ENV_DIR] = str(out / "setup_cache")
     layers, laps = ([1, 2], [1, 2]) if a.subset else (range(1, 5), range(1, 6))
     modes = range(7, 44, 6)
     target = Target.parse(a.target)
-    print(f"seed scenario, t_end = {a.t_end:g} s, dt = {a.dt:g} s, other body {a.other}, "
-          f"target {a.target}, out {out}")
+    print(
+        f"seed scenario, t_end = {a.t_end:g} s, dt = {a.dt:g} s, other body {a.other}, "
+        f"target {a.target}, out {out}"
+    )
     kw = {"t_end_s": a.t_end, "dt_s": a.dt, "other": a.other}
     t0 = time.perf_counter()
-    brute = run_selection_study(SEED, "b2", out / "brute", layers, laps, modes, target,
-                                search=False, scheduler=None, n_workers=a.workers,
-                                progress=True, **kw)
+    brute = run_selection_study(
+        SEED,
+        "b2",
+        out / "brute",
+        layers,
+        laps,
+        modes,
+        target,
+        search=False,
+        scheduler=None,
+        n_workers=a.workers,
+        progress=True,
+        **kw,
+    )
     t_brute = time.perf_counter() - t0
     rows = (out / "brute" / "ncc.csv").read_text().splitlines()[1:]
     per_run = sum(float(r.split(",")[-1]) for r in rows) / max(len(rows), 1)
-    print(f"brute force: {brute['runs']} runs ({brute['runs_made']} made) in {t_brute:.1f} s "
-          f"wall (incl. reference), {per_run:.2f} s per run (solver wall time); full grid of "
-          f"140 runs ~ {140 * per_run:.0f} s of run time")
+    print(
+        f"brute force: {brute['runs']} runs ({brute['runs_made']} made) in {t_brute:.1f} s "
+        f"wall (incl. reference), {per_run:.2f} s per run (solver wall time); full grid of "
+        f"140 runs ~ {140 * per_run:.0f} s of run time"
+    )
     (out / "search").mkdir(parents=True, exist_ok=True)
     shutil.copytree(out / "brute" / "reference", out / "search" / "reference", dirs_exist_ok=True)
     t0 = time.perf_counter()
-    found = run_selection_study(SEED, "b2", out / "search", layers, laps, modes, target,
-                                search=True, scheduler=None, n_workers=a.workers,
-                                progress=True, **kw)
+    found = run_selection_study(
+        SEED,
+        "b2",
+        out / "search",
+        layers,
+        laps,
+        modes,
+        target,
+        search=True,
+        scheduler=None,
+        n_workers=a.workers,
+        progress=True,
+        **kw,
+    )
     t_search = time.perf_counter() - t0
     print(f"search: {found['runs']} runs in {t_search:.1f} s wall")
     keys = ("passed", "layers", "laps", "modes", "dof", "ncc_force")
     ref = json.loads((out / "brute" / "reference" / "reference.json").read_text())["summary"]
     print(f"reference run (study body full FE): {ref['wall_time_s']:.1f} s solver wall time")
-    record = {"commit": _commit(), "settings": {"t_end_s": a.t_end, "dt_s": a.dt,
-                                                "other": a.other, "workers": a.workers,
-                                                "target": a.target, "subset": a.subset,
-                                                "setup_cache": a.setup_cache},
-              "brute": {k: brute.get(k) for k in keys},
-              "search": {k: found.get(k) for k in keys},
-              "runs": {"brute": brute["runs"], "search": found["runs"]},
-              "wall_s": {"brute": t_brute, "search": t_search},
-              "solver_s_per_run": per_run,
-              "reference_solver_s": ref["wall_time_s"],
-              "load_average_1_5_15": {"start": load0, "end": os.getloadavg()},
-              "cpus": os.cpu_count()}
+    record = {
+        "commit": _commit(),
+        "settings": {
+            "t_end_s": a.t_end,
+            "dt_s": a.dt,
+            "other": a.other,
+            "workers": a.workers,
+            "target": a.target,
+            "subset": a.subset,
+            "setup_cache": a.setup_cache,
+        },
+        "brute": {k: brute.get(k) for k in keys},
+        "search": {k: found.get(k) for k in keys},
+        "runs": {"brute": brute["runs"], "search": found["runs"]},
+        "wall_s": {"brute": t_brute, "search": t_search},
+        "solver_s_per_run": per_run,
+        "reference_solver_s": ref["wall_time_s"],
+        "load_average_1_5_15": {"start": load0, "end": os.getloadavg()},
+        "cpus": os.cpu_count(),
+    }
     print(json.dumps(record, indent=1))
     a.record.mkdir(parents=True, exist_ok=True)
     path = a.record / f"studies_{record['commit']}.json"

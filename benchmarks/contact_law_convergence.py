@@ -58,9 +58,12 @@ def run(model, theta, law, redis, scenario, *dts):
     print(f"h [us]: {hs}")
     for row in orders(histories):
         cut = "whole history" if row["below_khz"] is None else f"below {row['below_khz']:g} kHz"
-        print(f"{cut:>16}: |f(h) - f(h/2)| / |f| = "
-              + ", ".join(f"{d:.3e}" for d in row["diffs"])
-              + "; observed order " + ", ".join(f"{o:.2f}" for o in row["orders"]))
+        print(
+            f"{cut:>16}: |f(h) - f(h/2)| / |f| = "
+            + ", ".join(f"{d:.3e}" for d in row["diffs"])
+            + "; observed order "
+            + ", ".join(f"{o:.2f}" for o in row["orders"])
+        )
 
 
 if __name__ == "__main__":

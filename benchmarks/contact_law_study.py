@@ -49,13 +49,12 @@ from flexmvm.theory.scenario import theory_histories
 SHORT = "scenarios/rod_impact_short.toml"
 
 
-def scenario(model: str, theta: float, law: str, redis: bool, dt: float | None,
-             path: str = SHORT):
+def scenario(model: str, theta: float, law: str, redis: bool, dt: float | None, path: str = SHORT):
     sc = fm.load_scenario(path)
     if model != "shipped" and "=" not in model:
         sc = sc.with_kind(model)
     data = sc.model_dump(mode="json")
-    if "=" in model:   # per body: "b1=mvm,b2=mvm:1-5" (kind, optionally :selection)
+    if "=" in model:  # per body: "b1=mvm,b2=mvm:1-5" (kind, optionally :selection)
         for item in model.split(","):
             name, spec = item.split("=")
             kind, _, selection = spec.partition(":")
@@ -65,7 +64,7 @@ def scenario(model: str, theta: float, law: str, redis: bool, dt: float | None,
                 body["model"]["selection"] = selection
     data["contacts"][0]["law"] = law
     data["contacts"][0]["redistribute_mass"] = bool(redis)
-    if isinstance(theta, str):            # "tau=12.5": theta = 1/2 + h / (4 tau), tau [us]
+    if isinstance(theta, str):  # "tau=12.5": theta = 1/2 + h / (4 tau), tau [us]
         data["time"].pop("theta", None)
         data["time"]["hf_damping_time_s"] = float(theta.partition("=")[2]) * 1e-6
         sc = fm.scenario_from_dict(data)
@@ -84,8 +83,17 @@ def main(model, theta, law, redis, dt_us=None, out=None, path=SHORT):
     prov = system.contacts[0]
     s_nodes = ContactNodes(system.bodies[prov.slave], prov.slave_nodes)
     m_nodes = ContactNodes(system.bodies[prov.master], prov.master_nodes)
-    rec = {"t": [], "h": [], "us": [], "um": [], "xs": [], "xm": [], "imp": [], "n_on": [],
-           "n_rows": []}
+    rec = {
+        "t": [],
+        "h": [],
+        "us": [],
+        "um": [],
+        "xs": [],
+        "xm": [],
+        "imp": [],
+        "n_on": [],
+        "n_rows": [],
+    }
     touched_s, touched_m = set(), set()
 
     class Recording(MoreauJeanIntegrator):
@@ -103,7 +111,7 @@ def main(model, theta, law, redis, dt_us=None, out=None, path=SHORT):
             rec["imp"].append(float(res.contact.normal_impulse(lam)))
             rec["n_rows"].append(res.contact.rows.m)
             rec["n_on"].append(int((lam > 0).sum()))
-            last = prov._last[0]   # (slave index, master facet nodes (local), weights, normal)
+            last = prov._last[0]  # (slave index, master facet nodes (local), weights, normal)
             if last is not None and lam.size:
                 point, nodes, weights = last[0], last[1], last[2]
                 for j in np.nonzero(lam[: len(point)] > 0)[0]:
@@ -139,7 +147,7 @@ def main(model, theta, law, redis, dt_us=None, out=None, path=SHORT):
     rm, rm99 = ring("um", touched_m)
     ps, ps99 = ring("xs", touched_s)
     pm, pm99 = ring("xm", touched_m)
-    free = set(range(len(prov.slave_nodes))) - touched_s   # the slave face outside the patch
+    free = set(range(len(prov.slave_nodes))) - touched_s  # the slave face outside the patch
     pf, _ = ring("xs", free)
     vf, _ = ring("us", free)
     d2f = np.abs(F[ks + 1] - 2 * F[ks] + F[ks - 1])
@@ -154,39 +162,74 @@ def main(model, theta, law, redis, dt_us=None, out=None, path=SHORT):
         at = at[np.concatenate([[True], np.diff(j[at]) > 0])]
         jj, tw = j[at], t_s[at]
         V = np.diff(X[at], axis=0) / w
-        ok = np.diff(jj) == 1      # consecutive windows only
+        ok = np.diff(jj) == 1  # consecutive windows only
         d2 = np.abs(V[2:] - 2 * V[1:-1] + V[:-2]) / v0
         sel = ok[2:] & ok[1:-1] & ok[:-2] & (tw[2:-1] >= t_s[k0]) & (tw[2:-1] <= t_s[k1])
         return float(d2[sel].mean()) if sel.any() else float("nan")
-    out_d = {"scenario": path, "model": model, "theta": theta, "theta_used": built.grid.theta, "law": law, "redis": redis,
-             "dt_us": hc * 1e6, "energy_end": float((E[-1] - E[0]) / E[0]),
-             "energy_max": float(np.abs(E - E[0]).max() / E[0]),
-             "ncc": cmp_.get("ncc_force"), "peak_err": cmp_.get("peak_err"),
-             "peak_N": float(F.max()), "peak_out_N": float(np.max(f)),
-             "pen_um": run.max_penetration_m * 1e6,
-             "pen_dirs_um": {k: v * 1e6 for k, v in run.max_penetration_by_direction_m.items()},
-             "ring_slave": rs, "ring_slave_p99": rs99, "ring_master": rm,
-             "ring_master_p99": rm99,
-             "ringx_slave": ps, "ringx_slave_p99": ps99, "ringx_master": pm,
-             "ringx_master_p99": pm99, "ringx_face_free": pf, "ring_face_free": vf, "force_ring": float(d2f.mean() / F.max()),
-             "ringx_window_slave": {f"{w * 1e6:g}us": ring_windows("xs", touched_s, w)
-                                    for w in (0.5e-6, 1e-6, 2e-6) if w >= hc * (1 - 1e-9)},
-             "ringx_window_master": {f"{w * 1e6:g}us": ring_windows("xm", touched_m, w)
-                                     for w in (0.5e-6, 1e-6, 2e-6) if w >= hc * (1 - 1e-9)},
-             "n_touched": [len(touched_s), len(touched_m)],
-             "contact_us": [float(t_s[k0] * 1e6), float(t_s[k1] * 1e6)],
-             "ncc_b2_free_end": cmp_.get("ncc_b2_free_end"), "wall_s": wall,
-             "steps": run.n_steps, "lcp_res": run.lcp_residual_max}
+
+    out_d = {
+        "scenario": path,
+        "model": model,
+        "theta": theta,
+        "theta_used": built.grid.theta,
+        "law": law,
+        "redis": redis,
+        "dt_us": hc * 1e6,
+        "energy_end": float((E[-1] - E[0]) / E[0]),
+        "energy_max": float(np.abs(E - E[0]).max() / E[0]),
+        "ncc": cmp_.get("ncc_force"),
+        "peak_err": cmp_.get("peak_err"),
+        "peak_N": float(F.max()),
+        "peak_out_N": float(np.max(f)),
+        "pen_um": run.max_penetration_m * 1e6,
+        "pen_dirs_um": {k: v * 1e6 for k, v in run.max_penetration_by_direction_m.items()},
+        "ring_slave": rs,
+        "ring_slave_p99": rs99,
+        "ring_master": rm,
+        "ring_master_p99": rm99,
+        "ringx_slave": ps,
+        "ringx_slave_p99": ps99,
+        "ringx_master": pm,
+        "ringx_master_p99": pm99,
+        "ringx_face_free": pf,
+        "ring_face_free": vf,
+        "force_ring": float(d2f.mean() / F.max()),
+        "ringx_window_slave": {
+            f"{w * 1e6:g}us": ring_windows("xs", touched_s, w)
+            for w in (0.5e-6, 1e-6, 2e-6)
+            if w >= hc * (1 - 1e-9)
+        },
+        "ringx_window_master": {
+            f"{w * 1e6:g}us": ring_windows("xm", touched_m, w)
+            for w in (0.5e-6, 1e-6, 2e-6)
+            if w >= hc * (1 - 1e-9)
+        },
+        "n_touched": [len(touched_s), len(touched_m)],
+        "contact_us": [float(t_s[k0] * 1e6), float(t_s[k1] * 1e6)],
+        "ncc_b2_free_end": cmp_.get("ncc_b2_free_end"),
+        "wall_s": wall,
+        "steps": run.n_steps,
+        "lcp_res": run.lcp_residual_max,
+    }
     line = json.dumps(out_d)
     print(line)
     if out:
         with open(out, "a") as fh:
             fh.write(line + "\n")
-        np.savez(out.replace(".json", "") + f"_{Path(path).stem}_{model}_{theta}_{law}_{int(redis)}_{hc*1e6:g}.npz",
-                 t=t_f, f=f, t_step=t_s, F_step=F, E=E, t_E=run.t,
-                 xs=np.array(rec["xs"])[:, sorted(touched_s)],
-                 us=np.array(rec["us"])[:, sorted(touched_s)],
-                 n_on=np.array(rec["n_on"]), n_rows=np.array(rec["n_rows"]))
+        np.savez(
+            out.replace(".json", "")
+            + f"_{Path(path).stem}_{model}_{theta}_{law}_{int(redis)}_{hc * 1e6:g}.npz",
+            t=t_f,
+            f=f,
+            t_step=t_s,
+            F_step=F,
+            E=E,
+            t_E=run.t,
+            xs=np.array(rec["xs"])[:, sorted(touched_s)],
+            us=np.array(rec["us"])[:, sorted(touched_s)],
+            n_on=np.array(rec["n_on"]),
+            n_rows=np.array(rec["n_rows"]),
+        )
     return out_d, np.asarray(t_f), np.asarray(f)
 
 

@@ -42,8 +42,12 @@ MM = 1e-3
 
 #: the names of the first measurements (docs/interface_basis.md) -> model text
 ALIASES = {"mvm-1-1+37": "mvm:1-1:37", "mvm-1-3+25": "mvm:1-3:25", "mvm-1-3+37": "mvm:1-3:37"}
-_SETS = {"p1": "0.46", "p3": "0.2,0.46,0.9", "p5": "0.15,0.3,0.46,0.7,1.0",
-         "p8": "0.1,0.2,0.3,0.46,0.6,0.8,1.0,1.4"}
+_SETS = {
+    "p1": "0.46",
+    "p3": "0.2,0.46,0.9",
+    "p5": "0.15,0.3,0.46,0.7,1.0",
+    "p8": "0.1,0.2,0.3,0.46,0.6,0.8,1.0,1.4",
+}
 for _tag, _r in _SETS.items():
     for _n in range(41):
         ALIASES[f"{_tag}+{_n}"] = f"interface:{_r}:{_n}"
@@ -63,17 +67,29 @@ def model_of(name: str):
         radii = [float(a) * MM for a in bits[1].split(",") if a.strip()]
         choice = bits[3] if len(bits) == 4 else "participation"
         return fm.interface(radii, int(bits[2]), mode_choice=choice)
-    raise SystemExit(f"unknown model {name!r}: expected one of the aliases, 'mvm:I-J:M' or "
-                     "'interface:R1,R2,...(mm):MODES[:frequency]'")
+    raise SystemExit(
+        f"unknown model {name!r}: expected one of the aliases, 'mvm:I-J:M' or "
+        "'interface:R1,R2,...(mm):MODES[:frequency]'"
+    )
 
 
 def _commit() -> str:
     """HEAD at the start of this process (the code it runs), '-dirty' if src/ has changes."""
     try:
-        head = subprocess.run(["git", "rev-parse", "--short", "HEAD"], cwd=ROOT, text=True,
-                              capture_output=True, check=True).stdout.strip()
-        dirty = subprocess.run(["git", "status", "--porcelain", "src"], cwd=ROOT, text=True,
-                               capture_output=True, check=True).stdout.strip()
+        head = subprocess.run(
+            ["git", "rev-parse", "--short", "HEAD"],
+            cwd=ROOT,
+            text=True,
+            capture_output=True,
+            check=True,
+        ).stdout.strip()
+        dirty = subprocess.run(
+            ["git", "status", "--porcelain", "src"],
+            cwd=ROOT,
+            text=True,
+            capture_output=True,
+            check=True,
+        ).stdout.strip()
         return head + ("-dirty" if dirty else "")
     except (OSError, subprocess.CalledProcessError):
         return "unknown"
@@ -94,15 +110,24 @@ def main() -> None:
     ap.add_argument("--dt", type=float, default=1e-6)
     ap.add_argument("--other", default="mvm:3-5:40")
     ap.add_argument("--scenario", type=Path, default=SEED)
-    ap.add_argument("--figure", type=Path, default=None,
-                    help="write the NCC-DOF front figure here (interface rows of DIR/front.json "
-                         "beside the node selections of --nodes)")
-    ap.add_argument("--nodes", type=Path, default=ROOT / "docs" / "studies" / "selection" / "ncc.csv",
-                    help="ncc.csv of the 140-run selection study at the same settings")
+    ap.add_argument(
+        "--figure",
+        type=Path,
+        default=None,
+        help="write the NCC-DOF front figure here (interface rows of DIR/front.json "
+        "beside the node selections of --nodes)",
+    )
+    ap.add_argument(
+        "--nodes",
+        type=Path,
+        default=ROOT / "docs" / "studies" / "selection" / "ncc.csv",
+        help="ncc.csv of the 140-run selection study at the same settings",
+    )
     args = ap.parse_args()
     models = {name: model_of(name) for name in args.models}
-    sc = study_scenario(fm.load_scenario(args.scenario), "b2", t_end_s=args.t_end,
-                        dt_s=args.dt, other=args.other)
+    sc = study_scenario(
+        fm.load_scenario(args.scenario), "b2", t_end_s=args.t_end, dt_s=args.dt, other=args.other
+    )
     args.out.mkdir(parents=True, exist_ok=True)
     hist, fresh = reference_history(sc, "b2", args.out, progress=False)
     print(f"reference {hist} ({'computed' if fresh else 'stored'})", flush=True)
@@ -123,8 +148,12 @@ def main() -> None:
         run = run_scenario(sc.with_model("b2", model))
         info = next(b for b in run.built.info if b.name == "b2")
         cmp = compare_runs(t_ref, f_ref, probes_ref, *run.result.curves())
-        row = {"model": model.label, "dof": info.dof - 6, "commit": commit,
-               "wall_time_s": round(time.perf_counter() - t0, 1)} | current
+        row = {
+            "model": model.label,
+            "dof": info.dof - 6,
+            "commit": commit,
+            "wall_time_s": round(time.perf_counter() - t0, 1),
+        } | current
         row |= {k: v for k, v in cmp.items() if isinstance(v, float)}
         guard = run.summary.get("reduced_contact_guard")
         if guard is not None:
@@ -132,8 +161,19 @@ def main() -> None:
         rows[name] = row
         store.write_text(json.dumps(rows, indent=1))
         print(name, json.dumps(row), flush=True)
-    keys = ["name", "model", "dof", "ncc_force", "peak_err", "impulse_err", "duration_err",
-            "ncc_b2_impact_end", "ncc_b2_free_end", "wall_time_s", "commit"]
+    keys = [
+        "name",
+        "model",
+        "dof",
+        "ncc_force",
+        "peak_err",
+        "impulse_err",
+        "duration_err",
+        "ncc_b2_impact_end",
+        "ncc_b2_free_end",
+        "wall_time_s",
+        "commit",
+    ]
     with open(args.out / "front.csv", "w", newline="") as fh:
         w = csv.DictWriter(fh, keys, extrasaction="ignore")
         w.writeheader()
@@ -142,28 +182,41 @@ def main() -> None:
     if args.figure is not None:
         _figure(args.figure, rows, args.nodes)
     for name, row in sorted(rows.items(), key=lambda kv: (kv[1]["dof"], kv[0])):
-        print(f"{name:14s} {row['dof']:4d}  NCC {row.get('ncc_force', float('nan')):.4f}  "
-              f"peak {100 * row.get('peak_err', float('nan')):+.2f} %  "
-              f"impact end {row.get('ncc_b2_impact_end', float('nan')):.4f}  "
-              f"free end {row.get('ncc_b2_free_end', float('nan')):.4f}")
+        print(
+            f"{name:14s} {row['dof']:4d}  NCC {row.get('ncc_force', float('nan')):.4f}  "
+            f"peak {100 * row.get('peak_err', float('nan')):+.2f} %  "
+            f"impact end {row.get('ncc_b2_impact_end', float('nan')):.4f}  "
+            f"free end {row.get('ncc_b2_free_end', float('nan')):.4f}"
+        )
 
 
 def _figure(path: Path, rows: dict, nodes_csv: Path) -> None:
     from flexmvm.plots.study_figures import plot_ncc_dof_fronts
 
     with open(nodes_csv, newline="") as fh:
-        nodes = [(int(r["dof"]), float(r["ncc_force"])) for r in csv.DictReader(fh)
-                 if r.get("ncc_force")]
-    kinds = {"node selections (mvm, Craig-Bampton)": nodes,
-             "interface, modes by participation": [
-                 (r["dof"], r["ncc_force"]) for r in rows.values()
-                 if r["model"].startswith("interface") and "frequency" not in r["model"]],
-             "interface, modes by frequency": [
-                 (r["dof"], r["ncc_force"]) for r in rows.values()
-                 if r["model"].startswith("interface") and "frequency" in r["model"]]}
+        nodes = [
+            (int(r["dof"]), float(r["ncc_force"])) for r in csv.DictReader(fh) if r.get("ncc_force")
+        ]
+    kinds = {
+        "node selections (mvm, Craig-Bampton)": nodes,
+        "interface, modes by participation": [
+            (r["dof"], r["ncc_force"])
+            for r in rows.values()
+            if r["model"].startswith("interface") and "frequency" not in r["model"]
+        ],
+        "interface, modes by frequency": [
+            (r["dof"], r["ncc_force"])
+            for r in rows.values()
+            if r["model"].startswith("interface") and "frequency" in r["model"]
+        ],
+    }
     path.parent.mkdir(parents=True, exist_ok=True)
-    plot_ncc_dof_fronts(path, kinds, target=0.995,
-                        title="seed case, b2: force NCC against b2 full FE (0.8 ms, 1 us)")
+    plot_ncc_dof_fronts(
+        path,
+        kinds,
+        target=0.995,
+        title="seed case, b2: force NCC against b2 full FE (0.8 ms, 1 us)",
+    )
     print(f"wrote {path}")
 
 

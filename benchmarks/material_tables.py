@@ -6,6 +6,7 @@ Reads materials.csv, materials.json and <material>/reference/reference.json; pri
 references against the 1D theory, the force NCC per material, selection and mode count, the
 mean NCC per material and whether the seed's ordering W > Cu > Al > PA6 holds.
 """
+
 import csv
 import json
 import sys
@@ -26,21 +27,48 @@ for m in mats:
     s = json.loads((d / m / "reference" / "reference.json").read_text())["summary"]
     per = res["materials"][m]
     iv = s["contact_intervals_s"]
-    ivs = ", ".join(f"{a*1e6:.0f}..{b*1e6:.0f}" for a, b in iv)
+    ivs = ", ".join(f"{a * 1e6:.0f}..{b * 1e6:.0f}" for a, b in iv)
     tp, td = per.get("theory_peak_force_N"), per.get("theory_contact_duration_s")
-    print(f"| {m} | {s['max_contact_force_N']:.1f} N | {tp:.1f} N ({(s['max_contact_force_N']/tp-1)*100:+.1f} %) | {ivs} us | {td*1e6:.0f} us | {s['energy_rel_error']*100:+.2f} % | {s['wall_time_s']:.0f} s |")
-print("\n| material | selection | " + " | ".join(map(str, modes)) + f" | peak error at {modes[-1]} | mean wall per run |")
+    print(
+        f"| {m} | {s['max_contact_force_N']:.1f} N | {tp:.1f} N ({(s['max_contact_force_N'] / tp - 1) * 100:+.1f} %) | {ivs} us | {td * 1e6:.0f} us | {s['energy_rel_error'] * 100:+.2f} % | {s['wall_time_s']:.0f} s |"
+    )
+print(
+    "\n| material | selection | "
+    + " | ".join(map(str, modes))
+    + f" | peak error at {modes[-1]} | mean wall per run |"
+)
 print("|---|---|" + "---|" * (len(modes) + 2))
 for m in mats:
     for sel in sels:
         rs = {int(r["modes"]): r for r in rows if r["material"] == m and r["selection"] == sel}
-        cells = [f"{float(rs[n]['ncc_force']):.4f}" if rs.get(n) and rs[n]["ncc_force"] else "failed" for n in modes]
+        cells = [
+            f"{float(rs[n]['ncc_force']):.4f}" if rs.get(n) and rs[n]["ncc_force"] else "failed"
+            for n in modes
+        ]
         last = rs.get(modes[-1])
-        pe = f"{float(last['peak_err'])*100:+.1f} %" if last and last["peak_err"] else "-"
+        pe = f"{float(last['peak_err']) * 100:+.1f} %" if last and last["peak_err"] else "-"
         w = [float(r["wall_time_s"]) for r in rs.values() if r["wall_time_s"]]
-        print(f"| {m} | {sel} | " + " | ".join(cells) + f" | {pe} | {sum(w)/len(w):.1f} s |")
-print("\nmean NCC: " + ", ".join(f"{m} {res['materials'][m]['mean_ncc_force']:.4f} ({res['materials'][m]['n_cases']} runs)" if res['materials'][m]['mean_ncc_force'] is not None else f"{m} none" for m in mats))
-print("seed ordering holds:", res["seed_ordering_holds"], "observed:", " > ".join(res["observed_order"]))
-print("theory radius mm:", {m: round(res["materials"][m]["theory_contact_radius_m"]*1e3, 3) for m in mats}, "selection radius:", res["selection_radius_m"])
+        print(f"| {m} | {sel} | " + " | ".join(cells) + f" | {pe} | {sum(w) / len(w):.1f} s |")
+print(
+    "\nmean NCC: "
+    + ", ".join(
+        f"{m} {res['materials'][m]['mean_ncc_force']:.4f} ({res['materials'][m]['n_cases']} runs)"
+        if res["materials"][m]["mean_ncc_force"] is not None
+        else f"{m} none"
+        for m in mats
+    )
+)
+print(
+    "seed ordering holds:",
+    res["seed_ordering_holds"],
+    "observed:",
+    " > ".join(res["observed_order"]),
+)
+print(
+    "theory radius mm:",
+    {m: round(res["materials"][m]["theory_contact_radius_m"] * 1e3, 3) for m in mats},
+    "selection radius:",
+    res["selection_radius_m"],
+)
 w = [float(r["wall_time_s"]) for r in rows if r["wall_time_s"]]
 print(f"runs {len(rows)}, sum wall {sum(w):.0f} s")

@@ -46,8 +46,12 @@ LAWS = [("velocity", None), ("velocity", 0.0), ("position", None)]
 
 def _commit() -> str:
     try:
-        return subprocess.run(["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
-                              capture_output=True, text=True, check=True).stdout.strip()
+        return subprocess.run(
+            ["git", "-C", str(ROOT), "rev-parse", "--short", "HEAD"],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
     except (OSError, subprocess.CalledProcessError):
         return "unknown"
 
@@ -95,24 +99,34 @@ def row_masses() -> dict:
 def main(out: Path, quick: bool) -> None:
     warnings.simplefilter("ignore")
     masses = row_masses()
-    sc = study_scenario(load_scenario(ROOT / "scenarios" / "rod_impact.toml"), "b2",
-                        t_end_s=2e-3, dt_s=1e-6, other="mvm:3-5:40")
+    sc = study_scenario(
+        load_scenario(ROOT / "scenarios" / "rod_impact.toml"),
+        "b2",
+        t_end_s=2e-3,
+        dt_s=1e-6,
+        other="mvm:3-5:40",
+    )
     sc = material_scenario(sc, "b2", "PA6", PA6)
     t0 = time.perf_counter()
     hist, made = reference_history(sc, "b2", out)
-    print(f"reference {'computed' if made else 'loaded'} ({time.perf_counter() - t0:.0f} s): {hist}")
+    print(
+        f"reference {'computed' if made else 'loaded'} ({time.perf_counter() - t0:.0f} s): {hist}"
+    )
     ref = read_history(hist)
     ref_steps = json.loads((hist.parent / "reference.json").read_text())["summary"]
     rows = []
     models = [("1-3", 43), ("1-4", 43)] if quick else MODELS
     laws = LAWS[:2] if quick else LAWS
-    print(f"{'b2 model':>10} {'law':>13} {'NCC':>8} {'peak':>8} {'intervals':>9} "
-          f"{'pen. um':>8} {'energy':>8} {'guard':>6}")
+    print(
+        f"{'b2 model':>10} {'law':>13} {'NCC':>8} {'peak':>8} {'intervals':>9} "
+        f"{'pen. um':>8} {'energy':>8} {'guard':>6}"
+    )
     for sel, modes in models:
         for law, beta in laws:
             if sel.startswith("if"):
-                model = interface([float(sel[2:]) * 1e-3], modes,
-                                  reference=sc.body("b2").model.reference)
+                model = interface(
+                    [float(sel[2:]) * 1e-3], modes, reference=sc.body("b2").model.reference
+                )
                 s2 = sc.with_model("b2", model)
             else:
                 i, j = map(int, sel.split("-"))
@@ -125,28 +139,42 @@ def main(out: Path, quick: bool) -> None:
             s = run.summary
             cmp = compare_runs(*ref, *run.result.curves())
             guard = s["reduced_contact_guard"].get("b2")
-            row = {"b2": f"{sel}+{modes}", "law": law,
-                   "penetration_recovery": 0.2 if (law == "velocity" and beta is None) else beta,
-                   "ncc_force": cmp["ncc_force"], "peak_err": cmp["peak_err"],
-                   "contact_intervals": len(run.result.contact_intervals),
-                   "max_penetration_m": s["max_penetration_m"],
-                   "energy_rel_error_max": s["energy_rel_error_max"],
-                   "guard_outside_fraction": None if guard is None
-                   else guard["impulse_fraction_outside"],
-                   "wall_time_s": s["wall_time_s"]}
+            row = {
+                "b2": f"{sel}+{modes}",
+                "law": law,
+                "penetration_recovery": 0.2 if (law == "velocity" and beta is None) else beta,
+                "ncc_force": cmp["ncc_force"],
+                "peak_err": cmp["peak_err"],
+                "contact_intervals": len(run.result.contact_intervals),
+                "max_penetration_m": s["max_penetration_m"],
+                "energy_rel_error_max": s["energy_rel_error_max"],
+                "guard_outside_fraction": None
+                if guard is None
+                else guard["impulse_fraction_outside"],
+                "wall_time_s": s["wall_time_s"],
+            }
             rows.append(row)
             lab = law if law == "position" else f"velocity b{row['penetration_recovery']:g}"
             g = row["guard_outside_fraction"]
-            print(f"{row['b2']:>10} {lab:>13} {row['ncc_force']:8.4f} {row['peak_err']:+8.3f} "
-                  f"{row['contact_intervals']:9d} {1e6 * row['max_penetration_m']:8.2f} "
-                  f"{row['energy_rel_error_max']:8.4f} {'-' if g is None else f'{g:.2f}':>6}",
-                  flush=True)
-    write_json_atomic(out / "pa6_chatter.json", {
-        "commit": _commit(), "row_mass_kg": masses, "reference": {
-            "peak_N": float(ref[1].max()),
-            "max_penetration_m": ref_steps.get("max_penetration_m"),
-            "energy_rel_error_max": ref_steps.get("energy_rel_error_max")},
-        "rows": rows})
+            print(
+                f"{row['b2']:>10} {lab:>13} {row['ncc_force']:8.4f} {row['peak_err']:+8.3f} "
+                f"{row['contact_intervals']:9d} {1e6 * row['max_penetration_m']:8.2f} "
+                f"{row['energy_rel_error_max']:8.4f} {'-' if g is None else f'{g:.2f}':>6}",
+                flush=True,
+            )
+    write_json_atomic(
+        out / "pa6_chatter.json",
+        {
+            "commit": _commit(),
+            "row_mass_kg": masses,
+            "reference": {
+                "peak_N": float(ref[1].max()),
+                "max_penetration_m": ref_steps.get("max_penetration_m"),
+                "energy_rel_error_max": ref_steps.get("energy_rel_error_max"),
+            },
+            "rows": rows,
+        },
+    )
     print(f"wrote {out / 'pa6_chatter.json'}")
 
 

@@ -46,13 +46,18 @@ def _model(text: str, reference: str) -> ModelConfig:
 def _row(label: str, run, ref_curves, theory) -> dict:
     s = run.summary
     curves = run.result.curves()
-    row = {"model": label, "dof": s["dof"], "max_contact_force_N": s["max_contact_force_N"],
-           "contact_intervals_s": s["contact_intervals_s"],
-           "max_penetration_m": s["max_penetration_m"],
-           "max_penetration_at": s["max_penetration_at"],
-           "max_penetration_by_direction_m": s["max_penetration_by_direction_m"],
-           "energy_rel_error": s["energy_rel_error"], "wall_time_s": s["wall_time_s"],
-           "n_steps": s["n_steps"]}
+    row = {
+        "model": label,
+        "dof": s["dof"],
+        "max_contact_force_N": s["max_contact_force_N"],
+        "contact_intervals_s": s["contact_intervals_s"],
+        "max_penetration_m": s["max_penetration_m"],
+        "max_penetration_at": s["max_penetration_at"],
+        "max_penetration_by_direction_m": s["max_penetration_by_direction_m"],
+        "energy_rel_error": s["energy_rel_error"],
+        "wall_time_s": s["wall_time_s"],
+        "n_steps": s["n_steps"],
+    }
     if ref_curves is not None:
         row["vs_full"] = compare_runs(*ref_curves, *curves)
     if theory is not None:
@@ -69,11 +74,13 @@ def _fmt(row: dict, body: str) -> str:
         return f"{100 * d[k]:+7.2f} %" if k in d else "      -  "
 
     ncc = f"{v['ncc_force']:.4f}" if "ncc_force" in v else "     - "
-    return (f"{row['model']:22s} {row['dof'][body]:6d} {ncc:>7s} {pct(v, 'peak_err')} "
-            f"{pct(v, 'impulse_err')} {pct(v, 'duration_err')} {row['max_contact_force_N']:8.1f} "
-            f"{end:7.1f} {1e6 * row['max_penetration_m']:8.3f} "
-            f"{t.get('ncc_force', float('nan')):7.4f} {pct(t, 'peak_err')} {pct(t, 'duration_err')} "
-            f"{row['wall_time_s']:6.1f}")
+    return (
+        f"{row['model']:22s} {row['dof'][body]:6d} {ncc:>7s} {pct(v, 'peak_err')} "
+        f"{pct(v, 'impulse_err')} {pct(v, 'duration_err')} {row['max_contact_force_N']:8.1f} "
+        f"{end:7.1f} {1e6 * row['max_penetration_m']:8.3f} "
+        f"{t.get('ncc_force', float('nan')):7.4f} {pct(t, 'peak_err')} {pct(t, 'duration_err')} "
+        f"{row['wall_time_s']:6.1f}"
+    )
 
 
 def main() -> None:
@@ -91,8 +98,9 @@ def main() -> None:
     ap.add_argument("--json", type=Path, default=None)
     args = ap.parse_args()
 
-    base = study_scenario(load_scenario(args.scenario), args.body, t_end_s=args.t_end,
-                          dt_s=args.dt, other=args.other)
+    base = study_scenario(
+        load_scenario(args.scenario), args.body, t_end_s=args.t_end, dt_s=args.dt, other=args.other
+    )
     ref_set = base.body(args.body).model.reference
     models = [m for m in args.models.split(",") if m.strip()]
     for kind in [k for k in args.grid_kinds.split(",") if k.strip()]:
@@ -106,18 +114,26 @@ def main() -> None:
     except Exception as exc:  # noqa: BLE001 - report, go on without theory
         print(f"no theory comparison: {exc}")
         theory = None
-    commit = subprocess.run(["git", "-C", str(ROOT), "describe", "--always", "--dirty"],
-                            capture_output=True, text=True, check=False).stdout.strip()
+    commit = subprocess.run(
+        ["git", "-C", str(ROOT), "describe", "--always", "--dirty"],
+        capture_output=True,
+        text=True,
+        check=False,
+    ).stdout.strip()
     t0 = time.perf_counter()
     ref_sc = base.with_model(args.body, full(reference=ref_set))
     ref = run_scenario(ref_sc, label="full")
     ref_curves = ref.result.curves()
     rows = [_row("full", ref, None, theory)]
-    head = (f"{'model of ' + args.body:22s} {'DOF':>6s} {'NCC':>7s} {'peak':>9s} {'impulse':>9s} "
-            f"{'duration':>9s} {'F_max N':>8s} {'end us':>7s} {'pen um':>8s} "
-            f"{'NCC th':>7s} {'peak th':>9s} {'dur th':>9s} {'wall s':>6s}")
-    print(f"{args.scenario.name}: t_end {base.time.t_end_s:g} s, dt {base.time.dt_s:g} s, "
-          f"other bodies: {args.other}; code {commit}")
+    head = (
+        f"{'model of ' + args.body:22s} {'DOF':>6s} {'NCC':>7s} {'peak':>9s} {'impulse':>9s} "
+        f"{'duration':>9s} {'F_max N':>8s} {'end us':>7s} {'pen um':>8s} "
+        f"{'NCC th':>7s} {'peak th':>9s} {'dur th':>9s} {'wall s':>6s}"
+    )
+    print(
+        f"{args.scenario.name}: t_end {base.time.t_end_s:g} s, dt {base.time.dt_s:g} s, "
+        f"other bodies: {args.other}; code {commit}"
+    )
     print(head)
     print(_fmt(rows[0], args.body), flush=True)
     for text in models:
@@ -125,9 +141,16 @@ def main() -> None:
         row = _row(text, run_scenario(sc, label=text), ref_curves, theory)
         rows.append(row)
         print(_fmt(row, args.body), flush=True)
-    out = {"scenario": str(args.scenario), "body": args.body, "t_end_s": base.time.t_end_s,
-           "dt_s": base.time.dt_s, "other": args.other, "commit": commit,
-           "wall_time_total_s": time.perf_counter() - t0, "rows": rows}
+    out = {
+        "scenario": str(args.scenario),
+        "body": args.body,
+        "t_end_s": base.time.t_end_s,
+        "dt_s": base.time.dt_s,
+        "other": args.other,
+        "commit": commit,
+        "wall_time_total_s": time.perf_counter() - t0,
+        "rows": rows,
+    }
     if args.json is not None:
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps(out, indent=1))

@@ -38,8 +38,10 @@ from flexmvm.scenarios import load_scenario
 from flexmvm.scenarios.setup import default_setup
 
 ROOT = Path(__file__).resolve().parents[1]
-MESHES = {"seed": ROOT / "scenarios" / "rod_impact_seed_mesh.toml",
-          "default": ROOT / "scenarios" / "rod_impact.toml"}
+MESHES = {
+    "seed": ROOT / "scenarios" / "rod_impact_seed_mesh.toml",
+    "default": ROOT / "scenarios" / "rod_impact.toml",
+}
 KINDS = (BasisKind.CRAIG_BAMPTON, BasisKind.SEED_BLOCK, BasisKind.SEED_FIXED)
 
 
@@ -49,13 +51,15 @@ def hertz_load(rod, a_m: float, n_min: int = 20) -> tuple[np.ndarray, float]:
     face (n >= 10 points per patch radius), scaled to 1 N exactly; returns (f, the total [N]
     the rule integrated before scaling: its quadrature error)."""
     mesh = rod.mesh
-    p0 = 3.0 / (2.0 * math.pi * a_m ** 2)
+    p0 = 3.0 / (2.0 * math.pi * a_m**2)
     f = np.zeros(3 * mesh.n_nodes)
     xi_nodes = np.array([-1, 1, 1, -1, 0, 1, 0, -1, 0], float)
     eta_nodes = np.array([-1, -1, 1, 1, -1, 0, 1, 0, 0], float)
 
     def lag(t, t_node):  # 1D quadratic Lagrange at -1, 0, 1 and its derivative
-        val = np.where(t_node < 0, t * (t - 1) / 2, np.where(t_node > 0, t * (t + 1) / 2, 1 - t * t))
+        val = np.where(
+            t_node < 0, t * (t - 1) / 2, np.where(t_node > 0, t * (t + 1) / 2, 1 - t * t)
+        )
         der = np.where(t_node < 0, t - 0.5, np.where(t_node > 0, t + 0.5, -2 * t))
         return val, der
 
@@ -74,7 +78,7 @@ def hertz_load(rod, a_m: float, n_min: int = 20) -> tuple[np.ndarray, float]:
         pts = shape @ yz
         jac = np.stack([(dx * ly) @ yz, (lx * dy) @ yz], axis=1)  # (npt, 2, 2)
         area = np.abs(np.linalg.det(jac)) * (2.0 / n) ** 2
-        r2 = (pts ** 2).sum(axis=1) / a_m ** 2
+        r2 = (pts**2).sum(axis=1) / a_m**2
         p = p0 * np.sqrt(np.clip(1 - r2, 0.0, None))
         fn = shape.T @ (p * area)
         np.add.at(f, 3 * face, fn)
@@ -110,18 +114,31 @@ def study(mesh_name: str, selections: list[tuple[int, int]], modes: int, a_m: fl
     point[3 * centre] = 1.0  # +x: into the rod (end A is at x = 0, the rod covers x > 0)
     hertz, total = hertz_load(rod, a_m)
     loads = {"point": point, "hertz": hertz}
-    area = math.pi * cfg.rod.radius_m ** 2
+    area = math.pi * cfg.rod.radius_m**2
     rod_1d = cfg.rod.length_m / (material.E * area)
-    out = {"mesh": mesh_name, "n_nodes": int(rod.mesh.n_nodes), "n_dof": int(fe.n_dof),
-           "rod_1d_compliance_m_per_N": rod_1d, "modes": modes, "hertz_radius_m": a_m,
-           "hertz_load_integrated_N": total, "rows": []}
+    out = {
+        "mesh": mesh_name,
+        "n_nodes": int(rod.mesh.n_nodes),
+        "n_dof": int(fe.n_dof),
+        "rod_1d_compliance_m_per_N": rod_1d,
+        "modes": modes,
+        "hertz_radius_m": a_m,
+        "hertz_load_integrated_N": total,
+        "rows": [],
+    }
     full = {}
     for name, f in loads.items():
         full[name] = float(f @ full_response(fe, ref, f))
-    out["rows"].append({"basis": "full", "selection": "-", "nq": int(ref.free_dofs(fe.n_dof).size),
-                        **{f"{k}_compliance_m_per_N": v for k, v in full.items()},
-                        **{f"{k}_local_m_per_N": v - rod_1d for k, v in full.items()},
-                        **{f"{k}_stiffness_vs_full": 1.0 for k in full}})
+    out["rows"].append(
+        {
+            "basis": "full",
+            "selection": "-",
+            "nq": int(ref.free_dofs(fe.n_dof).size),
+            **{f"{k}_compliance_m_per_N": v for k, v in full.items()},
+            **{f"{k}_local_m_per_N": v - rod_1d for k, v in full.items()},
+            **{f"{k}_stiffness_vs_full": 1.0 for k in full},
+        }
+    )
     for i, j in selections:
         nodes = rod.selection(i, j)
         for kind in KINDS:
@@ -152,15 +169,22 @@ def main() -> None:
     for name in names:
         r = study(name, sels, args.modes, args.hertz_radius)
         results.append(r)
-        print(f"b2 on the {name} mesh: {r['n_nodes']} nodes, {r['n_dof']} DOF; {args.modes} modes; "
-              f"L/(EA) = {r['rod_1d_compliance_m_per_N']:.4e} m/N; Hertz patch a = "
-              f"{1e3 * args.hertz_radius:.3f} mm (integrated load {r['hertz_load_integrated_N']:.4f} N)")
-        print(f"  {'basis':16s} {'sel':4s} {'nq':>6s} | point: {'C [m/N]':>11s} {'local':>11s} "
-              f"{'k/k_full':>8s} | Hertz: {'C [m/N]':>11s} {'local':>11s} {'k/k_full':>8s}")
+        print(
+            f"b2 on the {name} mesh: {r['n_nodes']} nodes, {r['n_dof']} DOF; {args.modes} modes; "
+            f"L/(EA) = {r['rod_1d_compliance_m_per_N']:.4e} m/N; Hertz patch a = "
+            f"{1e3 * args.hertz_radius:.3f} mm (integrated load {r['hertz_load_integrated_N']:.4f} N)"
+        )
+        print(
+            f"  {'basis':16s} {'sel':4s} {'nq':>6s} | point: {'C [m/N]':>11s} {'local':>11s} "
+            f"{'k/k_full':>8s} | Hertz: {'C [m/N]':>11s} {'local':>11s} {'k/k_full':>8s}"
+        )
         for row in r["rows"]:
-            cells = "".join(f" | {'point' if k == 'point' else 'Hertz'}: "
-                            f"{row[k + '_compliance_m_per_N']:11.4e} {row[k + '_local_m_per_N']:11.4e} "
-                            f"{row[k + '_stiffness_vs_full']:8.3f}" for k in ("point", "hertz"))
+            cells = "".join(
+                f" | {'point' if k == 'point' else 'Hertz'}: "
+                f"{row[k + '_compliance_m_per_N']:11.4e} {row[k + '_local_m_per_N']:11.4e} "
+                f"{row[k + '_stiffness_vs_full']:8.3f}"
+                for k in ("point", "hertz")
+            )
             print(f"  {row['basis']:16s} {row['selection']:4s} {row['nq']:6d}{cells}")
     if args.json is not None:
         args.json.write_text(json.dumps(results, indent=1))

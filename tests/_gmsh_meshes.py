@@ -38,8 +38,9 @@ def sphere(path: Path, radius: float, size: float, order: int = 1) -> Path:
     return path
 
 
-def box(path: Path, lx: float, ly: float, lz: float, fine: float, coarse: float,
-        order: int = 1) -> Path:
+def box(
+    path: Path, lx: float, ly: float, lz: float, fine: float, coarse: float, order: int = 1
+) -> Path:
     """A box centred on the origin, physical surfaces top (z = lz/2) and ends (x = +-lx/2),
     refined to `fine` within 2 `fine` of the top face's centre."""
     with _model("box", path, order) as gmsh:
@@ -48,10 +49,12 @@ def box(path: Path, lx: float, ly: float, lz: float, fine: float, coarse: float,
         faces = [s[1] for s in gmsh.model.getBoundary([(3, v)], oriented=False)]
         com = {f: gmsh.model.occ.getCenterOfMass(2, f) for f in faces}
         gmsh.model.addPhysicalGroup(3, [v], name="solid")
-        gmsh.model.addPhysicalGroup(2, [f for f in faces if abs(com[f][2] - lz / 2) < 1e-12],
-                                    name="top")
-        gmsh.model.addPhysicalGroup(2, [f for f in faces if abs(abs(com[f][0]) - lx / 2) < 1e-12],
-                                    name="ends")
+        gmsh.model.addPhysicalGroup(
+            2, [f for f in faces if abs(com[f][2] - lz / 2) < 1e-12], name="top"
+        )
+        gmsh.model.addPhysicalGroup(
+            2, [f for f in faces if abs(abs(com[f][0]) - lx / 2) < 1e-12], name="ends"
+        )
         p = gmsh.model.occ.addPoint(0, 0, lz / 2)
         gmsh.model.occ.synchronize()
         dist = gmsh.model.mesh.field.add("Distance")

@@ -12,6 +12,10 @@ from flexmvm.integrate import driver
 def simulate_recording(built, hook: Callable) -> object:
     """driver.simulate of a built scenario, calling hook(t, states, h, result) after each
     accepted step (states: those at t, result: the StepResult)."""
-    return driver.simulate(built.system, built.states, built.grid, built.probes,
-                           on_step=lambda step: hook(step.t_s, step.start, step.h_s,
-                                                     step.result))
+    return driver.simulate(
+        built.system,
+        built.states,
+        built.grid,
+        built.probes,
+        on_step=lambda step: hook(step.t_s, step.start, step.h_s, step.result),
+    )

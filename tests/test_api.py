@@ -20,10 +20,13 @@ TINY = ROOT / "tests" / "data" / "tiny_impact.toml"
 
 
 def test_import_is_lazy_and_every_name_resolves():
-    code = ("import sys, flexmvm; print(json.dumps(sorted(m for m in sys.modules "
-            "if m.startswith('flexmvm'))))")
-    out = subprocess.run([sys.executable, "-c", "import json; " + code], capture_output=True,
-                         text=True, check=True).stdout
+    code = (
+        "import sys, flexmvm; print(json.dumps(sorted(m for m in sys.modules "
+        "if m.startswith('flexmvm'))))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", "import json; " + code], capture_output=True, text=True, check=True
+    ).stdout
     assert json.loads(out) == ["flexmvm"]
     for name in fm.__all__:
         assert getattr(fm, name) is not None, name
@@ -35,14 +38,26 @@ def test_typed_copies_equal_the_edited_file():
     """with_model / with_time / with_material give the scenario the edited TOML dict gives."""
     sc = fm.load_scenario(SHORT)
     data = sc.model_dump(mode="json")
-    data["bodies"][1]["model"] = {"kind": "mvm", "selection": "2-3", "modes": 13,
-                                  "region": None, "reference": "end_b"}
-    data["bodies"][1]["material"] = {"E_pa": COPPER.E, "nu": COPPER.nu,
-                                     "rho_kg_m3": COPPER.rho, "name": COPPER.name}
+    data["bodies"][1]["model"] = {
+        "kind": "mvm",
+        "selection": "2-3",
+        "modes": 13,
+        "region": None,
+        "reference": "end_b",
+    }
+    data["bodies"][1]["material"] = {
+        "E_pa": COPPER.E,
+        "nu": COPPER.nu,
+        "rho_kg_m3": COPPER.rho,
+        "name": COPPER.name,
+    }
     data["time"] |= {"t_end_s": 1e-4, "dt_s": 1e-6, "dt_max_s": 2e-6}
     edited = fm.scenario_from_dict(data)
-    typed = (sc.with_model("b2", fm.mvm((2, 3), 13)).with_material("b2", COPPER)
-             .with_time(t_end_s=1e-4, dt_s=1e-6))
+    typed = (
+        sc.with_model("b2", fm.mvm((2, 3), 13))
+        .with_material("b2", COPPER)
+        .with_time(t_end_s=1e-4, dt_s=1e-6)
+    )
     assert typed.model_dump() == edited.model_dump()  # (== would also compare the sources)
     assert typed.source == str(SHORT)  # a copy keeps naming its file in later errors
 
@@ -53,21 +68,26 @@ def test_with_kind_keeps_selections_and_rigid_bodies():
     assert over.body("b1").model.kind is fm.ModelKind.RIGID
     b2 = over.body("b2").model
     assert (b2.kind, b2.selection, b2.modes) == (fm.ModelKind.MODAL, "1-3", 37)
-    assert [b.model.kind for b in sc.with_models(fm.full()).bodies] == [fm.ModelKind.RIGID,
-                                                                        fm.ModelKind.FULL]
+    assert [b.model.kind for b in sc.with_models(fm.full()).bodies] == [
+        fm.ModelKind.RIGID,
+        fm.ModelKind.FULL,
+    ]
 
 
-@pytest.mark.parametrize(("change", "words"), [
-    (lambda sc: sc.with_model("b3", fm.full()), "no body 'b3' (bodies: b1, b2)"),
-    (lambda sc: sc.with_model("b2", "mvm"), "received str, expected a ModelConfig"),
-    (lambda sc: sc.with_time(output_dt_s=1e-7), "time.output_dt_s: must be >= dt_s"),
-    (lambda sc: sc.with_time(dt_s=1e-3), "time.hf_damping_time_s: must be >= dt_s / 2"),
-    (lambda sc: sc.with_kind("fem"), "model kind 'fem'; expected one of full, mvm"),
-    (lambda sc: sc.with_material("b2", "unobtainium"), "unknown material preset"),
-    (lambda sc: sc.with_rod("b2", radius_m=-1.0), "bodies[1].rod.radius_m: must be > 0"),
-    (lambda sc: fm.mvm("1-3", 0), "modes: must be >= 1 for kind 'mvm'"),
-    (lambda sc: fm.mvm("0-3", 5), "must be 'i-j' (layers-laps, both >= 1)"),
-])
+@pytest.mark.parametrize(
+    ("change", "words"),
+    [
+        (lambda sc: sc.with_model("b3", fm.full()), "no body 'b3' (bodies: b1, b2)"),
+        (lambda sc: sc.with_model("b2", "mvm"), "received str, expected a ModelConfig"),
+        (lambda sc: sc.with_time(output_dt_s=1e-7), "time.output_dt_s: must be >= dt_s"),
+        (lambda sc: sc.with_time(dt_s=1e-3), "time.hf_damping_time_s: must be >= dt_s / 2"),
+        (lambda sc: sc.with_kind("fem"), "model kind 'fem'; expected one of full, mvm"),
+        (lambda sc: sc.with_material("b2", "unobtainium"), "unknown material preset"),
+        (lambda sc: sc.with_rod("b2", radius_m=-1.0), "bodies[1].rod.radius_m: must be > 0"),
+        (lambda sc: fm.mvm("1-3", 0), "modes: must be >= 1 for kind 'mvm'"),
+        (lambda sc: fm.mvm("0-3", 5), "must be 'i-j' (layers-laps, both >= 1)"),
+    ],
+)
 def test_bad_changes_are_one_line_scenario_errors(change, words):
     with pytest.raises(fm.ScenarioError) as info:
         change(fm.load_scenario(SHORT))
@@ -103,8 +123,9 @@ def test_run_accessors_and_step_history(tiny_run):
     assert len(steps.t_s) == run.result.n_steps == round(sc.time.t_end_s / sc.time.dt_s)
     assert steps.size_counts() == {sc.time.dt_s: run.result.n_steps}
     # one output per step: the output force is that step's impulse over its size
-    np.testing.assert_allclose(run.contact_force[1:], steps.contact_impulse_Ns / steps.h_s,
-                               rtol=1e-14)
+    np.testing.assert_allclose(
+        run.contact_force[1:], steps.contact_impulse_Ns / steps.h_s, rtol=1e-14
+    )
     assert run.dof("b2") == run.summary["dof"]["b2"]
     with pytest.raises(fm.InputError, match="no probe 'nope'"):
         run.probe("nope")
@@ -120,7 +141,7 @@ def test_compare_takes_runs_results_and_tuples(tiny_run):
     t, f, probes = run.curves()
     half = fm.compare((t, 0.5 * f, probes), run)
     assert half.ncc_force == pytest.approx(1.0, abs=1e-12)  # NCC is blind to scale ...
-    assert half.peak_err == pytest.approx(-0.5)              # ... the peak error is not
+    assert half.peak_err == pytest.approx(-0.5)  # ... the peak error is not
     assert half.as_dict()["peak_err"] == half.peak_err
     with pytest.raises(fm.InputError, match="received int"):
         fm.compare(run, 3)

@@ -34,19 +34,31 @@ from flexmvm.mesh import parts
 # reduced-cost guard's warning is expected here
 pytestmark = pytest.mark.filterwarnings("ignore::flexmvm.scenarios.cost.ReducedCostWarning")
 
-OMEGA = 2.0          # initial angular velocity [rad/s]
-ARM_X = 0.270        # struck point's distance from the pivot [m]
-GAP = 10e-6          # initial gap [m]
-T_END = 1.0e-4       # [s]: impact at ~18.5 us, separation at ~81 us
+OMEGA = 2.0  # initial angular velocity [rad/s]
+ARM_X = 0.270  # struck point's distance from the pivot [m]
+GAP = 10e-6  # initial gap [m]
+T_END = 1.0e-4  # [s]: impact at ~18.5 us, separation at ~81 us
 
 
 @pytest.fixture(scope="module")
 def meshes(tmp_path_factory):
     d = tmp_path_factory.mktemp("arm_stop")
-    arm = parts.arm(d / "arm.msh", 0.300, 0.020, 0.010, 0.015, 0.005, 0.010,
-                    refine=parts.Refinement((ARM_X, 0.010, 0.005), 1.0e-3, 2.0e-3, 10.0e-3))
-    stop = parts.sphere(d / "stop.msh", 0.010, 0.004,
-                        refine=parts.Refinement((0.0, 0.0, -0.010), 0.5e-3, 1.0e-3, 5.0e-3))
+    arm = parts.arm(
+        d / "arm.msh",
+        0.300,
+        0.020,
+        0.010,
+        0.015,
+        0.005,
+        0.010,
+        refine=parts.Refinement((ARM_X, 0.010, 0.005), 1.0e-3, 2.0e-3, 10.0e-3),
+    )
+    stop = parts.sphere(
+        d / "stop.msh",
+        0.010,
+        0.004,
+        refine=parts.Refinement((0.0, 0.0, -0.010), 0.5e-3, 1.0e-3, 5.0e-3),
+    )
     return arm, stop
 
 
@@ -54,20 +66,37 @@ def _data(meshes, model: dict) -> dict:
     arm, stop = meshes
     return {
         "name": "arm_stop_coarse",
-        "time": {"t_end_s": T_END, "dt_s": 1e-6, "dt_max_s": 2e-6, "output_dt_s": 1e-6,
-                 "hf_damping_time_s": 12.5e-6},
+        "time": {
+            "t_end_s": T_END,
+            "dt_s": 1e-6,
+            "dt_max_s": 2e-6,
+            "output_dt_s": 1e-6,
+            "hf_damping_time_s": 12.5e-6,
+        },
         "bodies": [
-            {"name": "arm", "mesh_file": str(arm), "material": "aluminium",
-             "model": {"reference": "hub", **model},
-             "placement": {"angular_velocity_radps": [0.0, 0.0, OMEGA]}},
-            {"name": "stop", "mesh_file": str(stop), "model": {"kind": "rigid"},
-             "material": {"E_pa": 210e9, "nu": 0.3, "rho_kg_m3": 7850.0},
-             # its refined -z pole turned to face -y, GAP beyond the arm's +y side
-             "placement": {"position_m": [ARM_X, 0.020 + GAP, 0.005],
-                           "rotation": {"axis": [1.0, 0.0, 0.0], "angle_deg": -90.0}}},
+            {
+                "name": "arm",
+                "mesh_file": str(arm),
+                "material": "aluminium",
+                "model": {"reference": "hub", **model},
+                "placement": {"angular_velocity_radps": [0.0, 0.0, OMEGA]},
+            },
+            {
+                "name": "stop",
+                "mesh_file": str(stop),
+                "model": {"kind": "rigid"},
+                "material": {"E_pa": 210e9, "nu": 0.3, "rho_kg_m3": 7850.0},
+                # its refined -z pole turned to face -y, GAP beyond the arm's +y side
+                "placement": {
+                    "position_m": [ARM_X, 0.020 + GAP, 0.005],
+                    "rotation": {"axis": [1.0, 0.0, 0.0], "angle_deg": -90.0},
+                },
+            },
         ],
-        "joints": [{"type": "revolute", "body": "arm", "node_set": "hub", "axis": [0, 0, 1]},
-                   {"type": "ground", "body": "stop"}],
+        "joints": [
+            {"type": "revolute", "body": "arm", "node_set": "hub", "axis": [0, 0, 1]},
+            {"type": "ground", "body": "stop"},
+        ],
         "contacts": [{"slave": "stop.front", "master": "arm.surface", "law": "position"}],
         "probes": [{"name": "tip", "body": "arm", "point_m": [0.300, -0.010, 0.0]}],
     }
@@ -77,8 +106,11 @@ def _scenario(meshes, model: dict):
     return fm.scenario_from_dict(_data(meshes, model))
 
 
-MVM = {"kind": "mvm", "modes": 30,
-       "region": {"ball": {"centre_m": [ARM_X, 0.010, 0.005], "radius_m": 2.5e-3}}}
+MVM = {
+    "kind": "mvm",
+    "modes": 30,
+    "region": {"ball": {"centre_m": [ARM_X, 0.010, 0.005], "radius_m": 2.5e-3}},
+}
 
 
 @pytest.fixture(scope="module")
@@ -106,7 +138,7 @@ def test_arm_swings_into_the_stop_and_rebounds(runs, which):
     s = run.summary
     assert s["status"] == "completed"
     assert s["steps_not_converged"] == 0 and s["step_cuts"] == 0
-    (t_on, t_off), = s["contact_intervals_s"]
+    ((t_on, t_off),) = s["contact_intervals_s"]
     assert GAP / (OMEGA * ARM_X) - 2e-6 <= t_on <= GAP / (OMEGA * ARM_X) + 2e-6
     assert t_off < T_END - 5e-6
     L = _pivot_angular_momentum(run)
@@ -183,12 +215,17 @@ def test_frame_block_is_the_mass_matrix_of_its_configuration(runs):
     assert np.linalg.eigvalsh(0.5 * (schur + schur.T)).min() > 0.0
 
 
-@pytest.mark.parametrize(("joint", "message"), [
-    ({"type": "distance", "node_set": "hub", "ground_m": [0, 0, 0]}, "node_set: not used"),
-    ({"type": "revolute", "node_set": "hub", "point_m": [0, 0, 0], "axis": [0, 0, 1]},
-     "point_m: not used"),
-    ({"type": "revolute", "node_set": "nowhere", "axis": [0, 0, 1]}, "nowhere"),
-])
+@pytest.mark.parametrize(
+    ("joint", "message"),
+    [
+        ({"type": "distance", "node_set": "hub", "ground_m": [0, 0, 0]}, "node_set: not used"),
+        (
+            {"type": "revolute", "node_set": "hub", "point_m": [0, 0, 0], "axis": [0, 0, 1]},
+            "point_m: not used",
+        ),
+        ({"type": "revolute", "node_set": "nowhere", "axis": [0, 0, 1]}, "nowhere"),
+    ],
+)
 def test_node_set_joint_errors_are_one_line(meshes, joint, message):
     """node_set stands for point_m on fixed, spherical and revolute joints only, never
     beside it, and names a set the body has: each a one-line error naming the key."""

@@ -18,8 +18,11 @@ SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
 def _reference_nodes(body) -> np.ndarray:
     """The nodes of a full-FE body's reference condition: its basis has zero rows there."""
     psi = body.psi.tocsr() if hasattr(body.psi, "tocsr") else np.asarray(body.psi)
-    rows = np.flatnonzero(np.diff(psi.indptr) == 0) if hasattr(psi, "indptr") \
+    rows = (
+        np.flatnonzero(np.diff(psi.indptr) == 0)
+        if hasattr(psi, "indptr")
         else np.flatnonzero(~np.any(psi, axis=1))
+    )
     assert len(rows) == 6
     return np.unique(rows // 3)
 
@@ -72,8 +75,11 @@ def test_unknown_contact_surface_of_auto_reference_is_one_line():
     """An automatic reference needs its body's contact surfaces: a contact on a surface the
     mesh lacks is one InputError line naming the body's key and the known surfaces."""
     sc = scenario_from_dict(_beam_scenario("nowhere"), source="s", base_dir=SCENARIOS)
-    with pytest.raises(InputError, match=r"bodies\[beam\]\.model\.reference: unknown surface "
-                                         r"'nowhere'; known: .*mid_top") as info:
+    with pytest.raises(
+        InputError,
+        match=r"bodies\[beam\]\.model\.reference: unknown surface "
+        r"'nowhere'; known: .*mid_top",
+    ) as info:
         build_scenario(sc)
     assert "\n" not in str(info.value)
 

@@ -61,7 +61,9 @@ def test_invariants_match_nodal_sums(sparse):
     v = rng.normal(size=body.nv)
     T, Q, p, h = _nodal(body, X, Ms, psi, r, A, q, v)
     assert body.kinetic_energy(A, q, v) == pytest.approx(T, rel=1e-10)
-    np.testing.assert_allclose(body.velocity_forces(A, q, v), Q, rtol=1e-10, atol=1e-10 * abs(Q).max())
+    np.testing.assert_allclose(
+        body.velocity_forces(A, q, v), Q, rtol=1e-10, atol=1e-10 * abs(Q).max()
+    )
     np.testing.assert_allclose(body.linear_momentum(A, q, v), p, rtol=1e-10)
     np.testing.assert_allclose(body.angular_momentum(r, A, q, v), h, rtol=1e-10)
 
@@ -98,10 +100,14 @@ def _definition(X, Ms, psi):
     M = Ms.toarray()
     P = [np.asarray(psi[a::3, :].todense() if sp.issparse(psi) else psi[a::3, :]) for a in range(3)]
     one = np.ones(len(X))
-    return {"mass": one @ M @ one, "S0": one @ M @ X, "G0": X.T @ M @ X,
-            "S1": np.array([one @ M @ P[a] for a in range(3)]),
-            "G1": [[X[:, a] @ M @ P[b] for b in range(3)] for a in range(3)],
-            "G2": [[P[a].T @ M @ P[b] for b in range(3)] for a in range(3)]}
+    return {
+        "mass": one @ M @ one,
+        "S0": one @ M @ X,
+        "G0": X.T @ M @ X,
+        "S1": np.array([one @ M @ P[a] for a in range(3)]),
+        "G1": [[X[:, a] @ M @ P[b] for b in range(3)] for a in range(3)],
+        "G2": [[P[a].T @ M @ P[b] for b in range(3)] for a in range(3)],
+    }
 
 
 def _dense(a):
@@ -186,8 +192,9 @@ def test_packed_g2_contraction_equals_the_nine_products(nq):
     for a in range(3):
         for b in range(3):
             want = G2[b][a] @ x
-            np.testing.assert_allclose(got[a, b], want, rtol=0,
-                                       atol=1e-13 * max(np.abs(want).max(), 1.0))
+            np.testing.assert_allclose(
+                got[a, b], want, rtol=0, atol=1e-13 * max(np.abs(want).max(), 1.0)
+            )
     # in two parts on two threads: the same arithmetic, bit for bit
     with ThreadPoolExecutor(1) as pool:
         np.testing.assert_array_equal(packed(x, pool), got)
@@ -207,14 +214,14 @@ def test_mass_times_is_the_trace_of_the_contraction(sparse):
         X = rng.normal(size=(n, 3))
         B = sp.random(n, n, density=0.05, random_state=4)
         Ms = sp.csr_matrix(B @ B.T + sp.eye(n))
-        bodies.append(FlexibleBody.build("wide", X, Ms, rng.normal(size=(3 * n, 320)),
-                                         np.eye(320)))
+        bodies.append(FlexibleBody.build("wide", X, Ms, rng.normal(size=(3 * n, 320)), np.eye(320)))
     for b in bodies:
         x = np.random.default_rng(b.nq).standard_normal(b.nq)
         L = b.contractions(x)
         want = b.inv.M_qq @ x
-        np.testing.assert_allclose(L[0, 0] + L[1, 1] + L[2, 2], want, rtol=0,
-                                   atol=1e-13 * np.abs(want).max())
+        np.testing.assert_allclose(
+            L[0, 0] + L[1, 1] + L[2, 2], want, rtol=0, atol=1e-13 * np.abs(want).max()
+        )
 
 
 def test_expm_so3_against_the_matrix_exponential():

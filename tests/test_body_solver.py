@@ -62,8 +62,15 @@ def test_solve_nodal_equals_bordered_solve(sparse):
     body, rng = _body(sparse)
     solver = BodySolver(body, theta=0.55)
     h = 1e-3
-    solver.prepare(h, np.eye(3), body.frame_mass(np.eye(3), body.first_moment(np.zeros(body.nq)),
-                                                  body.frame_inertia_first_order(np.zeros(body.nq))))
+    solver.prepare(
+        h,
+        np.eye(3),
+        body.frame_mass(
+            np.eye(3),
+            body.first_moment(np.zeros(body.nq)),
+            body.frame_inertia_first_order(np.zeros(body.nq)),
+        ),
+    )
     n = len(body.X)
     N = _selector(rng, 5, n, np.arange(n))
     bf = rng.normal(size=(5, 6))
@@ -84,8 +91,9 @@ def test_solve_frame_equals_bordered_solve_of_frame_rows(sparse):
     h = 1e-3
     A = np.linalg.qr(rng.normal(size=(3, 3)))[0]
     q = 1e-3 * rng.normal(size=body.nq)
-    solver.prepare(h, A, body.frame_mass(A, body.first_moment(q),
-                                         body.frame_inertia_first_order(q)))
+    solver.prepare(
+        h, A, body.frame_mass(A, body.first_moment(q), body.frame_inertia_first_order(q))
+    )
     bf = rng.normal(size=6)
     got = solver.solve_frame(bf)
     want = solver.solve(np.concatenate([bf, np.zeros(body.nq)]))
@@ -99,6 +107,7 @@ def test_schur_complement_follows_a_kept_coupling_to_first_order(sparse):
     error is second order (here relative drift 1e-5: the error must fall by more than 1e3
     against the stale complement; measured 1.9e4 and 5.0e4 on these bodies)."""
     from flexmvm.integrate.dense_solve import lu_solve
+
     body, rng = _body(sparse)
     h = 1e-3
     A = np.linalg.qr(rng.normal(size=(3, 3)))[0]
@@ -106,7 +115,7 @@ def test_schur_complement_follows_a_kept_coupling_to_first_order(sparse):
     Mff = body.frame_mass(A, body.first_moment(q), body.frame_inertia_first_order(q))
     Mw0 = body.rotational_coupling(np.zeros(body.nq))
     Mw = Mw0 + 1e-5 * np.linalg.norm(Mw0) * rng.normal(size=Mw0.shape) / np.sqrt(Mw0.size)
-    Wqq = (body.inv.M_qq + (0.55 * h) ** 2 * body.k_hat)
+    Wqq = body.inv.M_qq + (0.55 * h) ** 2 * body.k_hat
     Wqq = Wqq.toarray() if sp.issparse(Wqq) else np.asarray(Wqq)
     B = np.vstack([A @ np.asarray(body.inv.S1), Mw])
     S_exact = Mff - B @ np.linalg.solve(Wqq, B.T)
@@ -116,10 +125,10 @@ def test_schur_complement_follows_a_kept_coupling_to_first_order(sparse):
         return np.abs(S_inv @ S_exact - np.eye(6)).max()
 
     kept = BodySolver(body, theta=0.55)
-    kept.refresh_coupling(h, Mw, tol=1e-3)      # kept: drift 1e-5 < 1e-3
+    kept.refresh_coupling(h, Mw, tol=1e-3)  # kept: drift 1e-5 < 1e-3
     assert kept.n_coupling_updates == 0
     kept.prepare(h, A, Mff)
-    stale = BodySolver(body, theta=0.55)         # the complement with M_wq(0), uncorrected
+    stale = BodySolver(body, theta=0.55)  # the complement with M_wq(0), uncorrected
     stale.prepare(h, A, Mff)
     assert schur_error(kept) < 1e-3 * schur_error(stale)
 
@@ -139,17 +148,21 @@ def test_elastic_rows_of_a_solve_are_known(sparse):
     for drift in (0.0, 1e-5, 1e-2):
         q = drift * rng.normal(size=body.nq)
         solver.refresh_coupling(h, body.rotational_coupling(q), 1e-4)
-        solver.prepare(h, A, body.frame_mass(A, body.first_moment(q),
-                                             body.frame_inertia_first_order(q)))
+        solver.prepare(
+            h, A, body.frame_mass(A, body.first_moment(q), body.frame_inertia_first_order(q))
+        )
         b = rng.normal(size=body.nv)
         N = _selector(rng, 4, n, np.arange(n))
         bf = rng.normal(size=(4, 6))
         lam = rng.normal(size=4)
-        cases = [(b, solver.solve(b)),
-                 (np.concatenate([b[:6], np.zeros(body.nq)]), solver.solve_frame(b[:6]))]
+        cases = [
+            (b, solver.solve(b)),
+            (np.concatenate([b[:6], np.zeros(body.nq)]), solver.solve_frame(b[:6])),
+        ]
         rows_q = np.asarray(N @ body.psi.toarray() if sparse else N @ body.psi)
-        cases.append((np.concatenate([bf.T @ lam, rows_q.T @ lam]),
-                      solver.solve_nodal(h, bf, N) @ lam))
+        cases.append(
+            (np.concatenate([bf.T @ lam, rows_q.T @ lam]), solver.solve_nodal(h, bf, N) @ lam)
+        )
         for rhs, x in cases:
             got = Wqq @ x[6:]
             want = rhs[6:] - solver.coupling_transpose(x[:6])
@@ -176,8 +189,13 @@ def test_a_deferred_refresh_solves_as_an_immediate_one(sparse):
     b, b2, xf = (rng.normal(size=body.nv), rng.normal(size=body.nv), rng.normal(size=6))
 
     def uses(solver, first):
-        out = [first(solver), solver.solve(b2), solver.solve_frame(b2[:6]),
-               solver.solve_nodal(h, bf, N), solver.coupling_transpose(xf)]
+        out = [
+            first(solver),
+            solver.solve(b2),
+            solver.solve_frame(b2[:6]),
+            solver.solve_nodal(h, bf, N),
+            solver.coupling_transpose(xf),
+        ]
         assert solver.n_coupling_updates == 1 and solver._pending is None
         return out
 
@@ -189,9 +207,12 @@ def test_a_deferred_refresh_solves_as_an_immediate_one(sparse):
         return solver
 
     want = uses(made(False), lambda s: s.solve(b))
-    for first in (lambda s: s.solve(b), lambda s: s.solve(np.column_stack([b, b2]))[:, 0],
-                  lambda s: (s.solve_frame(b[:6]), s.solve(b))[1],
-                  lambda s: (s.coupling_transpose(xf), s.solve(b))[1]):
+    for first in (
+        lambda s: s.solve(b),
+        lambda s: s.solve(np.column_stack([b, b2]))[:, 0],
+        lambda s: (s.solve_frame(b[:6]), s.solve(b))[1],
+        lambda s: (s.coupling_transpose(xf), s.solve(b))[1],
+    ):
         for got, w in zip(uses(made(True), first), want):
             np.testing.assert_allclose(got, w, rtol=0, atol=1e-10 * np.abs(w).max())
 
@@ -211,8 +232,9 @@ def test_an_order_found_absent_is_not_sought_again(monkeypatch):
     body = _body(True)[0]
     x = np.random.default_rng(3).normal(size=body.nv)
     A = np.eye(3)
-    Mff = body.frame_mass(A, body.first_moment(np.zeros(body.nq)),
-                          body.frame_inertia_first_order(np.zeros(body.nq)))
+    Mff = body.frame_mass(
+        A, body.first_moment(np.zeros(body.nq)), body.frame_inertia_first_order(np.zeros(body.nq))
+    )
     results = []
     for b in (body, dataclasses.replace(body, elimination_order=np.zeros(0, np.int64))):
         solver = BodySolver(b, 0.55)

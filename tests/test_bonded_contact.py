@@ -49,8 +49,10 @@ def _history():
         before = set(provider._bonds)
         res = integ.step(k * h, states, h)
         states = res.states
-        lam = {res.contact.keys[3 * i][2]: res.contact_impulses[3 * i : 3 * i + 3]
-               for i in range(res.contact.n_eq // 3)}
+        lam = {
+            res.contact.keys[3 * i][2]: res.contact_impulses[3 * i : 3 * i + 3]
+            for i in range(res.contact.n_eq // 3)
+        }
         for s in before - set(provider._bonds):
             releases.append(float(lam[s] @ provider._bond_normal[s]))
         for s, (nodes, w) in provider._bonds.items():
@@ -108,6 +110,7 @@ def test_bond_rows_push_back_drift_over_the_coming_step():
     rows_2h = provider.candidate_rows(sysm.bodies, states, 2 * h)
     n_eq = rows_h.n_eq
     assert n_eq and rows_2h.n_eq == n_eq
-    np.testing.assert_allclose(rows_2h.lower[:n_eq], 0.5 * rows_h.lower[:n_eq], rtol=1e-12,
-                               atol=0.0)
+    np.testing.assert_allclose(
+        rows_2h.lower[:n_eq], 0.5 * rows_h.lower[:n_eq], rtol=1e-12, atol=0.0
+    )
     assert PENETRATION_RECOVERY > 0.0

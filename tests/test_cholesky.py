@@ -34,8 +34,9 @@ def tube_w():
 
 
 def _backward(A, x, b) -> float:
-    return float(np.abs(A @ x - b).max()
-                 / (abs(A).sum(axis=1).max() * np.abs(x).max() + np.abs(b).max()))
+    return float(
+        np.abs(A @ x - b).max() / (abs(A).sum(axis=1).max() * np.abs(x).max() + np.abs(b).max())
+    )
 
 
 def _unpack(sym, tri, rect, d):
@@ -45,10 +46,10 @@ def _unpack(sym, tri, rect, d):
     for s in range(sym.starts.size - 1):
         c0, c1 = sym.starts[s], sym.starts[s + 1]
         w = c1 - c0
-        T = tri[sym.t_off[s]: sym.t_off[s + 1]].reshape(w, w)
+        T = tri[sym.t_off[s] : sym.t_off[s + 1]].reshape(w, w)
         L[c0:c1, c0:c1] += np.tril(T, -1)
-        rows = sym.rows[sym.r_off[s]: sym.r_off[s + 1]]
-        L[rows, c0:c1] = rect[sym.b_off[s]: sym.b_off[s + 1]].reshape(rows.size, w)
+        rows = sym.rows[sym.r_off[s] : sym.r_off[s + 1]]
+        L[rows, c0:c1] = rect[sym.b_off[s] : sym.b_off[s + 1]].reshape(rows.size, w)
     return L, d
 
 
@@ -70,7 +71,7 @@ def test_structure_is_the_exact_symbolic_factor(tube_w):
     A = tube_w.copy()
     A.data = rng.uniform(-1, 1, A.data.size)
     A = sp.csc_matrix(A + A.T)
-    A = A + sp.diags(abs(A).sum(axis=1).A1 + 1.0)    # diagonally dominant: SPD
+    A = A + sp.diags(abs(A).sum(axis=1).A1 + 1.0)  # diagonally dominant: SPD
     sym = SymbolicFactor(A)
     p = sym.order
     Lc = np.linalg.cholesky(A[p][:, p].toarray())
@@ -80,11 +81,11 @@ def test_structure_is_the_exact_symbolic_factor(tube_w):
     for s in range(sym.starts.size - 1):
         c0, c1 = sym.starts[s], sym.starts[s + 1]
         held[c0:c1, c0:c1] = np.tril(np.ones((c1 - c0, c1 - c0), bool))
-        held[sym.rows[sym.r_off[s]: sym.r_off[s + 1]], c0:c1] = True
+        held[sym.rows[sym.r_off[s] : sym.r_off[s + 1]], c0:c1] = True
     assert not np.any(nz & ~held)
     assert sym.nnz == held.sum() >= nz.sum()
     # the parent of every column is its first below-diagonal row (elimination tree)
-    first_below = [np.flatnonzero(nz[j + 1:, j]) for j in range(sym.n)]
+    first_below = [np.flatnonzero(nz[j + 1 :, j]) for j in range(sym.n)]
     parent = np.array([j + 1 + f[0] if f.size else -1 for j, f in enumerate(first_below)])
     assert np.all(parent[parent >= 0] > np.flatnonzero(parent >= 0))
 
@@ -148,11 +149,11 @@ def test_symbolic_reused_for_new_values(tube_w):
     size); a matrix of another pattern is refused by numeric_factor, and cholesky_ldl makes
     its analysis anew with the same order."""
     sym = SymbolicFactor(tube_w)
-    B = tube_w * 3.0 + sp.diags(np.ones(tube_w.shape[0]))   # same pattern (diagonal stored)
+    B = tube_w * 3.0 + sp.diags(np.ones(tube_w.shape[0]))  # same pattern (diagonal stored)
     b = np.ones(tube_w.shape[0])
     assert _backward(B, cholesky_ldl(B, symbolic=sym).solve(b), b) < 1e-14
     n = tube_w.shape[0]
-    eps = 1e-3 * tube_w.diagonal().min()      # a new coupling, small enough to stay SPD
+    eps = 1e-3 * tube_w.diagonal().min()  # a new coupling, small enough to stay SPD
     C = sp.csc_matrix(tube_w + eps * (sp.eye(n, k=n - 1) + sp.eye(n, k=1 - n)))
     with pytest.raises(SolverError, match="another sparsity pattern"):
         numeric_factor(sym, C)
@@ -185,14 +186,21 @@ def test_cholesky_backend_setting(monkeypatch):
     monkeypatch.delenv(spd.ENV_CHOLESKY, raising=False)
     assert spd.cholesky_backend() is spd.CholeskyBackend.SUPERNODAL
     monkeypatch.setenv(spd.ENV_CHOLESKY, "pardiso")
-    with pytest.raises(SolverError, match=r"FLEXMVM_CHOLESKY must be one of supernodal, "
-                                          r"cholmod, got 'pardiso'"):
+    with pytest.raises(
+        SolverError,
+        match=r"FLEXMVM_CHOLESKY must be one of supernodal, "
+        r"cholmod, got 'pardiso'",
+    ):
         spd.spd_solver(sp.identity(3, format="csc"))
     from flexmvm.fe.solvers import cholmod
+
     monkeypatch.setattr(cholmod, "available", lambda: False)
     monkeypatch.setenv(spd.ENV_CHOLESKY, "cholmod")
-    with pytest.raises(SolverError, match=r"needs the cholespy package \(pip install "
-                                          r"flexmvm\[cholmod\]\)"):
+    with pytest.raises(
+        SolverError,
+        match=r"needs the cholespy package \(pip install "
+        r"flexmvm\[cholmod\]\)",
+    ):
         spd.spd_solver(sp.identity(3, format="csc"))
 
 
@@ -206,6 +214,7 @@ def test_cholmod_backend_against_the_default(tube_w, monkeypatch):
     one triangle, fails its backward-error check and goes to SuperLU's LU, as the default's
     does. Runtime ~1 s."""
     from flexmvm.fe.solvers import cholmod
+
     if not cholmod.available():
         pytest.skip("cholespy (the CHOLMOD backend, flexmvm[cholmod]) is not installed")
     b = np.random.default_rng(5).standard_normal((tube_w.shape[0], 8))

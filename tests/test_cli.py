@@ -13,8 +13,14 @@ SEED = ROOT / "scenarios" / "rod_impact.toml"
 
 
 def _flexmvm(*args, cwd=None):
-    return subprocess.run([sys.executable, "-m", "flexmvm.cli.main", *map(str, args)],
-                          capture_output=True, text=True, cwd=cwd, timeout=600, check=False)
+    return subprocess.run(
+        [sys.executable, "-m", "flexmvm.cli.main", *map(str, args)],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        timeout=600,
+        check=False,
+    )
 
 
 def _one_line_error(proc, *words):
@@ -27,13 +33,16 @@ def _one_line_error(proc, *words):
         assert w in err, err
 
 
-@pytest.mark.parametrize(("args", "words"), [
-    (["--E", "-1"], ["Young's modulus", "-1"]),
-    (["--nu", "0.5"], ["Poisson ratio"]),
-    (["--radius", "0"], ["radius_m"]),
-    (["--length", "-2"], ["length_m"]),
-    (["--selection", "9-99"], ["laps", "99"]),
-])
+@pytest.mark.parametrize(
+    ("args", "words"),
+    [
+        (["--E", "-1"], ["Young's modulus", "-1"]),
+        (["--nu", "0.5"], ["Poisson ratio"]),
+        (["--radius", "0"], ["radius_m"]),
+        (["--length", "-2"], ["length_m"]),
+        (["--selection", "9-99"], ["laps", "99"]),
+    ],
+)
 def test_mesh_rod_bad_input(args, words):
     _one_line_error(_flexmvm("mesh", "rod", "--modes", "0", *args), *words)
 
@@ -53,22 +62,46 @@ def _edited(tmp_path, old, new, source=SEED):
     return path
 
 
-@pytest.mark.parametrize(("old", "new", "words"), [
-    ('name = "rod_impact"', 'name = "rod_impact"\ncolour = "red"', ["colour", "unknown key"]),
-    ('master = "b1.end_a"', 'master = "b9.end_a"', ["contacts[0].master", "b9"]),
-    ('slave = "b2.end_a"', 'slave = "b2.nowhere"', ["contacts[0].slave", "nowhere"]),
-    ('node_set = "end_b_centre"', 'point_m = [3.0, 0.0, 0.0]', ["probes[1].point_m", "off the body"]),
-    ("E_pa", "E_pa", []),
-])
+@pytest.mark.parametrize(
+    ("old", "new", "words"),
+    [
+        ('name = "rod_impact"', 'name = "rod_impact"\ncolour = "red"', ["colour", "unknown key"]),
+        ('master = "b1.end_a"', 'master = "b9.end_a"', ["contacts[0].master", "b9"]),
+        ('slave = "b2.end_a"', 'slave = "b2.nowhere"', ["contacts[0].slave", "nowhere"]),
+        (
+            'node_set = "end_b_centre"',
+            "point_m = [3.0, 0.0, 0.0]",
+            ["probes[1].point_m", "off the body"],
+        ),
+        ("E_pa", "E_pa", []),
+    ],
+)
 def test_run_bad_scenarios(tmp_path, old, new, words):
     """Unknown key, missing body, unknown surface, probe off the body: one line naming the key."""
     if old == "E_pa":
-        path = _edited(tmp_path, 'material = "aluminium" ', 'material = { E_pa = -1.0, nu = 0.33, rho_kg_m3 = 2700.0 } ')
+        path = _edited(
+            tmp_path,
+            'material = "aluminium" ',
+            "material = { E_pa = -1.0, nu = 0.33, rho_kg_m3 = 2700.0 } ",
+        )
         words = ["E_pa", "-1"]
     else:
         path = _edited(tmp_path, old, new)
-    _one_line_error(_flexmvm("run", path, "--out", tmp_path / "out", "--t-end", "4e-6",
-                             "--model", "rigid", "--no-fields", "--no-progress"), *words)
+    _one_line_error(
+        _flexmvm(
+            "run",
+            path,
+            "--out",
+            tmp_path / "out",
+            "--t-end",
+            "4e-6",
+            "--model",
+            "rigid",
+            "--no-fields",
+            "--no-progress",
+        ),
+        *words,
+    )
 
 
 def test_missing_scenario_file(tmp_path):

@@ -25,9 +25,15 @@ RUN_FAST = ["--t-end", "3e-6", "--no-fields", "--no-progress", "--jobs", "1"]
 
 
 def _flexmvm(*args, cwd=None, env=None):
-    return subprocess.run([sys.executable, "-m", "flexmvm.cli.main", *map(str, args)],
-                          capture_output=True, text=True, cwd=cwd, timeout=600, check=False,
-                          env=None if env is None else {**os.environ, **env})
+    return subprocess.run(
+        [sys.executable, "-m", "flexmvm.cli.main", *map(str, args)],
+        capture_output=True,
+        text=True,
+        cwd=cwd,
+        timeout=600,
+        check=False,
+        env=None if env is None else {**os.environ, **env},
+    )
 
 
 def _one_line(stderr: str, status: int, returncode: int, *words) -> str:
@@ -54,15 +60,25 @@ def _in_process(argv, capsys) -> tuple[int, str, str]:
 
 def _tree(path: Path) -> dict[str, bytes]:
     """Every file under path (relative name -> content)."""
-    return {str(p.relative_to(path)): p.read_bytes() for p in sorted(path.rglob("*"))
-            if p.is_file()}
+    return {
+        str(p.relative_to(path)): p.read_bytes() for p in sorted(path.rglob("*")) if p.is_file()
+    }
 
 
 # ----------------------------------------------------------------------------------------------
 # item 10: bad input -> one line, exit status, nothing written
 def test_mesh_rod_write_into_a_missing_directory(tmp_path):
-    p = _flexmvm("mesh", "rod", "--length", "0.2", "--modes", "0", "--write",
-                 "missing_dir/rod.vtu", cwd=tmp_path)
+    p = _flexmvm(
+        "mesh",
+        "rod",
+        "--length",
+        "0.2",
+        "--modes",
+        "0",
+        "--write",
+        "missing_dir/rod.vtu",
+        cwd=tmp_path,
+    )
     _one_line(p.stderr, 2, p.returncode, "--write", "missing_dir")
     assert list(tmp_path.iterdir()) == []
 
@@ -73,8 +89,12 @@ STUDY_FAST = ["--serial", "--no-progress", "--t-end", "3e-6", "--modes", "7"]
 @pytest.mark.parametrize("command", [["run"], ["theory"], ["select"], ["study", "materials"]])
 def test_out_dir_under_a_file_cannot_be_created(tmp_path, command):
     (tmp_path / "afile").write_text("user data\n")
-    extra = {"run": RUN_FAST, "theory": [], "select": ["--body", "b2", *STUDY_FAST],
-             "study": STUDY_FAST}[command[0]]
+    extra = {
+        "run": RUN_FAST,
+        "theory": [],
+        "select": ["--body", "b2", *STUDY_FAST],
+        "study": STUDY_FAST,
+    }[command[0]]
     p = _flexmvm(*command, TINY, "--out", "afile/sub", *extra, cwd=tmp_path)
     _one_line(p.stderr, 2, p.returncode, "--out", "afile/sub", "is a file")
     assert [x.name for x in tmp_path.iterdir()] == ["afile"]
@@ -98,8 +118,9 @@ def _bad_connectivity_scenario(tmp_path: Path, duplicate: bool = False) -> Path:
     from flexmvm.mesh.io import write_mesh
     from flexmvm.mesh.rod import RodSpec, rod_mesh
 
-    rm = rod_mesh(RodSpec(radius_m=0.005, length_m=0.05, n_rings=1, first_element_m=0.005,
-                          max_element_m=0.02))
+    rm = rod_mesh(
+        RodSpec(radius_m=0.005, length_m=0.05, n_rings=1, first_element_m=0.005, max_element_m=0.02)
+    )
     write_mesh(tmp_path / "good.vtu", rm.mesh)
     m = meshio.read(tmp_path / "good.vtu")
     conn = m.cells[0].data.copy()
@@ -107,15 +128,20 @@ def _bad_connectivity_scenario(tmp_path: Path, duplicate: bool = False) -> Path:
         conn = np.vstack([conn, conn[3:4]])
     else:
         conn[0, 0] = len(m.points) + 5
-    meshio.write(tmp_path / "bad.vtu", meshio.Mesh(m.points, [(m.cells[0].type, conn)],
-                                                   point_data=m.point_data if duplicate else {}))
+    meshio.write(
+        tmp_path / "bad.vtu",
+        meshio.Mesh(
+            m.points, [(m.cells[0].type, conn)], point_data=m.point_data if duplicate else {}
+        ),
+    )
     text = TINY.read_text()
     i = text.index('name = "b2"')
     b2 = text[i:]
-    b2 = b2.replace(b2[b2.index("[bodies.rod]"):b2.index("[bodies.model]")], "")
+    b2 = b2.replace(b2[b2.index("[bodies.rod]") : b2.index("[bodies.model]")], "")
     b2 = b2.replace('material = "aluminium"', 'material = "aluminium"\nmesh_file = "bad.vtu"')
-    b2 = b2.replace('kind = "mvm"\nselection = "1-1"\nmodes = 13\nreference = "end_b"',
-                    'kind = "rigid"')
+    b2 = b2.replace(
+        'kind = "mvm"\nselection = "1-1"\nmodes = 13\nreference = "end_b"', 'kind = "rigid"'
+    )
     path = tmp_path / "bad.toml"
     path.write_text(text[:i] + b2)
     return path
@@ -239,8 +265,13 @@ def test_driver_names_the_body_whose_state_became_non_finite():
     from flexmvm.integrate.driver import _check_finite
 
     system = SimpleNamespace(bodies=[SimpleNamespace(name="b1"), SimpleNamespace(name="b2")])
-    row = {"kin": 1.0, "strain": 0.5, "force": 0.0, "v": np.zeros((2, 6)),
-           "q": [np.zeros(3), np.zeros(4)]}
+    row = {
+        "kin": 1.0,
+        "strain": 0.5,
+        "force": 0.0,
+        "v": np.zeros((2, 6)),
+        "q": [np.zeros(3), np.zeros(4)],
+    }
     _check_finite(row, system, 1e-6)
     row["q"][1][2] = np.nan
     row["strain"] = np.nan
@@ -270,8 +301,9 @@ def test_read_mesh_refuses_out_of_range_node_sets(tmp_path):
     from flexmvm.mesh.io import read_mesh, write_mesh
     from flexmvm.mesh.rod import RodSpec, rod_mesh
 
-    rm = rod_mesh(RodSpec(radius_m=0.005, length_m=0.05, n_rings=1, first_element_m=0.005,
-                          max_element_m=0.02))
+    rm = rod_mesh(
+        RodSpec(radius_m=0.005, length_m=0.05, n_rings=1, first_element_m=0.005, max_element_m=0.02)
+    )
     write_mesh(tmp_path / "rod.vtu", rm.mesh)
     with pytest.raises(MeshError, match="node set 'tip'"):
         read_mesh(tmp_path / "rod.vtu", node_sets={"tip": [rm.mesh.n_nodes + 1]})
@@ -285,8 +317,7 @@ def _run_ok(out: Path, capsys) -> dict:
     return json.loads((out / "summary.json").read_text())
 
 
-def test_reference_failure_leaves_the_output_directory_as_it_was(tmp_path, capsys,
-                                                                  monkeypatch):
+def test_reference_failure_leaves_the_output_directory_as_it_was(tmp_path, capsys, monkeypatch):
     """The scenario's run writes its history, then the full-FE reference fails: DIR (new or
     holding an earlier run) gets nothing, no temporary directory is left beside it."""
     from flexmvm.scenarios import main_job
@@ -364,8 +395,7 @@ def test_staged_dir_replaces_an_earlier_output_as_a_whole(tmp_path):
         (tmp / "a.txt").write_text("2")
         assert (out / "a.txt").read_text() == "1"
     assert files() == {"a.txt": b"2"}
-    with pytest.raises(InputError, match="not of flexmvm other"), \
-            staged_dir(out, "flexmvm other"):
+    with pytest.raises(InputError, match="not of flexmvm other"), staged_dir(out, "flexmvm other"):
         pass
     with pytest.raises(RuntimeError), staged_dir(out, "flexmvm test") as tmp:
         (tmp / "a.txt").write_text("3")
@@ -431,8 +461,12 @@ def test_stale_data_note_is_one_line(capsys):
     with warnings.catch_warnings():
         warnings.simplefilter("always")
         notes_as_lines()
-        notes_as_lines()   # once is enough: a second call adds nothing
-        warnings.warn("setup cache fe-0.npz: holds NaN or inf in M_data: evicted and rebuilt",
-                      StaleDataWarning, stacklevel=1)
-    assert capsys.readouterr().err == ("flexmvm: note: setup cache fe-0.npz: holds NaN or inf "
-                                       "in M_data: evicted and rebuilt\n")
+        notes_as_lines()  # once is enough: a second call adds nothing
+        warnings.warn(
+            "setup cache fe-0.npz: holds NaN or inf in M_data: evicted and rebuilt",
+            StaleDataWarning,
+            stacklevel=1,
+        )
+    assert capsys.readouterr().err == (
+        "flexmvm: note: setup cache fe-0.npz: holds NaN or inf in M_data: evicted and rebuilt\n"
+    )

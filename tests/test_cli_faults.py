@@ -45,16 +45,31 @@ def _tiny_with(tmp_path: Path, old: str, new: str) -> Path:
     return path
 
 
-@pytest.mark.parametrize("old, new, key", [
-    ("velocity_mps = [0.21, 0.0, 0.0]", "velocity_mps = [1e200, 0.0, 0.0]",
-     "bodies[0].placement.velocity_mps"),
-    ("gravity_mps2 = [0.0, 0.0, 0.0]", "gravity_mps2 = [0.0, 0.0, -1e308]", "gravity_mps2"),
-])
+@pytest.mark.parametrize(
+    "old, new, key",
+    [
+        (
+            "velocity_mps = [0.21, 0.0, 0.0]",
+            "velocity_mps = [1e200, 0.0, 0.0]",
+            "bodies[0].placement.velocity_mps",
+        ),
+        ("gravity_mps2 = [0.0, 0.0, 0.0]", "gravity_mps2 = [0.0, 0.0, -1e308]", "gravity_mps2"),
+    ],
+)
 def test_absurd_motion_is_an_input_error_naming_the_key(tmp_path, capsys, old, new, key):
     """Velocity 1e200 m/s and gravity 1e308 m/s^2 ended in exit 1, 'ValueError: math domain
     error' (expm_so3 of an overflowed rotation); now exit 2 naming the key and the bound."""
-    code, err = _in_process(["run", _tiny_with(tmp_path, old, new), *RUN_FAST, "--no-fields",
-                             "--out", tmp_path / "out"], capsys)
+    code, err = _in_process(
+        [
+            "run",
+            _tiny_with(tmp_path, old, new),
+            *RUN_FAST,
+            "--no-fields",
+            "--out",
+            tmp_path / "out",
+        ],
+        capsys,
+    )
     line = _one_line(err)
     assert code == 2
     assert key in line and "magnitude must be <=" in line
@@ -81,14 +96,22 @@ def test_dt_longer_than_the_run_is_reported_as_dt():
     assert "output_dt_s" not in str(exc.value)
 
 
-@pytest.mark.parametrize("message, err_no", [
-    ("No space left on device", errno.ENOSPC),
-    # h5py's own wording: an OSError without errno
-    (("Can't synchronously write data (file write failed: time = Fri Nov 27 01:00:00 2026, "
-     "filename = 'results.h5', file descriptor = 5, errno = 28, error message = 'No space "
-     "left on device', buf = 0x5, total write size = 8192, bytes this sub-write = 8192, "
-     "bytes actually written = 18446744073709551615, offset = 0)"), None),
-])
+@pytest.mark.parametrize(
+    "message, err_no",
+    [
+        ("No space left on device", errno.ENOSPC),
+        # h5py's own wording: an OSError without errno
+        (
+            (
+                "Can't synchronously write data (file write failed: time = Fri Nov 27 01:00:00 2026, "
+                "filename = 'results.h5', file descriptor = 5, errno = 28, error message = 'No space "
+                "left on device', buf = 0x5, total write size = 8192, bytes this sub-write = 8192, "
+                "bytes actually written = 18446744073709551615, offset = 0)"
+            ),
+            None,
+        ),
+    ],
+)
 def test_full_disk_is_one_line_naming_the_file(tmp_path, capsys, monkeypatch, message, err_no):
     """A full disk while results.h5 is written: exit non-zero (2, an OutputError), one line
     naming the file and 'no space left'; the output directory is not created."""
@@ -127,11 +150,24 @@ def test_interrupt_during_the_imports_is_one_line_and_130(module):
     51-line traceback; now exit 130 and the one interrupt line. Importing the entry point
     itself imports neither click nor numpy (checked below), so nothing before main() can
     take long enough to be interrupted."""
-    proc = subprocess.run([sys.executable, "-c", INTERRUPTING_IMPORT.format(module=module)],
-                          capture_output=True, text=True, timeout=300, check=False)
+    proc = subprocess.run(
+        [sys.executable, "-c", INTERRUPTING_IMPORT.format(module=module)],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
     assert proc.returncode == 130, proc.stderr
     assert _one_line(proc.stderr) == cli_main.INTERRUPTED
-    probe = subprocess.run([sys.executable, "-c", ("import sys, flexmvm.cli.main; "
-                            "print(sorted({'click', 'numpy'} & set(sys.modules)))")],
-                           capture_output=True, text=True, timeout=300, check=True)
+    probe = subprocess.run(
+        [
+            sys.executable,
+            "-c",
+            ("import sys, flexmvm.cli.main; print(sorted({'click', 'numpy'} & set(sys.modules)))"),
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=True,
+    )
     assert probe.stdout.strip() == "[]"

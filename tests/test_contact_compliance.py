@@ -143,12 +143,16 @@ def _raw_selector(rng, m: int, n_nodes: int, nodes: np.ndarray, sort: bool = Tru
             row.append(row[0])
         entries = [(3 * k + j, rng.uniform() * d[j]) for k in row for j in range(3)]
         if sort:
-            entries.sort(key=lambda e: e[0])      # stable, as pair_rows._sort_row
+            entries.sort(key=lambda e: e[0])  # stable, as pair_rows._sort_row
         idx += [c for c, _ in entries]
         data += [v for _, v in entries]
         ptr.append(len(idx))
-    return (np.array(data), np.array(idx, dtype=np.int64), np.array(ptr, dtype=np.int64),
-            (m, 3 * n_nodes))
+    return (
+        np.array(data),
+        np.array(idx, dtype=np.int64),
+        np.array(ptr, dtype=np.int64),
+        (m, 3 * n_nodes),
+    )
 
 
 @pytest.mark.parametrize("kind", ["select", "dense"])

@@ -51,9 +51,10 @@ def test_held_pair_gap_is_linear_in_the_node_positions():
     facet = np.array([0], dtype=np.int64)
     out = np.zeros((1, 11))
     out[0, 4:6] = (0.7, -0.1)
-    out[0, 9] = 2.0e-9          # the scan's exact gap: d = 0.5e-9, within tol of held_d
-    anew, released = hold_pairs(held, held_w, held_n, held_off, held_d, facet, out, xs,
-                                vs, xm, vm, A, conn, 1e-9, 1e-8)
+    out[0, 9] = 2.0e-9  # the scan's exact gap: d = 0.5e-9, within tol of held_d
+    anew, released = hold_pairs(
+        held, held_w, held_n, held_off, held_d, facet, out, xs, vs, xm, vm, A, conn, 1e-9, 1e-8
+    )
     assert (anew, released) == (0, 0) and held[0] == 0 and facet[0] == 0
     assert out[0, :4] == pytest.approx(w, abs=0)
     assert out[0, 6:9] == pytest.approx(n, abs=1e-15)
@@ -76,11 +77,12 @@ def test_held_pair_takes_the_scan_geometry_without_a_jump():
     held_w, held_n = w_old[None, :].copy(), np.array([[1.0, 0.0, 0.0]])
     held_off, held_d = np.array([1.5e-9]), np.zeros(1)
     out = np.zeros((1, 11))
-    out[0, :4], out[0, 6:9], out[0, 9] = w_new, n, 3e-9    # the scan: exact gap 3 nm
-    anew, released = hold_pairs(held, held_w, held_n, held_off, held_d, facet, out, xs,
-                                vs, xm, vm, A, conn, 1e-9, 1e-8)
+    out[0, :4], out[0, 6:9], out[0, 9] = w_new, n, 3e-9  # the scan: exact gap 3 nm
+    anew, released = hold_pairs(
+        held, held_w, held_n, held_off, held_d, facet, out, xs, vs, xm, vm, A, conn, 1e-9, 1e-8
+    )
     assert (anew, released) == (1, 0) and held[0] == 0
-    assert out[0, 9] == pytest.approx(4.5e-9, rel=1e-6)    # the linear gap, unchanged
+    assert out[0, 9] == pytest.approx(4.5e-9, rel=1e-6)  # the linear gap, unchanged
     assert held_w[0] == pytest.approx(w_new, abs=0)
     assert held_n[0] == pytest.approx([1.0, 0.0, 0.0], abs=1e-15)
     assert held_off[0] == pytest.approx(1.5e-9, rel=1e-6)
@@ -101,9 +103,23 @@ def test_held_pair_released(exact_gap, scanned_facet):
     out = np.zeros((1, 11))
     out[0, 9] = exact_gap
     before = out.copy()
-    anew, released = hold_pairs(held, w[None, :].copy(), np.array([[1.0, 0.0, 0.0]]),
-                                np.zeros(1), np.zeros(1), facet, out, xs, np.zeros((1, 3)), xm,
-                                vm, A, conn, 1e-9, 1e-8)
+    anew, released = hold_pairs(
+        held,
+        w[None, :].copy(),
+        np.array([[1.0, 0.0, 0.0]]),
+        np.zeros(1),
+        np.zeros(1),
+        facet,
+        out,
+        xs,
+        np.zeros((1, 3)),
+        xm,
+        vm,
+        A,
+        conn,
+        1e-9,
+        1e-8,
+    )
     assert (anew, released) == (0, 1) and held[0] == -1 and facet[0] == scanned_facet
     assert np.array_equal(out, before)
 

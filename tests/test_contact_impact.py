@@ -30,7 +30,9 @@ def _run(dt: float = 0.25e-6, theta: float | None = None):
 
 
 def _F0() -> float:
-    return st_venant_force(Rod1D.from_material(BRASS, L, R), Rod1D.from_material(ALUMINIUM, L, R), V0)
+    return st_venant_force(
+        Rod1D.from_material(BRASS, L, R), Rod1D.from_material(ALUMINIUM, L, R), V0
+    )
 
 
 def test_invariants_momentum_no_tension_no_penetration():

@@ -39,8 +39,10 @@ def test_project_pair_matches_project_points(n_quads, n_tris):
     base = np.array([[0.0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0]])
     for _ in range(300):
         nodes = base + rng.uniform(-0.3, 0.3, (4, 3))
-        surf = MasterSurface(quads=[[0, 1, 2, 3]] if n_quads else np.zeros((0, 4)),
-                             tris=[[0, 1, 2]] if n_tris else np.zeros((0, 3)))
+        surf = MasterSurface(
+            quads=[[0, 1, 2, 3]] if n_quads else np.zeros((0, 4)),
+            tris=[[0, 1, 2]] if n_tris else np.zeros((0, 3)),
+        )
         xs = rng.uniform(-1.0, 2.0, (6, 3)) * rng.choice([0.5, 1.0, 5.0], (6, 1))
         proj = project_points(xs, nodes, surf, (np.arange(6), np.zeros(6, np.int64)))
         P = nodes[surf.connectivity[0]]
@@ -61,7 +63,9 @@ def _warped_plate(n=6):
     X, Y = np.meshgrid(g, g, indexing="xy")
     nodes = np.column_stack([X.ravel(), Y.ravel(), 0.05 * np.sin(3 * X.ravel() + 2 * Y.ravel())])
     k = lambda i, j: j * (n + 1) + i
-    quads = [[k(i, j), k(i + 1, j), k(i + 1, j + 1), k(i, j + 1)] for j in range(n - 1) for i in range(n)]
+    quads = [
+        [k(i, j), k(i + 1, j), k(i + 1, j + 1), k(i, j + 1)] for j in range(n - 1) for i in range(n)
+    ]
     tris = []
     for i in range(n):
         a, b, c, d = k(i, n - 1), k(i + 1, n - 1), k(i + 1, n), k(i, n)
@@ -89,8 +93,12 @@ def _rotation(rng):
 
 def _states(rng, t, A):
     """Slave sweeping across the plate and down through it (t in [0, 1])."""
-    master = types.SimpleNamespace(r=np.zeros(3), A=A, q=1e-2 * rng.standard_normal(7),
-                                   v=np.concatenate([rng.standard_normal(6), rng.standard_normal(7)]))
+    master = types.SimpleNamespace(
+        r=np.zeros(3),
+        A=A,
+        q=1e-2 * rng.standard_normal(7),
+        v=np.concatenate([rng.standard_normal(6), rng.standard_normal(7)]),
+    )
     r_s = A @ np.array([0.3 * np.sin(4 * t), 0.2 * t, 0.08 - 0.12 * t])
     slave = types.SimpleNamespace(r=r_s, A=A, q=rng.standard_normal(75), v=rng.standard_normal(81))
     return [master, slave]
@@ -136,11 +144,14 @@ def test_provider_matches_reference_along_a_trajectory():
         n_rows += len(act)
         if not len(act):
             continue
-        assert crows.keys == [(prov.name, int(prov.slave_nodes[p]), int(f)) for p, f in zip(act.point, act.facet)]
+        assert crows.keys == [
+            (prov.name, int(prov.slave_nodes[p]), int(f)) for p, f in zip(act.point, act.facet)
+        ]
         # the velocity law's recovery, capped by the pair's closing speed
         recovery = PENETRATION_RECOVERY * np.maximum(0.0, -act.gap) / h
-        np.testing.assert_allclose(crows.lower, np.minimum(recovery, np.maximum(0.0, -u_n)),
-                                   atol=1e-9)
+        np.testing.assert_allclose(
+            crows.lower, np.minimum(recovery, np.maximum(0.0, -u_n)), atol=1e-9
+        )
         _check_rows(bodies, states, prov, crows, act)
     # ties: a node beside a shared edge scores the same on both facets (the closest-distance
     # rule, geometry.closest_facets); 3 of the 288 row-carrying projections here
@@ -154,16 +165,21 @@ def _assert_round_off_tie(bodies, states, prov, proj):
     kin = ref.kinematics(bodies, states, 1, prov.slave_nodes, 0, prov.master_nodes)
     for k in np.nonzero(prov._facet[proj.point] != proj.facet)[0]:
         i = proj.point[k]
-        both = project_points(kin.x_slave, kin.x_master, prov.surface,
-                              (np.array([i, i]), np.array([prov._facet[i], proj.facet[k]])))
+        both = project_points(
+            kin.x_slave,
+            kin.x_master,
+            prov.surface,
+            (np.array([i, i]), np.array([prov._facet[i], proj.facet[k]])),
+        )
         score = np.where(both.inside, np.abs(both.gap), both.distance)
         assert both.inside[0] == both.inside[1] and abs(score[0] - score[1]) <= 1e-12
 
 
 def _check_rows(bodies, states, prov, crows, act):
     m = len(act)
-    sf, sq, ssel = ref.body_rows(bodies[1], states[1], prov.slave_nodes[act.point][:, None],
-                                 np.ones((m, 1)), act.normal)
+    sf, sq, ssel = ref.body_rows(
+        bodies[1], states[1], prov.slave_nodes[act.point][:, None], np.ones((m, 1)), act.normal
+    )
     mf, mq, msel = ref.body_rows(bodies[0], states[0], act.nodes, act.weights, act.normal)
     for got, want in ((crows.rows.blocks[1], (sf, sq)), (crows.rows.blocks[0], (-mf, -mq))):
         for a, b in zip(got, want):
@@ -184,8 +200,14 @@ def test_min_gap_ahead_matches_reference():
         states = _states(rng, t, A)
         got = prov.min_gap_ahead(bodies, states, horizon)
         kin = ref.kinematics(bodies, states, 1, prov.slave_nodes, 0, prov.master_nodes)
-        proj = ref.projection(kin, states[0], prov.surface, prov.broad, prov._box,
-                              prov.search_radius + kin.speed * horizon)
+        proj = ref.projection(
+            kin,
+            states[0],
+            prov.surface,
+            prov.broad,
+            prov._box,
+            prov.search_radius + kin.speed * horizon,
+        )
         if proj is None:
             assert got == np.inf
             continue
@@ -203,9 +225,23 @@ def test_kinematics_kept_while_the_state_is_unchanged():
 
     def check(cn, fresh, st, reused):
         got = cn.update(st)
-        want = body_kinematics(fresh.X, fresh.psi_c, fresh.indptr, fresh.indices, fresh.data,
-                               fresh.dense, st.q, st.v, st.r, st.A, fresh.u, fresh.ud, fresh.s,
-                               fresh.x, fresh.xd)
+        want = body_kinematics(
+            fresh.X,
+            fresh.psi_c,
+            fresh.indptr,
+            fresh.indices,
+            fresh.data,
+            fresh.dense,
+            st.q,
+            st.v,
+            st.r,
+            st.A,
+            fresh.u,
+            fresh.ud,
+            fresh.s,
+            fresh.x,
+            fresh.xd,
+        )
         assert got == want
         if reused:
             assert (cn.x == -7.0).all()
@@ -219,20 +255,26 @@ def test_kinematics_kept_while_the_state_is_unchanged():
         st = _states(rng, 0.3, A)[b]
         check(cn, fresh, st, False)
         check(cn, fresh, st, True)
-        for arr, at, value in ((st.q, 0, st.q[0] + 1e-9), (st.v, -1, 0.5 * st.v[-1]),
-                               (st.r, 2, st.r[2] + 1e-12), (st.A, (1, 2), st.A[1, 2] * (1 + 1e-15)),
-                               (st.q, 1, 0.0), (st.q, 1, -0.0)):
-            arr[at] = value                 # in place
+        for arr, at, value in (
+            (st.q, 0, st.q[0] + 1e-9),
+            (st.v, -1, 0.5 * st.v[-1]),
+            (st.r, 2, st.r[2] + 1e-12),
+            (st.A, (1, 2), st.A[1, 2] * (1 + 1e-15)),
+            (st.q, 1, 0.0),
+            (st.q, 1, -0.0),
+        ):
+            arr[at] = value  # in place
             check(cn, fresh, st, False)
             check(cn, fresh, st, True)
-        st.q = st.q.copy()                  # other arrays, same values: reused
+        st.q = st.q.copy()  # other arrays, same values: reused
         check(cn, fresh, st, True)
 
 
 def _slave_quads():
     g = np.arange(25).reshape(5, 5)
-    quads = np.column_stack([g[:-1, :-1].ravel(), g[1:, :-1].ravel(), g[1:, 1:].ravel(),
-                             g[:-1, 1:].ravel()])
+    quads = np.column_stack(
+        [g[:-1, :-1].ravel(), g[1:, :-1].ravel(), g[1:, 1:].ravel(), g[:-1, 1:].ravel()]
+    )
     return MasterSurface(quads, np.zeros((0, 3)))
 
 
@@ -243,8 +285,12 @@ def test_projection_memo_changes_nothing():
     rng = np.random.default_rng(13)
     bodies, surf = _bodies(rng)
     A = _rotation(rng)
-    provs = [PointToSurfaceContact(bodies, 1, np.arange(25), 0, surf, search_radius_m=0.05,
-                                   slave_surface=_slave_quads()) for _ in range(2)]
+    provs = [
+        PointToSurfaceContact(
+            bodies, 1, np.arange(25), 0, surf, search_radius_m=0.05, slave_surface=_slave_quads()
+        )
+        for _ in range(2)
+    ]
     bare = provs[1]
     bare._memo = ProjectionMemo(bare._s, bare._m, bare._conn, bare._facets.params, k=0)
     bare._measure.directions[0].memo = bare._memo
@@ -254,9 +300,12 @@ def test_projection_memo_changes_nothing():
         states = _states(rng, t, A)
         got = []
         for p in provs:
-            seq = [p.penetration(bodies, states), p.candidate_rows(bodies, states, h),
-                   p.min_gap_ahead(bodies, states, 4 * h)]
-            states[0].q[1] *= 1.0 + 1e-9          # in place: nothing kept may be read
+            seq = [
+                p.penetration(bodies, states),
+                p.candidate_rows(bodies, states, h),
+                p.min_gap_ahead(bodies, states, 4 * h),
+            ]
+            states[0].q[1] *= 1.0 + 1e-9  # in place: nothing kept may be read
             seq.append(p.candidate_rows(bodies, states, h))
             states[0].q[1] /= 1.0 + 1e-9
             got.append((seq, p._facet.copy(), p._out.copy()))
@@ -283,13 +332,15 @@ def test_measure_shares_the_search_node_sets_when_equal():
     rng = np.random.default_rng(2)
     bodies, surf = _bodies(rng)
     slave_surf = _slave_quads()
-    prov = PointToSurfaceContact(bodies, 1, np.arange(25), 0, surf, search_radius_m=0.05,
-                                 slave_surface=slave_surf)
+    prov = PointToSurfaceContact(
+        bodies, 1, np.arange(25), 0, surf, search_radius_m=0.05, slave_surface=slave_surf
+    )
     assert prov._measure._s is prov._s and prov._measure._m is prov._m
     assert prov._measure.directions[0].memo is prov._memo
     assert prov._measure.directions[1].memo.arrays.facets.shape[1] == 0
-    prov = PointToSurfaceContact(bodies, 1, np.arange(5, 25), 0, surf, search_radius_m=0.05,
-                                 slave_surface=slave_surf)
+    prov = PointToSurfaceContact(
+        bodies, 1, np.arange(5, 25), 0, surf, search_radius_m=0.05, slave_surface=slave_surf
+    )
     assert prov._measure._s is not prov._s and prov._measure._m is prov._m
     assert len(prov._measure._s.nodes) == 25
     assert prov._measure.directions[0].memo is not prov._memo

@@ -48,8 +48,10 @@ def _run(law: str, redistribute: bool, theta: float = 0.5):
     def rows(t, states, h, res):
         c = res.contact
         if c.rows.m:
-            u = [sum(c.rows.body_matrix(b) @ s[b].v for b in c.rows.blocks)
-                 for s in (states, res.states)]
+            u = [
+                sum(c.rows.body_matrix(b) @ s[b].v for b in c.rows.blocks)
+                for s in (states, res.states)
+            ]
             steps.append((h, c.gaps, c.lower, u[0], u[1], res.contact_impulses))
 
     return simulate_recording(built, rows), steps
@@ -74,8 +76,7 @@ def test_end_gap_held_to_round_off(theta):
     n_active = 0
     for h, g, lower, um, up, lam in steps:
         end = g + h * (theta * up + (1.0 - theta) * um)
-        assert np.allclose(lower, -(g + (1.0 - theta) * h * um) / (theta * h), rtol=0,
-                           atol=1e-12)
+        assert np.allclose(lower, -(g + (1.0 - theta) * h * um) / (theta * h), rtol=0, atol=1e-12)
         worst_open = max(worst_open, float(-end.min()))
         on = lam > 0
         n_active += int(on.sum())
@@ -113,8 +114,9 @@ def test_integrator_refuses_massless_nodes_under_the_velocity_law():
     contact on a body with massless coordinates, with a one-line SolverError."""
     built = build_scenario(_scenario("position", True))
     c = built.system.contacts[0]
-    velocity = PointToSurfaceContact(built.system.bodies, c.slave, c.slave_nodes, c.master,
-                                     c.surface)
+    velocity = PointToSurfaceContact(
+        built.system.bodies, c.slave, c.slave_nodes, c.master, c.surface
+    )
     with pytest.raises(SolverError, match="position contact law"):
         MoreauJeanIntegrator(dataclasses.replace(built.system, contacts=(velocity,)))
 
@@ -209,8 +211,9 @@ def test_law_default_and_checks():
     # the scheme's theta of each step size (TimeGrid.theta_rule): fixed here
     assert c.law is ContactLaw.POSITION and c.theta(built.grid.dt_s) == 0.55
     with pytest.raises(InputError, match="theta"):
-        PointToSurfaceContact(built.system.bodies, c.slave, c.slave_nodes, c.master, c.surface,
-                              law="position")
+        PointToSurfaceContact(
+            built.system.bodies, c.slave, c.slave_nodes, c.master, c.surface, law="position"
+        )
 
 
 def test_penetration_recovery_option():
@@ -230,7 +233,7 @@ def test_penetration_recovery_option():
     c = build_scenario(scenario_from_dict(data)).system.contacts[0]
     assert c.beta == 0.0
     gaps, h = np.array([-1e-6, -1e-6, -1e-6, -1e-6, 0.0, 2e-6]), 1e-6
-    closing = np.array([-10.0, -0.2, 0.0, 0.3, -1.0, -1.0])   # u_N- [m/s]
+    closing = np.array([-10.0, -0.2, 0.0, 0.3, -1.0, -1.0])  # u_N- [m/s]
     assert np.all(c._lower(gaps, closing, h) == 0.0)
     data["contacts"][0]["penetration_recovery"] = 0.5
     c = build_scenario(scenario_from_dict(data)).system.contacts[0]
@@ -251,14 +254,27 @@ def test_conserving_scheme_flag_and_its_energy_warning():
     from flexmvm.scenarios.run import run_scenario
 
     short = {"t_end_s": 2e-6}
-    assert run_scenario(_scenario("position", True).with_time(**short)).summary[
-        "energy_conserving_scheme"] is True
-    assert run_scenario(_scenario("position", True, 0.55).with_time(**short)).summary[
-        "energy_conserving_scheme"] is True
-    assert run_scenario(_scenario("velocity", False).with_time(**short)).summary[
-        "energy_conserving_scheme"] is False
+    assert (
+        run_scenario(_scenario("position", True).with_time(**short)).summary[
+            "energy_conserving_scheme"
+        ]
+        is True
+    )
+    assert (
+        run_scenario(_scenario("position", True, 0.55).with_time(**short)).summary[
+            "energy_conserving_scheme"
+        ]
+        is True
+    )
+    assert (
+        run_scenario(_scenario("velocity", False).with_time(**short)).summary[
+            "energy_conserving_scheme"
+        ]
+        is False
+    )
     unstable = {"energy_gain_rel_max": 4.6e-4, "energy_conserving_scheme": True}
     assert "theta = 0.55" in energy_gain_warning(unstable)
     assert energy_gain_warning(unstable | {"energy_conserving_scheme": False}) is None
-    assert energy_gain_warning({"energy_gain_rel_max": 7e-7,
-                                "energy_conserving_scheme": True}) is None
+    assert (
+        energy_gain_warning({"energy_gain_rel_max": 7e-7, "energy_conserving_scheme": True}) is None
+    )

@@ -49,7 +49,7 @@ def _ring(scheme: str) -> tuple[float, float, float]:
         v.append(nodes.xd[:, 0].copy())
         lam = res.contact_impulses
         force.append(float(res.contact.normal_impulse(lam)) / h)
-        last = prov._last[0]            # (slave index, master facet nodes, weights, normal)
+        last = prov._last[0]  # (slave index, master facet nodes, weights, normal)
         if last is not None and lam.size:
             touched.update(int(p) for p in last[0][np.nonzero(lam[: len(last[0])] > 0)[0]])
 
@@ -79,4 +79,3 @@ def test_contact_nodes_ring_no_more_than_on_the_damped_scheme():
     assert (theta, theta_d, theta_0) == (0.51, 0.55, 0.5)
     assert vm <= 1.1 * vm_d and vp <= 0.5 * vp_d, (vm, vm_d, vp, vp_d)
     assert vm_0 >= 1.4 * vm, (vm_0, vm)
-

@@ -30,8 +30,10 @@ from pathlib import Path
 import pytest
 
 ROOT = Path(__file__).resolve().parents[1]
-PAGES = [ROOT / "README.md",
-         *sorted(p for p in (ROOT / "docs").rglob("*.md") if "_build" not in p.parts)]
+PAGES = [
+    ROOT / "README.md",
+    *sorted(p for p in (ROOT / "docs").rglob("*.md") if "_build" not in p.parts),
+]
 MARKER = re.compile(r"^<!-- docs-test: replace `([^`]+)` with `([^`]*)` -->$")
 # Each block's wall-time budget [s]. The longest, README's first script (two runs on 20 us of
 # the short seed case; the same block on docs/getting_started.md runs once), took 27-54 s on the
@@ -53,8 +55,7 @@ def _blocks(page: Path) -> list[tuple[str, str, list[tuple[str, str]]]]:
             subs.insert(0, m.groups())
             k -= 1
         j = lines.index("```", i + 1)
-        out.append((f"{page.relative_to(ROOT)}:{i + 1}", "\n".join(lines[i + 1 : j]) + "\n",
-                    subs))
+        out.append((f"{page.relative_to(ROOT)}:{i + 1}", "\n".join(lines[i + 1 : j]) + "\n", subs))
         i = j + 1
     return out
 
@@ -91,8 +92,9 @@ def test_tutorial_code_is_run_by_a_test():
         for line in page.read_text(encoding="utf-8").splitlines():
             if m := INCLUDE.match(line.strip()):
                 path = (page.parent / m.group(1)).resolve()
-                assert path.parent == ROOT / "examples" and path.suffix == ".py", \
+                assert path.parent == ROOT / "examples" and path.suffix == ".py", (
                     f"{page.relative_to(ROOT)} shows {m.group(1)}, not a script of examples/"
+                )
                 assert path.is_file(), f"{page.relative_to(ROOT)} shows {m.group(1)}: no such file"
                 shown.add(path.name)
     assert shown >= {"rod_impact.py", "selection_study.py", "pendulum_joints.py"}
@@ -118,8 +120,14 @@ def test_python_block_runs_as_a_script(tmp_path, label, code, subs):
             code = code.replace(old, new)
     script = tmp_path / "block.py"
     script.write_text(code, encoding="utf-8")
-    proc = subprocess.run([sys.executable, str(script)], check=False, cwd=ROOT,
-                          capture_output=True, text=True, timeout=BUDGET_S)
+    proc = subprocess.run(
+        [sys.executable, str(script)],
+        check=False,
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        timeout=BUDGET_S,
+    )
     assert proc.returncode == 0, f"{label}:\n{proc.stderr[-3000:]}"
     assert "Traceback" not in proc.stderr, proc.stderr[-3000:]
     assert "bootstrapping phase" not in proc.stderr

@@ -29,8 +29,16 @@ from flexmvm.reduction.basis import BasisKind, build_basis
 from flexmvm.reduction.rod_reference import rod_reference
 
 G = np.array([0.0, 0.0, -9.81])
-SHORT_ROD = RodSpec(length_m=0.2, radius_m=0.01, core_elements=1, core_half_width_m=0.003,
-                    n_rings=1, first_element_m=0.025, growth=1.0, max_element_m=0.025)
+SHORT_ROD = RodSpec(
+    length_m=0.2,
+    radius_m=0.01,
+    core_elements=1,
+    core_half_width_m=0.003,
+    n_rings=1,
+    first_element_m=0.025,
+    growth=1.0,
+    max_element_m=0.025,
+)
 
 
 @functools.cache
@@ -64,8 +72,9 @@ def test_rigid_pendulum_period_at_60_degrees():
     I_y = body.inv.G0[0, 0] + body.inv.G0[2, 2]
     T_exact = 4 * np.sqrt(I_y / (1.0 * 9.81 * 1.0)) * ellipk(np.sin(th0 / 2) ** 2)
     sysm = System((body,), (SphericalJoint(BodyPoint(0, local=(0, 0, 0)), np.zeros(3)),), (), G)
-    res = simulate(sysm, [_state(body, A=axis_angle([0, 1, 0], th0))],
-                   TimeGrid(1.3 * T_exact, 2e-3, theta=0.5))
+    res = simulate(
+        sysm, [_state(body, A=axis_angle([0, 1, 0], th0))], TimeGrid(1.3 * T_exact, 2e-3, theta=0.5)
+    )
     ang = np.array([np.arctan2(A[0, 2], A[2, 2]) for A in res.frame_A[:, 0]])
     i = np.where(np.diff(np.sign(ang)) != 0)[0]
     tc = res.t[i] - ang[i] * (res.t[i + 1] - res.t[i]) / (ang[i + 1] - ang[i])
@@ -161,16 +170,20 @@ def test_bifilar_pendulum_swings_without_rotation_and_reaches_sqrt_2gh():
     a = top[np.argmin(np.abs(X[top, 0] - 0.05))]
     b = top[np.argmin(np.abs(X[top, 0] - 0.15))]
     ref = rod_reference(rod)
-    basis = build_basis(fe, BasisKind.CRAIG_BAMPTON, ref, retained_nodes=np.array([a, b]), n_modes=6)
+    basis = build_basis(
+        fe, BasisKind.CRAIG_BAMPTON, ref, retained_nodes=np.array([a, b]), n_modes=6
+    )
     body = body_from_fe("rod", fe, basis)
     ell, th0 = 0.3, np.radians(20.0)
     offset = np.array([-ell * np.sin(th0), 0.0, ell * (1 - np.cos(th0))])
-    joints = tuple(DistanceJoint(BodyPoint(0, node=int(k)), X[k] + np.array([0, 0, ell]), ell)
-                   for k in (a, b))
+    joints = tuple(
+        DistanceJoint(BodyPoint(0, node=int(k)), X[k] + np.array([0, 0, ell]), ell) for k in (a, b)
+    )
     sysm = System((body,), joints, (), G)
     T_quarter = np.pi / 2 * np.sqrt(ell / 9.81)
-    res = simulate(sysm, [_state(body, r=offset)],
-                   TimeGrid(1.2 * T_quarter, 2e-4, 2e-4, 2e-4, theta=0.5))
+    res = simulate(
+        sysm, [_state(body, r=offset)], TimeGrid(1.2 * T_quarter, 2e-4, 2e-4, 2e-4, theta=0.5)
+    )
     speed = np.linalg.norm(res.momentum, axis=1) / body.inv.mass
     v_exact = np.sqrt(2 * 9.81 * ell * (1 - np.cos(th0)))
     assert abs(speed.max() / v_exact - 1) < 1e-3
@@ -196,8 +209,9 @@ def test_time_step_convergence_is_second_order():
         v = np.zeros(body.nv)
         v[3:6] = (40.0, 30.0, 0.0)
         v[6:] = 0.05 * rng.normal(size=body.nq) / np.sqrt(body.nq)
-        return simulate(System((body,)), [_state(body, v=v)], TimeGrid(1e-4, h, h, h, theta=0.5),
-                        probes)
+        return simulate(
+            System((body,)), [_state(body, v=v)], TimeGrid(1e-4, h, h, h, theta=0.5), probes
+        )
 
     ref = run(1e-6 / 64)
     hs = [0.5e-6, 0.25e-6, 0.125e-6]

@@ -39,7 +39,8 @@ def test_rod_impact_example(capsys):
         p = run.result.momentum
         assert np.abs(p - p[0]).max() <= 1e-9 * np.linalg.norm(p[0])
         assert run.steps.contact_impulse_Ns.sum() == pytest.approx(
-            np.sum(run.contact_force[1:] * np.diff(run.t)), rel=1e-12)
+            np.sum(run.contact_force[1:] * np.diff(run.t)), rel=1e-12
+        )
     assert "force NCC against full FE" in capsys.readouterr().out
 
 

@@ -71,7 +71,7 @@ def test_run_keeps_a_note_added_to_its_earlier_output(tmp_path, capsys):
     assert set(manifest["files"]) == set(_tree(out)) - {MARKER}
     first = _tree(out)
     code, _, err = _in_process(["run", TINY, "--out", out, *RUN_FAST], capsys)
-    assert code == 0, err                     # an unchanged earlier output is replaced
+    assert code == 0, err  # an unchanged earlier output is replaced
     assert set(_tree(out)) == set(first)
     (out / "NOTES.txt").write_text("run 1: looks right\n")
     before = _tree(out)
@@ -92,12 +92,13 @@ def test_staged_dir_refuses_another_command_and_a_markerless_folder(tmp_path):
         (tmp / "a.txt").write_text("1")
         (tmp / "sub").mkdir()
         (tmp / "sub" / "b.txt").write_text("2")
-    with pytest.raises(InputError, match="output of 'flexmvm test', not of flexmvm other"), \
-            staged_dir(out, "flexmvm other"):
+    with (
+        pytest.raises(InputError, match="output of 'flexmvm test', not of flexmvm other"),
+        staged_dir(out, "flexmvm other"),
+    ):
         pass
     (out / MARKER).unlink()
-    with pytest.raises(InputError, match="no flexmvm manifest"), \
-            staged_dir(out, "flexmvm test"):
+    with pytest.raises(InputError, match="no flexmvm manifest"), staged_dir(out, "flexmvm test"):
         pass
     assert _tree(out) == {"a.txt": b"1", "sub/b.txt": b"2"}
 
@@ -132,10 +133,29 @@ def test_select_cli_refuses_a_users_folder(tmp_path):
     (out / "selection.json").write_text("{}\n")
     (out / "draft.md").write_text("draft\n")
     before = _tree(out)
-    p = subprocess.run([sys.executable, "-m", "flexmvm.cli.main", "select", str(TINY),
-                        "--body", "b2", "--out", str(out), "--serial", "--no-progress",
-                        "--t-end", "3e-6", "--modes", "7"],
-                       capture_output=True, text=True, timeout=300, check=False)
+    p = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "flexmvm.cli.main",
+            "select",
+            str(TINY),
+            "--body",
+            "b2",
+            "--out",
+            str(out),
+            "--serial",
+            "--no-progress",
+            "--t-end",
+            "3e-6",
+            "--modes",
+            "7",
+        ],
+        capture_output=True,
+        text=True,
+        timeout=300,
+        check=False,
+    )
     _refused(p.returncode, p.stderr, "draft.md")
     assert _tree(out) == before
 
@@ -152,7 +172,7 @@ def _children(pid: int) -> list[int]:
             stat = (d / "stat").read_text()
         except OSError:
             continue
-        fields = stat[stat.rindex(")") + 2:].split()
+        fields = stat[stat.rindex(")") + 2 :].split()
         if int(fields[1]) == pid and fields[0] != "Z":
             kids.append(int(d.name))
     return kids
@@ -163,22 +183,41 @@ def _alive(pid: int) -> bool:
         stat = Path(f"/proc/{pid}/stat").read_text()
     except OSError:
         return False
-    return stat[stat.rindex(")") + 2:].split()[0] != "Z"
+    return stat[stat.rindex(")") + 2 :].split()[0] != "Z"
 
 
 def _start_run(out: Path) -> tuple[subprocess.Popen, list[int]]:
     """`flexmvm run --jobs 2` on the tiny case (long enough to be caught running); returns the
     process and its two pool workers once both have started."""
-    proc = subprocess.Popen([sys.executable, "-m", "flexmvm.cli.main", "run", str(TINY),
-                             "--out", str(out), "--t-end", "3e-4", "--no-fields",
-                             "--no-progress", "--jobs", "2"],
-                            stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    proc = subprocess.Popen(
+        [
+            sys.executable,
+            "-m",
+            "flexmvm.cli.main",
+            "run",
+            str(TINY),
+            "--out",
+            str(out),
+            "--t-end",
+            "3e-4",
+            "--no-fields",
+            "--no-progress",
+            "--jobs",
+            "2",
+        ],
+        stdout=subprocess.PIPE,
+        stderr=subprocess.PIPE,
+        text=True,
+    )
     deadline = time.monotonic() + 120
     while time.monotonic() < deadline:
-        workers = [k for k in _children(proc.pid)
-                   if "resource_tracker" not in Path(f"/proc/{k}/cmdline").read_text()]
+        workers = [
+            k
+            for k in _children(proc.pid)
+            if "resource_tracker" not in Path(f"/proc/{k}/cmdline").read_text()
+        ]
         if len(workers) >= 2 and (out.parent / f"{out.name}.partial-{proc.pid}").is_dir():
-            time.sleep(3.0)            # inside the runs, past the imports
+            time.sleep(3.0)  # inside the runs, past the imports
             return proc, _children(proc.pid)
         if proc.poll() is not None:
             pytest.fail(f"the run ended before it could be killed: {proc.communicate()}")
@@ -213,8 +252,7 @@ def test_sigterm_stops_the_workers_and_leaves_nothing(tmp_path):
 
 
 @pytest.mark.skipif(not sys.platform.startswith("linux"), reason="reads /proc")
-def test_sigkill_takes_the_workers_and_the_next_run_removes_the_staging_folder(tmp_path,
-                                                                               capsys):
+def test_sigkill_takes_the_workers_and_the_next_run_removes_the_staging_folder(tmp_path, capsys):
     """SIGKILL cannot be cleaned up after: the workers die with the parent (within 5 s), the
     staging folder stays, and the next run into the same --out removes it and says so."""
     out = tmp_path / "out"
@@ -241,6 +279,8 @@ def test_a_killed_worker_fails_the_run_in_one_line(tmp_path):
     _, err = proc.communicate(timeout=120)
     assert proc.returncode != 0
     lines = err.strip().splitlines()
-    assert "Traceback" not in err and len(lines) == 1 and lines[0].startswith("flexmvm: error:"), err
+    assert "Traceback" not in err and len(lines) == 1 and lines[0].startswith("flexmvm: error:"), (
+        err
+    )
     assert _wait_gone(kids, 5.0) == []
     assert list(tmp_path.iterdir()) == []

@@ -22,9 +22,27 @@ STEEL = Material(E=210e9, nu=0.3, rho=7800.0, name="steel")
 
 # meshio/VTK reference positions, doubled to lattice offsets (0, 1, 2).
 _HEX8 = [(0, 0, 0), (2, 0, 0), (2, 2, 0), (0, 2, 0), (0, 0, 2), (2, 0, 2), (2, 2, 2), (0, 2, 2)]
-_HEX27 = _HEX8 + [(1, 0, 0), (2, 1, 0), (1, 2, 0), (0, 1, 0), (1, 0, 2), (2, 1, 2), (1, 2, 2),
-                  (0, 1, 2), (0, 0, 1), (2, 0, 1), (2, 2, 1), (0, 2, 1), (0, 1, 1), (2, 1, 1),
-                  (1, 0, 1), (1, 2, 1), (1, 1, 0), (1, 1, 2), (1, 1, 1)]
+_HEX27 = _HEX8 + [
+    (1, 0, 0),
+    (2, 1, 0),
+    (1, 2, 0),
+    (0, 1, 0),
+    (1, 0, 2),
+    (2, 1, 2),
+    (1, 2, 2),
+    (0, 1, 2),
+    (0, 0, 1),
+    (2, 0, 1),
+    (2, 2, 1),
+    (0, 2, 1),
+    (0, 1, 1),
+    (2, 1, 1),
+    (1, 0, 1),
+    (1, 2, 1),
+    (1, 1, 0),
+    (1, 1, 2),
+    (1, 1, 1),
+]
 
 
 def _lattice(shape):
@@ -82,17 +100,25 @@ def hex_wedge_mesh() -> Mesh:
 
 def tube_hex27(r_in=0.5e-2, r_out=1e-2, length=0.04, n_theta=8, n_r=1, n_x=2) -> Mesh:
     """Curved HEX27 tube along x: exact radii and angles at every node (periodic in theta)."""
-    i, j, k = np.meshgrid(np.arange(2 * n_x + 1), np.arange(2 * n_r + 1),
-                          np.arange(2 * n_theta), indexing="ij")
+    i, j, k = np.meshgrid(
+        np.arange(2 * n_x + 1), np.arange(2 * n_r + 1), np.arange(2 * n_theta), indexing="ij"
+    )
     x = i / (2 * n_x) * length
     r = r_in + j / (2 * n_r) * (r_out - r_in)
     th = k / (2 * n_theta) * 2 * np.pi
     nodes = np.stack([x, r * np.cos(th), r * np.sin(th)], axis=-1).reshape(-1, 3)
     ids = np.arange(nodes.shape[0]).reshape(i.shape)
-    base = np.stack(np.meshgrid(2 * np.arange(n_x), 2 * np.arange(n_r), 2 * np.arange(n_theta),
-                                indexing="ij"), -1).reshape(-1, 3)
-    conn = np.stack([ids[base[:, 0] + o[0], base[:, 1] + o[1], (base[:, 2] + o[2]) % (2 * n_theta)]
-                     for o in _HEX27], axis=1)
+    base = np.stack(
+        np.meshgrid(2 * np.arange(n_x), 2 * np.arange(n_r), 2 * np.arange(n_theta), indexing="ij"),
+        -1,
+    ).reshape(-1, 3)
+    conn = np.stack(
+        [
+            ids[base[:, 0] + o[0], base[:, 1] + o[1], (base[:, 2] + o[2]) % (2 * n_theta)]
+            for o in _HEX27
+        ],
+        axis=1,
+    )
     return Mesh(nodes, (CellBlock(CellType.HEX27, conn),))
 
 
@@ -101,9 +127,13 @@ def boundary_mask(mesh: Mesh) -> np.ndarray:
     x = mesh.nodes
     on_box = np.any(np.isclose(x, x.min(0)) | np.isclose(x, x.max(0)), axis=1)
     r = np.hypot(x[:, 1], x[:, 2])
-    if np.isclose(r.min(), 0.5e-2) and np.isclose(r.max(), 1e-2):      # the tube
-        return np.isclose(r, r.min()) | np.isclose(r, r.max()) | np.isclose(x[:, 0], 0) | (
-            np.isclose(x[:, 0], x[:, 0].max()))
+    if np.isclose(r.min(), 0.5e-2) and np.isclose(r.max(), 1e-2):  # the tube
+        return (
+            np.isclose(r, r.min())
+            | np.isclose(r, r.max())
+            | np.isclose(x[:, 0], 0)
+            | (np.isclose(x[:, 0], x[:, 0].max()))
+        )
     return on_box
 
 
@@ -132,7 +162,7 @@ def test_mass_is_rho_times_volume(case):
     if name in BOX_VOLUME:
         assert fe.volume == pytest.approx(BOX_VOLUME[name], rel=1e-12)
     kron = sp.kron(fe.M_scalar, sp.identity(3), format="csr")
-    assert abs(fe.M - kron).max() == 0.0            # M == kron(M_scalar, I3) exactly
+    assert abs(fe.M - kron).max() == 0.0  # M == kron(M_scalar, I3) exactly
 
 
 def test_curved_hex27_integrated_on_true_geometry():
@@ -246,7 +276,7 @@ def test_nonconforming_mesh_raises():
     mesh = box_hex((2, 1, 1), (0.2, 0.1, 0.1), order=2)
     conn = mesh.cells[0].connectivity.copy()
     nodes = np.vstack([mesh.nodes, mesh.nodes[conn[1, 20]]])
-    conn[1, 20] = len(nodes) - 1          # cell 1's x=0 face centre, shared with cell 0
+    conn[1, 20] = len(nodes) - 1  # cell 1's x=0 face centre, shared with cell 0
     bad = Mesh(nodes, (CellBlock(CellType.HEX27, conn),))
     with pytest.raises(MeshError, match="non-conforming"):
         assemble(bad, STEEL)
@@ -263,7 +293,7 @@ def test_mode_solver_errors():
     freqs, phi = free_modes(fe, fe.n_dof)
     assert freqs.shape == (fe.n_dof,) and np.all(np.diff(freqs) >= 0)
     np.testing.assert_allclose(phi.T @ (fe.M @ phi), np.eye(fe.n_dof), atol=1e-9)
-    fixed = np.arange(12)                      # nodes 0..3 clamped: no rigid motion left
+    fixed = np.arange(12)  # nodes 0..3 clamped: no rigid motion left
     with pytest.raises(SolverError, match="negative eigenvalue"):
         constrained_modes(fe.M, -fe.K, fixed, 3)
 
@@ -278,8 +308,9 @@ def test_constrained_modes_zero_at_fixed_dofs():
     freqs, modes = constrained_modes(fe.M, fe.K, fixed, 5)
     assert np.all(modes[fixed] == 0.0) and freqs.min() > 0
     free = np.setdiff1d(np.arange(fe.n_dof), fixed)
-    lam = sla.eigh(fe.K[free][:, free].toarray(), fe.M[free][:, free].toarray(),
-                   eigvals_only=True)[:5]
+    lam = sla.eigh(fe.K[free][:, free].toarray(), fe.M[free][:, free].toarray(), eigvals_only=True)[
+        :5
+    ]
     assert np.allclose((2 * np.pi * freqs) ** 2, lam, rtol=1e-9)
     assert np.allclose(np.diag(modes.T @ fe.M @ modes), 1.0, rtol=1e-10)
 
@@ -322,9 +353,9 @@ def test_spd_solver_choice(monkeypatch):
     assert isinstance(many.__self__, SupernodalLDL)
     assert not isinstance(few.__self__, SupernodalLDL)
     monkeypatch.setattr(modes, "CHOLESKY_MIN_N", 1)
-    U = sp.csc_matrix(A + sp.triu(A, 1) * 1e-3)              # unsymmetric
+    U = sp.csc_matrix(A + sp.triu(A, 1) * 1e-3)  # unsymmetric
     shift = 0.5 * float(eigsh(A, k=1, return_eigenvectors=False)[0])
-    S = sp.csc_matrix(A - shift * sp.eye(A.shape[0]))        # symmetric indefinite
+    S = sp.csc_matrix(A - shift * sp.eye(A.shape[0]))  # symmetric indefinite
     refused = [modes.spd_solver(U), modes.spd_solver(S)]
     assert not any(isinstance(r.__self__, SupernodalLDL) for r in refused)
     for solve, M in ((many, A), (few, A), (refused[0], U), (refused[1], S)):

@@ -34,9 +34,15 @@ from flexmvm.scenarios.build import build_scenario
 from flexmvm.scenarios.run import run_scenario
 
 G = 9.81
-ROT_UP = {"axis": [0.0, 1.0, 0.0], "angle_deg": -90.0}   # rod local +x -> global +z
-COARSE = {"core_elements": 1, "core_half_width_m": 0.003, "n_rings": 1, "first_element_m": 0.005,
-              "growth": 1.0, "max_element_m": 0.005}
+ROT_UP = {"axis": [0.0, 1.0, 0.0], "angle_deg": -90.0}  # rod local +x -> global +z
+COARSE = {
+    "core_elements": 1,
+    "core_half_width_m": 0.003,
+    "n_rings": 1,
+    "first_element_m": 0.005,
+    "growth": 1.0,
+    "max_element_m": 0.005,
+}
 
 
 # -- the cone problem -----------------------------------------------------------------------
@@ -79,7 +85,7 @@ def _rigid_bodies_problem(rng, n_points: int, mu_max: float = 0.8):
     pts -= np.array([0.0, 0.0, 0.01])
     n_rows = 3 * n_points
     J = np.zeros((n_rows, 6))
-    dirs = np.eye(3)[[2, 0, 1]]          # normal z, tangents x, y
+    dirs = np.eye(3)[[2, 0, 1]]  # normal z, tangents x, y
     for k, p in enumerate(pts):
         for j, d in enumerate(dirs):
             J[j * n_points + k] = np.concatenate([d, np.cross(p, d)])
@@ -89,8 +95,13 @@ def _rigid_bodies_problem(rng, n_points: int, mu_max: float = 0.8):
     c = J @ v
     c[:n_points] -= np.abs(rng.normal(size=n_points)) * 0.01
     ids = np.arange(n_points)
-    return D, c, ids, np.column_stack([n_points + ids, 2 * n_points + ids]), \
-        rng.uniform(0, mu_max, n_points)
+    return (
+        D,
+        c,
+        ids,
+        np.column_stack([n_points + ids, 2 * n_points + ids]),
+        rng.uniform(0, mu_max, n_points),
+    )
 
 
 def test_random_rigid_contact_problems_meet_their_residual():
@@ -107,8 +118,7 @@ def test_random_rigid_contact_problems_meet_their_residual():
         assert res <= COULOMB_RTOL
         scale = np.abs(lam).max() + 1e-300
         assert np.all(lam[normal] >= 0.0)
-        assert np.all(np.linalg.norm(lam[tangent], axis=1)
-                      <= mu * lam[normal] + 1e-7 * scale)
+        assert np.all(np.linalg.norm(lam[tangent], axis=1) <= mu * lam[normal] + 1e-7 * scale)
         k = int(np.argmax(lam[normal]))
         if lam[normal][k] > 1e-3 * scale and mu[k] > 0.05:
             bad = lam.copy()
@@ -123,8 +133,8 @@ def test_unsolvable_tolerance_is_reported():
     residual, the sweeps and the rows."""
     rng = np.random.default_rng(3)
     D, c, normal, tangent, mu = _rigid_bodies_problem(rng, 6)
-    c[normal] = -1.0                      # every point approaching
-    c[tangent[:, 0]] += 1.0               # and sliding along x
+    c[normal] = -1.0  # every point approaching
+    c[tangent[:, 0]] += 1.0  # and sliding along x
     with pytest.raises(SolverError, match=r"Coulomb residual .* exceeds 1e-30 after \d+ Gauss"):
         solve_coulomb_checked(D, c, 0, normal, tangent, mu, rtol=1e-30)
 
@@ -136,22 +146,38 @@ def _incline(alpha_deg: float, mu: float, t_end_s: float = 0.05, dt_s: float = 1
     global x. The block's bottom face carries the slave nodes (25), the flat's top face the
     master facets."""
     a = np.radians(alpha_deg)
-    return scenario_from_dict({
-        "name": "incline", "gravity_mps2": [G * np.sin(a), 0.0, -G * np.cos(a)],
-        "time": {"t_end_s": t_end_s, "dt_s": dt_s, "output_dt_s": dt_s},
-        "bodies": [
-            {"name": "flat", "material": "aluminium",
-             "rod": {"length_m": 0.01, "radius_m": 0.05, **COARSE, "core_half_width_m": 0.01},
-             "model": {"kind": "rigid"},
-             "placement": {"position_m": [0.0, 0.0, -0.01], "rotation": ROT_UP}},
-            {"name": "block", "material": "brass",
-             "rod": {"length_m": 0.01, "radius_m": 0.01, **COARSE},
-             "model": {"kind": "rigid"},
-             "placement": {"position_m": [0.0, 0.0, 0.0], "rotation": ROT_UP}}],
-        "contacts": [{"slave": "block.end_a", "master": "flat.end_b",
-                      "friction_coefficient": mu}],
-        "joints": [{"type": "ground", "body": "flat"}],
-    })
+    return scenario_from_dict(
+        {
+            "name": "incline",
+            "gravity_mps2": [G * np.sin(a), 0.0, -G * np.cos(a)],
+            "time": {"t_end_s": t_end_s, "dt_s": dt_s, "output_dt_s": dt_s},
+            "bodies": [
+                {
+                    "name": "flat",
+                    "material": "aluminium",
+                    "rod": {
+                        "length_m": 0.01,
+                        "radius_m": 0.05,
+                        **COARSE,
+                        "core_half_width_m": 0.01,
+                    },
+                    "model": {"kind": "rigid"},
+                    "placement": {"position_m": [0.0, 0.0, -0.01], "rotation": ROT_UP},
+                },
+                {
+                    "name": "block",
+                    "material": "brass",
+                    "rod": {"length_m": 0.01, "radius_m": 0.01, **COARSE},
+                    "model": {"kind": "rigid"},
+                    "placement": {"position_m": [0.0, 0.0, 0.0], "rotation": ROT_UP},
+                },
+            ],
+            "contacts": [
+                {"slave": "block.end_a", "master": "flat.end_b", "friction_coefficient": mu}
+            ],
+            "joints": [{"type": "ground", "body": "flat"}],
+        }
+    )
 
 
 @functools.cache
@@ -176,7 +202,8 @@ def test_block_sticks_below_the_friction_angle():
     # the solves' 1e-8 (relative)
     a = np.arctan(0.8 * mu)
     assert np.linalg.norm(res.friction.impulse_ns) == pytest.approx(
-        res.block_mass_kg * G * np.sin(a) * 0.05, rel=1e-7)
+        res.block_mass_kg * G * np.sin(a) * 0.05, rel=1e-7
+    )
 
 
 @pytest.mark.parametrize("alpha_deg", [30.0, 20.0])
@@ -190,7 +217,7 @@ def test_block_slides_above_the_friction_angle(alpha_deg):
     a_cf = G * (np.sin(np.radians(alpha_deg)) - mu * np.cos(np.radians(alpha_deg)))
     a_fit = 2.0 * np.polyfit(res.t, res.frame_r[:, 1, 0], 2)[0]
     assert a_fit == pytest.approx(a_cf, rel=1e-7)
-    assert np.abs(res.frame_r[:, 1, 2]).max() < 1e-9    # stays on the flat
+    assert np.abs(res.frame_r[:, 1, 2]).max() < 1e-9  # stays on the flat
     assert res.friction.max_sliding > 0 and res.friction.max_sticking == 0
 
 
@@ -199,21 +226,35 @@ def _oblique(vt: float, vn: float, mu: float, h: float = 1e-7):
     """The seed's brass striker (0.1 m, r 10 mm, hemispherical end A) as a rigid body, axis
     along z with the apex at the origin, moving at (vt, 0, -vn) onto a free rigid aluminium
     disc (r 30 mm, 10 mm high) whose top face is at z = 0 (both at t = 0: touching)."""
-    return scenario_from_dict({
-        "name": "oblique", "time": {"t_end_s": 10 * h, "dt_s": h, "output_dt_s": h},
-        "bodies": [
-            {"name": "flat", "material": "aluminium",
-             "rod": {"length_m": 0.01, "radius_m": 0.03, **COARSE},
-             "model": {"kind": "rigid"},
-             "placement": {"position_m": [0.0, 0.0, -0.01], "rotation": ROT_UP}},
-            {"name": "striker", "material": "brass",
-             "rod": {"length_m": 0.1, "radius_m": 0.01, "end_a": "hemisphere"},
-             "model": {"kind": "rigid"},
-             "placement": {"position_m": [0.0, 0.0, 0.0], "rotation": ROT_UP,
-                           "velocity_mps": [vt, 0.0, -vn]}}],
-        "contacts": [{"slave": "striker.end_a", "master": "flat.end_b",
-                      "friction_coefficient": mu}],
-    })
+    return scenario_from_dict(
+        {
+            "name": "oblique",
+            "time": {"t_end_s": 10 * h, "dt_s": h, "output_dt_s": h},
+            "bodies": [
+                {
+                    "name": "flat",
+                    "material": "aluminium",
+                    "rod": {"length_m": 0.01, "radius_m": 0.03, **COARSE},
+                    "model": {"kind": "rigid"},
+                    "placement": {"position_m": [0.0, 0.0, -0.01], "rotation": ROT_UP},
+                },
+                {
+                    "name": "striker",
+                    "material": "brass",
+                    "rod": {"length_m": 0.1, "radius_m": 0.01, "end_a": "hemisphere"},
+                    "model": {"kind": "rigid"},
+                    "placement": {
+                        "position_m": [0.0, 0.0, 0.0],
+                        "rotation": ROT_UP,
+                        "velocity_mps": [vt, 0.0, -vn],
+                    },
+                },
+            ],
+            "contacts": [
+                {"slave": "striker.end_a", "master": "flat.end_b", "friction_coefficient": mu}
+            ],
+        }
+    )
 
 
 @functools.cache
@@ -240,14 +281,19 @@ def _impact(vt, vn, mu):
     tangential relative velocity of the contact point after it [m/s]."""
     built = build_scenario(_oblique(vt, vn, mu))
     step = MoreauJeanIntegrator(built.system, theta=built.grid.theta).step(
-        0.0, built.states, built.grid.dt_s)
+        0.0, built.states, built.grid.dt_s
+    )
     u = []
     for b, point in ((1, "end_a_centre"), (0, "end_b_centre")):
         st, node = step.states[b], built.info[b].rod.mesh.node_set(point)[:1]
         u.append(built.system.bodies[b].node_velocities(node, st.A, st.q, st.v)[0])
     lam = step.contact_impulses
-    return (step.contact.normal_impulse(lam), step.contact.tangential_impulse(lam),
-            (u[0] - u[1])[0], step)
+    return (
+        step.contact.normal_impulse(lam),
+        step.contact.tangential_impulse(lam),
+        (u[0] - u[1])[0],
+        step,
+    )
 
 
 @pytest.mark.parametrize("ratio", [0.5, 0.9, 1.1, 2.0])
@@ -265,8 +311,8 @@ def test_oblique_impact_stick_slip_closed_form(ratio):
     vt = ratio * mu * vn * K_tt / K_nn
     P_n, P_t, ut, step = _impact(vt, vn, mu)
     assert P_n == pytest.approx(vn / K_nn, rel=1e-6)
-    assert abs(P_t[1]) + abs(P_t[2]) <= 1e-12 * P_n     # in the plane of incidence
-    assert -P_t[0] <= mu * P_n * (1 + 1e-9)             # inside the cone, opposing v_t
+    assert abs(P_t[1]) + abs(P_t[2]) <= 1e-12 * P_n  # in the plane of incidence
+    assert -P_t[0] <= mu * P_n * (1 + 1e-9)  # inside the cone, opposing v_t
     if ratio < 1.0:
         assert -P_t[0] == pytest.approx(vt / K_tt, rel=1e-6)
         assert abs(ut) <= 1e-6 * vt
@@ -287,7 +333,7 @@ def test_zero_friction_is_bit_identical_to_frictionless():
     default run's bit for bit (mu = 0 builds no tangent rows; the exact LCP path)."""
     sc = load_scenario(CASE).with_overrides(t_end_s=10e-6)
     data = sc.model_dump(mode="json")
-    assert "friction_coefficient" not in data["contacts"][0]    # dumps as before
+    assert "friction_coefficient" not in data["contacts"][0]  # dumps as before
     data["contacts"][0]["friction_coefficient"] = 0.0
     explicit = scenario_from_dict(data)
     assert explicit.contacts[0].friction_coefficient == 0.0
@@ -304,8 +350,11 @@ def test_friction_coefficient_checks():
     """Scenario: >= 0, a number, not with bonded contact (one-line errors); the provider
     checks the same for code that builds it directly."""
     data = load_scenario(CASE).model_dump(mode="json")
-    for value, msg in [(-0.1, "must be >= 0"), ("0.3", "valid number"),
-                       (float("nan"), "friction_coefficient")]:
+    for value, msg in [
+        (-0.1, "must be >= 0"),
+        ("0.3", "valid number"),
+        (float("nan"), "friction_coefficient"),
+    ]:
         data["contacts"][0]["friction_coefficient"] = value
         with pytest.raises(InputError, match=msg):
             scenario_from_dict(data)
@@ -316,14 +365,28 @@ def test_friction_coefficient_checks():
     assert scenario_from_dict(data).contacts[0].friction_coefficient == 0.2
 
     from flexmvm.constraints.contact import ContactKind
+
     built = build_scenario(load_scenario(CASE))
     p = built.system.contacts[0]
     with pytest.raises(InputError, match="friction coefficient must be a finite number"):
-        type(p)(built.system.bodies, p.slave, p.slave_nodes, p.master, p.surface,
-                friction_coefficient=-1.0)
+        type(p)(
+            built.system.bodies,
+            p.slave,
+            p.slave_nodes,
+            p.master,
+            p.surface,
+            friction_coefficient=-1.0,
+        )
     with pytest.raises(InputError, match="takes no friction coefficient"):
-        type(p)(built.system.bodies, p.slave, p.slave_nodes, p.master, p.surface,
-                ContactKind.BONDED, friction_coefficient=0.1)
+        type(p)(
+            built.system.bodies,
+            p.slave,
+            p.slave_nodes,
+            p.master,
+            p.surface,
+            ContactKind.BONDED,
+            friction_coefficient=0.1,
+        )
 
 
 # -- the shipped oblique rod impact --------------------------------------------------------------
@@ -362,8 +425,9 @@ def test_merged_contacts_keep_their_cones():
         r = Rows(m, {0: (np.ones((m, 6)), np.zeros((m, 0)))})
         w = np.zeros(m)
         w[0 if friction is None else friction.normal] = 1.0
-        return ContactRows(r, np.zeros(m), [("c", i) for i in range(m)], np.zeros(1), 0, w,
-                           friction)
+        return ContactRows(
+            r, np.zeros(m), [("c", i) for i in range(m)], np.zeros(1), 0, w, friction
+        )
 
     t = np.array([[[1.0, 0, 0], [0, 1.0, 0]]])
     a = rows(3, FrictionRows(np.array([0]), np.array([[1, 2]]), np.array([0.2]), t))

@@ -25,8 +25,15 @@ def test_against_the_hertz_oscillator():
     def rhs(_t, y):
         return [y[1], -k * max(y[0], 0.0) ** 1.5 / m1]
 
-    out = solve_ivp(rhs, (0, 4 * h.duration_s), [0.0, v], rtol=1e-11, atol=1e-15,
-                    dense_output=True, events=lambda t, y: y[0] if t > 0 else 1.0)
+    out = solve_ivp(
+        rhs,
+        (0, 4 * h.duration_s),
+        [0.0, v],
+        rtol=1e-11,
+        atol=1e-15,
+        dense_output=True,
+        events=lambda t, y: y[0] if t > 0 else 1.0,
+    )
     t_end = out.t_events[0][0]
     t = np.linspace(0, t_end, 20001)
     x = out.sol(t)[0]

@@ -49,9 +49,9 @@ from flexmvm.integrate.lcp import solve_checked
 from flexmvm.materials import ALUMINIUM
 from flexmvm.mesh.rod import RodSpec, rod_mesh
 
-SPHERE_R = 0.01      # m: the seed striker's cap radius
-ROD_B = 0.01         # m: rod radius
-ROD_L = 0.02         # m
+SPHERE_R = 0.01  # m: the seed striker's cap radius
+ROD_B = 0.01  # m: rod radius
+ROD_L = 0.02  # m
 
 
 def indentation_forces(spec: RodSpec, depths: np.ndarray, reach_m: float):
@@ -63,13 +63,13 @@ def indentation_forces(spec: RodSpec, depths: np.ndarray, reach_m: float):
     n = len(mesh.nodes)
     clamped = np.zeros(3 * n, dtype=bool)
     for k in mesh.node_sets["end_b"]:
-        clamped[3 * k: 3 * k + 3] = True
+        clamped[3 * k : 3 * k + 3] = True
     free = np.flatnonzero(~clamped)
     solve = ldl_factor(K[free][:, free])
     face = mesh.node_sets["end_a"]
     r = np.hypot(mesh.nodes[face, 1], mesh.nodes[face, 2])
     near = r < reach_m
-    rows = np.searchsorted(free, 3 * face[near])          # axial DOF of each candidate
+    rows = np.searchsorted(free, 3 * face[near])  # axial DOF of each candidate
     P = np.zeros((len(free), len(rows)))
     P[rows, np.arange(len(rows))] = 1.0
     G = solve(P)[rows]
@@ -87,9 +87,9 @@ def indentation_forces(spec: RodSpec, depths: np.ndarray, reach_m: float):
 
 def hertz_ratio(depths: np.ndarray, forces: np.ndarray) -> tuple[np.ndarray, float]:
     """F / F_Hertz(d - C F) per load and the fitted linear compliance C [m/N] (module doc)."""
-    e_star = ALUMINIUM.E / (1.0 - ALUMINIUM.nu ** 2)
+    e_star = ALUMINIUM.E / (1.0 - ALUMINIUM.nu**2)
     k = 4.0 / 3.0 * e_star * np.sqrt(SPHERE_R)
-    c = float(np.sum((depths - (forces / k) ** (2.0 / 3.0)) * forces) / np.sum(forces ** 2))
+    c = float(np.sum((depths - (forces / k) ** (2.0 / 3.0)) * forces) / np.sum(forces**2))
     return forces / (k * (depths - c * forces) ** 1.5), c
 
 
@@ -100,7 +100,7 @@ def _check(spec: RodSpec, h_node: float, a_min: float, tol: float) -> float:
     """Six loads with a = a_min .. 0.3 mm (the refined core's half-width): F / F_Hertz within
     tol, C of a finite body's order, the nodes in contact growing with a; returns C."""
     radii = np.geomspace(a_min * h_node, 0.3e-3, 6)
-    depths = radii ** 2 / SPHERE_R
+    depths = radii**2 / SPHERE_R
     forces, active = indentation_forces(spec, depths, reach_m=0.6e-3)
     ratio, c = hertz_ratio(depths, forces)
     assert np.all(np.abs(ratio - 1.0) < tol), (ratio, c)
@@ -116,7 +116,7 @@ def test_sphere_on_refined_rod_end_follows_hertz():
     both lengths to that accuracy)."""
     c20 = _check(RodSpec(radius_m=ROD_B, length_m=ROD_L, **REFINED), 0.075e-3, 2.0, 0.02)
     c40 = _check(RodSpec(radius_m=ROD_B, length_m=2 * ROD_L, **REFINED), 0.075e-3, 2.0, 0.02)
-    bar = ROD_L / (ALUMINIUM.E * np.pi * ROD_B ** 2)
+    bar = ROD_L / (ALUMINIUM.E * np.pi * ROD_B**2)
     assert abs((c40 - c20) / bar - 1.0) < 0.10, (c20, c40, bar)
 
 

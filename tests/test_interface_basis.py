@@ -44,8 +44,16 @@ SHORT = ROOT / "scenarios" / "rod_impact_short.toml"
 MM = 1e-3
 
 # a small rod (a few thousand DOFs): the face still graded to 0.3 mm at the centre
-SMALL = RodSpec(length_m=0.03, radius_m=0.005, core_elements=1, core_half_width_m=0.3e-3,
-                n_rings=2, first_element_m=0.3e-3, growth=2.0, max_element_m=0.01)
+SMALL = RodSpec(
+    length_m=0.03,
+    radius_m=0.005,
+    core_elements=1,
+    core_half_width_m=0.3e-3,
+    n_rings=2,
+    first_element_m=0.3e-3,
+    growth=2.0,
+    max_element_m=0.01,
+)
 
 
 @pytest.fixture(scope="module")
@@ -100,8 +108,9 @@ def test_participation_keeps_the_modes_an_axial_load_excites(small):
     _rod, fe, ref = small
     spec = InterfaceSpec(radii_m=(0.5 * MM,), pool=40)
     part = interface_columns(fe, ref, spec, 4)
-    freq = interface_columns(fe, ref, InterfaceSpec(radii_m=(0.5 * MM,),
-                                                    mode_choice=ModeChoice.FREQUENCY), 4)
+    freq = interface_columns(
+        fe, ref, InterfaceSpec(radii_m=(0.5 * MM,), mode_choice=ModeChoice.FREQUENCY), 4
+    )
     # every mode kept by participation is excited by the on-axis load; the four lowest modes
     # (bending pairs) are not: their participation is round-off of the kept ones'
     f_hz, phi = free_modes(fe, 46)
@@ -134,27 +143,41 @@ def test_build_basis_and_cache_key_carry_the_patch(small):
     assert basis.nq == 5 and basis.n_modes == 3 and basis.retained_nodes.size == 0
     src = setup_cache.rod_source(SMALL)
     mat = PRESETS["aluminium"]
-    keys = {setup_cache.basis_key(src, mat, BasisKind.INTERFACE, "end_b", ref, np.zeros(0), 3,
-                                  extra=InterfaceSpec(radii_m=r).key())
-            for r in ((0.3 * MM, 0.6 * MM), (0.3 * MM, 0.7 * MM), (0.3 * MM,))}
+    keys = {
+        setup_cache.basis_key(
+            src,
+            mat,
+            BasisKind.INTERFACE,
+            "end_b",
+            ref,
+            np.zeros(0),
+            3,
+            extra=InterfaceSpec(radii_m=r).key(),
+        )
+        for r in ((0.3 * MM, 0.6 * MM), (0.3 * MM, 0.7 * MM), (0.3 * MM,))
+    }
     assert len(keys) == 3
     # the other kinds' keys do not change (no 'extra' entry)
-    assert setup_cache.basis_key(src, mat, BasisKind.MODAL, "end_b", ref, np.zeros(0), 3) == \
-        setup_cache.basis_key(src, mat, BasisKind.MODAL, "end_b", ref, np.zeros(0), 3, extra=None)
+    assert setup_cache.basis_key(
+        src, mat, BasisKind.MODAL, "end_b", ref, np.zeros(0), 3
+    ) == setup_cache.basis_key(src, mat, BasisKind.MODAL, "end_b", ref, np.zeros(0), 3, extra=None)
     with pytest.raises(InputError, match="InterfaceSpec"):
         build_basis(fe, BasisKind.INTERFACE, ref, n_modes=3)
     with pytest.raises(InputError, match="repeat"):
         interface_columns(fe, ref, InterfaceSpec(radii_m=(0.3 * MM, 0.3 * MM)), 2)
 
 
-@pytest.mark.parametrize("model, message", [
-    ({"kind": "interface"}, "needs modes >= 1 or at least one patch radius"),
-    ({"kind": "interface", "modes": 5, "patch_radii_m": [1e-4, 1e-4]}, "distinct"),
-    ({"kind": "interface", "modes": 5, "patch_radii_m": [-1e-4]}, "patch_radii_m"),
-    ({"kind": "interface", "modes": 5, "patch_surface": "nowhere"}, "rods have no set"),
-    ({"kind": "interface", "modes": 5, "mode_choice": "loudest"}, "mode_choice"),
-    ({"kind": "interface", "modes": 5, "mode_pool": 3}, "must be >= modes"),
-])
+@pytest.mark.parametrize(
+    "model, message",
+    [
+        ({"kind": "interface"}, "needs modes >= 1 or at least one patch radius"),
+        ({"kind": "interface", "modes": 5, "patch_radii_m": [1e-4, 1e-4]}, "distinct"),
+        ({"kind": "interface", "modes": 5, "patch_radii_m": [-1e-4]}, "patch_radii_m"),
+        ({"kind": "interface", "modes": 5, "patch_surface": "nowhere"}, "rods have no set"),
+        ({"kind": "interface", "modes": 5, "mode_choice": "loudest"}, "mode_choice"),
+        ({"kind": "interface", "modes": 5, "mode_pool": 3}, "must be >= modes"),
+    ],
+)
 def test_schema_errors_are_one_line(model, message):
     sc = fm.load_scenario(SHORT)
     data = sc.model_dump(mode="json")
@@ -170,12 +193,17 @@ def short_runs():
     out = {}
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        for name, model in (("interface", fm.interface([0.15 * MM, 0.3 * MM], 6)),
-                            ("1-1", fm.mvm("1-1", 7)), ("1-3", fm.mvm("1-3", 7))):
+        for name, model in (
+            ("interface", fm.interface([0.15 * MM, 0.3 * MM], 6)),
+            ("1-1", fm.mvm("1-1", 7)),
+            ("1-3", fm.mvm("1-3", 7)),
+        ):
             n0 = len(caught)
             run = fm.run(sc.with_model("b2", model), t_end_s=1.2e-4)
-            out[name] = (run, [w for w in caught[n0:]
-                               if issubclass(w.category, ReducedBasisWarning)])
+            out[name] = (
+                run,
+                [w for w in caught[n0:] if issubclass(w.category, ReducedBasisWarning)],
+            )
     return out
 
 
@@ -183,11 +211,11 @@ def test_contact_on_the_interface_basis_is_frictionless_and_non_tensile(short_ru
     run, _ = short_runs["interface"]
     s = run.summary
     assert s["dof"]["b2"] == 6 + 2 + 6 and s["model"]["b2"] == "interface"
-    assert s["max_contact_force_N"] > 100.0       # the contact closed and carried the impact
+    assert s["max_contact_force_N"] > 100.0  # the contact closed and carried the impact
     assert s["min_contact_force_N"] >= 0.0
     assert np.all(run.steps.contact_impulse_Ns >= 0.0)
     assert all(x > 0.0 for x, _ in run.result.contact_row_impulses.values())
-    assert "friction_impulse_Ns" not in s         # no tangent rows, no friction cones
+    assert "friction_impulse_Ns" not in s  # no tangent rows, no friction cones
     assert run.result.friction is None
     assert all(len(k) == 3 for k in run.result.contact_row_impulses)  # normal rows only
     # the row impulses act along the master facets' normals, tilted by up to r/R from the
@@ -236,11 +264,20 @@ def test_selection_study_sweeps_the_interface_kind_beside_the_nodes(tmp_path):
     with pytest.raises(InputError, match="--patches"):
         parse_patches("0.2,x")
     tiny = ROOT / "tests" / "data" / "tiny_impact.toml"
-    res = run_selection_study(tiny, "b2", tmp_path, layers=[1], laps=[1], modes=[7],
-                              target=fm.Target(0.99, peak_err_max=0.02), serial=True,
-                              progress=False, echo=lambda s: None,
-                              patches=[(0.2 * MM,), (0.2 * MM, 0.4 * MM)],
-                              interface_modes=[3])
+    res = run_selection_study(
+        tiny,
+        "b2",
+        tmp_path,
+        layers=[1],
+        laps=[1],
+        modes=[7],
+        target=fm.Target(0.99, peak_err_max=0.02),
+        serial=True,
+        progress=False,
+        echo=lambda s: None,
+        patches=[(0.2 * MM,), (0.2 * MM, 0.4 * MM)],
+        interface_modes=[3],
+    )
     rows = (tmp_path / "ncc_interface.csv").read_text().splitlines()
     assert len(rows) == 3 and rows[0].startswith("model,n_patch,modes,mode_pool,dof,ncc_force")
     # each case with its patch set's explicit mode pool (the default pool of its 3 modes)
@@ -248,7 +285,7 @@ def test_selection_study_sweeps_the_interface_kind_beside_the_nodes(tmp_path):
         assert all(int(r["mode_pool"]) >= 4 * 3 + 6 for r in csv.DictReader(fh))
     ie = res["interface"]
     assert ie["runs"] == 2 and not ie["failures"]
-    assert ie["passed"] and ie["dof"] == 5          # 2 patches + 3 modes: 1 patch fails
+    assert ie["passed"] and ie["dof"] == 5  # 2 patches + 3 modes: 1 patch fails
     assert ie["ncc_force"] >= 0.99 and abs(ie["peak_err"]) <= 0.02
     assert res["passed"] and res["dof"] == 10
     assert res["best_overall"]["dof"] == 5

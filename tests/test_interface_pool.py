@@ -72,8 +72,15 @@ def _args(sc, p: dict) -> tuple:
     from flexmvm.studies.interface import _model
 
     cfg = sc.with_model("b2", _model(p, "end_b")).body("b2")
-    return (cfg.rod.spec(), cfg.material_obj(), BasisKind.INTERFACE, (), cfg.model.modes,
-            cfg.model.reference, cfg.model.interface_spec())
+    return (
+        cfg.rod.spec(),
+        cfg.material_obj(),
+        BasisKind.INTERFACE,
+        (),
+        cfg.model.modes,
+        cfg.model.reference,
+        cfg.model.interface_spec(),
+    )
 
 
 def test_cases_of_a_patch_set_share_the_pool_of_the_largest_count(tiny):
@@ -81,8 +88,11 @@ def test_cases_of_a_patch_set_share_the_pool_of_the_largest_count(tiny):
     assert len(cases) == len(PATCHES) * len(MODES)
     fe = SETUP.fe_model(tiny.body("b2").rod.spec(), ALUMINIUM)
     for radii in PATCHES:
-        own = {c.params["modes"]: c.params["mode_pool"] for c in cases
-               if tuple(c.params["patch_radii_m"]) == radii}
+        own = {
+            c.params["modes"]: c.params["mode_pool"]
+            for c in cases
+            if tuple(c.params["patch_radii_m"]) == radii
+        }
         top = participation_pool(fe, InterfaceSpec(radii_m=radii), max(MODES))
         # the default pool of the largest count, grown past 4 m + 6 here (the tiny rod's
         # on-axis load excites few of its lowest modes)
@@ -93,13 +103,14 @@ def test_cases_of_a_patch_set_share_the_pool_of_the_largest_count(tiny):
     assert freq[0].params["mode_pool"] is None
 
 
-def test_largest_count_is_the_default_model_and_a_case_is_reproducible(tiny, cache,
-                                                                      monkeypatch):
+def test_largest_count_is_the_default_model_and_a_case_is_reproducible(tiny, cache, monkeypatch):
     """The largest count's basis with the explicit pool is the default basis bit for bit; a
     smaller count built in the study (pool and statics from the cache) equals the same model
     built alone with no cache at all."""
-    cases = {(len(c.params["patch_radii_m"]), c.params["modes"]): c
-             for c in interface_cases(tiny, "b2", PATCHES, MODES)}
+    cases = {
+        (len(c.params["patch_radii_m"]), c.params["modes"]): c
+        for c in interface_cases(tiny, "b2", PATCHES, MODES)
+    }
     top = cases[(2, 6)].params
     study = SETUP.basis(*_args(tiny, top))
     default = SETUP.basis(*_args(tiny, dict(top, mode_pool=None)))
@@ -112,8 +123,11 @@ def test_largest_count_is_the_default_model_and_a_case_is_reproducible(tiny, cac
     assert np.array_equal(in_study.psi, alone.psi)
     np.testing.assert_array_equal(in_study.mode_freqs_hz, alone.mode_freqs_hz)
     # the case's model is the standalone scenario's: the written-out model carries the pool
-    model = fm.scenario_from_dict(small["scenario"]).with_model(
-        "b2", fm.interface([0.2 * MM, 0.4 * MM], 3, mode_pool=small["mode_pool"])).body("b2")
+    model = (
+        fm.scenario_from_dict(small["scenario"])
+        .with_model("b2", fm.interface([0.2 * MM, 0.4 * MM], 3, mode_pool=small["mode_pool"]))
+        .body("b2")
+    )
     assert model.model.interface_spec() == _args(tiny, small)[-1]
 
 
@@ -133,8 +147,7 @@ def test_a_second_mode_count_solves_no_eigenproblem(tiny, monkeypatch):
     assert eig.calls == 0 and statics.calls == 1
     # a pool of another size is a miss: the counters can fail
     scenario_setup.clear_caches()
-    SETUP.basis(*_args(tiny, dict(cases[3].params, mode_pool=cases[3].params["mode_pool"]
-                                      + 1)))
+    SETUP.basis(*_args(tiny, dict(cases[3].params, mode_pool=cases[3].params["mode_pool"] + 1)))
     assert eig.calls == 1 and statics.calls == 1
 
 
@@ -143,8 +156,11 @@ def test_run_interface_case_records_the_pool(tiny, tmp_path):
 
     sc = tiny.with_time(t_end_s=5e-6)
     hist, _ = reference_history(sc, "b2", tmp_path)
-    (case,) = [c for c in interface_cases(sc, "b2", PATCHES[:1], [1, 3], reference=hist)
-               if c.params["modes"] == 1]
+    (case,) = [
+        c
+        for c in interface_cases(sc, "b2", PATCHES[:1], [1, 3], reference=hist)
+        if c.params["modes"] == 1
+    ]
     row = run_interface_case(case, reference=hist)
     assert row["mode_pool"] == case.params["mode_pool"] > 3 and "failed" not in row
 
@@ -170,26 +186,45 @@ def test_pool_and_statics_keys_follow_their_inputs_not_the_mode_count(tiny):
     spec = tiny.body("b2").rod.spec()
     src = setup_cache.rod_source(spec)
     other = setup_cache.rod_source(tiny.body("b1").rod.spec())
-    keys = {setup_cache.free_modes_key(s, m, k)
-            for s in (src, other) for m in (ALUMINIUM, BRASS) for k in (30, 60)}
+    keys = {
+        setup_cache.free_modes_key(s, m, k)
+        for s in (src, other)
+        for m in (ALUMINIUM, BRASS)
+        for k in (30, 60)
+    }
     assert len(keys) == 8 and all(k.startswith("freemodes-") for k in keys)
     assert setup_cache.free_modes_key(src, ALUMINIUM, 30, version="0" * 16) not in keys
     mesh = SETUP.rod_mesh(spec).mesh
     ref_b = SETUP.reference_condition(spec, mesh, "end_b")
     ref_3 = three_two_one(mesh, mesh.node_set("end_a"))
-    base = {"source": src, "material": ALUMINIUM, "reference_set": "end_b",
-            "reference": ref_b, "surface": "end_a", "node": 0, "radii_m": (0.2 * MM,)}
-    variants = [{}, {"source": other}, {"material": BRASS},
-                {"reference_set": "end_a", "reference": ref_3}, {"surface": "end_b"},
-                {"node": 1}, {"radii_m": (0.3 * MM,)}, {"radii_m": (0.2 * MM, 0.4 * MM)}]
+    base = {
+        "source": src,
+        "material": ALUMINIUM,
+        "reference_set": "end_b",
+        "reference": ref_b,
+        "surface": "end_a",
+        "node": 0,
+        "radii_m": (0.2 * MM,),
+    }
+    variants = [
+        {},
+        {"source": other},
+        {"material": BRASS},
+        {"reference_set": "end_a", "reference": ref_3},
+        {"surface": "end_b"},
+        {"node": 1},
+        {"radii_m": (0.3 * MM,)},
+        {"radii_m": (0.2 * MM, 0.4 * MM)},
+    ]
     keys = {setup_cache.patch_statics_key(**(base | v)) for v in variants}
     assert len(keys) == len(variants) and all(k.startswith("patchstatic-") for k in keys)
     # a malformed entry is a miss, rebuilt
     key = setup_cache.free_modes_key(src, ALUMINIUM, 7)
     setup_cache.save(key, {"freqs_hz": np.zeros(7), "modes": np.zeros((5, 7))})
     calls = []
-    _f, m = setup_cache.cached_free_modes(src, ALUMINIUM, 7, 6, lambda: calls.append(1) or
-                                          (np.ones(7), np.ones((6, 7))))
+    _f, m = setup_cache.cached_free_modes(
+        src, ALUMINIUM, 7, 6, lambda: calls.append(1) or (np.ones(7), np.ones((6, 7)))
+    )
     assert calls == [1] and m.shape == (6, 7)
     _f, m = setup_cache.cached_free_modes(src, ALUMINIUM, 7, 6, lambda: calls.append(1))
     assert calls == [1] and np.array_equal(m, np.ones((6, 7)))

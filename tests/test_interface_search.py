@@ -25,8 +25,13 @@ from flexmvm.studies.selection import run_selection_study
 ROOT = Path(__file__).resolve().parents[1]
 TINY = ROOT / "tests" / "data" / "tiny_impact.toml"
 MM = 1e-3
-GRID = {"layers": [1], "laps": [1, 2], "modes": [7, 13],
-        "patches": [(), (0.2 * MM,), (0.2 * MM, 0.4 * MM)], "interface_modes": [1, 3, 5]}
+GRID = {
+    "layers": [1],
+    "laps": [1, 2],
+    "modes": [7, 13],
+    "patches": [(), (0.2 * MM,), (0.2 * MM, 0.4 * MM)],
+    "interface_modes": [1, 3, 5],
+}
 QUIET = {"serial": True, "progress": False, "echo": lambda s: None}
 
 
@@ -39,13 +44,29 @@ def _rows(out: Path) -> list[tuple]:
     rows = []
     with open(out / "ncc.csv", newline="") as fh:
         for r in csv.DictReader(fh):
-            rows.append(("nodes", (int(r["layers"]), int(r["laps"])), int(r["modes"]),
-                         int(r["dof"]), float(r["ncc_force"]), float(r["peak_err"])))
+            rows.append(
+                (
+                    "nodes",
+                    (int(r["layers"]), int(r["laps"])),
+                    int(r["modes"]),
+                    int(r["dof"]),
+                    float(r["ncc_force"]),
+                    float(r["peak_err"]),
+                )
+            )
     with open(out / "ncc_interface.csv", newline="") as fh:
         for r in csv.DictReader(fh):
             n = int(r["n_patch"])
-            rows.append(("interface", n, int(r["modes"]), int(r["dof"]),
-                         float(r["ncc_force"]), float(r["peak_err"])))
+            rows.append(
+                (
+                    "interface",
+                    n,
+                    int(r["modes"]),
+                    int(r["dof"]),
+                    float(r["ncc_force"]),
+                    float(r["peak_err"]),
+                )
+            )
     return rows
 
 
@@ -111,8 +132,17 @@ def test_search_over_both_kinds_makes_fewer_runs_for_the_same_answer(brute, tmp_
     assert (s["grid_size"], s["interface"]["grid_size"]) == (4, 9)
 
 
-@pytest.mark.parametrize("text", ["ncc>=0.99", "ncc>=0.999", "ncc>=0.99999",
-                                  "ncc>=0.99999985", "ncc>=0.99,peak<=0.02", "ncc>=0.9999999"])
+@pytest.mark.parametrize(
+    "text",
+    [
+        "ncc>=0.99",
+        "ncc>=0.999",
+        "ncc>=0.99999",
+        "ncc>=0.99999985",
+        "ncc>=0.99,peak<=0.02",
+        "ncc>=0.9999999",
+    ],
+)
 def test_search_replays_the_brute_force_answer_for_several_targets(brute, tmp_path, text):
     src, rows = brute
     target = Target.parse(text)
@@ -137,20 +167,47 @@ def test_cli_search_with_patches_reports_both_kinds(brute, tmp_path):
     src, rows = brute
     out = _copy(src, tmp_path, cases=True)
     _register()
-    res = CliRunner().invoke(cli, [
-        "select", str(TINY), "--body", "b2", "--layers", "1", "--laps", "1..2",
-        "--modes", "7:13:6", "--patches", "-;0.2;0.2,0.4", "--interface-modes", "1:5:2",
-        "--target", "ncc>=0.9999996", "--search", "--serial", "--no-progress",
-        "--out", str(out)])
+    res = CliRunner().invoke(
+        cli,
+        [
+            "select",
+            str(TINY),
+            "--body",
+            "b2",
+            "--layers",
+            "1",
+            "--laps",
+            "1..2",
+            "--modes",
+            "7:13:6",
+            "--patches",
+            "-;0.2;0.2,0.4",
+            "--interface-modes",
+            "1:5:2",
+            "--target",
+            "ncc>=0.9999996",
+            "--search",
+            "--serial",
+            "--no-progress",
+            "--out",
+            str(out),
+        ],
+    )
     assert res.exit_code == 0, res.output
     exp = _expected(rows, 0.9999996)
     lines = res.output.splitlines()
-    assert any(line.startswith("smallest interface model reaching ncc>=0.9999996")
-               and f"{exp[3]} DOF" in line for line in lines), res.output
-    assert any(line.startswith("smallest model over both kinds") and f"{exp[3]} DOF" in line
-               for line in lines), res.output
-    assert any(f"up to {exp[3]} DOF" in line and "looked no further" in line
-               for line in lines), res.output
+    assert any(
+        line.startswith("smallest interface model reaching ncc>=0.9999996")
+        and f"{exp[3]} DOF" in line
+        for line in lines
+    ), res.output
+    assert any(
+        line.startswith("smallest model over both kinds") and f"{exp[3]} DOF" in line
+        for line in lines
+    ), res.output
+    assert any(f"up to {exp[3]} DOF" in line and "looked no further" in line for line in lines), (
+        res.output
+    )
 
 
 # ----------------------------------------------------------------------------------------------
@@ -203,11 +260,14 @@ def test_estimate_interface_rounds_up_to_a_grid_and_keeps_its_modes():
     assert short["modes"] == 0 and short["grid_max_modes_insufficient"]
 
 
-@pytest.mark.parametrize("kwargs, message", [
-    ({"k": 0.0}, "k: expected a number > 0"),
-    ({"modes": []}, "modes: expected a grid"),
-    ({"body": "b7"}, "no body 'b7'"),
-])
+@pytest.mark.parametrize(
+    "kwargs, message",
+    [
+        ({"k": 0.0}, "k: expected a number > 0"),
+        ({"modes": []}, "modes: expected a grid"),
+        ({"body": "b7"}, "no body 'b7'"),
+    ],
+)
 def test_estimate_interface_bad_input_is_one_line(kwargs, message):
     import flexmvm as fm
 

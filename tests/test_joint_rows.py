@@ -30,26 +30,35 @@ def _bodies_states(seed=0):
         psi = rng.normal(size=(3 * n, nq))
         K = rng.normal(size=(nq, nq))
         bodies.append(FlexibleBody.build(f"b{k}", X, Ms, psi, K @ K.T + np.eye(nq)))
-        states.append(BodyState(rng.normal(size=3), expm_so3(rng.normal(size=3)),
-                                1e-2 * rng.normal(size=nq), rng.normal(size=6 + nq)))
+        states.append(
+            BodyState(
+                rng.normal(size=3),
+                expm_so3(rng.normal(size=3)),
+                1e-2 * rng.normal(size=nq),
+                rng.normal(size=6 + nq),
+            )
+        )
     return bodies, states
 
 
 def test_selector_times_psi_is_the_elastic_part():
     bodies, states = _bodies_states()
-    joints = [DistanceJoint(BodyPoint(0, node=3, offset_m=(0.0, 0.01, 0.0)),
-                            BodyPoint(1, node=7), 0.5),
-              SphericalJoint(BodyPoint(0, node=5), np.array([0.1, 0.2, 0.3])),
-              *revolute_joint(BodyPoint(1, node=2), BodyPoint(0, local=(0.0, 0.0, 0.1)),
-                              (0.0, 0.0, 1.0), states),
-              *fixed_joint(BodyPoint(0, node=1), np.zeros(3), states)]
+    joints = [
+        DistanceJoint(BodyPoint(0, node=3, offset_m=(0.0, 0.01, 0.0)), BodyPoint(1, node=7), 0.5),
+        SphericalJoint(BodyPoint(0, node=5), np.array([0.1, 0.2, 0.3])),
+        *revolute_joint(
+            BodyPoint(1, node=2), BodyPoint(0, local=(0.0, 0.0, 0.1)), (0.0, 0.0, 1.0), states
+        ),
+        *fixed_joint(BodyPoint(0, node=1), np.zeros(3), states),
+    ]
     rows = stack([j.evaluate(bodies, states, 0.0)[1] for j in joints])
     for b, body in enumerate(bodies):
         N = rows.nodal_selector(b)
         assert N is not None and N.shape == (rows.m, body.psi.shape[0])
         elastic = rows.blocks[b][1]
-        np.testing.assert_allclose(N @ body.psi, elastic, rtol=0,
-                                   atol=1e-14 * max(np.abs(elastic).max(), 1.0))
+        np.testing.assert_allclose(
+            N @ body.psi, elastic, rtol=0, atol=1e-14 * max(np.abs(elastic).max(), 1.0)
+        )
 
 
 def test_elastic_part_without_selector_has_none():

@@ -40,9 +40,11 @@ def _two_reduced_bodies_delassus(rng, m: int, n1: int, n2: int):
     iteration matrices, spread over 4 decades as M + h^2/4 K is) and m contact rows acting on
     both with opposite signs: rank <= n1 + n2 < m gives redundant rows (many contact nodes on
     a patch carried by few coordinates)."""
+
     def spd(n):
         Q, _ = np.linalg.qr(rng.normal(size=(n, n)))
         return Q @ np.diag(10.0 ** rng.uniform(-2, 2, n)) @ Q.T
+
     G1, G2 = rng.normal(size=(m, n1)), -rng.normal(size=(m, n2))
     D = G1 @ np.linalg.solve(spd(n1), G1.T) + G2 @ np.linalg.solve(spd(n2), G2.T)
     # free relative velocities c = G v of some velocity v of the bodies: the LCP is then
@@ -69,9 +71,15 @@ def test_semidefinite_delassus_with_redundant_rows():
         lam, res = solve_checked(D, c, 0)
         assert res <= LCP_RTOL
         assert np.all(lam >= 0.0)
-        ref = minimize(_qp_value, np.zeros(m), args=(D, c), jac=lambda x, D=D, c=c: D @ x + c,
-                       bounds=[(0.0, None)] * m, method="L-BFGS-B",
-                       options={"ftol": 1e-15, "gtol": 1e-12, "maxiter": 20000})
+        ref = minimize(
+            _qp_value,
+            np.zeros(m),
+            args=(D, c),
+            jac=lambda x, D=D, c=c: D @ x + c,
+            bounds=[(0.0, None)] * m,
+            method="L-BFGS-B",
+            options={"ftol": 1e-15, "gtol": 1e-12, "maxiter": 20000},
+        )
         scale = max(abs(ref.fun), np.abs(c).max() ** 2 / np.abs(np.diag(D)).max())
         assert _qp_value(lam, D, c) <= ref.fun + 1e-9 * scale, trial
 
@@ -93,7 +101,7 @@ def test_residual_detects_a_wrong_solution():
     c = np.array([-1.0, 1.0])
     good, _ = solve_checked(D, c, 0)
     assert complementarity_residual(D, c, 0, good) <= 1e-14
-    assert complementarity_residual(D, c, 0, np.zeros(2)) > 0.1       # penetrating row
+    assert complementarity_residual(D, c, 0, np.zeros(2)) > 0.1  # penetrating row
     assert complementarity_residual(D, c, 0, good + [0.0, 0.3]) > 0.1  # impulse on a gap
 
 
@@ -149,7 +157,7 @@ def test_active_set_kernel_agrees_with_nnls():
         assert complementarity_residual(D, c, 0, lam) <= 1e-12
         assert np.all(lam >= 0.0)
         n_active += int((lam > 0).sum())
-    assert n_active > 1000   # the problems are not trivial: many rows carry impulses
+    assert n_active > 1000  # the problems are not trivial: many rows carry impulses
 
 
 def test_redundant_rows_and_the_nnls_fallback(monkeypatch):

@@ -105,10 +105,11 @@ def test_halves_are_whole_subtrees(iteration_matrix, kind):
     from flexmvm.fe.solvers.ldl import etree_halves
 
     n = 60
-    A = {"tube": iteration_matrix,
-         "tridiagonal": sp.diags([-np.ones(n - 1), 2.5 * np.ones(n), -np.ones(n - 1)],
-                                 [-1, 0, 1]),
-         "dense": np.ones((n, n)) + n * np.eye(n)}[kind]
+    A = {
+        "tube": iteration_matrix,
+        "tridiagonal": sp.diags([-np.ones(n - 1), 2.5 * np.ones(n), -np.ones(n - 1)], [-1, 0, 1]),
+        "dense": np.ones((n, n)) + n * np.eye(n),
+    }[kind]
     sym = SymbolicFactor(sp.csc_matrix(A))
     starts, r_off, rows = sym.starts, sym.r_off, sym.rows
     halves = etree_halves(starts, r_off, rows, 1.0)
@@ -118,11 +119,11 @@ def test_halves_are_whole_subtrees(iteration_matrix, kind):
     label = np.full(sym.n, -1)
     for h, part in enumerate(halves):
         for s in part:
-            label[starts[s]: starts[s + 1]] = h
+            label[starts[s] : starts[s + 1]] = h
     assert np.all(label >= 0) and len(halves[0]) and len(halves[1])
     for h in (0, 1):
         for s in halves[h]:
-            assert set(label[rows[r_off[s]: r_off[s + 1]]]) <= {h, 2}
+            assert set(label[rows[r_off[s] : r_off[s + 1]]]) <= {h, 2}
 
 
 def test_zero_pivot_is_a_solver_error():
@@ -149,8 +150,9 @@ def test_edge_structures(kind):
     A = sp.csc_matrix(A)
     lu = superlu_spd(A)
     b = rng.standard_normal((n, 2))
-    np.testing.assert_allclose(cholesky_ldl(A).solve(b), lu.solve(b), rtol=0,
-                               atol=1e-12 * np.abs(lu.solve(b)).max())
+    np.testing.assert_allclose(
+        cholesky_ldl(A).solve(b), lu.solve(b), rtol=0, atol=1e-12 * np.abs(lu.solve(b)).max()
+    )
 
 
 @pytest.mark.parametrize("kind", ["diagonal", "two_chains"])
@@ -164,8 +166,9 @@ def test_forest_split_with_empty_top(kind):
     if kind == "diagonal":
         A = sp.diags(rng.uniform(1, 2, n))
     else:
-        chain = sp.diags([-np.ones(n // 2 - 1), 2.5 * np.ones(n // 2), -np.ones(n // 2 - 1)],
-                         [-1, 0, 1])
+        chain = sp.diags(
+            [-np.ones(n // 2 - 1), 2.5 * np.ones(n // 2), -np.ones(n // 2 - 1)], [-1, 0, 1]
+        )
         A = sp.block_diag([chain, chain])
     A = sp.csc_matrix(A)
     lu = superlu_spd(A)
@@ -173,10 +176,11 @@ def test_forest_split_with_empty_top(kind):
         for p in (None, pool):
             ldl = cholesky_ldl(A, p)
             assert ldl.split
-            for k in (3, 20):                  # loops; blocks through BLAS
+            for k in (3, 20):  # loops; blocks through BLAS
                 b = rng.standard_normal((A.shape[0], k))
-                np.testing.assert_allclose(ldl.solve(b), lu.solve(b), rtol=0,
-                                           atol=1e-12 * np.abs(lu.solve(b)).max())
+                np.testing.assert_allclose(
+                    ldl.solve(b), lu.solve(b), rtol=0, atol=1e-12 * np.abs(lu.solve(b)).max()
+                )
 
 
 def test_backward_error_check_takes_ill_conditioned_spd_and_refuses_unsymmetric():

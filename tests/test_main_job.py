@@ -16,8 +16,15 @@ def test_two_processes_equal_one(tmp_path):
     and every reported number agree exactly (the wall times aside)."""
     out = {}
     for jobs in (1, 2):
-        run_main_job(TINY, tmp_path / f"jobs{jobs}", t_end=10e-6, fields=False, progress=False,
-                     echo=lambda *_: None, jobs=jobs)
+        run_main_job(
+            TINY,
+            tmp_path / f"jobs{jobs}",
+            t_end=10e-6,
+            fields=False,
+            progress=False,
+            echo=lambda *_: None,
+            jobs=jobs,
+        )
         out[jobs] = json.loads((tmp_path / f"jobs{jobs}" / "summary.json").read_text())
         assert (tmp_path / f"jobs{jobs}" / "full" / "history.csv").exists()
     for s in out.values():

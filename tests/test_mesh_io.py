@@ -50,8 +50,11 @@ def _gmsh_box(path, order: int = 1, extra_groups: bool = False, version: float =
         gmsh.model.addPhysicalGroup(2, top, name="top")
         gmsh.model.addPhysicalGroup(3, [vol], name="body")
         if extra_groups:
-            side = [tag for dim, tag in gmsh.model.getEntities(2)
-                    if abs(gmsh.model.occ.getCenterOfMass(dim, tag)[1]) < 1e-9]
+            side = [
+                tag
+                for dim, tag in gmsh.model.getEntities(2)
+                if abs(gmsh.model.occ.getCenterOfMass(dim, tag)[1]) < 1e-9
+            ]
             gmsh.model.addPhysicalGroup(2, top, name="top2")
             gmsh.model.addPhysicalGroup(2, side, name="side")
             gmsh.model.addPhysicalGroup(2, [], name="empty")
@@ -151,8 +154,11 @@ def test_duplicated_cell_refused(tmp_path):
     conn = mesh.cells[0].connectivity
     path = tmp_path / "target.vtu"
     meshio.write(path, meshio.Mesh(mesh.nodes, [("hexahedron27", np.vstack([conn, conn[3:4]]))]))
-    with pytest.raises(MeshError, match=r"target.vtu.*hexahedron27 cell 3 is written 2 times "
-                                        r"\(also cell \d+; no physical group\)") as info:
+    with pytest.raises(
+        MeshError,
+        match=r"target.vtu.*hexahedron27 cell 3 is written 2 times "
+        r"\(also cell \d+; no physical group\)",
+    ) as info:
         read_mesh(path)
     assert "\n" not in str(info.value)
     meshio.write(path, meshio.Mesh(mesh.nodes, [("hexahedron27", conn)]))
@@ -172,14 +178,16 @@ def test_duplicated_cell_in_another_order_refused(tmp_path):
 def test_folded_cells_refused(tmp_path):
     """Two valid tets on the same side of their shared face overlap (a folded mesh): refused;
     the same two tets on opposite sides read, with a skin of 6 outward triangles."""
-    pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [0.2, 0.2, 0.5],
-                    [0, 0, -1]], dtype=float)
+    pts = np.array(
+        [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [0.2, 0.2, 0.5], [0, 0, -1]], dtype=float
+    )
     path = tmp_path / "fold.vtu"
     meshio.write(path, meshio.Mesh(pts[:5], [("tetra", np.array([[0, 1, 2, 3], [0, 1, 2, 4]]))]))
     with pytest.raises(MeshError, match="cells 0 and 1 .* lie on the same side"):
         read_mesh(path)
-    meshio.write(path, meshio.Mesh(pts[[0, 1, 2, 3, 5]],
-                                   [("tetra", np.array([[0, 1, 2, 3], [0, 2, 1, 4]]))]))
+    meshio.write(
+        path, meshio.Mesh(pts[[0, 1, 2, 3, 5]], [("tetra", np.array([[0, 1, 2, 3], [0, 2, 1, 4]]))])
+    )
     mesh = read_mesh(path)
     skin = mesh.facet_set("surface")
     assert len(skin.tris) == 6 and len(skin.quads) == 0
@@ -193,8 +201,11 @@ def test_unused_nodes_stated(tmp_path):
     pts = np.array([[9, 9, 9], [0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
     path = tmp_path / "tet.vtu"
     meshio.write(path, meshio.Mesh(pts, [("tetra", np.array([[1, 2, 3, 4]]))]))
-    with pytest.warns(MeshWarning, match=r"1 node\(s\) used by no volume cell dropped "
-                                         r"\(file ids 0\)"):
+    with pytest.warns(
+        MeshWarning,
+        match=r"1 node\(s\) used by no volume cell dropped "
+        r"\(file ids 0\)",
+    ):
         read_mesh(path)
     meshio.write(path, meshio.Mesh(pts[1:], [("tetra", np.array([[0, 1, 2, 3]]))]))
     with warnings.catch_warnings():
@@ -262,8 +273,14 @@ def test_surface_set_is_the_boundary(tmp_path, order):
     mesh = read_mesh(path)
     faces = _box_facets(mesh)
     assert sum(n for n, _ in faces.values()) == mesh.facet_set("surface").n_facets
-    areas = {(0, 0.0): 0.5, (0, 2.0): 0.5, (1, 0.0): 1.0, (1, 1.0): 1.0, (2, 0.0): 2.0,
-             (2, 0.5): 2.0}
+    areas = {
+        (0, 0.0): 0.5,
+        (0, 2.0): 0.5,
+        (1, 0.0): 1.0,
+        (1, 1.0): 1.0,
+        (2, 0.0): 2.0,
+        (2, 0.5): 2.0,
+    }
     for key, area in areas.items():
         assert faces[key][1] == pytest.approx(area, rel=1e-12)
     assert faces[2, 0.5][0] == mesh.facet_set("top").n_facets
@@ -287,14 +304,20 @@ def test_rod_skin_is_its_three_surfaces(tmp_path):
     path = tmp_path / "rod.vtu"
     write_mesh(path, rm.mesh)
     back = read_mesh(path)
-    parts = np.unique(np.concatenate([rm.mesh.facet_set(s).nodes
-                                      for s in ("end_a", "end_b", "side")]))
+    parts = np.unique(
+        np.concatenate([rm.mesh.facet_set(s).nodes for s in ("end_a", "end_b", "side")])
+    )
     assert np.all(np.isin(back.facet_set("surface").nodes, parts))
     assert np.array_equal(rm.mesh.facet_set("surface").nodes, parts)
-    assert np.array_equal(rm.mesh.node_set("surface"), np.unique(np.concatenate(
-        [rm.mesh.node_set(s) for s in ("end_a", "end_b", "side")])))
-    assert back.facet_set("surface").n_facets == rm.mesh.facet_set("surface").n_facets == sum(
-        rm.mesh.facet_set(s).n_facets for s in ("end_a", "end_b", "side"))
+    assert np.array_equal(
+        rm.mesh.node_set("surface"),
+        np.unique(np.concatenate([rm.mesh.node_set(s) for s in ("end_a", "end_b", "side")])),
+    )
+    assert (
+        back.facet_set("surface").n_facets
+        == rm.mesh.facet_set("surface").n_facets
+        == sum(rm.mesh.facet_set(s).n_facets for s in ("end_a", "end_b", "side"))
+    )
     assert np.array_equal(back.node_set("surface"), parts)
 
     def cyclic(quads):  # each quad from its smallest node id: same winding, same rows
@@ -302,8 +325,9 @@ def test_rod_skin_is_its_three_surfaces(tmp_path):
         rolled = np.array([np.roll(q, -k) for q, k in zip(quads, start)])
         return rolled[np.lexsort(rolled.T[::-1])]
 
-    assert np.array_equal(cyclic(back.facet_set("surface").quads),
-                          cyclic(rm.mesh.facet_set("surface").quads))
+    assert np.array_equal(
+        cyclic(back.facet_set("surface").quads), cyclic(rm.mesh.facet_set("surface").quads)
+    )
 
 
 def test_abaqus_sets_by_name(tmp_path):
@@ -313,11 +337,19 @@ def test_abaqus_sets_by_name(tmp_path):
     ('lower') the node set of its nodes, an NSET ('apex') a node set."""
     pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [0, 0, -1]], dtype=float)
     none = np.zeros(0, dtype=int)
-    m = meshio.Mesh(pts, [("tetra", np.array([[0, 1, 2, 3], [0, 2, 1, 4]])),
-                          ("triangle", np.array([[1, 3, 2], [0, 3, 1]]))],
-                    cell_sets={"slope": [none, np.array([0])], "both": [none, np.array([0, 1])],
-                               "lower": [np.array([1]), none]},
-                    point_sets={"apex": np.array([3])})
+    m = meshio.Mesh(
+        pts,
+        [
+            ("tetra", np.array([[0, 1, 2, 3], [0, 2, 1, 4]])),
+            ("triangle", np.array([[1, 3, 2], [0, 3, 1]])),
+        ],
+        cell_sets={
+            "slope": [none, np.array([0])],
+            "both": [none, np.array([0, 1])],
+            "lower": [np.array([1]), none],
+        },
+        point_sets={"apex": np.array([3])},
+    )
     path = tmp_path / "two.inp"
     meshio.write(path, m)
     mesh = read_mesh(path)
@@ -336,15 +368,18 @@ def test_copies_in_two_physical_volumes_kept_once(tmp_path, tags, kept):
     node set has its nodes); two copies with the same tag are a true duplicate, refused."""
     pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
     conn = np.array([[0, 1, 2, 3], [0, 1, 2, 3]])
-    m = meshio.Mesh(pts, [("tetra", conn)],
-                    cell_data={"gmsh:physical": [np.array(tags)],
-                               "gmsh:geometrical": [np.array([1, 1])]},
-                    field_data={"a": np.array([1, 3]), "b": np.array([2, 3])})
+    m = meshio.Mesh(
+        pts,
+        [("tetra", conn)],
+        cell_data={"gmsh:physical": [np.array(tags)], "gmsh:geometrical": [np.array([1, 1])]},
+        field_data={"a": np.array([1, 3]), "b": np.array([2, 3])},
+    )
     path = tmp_path / "two.msh"
     meshio.write(path, m, file_format="gmsh22", binary=False)
     if not kept:
-        with pytest.raises(MeshError, match="tetra cell 0 is written 2 times .*both in physical "
-                                            "group 1"):
+        with pytest.raises(
+            MeshError, match="tetra cell 0 is written 2 times .*both in physical group 1"
+        ):
             read_mesh(path)
         return
     mesh = read_mesh(path)

@@ -41,8 +41,11 @@ def test_block_and_beam_volumes_and_groups(gmsh, tmp_path, order):
     assert _area(m.facet_set("top"), m.nodes) == pytest.approx(0.06 * 0.05, rel=1e-12)
     assert np.allclose(m.nodes[m.node_set("bottom"), 2], -0.03)
     refine = Refinement((0.1, 0.0, 0.0), 1e-3, 2e-3, 8e-3)
-    m = read_mesh(beam(tmp_path / "beam.msh", 0.2, 0.01, 0.012, 0.005, patch_m=0.02,
-                       order=order, refine=refine))
+    m = read_mesh(
+        beam(
+            tmp_path / "beam.msh", 0.2, 0.01, 0.012, 0.005, patch_m=0.02, order=order, refine=refine
+        )
+    )
     assert mesh_volume(m) == pytest.approx(0.2 * 0.01 * 0.012, rel=1e-12)
     assert _area(m.facet_set("top"), m.nodes) == pytest.approx(0.2 * 0.01, rel=1e-12)
     assert _area(m.facet_set("mid_top"), m.nodes) == pytest.approx(0.02 * 0.01, rel=1e-12)

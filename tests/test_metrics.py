@@ -63,8 +63,10 @@ def test_ncc_resamples_candidate_on_reference_grid():
     t_ref = np.linspace(0.0, 1.5, 301)
     rng = np.random.default_rng(3)
     t = np.sort(np.concatenate(([0.2, 1.5, 2.0], rng.uniform(0.2, 2.0, 700))))
+
     def f(x):
         return np.sin(2 * np.pi * x) * np.exp(-x)
+
     y = np.where(t > 1.5, 1e3 * rng.standard_normal(t.size), f(t))
     r = ncc(t_ref, f(t_ref), t, y)
     assert r > 0.9999
@@ -78,13 +80,13 @@ def test_ncc_errors(histories):
     """No overlap, < 3 samples, NaN, a constant history: InputError with a one-line message."""
     t, y_ref, y = histories
     bad = [
-        (t, y_ref, t + 2.0, y),                      # no overlap
-        (t[:2], y_ref[:2], t, y),                    # < 3 samples
+        (t, y_ref, t + 2.0, y),  # no overlap
+        (t[:2], y_ref[:2], t, y),  # < 3 samples
         (t, np.where(t > 0.5, np.nan, y_ref), t, y),  # NaN
-        (t, y_ref, t, np.full_like(t, 2.0)),         # constant candidate
-        (t, np.zeros_like(t), t, y),                 # constant reference
-        (t[::-1], y_ref, t, y),                      # decreasing time
-        (t, y_ref[:-1], t, y),                       # length mismatch
+        (t, y_ref, t, np.full_like(t, 2.0)),  # constant candidate
+        (t, np.zeros_like(t), t, y),  # constant reference
+        (t[::-1], y_ref, t, y),  # decreasing time
+        (t, y_ref[:-1], t, y),  # length mismatch
     ]
     for args in bad:
         with pytest.raises(InputError) as err:
@@ -122,7 +124,7 @@ def test_contact_intervals_peak_impulse():
     assert np.allclose(iv, [(0.1, 0.3), (0.5, 0.6)], atol=1e-9)
     iv_half = contact_intervals(t, f, 300.0)
     assert len(iv_half) == 1
-    (a, b), = iv_half
+    ((a, b),) = iv_half
     assert b - a == pytest.approx(2 * 0.2 / 3, abs=1e-4)
     assert peak(t, f) == pytest.approx((0.2, 600.0), abs=1e-9)
     assert impulse(t, f) == pytest.approx(2 * (600 * 0.2 + 300 * 0.1) / math.pi, rel=1e-5)
@@ -143,8 +145,13 @@ def test_duration_error_from_contact_intervals():
     assert c.impulse_err == pytest.approx(0.1, abs=1e-4)
     assert 0.9 < c.ncc < 0.999
     assert ncc(t, _pulse(t), t, _pulse(t)) == pytest.approx(1.0, abs=1e-12)
-    two = compare_force(t, _pulse(t) + _pulse(t, 0.35, 0.45), t,
-                        _pulse(t) + _pulse(t, 0.35, 0.49), threshold_fraction=0.0)
+    two = compare_force(
+        t,
+        _pulse(t) + _pulse(t, 0.35, 0.45),
+        t,
+        _pulse(t) + _pulse(t, 0.35, 0.49),
+        threshold_fraction=0.0,
+    )
     assert two.duration_err == pytest.approx(0.04 / 0.3, abs=2 * (t[1] - t[0]) / 0.3)
     with pytest.raises(InputError, match="threshold_fraction"):
         compare_force(t, _pulse(t), t, _pulse(t), threshold_fraction=1.5)
@@ -166,16 +173,27 @@ def test_target_parse_and_met_by():
     assert not Target(duration_err_max=0.1).met_by(good)
 
 
-@pytest.mark.parametrize("text", [
-    "ncc>=abc", "stiffness<=0.1", "peak>=0.02", "ncc<=0.9", "peak<=0.02,peak<=0.03", "",
-    "ncc>=1.5", "peak<=-0.1", "peak<=nan", "ncc=0.99", "peak<=0.02,,",
-])
+@pytest.mark.parametrize(
+    "text",
+    [
+        "ncc>=abc",
+        "stiffness<=0.1",
+        "peak>=0.02",
+        "ncc<=0.9",
+        "peak<=0.02,peak<=0.03",
+        "",
+        "ncc>=1.5",
+        "peak<=-0.1",
+        "peak<=nan",
+        "ncc=0.99",
+        "peak<=0.02,,",
+    ],
+)
 def test_target_parse_errors(text):
     """Unknown keys, wrong operators, repeats, bad or out-of-range numbers: one-line InputError."""
     with pytest.raises(InputError) as err:
         Target.parse(text)
     assert "\n" not in str(err.value)
-
 
 
 @pytest.mark.parametrize("window", [1.0, 2.0, 3.0])

@@ -25,8 +25,10 @@ def _body(nq: int, seed: int) -> FlexibleBody:
     return FlexibleBody.build("b", X, Ms, psi, K @ K.T + np.eye(nq))
 
 
-@pytest.mark.parametrize("nq, seed, spin, gravity", [(1, 0, True, False), (12, 1, True, True),
-                                                     (40, 2, False, True), (40, 3, True, True)])
+@pytest.mark.parametrize(
+    "nq, seed, spin, gravity",
+    [(1, 0, True, False), (12, 1, True, True), (40, 2, False, True), (40, 3, True, True)],
+)
 def test_equals_numpy_reference(nq, seed, spin, gravity):
     body = _body(nq, seed)
     rng = np.random.default_rng(100 + seed)
@@ -51,12 +53,28 @@ def test_equals_numpy_reference(nq, seed, spin, gravity):
 
     got = [np.empty(body.nv) for _ in range(3)]
     inv = body.inv
-    momentum_terms(A, q, dv, vm, Lq, Lqd, Kq, mqq_dv, mqq_vm, inv.mass, inv.S0, inv.S1, inv.G0,
-                   body.G1_array, g, *got)
-    for name, x, want in zip(("inertia", "force", "momentum"), got,
-                             (want_inertia, want_force, want_momentum)):
-        np.testing.assert_allclose(x, want, rtol=0, atol=1e-12 * np.abs(want).max(),
-                                   err_msg=name)
+    momentum_terms(
+        A,
+        q,
+        dv,
+        vm,
+        Lq,
+        Lqd,
+        Kq,
+        mqq_dv,
+        mqq_vm,
+        inv.mass,
+        inv.S0,
+        inv.S1,
+        inv.G0,
+        body.G1_array,
+        g,
+        *got,
+    )
+    for name, x, want in zip(
+        ("inertia", "force", "momentum"), got, (want_inertia, want_force, want_momentum)
+    ):
+        np.testing.assert_allclose(x, want, rtol=0, atol=1e-12 * np.abs(want).max(), err_msg=name)
 
 
 def _nodal_body(seed: int, drop: int) -> FlexibleBody:
@@ -68,14 +86,16 @@ def _nodal_body(seed: int, drop: int) -> FlexibleBody:
     B = sp.random(n, n, density=0.2, random_state=seed)
     Ms = sp.csr_matrix(B @ B.T + sp.eye(n))
     dofs = rng.permutation(3 * n)[: 3 * n - drop]
-    psi = sp.csr_matrix((np.ones(dofs.size), (dofs, np.arange(dofs.size))),
-                        shape=(3 * n, dofs.size))
+    psi = sp.csr_matrix(
+        (np.ones(dofs.size), (dofs, np.arange(dofs.size))), shape=(3 * n, dofs.size)
+    )
     K = sp.random(dofs.size, dofs.size, density=0.1, random_state=seed)
     return FlexibleBody.build("b", X, Ms, psi, sp.csr_matrix(K @ K.T + sp.eye(dofs.size)))
 
 
-@pytest.mark.parametrize("seed, drop, spin, gravity", [(0, 0, True, False), (1, 6, True, True),
-                                                       (2, 5, False, True)])
+@pytest.mark.parametrize(
+    "seed, drop, spin, gravity", [(0, 0, True, False), (1, 6, True, True), (2, 5, False, True)]
+)
 def test_nodal_kernel_equals_the_general_one(seed, drop, spin, gravity):
     """momentum_terms_nodal on the compact contractions Y(q), Y(q_dot) against momentum_terms
     on the full L(q), L(q_dot) of the same body (bodies.nodal_contraction): the same sums in
@@ -99,17 +119,52 @@ def test_nodal_kernel_equals_the_general_one(seed, drop, spin, gravity):
     for L, Y, x in ((Lq, Yq, q), (Lqd, Yqd, vm[6:])):
         np.testing.assert_allclose(nodal.expand(Y), L, rtol=0, atol=1e-13 * np.abs(L).max())
         mx = body.inv.M_qq @ x
-        np.testing.assert_allclose(body.contraction_trace(Y), mx, rtol=0,
-                                   atol=1e-13 * np.abs(mx).max())
+        np.testing.assert_allclose(
+            body.contraction_trace(Y), mx, rtol=0, atol=1e-13 * np.abs(mx).max()
+        )
     Kq = body.k_hat @ q
     mqq_dv, mqq_vm = body.inv.M_qq @ dv[6:], body.inv.M_qq @ vm[6:]
     inv = body.inv
     want = [np.empty(body.nv) for _ in range(3)]
-    momentum_terms(A, q, dv, vm, Lq, Lqd, Kq, mqq_dv, mqq_vm, inv.mass, inv.S0, inv.S1, inv.G0,
-                   body.G1_array, g, *want)
+    momentum_terms(
+        A,
+        q,
+        dv,
+        vm,
+        Lq,
+        Lqd,
+        Kq,
+        mqq_dv,
+        mqq_vm,
+        inv.mass,
+        inv.S0,
+        inv.S1,
+        inv.G0,
+        body.G1_array,
+        g,
+        *want,
+    )
     got = [np.empty(body.nv) for _ in range(3)]
-    momentum_terms_nodal(A, q, dv, vm, Yq, Yqd, Kq, mqq_dv, mqq_vm, inv.mass, inv.S0, inv.S1,
-                         inv.G0, nodal.MsX, nodal.node, nodal.comp, g, *got)
+    momentum_terms_nodal(
+        A,
+        q,
+        dv,
+        vm,
+        Yq,
+        Yqd,
+        Kq,
+        mqq_dv,
+        mqq_vm,
+        inv.mass,
+        inv.S0,
+        inv.S1,
+        inv.G0,
+        nodal.MsX,
+        nodal.node,
+        nodal.comp,
+        g,
+        *got,
+    )
     for name, x, w in zip(("inertia", "force", "momentum"), got, want):
         np.testing.assert_allclose(x, w, rtol=0, atol=1e-12 * np.abs(w).max(), err_msg=name)
     # the inertia terms and the frame coupling from the compact form (the recorder's and the
@@ -120,13 +175,18 @@ def test_nodal_kernel_equals_the_general_one(seed, drop, spin, gravity):
     np.testing.assert_allclose(S2, S, rtol=0, atol=1e-13 * np.abs(S).max())
     np.testing.assert_allclose(J2, J, rtol=0, atol=1e-13 * np.abs(J).max())
     np.testing.assert_allclose(Mwq2, Mwq, rtol=0, atol=1e-13 * np.abs(Mwq).max())
-    np.testing.assert_allclose(body.rotational_coupling(q, Yq), body.rotational_coupling(q, Lq),
-                               rtol=0, atol=1e-13 * np.abs(Mwq).max())
+    np.testing.assert_allclose(
+        body.rotational_coupling(q, Yq),
+        body.rotational_coupling(q, Lq),
+        rtol=0,
+        atol=1e-13 * np.abs(Mwq).max(),
+    )
     Gq = body.G1_array @ q
     G = body.inv.G0 + Gq + Gq.T
     J1 = np.trace(G) * np.eye(3) - G
-    np.testing.assert_allclose(body.frame_inertia_first_order(q), J1, rtol=0,
-                               atol=1e-13 * np.abs(J1).max())
+    np.testing.assert_allclose(
+        body.frame_inertia_first_order(q), J1, rtol=0, atol=1e-13 * np.abs(J1).max()
+    )
 
 
 def test_nodal_contraction_only_for_selecting_bases():

@@ -46,8 +46,9 @@ def test_steps_stopped_on_the_floor_are_counted(monkeypatch, tmp_path):
     """With an unreachable tolerance (1e-18, below double round-off of the momentum sums) every
     contact step stops on the round-off floor: each is counted, the worst residual is above the
     tolerance, and `flexmvm run` prints a warning naming the count."""
-    monkeypatch.setattr(driver, "MoreauJeanIntegrator",
-                        functools.partial(MoreauJeanIntegrator, rtol=1e-18))
+    monkeypatch.setattr(
+        driver, "MoreauJeanIntegrator", functools.partial(MoreauJeanIntegrator, rtol=1e-18)
+    )
     s = run_scenario(load_scenario(TINY).with_overrides(t_end_s=3e-6)).summary
     assert s["steps_not_converged"] == s["n_steps"] == 12
     assert s["newton_residual_max"] > 1e-18
@@ -57,9 +58,21 @@ def test_steps_stopped_on_the_floor_are_counted(monkeypatch, tmp_path):
     from flexmvm.cli.main import _register, cli
 
     _register()
-    res = CliRunner().invoke(cli, ["run", str(TINY), "--t-end", "3e-6", "--no-fields",
-                                   "--no-progress", "--jobs", "1", "--out",
-                                   str(tmp_path / "out")])
+    res = CliRunner().invoke(
+        cli,
+        [
+            "run",
+            str(TINY),
+            "--t-end",
+            "3e-6",
+            "--no-fields",
+            "--no-progress",
+            "--jobs",
+            "1",
+            "--out",
+            str(tmp_path / "out"),
+        ],
+    )
     assert res.exit_code == 0, res.output
     assert "12 step(s) stopped on the round-off floor" in res.output
 
@@ -84,8 +97,9 @@ def test_accepted_steps_balance_linear_momentum(monkeypatch, scheme):
 
     def checked(self, t, states, h):
         out = step(self, t, states, h)
-        R, _, _, scales = self._residuals(t, states, [s.v for s in out.states], h,
-                                          self.theta_rule.at(h))
+        R, _, _, scales = self._residuals(
+            t, states, [s.v for s in out.states], h, self.theta_rule.at(h)
+        )
         for b, (r, sc) in enumerate(zip(R, scales)):
             if b in out.contact.rows.blocks:
                 r = r - out.contact.rows.body_matrix(b).T @ out.contact_impulses
@@ -95,7 +109,7 @@ def test_accepted_steps_balance_linear_momentum(monkeypatch, scheme):
     monkeypatch.setattr(MoreauJeanIntegrator, "step", checked)
     sc = validation.short_scenario()
     if scheme == "damped":
-        sc = seed_scheme(sc, "b2")   # velocity law, no redistribution, theta = 0.55
+        sc = seed_scheme(sc, "b2")  # velocity law, no redistribution, theta = 0.55
     s = run_scenario(sc.with_overrides(t_end_s=20e-6)).summary
     assert s["steps_not_converged"] == 0
     assert len(seen) == 2 * s["n_steps"]
@@ -107,6 +121,7 @@ def test_accepted_steps_balance_linear_momentum(monkeypatch, scheme):
 @functools.cache
 def _tiny_at_rtol(rtol):
     """The tiny seed case (full FE, 40 steps of 0.25 us) with the Newton tolerance rtol."""
+
     def integrator(*args, **kwargs):
         return MoreauJeanIntegrator(*args, rtol=rtol, **kwargs)
 

@@ -21,8 +21,9 @@ def _lap(n):
 
 
 def _strip(nx=200, ny=10):
-    return sp.csc_matrix(sp.kron(_lap(nx), sp.eye(ny)) + sp.kron(sp.eye(nx), _lap(ny))
-                         + 1e-3 * sp.eye(nx * ny))
+    return sp.csc_matrix(
+        sp.kron(_lap(nx), sp.eye(ny)) + sp.kron(sp.eye(nx), _lap(ny)) + 1e-3 * sp.eye(nx * ny)
+    )
 
 
 def test_separator_last_and_two_sides():
@@ -53,8 +54,9 @@ def test_fill_and_halves():
     share = [work[h].sum() / work.sum() for h in halves]
     assert 1.0 / (share[2] + max(share[:2])) > 1.5
     b = np.random.default_rng(0).standard_normal(A.shape[0])
-    np.testing.assert_allclose(ldl.solve(b), md.solve(b), rtol=0,
-                               atol=1e-12 * np.abs(md.solve(b)).max())
+    np.testing.assert_allclose(
+        ldl.solve(b), md.solve(b), rtol=0, atol=1e-12 * np.abs(md.solve(b)).max()
+    )
 
 
 def test_no_order_without_a_separator():

@@ -38,7 +38,7 @@ ROOT = Path(__file__).resolve().parents[1]
 PENDULUM = ROOT / "scenarios" / "pendulum_release.toml"
 SEED = ROOT / "scenarios" / "rod_impact.toml"
 V0, ELL, G = 0.21, 0.5, 9.81
-GAP_M = 3e-3      # the short event starts with b1's apex this far (along x) before b2
+GAP_M = 3e-3  # the short event starts with b1's apex this far (along x) before b2
 AFTER_S = 2.5e-3  # and runs this long after the seed case's contact time (0.66 ms)
 
 
@@ -74,8 +74,9 @@ def test_body_point_offset_row_is_the_points_velocity():
     assert rate == pytest.approx(float(d @ (at(h) - at(-h))) / (2 * h), rel=1e-8)
     # the offset moves the point: position = node + A offset
     x_node = BodyPoint(0, node=2).position([body], [st])
-    np.testing.assert_allclose(p.position([body], [st]) - x_node, st.A @ [0.01, -0.02, 0.03],
-                               atol=1e-15)
+    np.testing.assert_allclose(
+        p.position([body], [st]) - x_node, st.A @ [0.01, -0.02, 0.03], atol=1e-15
+    )
     with pytest.raises(InputError, match="offset_m is measured from a node"):
         BodyPoint(0, local=(0.0, 0.0, 0.0), offset_m=(0.01, 0.0, 0.0))
 
@@ -100,8 +101,9 @@ def test_strings_attach_at_their_points_and_hang_vertically(model):
     bottom = -np.asarray(sc.body("b1").placement.position_m)
     for j, cfg in zip(js, sc.joints):
         x = j.p1.position(built.system.bodies, built.states)
-        np.testing.assert_allclose(x, sc.body(cfg.body).placement.to_global(cfg.point_m),
-                                   rtol=0, atol=1e-14)
+        np.testing.assert_allclose(
+            x, sc.body(cfg.body).placement.to_global(cfg.point_m), rtol=0, atol=1e-14
+        )
         assert j.length == pytest.approx(ELL, rel=1e-13)
         off = x - np.asarray(j.p2) + (bottom if cfg.body == "b1" else 0.0)
         np.testing.assert_allclose(off, [0.0, 0.0, -ELL], rtol=0, atol=1e-14)
@@ -219,7 +221,9 @@ def test_sag_needs_a_frame_that_does_not_turn():
     with pytest.raises(InputError) as info:
         build_scenario(scenario_from_dict(data, "pendulum_release.toml"))
     assert "\n" not in str(info.value)
-    assert str(info.value).startswith("bodies[b2].placement: sagged = true needs a body whose frame")
+    assert str(info.value).startswith(
+        "bodies[b2].placement: sagged = true needs a body whose frame"
+    )
 
 
 def test_short_pendulum_after_separation_and_strings():
@@ -244,8 +248,9 @@ def test_short_pendulum_after_separation_and_strings():
     assert np.abs(res.body_momentum[before, 1, 0]).max() < 1e-8
     assert s["max_joint_drift"] < 1e-9
     js = strings(own.built.system)
-    lengths = np.linalg.norm(attachment_positions(own.built, res)
-                             - np.array([j.p2 for j in js])[None], axis=2)
+    lengths = np.linalg.norm(
+        attachment_positions(own.built, res) - np.array([j.p2 for j in js])[None], axis=2
+    )
     np.testing.assert_allclose(lengths, ELL, rtol=0, atol=1e-9)
     assert isinstance(js[0], DistanceJoint)
 
@@ -258,8 +263,15 @@ def test_event_figure(tmp_path):
     t = np.linspace(0.0, 0.36, 400)
     force = np.where((t > 0.3548) & (t < 0.3555), 600.0, 0.0)
     path = tmp_path / "event.png"
-    plot_event(path, t, {"b1.1": -0.09 * np.cos(4.4 * t)}, 0.047 * np.cos(4.4 * t), force,
-               [(0.3548, 0.3555)], title="synthetic")
+    plot_event(
+        path,
+        t,
+        {"b1.1": -0.09 * np.cos(4.4 * t)},
+        0.047 * np.cos(4.4 * t),
+        force,
+        [(0.3548, 0.3555)],
+        title="synthetic",
+    )
     assert path.stat().st_size > 10_000
     with pytest.raises(InputError) as info:
         plot_event(path, t, {"b1.1": t[:-1]}, t, force)

@@ -37,8 +37,9 @@ def _grid(n, step, z=0.0):
     X, Y = np.meshgrid(g, g, indexing="xy")
     nodes = np.column_stack([X.ravel(), Y.ravel(), np.full(X.size, z)])
     k = lambda i, j: j * (n + 1) + i
-    quads = np.array([[k(i, j), k(i + 1, j), k(i + 1, j + 1), k(i, j + 1)]
-                      for j in range(n) for i in range(n)])
+    quads = np.array(
+        [[k(i, j), k(i + 1, j), k(i + 1, j + 1), k(i, j + 1)] for j in range(n) for i in range(n)]
+    )
     return nodes, quads
 
 
@@ -55,10 +56,14 @@ def _bodies(extra=None):
         Xm = np.vstack([Xm, [[x, 0.0, z], [x, 0.5, z]]])
         qm = np.vstack([qm, [[4, 9, base + 1, base]]])  # (2, 0), (2, 0.5), outer: normal -z
     Xs, qs = _grid(2, 1.0)
-    mk = lambda name, X: FlexibleBody(name, X, sp.csr_matrix((3 * len(X), 0)),
-                                      types.SimpleNamespace(nq=0), None)
-    return [mk("top", Xm), mk("bottom", Xs)], MasterSurface(qm, np.zeros((0, 3))), \
-        MasterSurface(qs, np.zeros((0, 3)))
+    mk = lambda name, X: FlexibleBody(
+        name, X, sp.csr_matrix((3 * len(X), 0)), types.SimpleNamespace(nq=0), None
+    )
+    return (
+        [mk("top", Xm), mk("bottom", Xs)],
+        MasterSurface(qm, np.zeros((0, 3))),
+        MasterSurface(qs, np.zeros((0, 3))),
+    )
 
 
 def _states():
@@ -68,8 +73,15 @@ def _states():
 
 def _provider(extra=None, two_way=True):
     bodies, master, slave = _bodies(extra)
-    prov = PointToSurfaceContact(bodies, 1, slave.nodes(), 0, master, search_radius_m=0.05,
-                                 slave_surface=slave if two_way else None)
+    prov = PointToSurfaceContact(
+        bodies,
+        1,
+        slave.nodes(),
+        0,
+        master,
+        search_radius_m=0.05,
+        slave_surface=slave if two_way else None,
+    )
     return bodies, prov
 
 
@@ -125,8 +137,13 @@ def test_floor_skips_only_what_cannot_be_deeper():
 
 
 def _flexmvm(*args):
-    return subprocess.run([sys.executable, "-m", "flexmvm.cli.main", *map(str, args)],
-                          capture_output=True, text=True, timeout=600, check=False)
+    return subprocess.run(
+        [sys.executable, "-m", "flexmvm.cli.main", *map(str, args)],
+        capture_output=True,
+        text=True,
+        timeout=600,
+        check=False,
+    )
 
 
 def test_overlap_at_start_is_one_line_error(tmp_path):
@@ -136,11 +153,26 @@ def test_overlap_at_start_is_one_line_error(tmp_path):
     old = '[bodies.model]\nkind = "full"\n\n[[contacts]]'
     assert old in text
     path = tmp_path / "overlap.toml"
-    path.write_text(text.replace(old, '[bodies.model]\nkind = "full"\n[bodies.placement]\n'
-                                      'position_m = [-0.001, 0.0, 0.0]\n\n[[contacts]]'))
+    path.write_text(
+        text.replace(
+            old,
+            '[bodies.model]\nkind = "full"\n[bodies.placement]\n'
+            "position_m = [-0.001, 0.0, 0.0]\n\n[[contacts]]",
+        )
+    )
     out = tmp_path / "out"
-    p = _flexmvm("run", path, "--out", out, "--model", "rigid", "--t-end", "1e-6",
-                 "--no-fields", "--no-progress")
+    p = _flexmvm(
+        "run",
+        path,
+        "--out",
+        out,
+        "--model",
+        "rigid",
+        "--t-end",
+        "1e-6",
+        "--no-fields",
+        "--no-progress",
+    )
     assert p.returncode == 2, p.stderr
     err = p.stderr.strip()
     assert "Traceback" not in p.stderr and len(err.splitlines()) == 1, err

@@ -41,9 +41,9 @@ from flexmvm.mesh import read_mesh
 
 BLOCK = Path(__file__).resolve().parents[1] / "scenarios" / "meshes" / "block_60x60x30.msh"
 
-R = 0.01                                     # sphere radius [m]
+R = 0.01  # sphere radius [m]
 DEPTHS = np.array([8.0, 12.0, 15.5]) * 1e-6  # indentation [m]
-REACH = 0.6e-3                               # candidate nodes within this radius [m]
+REACH = 0.6e-3  # candidate nodes within this radius [m]
 
 
 @pytest.fixture(scope="module")
@@ -53,7 +53,7 @@ def indentation():
     K = assemble(mesh, ALUMINIUM).K
     clamped = np.zeros(mesh.n_dof, dtype=bool)
     for k in mesh.node_set("bottom"):
-        clamped[3 * k: 3 * k + 3] = True
+        clamped[3 * k : 3 * k + 3] = True
     free = np.flatnonzero(~clamped)
     solve = ldl_factor(K[free][:, free])
     x = mesh.nodes
@@ -68,7 +68,7 @@ def indentation():
         G = solve(P)[rows]
         G = 0.5 * (G + G.T)
         r = np.hypot(x[nodes, 0], x[nodes, 1])
-        g0 = R - np.sqrt(R ** 2 - r ** 2)
+        g0 = R - np.sqrt(R**2 - r**2)
         forces = []
         for d in DEPTHS:
             lam, _ = solve_checked(G, g0 - d, 0, where=f" (static Hertz, d = {d:.2e} m)")
@@ -79,8 +79,8 @@ def indentation():
 
 
 def _hertz(d: np.ndarray) -> np.ndarray:
-    e_star = ALUMINIUM.E / (1.0 - ALUMINIUM.nu ** 2)
-    return 4.0 / 3.0 * e_star * np.sqrt(R) * d ** 1.5
+    e_star = ALUMINIUM.E / (1.0 - ALUMINIUM.nu**2)
+    return 4.0 / 3.0 * e_star * np.sqrt(R) * d**1.5
 
 
 def test_tet10_face_with_midside_nodes_follows_hertz(indentation):

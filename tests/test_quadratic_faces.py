@@ -29,8 +29,11 @@ def _box(path, hexes: bool) -> None:
         gmsh.model.add("box")
         vol = gmsh.model.occ.addBox(0, 0, 0, LX, LY, LZ)
         gmsh.model.occ.synchronize()
-        top = [t for d, t in gmsh.model.getEntities(2)
-               if abs(gmsh.model.occ.getCenterOfMass(d, t)[2] - LZ) < 1e-9]
+        top = [
+            t
+            for d, t in gmsh.model.getEntities(2)
+            if abs(gmsh.model.occ.getCenterOfMass(d, t)[2] - LZ) < 1e-9
+        ]
         gmsh.model.addPhysicalGroup(2, top, name="top")
         gmsh.model.addPhysicalGroup(3, [vol], name="body")
         if hexes:
@@ -60,8 +63,7 @@ def _area_normals(x: np.ndarray, facets: np.ndarray) -> np.ndarray:
     return 0.5 * np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 1])
 
 
-@pytest.mark.parametrize(("hexes", "cell_type"), [(False, CellType.TET10),
-                                                  (True, CellType.HEX27)])
+@pytest.mark.parametrize(("hexes", "cell_type"), [(False, CellType.TET10), (True, CellType.HEX27)])
 def test_quadratic_faces_are_linear_subfacets_through_all_nodes(tmp_path, hexes, cell_type):
     path = tmp_path / "box.msh"
     _box(path, hexes)
@@ -80,7 +82,7 @@ def test_quadratic_faces_are_linear_subfacets_through_all_nodes(tmp_path, hexes,
     on_top = np.flatnonzero(np.isclose(x[:, 2], LZ))
     assert np.array_equal(top.nodes, on_top)
     assert np.array_equal(mesh.node_set("top"), on_top)
-    corners = np.unique(mesh.cells[0].connectivity[:, :8 if hexes else 4])
+    corners = np.unique(mesh.cells[0].connectivity[:, : 8 if hexes else 4])
     assert np.setdiff1d(on_top, corners).size > 0.5 * on_top.size  # mid-side nodes: most
     # the split: grids of 0.125 (half the element) for hexes; for tets, sub-triangles of a
     # 6-node face have three sub-triangles with one parent corner each and one inner one,
@@ -94,8 +96,7 @@ def test_quadratic_faces_are_linear_subfacets_through_all_nodes(tmp_path, hexes,
             assert np.all(np.isin(sub[:, k], corners).sum(axis=1) == 1)
         assert not np.any(np.isin(sub[:, 3], corners))
         a, b, c = sub[:, 0, 0], sub[:, 1, 1], sub[:, 2, 2]
-        for (i, j), mid in (((a, b), sub[:, 0, 1]), ((b, c), sub[:, 1, 2]),
-                            ((c, a), sub[:, 0, 2])):
+        for (i, j), mid in (((a, b), sub[:, 0, 1]), ((b, c), sub[:, 1, 2]), ((c, a), sub[:, 0, 2])):
             assert np.allclose(x[mid], 0.5 * (x[i] + x[j]), atol=1e-12 * LX)
     # the skin: the same split on every face, outward, the box's area
     skin = mesh.facet_set("surface")

@@ -22,8 +22,12 @@ def _wide(allow: bool):
     model.pop("selection", None)
     # a ball of 2 cm about end A, the graded fine part (its 3-2-1 nodes stay out): most nodes
     # retained, a dense basis of ~3 n columns
-    model.update(kind="mvm", modes=5, allow_costly=allow,
-                 region={"ball": {"centre_m": [0.0, 0.0, 0.0], "radius_m": 0.02}})
+    model.update(
+        kind="mvm",
+        modes=5,
+        allow_costly=allow,
+        region={"ball": {"centre_m": [0.0, 0.0, 0.0], "radius_m": 0.02}},
+    )
     return fm.scenario_from_dict(data, base_dir=TINY.parent)
 
 
@@ -53,9 +57,9 @@ def test_cost_model_orders_the_issue_case():
     nodes, K with ~2.0 M nonzeros): refused; the shipped seed b2 (129 DOF on a 25,000-DOF rod,
     4.5 M nonzeros) is far below its full-FE cost."""
     block = reduced_cost("block", 9394, 9289, 2_000_000)
-    assert block.bytes > 10 * block.full_bytes   # 7.6 GB against 0.1 GB
+    assert block.bytes > 10 * block.full_bytes  # 7.6 GB against 0.1 GB
     with pytest.raises(InputError):
         check_cost(block, False, "bodies[block].model")
     seed = reduced_cost("b2", 8349, 123, 4_483_229)
-    assert seed.bytes < 0.25 * seed.full_bytes   # 26 MB against 215 MB
+    assert seed.bytes < 0.25 * seed.full_bytes  # 26 MB against 215 MB
     check_cost(seed, False, "bodies[b2].model")

@@ -30,10 +30,35 @@ from flexmvm.reduction.basis import MasslessStatics, massless_patterns
 from flexmvm.reduction.interface import InterfaceSpec
 
 # meshio/VTK hexahedron27 nodes as doubled reference coordinates (independent of the library).
-_HEX27 = [(0, 0, 0), (2, 0, 0), (2, 2, 0), (0, 2, 0), (0, 0, 2), (2, 0, 2), (2, 2, 2), (0, 2, 2),
-          (1, 0, 0), (2, 1, 0), (1, 2, 0), (0, 1, 0), (1, 0, 2), (2, 1, 2), (1, 2, 2), (0, 1, 2),
-          (0, 0, 1), (2, 0, 1), (2, 2, 1), (0, 2, 1), (0, 1, 1), (2, 1, 1), (1, 0, 1), (1, 2, 1),
-          (1, 1, 0), (1, 1, 2), (1, 1, 1)]
+_HEX27 = [
+    (0, 0, 0),
+    (2, 0, 0),
+    (2, 2, 0),
+    (0, 2, 0),
+    (0, 0, 2),
+    (2, 0, 2),
+    (2, 2, 2),
+    (0, 2, 2),
+    (1, 0, 0),
+    (2, 1, 0),
+    (1, 2, 0),
+    (0, 1, 0),
+    (1, 0, 2),
+    (2, 1, 2),
+    (1, 2, 2),
+    (0, 1, 2),
+    (0, 0, 1),
+    (2, 0, 1),
+    (2, 2, 1),
+    (0, 2, 1),
+    (0, 1, 1),
+    (2, 1, 1),
+    (1, 0, 1),
+    (1, 2, 1),
+    (1, 1, 0),
+    (1, 1, 2),
+    (1, 1, 1),
+]
 
 
 def beam(n=(6, 2, 2), size=(0.12, 0.02, 0.02)) -> Mesh:
@@ -83,16 +108,20 @@ def _with_face(fe):
     X = fe.mesh.nodes
     ids = np.flatnonzero(np.isclose(X[:, 0], 0.0))
     grid = ids[np.lexsort((X[ids, 2], X[ids, 1]))].reshape(5, 5)  # [y index, z index]
-    quads = [[grid[i, j], grid[i, j + 1], grid[i + 1, j + 1], grid[i + 1, j]]
-             for i in range(4) for j in range(4)]
+    quads = [
+        [grid[i, j], grid[i, j + 1], grid[i + 1, j + 1], grid[i + 1, j]]
+        for i in range(4)
+        for j in range(4)
+    ]
     mesh = dataclasses.replace(fe.mesh, facet_sets={"end_a": FacetSet(quads=np.array(quads))})
     return dataclasses.replace(fe, mesh=mesh)
 
 
 def make(fe, ref, face_a, kind, n_modes=6, retained=None):
     if kind is BasisKind.INTERFACE:  # two Hertz patches on the x = 0 face + modes
-        return build_basis(_with_face(fe), kind, ref, (), n_modes,
-                           interface=InterfaceSpec(radii_m=(0.003, 0.006)))
+        return build_basis(
+            _with_face(fe), kind, ref, (), n_modes, interface=InterfaceSpec(radii_m=(0.003, 0.006))
+        )
     if kind in (BasisKind.FULL, BasisKind.MODAL):
         return build_basis(fe, kind, ref, (), 0 if kind is BasisKind.FULL else n_modes)
     return build_basis(fe, kind, ref, face_a if retained is None else retained, n_modes)
@@ -127,13 +156,13 @@ def test_reference_bad_inputs(fe):
     with pytest.raises(InputError, match="in 0.."):
         three_two_one(mesh, [0, 1, mesh.n_nodes])
     with pytest.raises(InputError, match="rigid-body"):
-        ReferenceCondition.from_dofs(mesh, 3 * np.arange(6))          # six x components
+        ReferenceCondition.from_dofs(mesh, 3 * np.arange(6))  # six x components
     with pytest.raises(InputError, match="in 0.."):
         ReferenceCondition.from_dofs(mesh, [0, 1, 2, 3, 4, mesh.n_dof])
     with pytest.raises(InputError, match="6 integer"):
         ReferenceCondition((0,), np.arange(5))
     # Nodes 0, 2, 14 lie in the x = 0 face, AB along z, AB x AC along x.
-    with pytest.raises(InputError, match="rigid-body"):       # B clamped along AB
+    with pytest.raises(InputError, match="rigid-body"):  # B clamped along AB
         ReferenceCondition.from_dofs(mesh, [0, 1, 2, 3 * 2 + 1, 3 * 2 + 2, 3 * 14 + 2])
     ok = ReferenceCondition.from_dofs(mesh, [0, 1, 2, 3 * 2, 3 * 2 + 1, 3 * 14])
     assert ok.nodes == (0, 2, 14)
@@ -171,8 +200,9 @@ def test_rayleigh_ritz_upper_bounds(fe, ref, face_a, full_lam, kind):
         np.testing.assert_allclose(lam[:k], full_lam[:k], rtol=1e-8)
 
 
-@pytest.mark.parametrize("kind", [BasisKind.CRAIG_BAMPTON, BasisKind.SEED_BLOCK,
-                                  BasisKind.MODAL], ids=lambda k: k.value)
+@pytest.mark.parametrize(
+    "kind", [BasisKind.CRAIG_BAMPTON, BasisKind.SEED_BLOCK, BasisKind.MODAL], ids=lambda k: k.value
+)
 def test_frequencies_decrease_with_modes(fe, ref, face_a, full_lam, kind):
     """Adding modes nests the subspaces, so every reduced omega^2_k of the smaller basis
     (k <= its nq) is >= the one of the larger basis (margin rel 1e-9: the soft 3-2-1
@@ -281,9 +311,10 @@ def test_craig_bampton_split_at_massless_retained_nodes(fe, ref, face_a):
     round-off of two eigen solves) and bound the full model's from above."""
     fe_r = _redistributed(fe, face_a[:9])
     cb_psi = _craig_bampton_unsplit(fe_r, ref, face_a, 6)
-    split = build_basis(fe_r, BasisKind.CRAIG_BAMPTON, ref, face_a, 6,
-                        massless_statics=MasslessStatics.ALL)
-    nb, ns = 3 * face_a.size, 27   # columns of the retained nodes, of the massless ones
+    split = build_basis(
+        fe_r, BasisKind.CRAIG_BAMPTON, ref, face_a, 6, massless_statics=MasslessStatics.ALL
+    )
+    nb, ns = 3 * face_a.size, 27  # columns of the retained nodes, of the massless ones
     assert split.n_static == split.nq - nb - 6 and 0 < split.n_static <= ns
     dofs = (3 * face_a[:, None] + np.arange(3)).ravel()
     assert np.array_equal(split.psi[dofs, :nb], np.eye(nb))
@@ -304,7 +335,7 @@ def test_craig_bampton_split_at_massless_retained_nodes(fe, ref, face_a):
     lam_cb = sla.eigh(0.5 * (k_cb + k_cb.T), 0.5 * (m_cb + m_cb.T), eigvals_only=True)[:8]
     assert np.all(lam_split <= lam_cb * (1 + 1e-9))
     free = ref.free_dofs(fe.n_dof)
-    s_full = np.searchsorted(free, dofs[:ns])   # the massless DOFs among the free ones
+    s_full = np.searchsorted(free, dofs[:ns])  # the massless DOFs among the free ones
     k_f, m_f = (a[free][:, free].toarray() for a in (fe_r.K, fe_r.M))
     lam_full = _condensed_lam_dense(k_f, m_f, s_full)[:8]
     assert np.all(lam_full <= lam_split * (1 + 1e-9))
@@ -321,8 +352,9 @@ def test_patch_statics_of_massless_retained_nodes(fe, ref, face_a):
     fe_r = _redistributed(fe, face_a[:9])
     cb_psi = _craig_bampton_unsplit(fe_r, ref, face_a, 6)
     patch = build_basis(fe_r, BasisKind.CRAIG_BAMPTON, ref, face_a, 6)
-    full_split = build_basis(fe_r, BasisKind.CRAIG_BAMPTON, ref, face_a, 6,
-                             massless_statics=MasslessStatics.ALL)
+    full_split = build_basis(
+        fe_r, BasisKind.CRAIG_BAMPTON, ref, face_a, 6, massless_statics=MasslessStatics.ALL
+    )
     nb, ns = 3 * face_a.size, 27
     P = massless_patterns(fe.mesh.nodes[face_a[:9]])
     assert P.shape == (ns, 11)
@@ -346,8 +378,10 @@ def test_patch_statics_of_massless_retained_nodes(fe, ref, face_a):
     k_f, m_f = (a[free][:, free].toarray() for a in (fe_r.K, fe_r.M))
     assert np.all(_condensed_lam_dense(k_f, m_f, s_full)[:8] <= lam_patch * (1 + 1e-9))
     one = _redistributed(fe, face_a[:1])
-    a, b = (build_basis(one, BasisKind.CRAIG_BAMPTON, ref, face_a, 6, massless_statics=k)
-            for k in (MasslessStatics.PATCH, MasslessStatics.ALL))
+    a, b = (
+        build_basis(one, BasisKind.CRAIG_BAMPTON, ref, face_a, 6, massless_statics=k)
+        for k in (MasslessStatics.PATCH, MasslessStatics.ALL)
+    )
     assert a.n_static == b.n_static == 3
 
 
@@ -373,5 +407,5 @@ def _craig_bampton_unsplit(fe, ref, nodes, n_modes):
     psi[b, np.arange(b.size)] = 1.0
     psi[i, : b.size] = -np.linalg.solve(K[np.ix_(i, i)], K[np.ix_(i, b)])
     _, v = sla.eigh(K[np.ix_(i, i)], M[np.ix_(i, i)], subset_by_index=[0, n_modes - 1])
-    psi[i, b.size:] = v
+    psi[i, b.size :] = v
     return psi

@@ -46,8 +46,16 @@ from flexmvm.results.writers import (
 )
 
 PNG_MAGIC = b"\x89PNG\r\n\x1a\n"
-SPEC = RodSpec(length_m=0.05, radius_m=0.01, core_elements=1, core_half_width_m=0.003,
-               n_rings=1, first_element_m=0.01, growth=1.0, max_element_m=0.01)
+SPEC = RodSpec(
+    length_m=0.05,
+    radius_m=0.01,
+    core_elements=1,
+    core_half_width_m=0.003,
+    n_rings=1,
+    first_element_m=0.01,
+    growth=1.0,
+    max_element_m=0.01,
+)
 NQ = 4
 W = 3.0  # frame spin about z [rad/s]
 
@@ -68,10 +76,17 @@ def bodies(rod):
     n = mesh.n_nodes
     rng = np.random.default_rng(7)
     psi = 1e-4 * rng.standard_normal((3 * n, NQ))
-    b1 = FlexibleBody.build("b1", mesh.nodes, sp.identity(n, format="csr"), psi, np.eye(NQ),
-                            mesh=mesh)
-    b2 = FlexibleBody.build("b2", mesh.nodes, sp.identity(n, format="csr"),
-                            sp.csr_matrix(psi[:, ::-1]), np.eye(NQ), mesh=mesh)
+    b1 = FlexibleBody.build(
+        "b1", mesh.nodes, sp.identity(n, format="csr"), psi, np.eye(NQ), mesh=mesh
+    )
+    b2 = FlexibleBody.build(
+        "b2",
+        mesh.nodes,
+        sp.identity(n, format="csr"),
+        sp.csr_matrix(psi[:, ::-1]),
+        np.eye(NQ),
+        mesh=mesh,
+    )
     return [b1, b2]
 
 
@@ -80,24 +95,41 @@ def motion():
     """Per body: r0, v, q0, qd, qa; plus the output times (non-uniform)."""
     t = np.array([0.0, 1e-4, 2e-4, 3.5e-4, 5e-4])
     return t, [
-        (np.array([-0.05, 0.0, 0.0]), np.array([0.21, 0.0, 0.0]), np.zeros(NQ), np.zeros(NQ),
-         np.zeros(NQ)),
-        (np.array([0.0, 0.01, 0.0]), np.array([0.0, 0.0, 0.05]), np.array([1.0, -2.0, 0.5, 0.0]),
-         np.array([30.0, 10.0, -20.0, 5.0]), np.array([1e5, -4e4, 0.0, 2e5])),
+        (
+            np.array([-0.05, 0.0, 0.0]),
+            np.array([0.21, 0.0, 0.0]),
+            np.zeros(NQ),
+            np.zeros(NQ),
+            np.zeros(NQ),
+        ),
+        (
+            np.array([0.0, 0.01, 0.0]),
+            np.array([0.0, 0.0, 0.05]),
+            np.array([1.0, -2.0, 0.5, 0.0]),
+            np.array([30.0, 10.0, -20.0, 5.0]),
+            np.array([1e5, -4e4, 0.0, 2e5]),
+        ),
     ]
 
 
 def _state(t, r0, v, q0, qd, qa):
     """(r, A, q, [r_dot, omega], true q_dot) at time t."""
-    return (r0 + v * t, _rot_z(W * t), q0 + qd * t + qa * t**2,
-            np.concatenate([v, [0.0, 0.0, W]]), qd + 2.0 * qa * t)
+    return (
+        r0 + v * t,
+        _rot_z(W * t),
+        q0 + qd * t + qa * t**2,
+        np.concatenate([v, [0.0, 0.0, W]]),
+        qd + 2.0 * qa * t,
+    )
 
 
 @pytest.fixture(scope="module")
 def run(rod, bodies, motion):
     t, per_body = motion
-    probes = [(1, int(rod.mesh.node_set("end_a_centre")[0])),
-              (1, int(rod.mesh.node_set("end_b_centre")[0]))]
+    probes = [
+        (1, int(rod.mesh.node_set("end_a_centre")[0])),
+        (1, int(rod.mesh.node_set("end_b_centre")[0])),
+    ]
     n_out, nb = len(t), len(bodies)
     r, A, fv = np.zeros((n_out, nb, 3)), np.zeros((n_out, nb, 3, 3)), np.zeros((n_out, nb, 6))
     qs = [np.zeros((n_out, NQ)) for _ in bodies]
@@ -113,13 +145,27 @@ def run(rod, bodies, motion):
             pv[i, p] = bodies[b].node_velocities(np.array([node]), Ab, qb, vb)[0]
     force = np.array([0.0, 12.5, 1e3 / 3.0, 7.25, 0.0])
     return RunResult(
-        t=t, body_names=["b1", "b2"], frame_r=r, frame_v=fv,
-        probe_names=["b2_impact_end", "b2_free_end"], probe_x=px, probe_v=pv,
-        contact_force=force, joint_force=np.zeros((n_out, 0)),
-        kinetic=np.linspace(1.0, 2.0, n_out), strain=np.linspace(0.0, 0.1, n_out),
-        potential=np.zeros(n_out), momentum=np.ones((n_out, 3)),
-        angular_momentum=np.full((n_out, 3), 2.0), q=qs, q_dot=qds, frame_A=A,
-        contact_intervals=[(1e-4, 3.5e-4)], n_steps=40, n_factorizations=2, wall_time_s=0.5,
+        t=t,
+        body_names=["b1", "b2"],
+        frame_r=r,
+        frame_v=fv,
+        probe_names=["b2_impact_end", "b2_free_end"],
+        probe_x=px,
+        probe_v=pv,
+        contact_force=force,
+        joint_force=np.zeros((n_out, 0)),
+        kinetic=np.linspace(1.0, 2.0, n_out),
+        strain=np.linspace(0.0, 0.1, n_out),
+        potential=np.zeros(n_out),
+        momentum=np.ones((n_out, 3)),
+        angular_momentum=np.full((n_out, 3), 2.0),
+        q=qs,
+        q_dot=qds,
+        frame_A=A,
+        contact_intervals=[(1e-4, 3.5e-4)],
+        n_steps=40,
+        n_factorizations=2,
+        wall_time_s=0.5,
     )
 
 
@@ -231,7 +277,8 @@ def test_paraview_series_files_and_point_data(tmp_path, run, bodies, motion):
             np.testing.assert_allclose(vm, von_mises(body.mesh, material, u), rtol=1e-12)
             assert (vm.max() > 0) == bool(np.any(q))
     assert sorted(p.name for p in out.iterdir()) == sorted(
-        [f"{b}_{i:06d}.vtu" for b in ("b1", "b2") for i in written] + ["b1.pvd", "b2.pvd"])
+        [f"{b}_{i:06d}.vtu" for b in ("b1", "b2") for i in written] + ["b1.pvd", "b2.pvd"]
+    )
 
 
 def test_paraview_default_every_caps_steps(tmp_path, run, bodies):
@@ -250,14 +297,18 @@ def test_fields_match_body_kinematics(bodies, motion):
     body = bodies[1]
     r, A, q, fv, qd = _state(t[3], *per_body[1])
     nodes = np.arange(len(body.X))
-    np.testing.assert_allclose(node_positions(body, r, A, q),
-                               body.node_positions(nodes, r, A, q), atol=1e-15)
-    np.testing.assert_allclose(node_velocities(body, A, q, fv, qd),
-                               body.node_velocities(nodes, A, q, np.concatenate([fv, qd])),
-                               atol=1e-14)
+    np.testing.assert_allclose(
+        node_positions(body, r, A, q), body.node_positions(nodes, r, A, q), atol=1e-15
+    )
+    np.testing.assert_allclose(
+        node_velocities(body, A, q, fv, qd),
+        body.node_velocities(nodes, A, q, np.concatenate([fv, qd])),
+        atol=1e-14,
+    )
     u = displacement(body, r, A, q, per_body[1][0], np.eye(3))
-    np.testing.assert_allclose(u, node_positions(body, r, A, q) - (per_body[1][0] + body.X),
-                               atol=1e-15)
+    np.testing.assert_allclose(
+        u, node_positions(body, r, A, q) - (per_body[1][0] + body.X), atol=1e-15
+    )
 
 
 def _uniaxial(nodes: np.ndarray, sigma: float, material) -> np.ndarray:
@@ -285,9 +336,13 @@ def _single_cell(cell_type: CellType, distort: float) -> Mesh:
     tet = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], float)
     edges = np.array([[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]])
     wedge = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [0, 1, 1]], float)
-    ref = {CellType.HEX8: HEX27_IJK[:8] / 2.0, CellType.HEX27: HEX27_IJK / 2.0,
-           CellType.TET4: tet, CellType.TET10: np.vstack([tet, tet[edges].mean(axis=1)]),
-           CellType.WEDGE6: wedge}[cell_type]
+    ref = {
+        CellType.HEX8: HEX27_IJK[:8] / 2.0,
+        CellType.HEX27: HEX27_IJK / 2.0,
+        CellType.TET4: tet,
+        CellType.TET10: np.vstack([tet, tet[edges].mean(axis=1)]),
+        CellType.WEDGE6: wedge,
+    }[cell_type]
     x = ref @ _B.T + _C
     x += distort * np.random.default_rng(3).uniform(-1, 1, x.shape)
     return Mesh(x, (CellBlock(cell_type, np.arange(len(x))[None, :]),))
@@ -329,8 +384,10 @@ def test_von_mises_series_is_von_mises_of_each_field(rod, monkeypatch, gradient_
         monkeypatch.setattr(fields_module, "SERIES_GRADIENT_BYTES", gradient_bytes)
     op = StressOperator(rod.mesh, ALUMINIUM)
     rng = np.random.default_rng(7)
-    U = np.stack([_uniaxial(rod.mesh.nodes, -3.0e7, ALUMINIUM), np.zeros_like(rod.mesh.nodes)]
-                 + [1e-5 * rng.standard_normal(rod.mesh.nodes.shape) for _ in range(3)])
+    U = np.stack(
+        [_uniaxial(rod.mesh.nodes, -3.0e7, ALUMINIUM), np.zeros_like(rod.mesh.nodes)]
+        + [1e-5 * rng.standard_normal(rod.mesh.nodes.shape) for _ in range(3)]
+    )
     vm = op.von_mises_series(U)
     assert vm.shape == (5, rod.mesh.n_nodes)
     np.testing.assert_allclose(vm[0], 3.0e7, rtol=1e-10, atol=0)
@@ -346,8 +403,12 @@ def test_von_mises_series_is_von_mises_of_each_field(rod, monkeypatch, gradient_
 def test_von_mises_series_every_cell_type(cell_type):
     mesh = _single_cell(cell_type, distort=1e-3)
     op = StressOperator(mesh, BRASS)
-    U = np.stack([_uniaxial(mesh.nodes, 5.0e6, BRASS),
-                  1e-4 * np.random.default_rng(1).standard_normal(mesh.nodes.shape)])
+    U = np.stack(
+        [
+            _uniaxial(mesh.nodes, 5.0e6, BRASS),
+            1e-4 * np.random.default_rng(1).standard_normal(mesh.nodes.shape),
+        ]
+    )
     vm = op.von_mises_series(U)
     np.testing.assert_allclose(vm[0], 5.0e6, rtol=1e-10, atol=0)
     np.testing.assert_allclose(vm[1], op.von_mises(U[1]), rtol=1e-12)
@@ -376,13 +437,18 @@ def test_vtu_series_reads_back_as_meshio_writes_it(tmp_path):
     rng = np.random.default_rng(5)
     data = {"displacement": rng.standard_normal(points.shape), "von_mises": rng.random(len(points))}
     series = VtuSeries(points, cells)
-    for k in range(2):   # the encoded grid is reused by every file
+    for k in range(2):  # the encoded grid is reused by every file
         data = {name: v * (k + 1) for name, v in data.items()}
         series.write(tmp_path / f"ours_{k}.vtu", data)
         meshio.write(tmp_path / f"theirs_{k}.vtu", meshio.Mesh(points, cells, point_data=data))
-        ours, theirs = meshio.read(tmp_path / f"ours_{k}.vtu"), meshio.read(tmp_path / f"theirs_{k}.vtu")
+        ours, theirs = (
+            meshio.read(tmp_path / f"ours_{k}.vtu"),
+            meshio.read(tmp_path / f"theirs_{k}.vtu"),
+        )
         np.testing.assert_array_equal(ours.points, points)
-        assert [c.type for c in ours.cells] == [c.type for c in theirs.cells] == [c for c, _ in cells]
+        assert (
+            [c.type for c in ours.cells] == [c.type for c in theirs.cells] == [c for c, _ in cells]
+        )
         for ours_block, theirs_block, (_, conn) in zip(ours.cells, theirs.cells, cells):
             np.testing.assert_array_equal(ours_block.data, conn)
             np.testing.assert_array_equal(theirs_block.data, conn)
@@ -390,8 +456,10 @@ def test_vtu_series_reads_back_as_meshio_writes_it(tmp_path):
             np.testing.assert_array_equal(ours.point_data[name], v)
             np.testing.assert_array_equal(theirs.point_data[name], v)
     root = ET.parse(tmp_path / "ours_0.vtu").getroot()
-    assert root.get("type") == "UnstructuredGrid" and root.get("compressor") == "vtkZLibDataCompressor"
-    assert not list(tmp_path.glob(".*.tmp"))   # written atomically, nothing left behind
+    assert (
+        root.get("type") == "UnstructuredGrid" and root.get("compressor") == "vtkZLibDataCompressor"
+    )
+    assert not list(tmp_path.glob(".*.tmp"))  # written atomically, nothing left behind
 
 
 def test_vtu_series_refuses_bad_input(tmp_path):

@@ -59,8 +59,7 @@ def test_serial_stores_every_case_and_returns_json_form(tmp_path):
             "key": case.key,
             "params": case.params.to_dict(),
             "result": results[case.key],
-            "result_sha256": hashlib.sha256(canonical_json(results[case.key]).encode()
-                                            ).hexdigest(),
+            "result_sha256": hashlib.sha256(canonical_json(results[case.key]).encode()).hexdigest(),
             "version": None,
         }
         expected = chain_eigenvalues(case)
@@ -149,8 +148,15 @@ def test_corrupt_case_is_counted_as_computed_not_loaded(tmp_path):
     path.write_text(path.read_text()[:40])
     loaded: set[str] = set()
     notes: list[str] = []
-    run_cases(cases, chain_eigenvalues, tmp_path, serial=True, progress=False, loaded=loaded,
-              announce=notes.append)
+    run_cases(
+        cases,
+        chain_eigenvalues,
+        tmp_path,
+        serial=True,
+        progress=False,
+        loaded=loaded,
+        announce=notes.append,
+    )
     assert loaded == {cases[1].key, cases[2].key}
     assert notes == [f"{path}: unreadable or incomplete case file: recomputed"]
 
@@ -167,21 +173,40 @@ def test_case_of_another_version_is_recomputed_and_named(tmp_path):
     sc = load_scenario(Path(__file__).parent / "data" / "tiny_impact.toml")
     old = stamp(sc) | {"code": "0" * 16, "key": "0" * 32}
     cases = make_cases(3)
-    run_cases(cases, chain_eigenvalues, tmp_path, serial=True, progress=False,
-              version={"provenance": old})
+    run_cases(
+        cases, chain_eigenvalues, tmp_path, serial=True, progress=False, version={"provenance": old}
+    )
     log = tmp_path / "log"
     log.mkdir()
     notes: list[str] = []
     loaded: set[str] = set()
-    run_cases(cases, CountingCase(log), tmp_path, serial=True, progress=False,
-              version={"provenance": stamp(sc)}, loaded=loaded, announce=notes.append)
+    run_cases(
+        cases,
+        CountingCase(log),
+        tmp_path,
+        serial=True,
+        progress=False,
+        version={"provenance": stamp(sc)},
+        loaded=loaded,
+        announce=notes.append,
+    )
     assert computed_keys(log) == sorted(c.key for c in cases) and loaded == set()
     assert len(notes) == 1
-    assert notes[0].startswith(f"{case_path(tmp_path, cases[0].key)} and 2 other case(s): "
-                               f"run under code version {'0' * 16} (now ")
+    assert notes[0].startswith(
+        f"{case_path(tmp_path, cases[0].key)} and 2 other case(s): "
+        f"run under code version {'0' * 16} (now "
+    )
     assert notes[0].endswith(": recomputed")
-    run_cases(cases, CountingCase(log), tmp_path, serial=True, progress=False,
-              version={"provenance": stamp(sc)}, loaded=loaded, announce=notes.append)
+    run_cases(
+        cases,
+        CountingCase(log),
+        tmp_path,
+        serial=True,
+        progress=False,
+        version={"provenance": stamp(sc)},
+        loaded=loaded,
+        announce=notes.append,
+    )
     assert len(computed_keys(log)) == 3 and loaded == {c.key for c in cases} and len(notes) == 1
 
 
@@ -195,11 +220,13 @@ def test_edited_result_is_recomputed(tmp_path):
     record["result"]["trace"] += 1.0
     path.write_text(json.dumps(record))
     notes: list[str] = []
-    again = run_cases(cases, chain_eigenvalues, tmp_path, serial=True, progress=False,
-                      announce=notes.append)
+    again = run_cases(
+        cases, chain_eigenvalues, tmp_path, serial=True, progress=False, announce=notes.append
+    )
     assert again == reference
-    assert notes == [(f"{path}: result differs from the SHA-256 written with it (edited or "
-                      "damaged): recomputed")]
+    assert notes == [
+        (f"{path}: result differs from the SHA-256 written with it (edited or damaged): recomputed")
+    ]
 
 
 def test_stored_case_with_other_params_refused(tmp_path):
@@ -310,8 +337,9 @@ def test_cluster_slots_counts_the_cases_run_at_once():
     assert cluster_slots(None, None, True) == 1
     assert cluster_slots(None, 3, False) == 3
     assert cluster_slots(None, None, False) == (os.cpu_count() or 1)
-    with LocalCluster(n_workers=2, threads_per_worker=2, processes=False,
-                      dashboard_address=None) as cluster:
+    with LocalCluster(
+        n_workers=2, threads_per_worker=2, processes=False, dashboard_address=None
+    ) as cluster:
         assert cluster_slots(cluster.scheduler_address, None, False) == 4
     with pytest.raises(InputError, match="expected one"):
         cluster_slots("tcp://127.0.0.1:1", None, True)
@@ -324,12 +352,26 @@ def test_case_compared_with_another_reference_is_recomputed(tmp_path):
     with: after the reference was recomputed to other bits, the cases are recomputed (not
     refused as another study, not kept against the old reference), said in one line."""
     cases = make_cases(2)
-    run_cases(cases, chain_eigenvalues, tmp_path, serial=True, progress=False,
-              version={"reference_sha256": "a" * 64})
+    run_cases(
+        cases,
+        chain_eigenvalues,
+        tmp_path,
+        serial=True,
+        progress=False,
+        version={"reference_sha256": "a" * 64},
+    )
     notes: list[str] = []
     loaded: set[str] = set()
-    run_cases(cases, chain_eigenvalues, tmp_path, serial=True, progress=False,
-              version={"reference_sha256": "b" * 64}, loaded=loaded, announce=notes.append)
+    run_cases(
+        cases,
+        chain_eigenvalues,
+        tmp_path,
+        serial=True,
+        progress=False,
+        version={"reference_sha256": "b" * 64},
+        loaded=loaded,
+        announce=notes.append,
+    )
     assert loaded == set()
     first = case_path(tmp_path, cases[0].key)
     why = "compared with another reference history"
@@ -351,13 +393,16 @@ def _as_main(monkeypatch, tmp_path, source: str | None):
     return main
 
 
-@pytest.mark.parametrize("source, unguarded", [
-    ("import flexmvm\nflexmvm.select('x.toml', 'b2')\n", True),
-    ("import flexmvm\nif __name__ == '__main__':\n    flexmvm.select('x.toml', 'b2')\n", False),
-    ("def main():\n    pass\nif '__main__' == __name__:\n    main()\n", False),
-    ("if __name__ != '__main__':\n    pass\n", True),
-    (None, False),
-])
+@pytest.mark.parametrize(
+    "source, unguarded",
+    [
+        ("import flexmvm\nflexmvm.select('x.toml', 'b2')\n", True),
+        ("import flexmvm\nif __name__ == '__main__':\n    flexmvm.select('x.toml', 'b2')\n", False),
+        ("def main():\n    pass\nif '__main__' == __name__:\n    main()\n", False),
+        ("if __name__ != '__main__':\n    pass\n", True),
+        (None, False),
+    ],
+)
 def test_unguarded_main_script_is_recognised(monkeypatch, tmp_path, source, unguarded):
     """A script whose top level has no `if __name__ == "__main__":` block is named (spawned
     workers would re-run it); a guarded one, or no script at all, is not."""

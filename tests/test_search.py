@@ -138,14 +138,16 @@ def mixed_table(rng: np.random.Generator):
     candidates, table, threshold = random_table(rng)
     sets = set()
     for _ in range(int(rng.integers(1, 4))):
-        radii = tuple(sorted(float(a) for a in rng.choice(RADII, int(rng.integers(0, 4)),
-                                                           replace=False)))
+        radii = tuple(
+            sorted(float(a) for a in rng.choice(RADII, int(rng.integers(0, 4)), replace=False))
+        )
         if radii in sets:
             continue
         sets.add(radii)
         pool = [m for m in IF_MODES if m + len(radii) >= 1]
-        modes = sorted(int(m) for m in rng.choice(pool, int(rng.integers(1, len(pool) + 1)),
-                                                  replace=False))
+        modes = sorted(
+            int(m) for m in rng.choice(pool, int(rng.integers(1, len(pool) + 1)), replace=False)
+        )
         for m, s in zip(modes, monotone_scores(rng, len(modes))):
             c = Candidate.interface(radii, m)
             candidates.append(c)
@@ -176,16 +178,22 @@ def test_mixed_families_match_brute_force_on_random_monotone_tables(max_open):
                 n_exact_fail += 1
                 assert own is None or own.dof > found.dof
         by_kind = [[c for c in candidates if c.kind is k] for k in FamilyKind]
-        separate.append(sum(len(smallest_passing(cs, Recorder(table), passes,
-                                                 max_open=max_open)[1]) for cs in by_kind))
+        separate.append(
+            sum(
+                len(smallest_passing(cs, Recorder(table), passes, max_open=max_open)[1])
+                for cs in by_kind
+            )
+        )
         joint.append(len(scores))
         ratios.append(len(scores) / len(candidates))
         if expected is not None:
             won[expected.kind] += 1
-    print(f"\nmax_open={max_open}: mixed tables, evaluations / brute force = "
-          f"{np.mean(ratios):.3f}, joint / separate searches = "
-          f"{np.sum(joint) / np.sum(separate):.3f}, winners {dict(won)}, "
-          f"kinds not exact {n_exact_fail}")
+    print(
+        f"\nmax_open={max_open}: mixed tables, evaluations / brute force = "
+        f"{np.mean(ratios):.3f}, joint / separate searches = "
+        f"{np.sum(joint) / np.sum(separate):.3f}, winners {dict(won)}, "
+        f"kinds not exact {n_exact_fail}"
+    )
     assert all(n > 20 for n in won.values())  # both kinds win in some tables
     assert n_exact_fail > 20
     assert np.mean(ratios) < 0.75
@@ -217,8 +225,8 @@ def test_an_interface_winner_closes_the_node_selections():
 
 
 def test_cross_kind_ties_higher_score_then_nodes_then_fewer_patches():
-    n = Candidate((1, 1), 7, 10)                 # 3 node DOF + 7 modes
-    p1 = Candidate.interface((0.46e-3,), 9)      # 1 patch + 9 modes
+    n = Candidate((1, 1), 7, 10)  # 3 node DOF + 7 modes
+    p1 = Candidate.interface((0.46e-3,), 9)  # 1 patch + 9 modes
     p3 = Candidate.interface((0.2e-3, 0.46e-3, 0.9e-3), 7)
     assert n.dof == p1.dof == p3.dof == 10
     passes = lambda s: s >= 0.99
@@ -282,11 +290,17 @@ def test_invalid_input():
     with pytest.raises(InputError, match="distinct radii > 0"):
         Candidate.interface((-1e-3,), 5)
     with pytest.raises(InputError, match=r"patch set \(0.46\) mm: 5 modes appears twice"):
-        smallest_passing([Candidate.interface((0.46e-3,), 5), Candidate(None, 5, 7, (0.46e-3,))],
-                         lambda b: [1.0] * len(b), lambda s: True)
+        smallest_passing(
+            [Candidate.interface((0.46e-3,), 5), Candidate(None, 5, 7, (0.46e-3,))],
+            lambda b: [1.0] * len(b),
+            lambda s: True,
+        )
     with pytest.raises(InputError, match="strictly increasing"):
-        brute_force([Candidate(None, 5, 7, (0.46e-3,)), Candidate(None, 10, 7, (0.46e-3,))],
-                    lambda b: [1.0] * len(b), lambda s: True)
+        brute_force(
+            [Candidate(None, 5, 7, (0.46e-3,)), Candidate(None, 10, 7, (0.46e-3,))],
+            lambda b: [1.0] * len(b),
+            lambda s: True,
+        )
     assert smallest_passing([], lambda b: [], lambda s: True) == (None, {})
 
 
@@ -314,13 +328,20 @@ def test_search_finds_the_brute_force_answer_on_the_seed_table():
         for k in ("ncc_force", "peak_err", "impulse_err", "duration_err"):
             r[k] = float(r[k])
         table[Candidate((int(r["layers"]), int(r["laps"])), int(r["modes"]), int(r["dof"]))] = r
-    targets = {"ncc>=0.99": (0.99, None), "ncc>=0.99,peak<=0.02": (0.99, 0.02),
-               "ncc>=0.9999": (0.9999, None)}
+    targets = {
+        "ncc>=0.99": (0.99, None),
+        "ncc>=0.99,peak<=0.02": (0.99, 0.02),
+        "ncc>=0.9999": (0.9999, None),
+    }
     for text, (ncc_min, peak_max) in targets.items():
-        ok = [r for r in rows if r["ncc_force"] >= ncc_min
-              and (peak_max is None or abs(r["peak_err"]) <= peak_max)]
-        best_row = min(ok, key=lambda r: (int(r["dof"]), -r["ncc_force"],
-                                          int(r["dof"]) - int(r["modes"])))
+        ok = [
+            r
+            for r in rows
+            if r["ncc_force"] >= ncc_min and (peak_max is None or abs(r["peak_err"]) <= peak_max)
+        ]
+        best_row = min(
+            ok, key=lambda r: (int(r["dof"]), -r["ncc_force"], int(r["dof"]) - int(r["modes"]))
+        )
         expected = ((int(best_row["layers"]), int(best_row["laps"])), int(best_row["modes"]))
         target = Target.parse(text)
 
@@ -339,18 +360,20 @@ def test_brute_force_takes_the_families_in_turn():
     """One batch of the whole grid, ordered so that a cluster's workers start on different
     families (each selection's basis is built once, not by two workers at the same time):
     every family's fewest modes first, then every family's next, ..."""
-    candidates = [Candidate((i, j), m, 3 * (i + j) + m) for i in (1, 2) for j in (1, 2, 3)
-                  for m in MODES[:4]]
-    candidates.append(Candidate((3, 1), 7, 19))           # a family of one member
+    candidates = [
+        Candidate((i, j), m, 3 * (i + j) + m) for i in (1, 2) for j in (1, 2, 3) for m in MODES[:4]
+    ]
+    candidates.append(Candidate((3, 1), 7, 19))  # a family of one member
     table = {c: 0.9 + 0.001 * c.modes for c in candidates}
     rec = Recorder(table)
     brute_force(candidates, rec, lambda s: s >= 0.99)
     (batch,) = rec.batches
     assert sorted(batch, key=lambda c: (c.selection, c.modes)) == sorted(
-        candidates, key=lambda c: (c.selection, c.modes))
+        candidates, key=lambda c: (c.selection, c.modes)
+    )
     n_families = 7
     assert len({c.selection for c in batch[:n_families]}) == n_families
     assert [c.modes for c in batch[:n_families]] == [7] * n_families
     later = batch[n_families:]
     assert [c.modes for c in later] == [13] * 6 + [19] * 6 + [25] * 6
-    assert all(len({c.selection for c in later[k:k + 6]}) == 6 for k in (0, 6, 12))
+    assert all(len({c.selection for c in later[k : k + 6]}) == 6 for k in (0, 6, 12))

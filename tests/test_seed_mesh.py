@@ -131,11 +131,13 @@ def test_static_stiffness_of_the_contact_node(b2):
     f = np.zeros(fe.n_dof)
     f[3 * centre] = 1.0
     full = _compliance(fe, build_basis(fe, BasisKind.FULL, ref).psi, f)
-    rod_1d = cfg.rod.length_m / (cfg.material_obj().E * math.pi * cfg.rod.radius_m ** 2)
+    rod_1d = cfg.rod.length_m / (cfg.material_obj().E * math.pi * cfg.rod.radius_m**2)
     assert rod_1d < full < 1.2 * rod_1d
     nodes = rod.selection(1, 1)
-    c = {kind: _compliance(fe, build_basis(fe, kind, ref, retained_nodes=nodes, n_modes=37).psi, f)
-         for kind in (BasisKind.CRAIG_BAMPTON, BasisKind.SEED_BLOCK, BasisKind.SEED_FIXED)}
+    c = {
+        kind: _compliance(fe, build_basis(fe, kind, ref, retained_nodes=nodes, n_modes=37).psi, f)
+        for kind in (BasisKind.CRAIG_BAMPTON, BasisKind.SEED_BLOCK, BasisKind.SEED_FIXED)
+    }
     assert c[BasisKind.CRAIG_BAMPTON] == pytest.approx(full, rel=1e-8)
     assert all(v <= full * (1 + 1e-12) for v in c.values())
     assert full / c[BasisKind.SEED_BLOCK] == pytest.approx(1.056, abs=0.01)
@@ -152,8 +154,15 @@ def test_seed_mesh_case_runs_against_its_full_fe(tmp_path):
     5 %, penetration below 1e-7 m (twice the first-step bound). Its speed is measured by
     benchmarks/, not here."""
     lines: list[str] = []
-    s = run_main_job(SEED_MESH, tmp_path / "out", t_end=5e-4, fields=False, progress=False,
-                     echo=lines.append, jobs=1)
+    s = run_main_job(
+        SEED_MESH,
+        tmp_path / "out",
+        t_end=5e-4,
+        fields=False,
+        progress=False,
+        echo=lines.append,
+        jobs=1,
+    )
     assert s["dof"] == {"b1": 2337, "b2": 46}
     assert s["model"] == {"b1": "full", "b2": "mvm-seed"}
     assert s["reference_full"]["dof"] == {"b1": 2337, "b2": 2337}
@@ -169,9 +178,14 @@ def test_seed_mesh_case_runs_against_its_full_fe(tmp_path):
     assert (tmp_path / "out" / "summary.json").is_file()
 
 
-@pytest.mark.parametrize("kind, sel, rtol", [(BasisKind.SEED_FIXED, (1, 1), 1e-10),
-                                             (BasisKind.SEED_FIXED, (2, 2), 1e-10),
-                                             (BasisKind.SEED_BLOCK, (1, 1), 1e-6)])
+@pytest.mark.parametrize(
+    "kind, sel, rtol",
+    [
+        (BasisKind.SEED_FIXED, (1, 1), 1e-10),
+        (BasisKind.SEED_FIXED, (2, 2), 1e-10),
+        (BasisKind.SEED_BLOCK, (1, 1), 1e-6),
+    ],
+)
 def test_both_eq4_readings_reproduce_statics_with_every_mode(kind, sel, rtol):
     """Loads on region II (random forces on the retained nodes), b2 held by its frame
     reference, a 6 mm rod (1,539 DOF): with every mode of region I (SEED_FIXED, n_I modes:
@@ -196,6 +210,5 @@ def test_both_eq4_readings_reproduce_statics_with_every_mode(kind, sel, rtol):
     f = np.zeros(fe.n_dof)
     f[b] = np.random.default_rng(0).standard_normal(b.size)
     full = _compliance(fe, build_basis(fe, BasisKind.FULL, ref).psi, f)
-    reduced = _compliance(fe, build_basis(fe, kind, ref, retained_nodes=nodes, n_modes=n_i).psi,
-                          f)
+    reduced = _compliance(fe, build_basis(fe, kind, ref, retained_nodes=nodes, n_modes=n_i).psi, f)
     assert reduced == pytest.approx(full, rel=rtol)

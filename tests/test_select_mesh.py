@@ -32,10 +32,10 @@ pytest.importorskip("gmsh")
 
 import _gmsh_meshes
 
-R = 0.010         # sphere radius [m]
-V0 = 0.5          # impact speed [m/s]
-TARGET = 0.98     # force NCC (module doc: splits the grid)
-STEEL = {"E_pa": 210e9, "nu": 0.3, "rho_kg_m3": 7850.0}   # the scenario's (SCENARIO)
+R = 0.010  # sphere radius [m]
+V0 = 0.5  # impact speed [m/s]
+TARGET = 0.98  # force NCC (module doc: splits the grid)
+STEEL = {"E_pa": 210e9, "nu": 0.3, "rho_kg_m3": 7850.0}  # the scenario's (SCENARIO)
 AL = {"E_pa": 70e9, "nu": 0.33, "rho_kg_m3": 2700.0}
 
 
@@ -117,7 +117,8 @@ def test_estimate_against_hertz(scenario_file):
     _holds_the_touched_facets(sc, "beam", est)
     # a given factor is the former rule, factor x a
     assert fm.estimate_region(sc, "beam", factor=2.0).radius_m == pytest.approx(
-        2.0 * est.contact_radius_m, rel=1e-12)
+        2.0 * est.contact_radius_m, rel=1e-12
+    )
     # its nodes and DOF are those of the region it states, as the builder selects it
     from flexmvm.scenarios import RegionSpec
     from flexmvm.scenarios.build import build_scenario
@@ -138,18 +139,22 @@ def _holds_the_touched_facets(sc, body: str, est) -> None:
     mesh = default_setup().free_modes_source(sc.body(body))[0].mesh
     fs, centre, a = mesh.facet_set(est.surface), np.array(est.centre_m), est.contact_radius_m
     k = np.array([(i, j) for i in range(41) for j in range(41 - i)]) / 40.0
-    bary = np.column_stack([k, 1.0 - k.sum(axis=1)])                    # (p, 3)
+    bary = np.column_stack([k, 1.0 - k.sum(axis=1)])  # (p, 3)
     facets = [*fs.tris, *fs.quads]
     # a quad sampled as its two triangles
     tris = np.concatenate([fs.tris, fs.quads[:, [0, 1, 2]], fs.quads[:, [0, 2, 3]]])
-    owner = np.concatenate([np.arange(len(fs.tris)), len(fs.tris) + np.arange(len(fs.quads)),
-                            len(fs.tris) + np.arange(len(fs.quads))])
-    x = mesh.nodes[tris]                                                 # (n, 3, 3)
+    owner = np.concatenate(
+        [
+            np.arange(len(fs.tris)),
+            len(fs.tris) + np.arange(len(fs.quads)),
+            len(fs.tris) + np.arange(len(fs.quads)),
+        ]
+    )
+    x = mesh.nodes[tris]  # (n, 3, 3)
     dist = np.linalg.norm(np.einsum("pk,nkd->npd", bary, x) - centre, axis=2).min(axis=1)
     touched = [facets[i] for i in np.unique(owner[dist <= a])]
     assert len(touched) >= 1
-    diam = max(np.linalg.norm(mesh.nodes[i] - mesh.nodes[j]) for f in touched
-               for i in f for j in f)
+    diam = max(np.linalg.norm(mesh.nodes[i] - mesh.nodes[j]) for f in touched for i in f for j in f)
     assert est.facet_size_m == pytest.approx(diam, rel=1e-12)
     assert est.radius_m == pytest.approx(a + est.facet_size_m, rel=1e-12)
     nodes = np.unique(np.concatenate(touched))
@@ -180,19 +185,27 @@ def test_estimate_errors_say_what_to_give(scenario_file, meshes):
     with pytest.raises(InputError, match="give the closing speed"):
         fm.estimate_region(_scenario(scenario_file, speed=0.0), "beam")
     _, beam = meshes
-    flat = fm.scenario_from_dict({
-        "name": "flat",
-        "time": {"t_end_s": 1e-5, "dt_s": 0.5e-6, "output_dt_s": 1e-6},
-        "bodies": [
-            # the same box turned over: its top face down on the lower box's top face
-            {"name": "upper", "mesh_file": str(beam), "material": AL,
-             "placement": {"position_m": [0.0, 0.0, 0.010],
-                           "rotation": {"axis": [1, 0, 0], "angle_deg": 180.0},
-                           "velocity_mps": [0.0, 0.0, -V0]}},
-            {"name": "lower", "mesh_file": str(beam), "material": AL},
-        ],
-        "contacts": [{"slave": "upper.top", "master": "lower.top"}],
-    })
+    flat = fm.scenario_from_dict(
+        {
+            "name": "flat",
+            "time": {"t_end_s": 1e-5, "dt_s": 0.5e-6, "output_dt_s": 1e-6},
+            "bodies": [
+                # the same box turned over: its top face down on the lower box's top face
+                {
+                    "name": "upper",
+                    "mesh_file": str(beam),
+                    "material": AL,
+                    "placement": {
+                        "position_m": [0.0, 0.0, 0.010],
+                        "rotation": {"axis": [1, 0, 0], "angle_deg": 180.0},
+                        "velocity_mps": [0.0, 0.0, -V0],
+                    },
+                },
+                {"name": "lower", "mesh_file": str(beam), "material": AL},
+            ],
+            "contacts": [{"slave": "upper.top", "master": "lower.top"}],
+        }
+    )
     with pytest.raises(InputError, match=r"no relative curvature.*radius_m, --radius-mm"):
         fm.estimate_region(flat, "lower")
     est = fm.estimate_region(flat, "lower", radius_m=0.05)
@@ -209,8 +222,17 @@ def brute(scenario_file, tmp_path_factory):
     out = tmp_path_factory.mktemp("brute")
     sc = _scenario(scenario_file)
     a = fm.estimate_region(sc, "beam").contact_radius_m
-    study = fm.select(sc, "beam", radii_m=[1.5e-3, 3e-3], modes=[5, 20], target=TARGET,
-                      serial=True, out_dir=out, patches=[(a,)], interface_modes=[10])
+    study = fm.select(
+        sc,
+        "beam",
+        radii_m=[1.5e-3, 3e-3],
+        modes=[5, 20],
+        target=TARGET,
+        serial=True,
+        out_dir=out,
+        patches=[(a,)],
+        interface_modes=[10],
+    )
     return out, study
 
 
@@ -222,14 +244,20 @@ def test_select_on_a_mesh_body_finds_a_model_that_is_not_the_smallest(brute, mes
     smallest = min(study.rows, key=lambda r: r["dof"])
     assert smallest["dof"] < s["dof"] and smallest["ncc_force"] < TARGET
     assert sorted((r["region"], r["modes"]) for r in study.rows) == [
-        ("ball 1.5 mm", 5), ("ball 1.5 mm", 20), ("ball 3 mm", 5), ("ball 3 mm", 20)]
+        ("ball 1.5 mm", 5),
+        ("ball 1.5 mm", 20),
+        ("ball 3 mm", 5),
+        ("ball 3 mm", 20),
+    ]
     # every row's nodes are its region's on the mesh (each run checked its built body's)
     from flexmvm.mesh.io import read_mesh
 
     mesh = read_mesh(meshes[1])
     dist = np.linalg.norm(mesh.nodes - [0.0, 0.0, 0.005], axis=1)
-    expected = {"ball 1.5 mm": np.count_nonzero(dist <= 1.5e-3),
-                "ball 3 mm": np.count_nonzero(dist <= 3e-3)}
+    expected = {
+        "ball 1.5 mm": np.count_nonzero(dist <= 1.5e-3),
+        "ball 3 mm": np.count_nonzero(dist <= 3e-3),
+    }
     assert all(r["nodes"] == expected[r["region"]] for r in study.rows)
     assert all(r["dof"] == 3 * r["nodes"] + r["modes"] for r in study.rows)
     assert study.best["region"] == "ball 1.5 mm"
@@ -253,15 +281,18 @@ def test_node_set_families_count_their_sets_nodes(scenario_file, meshes):
 
     n_top = len(read_mesh(meshes[1]).node_set("top"))
     with pytest.warns(ReducedCostWarning, match="region set top"):
-        grid = RegionGrid(_scenario(scenario_file), "beam",
-                          [RegionFamily(node_set="top"), RegionFamily(radius_m=1.5e-3)], [5])
+        grid = RegionGrid(
+            _scenario(scenario_file),
+            "beam",
+            [RegionFamily(node_set="top"), RegionFamily(radius_m=1.5e-3)],
+            [5],
+        )
     assert [f.label for f in grid.families] == ["ball 1.5 mm", "set top"]
     cands = [grid.candidate(c) for c in grid.cases(_scenario(scenario_file), None)]
     assert [(c.region, c.dof) for c in cands][1] == (("set", "top"), 3 * n_top + 5)
 
 
-def test_search_and_resume_give_the_brute_force_answer(scenario_file, brute, tmp_path,
-                                                       capsys):
+def test_search_and_resume_give_the_brute_force_answer(scenario_file, brute, tmp_path, capsys):
     """Resume and search: the 3 mm cases removed, the 1.5 mm ones stored. The search opens
     two families per worker: round 1 runs each family's largest model (1.5 mm + 20 passes,
     loaded; 3 mm + 20 fails, computed again), round 2 bisects 1.5 mm below its pass (+ 5,
@@ -273,9 +304,25 @@ def test_search_and_resume_give_the_brute_force_answer(scenario_file, brute, tmp
         f.unlink()
     from flexmvm.cli.app import run
 
-    run(["select", str(scenario_file), "--body", "beam", "--radii", "1.5,3", "--modes",
-         "5:20:15", "--target", f"ncc>={TARGET}", "--search", "--serial", "--no-progress",
-         "--out", str(tmp_path)])
+    run(
+        [
+            "select",
+            str(scenario_file),
+            "--body",
+            "beam",
+            "--radii",
+            "1.5,3",
+            "--modes",
+            "5:20:15",
+            "--target",
+            f"ncc>={TARGET}",
+            "--search",
+            "--serial",
+            "--no-progress",
+            "--out",
+            str(tmp_path),
+        ]
+    )
     res = json.loads((tmp_path / "selection.json").read_text())
     assert "smallest model reaching ncc>=0.98: ball 1.5 mm with 20 modes" in capsys.readouterr().out
     assert (res["region"], res["modes"], res["runs"]) == ("ball 1.5 mm", 20, 3)
@@ -283,22 +330,37 @@ def test_search_and_resume_give_the_brute_force_answer(scenario_file, brute, tmp
     assert res["ncc_force"] == study.summary["ncc_force"]
     rows = _rows(tmp_path / "ncc.csv")
     assert [(r["region"], r["modes"]) for r in rows] == [
-        ("ball 1.5 mm", "5"), ("ball 1.5 mm", "20"), ("ball 3 mm", "20")]
+        ("ball 1.5 mm", "5"),
+        ("ball 1.5 mm", "20"),
+        ("ball 3 mm", "20"),
+    ]
     assert (tmp_path / "fig_front_ncc_dof.png").is_file()
 
 
-@pytest.mark.parametrize("args, words", [
-    ([], ["mesh body", "--radii"]),
-    (["--node-sets", "nowhere"], ["unknown node set 'nowhere'"]),
-    (["--radii", "0,1"], ["--radii '0,1'"]),
-])
-def test_select_cli_one_line_errors_on_a_mesh_body(scenario_file, tmp_path, capsys, args,
-                                                   words):
+@pytest.mark.parametrize(
+    "args, words",
+    [
+        ([], ["mesh body", "--radii"]),
+        (["--node-sets", "nowhere"], ["unknown node set 'nowhere'"]),
+        (["--radii", "0,1"], ["--radii '0,1'"]),
+    ],
+)
+def test_select_cli_one_line_errors_on_a_mesh_body(scenario_file, tmp_path, capsys, args, words):
     from flexmvm.cli.app import run
 
     with pytest.raises(SystemExit) as exc:
-        run(["select", str(scenario_file), "--body", "beam", "--serial", "--out",
-             str(tmp_path / "out"), *args])
+        run(
+            [
+                "select",
+                str(scenario_file),
+                "--body",
+                "beam",
+                "--serial",
+                "--out",
+                str(tmp_path / "out"),
+                *args,
+            ]
+        )
     assert exc.value.code == 2
     line = capsys.readouterr().err.strip()
     assert "\n" not in line and line.startswith("flexmvm: error:")
@@ -313,7 +375,8 @@ def test_region_command_prints_the_region(scenario_file, capsys):
     run(["region", str(scenario_file), "--body", "beam", "--json"])
     est = json.loads(capsys.readouterr().out)
     assert est["region"]["ball"]["radius_m"] == pytest.approx(
-        est["contact_radius_m"] + est["facet_size_m"], rel=1e-12)
+        est["contact_radius_m"] + est["facet_size_m"], rel=1e-12
+    )
     assert est["rule"] == "a + h" and est["factor"] is None
     assert est["nodes"] >= 1 and est["dof"] == 3 * est["nodes"] + est["modes"]
     with pytest.raises(SystemExit) as exc:

@@ -25,8 +25,7 @@ from flexmvm.reduction.rod_reference import rod_reference
 from flexmvm.scenarios import setup as scenario_setup
 from flexmvm.scenarios.setup import SetupCache
 
-SPEC = RodSpec(length_m=0.04, radius_m=0.005, n_rings=2, first_element_m=1e-3,
-               max_element_m=0.01)
+SPEC = RodSpec(length_m=0.04, radius_m=0.005, n_rings=2, first_element_m=1e-3, max_element_m=0.01)
 SOURCE = setup_cache.rod_source(SPEC)
 
 
@@ -61,16 +60,21 @@ class Counter:
 
 def _same_csr(a, b) -> bool:
     a, b = sp.csr_matrix(a), sp.csr_matrix(b)
-    return (a.shape == b.shape and np.array_equal(a.data, b.data)
-            and np.array_equal(a.indices, b.indices) and np.array_equal(a.indptr, b.indptr))
+    return (
+        a.shape == b.shape
+        and np.array_equal(a.data, b.data)
+        and np.array_equal(a.indices, b.indices)
+        and np.array_equal(a.indptr, b.indptr)
+    )
 
 
 def _cb(fe, rod, n_modes=5, selection=(1, 2)):
     ref = rod_reference(rod)
     nodes = rod.selection(*selection)
     builder = Counter(lambda: build_basis(fe, BasisKind.CRAIG_BAMPTON, ref, nodes, n_modes))
-    basis = setup_cache.cached_basis(SOURCE, ALUMINIUM, BasisKind.CRAIG_BAMPTON, "end_b", ref,
-                                     nodes, n_modes, builder)
+    basis = setup_cache.cached_basis(
+        SOURCE, ALUMINIUM, BasisKind.CRAIG_BAMPTON, "end_b", ref, nodes, n_modes, builder
+    )
     return basis, builder
 
 
@@ -110,15 +114,29 @@ def test_key_follows_every_input(rod):
     ref = rod_reference(rod)
     other_ref = three_two_one(rod.mesh, rod.mesh.node_set("end_b"))
     nodes = rod.selection(1, 2)
-    base = {"source": SOURCE, "material": ALUMINIUM, "kind": BasisKind.CRAIG_BAMPTON,
-            "reference_set": "end_b", "reference": ref, "retained": nodes, "n_modes": 5}
+    base = {
+        "source": SOURCE,
+        "material": ALUMINIUM,
+        "kind": BasisKind.CRAIG_BAMPTON,
+        "reference_set": "end_b",
+        "reference": ref,
+        "retained": nodes,
+        "n_modes": 5,
+    }
     key = setup_cache.basis_key(**base)
     assert setup_cache.basis_key(**base) == key
     stiffer = Material(ALUMINIUM.E * 1.01, ALUMINIUM.nu, ALUMINIUM.rho)
     longer = setup_cache.rod_source(dataclasses.replace(SPEC, length_m=0.05))
-    changes = [{"material": stiffer}, {"retained": rod.selection(1, 1)}, {"n_modes": 6},
-               {"reference_set": "side"}, {"reference": other_ref}, {"source": longer},
-               {"kind": BasisKind.SEED_BLOCK}, {"version": "0" * 16}]
+    changes = [
+        {"material": stiffer},
+        {"retained": rod.selection(1, 1)},
+        {"n_modes": 6},
+        {"reference_set": "side"},
+        {"reference": other_ref},
+        {"source": longer},
+        {"kind": BasisKind.SEED_BLOCK},
+        {"version": "0" * 16},
+    ]
     keys = {setup_cache.basis_key(**{**base, **change}) for change in changes}
     assert key not in keys and len(keys) == len(changes)
     renamed = dataclasses.replace(ALUMINIUM, name="another name")
@@ -160,8 +178,11 @@ def _nan_copy(entry, checksum: bool) -> None:
     """Rewrite ``entry`` as a valid .npz with its arrays but every float NaN (with a checksum
     of that content when ``checksum``, as setup_cache.save would write it)."""
     with np.load(entry) as z:
-        arrays = {k: (np.full_like(z[k], np.nan) if z[k].dtype.kind == "f" else z[k])
-                  for k in z.files if k != "__sha256__"}  # setup_cache.CHECKSUM
+        arrays = {
+            k: (np.full_like(z[k], np.nan) if z[k].dtype.kind == "f" else z[k])
+            for k in z.files
+            if k != "__sha256__"
+        }  # setup_cache.CHECKSUM
     if checksum:
         arrays[setup_cache.CHECKSUM] = np.array(setup_cache.checksum(arrays))
     np.savez(entry, **arrays)
@@ -174,8 +195,11 @@ def test_nan_entry_is_evicted_rebuilt_and_announced(rod, fe, cache, checksum):
     fresh, _ = _cb(fe, rod)
     (entry,) = cache.glob("basis-*.npz")
     _nan_copy(entry, checksum)
-    with pytest.warns(StaleDataWarning, match=rf"setup cache {entry.name}: holds NaN or inf "
-                                              r"in \w+: evicted and rebuilt"):
+    with pytest.warns(
+        StaleDataWarning,
+        match=rf"setup cache {entry.name}: holds NaN or inf "
+        r"in \w+: evicted and rebuilt",
+    ):
         rebuilt, builder = _cb(fe, rod)
     assert builder.calls == 1 and np.array_equal(rebuilt.psi, fresh.psi)
     hit, again = _cb(fe, rod)
@@ -206,7 +230,8 @@ def test_run_after_nan_entries_succeeds_and_names_them(cache):
     from flexmvm.scenarios.run import run_scenario
 
     sc = load_scenario(Path(__file__).parent / "data" / "tiny_impact.toml").with_overrides(
-        t_end_s=2e-6)
+        t_end_s=2e-6
+    )
     first = run_scenario(sc, warn=False, setup=SetupCache()).result
     entries = sorted(cache.glob("*.npz"))
     assert entries
@@ -214,8 +239,11 @@ def test_run_after_nan_entries_succeeds_and_names_them(cache):
         _nan_copy(entry, checksum=False)
     with pytest.warns(StaleDataWarning) as notes:
         again = run_scenario(sc, warn=False, setup=SetupCache()).result
-    named = {str(w.message).split(":")[0].removeprefix("setup cache ") for w in notes
-             if issubclass(w.category, StaleDataWarning)}
+    named = {
+        str(w.message).split(":")[0].removeprefix("setup cache ")
+        for w in notes
+        if issubclass(w.category, StaleDataWarning)
+    }
     assert named and named <= {e.name for e in entries}
     assert np.array_equal(again.contact_force, first.contact_force)
 
@@ -276,9 +304,17 @@ def _assert_same_parts(a, b):
 
 def _cached_parts(basis, rod, fe):
     builder = Counter(lambda: body_parts(fe, basis))
-    parts = setup_cache.cached_body(SOURCE, ALUMINIUM, basis.kind, "end_b", basis.reference,
-                                    basis.retained_nodes, basis.n_modes, basis.psi.shape[1],
-                                    builder)
+    parts = setup_cache.cached_body(
+        SOURCE,
+        ALUMINIUM,
+        basis.kind,
+        "end_b",
+        basis.reference,
+        basis.retained_nodes,
+        basis.n_modes,
+        basis.psi.shape[1],
+        builder,
+    )
     return parts, builder
 
 
@@ -296,8 +332,9 @@ def test_body_hit_equals_fresh_build(rod, fe, cache):
     for name in ("S0", "S1", "G0", "M_qq"):
         assert np.array_equal(getattr(body.inv, name), getattr(fresh.inv, name))
     assert np.array_equal(body.k_hat, fresh.k_hat)
-    assert np.array_equal(body.contractions(np.arange(body.nq) * 1e-6),
-                          fresh.contractions(np.arange(body.nq) * 1e-6))
+    assert np.array_equal(
+        body.contractions(np.arange(body.nq) * 1e-6), fresh.contractions(np.arange(body.nq) * 1e-6)
+    )
 
 
 @pytest.mark.parametrize("damage", [b"not a zip file", b""])
@@ -327,8 +364,17 @@ def test_body_key_and_full_bodies(rod, fe, cache):
     assert setup_cache.body_key(*base, version="0" * 16) != key
     full = build_basis(fe, BasisKind.FULL, ref)
     builder = Counter(lambda: body_parts(fe, full))
-    args = (SOURCE, ALUMINIUM, BasisKind.FULL, "end_b", ref, full.retained_nodes, 0,
-            full.psi.shape[1], builder)
+    args = (
+        SOURCE,
+        ALUMINIUM,
+        BasisKind.FULL,
+        "end_b",
+        ref,
+        full.retained_nodes,
+        0,
+        full.psi.shape[1],
+        builder,
+    )
     parts = setup_cache.cached_body(*args)
     setup_cache.cached_body(*args)
     assert builder.calls == 2 and sp.issparse(parts.k_hat) and not cache.exists()
@@ -360,8 +406,9 @@ def test_warm_scenario_build_computes_nothing(cache, monkeypatch):
     monkeypatch.undo()
     own = body_parts(SetupCache().fe_model(SPEC, ALUMINIUM), cut_basis)
     np.testing.assert_allclose(cut.k_hat, own.k_hat, rtol=1e-12, atol=1e-9 * abs(own.k_hat).max())
-    np.testing.assert_allclose(cut.inv.M_qq, own.inv.M_qq, rtol=1e-12,
-                               atol=1e-12 * abs(own.inv.M_qq).max())
+    np.testing.assert_allclose(
+        cut.inv.M_qq, own.inv.M_qq, rtol=1e-12, atol=1e-12 * abs(own.inv.M_qq).max()
+    )
 
 
 def test_cli_info_and_clear(rod, cache):
@@ -369,8 +416,14 @@ def test_cli_info_and_clear(rod, cache):
     env = {**os.environ, setup_cache.ENV_DIR: str(cache)}
 
     def run(*args):
-        return subprocess.run([sys.executable, "-m", "flexmvm.cli.main", "cache", *args],
-                              capture_output=True, text=True, env=env, timeout=120, check=True)
+        return subprocess.run(
+            [sys.executable, "-m", "flexmvm.cli.main", "cache", *args],
+            capture_output=True,
+            text=True,
+            env=env,
+            timeout=120,
+            check=True,
+        )
 
     out = run("info").stdout
     assert str(cache) in out and "entries: 1" in out and "MB" in out

@@ -29,7 +29,7 @@ PA6 = Path(__file__).resolve().parents[1] / "scenarios" / "rod_impact_pa6.toml"
 def runs():
     sc = study_scenario(load_scenario(PA6), "b2", t_end_s=7e-4, dt_s=1e-6, other="mvm:3-5:40")
     data = mvm_scenario(sc, "b2", 1, 4, 43).model_dump(mode="json")
-    assert "penetration_recovery" not in data["contacts"][0]   # as shipped: the default
+    assert "penetration_recovery" not in data["contacts"][0]  # as shipped: the default
     out = {}
     for beta in (None, 0.0):
         d = {**data, "contacts": [dict(data["contacts"][0])]}

@@ -21,8 +21,8 @@ pytest.importorskip("gmsh")
 
 import _gmsh_meshes
 
-V0 = 0.5          # impact speed [m/s]
-R = 0.01          # sphere radius [m]
+V0 = 0.5  # impact speed [m/s]
+R = 0.01  # sphere radius [m]
 
 
 @pytest.fixture(scope="module")
@@ -35,21 +35,36 @@ def meshes(tmp_path_factory):
 
 def _scenario(meshes, model: dict, t_end: float):
     ball, beam = meshes
-    return fm.scenario_from_dict({
-        "name": "sphere_beam_coarse",
-        "time": {"t_end_s": t_end, "dt_s": 0.5e-6, "dt_max_s": 2e-6, "output_dt_s": 1e-6,
-                 "hf_damping_time_s": 12.5e-6},
-        "bodies": [
-            {"name": "ball", "mesh_file": str(ball), "model": {"kind": "rigid", "reference": "skin"},
-             "material": {"E_pa": 210e9, "nu": 0.3, "rho_kg_m3": 7850.0},
-             # touching the top face (z = 5 mm) with its lowest node
-             "placement": {"position_m": [0.0, 0.0, 0.005 + R], "velocity_mps": [0, 0, -V0]}},
-            {"name": "beam", "mesh_file": str(beam), "model": {"reference": "ends", **model},
-             "material": {"E_pa": 70e9, "nu": 0.33, "rho_kg_m3": 2700.0}},
-        ],
-        "contacts": [{"slave": "beam.top", "master": "ball.skin", "law": "position"}],
-        "probes": [{"name": "mid_bottom", "body": "beam", "point_m": [0.0, 0.0, -0.005]}],
-    })
+    return fm.scenario_from_dict(
+        {
+            "name": "sphere_beam_coarse",
+            "time": {
+                "t_end_s": t_end,
+                "dt_s": 0.5e-6,
+                "dt_max_s": 2e-6,
+                "output_dt_s": 1e-6,
+                "hf_damping_time_s": 12.5e-6,
+            },
+            "bodies": [
+                {
+                    "name": "ball",
+                    "mesh_file": str(ball),
+                    "model": {"kind": "rigid", "reference": "skin"},
+                    "material": {"E_pa": 210e9, "nu": 0.3, "rho_kg_m3": 7850.0},
+                    # touching the top face (z = 5 mm) with its lowest node
+                    "placement": {"position_m": [0.0, 0.0, 0.005 + R], "velocity_mps": [0, 0, -V0]},
+                },
+                {
+                    "name": "beam",
+                    "mesh_file": str(beam),
+                    "model": {"reference": "ends", **model},
+                    "material": {"E_pa": 70e9, "nu": 0.33, "rho_kg_m3": 2700.0},
+                },
+            ],
+            "contacts": [{"slave": "beam.top", "master": "ball.skin", "law": "position"}],
+            "probes": [{"name": "mid_bottom", "body": "beam", "point_m": [0.0, 0.0, -0.005]}],
+        }
+    )
 
 
 def test_start_check_takes_the_near_side_of_a_convex_master(meshes):
@@ -67,9 +82,17 @@ def test_start_check_takes_the_near_side_of_a_convex_master(meshes):
 def runs(meshes):
     """Full FE and MVM through the first impact and the separation (200 us)."""
     full = fm.run(_scenario(meshes, {"kind": "full"}, 2e-4))
-    mvm = fm.run(_scenario(meshes, {"kind": "mvm", "modes": 30,
-                                    "region": {"ball": {"centre_m": [0, 0, 0.005],
-                                                        "radius_m": 1.5e-3}}}, 2e-4))
+    mvm = fm.run(
+        _scenario(
+            meshes,
+            {
+                "kind": "mvm",
+                "modes": 30,
+                "region": {"ball": {"centre_m": [0, 0, 0.005], "radius_m": 1.5e-3}},
+            },
+            2e-4,
+        )
+    )
     return full, mvm
 
 

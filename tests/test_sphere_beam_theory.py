@@ -34,8 +34,13 @@ def test_the_case_read_off_the_scenario(scenario):
     case = sphere_beam_case(scenario)
     imp, beam = case.impact, case.impact.beam
     assert (case.sphere, case.beam) == ("ball", "beam")
-    for got, want in ((beam.length_m, 0.2), (beam.width_m, 0.01), (beam.depth_m, 0.01),
-                      (imp.contact_x_m, 0.1), (imp.sphere_radius_m, 0.01)):
+    for got, want in (
+        (beam.length_m, 0.2),
+        (beam.width_m, 0.01),
+        (beam.depth_m, 0.01),
+        (imp.contact_x_m, 0.1),
+        (imp.sphere_radius_m, 0.01),
+    ):
         assert got == pytest.approx(want, abs=1e-9)
     assert imp.e_star_pa == pytest.approx(72.71e9 / (1.0 - 0.33**2), rel=1e-12)
     ideal = 7850.0 * 4.0 / 3.0 * math.pi * 0.01**3

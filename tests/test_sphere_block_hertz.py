@@ -33,7 +33,7 @@ def check():
 
 def test_peak_force_and_duration_within_3_percent_of_hertz(check):
     assert check["status"] == "completed" and check["steps_not_converged"] == 0
-    assert check["hertz_peak_N"] == pytest.approx(615.1, abs=0.5)   # the reference itself
+    assert check["hertz_peak_N"] == pytest.approx(615.1, abs=0.5)  # the reference itself
     assert abs(check["peak_err"]) < 0.03, check
     assert abs(check["duration_err"]) < 0.03, check
 

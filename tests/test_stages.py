@@ -11,9 +11,28 @@ from pathlib import Path
 PACKAGE = Path(__file__).resolve().parents[1] / "src" / "flexmvm"
 
 # lowest first; a stage may import itself and anything earlier in this list
-STAGES = ["errors", "threads", "processes", "materials", "mesh", "fe", "reduction", "bodies", "constraints", "contact",
-          "integrate", "metrics", "theory", "results", "setup_cache", "plots", "scenarios",
-          "studies", "validation", "cli"]
+STAGES = [
+    "errors",
+    "threads",
+    "processes",
+    "materials",
+    "mesh",
+    "fe",
+    "reduction",
+    "bodies",
+    "constraints",
+    "contact",
+    "integrate",
+    "metrics",
+    "theory",
+    "results",
+    "setup_cache",
+    "plots",
+    "scenarios",
+    "studies",
+    "validation",
+    "cli",
+]
 
 
 def _stage(module: str) -> str | None:
@@ -50,9 +69,12 @@ def test_stages_point_one_way():
 
 
 def test_every_stage_is_listed():
-    names = {p.name.removesuffix(".py") for p in PACKAGE.iterdir()
-             if (p.is_dir() and (p / "__init__.py").exists()) or
-             (p.suffix == ".py" and p.name != "__init__.py")}
+    names = {
+        p.name.removesuffix(".py")
+        for p in PACKAGE.iterdir()
+        if (p.is_dir() and (p / "__init__.py").exists())
+        or (p.suffix == ".py" and p.name != "__init__.py")
+    }
     assert names <= set(STAGES), names - set(STAGES)
 
 
@@ -63,10 +85,16 @@ def test_no_private_names_across_modules():
     for path in sorted(PACKAGE.rglob("*.py")):
         tree = ast.parse(path.read_text(encoding="utf-8"))
         for node in ast.walk(tree):
-            if isinstance(node, ast.ImportFrom) and node.module and node.level == 0 \
-                    and node.module.split(".")[0] == "flexmvm":
+            if (
+                isinstance(node, ast.ImportFrom)
+                and node.module
+                and node.level == 0
+                and node.module.split(".")[0] == "flexmvm"
+            ):
                 for alias in node.names:
                     if alias.name.startswith("_") and not alias.name.startswith("__"):
-                        wrong.append(f"{path.relative_to(PACKAGE)}:{node.lineno} imports "
-                                     f"{node.module}.{alias.name}")
+                        wrong.append(
+                            f"{path.relative_to(PACKAGE)}:{node.lineno} imports "
+                            f"{node.module}.{alias.name}"
+                        )
     assert not wrong, "\n".join(wrong)

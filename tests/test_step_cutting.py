@@ -21,7 +21,7 @@ from flexmvm.integrate import driver
 from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
 
 TINY = Path(__file__).parent / "data" / "tiny_impact.toml"
-T_END = 6e-6          # 24 steps of the tiny case's dt_s = 0.25 us
+T_END = 6e-6  # 24 steps of the tiny case's dt_s = 0.25 us
 
 
 def _failing(monkeypatch, longest_ok: float, window=(2e-6, 3e-6)):
@@ -51,7 +51,7 @@ def test_a_failing_step_is_cut_and_the_run_matches_one_with_that_step(monkeypatc
     dt = 0.25e-6
     sizes = cut.steps.size_counts()
     assert min(sizes) == pytest.approx(dt / 4)
-    n_failed = 4                              # steps starting at 2.0, 2.25, 2.5, 2.75 us
+    n_failed = 4  # steps starting at 2.0, 2.25, 2.5, 2.75 us
     assert sizes[min(sizes)] == 4 * n_failed
     assert cut.summary["step_cuts"] == 3 * n_failed
     assert cut.summary["smallest_step_s"] == pytest.approx(dt / 4)
@@ -64,16 +64,15 @@ def test_a_failing_step_is_cut_and_the_run_matches_one_with_that_step(monkeypatc
     assert np.abs(cut.contact_force[:3] - ref.contact_force[:3]).max() == 0.0  # before: same
 
 
-def test_a_step_that_fails_at_the_smallest_step_stops_the_run_with_what_it_computed(
-        monkeypatch):
-    _failing(monkeypatch, 0.0)                # nothing converges inside the window
+def test_a_step_that_fails_at_the_smallest_step_stops_the_run_with_what_it_computed(monkeypatch):
+    _failing(monkeypatch, 0.0)  # nothing converges inside the window
     with pytest.raises(SimulationFailed) as info:
         fm.run(_tiny())
     msg = str(info.value)
     assert "t = 2e-06 s" in msg and "cut down to" in msg and "injected" in msg
     part = info.value.partial
     assert part.summary["status"] == "failed" and "injected" in part.summary["failure"]
-    assert part.t[-1] == pytest.approx(2e-6)      # the last output before the failure
+    assert part.t[-1] == pytest.approx(2e-6)  # the last output before the failure
     assert part.summary["t_end_reached_s"] == pytest.approx(2e-6)
     assert len(part.t) == 3 and part.contact_force.shape == (3,)
     monkeypatch.undo()
@@ -86,8 +85,22 @@ def test_flexmvm_run_writes_the_history_up_to_the_failure(tmp_path, monkeypatch,
     out = tmp_path / "out"
     code = 0
     try:
-        cli_main.main(["run", str(TINY), "--out", str(out), "--t-end", str(T_END), "--model",
-                       "full", "--no-fields", "--no-progress", "--jobs", "1"])
+        cli_main.main(
+            [
+                "run",
+                str(TINY),
+                "--out",
+                str(out),
+                "--t-end",
+                str(T_END),
+                "--model",
+                "full",
+                "--no-fields",
+                "--no-progress",
+                "--jobs",
+                "1",
+            ]
+        )
     except SystemExit as exc:
         code = exc.code
     err = capsys.readouterr().err.strip().splitlines()
@@ -95,7 +108,7 @@ def test_flexmvm_run_writes_the_history_up_to_the_failure(tmp_path, monkeypatch,
     summary = json.loads((out / "summary.json").read_text())
     assert summary["status"] == "failed" and "injected" in summary["failure"]
     rows = (out / "history.csv").read_text().strip().splitlines()
-    assert len(rows) == 1 + 3            # header + outputs at 0, 1, 2 us
+    assert len(rows) == 1 + 3  # header + outputs at 0, 1, 2 us
 
 
 def test_cut_limit_is_stated():
@@ -129,14 +142,22 @@ def test_the_hook_sees_every_accepted_step_of_the_integrator_the_call_chose():
         return integ
 
     seen = []
-    run = driver.simulate(built.system, built.states, built.grid, built.probes,
-                          integrator=factory, on_step=seen.append)
+    run = driver.simulate(
+        built.system,
+        built.states,
+        built.grid,
+        built.probes,
+        integrator=factory,
+        on_step=seen.append,
+    )
     assert len(made) == 1 and run.step_cuts == 4
     assert len(seen) == run.n_steps == 24 + 4
     np.testing.assert_array_equal([s.h_s for s in seen], run.steps.h_s)
     np.testing.assert_array_equal([s.t_end_s for s in seen], run.steps.t_s)
-    np.testing.assert_array_equal([s.result.contact.normal_impulse(s.result.contact_impulses)
-                                   for s in seen], run.steps.contact_impulse_Ns)
+    np.testing.assert_array_equal(
+        [s.result.contact.normal_impulse(s.result.contact_impulses) for s in seen],
+        run.steps.contact_impulse_Ns,
+    )
     for last, step in itertools.pairwise(seen):
         assert step.start is last.states
         assert step.t_s == pytest.approx(last.t_end_s, rel=1e-12)

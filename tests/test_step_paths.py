@@ -40,8 +40,11 @@ from flexmvm.scenarios.run import run_scenario
 
 DATA = Path(__file__).parent / "data"
 REFERENCE = DATA / "step_histories_tiny_flat.npz"
-CASES = {"tiny": ("tiny_impact.toml", None), "tiny_mvm": ("tiny_impact.toml", "mvm"),
-         "flat": ("short_flat_impact.toml", None)}
+CASES = {
+    "tiny": ("tiny_impact.toml", None),
+    "tiny_mvm": ("tiny_impact.toml", "mvm"),
+    "flat": ("short_flat_impact.toml", None),
+}
 
 
 @functools.cache
@@ -88,8 +91,10 @@ def test_nonrotating_step_equals_newton_step():
     (measured 124 to 160 of 160 steps as the summation order of the contact terms changed), so
     only its use is asserted, not a share."""
     built = build_scenario(load_scenario(DATA / "short_flat_impact.toml"))
-    fast_res, newton_res = (simulate(built.system, built.states, built.grid, built.probes,
-                                     exploit_nonrotating=fast) for fast in (True, False))
+    fast_res, newton_res = (
+        simulate(built.system, built.states, built.grid, built.probes, exploit_nonrotating=fast)
+        for fast in (True, False)
+    )
     assert fast_res.n_nonrotating_steps > 0
     assert newton_res.n_nonrotating_steps == 0
     peak = newton_res.contact_force.max()
@@ -110,8 +115,9 @@ def _random_body(sparse: bool, seed: int = 0) -> FlexibleBody:
     K = rng.normal(size=(nq, nq))
     K = K @ K.T + nq * np.eye(nq)
     if sparse:
-        return FlexibleBody.build("s", X, Ms, sp.csr_matrix(psi * (np.abs(psi) > 1.0)),
-                                  sp.csr_matrix(K))
+        return FlexibleBody.build(
+            "s", X, Ms, sp.csr_matrix(psi * (np.abs(psi) > 1.0)), sp.csr_matrix(K)
+        )
     return FlexibleBody.build("d", X, Ms, psi, K)
 
 

@@ -63,23 +63,27 @@ def _copy_reference(src: Path, dst: Path, cases: bool = False) -> None:
 @pytest.fixture(scope="module")
 def brute(tmp_path_factory) -> tuple[Path, dict]:
     out = tmp_path_factory.mktemp("brute")
-    res = run_selection_study(TINY, "b2", out, **GRID, target=TARGET, serial=True,
-                              progress=False, echo=lambda s: None)
+    res = run_selection_study(
+        TINY, "b2", out, **GRID, target=TARGET, serial=True, progress=False, echo=lambda s: None
+    )
     return out, res
 
 
 def test_brute_force_writes_table_json_and_figures(brute):
     out, res = brute
     header = (out / "ncc.csv").read_text().splitlines()[0]
-    assert header == ("layers,laps,nodes,modes,dof,ncc_force,ncc_b2_impact_end,ncc_b2_free_end,"
-                      "peak_err,impulse_err,duration_err,guard_outside_fraction,energy_gain_rel_max,"
-                      "wall_time_s")
+    assert header == (
+        "layers,laps,nodes,modes,dof,ncc_force,ncc_b2_impact_end,ncc_b2_free_end,"
+        "peak_err,impulse_err,duration_err,guard_outside_fraction,energy_gain_rel_max,"
+        "wall_time_s"
+    )
     rows = _table(out, drop=())
     # every run records its validity guard: the share of the contact impulse on surface
     # nodes the basis holds stiff, a fraction in [0, 1]
     assert all(0.0 <= float(r["guard_outside_fraction"]) <= 1.0 for r in rows)
-    assert [(int(r["layers"]), int(r["laps"]), int(r["modes"])) for r in rows] == \
-        [(i, j, m) for i in (1, 2) for j in (1, 2) for m in (7, 13)]
+    assert [(int(r["layers"]), int(r["laps"]), int(r["modes"])) for r in rows] == [
+        (i, j, m) for i in (1, 2) for j in (1, 2) for m in (7, 13)
+    ]
     for r in rows:  # dof = 3 x nodes + modes (elastic coordinates, seed count)
         assert int(r["dof"]) == 3 * int(r["nodes"]) + int(r["modes"])
         # measured 1 - r <= 2.2e-5 (module doc): a broken reduction or coupling reads far below
@@ -99,8 +103,16 @@ def test_brute_force_writes_table_json_and_figures(brute):
 def test_dask_local_cluster_gives_the_serial_table(brute, tmp_path):
     out, _ = brute
     _copy_reference(out, tmp_path)
-    res = run_selection_study(TINY, "b2", tmp_path, **GRID, target=Target(0.99), n_workers=2,
-                              progress=False, echo=lambda s: None)
+    res = run_selection_study(
+        TINY,
+        "b2",
+        tmp_path,
+        **GRID,
+        target=Target(0.99),
+        n_workers=2,
+        progress=False,
+        echo=lambda s: None,
+    )
     assert res["runs_made"] == 8 and res["reference_computed"] is False
     _same_table(_table(out), _table(tmp_path))
 
@@ -114,11 +126,20 @@ def test_interrupted_sweep_resumes_only_missing_cases(brute, tmp_path):
         (cases_dir / f"{key}.json").unlink()
     kept = {p.name: p.stat().st_mtime_ns for p in cases_dir.glob("*.json")}
     assert len(kept) == 5
-    res = run_selection_study(TINY, "b2", tmp_path, **GRID, target=Target(0.99), serial=True,
-                              progress=False, echo=lambda s: None)
+    res = run_selection_study(
+        TINY,
+        "b2",
+        tmp_path,
+        **GRID,
+        target=Target(0.99),
+        serial=True,
+        progress=False,
+        echo=lambda s: None,
+    )
     assert (res["runs_made"], res["runs_loaded"], res["runs"]) == (3, 5, 8)
-    assert {p.name: p.stat().st_mtime_ns for p in cases_dir.glob("*.json")
-            if p.name in kept} == kept
+    assert {
+        p.name: p.stat().st_mtime_ns for p in cases_dir.glob("*.json") if p.name in kept
+    } == kept
     assert sorted(p.stem for p in cases_dir.glob("*.json") if p.name not in kept) == sorted(missing)
     _same_table(_table(out), _table(tmp_path))
 
@@ -132,8 +153,9 @@ def test_search_finds_the_brute_force_answer_with_fewer_runs(brute, tmp_path, mo
     # brute force at this target from the stored cases (nothing recomputed)
     bdir = tmp_path / "brute"
     _copy_reference(out, bdir, cases=True)
-    b = run_selection_study(TINY, "b2", bdir, **GRID, target=target, serial=True,
-                            progress=False, echo=lambda s: None)
+    b = run_selection_study(
+        TINY, "b2", bdir, **GRID, target=target, serial=True, progress=False, echo=lambda s: None
+    )
     assert b["runs_made"] == 0 and b["runs"] == 8 and b["passed"]
     sdir = tmp_path / "search"
     _copy_reference(out, sdir)
@@ -145,8 +167,17 @@ def test_search_finds_the_brute_force_answer_with_fewer_runs(brute, tmp_path, mo
         return real(*args, max_open=max_open, **kw)
 
     monkeypatch.setattr(selection, "smallest_passing", spy)
-    s = run_selection_study(TINY, "b2", sdir, **GRID, target=target, search=True, serial=True,
-                            progress=False, echo=lambda s: None)
+    s = run_selection_study(
+        TINY,
+        "b2",
+        sdir,
+        **GRID,
+        target=target,
+        search=True,
+        serial=True,
+        progress=False,
+        echo=lambda s: None,
+    )
     # in-process: one case at a time, so SEARCH_OPEN_PER_SLOT families open
     assert opened == [selection.SEARCH_OPEN_PER_SLOT]
     assert s["passed"] and s["search"] is True
@@ -200,16 +231,24 @@ def test_parse_range():
             parse_range(bad)
 
 
-@pytest.mark.parametrize("args, message", [
-    (["--layers", "1..x"], "--layers '1..x'"),
-    (["--laps", "1..6"], "maximum 5 laps"),
-    (["--body", "b9"], "no body 'b9'"),
-])
+@pytest.mark.parametrize(
+    "args, message",
+    [
+        (["--layers", "1..x"], "--layers '1..x'"),
+        (["--laps", "1..6"], "maximum 5 laps"),
+        (["--body", "b9"], "no body 'b9'"),
+    ],
+)
 def test_cli_one_line_errors(tmp_path, args, message):
     argv = ["select", str(TINY), "--out", str(tmp_path / "out")]
     argv += args if "--body" in args else ["--body", "b2", *args]
-    p = subprocess.run([sys.executable, "-m", "flexmvm.cli.main", *argv],
-                       check=False, capture_output=True, text=True, timeout=120)
+    p = subprocess.run(
+        [sys.executable, "-m", "flexmvm.cli.main", *argv],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert p.returncode == 2
     lines = p.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("flexmvm: error: ") and message in lines[0]
@@ -220,12 +259,22 @@ def test_materials_study_two_materials(tmp_path):
     from flexmvm.scenarios.guard import ENERGY_GAIN_WARN, WARN_FRACTION
     from flexmvm.studies.materials import run_materials_study
 
-    res = run_materials_study(TINY, tmp_path, materials=["W", "Al"], selections=[(1, 1)],
-                              modes=[7], serial=True, progress=False, echo=lambda s: None)
+    res = run_materials_study(
+        TINY,
+        tmp_path,
+        materials=["W", "Al"],
+        selections=[(1, 1)],
+        modes=[7],
+        serial=True,
+        progress=False,
+        echo=lambda s: None,
+    )
     with open(tmp_path / "materials.csv", newline="") as fh:
         rows = list(csv.DictReader(fh))
-    assert [(r["material"], r["selection"], r["modes"]) for r in rows] == \
-        [("W", "1-1", "7"), ("Al", "1-1", "7")]
+    assert [(r["material"], r["selection"], r["modes"]) for r in rows] == [
+        ("W", "1-1", "7"),
+        ("Al", "1-1", "7"),
+    ]
     assert float(rows[0]["E_pa"]) == 344.70e9 and float(rows[1]["rho_kg_m3"]) == 2700.0
     w, al = (res["materials"][m]["mean_ncc_force"] for m in ("W", "Al"))
     assert w == pytest.approx(float(rows[0]["ncc_force"]))
@@ -237,8 +286,11 @@ def test_materials_study_two_materials(tmp_path):
     assert res["seed_ordering_holds"] is True
     # the validity verdict per run, and the means over the models valid for every material
     outside = {b["case"] for b in res["guard_outside_validity"]}
-    bad = [float(r["guard_outside_fraction"]) > WARN_FRACTION
-           or float(r["energy_gain_rel_max"]) > ENERGY_GAIN_WARN for r in rows]
+    bad = [
+        float(r["guard_outside_fraction"]) > WARN_FRACTION
+        or float(r["energy_gain_rel_max"]) > ENERGY_GAIN_WARN
+        for r in rows
+    ]
     for r, m, b in zip(rows, ("W", "Al"), bad):
         assert (f"{m}-l1-j1-m7" in outside) is b
         valid = res["materials"][m]["mean_ncc_force_valid"]
@@ -276,8 +328,15 @@ def test_materials_study_of_the_seed_eq4_kind(tmp_path, monkeypatch):
 
     basis = SetupCache.basis
     monkeypatch.setattr(SetupCache, "basis", recording)
-    study = fm.material_study(TINY, materials=["Al"], selections="1-1", modes=[7],
-                              serial=True, kind="mvm-seed", out_dir=tmp_path)
+    study = fm.material_study(
+        TINY,
+        materials=["Al"],
+        selections="1-1",
+        modes=[7],
+        serial=True,
+        kind="mvm-seed",
+        out_dir=tmp_path,
+    )
     assert ("Al", BasisKind.SEED_BLOCK) in built
     assert all(k is not BasisKind.CRAIG_BAMPTON for _, k in built)
     assert study.summary["kind"] == "mvm-seed" and [r["kind"] for r in study.rows] == ["mvm-seed"]
@@ -285,31 +344,57 @@ def test_materials_study_of_the_seed_eq4_kind(tmp_path, monkeypatch):
     stored = json.loads((tmp_path / "cases" / "Al-l1-j1-m7.json").read_text())
     assert stored["params"]["kind"] == "mvm-seed"
     with pytest.raises(InputError, match="stored params"):
-        fm.material_study(TINY, materials=["Al"], selections="1-1", modes=[7], serial=True,
-                          out_dir=tmp_path)
+        fm.material_study(
+            TINY, materials=["Al"], selections="1-1", modes=[7], serial=True, out_dir=tmp_path
+        )
     with pytest.raises(InputError, match="expected one of mvm, mvm-seed, mvm-seed-fixed"):
-        fm.material_study(TINY, materials=["Al"], serial=True, kind="modal",
-                          out_dir=tmp_path / "modal")
+        fm.material_study(
+            TINY, materials=["Al"], serial=True, kind="modal", out_dir=tmp_path / "modal"
+        )
     assert not (tmp_path / "modal").exists()
 
 
 def test_materials_cli_bad_kind_is_one_line(tmp_path):
-    p = subprocess.run([sys.executable, "-m", "flexmvm.cli.main", "study", "materials",
-                        str(TINY), "--kind", "modal", "--out", str(tmp_path / "out")],
-                       check=False, capture_output=True, text=True, timeout=120)
+    p = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "flexmvm.cli.main",
+            "study",
+            "materials",
+            str(TINY),
+            "--kind",
+            "modal",
+            "--out",
+            str(tmp_path / "out"),
+        ],
+        check=False,
+        capture_output=True,
+        text=True,
+        timeout=120,
+    )
     assert p.returncode == 2
     lines = p.stderr.strip().splitlines()
     assert len(lines) == 1 and lines[0].startswith("flexmvm: error: ") and "--kind" in lines[0]
     assert "mvm-seed-fixed" in lines[0] and not (tmp_path / "out").exists()
 
 
-@pytest.mark.skipif(not os.environ.get("FLEXMVM_SLOW"),
-                    reason="4-material study: not needed in tests (set FLEXMVM_SLOW=1)")
+@pytest.mark.skipif(
+    not os.environ.get("FLEXMVM_SLOW"),
+    reason="4-material study: not needed in tests (set FLEXMVM_SLOW=1)",
+)
 def test_materials_study_all_four(tmp_path):
     from flexmvm.studies.materials import run_materials_study
 
-    res = run_materials_study(TINY, tmp_path, selections=[(1, 1), (2, 2)], modes=[7, 13],
-                              n_workers=2, progress=False, echo=lambda s: None)
+    res = run_materials_study(
+        TINY,
+        tmp_path,
+        selections=[(1, 1), (2, 2)],
+        modes=[7, 13],
+        n_workers=2,
+        progress=False,
+        echo=lambda s: None,
+    )
     assert set(res["materials"]) == {"W", "Cu", "Al", "PA6"}
     assert isinstance(res["seed_ordering_holds"], bool)
 
@@ -353,8 +438,11 @@ def test_mode_floor_cuts_the_larger_craig_bampton_basis():
 
     sel = tuple(int(n) for n in rod_mesh(spec).selection(1, 1))
     fresh = default_setup().basis(spec, mat, BasisKind.CRAIG_BAMPTON, sel, 7, "end_b")
-    cut = default_setup().with_mode_floor(13).basis(spec, mat, BasisKind.CRAIG_BAMPTON, sel, 7,
-                                                    "end_b")
+    cut = (
+        default_setup()
+        .with_mode_floor(13)
+        .basis(spec, mat, BasisKind.CRAIG_BAMPTON, sel, 7, "end_b")
+    )
     assert cut.n_modes == 7 and cut.psi.shape == fresh.psi.shape
     np.testing.assert_allclose(cut.mode_freqs_hz, fresh.mode_freqs_hz, rtol=1e-8)
     nb = 3 * len(sel)
@@ -371,10 +459,12 @@ def test_selection_study_of_the_seed_eq4_kind(tmp_path):
 
     sc = load_scenario(TINY)
     assert all("kind" not in c.params for c in selection_cases(sc, "b2", [1], [1], [7]))
-    assert {c.params["kind"] for c in selection_cases(sc, "b2", [1], [1], [7],
-                                                      kind="mvm-seed")} == {"mvm-seed"}
-    study = fm.select(sc, "b2", layers=[1], laps=[1, 2], modes=[7], serial=True,
-                      kind="mvm-seed", out_dir=tmp_path)
+    assert {
+        c.params["kind"] for c in selection_cases(sc, "b2", [1], [1], [7], kind="mvm-seed")
+    } == {"mvm-seed"}
+    study = fm.select(
+        sc, "b2", layers=[1], laps=[1, 2], modes=[7], serial=True, kind="mvm-seed", out_dir=tmp_path
+    )
     assert study.summary["kind"] == "mvm-seed" and len(study.rows) == 2
     for r in study.rows:
         assert 0.0 < r["ncc_force"] <= 1.0 and r["dof"] == 3 * r["nodes"] + r["modes"]

@@ -21,8 +21,9 @@ GRID = {"layers": [1], "laps": [1], "modes": [7, 13]}
 
 
 def _study(out: Path, lines: list[str]) -> dict:
-    return run_selection_study(TINY, "b2", out, **GRID, target=Target(0.99), serial=True,
-                               progress=False, echo=lines.append)
+    return run_selection_study(
+        TINY, "b2", out, **GRID, target=Target(0.99), serial=True, progress=False, echo=lines.append
+    )
 
 
 def _ncc(out: Path) -> list[str]:
@@ -52,7 +53,9 @@ def test_cut_reference_is_recomputed_and_said(first, tmp_path):
     note = [s for s in lines if s.startswith("reference history.csv")]
     assert len(note) == 1 and re.fullmatch(
         rf"reference history.csv: 7 of {len(rows) - 1} samples, last at [0-9.]+ us "
-        r"\(expected window 0..30 us\): recomputed", note[0]), lines
+        r"\(expected window 0..30 us\): recomputed",
+        note[0],
+    ), lines
     assert res["reference_computed"] is True
     assert _ncc(tmp_path) == ncc
 
@@ -111,18 +114,28 @@ def test_material_reference_cut_short_is_recomputed(tmp_path):
     from flexmvm.studies.materials import run_materials_study
 
     def study() -> list[dict]:
-        run_materials_study(TINY, tmp_path, materials=["Al"], selections=[(1, 1)], modes=[7],
-                            serial=True, progress=False, echo=lambda s: None)
+        run_materials_study(
+            TINY,
+            tmp_path,
+            materials=["Al"],
+            selections=[(1, 1)],
+            modes=[7],
+            serial=True,
+            progress=False,
+            echo=lambda s: None,
+        )
         with open(tmp_path / "materials.csv", newline="") as fh:
-            return [{k: v for k, v in r.items() if k != "wall_time_s"}
-                    for r in csv.DictReader(fh)]
+            return [{k: v for k, v in r.items() if k != "wall_time_s"} for r in csv.DictReader(fh)]
 
     rows = study()
     hist = tmp_path / "Al" / "reference" / "history.csv"
     whole = hist.read_text()
     hist.write_text("".join(whole.splitlines(keepends=True)[:8]))
-    with pytest.warns(StaleDataWarning, match=r"Al/reference history.csv: 7 of \d+ samples, "
-                                              r"last at .* \(expected window 0..30 us\): "
-                                              "recomputed"):
+    with pytest.warns(
+        StaleDataWarning,
+        match=r"Al/reference history.csv: 7 of \d+ samples, "
+        r"last at .* \(expected window 0..30 us\): "
+        "recomputed",
+    ):
         again = study()
     assert again == rows and hist.read_text() == whole

@@ -63,7 +63,7 @@ def test_rigid_equal_rods_classic():
     assert np.allclose(s.v1_far[far_after], 0.0, atol=tol * V0)
     assert np.allclose(s.v2_far[far_after], V0, rtol=tol)
     assert np.allclose(s.v2_far[s.t < half - 2 * dt], 0.0, atol=tol * V0)
-    (start, end), = contact_intervals(s.t, s.contact_force, 0.5 * f_plateau)
+    ((start, end),) = contact_intervals(s.t, s.contact_force, 0.5 * f_plateau)
     assert start == 0.0
     assert abs(end - big_t) <= 2 * dt
     assert np.all(s.gap_m >= 0.0)
@@ -82,7 +82,7 @@ def test_rigid_seed_plateau_and_far_end(seed_rods, seed_rigid):
     assert f_sv == pytest.approx(619.38, abs=0.01)
     first = s.t < r2.round_trip_s - 2 * dt
     assert np.allclose(s.contact_force[first], f_sv, rtol=1e-12, atol=0)
-    (start, end), = contact_intervals(s.t, s.contact_force, 0.5 * f_sv)
+    ((start, end),) = contact_intervals(s.t, s.contact_force, 0.5 * f_sv)
     assert start == 0.0
     assert abs(end - r2.round_trip_s) <= 2 * dt
     t_arrive = r2.length_m / r2.c
@@ -174,8 +174,12 @@ def test_hertz_dt_convergence(seed_rods):
     """Peak force of the seed Hertz case changes by < 1e-4 relative when dt is halved
     (T2/5000 -> T2/10000), and the approach history converges at least at first order."""
     r1, r2 = seed_rods
-    runs = [two_rod_impact(r1, r2, V0, 8.0e-4, ContactLaw.HERTZ, sphere_radius_m=R_SPHERE,
-                           dt=r2.round_trip_s / div) for div in (2500, 5000, 10000)]
+    runs = [
+        two_rod_impact(
+            r1, r2, V0, 8.0e-4, ContactLaw.HERTZ, sphere_radius_m=R_SPHERE, dt=r2.round_trip_s / div
+        )
+        for div in (2500, 5000, 10000)
+    ]
     peaks = [peak(s.t, s.contact_force)[1] for s in runs]
     assert abs(peaks[2] - peaks[1]) / peaks[2] < 1e-4
     t_probe = np.linspace(0.0, 7.9e-4, 80)
@@ -189,8 +193,13 @@ def test_hertz_dt_convergence(seed_rods):
 def test_rod_validation_and_arguments(seed_rods):
     """Bad inputs raise one-line InputErrors naming what was received."""
     r1, r2 = seed_rods
-    for kwargs in ({"length_m": 0.0}, {"area_m2": -1.0}, {"E": float("nan")}, {"rho": "x"},
-                   {"nu": 0.5}):
+    for kwargs in (
+        {"length_m": 0.0},
+        {"area_m2": -1.0},
+        {"E": float("nan")},
+        {"rho": "x"},
+        {"nu": 0.5},
+    ):
         base = {"length_m": 1.0, "area_m2": 1e-4, "E": 1e11, "rho": 8000.0, "nu": 0.3} | kwargs
         with pytest.raises(InputError) as err:
             Rod1D(**base)

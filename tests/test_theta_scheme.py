@@ -114,8 +114,9 @@ def _momentum_error(theta: float, dt: float) -> tuple[float, tuple]:
     sc = load_scenario(TINY).with_time(t_end_s=3e-4, dt_s=dt, dt_max_s=dt, theta=theta)
     res = run_scenario(sc).result
     p = res.momentum
-    return float(np.linalg.norm(p - p[0], axis=1).max() / np.linalg.norm(p[0])), \
-        res.contact_intervals
+    return float(
+        np.linalg.norm(p - p[0], axis=1).max() / np.linalg.norm(p[0])
+    ), res.contact_intervals
 
 
 def test_momentum_through_impact_and_separation():
@@ -132,7 +133,7 @@ def test_momentum_through_impact_and_separation():
     rods' vibration). The test: theta = 1/2 to round-off; theta = 0.55 below 1e-8 and
     falling by at least 1.6x when h halves (measured 2.3x)."""
     err_mid, contact = _momentum_error(0.5, 0.5e-6)
-    assert len(contact) == 1 and 1.0e-4 < contact[0][1] < 1.3e-4, contact   # separated
+    assert len(contact) == 1 and 1.0e-4 < contact[0][1] < 1.3e-4, contact  # separated
     assert err_mid < 1e-12
     coarse, _ = _momentum_error(0.55, 0.5e-6)
     fine, _ = _momentum_error(0.55, 0.25e-6)
@@ -159,7 +160,7 @@ def test_theta_proportional_to_the_step_is_second_order():
         errs.append(np.abs(res.q[0][:, 0] - np.sin(OMEGA * res.t) / OMEGA).max())
     observed = np.log2(np.array(errs[:-1]) / np.array(errs[1:]))
     assert np.all(np.abs(observed - 2.0) < 0.15), observed
-    for x in (0.01, 0.05, 0.1):           # h / tau
+    for x in (0.01, 0.05, 0.1):  # h / tau
         theta = theta_for_damping_time(x, 1.0)
         assert abs(np.log((1 - theta) / theta) + x) <= x**3 / 12 * 1.01
 
@@ -174,11 +175,12 @@ def test_theta_is_a_property_of_the_step():
     _order) and capped at 1 from h = 2 tau on, where -(1 - theta) / theta = 0 <= exp(-h / tau):
     what the step cannot resolve never decays slower than exp(-t / tau). ~1 s."""
     tau = PERIOD / 20
-    H = PERIOD / 50                       # the step taken: theta(H) = 1/2 + (1/50) / (4/20)
+    H = PERIOD / 50  # the step taken: theta(H) = 1/2 + (1/50) / (4/20)
     rule = ThetaRule(damping_time_s=tau)
     assert rule.at(H) == pytest.approx(0.6, rel=1e-14) and rule.at(H / 4) == pytest.approx(0.525)
-    grid = TimeGrid(2.0 * PERIOD, H / 4, dt_max_s=H, output_dt_s=H, theta=rule.at(H / 4),
-                    hf_damping_time_s=tau)
+    grid = TimeGrid(
+        2.0 * PERIOD, H / 4, dt_max_s=H, output_dt_s=H, theta=rule.at(H / 4), hf_damping_time_s=tau
+    )
     v = np.zeros(7)
     v[6] = 1.0
     res = simulate(_oscillator(), [BodyState(np.zeros(3), np.eye(3), np.zeros(1), v)], grid)

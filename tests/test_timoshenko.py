@@ -28,8 +28,8 @@ from flexmvm.theory.timoshenko import (
 
 # the shipped scenario's beam: aluminium 200 x 10 x 10 mm (L / h = 20)
 BEAM = TimoshenkoBeam(0.2, 0.01, 0.01, 72.71e9, 0.33, 2700.0)
-E_STAR = BEAM.E_pa / (1.0 - BEAM.nu**2)            # rigid sphere on aluminium [Pa]
-M_SPHERE = 7850.0 * 4.0 / 3.0 * math.pi * 0.01**3   # steel, R 10 mm [kg]
+E_STAR = BEAM.E_pa / (1.0 - BEAM.nu**2)  # rigid sphere on aluminium [Pa]
+M_SPHERE = 7850.0 * 4.0 / 3.0 * math.pi * 0.01**3  # steel, R 10 mm [kg]
 
 
 def _simply_supported_fe(beam: TimoshenkoBeam, n_elements: int, n: int) -> np.ndarray:
@@ -41,9 +41,15 @@ def _simply_supported_fe(beam: TimoshenkoBeam, n_elements: int, n: int) -> np.nd
     return np.sqrt(lam[:n])
 
 
-@pytest.mark.parametrize(("shear", "rotary", "order", "bound"),
-                         [(True, True, 2.0, 6e-4), (True, False, 2.0, 6e-4),
-                          (False, True, 4.0, 1e-5), (False, False, 4.0, 1e-5)])
+@pytest.mark.parametrize(
+    ("shear", "rotary", "order", "bound"),
+    [
+        (True, True, 2.0, 6e-4),
+        (True, False, 2.0, 6e-4),
+        (False, True, 4.0, 1e-5),
+        (False, False, 4.0, 1e-5),
+    ],
+)
 def test_element_converges_to_the_simply_supported_closed_form(shear, rotary, order, bound):
     """The simply supported beam's frequencies solve (kGA a^2 - rho A w^2)(EI a^2 + kGA -
     rho I w^2) = (kGA a)^2, a = n pi / L (simply_supported_omega; with each term on or off).
@@ -71,8 +77,9 @@ def test_slender_free_free_beam_approaches_euler_bernoulli():
     slender = replace(BEAM, length_m=10.0)
     modes = free_free_modes(slender, 200)
     assert np.all(modes.omega[:2] == 0.0)
-    eb = np.array([euler_bernoulli_omega(slender, euler_bernoulli_free_free_beta(n))
-                   for n in range(1, 5)])
+    eb = np.array(
+        [euler_bernoulli_omega(slender, euler_bernoulli_free_free_beta(n)) for n in range(1, 5)]
+    )
     ratio = modes.omega[2:6] / eb
     assert np.all(ratio < 1.0) and np.all(ratio > 1.0 - 1e-4), ratio
 
@@ -86,9 +93,12 @@ def test_shear_and_rotary_inertia_lower_the_frequencies_more_for_higher_modes():
     of the first two free-free modes: measured 0.51 % against 0.40 % for the first).
     Cowper's kappa for nu = 0.33 is 0.851."""
     assert cowper_rectangle(0.33) == pytest.approx(0.85093, abs=1e-5)
-    variants = {"eb": replace(BEAM, shear_deformation=False, rotary_inertia=False),
-                "rotary": replace(BEAM, shear_deformation=False),
-                "shear": replace(BEAM, rotary_inertia=False), "timoshenko": BEAM}
+    variants = {
+        "eb": replace(BEAM, shear_deformation=False, rotary_inertia=False),
+        "rotary": replace(BEAM, shear_deformation=False),
+        "shear": replace(BEAM, rotary_inertia=False),
+        "timoshenko": BEAM,
+    }
     om = {k: free_free_modes(b, 100).omega[2:8] for k, b in variants.items()}
     for one in ("shear", "rotary"):
         assert np.all(om["timoshenko"] < om[one]) and np.all(om[one] < om["eb"])
@@ -137,8 +147,10 @@ def test_residual_flexibility_makes_few_modes_enough():
     the first impact's peak force with 10 modes within 2e-3 of 80 modes (measured 8.4e-4);
     without it the 10-mode peak is off by more than that (measured 3.2 %; 0.26 % still with
     80 modes: the point load's modal series converges as 1 / N once shear dominates)."""
-    peak = {(n, r): _impact(n_modes=n, residual_flexibility=r).solve(0.1e-3, 0.25e-6).force.max()
-            for n, r in ((10, True), (80, True), (10, False))}
+    peak = {
+        (n, r): _impact(n_modes=n, residual_flexibility=r).solve(0.1e-3, 0.25e-6).force.max()
+        for n, r in ((10, True), (80, True), (10, False))
+    }
     assert abs(peak[10, True] / peak[80, True] - 1.0) < 2e-3
     assert abs(peak[10, False] / peak[80, True] - 1.0) > 2e-3
 

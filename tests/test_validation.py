@@ -46,8 +46,10 @@ def test_seed_full_fe_and_mvm_against_theory_and_each_other():
 def test_seed_force_converges_with_the_step():
     """Halving the step changes the contact force history little: NCC(h/2 vs h) and peak over
     the first 0.2 ms (acceptance rows of "step_convergence")."""
-    _check(validation.step_convergence(OUT, 2e-4, 0.5e-6, t_end_h=validation.T_SEED),
-           "step_convergence")
+    _check(
+        validation.step_convergence(OUT, 2e-4, 0.5e-6, t_end_h=validation.T_SEED),
+        "step_convergence",
+    )
 
 
 def test_pendulum_whole_event():
@@ -57,11 +59,11 @@ def test_pendulum_whole_event():
     _check(validation.pendulum_case(OUT), "pendulum")
 
 
-@pytest.mark.parametrize("section", ["flat_vs_st_venant", "seed", "step_convergence",
-                                     "pendulum"])
+@pytest.mark.parametrize("section", ["flat_vs_st_venant", "seed", "step_convergence", "pendulum"])
 def test_stored_report_meets_the_table(section):
     """The numbers of docs/validation/validation.json (those docs/validation.md shows) meet
     every row of the acceptance table: the page and the table cannot disagree."""
     import json
+
     report = json.loads((OUT / "validation.json").read_text())
     _check(report[section], section)

@@ -38,9 +38,14 @@ def test_key_changes_with_every_setting_and_the_code(monkeypatch):
     sc = _tiny()
     base = validation.case_key(sc)
     assert validation.case_key(load_scenario(TINY).with_overrides(t_end_s=2e-6)) == base
-    variants = [sc.with_overrides(t_end_s=3e-6), sc.with_overrides(dt_s=0.125e-6),
-                _tiny(theta=0.6), _rod(sc, first_element_m=0.4e-3), sc.with_overrides(model="mvm"),
-                sc.with_overrides(body_models={"b2": ModelConfig(kind="modal", modes=5)})]
+    variants = [
+        sc.with_overrides(t_end_s=3e-6),
+        sc.with_overrides(dt_s=0.125e-6),
+        _tiny(theta=0.6),
+        _rod(sc, first_element_m=0.4e-3),
+        sc.with_overrides(model="mvm"),
+        sc.with_overrides(body_models={"b2": ModelConfig(kind="modal", modes=5)}),
+    ]
     keys = [validation.case_key(v) for v in variants]
     assert base not in keys and len(set(keys)) == len(keys)
     monkeypatch.setattr(provenance, "run_code_version", lambda: "0" * 16)
@@ -55,8 +60,9 @@ def test_key_holds_the_library_versions(monkeypatch):
     assert set(validation.case_inputs(sc)["libraries"]) == {"numpy", "scipy", "numba"}
     for lib in ("numpy", "scipy", "numba"):
         real = provenance.library_versions()
-        monkeypatch.setattr(provenance, "library_versions",
-                            lambda real=real, lib=lib: real | {lib: "0.0"})
+        monkeypatch.setattr(
+            provenance, "library_versions", lambda real=real, lib=lib: real | {lib: "0.0"}
+        )
         assert validation.case_key(sc) != base, lib
         monkeypatch.undo()
 
@@ -75,15 +81,21 @@ def test_stored_case_reused_only_under_its_key(tmp_path, monkeypatch):
     sc = _tiny()
     first = validation.run_case(tmp_path, "c", sc, progress=False)
     meta = json.loads((tmp_path / "c" / "key.json").read_text())
-    assert meta["key"] == validation.case_key(sc) and meta["inputs"]["scenario"]["time"]["t_end_s"] == 2e-6
+    assert (
+        meta["key"] == validation.case_key(sc)
+        and meta["inputs"]["scenario"]["time"]["t_end_s"] == 2e-6
+    )
     assert re.fullmatch(r"[0-9a-f]{12}(-dirty)?|unknown", meta["commit"])
     again = validation.run_case(tmp_path, "c", sc, progress=False)
     assert len(calls) == 1 and (again.force == first.force).all()
     validation.run_case(tmp_path, "c", _tiny(theta=0.6), progress=False)  # same folder
     assert len(calls) == 2
     monkeypatch.setattr(provenance, "run_code_version", lambda: "f" * 16)
-    with pytest.warns(StaleDataWarning, match=r"validation case c: run under code version "
-                                              r"[0-9a-f]{16} \(now f{16}\): recomputed"):
+    with pytest.warns(
+        StaleDataWarning,
+        match=r"validation case c: run under code version "
+        r"[0-9a-f]{16} \(now f{16}\): recomputed",
+    ):
         validation.run_case(tmp_path, "c", _tiny(theta=0.6), progress=False)
     assert len(calls) == 3
     (tmp_path / "c" / "key.json").write_text("{not json")
@@ -99,8 +111,9 @@ def test_edited_or_cut_history_is_recomputed_not_checked(tmp_path, monkeypatch):
     SHA-256 and window in key.json) and is recomputed, said in one line naming the case."""
     calls = []
     real = run_module.run_scenario
-    monkeypatch.setattr(run_module, "run_scenario",
-                        lambda sc, **kw: calls.append(sc) or real(sc, **kw))
+    monkeypatch.setattr(
+        run_module, "run_scenario", lambda sc, **kw: calls.append(sc) or real(sc, **kw)
+    )
     sc = _tiny()
     first = validation.run_case(tmp_path, "c", sc, progress=False)
     hist = tmp_path / "c" / "history.csv"
@@ -108,13 +121,17 @@ def test_edited_or_cut_history_is_recomputed_not_checked(tmp_path, monkeypatch):
     t, f = lines[-1].split(",")[:2]
     lines[-1] = lines[-1].replace(f"{t},{f},", f"{t},{float(f) + 1.0!r},", 1)
     hist.write_text("".join(lines))
-    with pytest.warns(StaleDataWarning, match="validation case c: history.csv: content "
-                                              "differs from the SHA-256"):
+    with pytest.warns(
+        StaleDataWarning, match="validation case c: history.csv: content differs from the SHA-256"
+    ):
         again = validation.run_case(tmp_path, "c", sc, progress=False)
     assert len(calls) == 2 and (again.force == first.force).all()
     hist.write_text("".join(hist.read_text().splitlines(keepends=True)[:3]))
-    with pytest.warns(StaleDataWarning, match=r"validation case c: history.csv: 2 of \d+ "
-                                              r"samples, last at .* \(expected window 0..2 us\)"):
+    with pytest.warns(
+        StaleDataWarning,
+        match=r"validation case c: history.csv: 2 of \d+ "
+        r"samples, last at .* \(expected window 0..2 us\)",
+    ):
         validation.run_case(tmp_path, "c", sc, progress=False)
     assert len(calls) == 3
     summary = tmp_path / "c" / "summary.json"

@@ -165,6 +165,7 @@ def _check_sane(run, e_min: float = 0.99) -> None:
 
 # --- 1. the short seed case ------------------------------------------------------------------
 
+
 def test_short_full_fe_against_wave_hertz_theory():
     """Full FE vs 1D wave-Hertz on the short case (measured on the scenario's scheme: force NCC
     over the contact 0.99617 (0.99719 over the whole window), peak +3.78 %, impulse -0.93 %,
@@ -222,6 +223,7 @@ def test_short_mvm_matches_its_full_fe():
 
 
 # --- 2. body models in contact ---------------------------------------------------------------
+
 
 def test_mvm_seed_body_in_contact():
     """b2 as seed eq. (4), diag(Psi_I, I_II) with the 1-3 region II and 37 modes of region I.
@@ -287,8 +289,15 @@ def test_rigid_striker_against_rigid_limit_theory():
     assert run.summary["dof"]["b1"] == 6
     _check_sane(run)
     r1, r2 = Rod1D.from_material(_stiff(BRASS), L, R), Rod1D.from_material(ALUMINIUM, L, R)
-    th = two_rod_impact(r1, r2, V0, 0.25e-3, ContactLaw.HERTZ, sphere_radius_m=R,
-                        dt=min(r1.round_trip_s, r2.round_trip_s) / 200)
+    th = two_rod_impact(
+        r1,
+        r2,
+        V0,
+        0.25e-3,
+        ContactLaw.HERTZ,
+        sphere_radius_m=R,
+        dt=min(r1.round_trip_s, r2.round_trip_s) / 200,
+    )
     c = compare_runs(th.t, th.contact_force, {}, *run.result.curves())
     assert c["ncc_force"] >= 0.99
     assert abs(c["peak_err"]) < 0.05

@@ -54,11 +54,20 @@ def test_bounds_and_failures():
     assert Bound.AT_MOST.holds(0, 0) and not Bound.BELOW.holds(1e-9, 1e-9)
     row = Criterion("x", ("a", "b"), Bound.AT_LEAST, 0.5, "because")
     assert row.value({"a": {"b": 0.25}}) == 0.25 and not row.holds({"a": {"b": 0.25}})
-    assert acceptance.failures({"plateau_err": 0.05, "jump_err": 0.0, "momentum_rel_error": 0.0,
-                                "lcp_residual_max": 0.0, "steps_not_converged": 0},
-                               "flat_vs_st_venant") == [
+    assert acceptance.failures(
+        {
+            "plateau_err": 0.05,
+            "jump_err": 0.0,
+            "momentum_rel_error": 0.0,
+            "lcp_residual_max": 0.0,
+            "steps_not_converged": 0,
+        },
+        "flat_vs_st_venant",
+    ) == [
         "flat_vs_st_venant: plateau_err |x| < 0.03 (value 0.05: "
-        + acceptance.criteria("flat_vs_st_venant")[0].why + ")"]
+        + acceptance.criteria("flat_vs_st_venant")[0].why
+        + ")"
+    ]
 
 
 def test_every_row_reads_a_number_of_the_stored_report(stored):
@@ -76,7 +85,7 @@ def test_command_help_and_unknown_case(tmp_path, capsys, monkeypatch):
     process, as `python -m` runs it); an unknown case is one line on stderr and exit status
     2, before anything runs."""
     monkeypatch.setattr(sys, "argv", ["flexmvm.validation", "--help"])
-    runpy.run_module("flexmvm.validation", run_name="__main__")   # returns: exit status 0
+    runpy.run_module("flexmvm.validation", run_name="__main__")  # returns: exit status 0
     out = capsys.readouterr().out
     assert "Usage: flexmvm validate" in out and "--recompute" in out
     with pytest.raises(SystemExit) as done:
@@ -84,5 +93,8 @@ def test_command_help_and_unknown_case(tmp_path, capsys, monkeypatch):
     captured = capsys.readouterr()
     assert done.value.code == 2 and captured.out == ""
     assert captured.err.strip().splitlines() == [
-        ("flexmvm: error: unknown validation case 'nope'; expected one of flat_vs_st_venant, "
-         "seed, step_convergence, short, pendulum, hertz_block")]
+        (
+            "flexmvm: error: unknown validation case 'nope'; expected one of flat_vs_st_venant, "
+            "seed, step_convergence, short, pendulum, hertz_block"
+        )
+    ]

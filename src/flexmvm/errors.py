@@ -58,8 +58,7 @@ def notes_as_lines() -> None:
     def show(message, category, filename, lineno, file=None, line=None):
         if issubclass(category, StaleDataWarning):
             text = " ".join(str(message).split())
-            print(f"flexmvm: note: {text}", file=sys.stderr if file is None else file,
-                  flush=True)
+            print(f"flexmvm: note: {text}", file=sys.stderr if file is None else file, flush=True)
         else:
             previous(message, category, filename, lineno, file, line)
 

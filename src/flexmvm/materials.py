@@ -24,13 +24,21 @@ class Material:
     def __post_init__(self) -> None:
         for key, val in (("E", self.E), ("nu", self.nu), ("rho", self.rho)):
             if not isinstance(val, (int, float)) or not math.isfinite(val):
-                raise InputError(f"material {self.name!r}: {key} must be a finite number, got {val!r}")
+                raise InputError(
+                    f"material {self.name!r}: {key} must be a finite number, got {val!r}"
+                )
         if self.E <= 0:
-            raise InputError(f"material {self.name!r}: Young's modulus E must be > 0 Pa, got {self.E!r}")
+            raise InputError(
+                f"material {self.name!r}: Young's modulus E must be > 0 Pa, got {self.E!r}"
+            )
         if self.rho <= 0:
-            raise InputError(f"material {self.name!r}: density rho must be > 0 kg/m^3, got {self.rho!r}")
+            raise InputError(
+                f"material {self.name!r}: density rho must be > 0 kg/m^3, got {self.rho!r}"
+            )
         if not -1.0 < self.nu < 0.5:
-            raise InputError(f"material {self.name!r}: Poisson ratio nu must be in (-1, 0.5), got {self.nu!r}")
+            raise InputError(
+                f"material {self.name!r}: Poisson ratio nu must be in (-1, 0.5), got {self.nu!r}"
+            )
 
     @property
     def bar_wave_speed(self) -> float:
@@ -52,6 +60,8 @@ TUNGSTEN = Material(E=344.70e9, nu=0.28, rho=19250.0, name="tungsten")
 COPPER = Material(E=96.50e9, nu=0.36, rho=8390.0, name="copper")
 PA6 = Material(E=2.32e9, nu=0.34, rho=1140.0, name="pa6")
 
-PRESETS: dict[str, Material] = {
-    m.name: m for m in (BRASS, ALUMINIUM, TUNGSTEN, COPPER, PA6)
-} | {"al": ALUMINIUM, "cu": COPPER, "w": TUNGSTEN}
+PRESETS: dict[str, Material] = {m.name: m for m in (BRASS, ALUMINIUM, TUNGSTEN, COPPER, PA6)} | {
+    "al": ALUMINIUM,
+    "cu": COPPER,
+    "w": TUNGSTEN,
+}

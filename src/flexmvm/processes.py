@@ -51,8 +51,9 @@ def die_with_parent(parent_pid: int) -> None:
             libc.prctl(_PR_SET_PDEATHSIG, signal.SIGKILL, 0, 0, 0)
     if os.getppid() != parent_pid:
         os._exit(1)
-    threading.Thread(target=_parent_watch, args=(parent_pid,), daemon=True,
-                     name="flexmvm-parent-watch").start()
+    threading.Thread(
+        target=_parent_watch, args=(parent_pid,), daemon=True, name="flexmvm-parent-watch"
+    ).start()
 
 
 def _raise_terminated(signum, frame) -> None:

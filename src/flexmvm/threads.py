@@ -25,7 +25,9 @@ def worker_threads() -> int:
     try:
         n = int(value)
     except ValueError:
-        raise SolverError(f"{ENV_THREADS} must be a whole number of threads, got {value!r}") from None
+        raise SolverError(
+            f"{ENV_THREADS} must be a whole number of threads, got {value!r}"
+        ) from None
     if n < 1:
         raise SolverError(f"{ENV_THREADS} must be >= 1, got {n}")
     return n

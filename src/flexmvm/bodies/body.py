@@ -153,7 +153,8 @@ class FlexibleBody:
     def G1_array(self) -> np.ndarray:
         """G1 as one C-ordered (3, 3, nq) array, [a, b] = inv.G1[a][b]."""
         return np.ascontiguousarray(
-            np.array([[self.inv.G1[a][b] for b in range(3)] for a in range(3)], dtype=float))
+            np.array([[self.inv.G1[a][b] for b in range(3)] for a in range(3)], dtype=float)
+        )
 
     def inertia_terms(self, q: np.ndarray, Lq: np.ndarray | None = None):
         """(S, J, M_wq, C) at q: first moment, inertia about the frame origin, the omega-q
@@ -235,8 +236,9 @@ class FlexibleBody:
         """6 x nq frame-elastic block [[A S1], [M_wq]]."""
         return np.vstack([A @ self.inv.S1, M_wq])
 
-    def mass_times(self, A, q, a_vec: np.ndarray, terms=None,
-                   mqq_a: np.ndarray | None = None) -> np.ndarray:
+    def mass_times(
+        self, A, q, a_vec: np.ndarray, terms=None, mqq_a: np.ndarray | None = None
+    ) -> np.ndarray:
         """M(A, q) @ a_vec without forming the full matrix (a_vec: (6 + nq,)); mqq_a =
         M_qq @ a_vec[6:] when already known (the only nq^2 part)."""
         S, J, M_wq, _ = terms if terms is not None else self.inertia_terms(q)

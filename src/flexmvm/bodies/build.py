@@ -46,9 +46,14 @@ class ModelKind(StrEnum):
         return self.retains_nodes or self is ModelKind.MODAL
 
 
-_BASIS = {ModelKind.FULL: BasisKind.FULL, ModelKind.MVM: BasisKind.CRAIG_BAMPTON,
-          ModelKind.MVM_SEED: BasisKind.SEED_BLOCK, ModelKind.MVM_SEED_FIXED: BasisKind.SEED_FIXED,
-          ModelKind.MODAL: BasisKind.MODAL, ModelKind.INTERFACE: BasisKind.INTERFACE}
+_BASIS = {
+    ModelKind.FULL: BasisKind.FULL,
+    ModelKind.MVM: BasisKind.CRAIG_BAMPTON,
+    ModelKind.MVM_SEED: BasisKind.SEED_BLOCK,
+    ModelKind.MVM_SEED_FIXED: BasisKind.SEED_FIXED,
+    ModelKind.MODAL: BasisKind.MODAL,
+    ModelKind.INTERFACE: BasisKind.INTERFACE,
+}
 
 
 @dataclass(frozen=True)
@@ -87,29 +92,43 @@ def reduced_stiffness(K: sp.spmatrix, psi) -> np.ndarray | sp.csr_matrix:
 def body_parts(fe, basis) -> BodyParts:
     """Invariants of (fe.mesh.nodes, fe.M_scalar, basis.psi) and k_hat = psi^T fe.K psi."""
     psi = sp.csr_matrix(basis.psi) if sp.issparse(basis.psi) else basis.psi
-    return BodyParts(inertia_invariants(fe.mesh.nodes, fe.M_scalar, psi),
-                     reduced_stiffness(fe.K, psi))
+    return BodyParts(
+        inertia_invariants(fe.mesh.nodes, fe.M_scalar, psi), reduced_stiffness(fe.K, psi)
+    )
 
 
-def body_from_parts(name: str, mesh, basis, parts: BodyParts, *,
-                    rayleigh: tuple[float, float] | None = None) -> FlexibleBody:
+def body_from_parts(
+    name: str, mesh, basis, parts: BodyParts, *, rayleigh: tuple[float, float] | None = None
+) -> FlexibleBody:
     """The body of mesh (nodes X (n, 3) [m]) and basis psi (3n, nq) with precomputed parts.
 
     rayleigh = (alpha [1/s], beta [s]) gives damping C = alpha M_qq + beta k_hat (off by default).
     """
     psi = sp.csr_matrix(basis.psi) if sp.issparse(basis.psi) else basis.psi
     if psi.shape != (3 * mesh.n_nodes, parts.inv.nq):
-        raise ValueError(f"body {name}: basis {psi.shape} does not match its parts "
-                         f"({3 * mesh.n_nodes}, {parts.inv.nq})")
+        raise ValueError(
+            f"body {name}: basis {psi.shape} does not match its parts "
+            f"({3 * mesh.n_nodes}, {parts.inv.nq})"
+        )
     c_hat = None
     if rayleigh is not None:
         alpha, beta = rayleigh
         c_hat = alpha * parts.inv.M_qq + beta * parts.k_hat
-    return FlexibleBody(name, np.asarray(mesh.nodes, float), psi, parts.inv, parts.k_hat, mesh,
-                        c_hat, getattr(basis.kind, "value", ""))
+    return FlexibleBody(
+        name,
+        np.asarray(mesh.nodes, float),
+        psi,
+        parts.inv,
+        parts.k_hat,
+        mesh,
+        c_hat,
+        getattr(basis.kind, "value", ""),
+    )
 
 
-def body_from_fe(name: str, fe, basis, *, rayleigh: tuple[float, float] | None = None) -> FlexibleBody:
+def body_from_fe(
+    name: str, fe, basis, *, rayleigh: tuple[float, float] | None = None
+) -> FlexibleBody:
     """The floating-frame body of FE model `fe` (M_scalar, K) with basis psi.
 
     rayleigh = (alpha [1/s], beta [s]) gives damping C = alpha M_qq + beta k_hat (off by default).
@@ -121,5 +140,12 @@ def body_from_fe(name: str, fe, basis, *, rayleigh: tuple[float, float] | None =
 def rigid_body_from_fe(name: str, fe) -> FlexibleBody:
     """A rigid body (nq = 0) with the mass distribution of fe."""
     n = fe.mesh.n_nodes
-    return FlexibleBody.build(name, fe.mesh.nodes, fe.M_scalar, np.zeros((3 * n, 0)),
-                              np.zeros((0, 0)), mesh=fe.mesh, label="rigid")
+    return FlexibleBody.build(
+        name,
+        fe.mesh.nodes,
+        fe.M_scalar,
+        np.zeros((3 * n, 0)),
+        np.zeros((0, 0)),
+        mesh=fe.mesh,
+        label="rigid",
+    )

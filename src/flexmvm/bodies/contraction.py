@@ -110,8 +110,7 @@ class G2Contraction:
         for a in range(3):
             g = np.asarray(G2[a][a], float)
             self._diag[a] = 0.5 * (g + g.T)
-        self._off = np.ascontiguousarray(
-            np.stack([np.asarray(G2[a][b], float) for a, b in _PAIRS]))
+        self._off = np.ascontiguousarray(np.stack([np.asarray(G2[a][b], float) for a, b in _PAIRS]))
 
     def __call__(self, x: np.ndarray, pool=None) -> np.ndarray:
         """L(x); with a thread pool (a concurrent.futures executor with a free worker) its

@@ -95,9 +95,9 @@ def _dense_terms(Ms: sp.csr_matrix, msum: np.ndarray, MsX: np.ndarray, psi: np.n
     MsP = Ms @ P
     G2: list[list] = [[None] * 3 for _ in range(3)]
     for a in range(3):
-        row = P[:, a * nq:(a + 1) * nq].T @ MsP[:, a * nq:]
+        row = P[:, a * nq : (a + 1) * nq].T @ MsP[:, a * nq :]
         for b in range(a, 3):
-            G2[a][b] = np.ascontiguousarray(row[:, (b - a) * nq:(b - a + 1) * nq])
+            G2[a][b] = np.ascontiguousarray(row[:, (b - a) * nq : (b - a + 1) * nq])
             if b > a:
                 G2[b][a] = np.ascontiguousarray(G2[a][b].T)
     return S1, G1, tuple(tuple(r) for r in G2)
@@ -130,5 +130,12 @@ def leading_columns(inv: InertiaInvariants, m: int) -> InertiaInvariants:
         raise ValueError(f"leading_columns: m = {m} outside 0..{inv.nq}")
     G1 = tuple(tuple(g[:m].copy() for g in row) for row in inv.G1)
     G2 = tuple(tuple(np.ascontiguousarray(g[:m, :m]) for g in row) for row in inv.G2)
-    return InertiaInvariants(inv.mass, inv.S0, np.ascontiguousarray(inv.S1[:, :m]), inv.G0, G1,
-                             G2, np.ascontiguousarray(inv.M_qq[:m, :m]))
+    return InertiaInvariants(
+        inv.mass,
+        inv.S0,
+        np.ascontiguousarray(inv.S1[:, :m]),
+        inv.G0,
+        G1,
+        G2,
+        np.ascontiguousarray(inv.M_qq[:m, :m]),
+    )

@@ -41,8 +41,9 @@ def _frame_velocity_forces(A, S, J, w, W, Om, S1qd, H, force):  # pragma: no cov
     W = w~, Om = w~ w~, H[a, b] = C[a][b] . q_dot."""
     force[:3] = -(A @ (Om @ S + 2.0 * (W @ S1qd)))
     Jw = J @ w
-    cwJw = np.array([w[1] * Jw[2] - w[2] * Jw[1], w[2] * Jw[0] - w[0] * Jw[2],
-                     w[0] * Jw[1] - w[1] * Jw[0]])
+    cwJw = np.array(
+        [w[1] * Jw[2] - w[2] * Jw[1], w[2] * Jw[0] - w[0] * Jw[2], w[0] * Jw[1] - w[1] * Jw[0]]
+    )
     trH = H[0, 0] + H[1, 1] + H[2, 2]
     force[3:6] = -(cwJw + 2.0 * (trH * w - H.T @ w))
 
@@ -146,8 +147,9 @@ def _elastic_velocity_forces(w, Om, Lq, Lqd, G1, Kq, force):  # pragma: no cover
 
 
 @numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
-def momentum_terms(A, q, dv, vm, Lq, Lqd, Kq, mqq_dv, mqq_vm, mass, S0, S1, G0, G1, g,
-                   inertia, force, momentum):  # pragma: no cover - compiled
+def momentum_terms(
+    A, q, dv, vm, Lq, Lqd, Kq, mqq_dv, mqq_vm, mass, S0, S1, G0, G1, g, inertia, force, momentum
+):  # pragma: no cover - compiled
     """Fill inertia, force, momentum (each (6 + nq,)) as described in the module docstring.
 
     A (3, 3); q (nq,) = q_m; dv, vm (6 + nq,); Lq, Lqd (3, 3, nq) = L(q_m), L(q_dot_m); Kq =
@@ -166,7 +168,7 @@ def momentum_terms(A, q, dv, vm, Lq, Lqd, Kq, mqq_dv, mqq_vm, mass, S0, S1, G0, 
     Om = W @ W
     qd = vm[6:]
     S1qd = np.zeros(3)
-    H = np.zeros((3, 3))     # H[a, b] = C[a][b] . q_dot
+    H = np.zeros((3, 3))  # H[a, b] = C[a][b] . q_dot
     for k in range(nq):
         for a in range(3):
             S1qd[a] += S1[a, k] * qd[k]
@@ -240,8 +242,28 @@ def _nodal_frame_inertia(q, Yq, S0, S1, G0, MsX, node, comp):  # pragma: no cove
 # long: one loop over the coordinates, its three component branches written out (docstring);
 # no "reassoc", as _nodal_frame_inertia
 @numba.njit(cache=True, nogil=True, fastmath={"contract"})
-def momentum_terms_nodal(A, q, dv, vm, Yq, Yqd, Kq, mqq_dv, mqq_vm, mass, S0, S1, G0, MsX,
-                         node, comp, g, inertia, force, momentum):  # pragma: no cover
+def momentum_terms_nodal(
+    A,
+    q,
+    dv,
+    vm,
+    Yq,
+    Yqd,
+    Kq,
+    mqq_dv,
+    mqq_vm,
+    mass,
+    S0,
+    S1,
+    G0,
+    MsX,
+    node,
+    comp,
+    g,
+    inertia,
+    force,
+    momentum,
+):  # pragma: no cover
     """momentum_terms for a basis that selects nodal DOFs (full FE), from the compact
     contractions Yq = Y(q_m), Yqd = Y(q_dot_m) (3, n) of bodies.nodal_contraction: coordinate
     k is component c = comp[k] of node n = node[k], and every (3, 3, nq) array of
@@ -285,7 +307,7 @@ def momentum_terms_nodal(A, q, dv, vm, Yq, Yqd, Kq, mqq_dv, mqq_vm, mass, S0, S1
         xi = dv[6 + k]
         xm = vm[6 + k]
         f = 0.0
-        if c == 0:      # M_wq[:, k] = [0, cq2, -cq1]
+        if c == 0:  # M_wq[:, k] = [0, cq2, -cq1]
             si0 += s1 * xi
             sm0 += s1 * xm
             ai1 += cq2 * xi
@@ -298,10 +320,11 @@ def momentum_terms_nodal(A, q, dv, vm, Yq, Yqd, Kq, mqq_dv, mqq_vm, mass, S0, S1
             h10 += cq1 * xm
             h20 += cq2 * xm
             if any_w:
-                f = (-(Om[0, 0] * cq0 + Om[0, 1] * cq1 + Om[0, 2] * cq2)
-                     - 2.0 * (w1 * Yqd[2, n] - w2 * Yqd[1, n]))
+                f = -(Om[0, 0] * cq0 + Om[0, 1] * cq1 + Om[0, 2] * cq2) - 2.0 * (
+                    w1 * Yqd[2, n] - w2 * Yqd[1, n]
+                )
             force[6 + k] = f - Kq[k] + s1 * gb[0]
-        elif c == 1:    # M_wq[:, k] = [-cq2, 0, cq0]
+        elif c == 1:  # M_wq[:, k] = [-cq2, 0, cq0]
             si1 += s1 * xi
             sm1 += s1 * xm
             ai0 -= cq2 * xi
@@ -314,10 +337,11 @@ def momentum_terms_nodal(A, q, dv, vm, Yq, Yqd, Kq, mqq_dv, mqq_vm, mass, S0, S1
             h11 += cq1 * xm
             h21 += cq2 * xm
             if any_w:
-                f = (-(Om[1, 0] * cq0 + Om[1, 1] * cq1 + Om[1, 2] * cq2)
-                     - 2.0 * (w2 * Yqd[0, n] - w0 * Yqd[2, n]))
+                f = -(Om[1, 0] * cq0 + Om[1, 1] * cq1 + Om[1, 2] * cq2) - 2.0 * (
+                    w2 * Yqd[0, n] - w0 * Yqd[2, n]
+                )
             force[6 + k] = f - Kq[k] + s1 * gb[1]
-        else:           # M_wq[:, k] = [cq1, -cq0, 0]
+        else:  # M_wq[:, k] = [cq1, -cq0, 0]
             si2 += s1 * xi
             sm2 += s1 * xm
             ai0 += cq1 * xi
@@ -330,8 +354,9 @@ def momentum_terms_nodal(A, q, dv, vm, Yq, Yqd, Kq, mqq_dv, mqq_vm, mass, S0, S1
             h12 += cq1 * xm
             h22 += cq2 * xm
             if any_w:
-                f = (-(Om[2, 0] * cq0 + Om[2, 1] * cq1 + Om[2, 2] * cq2)
-                     - 2.0 * (w0 * Yqd[1, n] - w1 * Yqd[0, n]))
+                f = -(Om[2, 0] * cq0 + Om[2, 1] * cq1 + Om[2, 2] * cq2) - 2.0 * (
+                    w0 * Yqd[1, n] - w1 * Yqd[0, n]
+                )
             force[6 + k] = f - Kq[k] + s1 * gb[2]
     s1x_i = np.array([si0, si1, si2])
     s1x_m = np.array([sm0, sm1, sm2])

@@ -76,10 +76,10 @@ def _antisymmetric(Cq, node, comp, out):  # pragma: no cover - compiled
 class NodalContraction:
     """The compact contraction of a DOF-selecting basis: `__call__(x)` -> Y(x) (3, n)."""
 
-    node: np.ndarray     # (nq,) node of each coordinate
-    comp: np.ndarray     # (nq,) component (0, 1, 2) of each coordinate
-    Ms: sp.csr_matrix    # (n, n) scalar mass [kg]
-    MsX: np.ndarray      # (n, 3) M_s X [kg m]
+    node: np.ndarray  # (nq,) node of each coordinate
+    comp: np.ndarray  # (nq,) component (0, 1, 2) of each coordinate
+    Ms: sp.csr_matrix  # (n, n) scalar mass [kg]
+    MsX: np.ndarray  # (n, 3) M_s X [kg m]
 
     @classmethod
     def of(cls, psi, Ms: sp.csr_matrix | None, X: np.ndarray) -> NodalContraction | None:
@@ -89,8 +89,12 @@ class NodalContraction:
             return None
         pc = sp.csc_matrix(psi)
         pc.sum_duplicates()
-        if (pc.nnz != pc.shape[1] or np.any(np.diff(pc.indptr) != 1)
-                or np.any(pc.data != 1.0) or np.unique(pc.indices).size != pc.nnz):
+        if (
+            pc.nnz != pc.shape[1]
+            or np.any(np.diff(pc.indptr) != 1)
+            or np.any(pc.data != 1.0)
+            or np.unique(pc.indices).size != pc.nnz
+        ):
             return None
         dof = pc.indices.astype(np.int64)
         Ms = sp.csr_matrix(Ms)
@@ -109,8 +113,16 @@ class NodalContraction:
     def __call__(self, x: np.ndarray) -> np.ndarray:
         Y = np.empty((3, self.n_nodes))
         U = np.empty((self.n_nodes, 3))
-        _compact(self.Ms.indptr, self.Ms.indices, self.Ms.data, self.node, self.comp,
-                 np.ascontiguousarray(x, dtype=float), U, Y)
+        _compact(
+            self.Ms.indptr,
+            self.Ms.indices,
+            self.Ms.data,
+            self.node,
+            self.comp,
+            np.ascontiguousarray(x, dtype=float),
+            U,
+            Y,
+        )
         return Y
 
     def expand(self, Y: np.ndarray) -> np.ndarray:

@@ -11,7 +11,9 @@ from flexmvm.errors import SolverError
 
 def cross3(a, b) -> np.ndarray:
     """a x b for two 3-vectors (np.cross is slow for single vectors)."""
-    return np.array([a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]])
+    return np.array(
+        [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    )
 
 
 def skew(v: np.ndarray) -> np.ndarray:
@@ -31,15 +33,21 @@ def expm_so3(theta: np.ndarray) -> np.ndarray:
     angle = math.sqrt(xx + yy + zz)
     if angle < 1e-8:
         s, c = 1.0, 0.5
-    elif not angle < math.inf:     # inf or NaN: the state has overflowed
-        raise SolverError(f"rotation vector {[x, y, z]} is not finite: the motion overflowed "
-                          "(expected finite angular velocities and forces)")
+    elif not angle < math.inf:  # inf or NaN: the state has overflowed
+        raise SolverError(
+            f"rotation vector {[x, y, z]} is not finite: the motion overflowed "
+            "(expected finite angular velocities and forces)"
+        )
     else:
         s, c = math.sin(angle) / angle, (1.0 - math.cos(angle)) / angle**2
     xy, xz, yz = c * (x * y), c * (x * z), c * (y * z)
-    return np.array([[1.0 - c * (yy + zz), xy - s * z, xz + s * y],
-                     [xy + s * z, 1.0 - c * (xx + zz), yz - s * x],
-                     [xz - s * y, yz + s * x, 1.0 - c * (xx + yy)]])
+    return np.array(
+        [
+            [1.0 - c * (yy + zz), xy - s * z, xz + s * y],
+            [xy + s * z, 1.0 - c * (xx + zz), yz - s * x],
+            [xz - s * y, yz + s * x, 1.0 - c * (xx + yy)],
+        ]
+    )
 
 
 def axis_angle(axis, angle_rad: float) -> np.ndarray:

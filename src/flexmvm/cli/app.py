@@ -33,8 +33,9 @@ _MAX_MESSAGE = 500
 
 @click.group(context_settings={"help_option_names": ["-h", "--help"]})
 @click.version_option(__version__, prog_name="flexmvm")
-@click.option("--debug", is_flag=True,
-              help=f"Show the Python traceback of a failure (also: {DEBUG_ENV}=1).")
+@click.option(
+    "--debug", is_flag=True, help=f"Show the Python traceback of a failure (also: {DEBUG_ENV}=1)."
+)
 def cli(debug: bool) -> None:
     """Contact and impact of flexible bodies with the multi-variable method (MVM)."""
 
@@ -43,8 +44,16 @@ def _register() -> None:
     """Attach the sub-commands; each module defines one click command or group."""
     if cli.commands:
         return
-    for name in ("mesh_cmd", "run_cmd", "theory_cmd", "select_cmd", "region_cmd", "study_cmd",
-                 "cache_cmd", "validate_cmd"):
+    for name in (
+        "mesh_cmd",
+        "run_cmd",
+        "theory_cmd",
+        "select_cmd",
+        "region_cmd",
+        "study_cmd",
+        "cache_cmd",
+        "validate_cmd",
+    ):
         try:
             module = __import__(f"flexmvm.cli.{name}", fromlist=["command"])
         except ModuleNotFoundError as exc:
@@ -124,4 +133,3 @@ def run(argv: list[str] | None = None) -> None:
             raise
         click.echo(describe(exc, command_path(args)), err=True)
         sys.exit(1)
-

@@ -25,7 +25,7 @@ def main(argv: list[str] | None = None) -> None:
         sys.exit(130)
     try:
         app.run(argv)
-    except KeyboardInterrupt:     # between app's own handler and the exit
+    except KeyboardInterrupt:  # between app's own handler and the exit
         sys.stderr.write(INTERRUPTED + "\n")
         sys.exit(130)
 

@@ -3,8 +3,12 @@
 Imports nothing: main.py reads it before anything heavy is loaded."""
 
 #: The one line of a Ctrl-C (exit status 130), during the imports and during the run.
-INTERRUPTED = ("flexmvm: interrupted; finished study cases are kept, an unfinished run leaves "
-               "its output directory as it was")
+INTERRUPTED = (
+    "flexmvm: interrupted; finished study cases are kept, an unfinished run leaves "
+    "its output directory as it was"
+)
 #: The one line of a SIGTERM (exit status 143, processes.sigterm_as_exit in app.py).
-TERMINATED = ("flexmvm: terminated (SIGTERM); finished study cases are kept, an unfinished run "
-              "leaves its output directory as it was")
+TERMINATED = (
+    "flexmvm: terminated (SIGTERM); finished study cases are kept, an unfinished run "
+    "leaves its output directory as it was"
+)

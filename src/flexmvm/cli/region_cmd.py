@@ -12,22 +12,50 @@ import click
 @click.command("region")
 @click.argument("scenario", type=click.Path(dir_okay=False, path_type=Path))
 @click.option("--body", required=True, help="The body to reduce.")
-@click.option("--factor", type=float, default=None,
-              help="Region radius per Hertz contact radius [default: none, the radius is a + h, "
-                   "h the size of the contact facets within a: studies/region.py].")
-@click.option("--radius-mm", "radius_mm", type=float, default=None,
-              help="Equivalent curvature radius of the two surfaces [mm], instead of the fit "
-                   "(needed for flat or line contacts).")
-@click.option("--speed", type=float, default=None,
-              help="Closing speed [m/s], instead of the placements' (needed when the bodies "
-                   "start at rest).")
-@click.option("--modes", type=int, default=None,
-              help="Mode count of the costed model [default: the body's model's, else 30].")
-@click.option("--contact", type=int, default=None,
-              help="Index of the contact in the scenario [default: the body's first].")
+@click.option(
+    "--factor",
+    type=float,
+    default=None,
+    help="Region radius per Hertz contact radius [default: none, the radius is a + h, "
+    "h the size of the contact facets within a: studies/region.py].",
+)
+@click.option(
+    "--radius-mm",
+    "radius_mm",
+    type=float,
+    default=None,
+    help="Equivalent curvature radius of the two surfaces [mm], instead of the fit "
+    "(needed for flat or line contacts).",
+)
+@click.option(
+    "--speed",
+    type=float,
+    default=None,
+    help="Closing speed [m/s], instead of the placements' (needed when the bodies start at rest).",
+)
+@click.option(
+    "--modes",
+    type=int,
+    default=None,
+    help="Mode count of the costed model [default: the body's model's, else 30].",
+)
+@click.option(
+    "--contact",
+    type=int,
+    default=None,
+    help="Index of the contact in the scenario [default: the body's first].",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print the estimate as JSON.")
-def command(scenario: Path, body: str, factor: float | None, radius_mm: float | None,
-            speed: float | None, modes: int | None, contact: int | None, as_json: bool) -> None:
+def command(
+    scenario: Path,
+    body: str,
+    factor: float | None,
+    radius_mm: float | None,
+    speed: float | None,
+    modes: int | None,
+    contact: int | None,
+    as_json: bool,
+) -> None:
     """Estimate the region BODY needs: a ball about the expected first contact point of
     radius a + h (a the Hertz contact radius of the expected impact, h the size of the
     contact facets within a; or --factor x a), its nodes, DOF and memory against full FE.
@@ -36,9 +64,15 @@ def command(scenario: Path, body: str, factor: float | None, radius_mm: float | 
     from flexmvm.studies.region import estimate_region
 
     sc = load_scenario(scenario)
-    est = estimate_region(sc, body, factor=factor,
-                          radius_m=None if radius_mm is None else radius_mm * 1e-3,
-                          speed_mps=speed, modes=modes, contact=contact)
+    est = estimate_region(
+        sc,
+        body,
+        factor=factor,
+        radius_m=None if radius_mm is None else radius_mm * 1e-3,
+        speed_mps=speed,
+        modes=modes,
+        contact=contact,
+    )
     if as_json:
         click.echo(json.dumps(est.as_dict(), indent=2))
         return

@@ -13,28 +13,48 @@ MODELS = ["full", "mvm", "mvm-seed", "mvm-seed-fixed", "modal", "interface", "ri
 
 @click.command("run")
 @click.argument("scenario", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
-              help="Output directory (created; an earlier run's output there is replaced at "
-                   "the end).")
-@click.option("--model", type=click.Choice(MODELS), default=None,
-              help="Model of every non-rigid body (then no full-FE reference runs). Default: "
-                   "the scenario's models.")
-@click.option("--reference/--no-reference", default=None,
-              help="Also run a full-FE copy of the reduced bodies and compare (default: the "
-                   "scenario's [compare] full_reference; the seed scenarios ask for it).")
-@click.option("--theory/--no-theory", default=None,
-              help="Lay the theory over the run: the 1D wave solution of a two-rod impact, or "
-                   "a Timoshenko beam with a Hertz spring for a sphere on a beam (default: "
-                   "the scenario's [compare] theory).")
+@click.option(
+    "--out",
+    "out_dir",
+    required=True,
+    type=click.Path(file_okay=False, path_type=Path),
+    help="Output directory (created; an earlier run's output there is replaced at the end).",
+)
+@click.option(
+    "--model",
+    type=click.Choice(MODELS),
+    default=None,
+    help="Model of every non-rigid body (then no full-FE reference runs). Default: "
+    "the scenario's models.",
+)
+@click.option(
+    "--reference/--no-reference",
+    default=None,
+    help="Also run a full-FE copy of the reduced bodies and compare (default: the "
+    "scenario's [compare] full_reference; the seed scenarios ask for it).",
+)
+@click.option(
+    "--theory/--no-theory",
+    default=None,
+    help="Lay the theory over the run: the 1D wave solution of a two-rod impact, or "
+    "a Timoshenko beam with a Hertz spring for a sphere on a beam (default: "
+    "the scenario's [compare] theory).",
+)
 @click.option("--t-end", "t_end", type=float, default=None, help="End time [s].")
 @click.option("--dt", type=float, default=None, help="Time step near contact [s].")
 @click.option("--no-fields", is_flag=True, help="Skip results.h5 and the ParaView series.")
 @click.option("--progress/--no-progress", default=True, show_default=True)
-@click.option("--jobs", type=click.IntRange(1, 2), default=2, show_default=True,
-              help="Processes for the scenario's run and its full-FE reference (2: side by "
-                   "side, one per core).")
-def command(scenario, out_dir, model, reference, theory, t_end, dt, no_fields, progress,
-            jobs) -> None:
+@click.option(
+    "--jobs",
+    type=click.IntRange(1, 2),
+    default=2,
+    show_default=True,
+    help="Processes for the scenario's run and its full-FE reference (2: side by "
+    "side, one per core).",
+)
+def command(
+    scenario, out_dir, model, reference, theory, t_end, dt, no_fields, progress, jobs
+) -> None:
     """Simulate SCENARIO; write history.csv, summary.json, results.h5, ParaView series, PNG.
 
     Everything is written into a temporary DIR.partial-<pid> beside DIR and renamed to DIR
@@ -45,21 +65,46 @@ def command(scenario, out_dir, model, reference, theory, t_end, dt, no_fields, p
     summary.json under "failures"."""
     from flexmvm.scenarios.main_job import run_main_job
 
-    summary = run_main_job(scenario, out_dir, model=model, t_end=t_end, dt=dt,
-                           fields=not no_fields, progress=progress, echo=click.echo,
-                           jobs=jobs, reference=reference, theory=theory)
-    keys = ("max_contact_force_N", "momentum_rel_error", "momentum_rel_error_converged",
-            "energy_rel_error", "max_penetration_m", "wall_time_s")
+    summary = run_main_job(
+        scenario,
+        out_dir,
+        model=model,
+        t_end=t_end,
+        dt=dt,
+        fields=not no_fields,
+        progress=progress,
+        echo=click.echo,
+        jobs=jobs,
+        reference=reference,
+        theory=theory,
+    )
+    keys = (
+        "max_contact_force_N",
+        "momentum_rel_error",
+        "momentum_rel_error_converged",
+        "energy_rel_error",
+        "max_penetration_m",
+        "wall_time_s",
+    )
     click.echo("  ".join(f"{k} = {summary[k]:.4g}" for k in keys if summary.get(k) is not None))
-    click.echo("dof (6 frame + elastic): " + ", ".join(
-        f"{name} = {dof} ({summary['model'][name]})" for name, dof in summary["dof"].items()))
+    click.echo(
+        "dof (6 frame + elastic): "
+        + ", ".join(
+            f"{name} = {dof} ({summary['model'][name]})" for name, dof in summary["dof"].items()
+        )
+    )
     for label, s in (("", summary), ("full FE reference: ", summary.get("reference_full") or {})):
         if s.get("steps_not_converged"):
-            click.echo(f"warning: {label}{s['steps_not_converged']} step(s) stopped on the "
-                       f"round-off floor above the Newton tolerance (worst relative residual "
-                       f"{s['newton_residual_max']:.2e}; summary.json steps_not_converged)",
-                       err=True)
+            click.echo(
+                f"warning: {label}{s['steps_not_converged']} step(s) stopped on the "
+                f"round-off floor above the Newton tolerance (worst relative residual "
+                f"{s['newton_residual_max']:.2e}; summary.json steps_not_converged)",
+                err=True,
+            )
     if "comparison_vs_full" in summary:
         c = summary["comparison_vs_full"]
-        click.echo("vs full FE: " + "  ".join(f"{k} = {v:.4f}" for k, v in c.items() if isinstance(v, float)))
+        click.echo(
+            "vs full FE: "
+            + "  ".join(f"{k} = {v:.4f}" for k, v in c.items() if isinstance(v, float))
+        )
     click.echo(f"wrote {out_dir}")

@@ -29,14 +29,17 @@ def parse_range(text: str, name: str = "range") -> list[int]:
     if m:
         a, b, s = int(m[1]), int(m[2]), int(m[3] or 1)
         if a < 1 or b < a or s < 1:
-            raise InputError(f"--{name} {text!r}: expected start:stop:step with "
-                             "1 <= start <= stop and step >= 1")
+            raise InputError(
+                f"--{name} {text!r}: expected start:stop:step with 1 <= start <= stop and step >= 1"
+            )
         return list(range(a, b + 1, s))
     m = _ONE.match(text)
     if m and int(m[1]) >= 1:
         return [int(m[1])]
-    raise InputError(f"--{name} {text!r}: expected a..b (inclusive), start:stop:step "
-                     "(stop included) or one integer >= 1")
+    raise InputError(
+        f"--{name} {text!r}: expected a..b (inclusive), start:stop:step "
+        "(stop included) or one integer >= 1"
+    )
 
 
 def parse_point(text: str, name: str) -> list[float]:
@@ -55,43 +58,105 @@ def parse_point(text: str, name: str) -> list[float]:
 @click.option("--body", required=True, help="The body to reduce (the seed's b2).")
 @click.option("--layers", default="1..4", show_default=True, help="Node layers i: a..b.")
 @click.option("--laps", default="1..5", show_default=True, help="Node laps j: a..b.")
-@click.option("--modes", default="7:43:6", show_default=True,
-              help="Mode counts: start:stop:step, stop included.")
-@click.option("--target", default="ncc>=0.99", show_default=True,
-              help="Accuracy target, e.g. 'ncc>=0.99,peak<=0.02'.")
-@click.option("--kind", type=click.Choice(["mvm", "mvm-seed", "mvm-seed-fixed"]), default="mvm",
-              show_default=True,
-              help="Model of the candidates: Craig-Bampton (mvm) or the seed's eq. (4) readings.")
-@click.option("--patches", default=None,
-              help="Also sweep the interface kind (docs/interface_basis.md): patch-radius sets "
-                   "in mm, comma-separated, sets separated by ';' (e.g. '0.46;0.2,0.46,0.9'; "
-                   "'-': no patch vector).")
-@click.option("--radii", default=None,
-              help="Region families of a mesh body: ball radii in mm, comma-separated (e.g. "
-                   "'0.4,0.8,1.2'), about --centre; replace --layers x --laps "
-                   "(`flexmvm region` estimates the radius a contact needs).")
-@click.option("--node-sets", "node_sets", default=None,
-              help="Region families: node-set names of the body's mesh, comma-separated.")
-@click.option("--centre", default=None,
-              help="Centre of the --radii balls in mm, body coordinates 'x,y,z' (default: the "
-                   "body's region ball centre in the scenario, else the expected first contact "
-                   "point).")
-@click.option("--patch-surface", "patch_surface", default=None,
-              help="Facet set of the interface kind's patches (with --patches; default: a mesh "
-                   "body's contact surface, a rod's end_a).")
-@click.option("--interface-modes", default="5:20:5", show_default=True,
-              help="Mode counts of the interface kind (with --patches): a..b, start:stop:step.")
-@click.option("--search", is_flag=True,
-              help="Search the mode counts per node selection and per patch set (one search "
-                   "over both kinds: the largest model under the DOF bound first, then "
-                   "bisection) instead of running the whole grid.")
+@click.option(
+    "--modes",
+    default="7:43:6",
+    show_default=True,
+    help="Mode counts: start:stop:step, stop included.",
+)
+@click.option(
+    "--target",
+    default="ncc>=0.99",
+    show_default=True,
+    help="Accuracy target, e.g. 'ncc>=0.99,peak<=0.02'.",
+)
+@click.option(
+    "--kind",
+    type=click.Choice(["mvm", "mvm-seed", "mvm-seed-fixed"]),
+    default="mvm",
+    show_default=True,
+    help="Model of the candidates: Craig-Bampton (mvm) or the seed's eq. (4) readings.",
+)
+@click.option(
+    "--patches",
+    default=None,
+    help="Also sweep the interface kind (docs/interface_basis.md): patch-radius sets "
+    "in mm, comma-separated, sets separated by ';' (e.g. '0.46;0.2,0.46,0.9'; "
+    "'-': no patch vector).",
+)
+@click.option(
+    "--radii",
+    default=None,
+    help="Region families of a mesh body: ball radii in mm, comma-separated (e.g. "
+    "'0.4,0.8,1.2'), about --centre; replace --layers x --laps "
+    "(`flexmvm region` estimates the radius a contact needs).",
+)
+@click.option(
+    "--node-sets",
+    "node_sets",
+    default=None,
+    help="Region families: node-set names of the body's mesh, comma-separated.",
+)
+@click.option(
+    "--centre",
+    default=None,
+    help="Centre of the --radii balls in mm, body coordinates 'x,y,z' (default: the "
+    "body's region ball centre in the scenario, else the expected first contact "
+    "point).",
+)
+@click.option(
+    "--patch-surface",
+    "patch_surface",
+    default=None,
+    help="Facet set of the interface kind's patches (with --patches; default: a mesh "
+    "body's contact surface, a rod's end_a).",
+)
+@click.option(
+    "--interface-modes",
+    default="5:20:5",
+    show_default=True,
+    help="Mode counts of the interface kind (with --patches): a..b, start:stop:step.",
+)
+@click.option(
+    "--search",
+    is_flag=True,
+    help="Search the mode counts per node selection and per patch set (one search "
+    "over both kinds: the largest model under the DOF bound first, then "
+    "bisection) instead of running the whole grid.",
+)
 @study_run_options
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
-              help="Study directory (a rerun resumes).")
+@click.option(
+    "--out",
+    "out_dir",
+    required=True,
+    type=click.Path(file_okay=False, path_type=Path),
+    help="Study directory (a rerun resumes).",
+)
 @click.option("--progress/--no-progress", default=True, show_default=True)
-def command(scenario, body, layers, laps, modes, target, kind, patches, radii, node_sets, centre,
-            patch_surface, interface_modes, search, scheduler, workers, serial, t_end, dt, other,
-            out_dir, progress) -> None:
+def command(
+    scenario,
+    body,
+    layers,
+    laps,
+    modes,
+    target,
+    kind,
+    patches,
+    radii,
+    node_sets,
+    centre,
+    patch_surface,
+    interface_modes,
+    search,
+    scheduler,
+    workers,
+    serial,
+    t_end,
+    dt,
+    other,
+    out_dir,
+    progress,
+) -> None:
     """Selection study: node selections x mode counts of BODY against the full-FE force;
     writes ncc.csv, selection.json, fig7_ncc_map.png, fig8_ncc_modes.png (with --patches
     also ncc_interface.csv and fig_front_ncc_dof.png, the NCC-DOF front of both kinds). With
@@ -102,8 +167,10 @@ def command(scenario, body, layers, laps, modes, target, kind, patches, radii, n
     from flexmvm.studies.regions import parse_node_sets, parse_radii
     from flexmvm.studies.selection import run_selection_study
 
-    regions = ((parse_radii(radii) if radii is not None else [])
-               + (parse_node_sets(node_sets) if node_sets is not None else [])) or None
+    regions = (
+        (parse_radii(radii) if radii is not None else [])
+        + (parse_node_sets(node_sets) if node_sets is not None else [])
+    ) or None
     centre_m = parse_point(centre, "centre") if centre is not None else None
 
     grid = (parse_range(layers, "layers"), parse_range(laps, "laps"), parse_range(modes, "modes"))
@@ -111,10 +178,26 @@ def command(scenario, body, layers, laps, modes, target, kind, patches, radii, n
     if_modes = parse_range(interface_modes, "interface-modes")
     tgt = Target.parse(target)
     check_workers(workers)
-    run_selection_study(scenario, body, out_dir, *grid, target=tgt, search=search,
-                        scheduler=scheduler, n_workers=workers, progress=progress, t_end_s=t_end,
-                        dt_s=dt, other=other,
-                        serial=serial, echo=click.echo, kind=kind, patches=patch_sets,
-                        interface_modes=if_modes, regions=regions, centre_m=centre_m,
-                        patch_surface=patch_surface)
+    run_selection_study(
+        scenario,
+        body,
+        out_dir,
+        *grid,
+        target=tgt,
+        search=search,
+        scheduler=scheduler,
+        n_workers=workers,
+        progress=progress,
+        t_end_s=t_end,
+        dt_s=dt,
+        other=other,
+        serial=serial,
+        echo=click.echo,
+        kind=kind,
+        patches=patch_sets,
+        interface_modes=if_modes,
+        regions=regions,
+        centre_m=centre_m,
+        patch_surface=patch_surface,
+    )
     click.echo(f"wrote {out_dir}")

@@ -17,21 +17,49 @@ def command() -> None:
 
 @command.command("materials")
 @click.argument("scenario", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
-              help="Study directory (a rerun resumes).")
+@click.option(
+    "--out",
+    "out_dir",
+    required=True,
+    type=click.Path(file_okay=False, path_type=Path),
+    help="Study directory (a rerun resumes).",
+)
 @click.option("--body", default="b2", show_default=True, help="The body whose material varies.")
-@click.option("--materials", default="W,Cu,Al,PA6", show_default=True,
-              help="Seed table 2 materials to run.")
+@click.option(
+    "--materials", default="W,Cu,Al,PA6", show_default=True, help="Seed table 2 materials to run."
+)
 @click.option("--selections", default="1-1,2-2", show_default=True, help="i-j selections.")
-@click.option("--modes", default="7:43:12", show_default=True,
-              help="Mode counts: start:stop:step, stop included.")
-@click.option("--kind", type=click.Choice([k.value for k in ModelKind if k.retains_nodes]),
-              default=ModelKind.MVM.value, show_default=True,
-              help="Reduced model of BODY: Craig-Bampton (mvm) or the seed's eq. (4) readings.")
+@click.option(
+    "--modes",
+    default="7:43:12",
+    show_default=True,
+    help="Mode counts: start:stop:step, stop included.",
+)
+@click.option(
+    "--kind",
+    type=click.Choice([k.value for k in ModelKind if k.retains_nodes]),
+    default=ModelKind.MVM.value,
+    show_default=True,
+    help="Reduced model of BODY: Craig-Bampton (mvm) or the seed's eq. (4) readings.",
+)
 @study_run_options
 @click.option("--progress/--no-progress", default=True, show_default=True)
-def materials(scenario, out_dir, body, materials, selections, modes, kind, scheduler, workers,
-              serial, t_end, dt, other, progress) -> None:
+def materials(
+    scenario,
+    out_dir,
+    body,
+    materials,
+    selections,
+    modes,
+    kind,
+    scheduler,
+    workers,
+    serial,
+    t_end,
+    dt,
+    other,
+    progress,
+) -> None:
     """Body BODY of W, Cu, Al, PA6 (seed table 2): runs of the KIND model against each
     full-FE reference; writes materials.csv, materials.json, fig9_materials.png."""
     from flexmvm.cli.select_cmd import parse_range
@@ -39,9 +67,21 @@ def materials(scenario, out_dir, body, materials, selections, modes, kind, sched
 
     check_workers(workers)
     names = [m.strip() for m in materials.split(",") if m.strip()]
-    run_materials_study(scenario, out_dir, body=body, materials=names,
-                        selections=parse_selections(selections), modes=parse_range(modes, "modes"),
-                        scheduler=scheduler, n_workers=workers, progress=progress, t_end_s=t_end,
-                        dt_s=dt, other=other,
-                        serial=serial, echo=click.echo, kind=kind)
+    run_materials_study(
+        scenario,
+        out_dir,
+        body=body,
+        materials=names,
+        selections=parse_selections(selections),
+        modes=parse_range(modes, "modes"),
+        scheduler=scheduler,
+        n_workers=workers,
+        progress=progress,
+        t_end_s=t_end,
+        dt_s=dt,
+        other=other,
+        serial=serial,
+        echo=click.echo,
+        kind=kind,
+    )
     click.echo(f"wrote {out_dir}")

@@ -10,9 +10,14 @@ import click
 
 @click.command("theory")
 @click.argument("scenario", type=click.Path(dir_okay=False, path_type=Path))
-@click.option("--out", "out_dir", required=True, type=click.Path(file_okay=False, path_type=Path),
-              help="Output directory (history.csv is written there; an earlier theory output "
-                   "there is replaced at the end).")
+@click.option(
+    "--out",
+    "out_dir",
+    required=True,
+    type=click.Path(file_okay=False, path_type=Path),
+    help="Output directory (history.csv is written there; an earlier theory output "
+    "there is replaced at the end).",
+)
 @click.option("--dt", type=float, default=None, help="Grid step of the solution [s].")
 def command(scenario: Path, out_dir: Path, dt: float | None) -> None:
     """1D wave solution of a two-rod scenario: St Venant (flat end) or wave + Hertz
@@ -31,5 +36,7 @@ def command(scenario: Path, out_dir: Path, dt: float | None) -> None:
         t, force, probes, info = theory_histories(sc, dt=dt)
         write_history(tmp / "history.csv", t, force, probes)
     path = out_dir / "history.csv"
-    click.echo(f"theory ({info['law']}, v0 = {info['v0_mps']:.4g} m/s): peak force "
-               f"{force.max():.2f} N; wrote {path}")
+    click.echo(
+        f"theory ({info['law']}, v0 = {info['v0_mps']:.4g} m/s): peak force "
+        f"{force.max():.2f} N; wrote {path}"
+    )

@@ -9,20 +9,33 @@ import click
 
 
 @click.command("validate")
-@click.option("--out", "out_dir", type=click.Path(file_okay=False, path_type=Path), default=None,
-              help="Folder of the stored cases, figures and validation.json (default: the "
-                   "checkout's docs/validation; required when installed from a wheel).")
-@click.option("--md", type=click.Path(dir_okay=False, path_type=Path), default=None,
-              help="Report page (default: beside --out with its name + .md, i.e. "
-                   "docs/validation.md in a checkout).")
-@click.option("--case", "cases", multiple=True, metavar="KEY",
-              help="Run only this case (repeatable): flat_vs_st_venant, seed, step_convergence, "
-                   "short, pendulum or hertz_block (flexmvm.validation.cases.CASES). The report "
-                   "page needs every case, so only validation.json is written. 'short' (0.1 m "
-                   "rods) and 'hertz_block' (a sphere on a block) take a few minutes.")
+@click.option(
+    "--out",
+    "out_dir",
+    type=click.Path(file_okay=False, path_type=Path),
+    default=None,
+    help="Folder of the stored cases, figures and validation.json (default: the "
+    "checkout's docs/validation; required when installed from a wheel).",
+)
+@click.option(
+    "--md",
+    type=click.Path(dir_okay=False, path_type=Path),
+    default=None,
+    help="Report page (default: beside --out with its name + .md, i.e. "
+    "docs/validation.md in a checkout).",
+)
+@click.option(
+    "--case",
+    "cases",
+    multiple=True,
+    metavar="KEY",
+    help="Run only this case (repeatable): flat_vs_st_venant, seed, step_convergence, "
+    "short, pendulum or hertz_block (flexmvm.validation.cases.CASES). The report "
+    "page needs every case, so only validation.json is written. 'short' (0.1 m "
+    "rods) and 'hertz_block' (a sphere on a block) take a few minutes.",
+)
 @click.option("--recompute", is_flag=True, help="Ignore stored cases.")
-def command(out_dir: Path | None, md: Path | None, cases: tuple[str, ...],
-            recompute: bool) -> None:
+def command(out_dir: Path | None, md: Path | None, cases: tuple[str, ...], recompute: bool) -> None:
     """Run the physics validation and write its report.
 
     Each case's runs are stored under --out and reused while their key (package source,

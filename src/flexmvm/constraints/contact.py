@@ -43,14 +43,13 @@ class FrictionRows:
     its two tangent rows tangent[i] (indices into the contact rows), friction coefficient
     mu[i] > 0 and the global unit tangents directions[i] (2, 3) of those rows."""
 
-    normal: np.ndarray      # (k,) int
-    tangent: np.ndarray     # (k, 2) int
-    mu: np.ndarray          # (k,)
+    normal: np.ndarray  # (k,) int
+    tangent: np.ndarray  # (k, 2) int
+    mu: np.ndarray  # (k,)
     directions: np.ndarray  # (k, 2, 3)
 
     def shifted(self, offset: int) -> FrictionRows:
-        return FrictionRows(self.normal + offset, self.tangent + offset, self.mu,
-                            self.directions)
+        return FrictionRows(self.normal + offset, self.tangent + offset, self.mu, self.directions)
 
 
 @dataclass
@@ -67,7 +66,7 @@ class ContactRows:
     gaps: np.ndarray
     n_eq: int = 0
     normal_weight: np.ndarray | None = None  # (m,): row impulse -> compressive normal impulse
-    friction: FrictionRows | None = None     # None: no friction cone (the exact LCP path)
+    friction: FrictionRows | None = None  # None: no friction cone (the exact LCP path)
     # (sticking, sliding) cones at the last solution of the step (set by integrate.coulomb)
     stick_slip: tuple[int, int] = (0, 0)
 
@@ -80,7 +79,7 @@ class ContactRows:
         if lam.size == 0:
             return 0.0
         w = self.normal_weight
-        return float(lam[self.n_eq:].sum() if w is None else w @ lam)
+        return float(lam[self.n_eq :].sum() if w is None else w @ lam)
 
     def tangential_impulse(self, lam: np.ndarray) -> np.ndarray:
         """Resultant tangential (friction) impulse (3,) [N s] of the row impulses lam: the sum
@@ -89,8 +88,6 @@ class ContactRows:
         if fr is None or lam.size == 0:
             return np.zeros(3)
         return np.einsum("ik,ikj->j", lam[fr.tangent], fr.directions)
-
-
 
 
 @runtime_checkable

@@ -67,10 +67,14 @@ class BodyPoint:
         if self.node is not None:
             fr, qp = body.point_jacobian(self.node, st.A, st.q, d)
             if self.offset_m is not None:
-                fr = fr + np.concatenate([np.zeros(3),
-                                          cross3(np.asarray(self.offset_m, float), st.A.T @ d)])
-            nodal = (3 * self.node + np.arange(3), sign * (st.A.T @ d),
-                     body.psi.shape[0] if body.nq else 0)
+                fr = fr + np.concatenate(
+                    [np.zeros(3), cross3(np.asarray(self.offset_m, float), st.A.T @ d)]
+                )
+            nodal = (
+                3 * self.node + np.arange(3),
+                sign * (st.A.T @ d),
+                body.psi.shape[0] if body.nq else 0,
+            )
         else:
             p = np.asarray(self.local, float)
             fr = np.concatenate([d, cross3(p, st.A.T @ d)])
@@ -104,9 +108,15 @@ class NodeSetPoint:
         if not ids.size:
             raise InputError("a node-set point needs at least one node")
         idx = (3 * ids[:, None] + np.arange(3)).ravel()
-        psi_bar = (np.asarray(body.psi[idx, :].todense() if hasattr(body.psi, "todense")
-                              else body.psi[idx, :]).reshape(len(ids), 3, body.nq).mean(axis=0)
-                   if body.nq else np.zeros((3, 0)))
+        psi_bar = (
+            np.asarray(
+                body.psi[idx, :].todense() if hasattr(body.psi, "todense") else body.psi[idx, :]
+            )
+            .reshape(len(ids), 3, body.nq)
+            .mean(axis=0)
+            if body.nq
+            else np.zeros((3, 0))
+        )
         return cls(index, tuple(int(k) for k in ids), body.X[ids].mean(axis=0), psi_bar)
 
     def _local(self, q) -> np.ndarray:
@@ -128,8 +138,9 @@ class NodeSetPoint:
         dl = st.A.T @ d
         fr = np.concatenate([d, cross3(self._local(st.q), dl)])
         qp = self.psi_bar.T @ dl
-        rows.add(row, self.body, sign * fr, sign * qp, body.nq, None if body.nq
-                 else _no_elastic(body))
+        rows.add(
+            row, self.body, sign * fr, sign * qp, body.nq, None if body.nq else _no_elastic(body)
+        )
 
 
 Anchor = BodyPoint | NodeSetPoint | np.ndarray
@@ -280,9 +291,7 @@ def fixed_joint(p1: BodyPoint | NodeSetPoint, p2: Anchor, states) -> list[Joint]
     body2 = p2.body if _on_body(p2) else None
     A2 = states[body2].A if body2 is not None else np.eye(3)
     e = np.eye(3)
-    pairs = tuple(
-        (tuple(A1.T @ e[i]), tuple(A2.T @ e[j])) for i, j in ((0, 1), (1, 2), (2, 0))
-    )
+    pairs = tuple((tuple(A1.T @ e[i]), tuple(A2.T @ e[j])) for i, j in ((0, 1), (1, 2), (2, 0)))
     return [SphericalJoint(p1, p2), OrientationLock(p1.body, body2, pairs)]
 
 

@@ -27,8 +27,9 @@ class NodalSelector:
 
     __slots__ = ("_csr", "data", "indices", "indptr", "shape")
 
-    def __init__(self, data: np.ndarray, indices: np.ndarray, indptr: np.ndarray,
-                 shape: tuple[int, int]):
+    def __init__(
+        self, data: np.ndarray, indices: np.ndarray, indptr: np.ndarray, shape: tuple[int, int]
+    ):
         self.data, self.indices, self.indptr = data, indices, indptr
         self.shape = (int(shape[0]), int(shape[1]))
         self._csr = None
@@ -61,8 +62,15 @@ class Rows:
     def empty(cls) -> Rows:
         return cls(0, {})
 
-    def add(self, row: int, body: int, frame: np.ndarray, elastic: np.ndarray, nq: int,
-            nodal: tuple[np.ndarray, np.ndarray, int] | None = None) -> None:
+    def add(
+        self,
+        row: int,
+        body: int,
+        frame: np.ndarray,
+        elastic: np.ndarray,
+        nq: int,
+        nodal: tuple[np.ndarray, np.ndarray, int] | None = None,
+    ) -> None:
         """Add frame (6,) and elastic (nq,) contributions of one body to row `row`. nodal =
         (dofs, values, n_dofs): the elastic part is values^T psi[dofs] (empty dofs: none);
         rows whose every contribution to a body says so get its nodal selector (nodal_selector)."""
@@ -128,7 +136,8 @@ def stack(parts: list[Rows]) -> Rows:
         sels = [p.nodal_selector(b) for p in parts if b in p.blocks]
         if all(s is not None for s in sels):
             n = sels[0].shape[1]
-            blocks = [p.nodal[b].tocsr() if b in p.blocks else sp.csr_matrix((p.m, n))
-                      for p in parts]
+            blocks = [
+                p.nodal[b].tocsr() if b in p.blocks else sp.csr_matrix((p.m, n)) for p in parts
+            ]
             out.nodal[b] = sp.vstack(blocks, format="csr")
     return out

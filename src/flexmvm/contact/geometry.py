@@ -219,9 +219,7 @@ def _quad_newton(xs: np.ndarray, P: np.ndarray) -> tuple[np.ndarray, np.ndarray]
         # tolerance widened where the distance dwarfs the facet, so round-off cannot stall it
         f0 = (r * r).sum(1)
         scale = np.sqrt(f0 / np.maximum(np.minimum(a11, a22), 1e-300))
-        done |= ~stuck & (
-            np.abs(step).max(axis=1) <= NEWTON_TOL + 64 * np.finfo(float).eps * scale
-        )
+        done |= ~stuck & (np.abs(step).max(axis=1) <= NEWTON_TOL + 64 * np.finfo(float).eps * scale)
         for _ in range(LINE_SEARCH_HALVINGS):
             trial = np.clip(xi + step, -XI_BOUND, XI_BOUND)
             r_trial = residual(trial)
@@ -394,8 +392,9 @@ def closest_facets(proj: Projection) -> Projection:
 def facet_adjacency(connectivity: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Facets sharing a node with each facet (itself excluded), CSR (indptr, indices)."""
     nf = len(connectivity)
-    inc = sp.csr_matrix((np.ones(connectivity.size), (np.repeat(np.arange(nf), 4),
-                                                      connectivity.ravel())))
+    inc = sp.csr_matrix(
+        (np.ones(connectivity.size), (np.repeat(np.arange(nf), 4), connectivity.ravel()))
+    )
     adj = (inc @ inc.T).tocsr()
     adj.setdiag(0)
     adj.eliminate_zeros()

@@ -30,8 +30,9 @@ def _normal_offset(w, n, g, conn, xs_i, vs_i, xm, vm):
 
 
 @numba.njit(cache=True)
-def hold_pairs(held, held_w, held_n, held_off, held_d, facet, out, xs, vs, xm, vm, A_m, conn,
-               tol, d_max):
+def hold_pairs(
+    held, held_w, held_n, held_off, held_d, facet, out, xs, vs, xm, vm, A_m, conn, tol, d_max
+):
     """Closed pairs on the geometry they closed with (pairs.PointToSurfaceContact, position
     law). held[i] >= 0: slave node i keeps master facet held[i], its weights held_w[i] (4,),
     its normal held_n[i] (3,) in the master's body frame and the gap offset held_off[i]; its
@@ -69,7 +70,7 @@ def hold_pairs(held, held_w, held_n, held_off, held_d, facet, out, xs, vs, xm, v
             held[i] = g
             for b in range(4):
                 held_w[i, b] = out[i, b]
-            for k in range(3):   # A_m^T n
+            for k in range(3):  # A_m^T n
                 held_n[i, k] = (A_m[0, k] * n[0] + A_m[1, k] * n[1]) + A_m[2, k] * n[2]
             held_off[i] = gap - proj
             held_d[i] = d
@@ -91,4 +92,3 @@ def gap_offsets(idx, facet, out, xs, xm, conn, offsets):
         i = idx[a]
         d, _ = _normal_offset(out[i, 0:4], out[i, 6:9], facet[i], conn, xs[i], xs[i], xm, xm)
         offsets[a] = out[i, 9] - d
-

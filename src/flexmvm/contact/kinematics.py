@@ -65,6 +65,7 @@ def frame_kinematics(X, u, ud, r, A, v, s, x, xd):
         umax = max(umax, np.sqrt(u[c, 0] ** 2 + u[c, 1] ** 2 + u[c, 2] ** 2))
     return vmax, umax
 
+
 @numba.njit(cache=True)
 def body_kinematics(X, psi_c, indptr, indices, data, dense, q, v, r, A, u, ud, s, x, xd):
     """Contact-node kinematics of one body: u, ud, s (body frame) and x, xd (global), all
@@ -91,8 +92,28 @@ def _same_bits(a, b):
 
 
 @numba.njit(cache=True)
-def body_kinematics_memo(X, psi_c, indptr, indices, data, dense, q, v, r, A, u, ud, s, x, xd,
-                         last_q, last_v, last_frame, last_out, version):
+def body_kinematics_memo(
+    X,
+    psi_c,
+    indptr,
+    indices,
+    data,
+    dense,
+    q,
+    v,
+    r,
+    A,
+    u,
+    ud,
+    s,
+    x,
+    xd,
+    last_q,
+    last_v,
+    last_frame,
+    last_out,
+    version,
+):
     """body_kinematics unless q, v, r and A are bit for bit those of the last call that
     filled u, ud, s, x, xd (last_q (nq,), last_v (6 + nq,), last_frame (12,) = [r, A row by
     row], last_out (2,) its result; NaN in last_frame: none yet): the outputs are a function
@@ -102,20 +123,25 @@ def body_kinematics_memo(X, psi_c, indptr, indices, data, dense, q, v, r, A, u, 
     same = q.shape[0] == last_q.shape[0] and v.shape[0] == last_v.shape[0]
     if same:
         for i in range(3):
-            same = same and _same_bits(A[i], last_frame[3 + 3 * i:6 + 3 * i])
-        same = same and _same_bits(r, last_frame[0:3]) and _same_bits(q, last_q) and _same_bits(
-            v, last_v)
+            same = same and _same_bits(A[i], last_frame[3 + 3 * i : 6 + 3 * i])
+        same = (
+            same
+            and _same_bits(r, last_frame[0:3])
+            and _same_bits(q, last_q)
+            and _same_bits(v, last_v)
+        )
     if same:
         return last_out[0], last_out[1]
-    vmax, umax = body_kinematics(X, psi_c, indptr, indices, data, dense, q, v, r, A, u, ud, s,
-                                 x, xd)
+    vmax, umax = body_kinematics(
+        X, psi_c, indptr, indices, data, dense, q, v, r, A, u, ud, s, x, xd
+    )
     version[0] += 1
     if q.shape[0] == last_q.shape[0] and v.shape[0] == last_v.shape[0]:
         last_q[:] = q
         last_v[:] = v
         last_frame[0:3] = r
         for i in range(3):
-            last_frame[3 + 3 * i:6 + 3 * i] = A[i]
+            last_frame[3 + 3 * i : 6 + 3 * i] = A[i]
         last_out[0], last_out[1] = vmax, umax
     else:
         last_frame[0] = np.nan

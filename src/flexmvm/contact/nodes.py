@@ -41,8 +41,13 @@ class ContactNodes:
         # version[0]: how many updates computed (positions kept for other uses are valid as
         # long as it stands: search_state.ProjectionMemo)
         self.version = np.zeros(1, dtype=np.int64)
-        self._last = (np.zeros(self.nq), np.zeros(6 + self.nq), np.full(12, np.nan), np.zeros(2),
-                      self.version)
+        self._last = (
+            np.zeros(self.nq),
+            np.zeros(6 + self.nq),
+            np.full(12, np.nan),
+            np.zeros(2),
+            self.version,
+        )
 
     def _gather(self, body, n: int) -> None:
         self.psi_c = np.zeros((0, 3, 0))
@@ -69,9 +74,24 @@ class ContactNodes:
         """Positions x, velocities xd (global), body-frame positions s at state st (kept
         when st holds the values of the last update). Returns (largest velocity component
         [m/s], largest displacement |u| [m])."""
-        return body_kinematics_memo(self.X, self.psi_c, self.indptr, self.indices, self.data,
-                                    self.dense, st.q, st.v, st.r, st.A, self.u, self.ud, self.s,
-                                    self.x, self.xd, *self._last)
+        return body_kinematics_memo(
+            self.X,
+            self.psi_c,
+            self.indptr,
+            self.indices,
+            self.data,
+            self.dense,
+            st.q,
+            st.v,
+            st.r,
+            st.A,
+            self.u,
+            self.ud,
+            self.s,
+            self.x,
+            self.xd,
+            *self._last,
+        )
 
     def rows(self, nodes, w, kc, dirs, A, sign: float):
         """sign * rows of the pairs (nodes, w (m, k) local ids / weights, kc (m,) nodes per
@@ -82,9 +102,26 @@ class ContactNodes:
         frame, elastic = np.empty((m, 6)), np.empty((m, self.nq))
         sel_data, sel_idx = np.empty(3 * k * m), np.empty(3 * k * m, dtype=np.int64)
         sel_ptr = np.empty(m + 1, dtype=np.int64)
-        body_rows(nodes, w, kc, dirs, A, self.s, sign, self.psi_c, self.indptr,
-                  self.indices, self.data, self.dense, self.gdof, frame, elastic, sel_data,
-                  sel_idx, sel_ptr)
+        body_rows(
+            nodes,
+            w,
+            kc,
+            dirs,
+            A,
+            self.s,
+            sign,
+            self.psi_c,
+            self.indptr,
+            self.indices,
+            self.data,
+            self.dense,
+            self.gdof,
+            frame,
+            elastic,
+            sel_data,
+            sel_idx,
+            sel_ptr,
+        )
         if not self.nq:
             return frame, elastic, None
         n = sel_ptr[m]

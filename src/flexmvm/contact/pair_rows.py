@@ -52,8 +52,7 @@ def active_pairs(facet, out, h, gap_tol, bonded, idx, conn, n_quads, slave_nodes
     s_nodes, s_w, s_k = np.empty((m, 1), np.int64), np.empty((m, 1)), np.empty(m, np.int64)
     m_nodes, m_w, m_k = np.empty((m, 4), np.int64), np.empty((m, 4)), np.empty(m, np.int64)
     pair_nodes(nodes, facet, out, conn, n_quads, s_nodes, s_w, s_k, m_nodes, m_w, m_k)
-    return (m, nodes, slave_ids, facets, normal, gap, u_n, (s_nodes, s_w, s_k),
-            (m_nodes, m_w, m_k))
+    return (m, nodes, slave_ids, facets, normal, gap, u_n, (s_nodes, s_w, s_k), (m_nodes, m_w, m_k))
 
 
 @numba.njit(cache=True)
@@ -71,8 +70,26 @@ def pair_nodes(idx, facet, out, conn, n_quads, s_nodes, s_w, s_k, m_nodes, m_w, 
 
 
 @numba.njit(cache=True)
-def body_rows(nodes, w, kc, dirs, A, s, sign, psi_c, indptr, indices, data, dense, gdof,
-              frame, elastic, sel_data, sel_idx, sel_ptr):
+def body_rows(
+    nodes,
+    w,
+    kc,
+    dirs,
+    A,
+    s,
+    sign,
+    psi_c,
+    indptr,
+    indices,
+    data,
+    dense,
+    gdof,
+    frame,
+    elastic,
+    sel_data,
+    sel_idx,
+    sel_ptr,
+):
     """sign * (rows d_a^T sum_k w_ak dx_{node_ak}/dv) of one body (seed eq. 9), as
     pairs.body_rows: frame (m, 6) = [d wsum, sw x A^T d], elastic (m, nq) = N psi with the
     nodal selector N (m, 3 n_nodes) in CSR (sel_data, sel_idx (m*12,), sel_ptr (m + 1,),
@@ -93,8 +110,11 @@ def body_rows(nodes, w, kc, dirs, A, s, sign, psi_c, indptr, indices, data, dens
             sw0 += wk * s[c, 0]
             sw1 += wk * s[c, 1]
             sw2 += wk * s[c, 2]
-        frame[a, 0], frame[a, 1], frame[a, 2] = (sign * (dirs[a, 0] * wsum), sign * (dirs[a, 1] * wsum),
-                                                 sign * (dirs[a, 2] * wsum))
+        frame[a, 0], frame[a, 1], frame[a, 2] = (
+            sign * (dirs[a, 0] * wsum),
+            sign * (dirs[a, 1] * wsum),
+            sign * (dirs[a, 2] * wsum),
+        )
         frame[a, 3] = sign * (sw1 * dl2 - sw2 * dl1)
         frame[a, 4] = sign * (sw2 * dl0 - sw0 * dl2)
         frame[a, 5] = sign * (sw0 * dl1 - sw1 * dl0)
@@ -133,4 +153,3 @@ def _sort_row(idx, val, lo, hi):
             idx[b + 1], val[b + 1] = idx[b], val[b]
             b -= 1
         idx[b + 1], val[b + 1] = ki, kv
-

@@ -66,7 +66,6 @@ from flexmvm.errors import InputError, SolverError
 __all__ = ["PointToSurfaceContact", "body_rows", "tangent_basis"]
 
 
-
 @dataclass
 class _Active:
     """The active pairs of the last candidate_rows: point (m,) slave index, nodes (m, 4)
@@ -101,24 +100,38 @@ class PointToSurfaceContact:
     has moved far enough to leave it, and the facet chosen last time, tried first.
     """
 
-    def __init__(self, bodies, slave: int, slave_nodes, master: int, surface: MasterSurface,
-                 kind: ContactKind = ContactKind.FRICTIONLESS, search_radius_m: float = 1e-3,
-                 gap_tol_m: float = 1e-9, name: str = "contact",
-                 slave_surface: MasterSurface | None = None,
-                 beta: float = PENETRATION_RECOVERY, friction_coefficient: float = 0.0,
-                 law: ContactLaw = ContactLaw.VELOCITY,
-                 theta: float | Callable[[float], float] | None = None):
+    def __init__(
+        self,
+        bodies,
+        slave: int,
+        slave_nodes,
+        master: int,
+        surface: MasterSurface,
+        kind: ContactKind = ContactKind.FRICTIONLESS,
+        search_radius_m: float = 1e-3,
+        gap_tol_m: float = 1e-9,
+        name: str = "contact",
+        slave_surface: MasterSurface | None = None,
+        beta: float = PENETRATION_RECOVERY,
+        friction_coefficient: float = 0.0,
+        law: ContactLaw = ContactLaw.VELOCITY,
+        theta: float | Callable[[float], float] | None = None,
+    ):
         if slave == master:
             raise InputError(f"{name}: slave and master must be different bodies")
         mu = float(friction_coefficient)
         if not (np.isfinite(mu) and mu >= 0.0):
-            raise InputError(f"{name}: friction coefficient must be a finite number >= 0, "
-                             f"got {friction_coefficient!r}")
+            raise InputError(
+                f"{name}: friction coefficient must be a finite number >= 0, "
+                f"got {friction_coefficient!r}"
+            )
         if mu > 0.0 and kind is ContactKind.BONDED:
-            raise InputError(f"{name}: bonded contact locks all three components and takes "
-                             f"no friction coefficient, got {mu!r}")
+            raise InputError(
+                f"{name}: bonded contact locks all three components and takes "
+                f"no friction coefficient, got {mu!r}"
+            )
         self.mu = mu
-        self._last = (None, 0)      # the last candidate rows' pairs and bond-row count
+        self._last = (None, 0)  # the last candidate rows' pairs and bond-row count
         self._bond_normal: dict = {}  # bonded slave node -> the normal it was locked with
         self.slave, self.master = slave, master
         self.slave_nodes = np.unique(np.asarray(slave_nodes, dtype=np.int64))
@@ -126,7 +139,9 @@ class PointToSurfaceContact:
         if self.slave_nodes.size == 0 or self.slave_nodes.max() >= n_s:
             raise InputError(f"{name}: slave nodes must be node ids of body {bodies[slave].name!r}")
         if surface.connectivity.max() >= n_m:
-            raise InputError(f"{name}: master facets refer to nodes outside body {bodies[master].name!r}")
+            raise InputError(
+                f"{name}: master facets refer to nodes outside body {bodies[master].name!r}"
+            )
         self.surface = surface
         self.master_nodes = surface.nodes()
         self.broad = BroadPhase(bodies[master].X, surface)
@@ -143,8 +158,9 @@ class PointToSurfaceContact:
         self.law = ContactLaw(law)
         if self.law is ContactLaw.POSITION:
             if theta is None or (not callable(theta) and not 0.5 <= theta <= 1.0):
-                raise InputError(f"{name}: the position law needs the scheme's theta in "
-                                 f"[0.5, 1], got {theta!r}")
+                raise InputError(
+                    f"{name}: the position law needs the scheme's theta in [0.5, 1], got {theta!r}"
+                )
             if kind is ContactKind.BONDED:
                 raise InputError(f"{name}: the position law is not for bonded contact")
         self.theta = None if theta is None else (theta if callable(theta) else float(theta))
@@ -152,18 +168,28 @@ class PointToSurfaceContact:
         self._bonds: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._setup(bodies)
         if slave_surface is not None and slave_surface.connectivity.max() >= n_s:
-            raise InputError(f"{name}: slave facets refer to nodes outside body {bodies[slave].name!r}")
-        self._measure = SurfaceMeasure(bodies, slave, self.slave_nodes, slave_surface, master,
-                                       surface, self.search_radius,
-                                       shared=(self._s, self._m, self._memo))
+            raise InputError(
+                f"{name}: slave facets refer to nodes outside body {bodies[slave].name!r}"
+            )
+        self._measure = SurfaceMeasure(
+            bodies,
+            slave,
+            self.slave_nodes,
+            slave_surface,
+            master,
+            surface,
+            self.search_radius,
+            shared=(self._s, self._m, self._memo),
+        )
 
     def _setup(self, bodies) -> None:
         """Gathered node data, facet geometry and the search state (see search.scan_nodes)."""
         self._s = ContactNodes(bodies[self.slave], self.slave_nodes)
         self._m = ContactNodes(bodies[self.master], self.master_nodes)
         self._conn = np.searchsorted(self.master_nodes, self.surface.connectivity).astype(np.int64)
-        self._facets = facet_surface(bodies[self.master].X, self.surface, self._conn, self.broad,
-                                     self.search_radius)
+        self._facets = facet_surface(
+            bodies[self.master].X, self.surface, self._conn, self.broad, self.search_radius
+        )
         ns, nf = len(self.slave_nodes), self.surface.n_facets
         self._search = SearchState.empty(ns, nf)
         self._memo = ProjectionMemo(self._s, self._m, self._conn, self._facets.params)
@@ -181,7 +207,7 @@ class PointToSurfaceContact:
         self._held_n = np.zeros((ns, 3))
         self._held_off = np.zeros(ns)
         self._held_d = np.zeros(ns)
-        self._row_geometry = None   # the last candidate rows': (idx, facets, w, normal, off, A_m)
+        self._row_geometry = None  # the last candidate rows': (idx, facets, w, normal, off, A_m)
 
     # -- geometry -----------------------------------------------------------------------------
     def _kinematics(self, states) -> float:
@@ -196,9 +222,21 @@ class PointToSurfaceContact:
         self._facet, self._out); returns the number of nodes with a facet."""
         sm = states[self.master]
         m = self._m
-        status, facet, n = scan_nodes(self._s.x, self._s.xd, m.x, m.xd, sm.r, sm.A, reach,
-                                      self._u_max, self._facets, self._search, self._memo.arrays,
-                                      self._facet, self._out)
+        status, facet, n = scan_nodes(
+            self._s.x,
+            self._s.xd,
+            m.x,
+            m.xd,
+            sm.r,
+            sm.A,
+            reach,
+            self._u_max,
+            self._facets,
+            self._search,
+            self._memo.arrays,
+            self._facet,
+            self._out,
+        )
         if status:
             raise SolverError(_failure(status, facet))
         return n
@@ -230,17 +268,39 @@ class PointToSurfaceContact:
         self._scan(states, self.search_radius + 2 * speed * h)
         A_m = states[self.master].A
         if self._holds:
-            hold_pairs(self._held, self._held_w, self._held_n, self._held_off, self._held_d,
-                       self._facet, self._out, self._s.x, self._s.xd, self._m.x, self._m.xd, A_m,
-                       self._conn, self.gap_tol, HOLD_DRIFT_MAX * self.gap_tol)
+            hold_pairs(
+                self._held,
+                self._held_w,
+                self._held_n,
+                self._held_off,
+                self._held_d,
+                self._facet,
+                self._out,
+                self._s.x,
+                self._s.xd,
+                self._m.x,
+                self._m.xd,
+                A_m,
+                self._conn,
+                self.gap_tol,
+                HOLD_DRIFT_MAX * self.gap_tol,
+            )
         if self.law is ContactLaw.POSITION:
             # g <= gap_tol + POSITION_REACH h u_reach, whatever u_N- (see the module doc)
             hp, tol = 0.0, self.gap_tol + POSITION_REACH * h * speed
         else:
             hp, tol = h, self.gap_tol
         m_n, idx, slave_ids, facets, normal, gaps, u_n, s_pairs, m_pairs = active_pairs(
-            self._facet, self._out, hp, tol, self._bonded, self._idx, self._conn,
-            self.surface.n_quads, self.slave_nodes)
+            self._facet,
+            self._out,
+            hp,
+            tol,
+            self._bonded,
+            self._idx,
+            self._conn,
+            self.surface.n_quads,
+            self.slave_nodes,
+        )
         eq = self._bond_rows(h) if self._bonds else None
         if m_n == 0 and eq is None:
             self._last = (None, 0)
@@ -289,20 +349,28 @@ class PointToSurfaceContact:
         t1, t2 = tangent_basis(normal)
         rows = Rows(3 * m_n, {})
         tile = lambda pairs: tuple(np.concatenate([p, p, p]) for p in pairs)
-        self._fill_rows(rows, states, tile(slave_pairs), tile(master_pairs),
-                        np.vstack([normal, t1, t2]))
+        self._fill_rows(
+            rows, states, tile(slave_pairs), tile(master_pairs), np.vstack([normal, t1, t2])
+        )
         ids = np.arange(m_n)
-        friction = FrictionRows(ids, np.column_stack([m_n + ids, 2 * m_n + ids]),
-                                np.full(m_n, self.mu), np.stack([t1, t2], axis=1))
+        friction = FrictionRows(
+            ids,
+            np.column_stack([m_n + ids, 2 * m_n + ids]),
+            np.full(m_n, self.mu),
+            np.stack([t1, t2], axis=1),
+        )
         keys = keys + [k + (f"t{j}",) for j in (1, 2) for k in keys]
         weight = np.concatenate([np.ones(m_n), np.zeros(2 * m_n)])
-        return ContactRows(rows, np.concatenate([lower, np.zeros(2 * m_n)]), keys, gaps, 0,
-                           weight, friction)
+        return ContactRows(
+            rows, np.concatenate([lower, np.zeros(2 * m_n)]), keys, gaps, 0, weight, friction
+        )
 
     def _fill_rows(self, rows: Rows, states, slave_pairs, master_pairs, dirs) -> None:
         """Rows of both bodies, compiled (slave +, master -), with their nodal selectors."""
-        for b, nodes, pairs, sign in ((self.slave, self._s, slave_pairs, 1.0),
-                                      (self.master, self._m, master_pairs, -1.0)):
+        for b, nodes, pairs, sign in (
+            (self.slave, self._s, slave_pairs, 1.0),
+            (self.master, self._m, master_pairs, -1.0),
+        ):
             frame, elastic, sel = nodes.rows(*pairs, dirs, states[b].A, sign)
             rows.blocks[b] = (frame, elastic)
             if sel is not None:
@@ -318,22 +386,28 @@ class PointToSurfaceContact:
         dirs = np.vstack([eq_dirs, normal])
         m = len(dirs)
         rows = Rows(m, {})
-        sf, sq, ssel = body_rows(bodies[self.slave], states[self.slave], slave_nodes[:, None],
-                                 np.ones((m, 1)), dirs)
-        mf, mq, msel = body_rows(bodies[self.master], states[self.master], master_nodes, master_w, dirs)
+        sf, sq, ssel = body_rows(
+            bodies[self.slave], states[self.slave], slave_nodes[:, None], np.ones((m, 1)), dirs
+        )
+        mf, mq, msel = body_rows(
+            bodies[self.master], states[self.master], master_nodes, master_w, dirs
+        )
         rows.blocks[self.slave] = (sf, sq)
         rows.blocks[self.master] = (-mf, -mq)
         if ssel is not None:
             rows.nodal[self.slave] = ssel
         if msel is not None:
             rows.nodal[self.master] = -msel
-        lower_n = self._lower(gaps, u_n, h)   # bonded contact: the velocity law
-        keys = eq_keys + list(zip([self.name] * len(idx), self.slave_nodes[idx].tolist(),
-                                  self._facet[idx].tolist()))
+        lower_n = self._lower(gaps, u_n, h)  # bonded contact: the velocity law
+        keys = eq_keys + list(
+            zip([self.name] * len(idx), self.slave_nodes[idx].tolist(), self._facet[idx].tolist())
+        )
         weight = np.ones(m)
         # bond rows x, y, z: their compressive part is the component along the normal
         weight[: len(eq_keys)] = [self._bond_normal[k[2]][k[3]] for k in eq_keys]
-        return ContactRows(rows, np.concatenate([eq_lower, lower_n]), keys, gaps, len(eq_keys), weight)
+        return ContactRows(
+            rows, np.concatenate([eq_lower, lower_n]), keys, gaps, len(eq_keys), weight
+        )
 
     def _bond_rows(self, h: float):
         """Three equality rows per bonded pair (seed eq. 7): x_S - x_C -> 0, at the node
@@ -350,8 +424,13 @@ class PointToSurfaceContact:
                 dirs.append(e)
                 lower.append(-self.beta * err[d] / h)
                 keys.append((self.name, "bond", s, d))
-        return (np.array(s_nodes), (np.array(w_rows), np.array(n_rows)), np.array(dirs),
-                np.array(lower), keys)
+        return (
+            np.array(s_nodes),
+            (np.array(w_rows), np.array(n_rows)),
+            np.array(dirs),
+            np.array(lower),
+            keys,
+        )
 
     def after_step(self, crows: ContactRows, impulses: np.ndarray, h: float) -> None:
         """Position law: pairs that carried an impulse keep this step's geometry, the others
@@ -362,8 +441,9 @@ class PointToSurfaceContact:
         if self.kind is not ContactKind.BONDED:
             return
         last, n_eq = self._last
-        proj = None if last is None else _Active(last[0], self.master_nodes[last[1]], last[2],
-                                                 last[3])
+        proj = (
+            None if last is None else _Active(last[0], self.master_nodes[last[1]], last[2], last[3])
+        )
         # release: normal component of the bond impulse (bond rows come in x, y, z triples)
         released = []
         for i in range(0, n_eq, 3):
@@ -396,7 +476,7 @@ class PointToSurfaceContact:
         i = idx[on]
         self._held[i] = facets[on]
         self._held_w[i] = w[on]
-        self._held_n[i] = normal[on] @ A_m     # rows A_m^T n
+        self._held_n[i] = normal[on] @ A_m  # rows A_m^T n
         self._held_off[i] = off[on]
         self._held_d[i] = np.where(before[i], self._held_d[i], 0.0)
 

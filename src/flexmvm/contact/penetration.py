@@ -29,11 +29,11 @@ from flexmvm.contact.search import penetration_scan
 from flexmvm.contact.search_state import ProjectionMemo, SearchState, facet_surface
 
 EDGE_TOL = 0.01  # lateral offset beyond a facet edge, per facet circumradius, still counted:
-                 # covers the round-off and the differential Poisson expansion of two faces
-                 # with a common edge (both ~1e-7 m on facets of ~1e-4 m and more)
+# covers the round-off and the differential Poisson expansion of two faces
+# with a common edge (both ~1e-7 m on facets of ~1e-4 m and more)
 RESOLUTION_M = 1e-12  # depths up to this read 0 and are not sought: the round-off of node
-                      # positions of metre-scale bodies (1e-16 m to 1e-14 m); touching faces
-                      # (gaps of round-off size) then cost one projection per node
+# positions of metre-scale bodies (1e-16 m to 1e-14 m); touching faces
+# (gaps of round-off size) then cost one projection per node
 
 
 @dataclass(frozen=True)
@@ -52,8 +52,18 @@ class _Direction:
     """Nodes `rows` (indices into node_set.nodes) of body `body` against the facets `surface` of
     body `against`, whose nodes are facet_set.nodes."""
 
-    def __init__(self, bodies, body, node_set: ContactNodes, rows, against, facet_set: ContactNodes,
-                 surface: MasterSurface, search_radius: float, memo: ProjectionMemo | None = None):
+    def __init__(
+        self,
+        bodies,
+        body,
+        node_set: ContactNodes,
+        rows,
+        against,
+        facet_set: ContactNodes,
+        surface: MasterSurface,
+        search_radius: float,
+        memo: ProjectionMemo | None = None,
+    ):
         self.body, self.against = body, against
         self.node_set, self.facet_set = node_set, facet_set
         self.rows = None if len(rows) == len(node_set.nodes) else np.asarray(rows, np.int64)
@@ -63,8 +73,9 @@ class _Direction:
         conn = local[surface.connectivity]
         if conn.min() < 0:
             raise ValueError("facet nodes missing from the facet node set")
-        self.surface = facet_surface(bodies[against].X, surface, conn,
-                                     BroadPhase(bodies[against].X, surface), search_radius)
+        self.surface = facet_surface(
+            bodies[against].X, surface, conn, BroadPhase(bodies[against].X, surface), search_radius
+        )
         Xs = bodies[against].X[surface.nodes()]
         Xn = bodies[body].X[self.node_ids]
         self.extent = float(np.linalg.norm(np.ptp(Xs, axis=0)) + np.linalg.norm(np.ptp(Xn, axis=0)))
@@ -74,14 +85,17 @@ class _Direction:
         # this scan (all nodes of its node set against its facets: the next step's search
         # reads what this measure projected), else none (keeping costs more than the few
         # projections a measure repeats itself)
-        if memo is None or self.rows is not None or not memo.serves(
-                node_set, facet_set, self.surface.conn, self.surface.params):
-            memo = ProjectionMemo(node_set, facet_set, self.surface.conn, self.surface.params,
-                                  k=0)
+        if (
+            memo is None
+            or self.rows is not None
+            or not memo.serves(node_set, facet_set, self.surface.conn, self.surface.params)
+        ):
+            memo = ProjectionMemo(node_set, facet_set, self.surface.conn, self.surface.params, k=0)
         self.memo = memo
 
-    def measure(self, states, u_max_facets: float, deep: bool, floor: float
-                ) -> tuple[int, int, Penetration]:
+    def measure(
+        self, states, u_max_facets: float, deep: bool, floor: float
+    ) -> tuple[int, int, Penetration]:
         x = self.node_set.x if self.rows is None else self.node_set.x[self.rows]
         st = states[self.against]
         if deep:  # the start check: reach over both surfaces, a throwaway search state
@@ -90,8 +104,18 @@ class _Direction:
         else:
             reach, search = self.search_radius + u_max_facets, self.search
         status, bad, depth, i, g = penetration_scan(
-            x, self.facet_set.x, st.r, st.A, reach, u_max_facets, self.surface, search,
-            self.memo.arrays, EDGE_TOL, floor)
+            x,
+            self.facet_set.x,
+            st.r,
+            st.A,
+            reach,
+            u_max_facets,
+            self.surface,
+            search,
+            self.memo.arrays,
+            EDGE_TOL,
+            floor,
+        )
         node = int(self.node_ids[i]) if i >= 0 else -1
         return status, bad, Penetration(float(depth), self.body, node, self.against, int(g))
 
@@ -105,25 +129,49 @@ class SurfaceMeasure:
     that the end-of-step measure and the next step's search (the same state) update them once
     (ContactNodes.update keeps them at an unchanged state); own ones otherwise."""
 
-    def __init__(self, bodies, slave: int, slave_nodes, slave_surface: MasterSurface | None,
-                 master: int, master_surface: MasterSurface, search_radius: float,
-                 shared: tuple[ContactNodes, ContactNodes, ProjectionMemo] | None = None):
+    def __init__(
+        self,
+        bodies,
+        slave: int,
+        slave_nodes,
+        slave_surface: MasterSurface | None,
+        master: int,
+        master_surface: MasterSurface,
+        search_radius: float,
+        shared: tuple[ContactNodes, ContactNodes, ProjectionMemo] | None = None,
+    ):
         s_ids = np.asarray(slave_nodes, dtype=np.int64)
         if slave_surface is not None:
             s_ids = np.union1d(s_ids, slave_surface.nodes())
         self.slave, self.master = slave, master
         sh_s, sh_m, memo = (None, None, None) if shared is None else shared
         self._s = _same_set(sh_s, s_ids) or ContactNodes(bodies[slave], s_ids)
-        self._m = _same_set(sh_m, master_surface.nodes()) or ContactNodes(bodies[master],
-                                                                           master_surface.nodes())
+        self._m = _same_set(sh_m, master_surface.nodes()) or ContactNodes(
+            bodies[master], master_surface.nodes()
+        )
         rows = np.searchsorted(s_ids, np.unique(np.asarray(slave_nodes, dtype=np.int64)))
-        self.directions = [_Direction(bodies, slave, self._s, rows, master, self._m,
-                                      master_surface, search_radius, memo)]
+        self.directions = [
+            _Direction(
+                bodies, slave, self._s, rows, master, self._m, master_surface, search_radius, memo
+            )
+        ]
         if slave_surface is not None:
-            self.directions.append(_Direction(bodies, master, self._m, np.arange(len(self._m.nodes)),
-                                              slave, self._s, slave_surface, search_radius))
+            self.directions.append(
+                _Direction(
+                    bodies,
+                    master,
+                    self._m,
+                    np.arange(len(self._m.nodes)),
+                    slave,
+                    self._s,
+                    slave_surface,
+                    search_radius,
+                )
+            )
 
-    def measure(self, states, deep: bool = False, floors=None) -> list[tuple[int, int, Penetration]]:
+    def measure(
+        self, states, deep: bool = False, floors=None
+    ) -> list[tuple[int, int, Penetration]]:
         """(status, failing facet, Penetration) per direction at the given states. floors
         (per direction, [m]; default 0): only depths above are sought, a shallower one reads 0
         (penetration_scan): the caller passes the deepest it has seen so far. Depths
@@ -132,8 +180,10 @@ class SurfaceMeasure:
         _, u_m = self._m.update(states[self.master])
         u = {self.slave: u_s, self.master: u_m}
         floors = [0.0] * len(self.directions) if floors is None else floors
-        return [d.measure(states, u[d.against], deep, max(float(f), RESOLUTION_M))
-                for d, f in zip(self.directions, floors)]
+        return [
+            d.measure(states, u[d.against], deep, max(float(f), RESOLUTION_M))
+            for d, f in zip(self.directions, floors)
+        ]
 
 
 def _same_set(nodes: ContactNodes | None, ids: np.ndarray) -> ContactNodes | None:
@@ -141,4 +191,3 @@ def _same_set(nodes: ContactNodes | None, ids: np.ndarray) -> ContactNodes | Non
     if nodes is not None and np.array_equal(nodes.nodes, np.asarray(ids, dtype=np.int64)):
         return nodes
     return None
-

@@ -37,8 +37,18 @@ REC_XI, REC_W, REC_N, REC_GAP, REC_IN, REC_DIST, REC_LEN = 0, 2, 6, 9, 10, 11, 1
 def projection_params(inside_tol: float = 1e-6) -> np.ndarray:
     """(7,) float64: max Newton iterations, line-search halvings, far-check iteration, far
     |xi|, Newton tolerance, xi bound, inside tolerance (the constants of contact.geometry)."""
-    return np.array([NEWTON_MAX_ITER, LINE_SEARCH_HALVINGS, FAR_CHECK_ITER, FAR_XI,
-                     NEWTON_TOL, XI_BOUND, inside_tol], dtype=np.float64)
+    return np.array(
+        [
+            NEWTON_MAX_ITER,
+            LINE_SEARCH_HALVINGS,
+            FAR_CHECK_ITER,
+            FAR_XI,
+            NEWTON_TOL,
+            XI_BOUND,
+            inside_tol,
+        ],
+        dtype=np.float64,
+    )
 
 
 @numba.njit(cache=True)
@@ -261,4 +271,3 @@ def project_pair(xs, P, quad, params, C, t, r, rec):
     rec[REC_GAP] = gap
     rec[REC_DIST] = dist if rec[REC_IN] == 1.0 else edge
     return 0
-

@@ -59,21 +59,40 @@ def clamp(proj: Projection, out: np.ndarray, x_slave, x_master, n_quads: int) ->
     tri = out & ~(proj.facet < n_quads)
     if quad.any():
         e, h = np.clip(xi[quad, 0], -1, 1), np.clip(xi[quad, 1], -1, 1)
-        w[quad] = 0.25 * np.column_stack([(1 - e) * (1 - h), (1 + e) * (1 - h), (1 + e) * (1 + h), (1 - e) * (1 + h)])
+        w[quad] = 0.25 * np.column_stack(
+            [(1 - e) * (1 - h), (1 + e) * (1 - h), (1 + e) * (1 + h), (1 - e) * (1 + h)]
+        )
         xi[quad] = np.column_stack([e, h])
     if tri.any():
-        bary = np.clip(np.column_stack([1 - xi[tri, 0] - xi[tri, 1], xi[tri, 0], xi[tri, 1]]), 0, None)
+        bary = np.clip(
+            np.column_stack([1 - xi[tri, 0] - xi[tri, 1], xi[tri, 0], xi[tri, 1]]), 0, None
+        )
         bary /= bary.sum(axis=1, keepdims=True)
         w[tri] = np.column_stack([bary, np.zeros(len(bary))])
         xi[tri] = bary[:, 1:]
     xc = np.einsum("mk,mki->mi", w, x_master[proj.nodes])
     gap = np.einsum("mi,mi->m", proj.normal, x_slave[proj.point] - xc)
-    return type(proj)(proj.point, proj.facet, proj.nodes, w, xi, proj.normal,
-                      np.where(out, gap, proj.gap), np.ones_like(proj.inside), proj.distance)
+    return type(proj)(
+        proj.point,
+        proj.facet,
+        proj.nodes,
+        w,
+        xi,
+        proj.normal,
+        np.where(out, gap, proj.gap),
+        np.ones_like(proj.inside),
+        proj.distance,
+    )
 
 
-def projection(kin: Kinematics, master_state, surface: MasterSurface, broad: BroadPhase,
-               box: tuple[np.ndarray, np.ndarray], reach: float) -> Projection | None:
+def projection(
+    kin: Kinematics,
+    master_state,
+    surface: MasterSurface,
+    broad: BroadPhase,
+    box: tuple[np.ndarray, np.ndarray],
+    reach: float,
+) -> Projection | None:
     """Closest facet of every slave node within reach of the master surface. A node that
     falls outside every candidate facet (above a vertex of a convex surface, or beside an
     edge of a dented, locally concave one) is kept with its clamped projection, so no slave
@@ -119,8 +138,9 @@ def body_rows(body, st, nodes: np.ndarray, weights: np.ndarray, dirs: np.ndarray
         return frame, np.zeros((m, 0)), None
     cols = (3 * nodes[:, :, None] + np.arange(3)).reshape(m, -1)
     data = (weights[:, :, None] * dl[:, None, :]).reshape(m, -1)
-    sel = sp.csr_matrix((data.ravel(), (np.repeat(np.arange(m), 3 * k), cols.ravel())),
-                        shape=(m, 3 * len(body.X)))
+    sel = sp.csr_matrix(
+        (data.ravel(), (np.repeat(np.arange(m), 3 * k), cols.ravel())), shape=(m, 3 * len(body.X))
+    )
     q = sel @ body.psi
     q = q.toarray() if sp.issparse(q) else np.asarray(q)
     return frame, q, sel

@@ -184,8 +184,27 @@ def _try(g, i, xs, xm, conn, n_quads, params, work, memo, best, best_g):
 
 
 @numba.njit(cache=True)
-def _closest(i, xs, n, cand, lb, mark, tag, f0, adj_ptr, adj_idx, geo, u_max, xm, conn,
-             n_quads, params, work, memo, best):
+def _closest(
+    i,
+    xs,
+    n,
+    cand,
+    lb,
+    mark,
+    tag,
+    f0,
+    adj_ptr,
+    adj_idx,
+    geo,
+    u_max,
+    xm,
+    conn,
+    n_quads,
+    params,
+    work,
+    memo,
+    best,
+):
     """Closest facet among the n candidates (marked mark[g] == tag): the previous facet f0
     first (warm start), its neighbours next unless f0 holds an inside projection, then the
     rest. Once an inside projection with score
@@ -197,8 +216,7 @@ def _closest(i, xs, n, cand, lb, mark, tag, f0, adj_ptr, adj_idx, geo, u_max, xm
     best_g = -1
     if f0 >= 0:
         if mark[f0] == tag:
-            status, best_g = _try(f0, i, xs, xm, conn, n_quads, params, work, memo, best,
-                                  best_g)
+            status, best_g = _try(f0, i, xs, xm, conn, n_quads, params, work, memo, best, best_g)
             mark[f0] = tag + 1
             if status:
                 return status, f0
@@ -206,8 +224,7 @@ def _closest(i, xs, n, cand, lb, mark, tag, f0, adj_ptr, adj_idx, geo, u_max, xm
         for k in range(start, adj_ptr[f0 + 1]):
             g = adj_idx[k]
             if mark[g] == tag:
-                status, best_g = _try(g, i, xs, xm, conn, n_quads, params, work, memo, best,
-                                      best_g)
+                status, best_g = _try(g, i, xs, xm, conn, n_quads, params, work, memo, best, best_g)
                 mark[g] = tag + 1
                 if status:
                     return status, g
@@ -227,7 +244,6 @@ def _closest(i, xs, n, cand, lb, mark, tag, f0, adj_ptr, adj_idx, geo, u_max, xm
     return 0, best_g
 
 
-
 @numba.njit(cache=True)
 def _finish(i, g, best, xs, vs, xm, vm, conn, n_quads, out):
     """Row i of out (ns, 11): weights (4), xi (2), normal (3), gap [m], normal velocity u_N
@@ -235,7 +251,7 @@ def _finish(i, g, best, xs, vs, xm, vm, conn, n_quads, out):
     clamped to the facet, weights and gap recomputed there, the normal kept."""
     e, h = best[REC_XI], best[REC_XI + 1]
     w = out[i, 0:4]
-    w[:] = best[REC_W:REC_W + 4]
+    w[:] = best[REC_W : REC_W + 4]
     gap = best[REC_GAP]
     if best[REC_IN] == 0.0:
         if g < n_quads:
@@ -249,21 +265,47 @@ def _finish(i, g, best, xs, vs, xm, vm, conn, n_quads, out):
             e, h = w[1], w[2]
         gap = 0.0
         for k in range(3):
-            xc = ((w[0] * xm[conn[g, 0], k] + w[1] * xm[conn[g, 1], k]) + w[2] * xm[conn[g, 2], k])
+            xc = (w[0] * xm[conn[g, 0], k] + w[1] * xm[conn[g, 1], k]) + w[2] * xm[conn[g, 2], k]
             gap += best[REC_N + k] * (xs[k] - (xc + w[3] * xm[conn[g, 3], k]))
     un = 0.0
     for k in range(3):
-        vc = ((w[0] * vm[conn[g, 0], k] + w[1] * vm[conn[g, 1], k]) + w[2] * vm[conn[g, 2], k])
+        vc = (w[0] * vm[conn[g, 0], k] + w[1] * vm[conn[g, 1], k]) + w[2] * vm[conn[g, 2], k]
         un += best[REC_N + k] * (vs[k] - (vc + w[3] * vm[conn[g, 3], k]))
     out[i, 4], out[i, 5] = e, h
-    out[i, 6:9] = best[REC_N:REC_N + 3]
+    out[i, 6:9] = best[REC_N : REC_N + 3]
     out[i, 9], out[i, 10] = gap, un
 
 
 @numba.njit(cache=True)
-def _search_node(i, xs, xm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_quads, adj_ptr,
-                 adj_idx, params, lists, ref, prev, mark, counter, cand, lb, grid, work, memo,
-                 best, p):
+def _search_node(
+    i,
+    xs,
+    xm,
+    r_m,
+    A_m,
+    box,
+    reach,
+    rho,
+    u_max,
+    geo,
+    conn,
+    n_quads,
+    adj_ptr,
+    adj_idx,
+    params,
+    lists,
+    ref,
+    prev,
+    mark,
+    counter,
+    cand,
+    lb,
+    grid,
+    work,
+    memo,
+    best,
+    p,
+):
     """Closest facet of node i of xs, shared by scan_nodes and penetration_scan: the box test
     in the facet body's frame (r_m, A_m), the candidate superset, the closest projection.
     Returns (searched: False when outside the box or without candidates, status, facet).
@@ -275,7 +317,8 @@ def _search_node(i, xs, xm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_quads
     inside_box = True
     for j in range(3):
         p[j] = ((xs[i, 0] - r_m[0]) * A_m[0, j] + (xs[i, 1] - r_m[1]) * A_m[1, j]) + (
-            xs[i, 2] - r_m[2]) * A_m[2, j]
+            xs[i, 2] - r_m[2]
+        ) * A_m[2, j]
         inside_box = inside_box and box[0, j] - reach <= p[j] <= box[1, j] + reach
     if not inside_box:
         return False, 0, -1
@@ -284,10 +327,28 @@ def _search_node(i, xs, xm, r_m, A_m, box, reach, rho, u_max, geo, conn, n_quads
     n = _candidates(i, p, reach, rho, geo, lists, ref, mark, tag, cand, lb, grid)
     if n == 0:
         return False, 0, -1
-    status, g = _closest(i, xs[i], n, cand, lb, mark, tag, prev[i], adj_ptr, adj_idx, geo,
-                         u_max, xm, conn, n_quads, params, work, memo, best)
+    status, g = _closest(
+        i,
+        xs[i],
+        n,
+        cand,
+        lb,
+        mark,
+        tag,
+        prev[i],
+        adj_ptr,
+        adj_idx,
+        geo,
+        u_max,
+        xm,
+        conn,
+        n_quads,
+        params,
+        work,
+        memo,
+        best,
+    )
     return True, status, g
-
 
 
 @numba.njit(cache=True)
@@ -319,10 +380,35 @@ def scan_nodes(xs, vs, xm, vm, r_m, A_m, reach, u_max, surface, state, memo, fac
     n_pairs = 0
     for i in range(xs.shape[0]):
         facet[i] = -1
-        searched, status, g = _search_node(i, xs, xm, r_m, A_m, box, reach, rho, u_max, geo,
-                                           conn, n_quads, adj_ptr, adj_idx, params, lists, ref,
-                                           prev, mark, counter, cand, lb, grid, work, kept, best,
-                                           p)
+        searched, status, g = _search_node(
+            i,
+            xs,
+            xm,
+            r_m,
+            A_m,
+            box,
+            reach,
+            rho,
+            u_max,
+            geo,
+            conn,
+            n_quads,
+            adj_ptr,
+            adj_idx,
+            params,
+            lists,
+            ref,
+            prev,
+            mark,
+            counter,
+            cand,
+            lb,
+            grid,
+            work,
+            kept,
+            best,
+            p,
+        )
         if not searched:
             continue
         if status:
@@ -376,10 +462,35 @@ def penetration_scan(xs, xm, r_m, A_m, reach, u_max, surface, state, memo, edge_
                 return status, f0, 0.0, -1, -1
             if best[REC_IN] == 1.0 and best[REC_GAP] >= -depth:
                 continue
-        searched, status, g = _search_node(i, xs, xm, r_m, A_m, box, reach, rho, u_max, geo,
-                                           conn, n_quads, adj_ptr, adj_idx, params, lists, ref,
-                                           prev, mark, counter, cand, lb, grid, work, kept, best,
-                                           p)
+        searched, status, g = _search_node(
+            i,
+            xs,
+            xm,
+            r_m,
+            A_m,
+            box,
+            reach,
+            rho,
+            u_max,
+            geo,
+            conn,
+            n_quads,
+            adj_ptr,
+            adj_idx,
+            params,
+            lists,
+            ref,
+            prev,
+            mark,
+            counter,
+            cand,
+            lb,
+            grid,
+            work,
+            kept,
+            best,
+            p,
+        )
         if not searched:
             continue
         if status:

@@ -34,23 +34,23 @@ LIST_CAP = 256
 class FacetGrid(NamedTuple):
     """A uniform grid over the facet centroids (:func:`facet_grid`)."""
 
-    meta: np.ndarray     # (5,) origin xyz [m], cell edge [m], largest circumradius [m]
-    dims: np.ndarray     # (3,) int64 cells per axis
-    start: np.ndarray    # (n_cells + 1,) int64: cell c holds facets[start[c]:start[c + 1]]
-    facets: np.ndarray   # (nf,) int64 facet ids, by cell, increasing within a cell
+    meta: np.ndarray  # (5,) origin xyz [m], cell edge [m], largest circumradius [m]
+    dims: np.ndarray  # (3,) int64 cells per axis
+    start: np.ndarray  # (n_cells + 1,) int64: cell c holds facets[start[c]:start[c + 1]]
+    facets: np.ndarray  # (nf,) int64 facet ids, by cell, increasing within a cell
 
 
 class FacetSurface(NamedTuple):
     """The facets of one contact surface as the search reads them (fixed for a contact)."""
 
-    geo: np.ndarray      # (nf, 4) undeformed centroid [m] and circumradius [m], body frame
-    conn: np.ndarray     # (nf, 4) int64 local node ids (a triangle repeats its last node)
-    n_quads: int         # facets 0..n_quads-1 are bilinear quads, the rest triangles
+    geo: np.ndarray  # (nf, 4) undeformed centroid [m] and circumradius [m], body frame
+    conn: np.ndarray  # (nf, 4) int64 local node ids (a triangle repeats its last node)
+    n_quads: int  # facets 0..n_quads-1 are bilinear quads, the rest triangles
     adj_ptr: np.ndarray  # (nf + 1,) int64 facet adjacency (CSR, geometry.facet_adjacency)
     adj_idx: np.ndarray  # int64
-    box: np.ndarray      # (2, 3) lower / upper corner of the surface nodes, body frame [m]
-    rho: float           # extra radius of the cached candidate supersets [m]
-    params: np.ndarray   # (7,) projection tolerances (projection.projection_params)
+    box: np.ndarray  # (2, 3) lower / upper corner of the surface nodes, body frame [m]
+    rho: float  # extra radius of the cached candidate supersets [m]
+    params: np.ndarray  # (7,) projection tolerances (projection.projection_params)
     grid: FacetGrid
 
 
@@ -60,36 +60,43 @@ class SearchState(NamedTuple):
     and radius it was built for) and its last facet (prev, -1: none); work arrays mark,
     counter (1,), cand, lb."""
 
-    lists: np.ndarray    # (n, min(nf, cap) + 1) int64
-    ref: np.ndarray      # (n, 4) position [m] and radius [m]; radius < 0: none yet
-    prev: np.ndarray     # (n,) int64
-    mark: np.ndarray     # (nf,) int64
+    lists: np.ndarray  # (n, min(nf, cap) + 1) int64
+    ref: np.ndarray  # (n, 4) position [m] and radius [m]; radius < 0: none yet
+    prev: np.ndarray  # (n,) int64
+    mark: np.ndarray  # (nf,) int64
     counter: np.ndarray  # (1,) int64
-    cand: np.ndarray     # (nf,) int64
-    lb: np.ndarray       # (nf,) lower bounds of the candidates' distances [m]
+    cand: np.ndarray  # (nf,) int64
+    lb: np.ndarray  # (nf,) lower bounds of the candidates' distances [m]
 
     @classmethod
     def empty(cls, n: int, nf: int, cap: int = LIST_CAP) -> SearchState:
         """A state with no node searched yet."""
-        return cls(np.zeros((n, min(nf, cap) + 1), dtype=np.int64), np.full((n, 4), -1.0),
-                   np.full(n, -1, dtype=np.int64), np.zeros(nf, dtype=np.int64),
-                   np.zeros(1, dtype=np.int64), np.zeros(nf, dtype=np.int64), np.zeros(nf))
+        return cls(
+            np.zeros((n, min(nf, cap) + 1), dtype=np.int64),
+            np.full((n, 4), -1.0),
+            np.full(n, -1, dtype=np.int64),
+            np.zeros(nf, dtype=np.int64),
+            np.zeros(1, dtype=np.int64),
+            np.zeros(nf, dtype=np.int64),
+            np.zeros(nf),
+        )
 
 
 class MemoArrays(NamedTuple):
     """Projections kept at the positions of versions node_version[0], facet_version[0] of the
     two node sets (ContactNodes.version); see ProjectionMemo."""
 
-    facets: np.ndarray         # (n, k) int64 facet of each kept projection
-    count: np.ndarray          # (n,) int64 projections kept per node
-    records: np.ndarray        # (n, k, REC_LEN) the projections (projection.REC_*)
-    versions: np.ndarray       # (2,) int64 the versions they were made at
-    node_version: np.ndarray   # (1,) int64, the nodes' ContactNodes.version
+    facets: np.ndarray  # (n, k) int64 facet of each kept projection
+    count: np.ndarray  # (n,) int64 projections kept per node
+    records: np.ndarray  # (n, k, REC_LEN) the projections (projection.REC_*)
+    versions: np.ndarray  # (2,) int64 the versions they were made at
+    node_version: np.ndarray  # (1,) int64, the nodes' ContactNodes.version
     facet_version: np.ndarray  # (1,) int64, the facet nodes' ContactNodes.version
 
 
-def facet_surface(X: np.ndarray, surface: MasterSurface, conn: np.ndarray, broad: BroadPhase,
-                  search_radius: float) -> FacetSurface:
+def facet_surface(
+    X: np.ndarray, surface: MasterSurface, conn: np.ndarray, broad: BroadPhase, search_radius: float
+) -> FacetSurface:
     """The search's view of `surface` of a body with nodes X (n, 3) [m]: conn (nf, 4) its
     connectivity in local node ids, broad its broad phase (centroids, circumradii), and the
     supersets' extra radius rho = max(search_radius, half the median circumradius) [m]."""
@@ -97,9 +104,16 @@ def facet_surface(X: np.ndarray, surface: MasterSurface, conn: np.ndarray, broad
     box = np.vstack([Xs.min(axis=0), Xs.max(axis=0)]).astype(np.float64)
     geo = np.column_stack([broad.centroids, broad.circumradius])
     rho = max(search_radius, 0.5 * float(np.median(broad.circumradius)))
-    return FacetSurface(geo, np.asarray(conn, dtype=np.int64), surface.n_quads,
-                        *facet_adjacency(surface.connectivity), box, rho, projection_params(),
-                        facet_grid(geo))
+    return FacetSurface(
+        geo,
+        np.asarray(conn, dtype=np.int64),
+        surface.n_quads,
+        *facet_adjacency(surface.connectivity),
+        box,
+        rho,
+        projection_params(),
+        facet_grid(geo),
+    )
 
 
 def facet_grid(geo: np.ndarray) -> FacetGrid:
@@ -111,8 +125,12 @@ def facet_grid(geo: np.ndarray) -> FacetGrid:
     geo = np.asarray(geo, dtype=np.float64)
     nf = len(geo)
     if nf == 0:
-        return FacetGrid(np.array([0.0, 0.0, 0.0, 1.0, 0.0]), np.ones(3, dtype=np.int64),
-                         np.zeros(2, dtype=np.int64), np.zeros(0, dtype=np.int64))
+        return FacetGrid(
+            np.array([0.0, 0.0, 0.0, 1.0, 0.0]),
+            np.ones(3, dtype=np.int64),
+            np.zeros(2, dtype=np.int64),
+            np.zeros(0, dtype=np.int64),
+        )
     c, r = geo[:, :3], geo[:, 3]
     lo, hi = c.min(axis=0), c.max(axis=0)
     span = np.maximum(hi - lo, 0.0)
@@ -140,19 +158,35 @@ class ProjectionMemo:
     (search._try). Scans of all of these nodes against these facets with these params may
     share one memo (serves); k = 0 keeps none."""
 
-    def __init__(self, nodes: ContactNodes, facets: ContactNodes, conn: np.ndarray,
-                 params: np.ndarray, k: int = 8):
+    def __init__(
+        self,
+        nodes: ContactNodes,
+        facets: ContactNodes,
+        conn: np.ndarray,
+        params: np.ndarray,
+        k: int = 8,
+    ):
         n = len(nodes.nodes)
         self.nodes, self.facets = nodes, facets
         self.conn, self.params = np.array(conn, dtype=np.int64), np.array(params, dtype=np.float64)
-        self.arrays = MemoArrays(np.zeros((n, k), dtype=np.int64), np.zeros(n, dtype=np.int64),
-                                 np.zeros((n, k, REC_LEN)), np.full(2, -1, dtype=np.int64),
-                                 nodes.version, facets.version)
+        self.arrays = MemoArrays(
+            np.zeros((n, k), dtype=np.int64),
+            np.zeros(n, dtype=np.int64),
+            np.zeros((n, k, REC_LEN)),
+            np.full(2, -1, dtype=np.int64),
+            nodes.version,
+            facets.version,
+        )
 
-    def serves(self, nodes: ContactNodes, facets: ContactNodes, conn: np.ndarray,
-               params: np.ndarray) -> bool:
+    def serves(
+        self, nodes: ContactNodes, facets: ContactNodes, conn: np.ndarray, params: np.ndarray
+    ) -> bool:
         """Whether a scan of all nodes of `nodes` against the facets conn over `facets` with
         these params may use this memo."""
-        return (nodes is self.nodes and facets is self.facets
-                and self.arrays.facets.shape[1] > 0
-                and np.array_equal(conn, self.conn) and np.array_equal(params, self.params))
+        return (
+            nodes is self.nodes
+            and facets is self.facets
+            and self.arrays.facets.shape[1] > 0
+            and np.array_equal(conn, self.conn)
+            and np.array_equal(params, self.params)
+        )

@@ -38,13 +38,37 @@ from flexmvm.errors import MeshError
 from flexmvm.materials import Material
 from flexmvm.mesh.mesh import CellBlock, CellType, Mesh
 
-_HEX_CORNERS = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [0, 1, 0],
-                [0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]]
-_HEX27_REST = [[.5, 0, 0], [1, .5, 0], [.5, 1, 0], [0, .5, 0],
-               [.5, 0, 1], [1, .5, 1], [.5, 1, 1], [0, .5, 1],
-               [0, 0, .5], [1, 0, .5], [1, 1, .5], [0, 1, .5],
-               [0, .5, .5], [1, .5, .5], [.5, 0, .5], [.5, 1, .5],
-               [.5, .5, 0], [.5, .5, 1], [.5, .5, .5]]
+_HEX_CORNERS = [
+    [0, 0, 0],
+    [1, 0, 0],
+    [1, 1, 0],
+    [0, 1, 0],
+    [0, 0, 1],
+    [1, 0, 1],
+    [1, 1, 1],
+    [0, 1, 1],
+]
+_HEX27_REST = [
+    [0.5, 0, 0],
+    [1, 0.5, 0],
+    [0.5, 1, 0],
+    [0, 0.5, 0],
+    [0.5, 0, 1],
+    [1, 0.5, 1],
+    [0.5, 1, 1],
+    [0, 0.5, 1],
+    [0, 0, 0.5],
+    [1, 0, 0.5],
+    [1, 1, 0.5],
+    [0, 1, 0.5],
+    [0, 0.5, 0.5],
+    [1, 0.5, 0.5],
+    [0.5, 0, 0.5],
+    [0.5, 1, 0.5],
+    [0.5, 0.5, 0],
+    [0.5, 0.5, 1],
+    [0.5, 0.5, 0.5],
+]
 _TET_CORNERS = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]
 
 #: Reference coordinates of the meshio/VTK local nodes of each cell type (VTK cell
@@ -52,12 +76,15 @@ _TET_CORNERS = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]
 _VTK_REF: dict[CellType, np.ndarray] = {
     CellType.HEX8: np.array(_HEX_CORNERS, dtype=float),
     CellType.HEX27: np.array(_HEX_CORNERS + _HEX27_REST, dtype=float),
-    CellType.WEDGE6: np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0],
-                               [0, 0, 1], [1, 0, 1], [0, 1, 1]], dtype=float),
+    CellType.WEDGE6: np.array(
+        [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [0, 1, 1]], dtype=float
+    ),
     CellType.TET4: np.array(_TET_CORNERS, dtype=float),
-    CellType.TET10: np.array(_TET_CORNERS + [[.5, 0, 0], [.5, .5, 0], [0, .5, 0],
-                                             [0, 0, .5], [.5, 0, .5], [0, .5, .5]],
-                             dtype=float),
+    CellType.TET10: np.array(
+        _TET_CORNERS
+        + [[0.5, 0, 0], [0.5, 0.5, 0], [0, 0.5, 0], [0, 0, 0.5], [0.5, 0, 0.5], [0, 0.5, 0.5]],
+        dtype=float,
+    ),
 }
 
 
@@ -137,9 +164,11 @@ def local_permutation(cell_type: CellType) -> np.ndarray:
     vtk = _VTK_REF[cell_type]
     dist = np.abs(skl[:, None, :] - vtk[None, :, :]).sum(axis=2)
     perm = np.argmin(dist, axis=1)
-    if skl.shape != vtk.shape or not np.all(dist[np.arange(len(perm)), perm] == 0) or len(
-        np.unique(perm)
-    ) != len(perm):
+    if (
+        skl.shape != vtk.shape
+        or not np.all(dist[np.arange(len(perm)), perm] == 0)
+        or len(np.unique(perm)) != len(perm)
+    ):
         raise MeshError(f"cannot map scikit-fem {type(elem).__name__} DOFs to {cell_type.value}")
     return perm
 
@@ -153,7 +182,7 @@ def _block_basis(nodes: np.ndarray, block: CellBlock) -> tuple[skfem.CellBasis, 
     perm = local_permutation(block.cell_type)
     elem = kind.element()
     n_vert = elem.refdom.nnodes
-    local_nodes = block.connectivity[:, perm]                 # (ne, nloc) our ids, skfem order
+    local_nodes = block.connectivity[:, perm]  # (ne, nloc) our ids, skfem order
     corner_ids, t = np.unique(local_nodes[:, :n_vert], return_inverse=True)
     t = np.ascontiguousarray(t.reshape(-1, n_vert).T.astype(np.int32))
     lin = kind.linear_mesh(np.ascontiguousarray(nodes[corner_ids].T), t)
@@ -182,13 +211,14 @@ def _hrz_diagonal(basis: skfem.CellBasis, rho: float) -> np.ndarray:
     m_ea = (int_e rho N_a^2) * m_e / sum_b int_e rho N_b^2,  m_e = int_e rho: all > 0 and
     each cell keeps its mass.
     """
-    dx = basis.dx                                             # (ne, nqp)
+    dx = basis.dx  # (ne, nqp)
     diag = np.stack([np.sum(np.asarray(b[0]) ** 2 * dx, axis=1) for b in basis.basis])
     return diag * (rho * dx.sum(axis=1) / diag.sum(axis=0))
 
 
-def _shape_arrays(basis: skfem.CellBasis, cells: slice
-                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _shape_arrays(
+    basis: skfem.CellBasis, cells: slice
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Shape functions at the quadrature points of the cells ``cells``, from scikit-fem.
 
     Returns N (ne, nloc, nqp), grad N (ne, nloc, 3, nqp) [1/m] and dx = |det J| w (ne, nqp)
@@ -228,8 +258,9 @@ def _scatter(blocks: np.ndarray, ids: np.ndarray, n: int) -> sp.csr_matrix:
     return sp.csr_matrix((blocks.ravel(), (rows, cols)), shape=(n, n))
 
 
-def _assemble_block(nodes: np.ndarray, block: CellBlock, material: Material, lumped: bool
-                    ) -> tuple[sp.csr_matrix, sp.csr_matrix, float]:
+def _assemble_block(
+    nodes: np.ndarray, block: CellBlock, material: Material, lumped: bool
+) -> tuple[sp.csr_matrix, sp.csr_matrix, float]:
     """Scalar mass (n x n), stiffness (3n x 3n) and volume of one cell block.
 
     Cells are processed in chunks of _CHUNK so element matrices never fill memory.
@@ -237,7 +268,7 @@ def _assemble_block(nodes: np.ndarray, block: CellBlock, material: Material, lum
     n = len(nodes)
     lam, mu = material.lame
     basis, dof_to_node = _block_basis(nodes, block)
-    cell_nodes = dof_to_node[basis.element_dofs.T]             # (ne, nloc) our node ids
+    cell_nodes = dof_to_node[basis.element_dofs.T]  # (ne, nloc) our node ids
     m_sum, k_sum, volume = sp.csr_matrix((n, n)), sp.csr_matrix((3 * n, 3 * n)), 0.0
     if lumped:
         vals = _hrz_diagonal(basis, material.rho)
@@ -275,8 +306,16 @@ def assemble(mesh: Mesh, material: Material, lumped: bool = False) -> FEModel:
     m_scalar = sp.csr_matrix(0.5 * (m_scalar + m_scalar.T))
     stiffness = sp.csr_matrix(0.5 * (stiffness + stiffness.T))
     m_full = sp.csr_matrix(sp.kron(m_scalar, sp.identity(3, format="csr"), format="csr"))
-    return FEModel(mesh=mesh, material=material, M=m_full, K=stiffness, M_scalar=m_scalar,
-                   mass=float(m_scalar.sum()), volume=volume, lumped=lumped)
+    return FEModel(
+        mesh=mesh,
+        material=material,
+        M=m_full,
+        K=stiffness,
+        M_scalar=m_scalar,
+        mass=float(m_scalar.sum()),
+        volume=volume,
+        lumped=lumped,
+    )
 
 
 __all__ = ["FEModel", "assemble", "local_permutation"]

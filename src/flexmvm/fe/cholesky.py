@@ -6,5 +6,13 @@ from flexmvm.fe.solvers.cholesky import cholesky_ldl, ldl_factor, numeric_factor
 from flexmvm.fe.solvers.ordering import mmd_order
 from flexmvm.fe.solvers.symbolic import RELAX_WIDTH, RELAX_ZEROS, SymbolicFactor
 
-__all__ = ["RELAX_WIDTH", "RELAX_ZEROS", "SymbolicFactor", "cholesky_ldl", "ldl_factor",
-           "mmd_order", "numeric_factor", "warm_kernels"]
+__all__ = [
+    "RELAX_WIDTH",
+    "RELAX_ZEROS",
+    "SymbolicFactor",
+    "cholesky_ldl",
+    "ldl_factor",
+    "mmd_order",
+    "numeric_factor",
+    "warm_kernels",
+]

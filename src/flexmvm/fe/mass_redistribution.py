@@ -33,8 +33,7 @@ def moments(M_scalar: sp.spmatrix, X: np.ndarray) -> np.ndarray:
     M = sp.csr_matrix(M_scalar)
     m1, MX = np.asarray(M.sum(axis=1)).ravel(), M @ X
     J = X.T @ MX
-    return np.array([m1.sum(), *(X.T @ m1), J[0, 0], J[1, 1], J[2, 2], J[0, 1], J[0, 2],
-                     J[1, 2]])
+    return np.array([m1.sum(), *(X.T @ m1), J[0, 0], J[1, 1], J[2, 2], J[0, 1], J[0, 2], J[1, 2]])
 
 
 def _moment_rows(X: np.ndarray) -> np.ndarray:
@@ -54,8 +53,10 @@ def redistribute_mass(M_scalar: sp.spmatrix, X: np.ndarray, nodes) -> sp.csr_mat
     if B.size == 0:
         return M
     if B[0] < 0 or B[-1] >= n:
-        raise InputError(f"mass redistribution: node {int(B[-1] if B[-1] >= n else B[0])} is "
-                         f"outside the mesh (0..{n - 1})")
+        raise InputError(
+            f"mass redistribution: node {int(B[-1] if B[-1] >= n else B[0])} is "
+            f"outside the mesh (0..{n - 1})"
+        )
     on_b = np.zeros(n, bool)
     on_b[B] = True
     keep = sp.diags((~on_b).astype(float))
@@ -67,13 +68,15 @@ def redistribute_mass(M_scalar: sp.spmatrix, X: np.ndarray, nodes) -> sp.csr_mat
     nb = np.unique(coupling.indices)
     nb = nb[~on_b[nb]]
     if nb.size < 10:
-        raise InputError(f"mass redistribution: the {B.size} contact nodes have {nb.size} "
-                         "neighbours off the contact surface; at least 10 are needed to keep "
-                         "the mass and its moments")
+        raise InputError(
+            f"mass redistribution: the {B.size} contact nodes have {nb.size} "
+            "neighbours off the contact surface; at least 10 are needed to keep "
+            "the mass and its moments"
+        )
     # each neighbour takes its coupling to the boundary, plus the boundary rows' own sums
     # spread over their neighbours by |M_ij|
-    rows_b = np.asarray(removed[B].sum(axis=1)).ravel()           # (|B|,) boundary row sums
-    C = coupling[:, nb]                                            # (|B|, |nb|)
+    rows_b = np.asarray(removed[B].sum(axis=1)).ravel()  # (|B|,) boundary row sums
+    C = coupling[:, nb]  # (|B|, |nb|)
     share = sp.diags(1.0 / np.maximum(np.asarray(C.sum(axis=1)).ravel(), 1e-300)) @ C
     d = np.zeros(n)
     d[nb] = np.asarray(removed[nb][:, B].sum(axis=1)).ravel() + share.T @ rows_b
@@ -88,12 +91,14 @@ def redistribute_mass(M_scalar: sp.spmatrix, X: np.ndarray, nodes) -> sp.csr_mat
     worst = float(np.abs(change / lumped).max())
     if worst > MAX_RELATIVE_CHANGE:
         share = float(target[0] / max(lumped.sum() + target[0], 1e-300))
-        raise InputError(f"mass redistribution: keeping the moments needs a change of "
-                         f"{worst:.2g} of a node's mass (at most {MAX_RELATIVE_CHANGE:g}): the "
-                         f"{B.size} contact nodes carry {100 * share:.2g} % of the body's mass; "
-                         "expected a contact surface the size of the contact (a patch about "
-                         "the expected contact point, e.g. a gmsh physical group) or "
-                         "redistribute_mass = false")
+        raise InputError(
+            f"mass redistribution: keeping the moments needs a change of "
+            f"{worst:.2g} of a node's mass (at most {MAX_RELATIVE_CHANGE:g}): the "
+            f"{B.size} contact nodes carry {100 * share:.2g} % of the body's mass; "
+            "expected a contact surface the size of the contact (a patch about "
+            "the expected contact point, e.g. a gmsh physical group) or "
+            "redistribute_mass = false"
+        )
     d[free] += change
     out = M_kept + sp.diags(d)
     return sp.csr_matrix(out)

@@ -46,9 +46,14 @@ V0_SEED = 20140101
 DENSE_MAX_DOF = 5000
 
 
-def shift_invert_modes(M: sp.spmatrix, K: sp.spmatrix, n_modes: int, sigma: float,
-                       solve: Solve | None = None, tol: float = 0.0
-                       ) -> tuple[np.ndarray, np.ndarray]:
+def shift_invert_modes(
+    M: sp.spmatrix,
+    K: sp.spmatrix,
+    n_modes: int,
+    sigma: float,
+    solve: Solve | None = None,
+    tol: float = 0.0,
+) -> tuple[np.ndarray, np.ndarray]:
     """Lowest ``n_modes`` eigenpairs of K phi = lambda M phi nearest ``sigma`` (shift-invert).
 
     M, K: (m, m) sparse symmetric, M positive definite, K positive semi-definite.
@@ -65,32 +70,44 @@ def shift_invert_modes(M: sp.spmatrix, K: sp.spmatrix, n_modes: int, sigma: floa
         raise InputError(f"number of modes must be in 1..{m} for {m} free DOFs, got {n_modes}")
     if n_modes == m:
         if m > DENSE_MAX_DOF:
-            raise InputError(f"all {m} modes need a dense eigensolve, limited to "
-                             f"{DENSE_MAX_DOF} DOFs; ask for at most {m - 1} modes")
-        lam, phi = sla.eigh(sp.csr_matrix(K).toarray(), sp.csr_matrix(M).toarray())  # phi^T M phi = I
+            raise InputError(
+                f"all {m} modes need a dense eigensolve, limited to "
+                f"{DENSE_MAX_DOF} DOFs; ask for at most {m - 1} modes"
+            )
+        lam, phi = sla.eigh(
+            sp.csr_matrix(K).toarray(), sp.csr_matrix(M).toarray()
+        )  # phi^T M phi = I
         return _check_eigenvalues(lam, sigma), phi
     if solve is not None:
         return _arpack(M, K, n_modes, sigma, solve, tol)
-    if sigma > 0.0:    # K - sigma M indefinite: SuperLU with pivoting
-        return _arpack(M, K, n_modes, sigma, factor(sp.csc_matrix(K - sigma * M), spd=False),
-                       tol)
+    if sigma > 0.0:  # K - sigma M indefinite: SuperLU with pivoting
+        return _arpack(M, K, n_modes, sigma, factor(sp.csc_matrix(K - sigma * M), spd=False), tol)
     with solver_pool() as pool:
-        return _arpack(M, K, n_modes, sigma, spd_solver(sp.csc_matrix(K - sigma * M), pool),
-                       tol)
+        return _arpack(M, K, n_modes, sigma, spd_solver(sp.csc_matrix(K - sigma * M), pool), tol)
 
 
-def _arpack(M, K, n_modes: int, sigma: float, solve: Solve, tol: float
-            ) -> tuple[np.ndarray, np.ndarray]:
+def _arpack(
+    M, K, n_modes: int, sigma: float, solve: Solve, tol: float
+) -> tuple[np.ndarray, np.ndarray]:
     """shift_invert_modes by ARPACK's implicitly restarted Lanczos (eigsh) with OPinv = solve."""
     m = M.shape[0]
     op_inv = spla.LinearOperator((m, m), matvec=solve, dtype=np.float64)
     v0 = np.random.default_rng(V0_SEED).standard_normal(m)
     try:
-        lam, phi = spla.eigsh(sp.csr_matrix(K), k=n_modes, M=sp.csr_matrix(M), sigma=sigma,
-                              which="LM", OPinv=op_inv, tol=tol, v0=v0)
+        lam, phi = spla.eigsh(
+            sp.csr_matrix(K),
+            k=n_modes,
+            M=sp.csr_matrix(M),
+            sigma=sigma,
+            which="LM",
+            OPinv=op_inv,
+            tol=tol,
+            v0=v0,
+        )
     except (spla.ArpackNoConvergence, spla.ArpackError) as exc:
-        raise SolverError(f"eigsh did not converge for {n_modes} modes (sigma={sigma:g}): {exc}"
-                          ) from None
+        raise SolverError(
+            f"eigsh did not converge for {n_modes} modes (sigma={sigma:g}): {exc}"
+        ) from None
     order = np.argsort(lam)
     lam, phi = lam[order], phi[:, order]
     lam = _check_eigenvalues(lam, sigma)
@@ -116,8 +133,9 @@ def to_hz(lam: np.ndarray) -> np.ndarray:
     return np.sqrt(lam) / (2.0 * np.pi)
 
 
-def free_modes(fe: FEModel, n_modes: int, sigma: float | None = None, tol: float = 0.0
-               ) -> tuple[np.ndarray, np.ndarray]:
+def free_modes(
+    fe: FEModel, n_modes: int, sigma: float | None = None, tol: float = 0.0
+) -> tuple[np.ndarray, np.ndarray]:
     """First ``n_modes`` free-free modes of ``fe`` (the six rigid-body modes first).
 
     sigma: shift [rad^2/s^2], negative so K - sigma M is positive definite; default
@@ -133,8 +151,9 @@ def free_modes(fe: FEModel, n_modes: int, sigma: float | None = None, tol: float
     return to_hz(lam), phi
 
 
-def constrained_modes(M: sp.spmatrix, K: sp.spmatrix, fixed_dofs: np.ndarray, n_modes: int,
-                      tol: float = 0.0) -> tuple[np.ndarray, np.ndarray]:
+def constrained_modes(
+    M: sp.spmatrix, K: sp.spmatrix, fixed_dofs: np.ndarray, n_modes: int, tol: float = 0.0
+) -> tuple[np.ndarray, np.ndarray]:
     """First ``n_modes`` modes with ``fixed_dofs`` clamped (shift-invert about sigma = 0).
 
     M, K: (N, N) sparse; fixed_dofs: int DOF ids (must remove all rigid-body motion).

@@ -35,9 +35,9 @@ MAX_CACHED = 10
 
 @dataclass
 class _Factor:
-    solve: object          # callable: (nq,) or (nq, k) -> same
-    Zr: np.ndarray         # W_qq^-1 S1^T (nq, 3)
-    Zw: np.ndarray         # W_qq^-1 M_wq(0)^T (nq, 3)
+    solve: object  # callable: (nq,) or (nq, k) -> same
+    Zr: np.ndarray  # W_qq^-1 S1^T (nq, 3)
+    Zw: np.ndarray  # W_qq^-1 M_wq(0)^T (nq, 3)
     S1Zr: np.ndarray
     S1Zw: np.ndarray
     MwZr: np.ndarray
@@ -47,13 +47,18 @@ class _Factor:
 class BodySolver:
     """Solves W x = b for one body; factorizations cached per step size."""
 
-    def __init__(self, body: FlexibleBody, theta: float | Callable[[float], float] = 0.5,
-                 max_cached: int = MAX_CACHED, pool=None):
+    def __init__(
+        self,
+        body: FlexibleBody,
+        theta: float | Callable[[float], float] = 0.5,
+        max_cached: int = MAX_CACHED,
+        pool=None,
+    ):
         self.body = body
         # a thread pool for the back-substitutions of a sparse W (fe.ldl: two etree halves
         # on two threads); None: on the calling thread
         self.pool = pool
-        self._symbolic: SymbolicFactor | None = None   # of W's pattern, made by the first _factor
+        self._symbolic: SymbolicFactor | None = None  # of W's pattern, made by the first _factor
         # theta of the step size h: a fixed one, or a function of h (integrate.theta); W is
         # factored once per h either way
         self.theta = theta
@@ -64,15 +69,15 @@ class BodySolver:
         self._Mw0 = body.inertia_terms(np.zeros(body.nq))[2] if body.nq else np.zeros((3, 0))
         self._schur = None
         self._A = np.eye(3)
-        self._dMw = None       # M_wq(q) - the M_wq in W, when refresh_coupling kept the old one
-        self._pending = None   # (h, M_wq) of a deferred refresh (refresh_coupling)
+        self._dMw = None  # M_wq(q) - the M_wq in W, when refresh_coupling kept the old one
+        self._pending = None  # (h, M_wq) of a deferred refresh (refresh_coupling)
         self._frame_args = None
         self.n_coupling_updates = 0
 
     def _factor(self, h: float) -> _Factor:
         f = self._cache.get(h)
         if f is not None:
-            if self._order[-1] != h:          # least recently used goes first
+            if self._order[-1] != h:  # least recently used goes first
                 self._order.remove(h)
                 self._order.append(h)
             return f
@@ -83,23 +88,29 @@ class BodySolver:
             W = W + (th * h) * b.c_hat
         data = W.data if sp.issparse(W) else np.asarray(W)
         if not np.isfinite(data).all():
-            raise SolverError(f"body {b.name!r}: iteration matrix M + h^2/4 K holds a non-finite "
-                              f"number (NaN/inf) at step size h = {h:.3g} s")
+            raise SolverError(
+                f"body {b.name!r}: iteration matrix M + h^2/4 K holds a non-finite "
+                f"number (NaN/inf) at step size h = {h:.3g} s"
+            )
         if sp.issparse(W):
             if self._symbolic is None:
                 # an order whose elimination tree has two halves, solved on two threads with
                 # a pool, in the same arithmetic without one (fe.ordering; one pattern for
                 # every h: one order and one symbolic analysis, the order made with the
                 # body when it was built by a scenario)
-                order = (b.elimination_order if b.elimination_order is not None
-                         else elimination_order(W))
-                self._symbolic = SymbolicFactor(W, order if order is not None and order.size
-                                                else None)
+                order = (
+                    b.elimination_order if b.elimination_order is not None else elimination_order(W)
+                )
+                self._symbolic = SymbolicFactor(
+                    W, order if order is not None and order.size else None
+                )
             try:
                 # W is SPD: supernodal L D L^T (fe.cholesky), GIL released
                 solve = cholesky_ldl(W, self.pool, self._symbolic).solve
             except SolverError as exc:
-                raise SolverError(f"body {b.name!r}: iteration matrix is singular ({exc})") from None
+                raise SolverError(
+                    f"body {b.name!r}: iteration matrix is singular ({exc})"
+                ) from None
         else:
             try:
                 cho = sla.cho_factor(np.asarray(W))
@@ -119,8 +130,7 @@ class BodySolver:
             self._cache.pop(self._order.pop(0), None)
         return f
 
-    def refresh_coupling(self, h: float, M_wq: np.ndarray, tol: float, defer: bool = False
-                         ) -> None:
+    def refresh_coupling(self, h: float, M_wq: np.ndarray, tol: float, defer: bool = False) -> None:
         """Use M_wq (3, nq) at the current configuration in W if it moved by more than tol
         (relative Frobenius norm) from the one in use: 3 back-substitutions. Bodies with small
         torsional inertia (thin rods) need it: their frame Schur complement is sensitive to
@@ -169,19 +179,23 @@ class BodySolver:
         """Set the step size and the frame block for the coming solves."""
         self._A = A
         if not (np.isfinite(A).all() and np.isfinite(Mff).all()):
-            raise SolverError(f"body {self.body.name!r}: non-finite number (NaN/inf) in the "
-                              "frame mass matrix or rotation; the state diverged")
+            raise SolverError(
+                f"body {self.body.name!r}: non-finite number (NaN/inf) in the "
+                "frame mass matrix or rotation; the state diverged"
+            )
         if not self.body.nq:
             self._f = None
             try:
                 self._schur = sla.cho_factor(Mff)
             except np.linalg.LinAlgError:
-                raise SolverError(f"body {self.body.name!r}: rigid-body mass matrix is singular "
-                                  "(zero mass or zero inertia about an axis)") from None
+                raise SolverError(
+                    f"body {self.body.name!r}: rigid-body mass matrix is singular "
+                    "(zero mass or zero inertia about an axis)"
+                ) from None
             return
         f = self._factor(h)
         self._f = f
-        if self._pending is not None:     # the frame block waits for the deferred columns
+        if self._pending is not None:  # the frame block waits for the deferred columns
             self._frame_args = (h, A, Mff)
             return
         # M_fq~ Z with Z = [Zr A^T, Zw]:
@@ -207,14 +221,16 @@ class BodySolver:
         try:
             self._schur = sla.lu_factor(S)
         except (np.linalg.LinAlgError, ValueError):
-            raise SolverError(f"body {self.body.name!r}: frame Schur complement is singular") from None
+            raise SolverError(
+                f"body {self.body.name!r}: frame Schur complement is singular"
+            ) from None
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         """x = W^-1 b for b of shape (nv,) or (nv, k)."""
         if self._f is None:
             return cho_solve(self._schur, b)
         f = self._f
-        y = self._flush(b[6:])    # a deferred refresh: [b_q, M_wq^T] in one back-substitution
+        y = self._flush(b[6:])  # a deferred refresh: [b_q, M_wq^T] in one back-substitution
         if y is not None:
             return self._bordered(b[:6], y[:, 0] if b.ndim == 1 else y)
         y = np.asarray(f.solve(b[6:]))
@@ -265,8 +281,10 @@ class BodySolver:
         integrate.nonrotating)."""
         self._A = A
         if not np.isfinite(A).all():
-            raise SolverError(f"body {self.body.name!r}: non-finite number (NaN/inf) in the "
-                              "frame rotation; the state diverged")
+            raise SolverError(
+                f"body {self.body.name!r}: non-finite number (NaN/inf) in the "
+                "frame rotation; the state diverged"
+            )
         m = self.body.inv.mass
         if not self.body.nq:
             self._f = None
@@ -278,8 +296,9 @@ class BodySolver:
         try:
             self._schur_t = sla.cho_factor(0.5 * (St + St.T))
         except np.linalg.LinAlgError:
-            raise SolverError(f"body {self.body.name!r}: translational Schur complement is not "
-                              "positive definite") from None
+            raise SolverError(
+                f"body {self.body.name!r}: translational Schur complement is not positive definite"
+            ) from None
 
     def solve_translation(self, b: np.ndarray, yq: np.ndarray | None = None) -> np.ndarray:
         """x = W_t^-1 b for b of shape (3 + nq,) or (3 + nq, k); yq = W_qq^-1 b[3:] when
@@ -302,8 +321,7 @@ class BodySolver:
         """The nodal column cache of factor f (made on first use)."""
         cache = getattr(f, "nodal", None)
         if cache is None:
-            cache = f.nodal = NodalColumns(self.body.psi, self.body.inv.S1, f.Zr, f.Zw,
-                                           self._mw(f))
+            cache = f.nodal = NodalColumns(self.body.psi, self.body.inv.S1, f.Zr, f.Zw, self._mw(f))
         return cache
 
     def nodal_inverse(self, h: float, selector: sp.csr_matrix) -> np.ndarray:
@@ -320,20 +338,24 @@ class BodySolver:
         slots, Nd = cache.touch(selector, f.solve)
         return cache.cols[slots].T @ Nd.T
 
-    def contact_compliance(self, h: float, bf: np.ndarray, selector: sp.csr_matrix
-                           ) -> NodalCompliance:
+    def contact_compliance(
+        self, h: float, bf: np.ndarray, selector: sp.csr_matrix
+    ) -> NodalCompliance:
         """D = Phi W^-1 Phi^T (m, m) and the velocity correction W^-1 Phi^T lambda of the
         rows Phi = [bf (m, 6), N psi] (N = selector (m, 3 n_nodes)) from the cached nodal
         columns (integrate.compliance), with the frame block of the last prepare()."""
         self._flush()
         f = self._factor(h)
-        return nodal_compliance(self._nodal(f), f.solve, bf, selector,
-                                (self._A, self._schur, f.Zr, f.Zw, self._mw(f)))
+        return nodal_compliance(
+            self._nodal(f), f.solve, bf, selector, (self._A, self._schur, f.Zr, f.Zw, self._mw(f))
+        )
 
-    def translation_compliance(self, h: float, bf: np.ndarray, selector: sp.csr_matrix
-                               ) -> NodalCompliance:
+    def translation_compliance(
+        self, h: float, bf: np.ndarray, selector: sp.csr_matrix
+    ) -> NodalCompliance:
         """As contact_compliance for W_t (prepare_translation): D (m, m) and the velocity
         correction (3 + nq,) = [dr_dot, dq_dot] of the rows [bf[:, :3], N psi]."""
         f = self._factor(h)
-        return nodal_compliance(self._nodal(f), f.solve, bf, selector,
-                                (self._A, self._schur_t, f.Zr, None, None))
+        return nodal_compliance(
+            self._nodal(f), f.solve, bf, selector, (self._A, self._schur_t, f.Zr, None, None)
+        )

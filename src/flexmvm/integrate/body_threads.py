@@ -25,16 +25,21 @@ class BodyThreads:
 
     def __init__(self, bodies):
         sparse = {b for b, body in enumerate(bodies) if body.nq and body.is_sparse}
-        self.sparse = frozenset(sparse)     # the full-FE bodies
+        self.sparse = frozenset(sparse)  # the full-FE bodies
         halves = any(body.contracts_in_halves for body in bodies)
         n = worker_threads()
         wanted = bool(sparse) or halves
-        self.executor = (ThreadPoolExecutor(max_workers=n, thread_name_prefix="flexmvm-body")
-                         if n >= 2 and wanted else None)
+        self.executor = (
+            ThreadPoolExecutor(max_workers=n, thread_name_prefix="flexmvm-body")
+            if n >= 2 and wanted
+            else None
+        )
         several = len(sparse) >= 2
         self.threaded: set[int] = sparse if (several and self.executor) else set()
-        self.solve_pool = [self.executor if (len(sparse) == 1 and b in sparse) else None
-                           for b in range(len(bodies))]
+        self.solve_pool = [
+            self.executor if (len(sparse) == 1 and b in sparse) else None
+            for b in range(len(bodies))
+        ]
         self.contraction_pool = self.executor if (not several and halves) else None
 
     def each(self, fn: Callable, bodies: Iterable[int]) -> dict:

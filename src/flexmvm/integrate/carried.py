@@ -36,9 +36,9 @@ class CarriedContractions:
     v: np.ndarray
     Lq: np.ndarray
     Lqd: np.ndarray
-    Kq: np.ndarray     # k_hat q and k_hat q_dot: the elastic force is linear too
+    Kq: np.ndarray  # k_hat q and k_hat q_dot: the elastic force is linear too
     Kqd: np.ndarray
-    Mqd: np.ndarray    # M_qq q_dot (M_qq v_m = M_qq q_dot + theta M_qq dq_dot)
+    Mqd: np.ndarray  # M_qq q_dot (M_qq v_m = M_qq q_dot + theta M_qq dq_dot)
     age: int = 0
 
 
@@ -72,10 +72,15 @@ class CarriedState:
         if c is None or c.q is not st.q or c.v is not st.v or c.age >= RESYNC_STEPS:
             body, pool = self.bodies[b], self.pool
             qd = st.v[6:]
-            c = CarriedContractions(st.q, st.v, body.carried_contractions(st.q, pool),
-                                    body.carried_contractions(qd, pool),
-                                    flat_product(body.k_hat, st.q), flat_product(body.k_hat, qd),
-                                    flat_product(body.inv.M_qq, qd))
+            c = CarriedContractions(
+                st.q,
+                st.v,
+                body.carried_contractions(st.q, pool),
+                body.carried_contractions(qd, pool),
+                flat_product(body.k_hat, st.q),
+                flat_product(body.k_hat, qd),
+                flat_product(body.inv.M_qq, qd),
+            )
             self._carried[b] = c
         return c
 
@@ -105,10 +110,11 @@ class CarriedState:
             MD = body.contraction_trace(LD)
             KD = self.images.k_dq(b, body, MD, dqd, th * h)
             Lqd_m = np.empty(c.Lqd.shape)
-            _midpoint(c.Lq.ravel(), c.Lqd.ravel(), LD.ravel(), th, th * h, Lq_m.ravel(),
-                      Lqd_m.ravel())
+            _midpoint(
+                c.Lq.ravel(), c.Lqd.ravel(), LD.ravel(), th, th * h, Lq_m.ravel(), Lqd_m.ravel()
+            )
             Kqd_m = c.Kqd + th * KD
-        else:   # the first iterate: q_dot_m = q_dot
+        else:  # the first iterate: q_dot_m = q_dot
             LD = KD = None
             MD = np.zeros(body.nq)
             Lqd_m, Kqd_m = c.Lqd, c.Kqd
@@ -126,11 +132,25 @@ class CarriedState:
                 continue
             Lq = np.empty(c.Lq.shape)
             Lqd = c.Lqd if p.L_dqd is None else np.empty(c.Lqd.shape)
-            _advance(c.Lq.ravel(), c.Lqd.ravel(), None if p.L_dqd is None else p.L_dqd.ravel(),
-                     p.L_qd_mid.ravel(), h, Lq.ravel(), Lqd.ravel())
+            _advance(
+                c.Lq.ravel(),
+                c.Lqd.ravel(),
+                None if p.L_dqd is None else p.L_dqd.ravel(),
+                p.L_qd_mid.ravel(),
+                h,
+                Lq.ravel(),
+                Lqd.ravel(),
+            )
             self._carried[b] = CarriedContractions(
-                new.q, new.v, Lq, Lqd, c.Kq + h * p.K_qd_mid,
-                c.Kqd if p.K_dqd is None else c.Kqd + p.K_dqd, c.Mqd + p.M_dqd, c.age + 1)
+                new.q,
+                new.v,
+                Lq,
+                Lqd,
+                c.Kq + h * p.K_qd_mid,
+                c.Kqd if p.K_dqd is None else c.Kqd + p.K_dqd,
+                c.Mqd + p.M_dqd,
+                c.age + 1,
+            )
 
 
 @numba.njit(cache=True, nogil=True)

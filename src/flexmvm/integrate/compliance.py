@@ -134,7 +134,8 @@ class NodalColumns:
         (selector_columns: the same DOFs and N_d, bit for bit)."""
         if isinstance(selector, NodalSelector):
             ok, dofs, slots, Nd, missing = selector_columns(
-                selector.data, selector.indices, selector.indptr, self.slot_of)
+                selector.data, selector.indices, selector.indptr, self.slot_of
+            )
             if ok:
                 if missing:
                     self._add(dofs[slots < 0], solve)
@@ -176,7 +177,7 @@ class NodalColumns:
         self.cols[n0:n1] = cols
         self.dof[n0:n1] = new
         self.slot_of[new] = np.arange(n0, n1)
-        block = _psi_times_rows(psi_new, self.cols[:n1])          # (k, n1)
+        block = _psi_times_rows(psi_new, self.cols[:n1])  # (k, n1)
         self.P[n0:n1, :n0] = block[:, :n0]
         self.P[:n0, n0:n1] = block[:, :n0].T
         self.P[n0:n1, n0:n1] = 0.5 * (block[:, n0:] + block[:, n0:].T)
@@ -227,8 +228,9 @@ class NodalCompliance:
         return np.concatenate([dvf, dq])
 
 
-def nodal_compliance(cache: NodalColumns, solve, bf: np.ndarray, selector, frame: tuple
-                     ) -> NodalCompliance:
+def nodal_compliance(
+    cache: NodalColumns, solve, bf: np.ndarray, selector, frame: tuple
+) -> NodalCompliance:
     """Compliance of the rows [bf (m, 6), selector (m, 3 n_nodes) psi] (module docstring).
 
     frame = (A (3, 3), schur, Z_r (nq, 3), Z_w (nq, 3), M_w (3, nq)) for the 6 x 6 frame Schur
@@ -238,14 +240,14 @@ def nodal_compliance(cache: NodalColumns, solve, bf: np.ndarray, selector, frame
     slots, Nd = cache.touch(selector, solve)
     if zw is not None:
         cache.coupling(mw, zw)
-    F = cache.F[slots]                                      # (n_d, 12)
+    F = cache.F[slots]  # (n_d, 12)
     NdT = Nd.T
-    K = Nd @ (cache.P[np.ix_(slots, slots)] @ NdT)          # N psi W_qq^-1 psi^T N^T
-    ar = A @ (F[:, 0:3].T @ NdT)                            # A S1 y, (3, m)
+    K = Nd @ (cache.P[np.ix_(slots, slots)] @ NdT)  # N psi W_qq^-1 psi^T N^T
+    ar = A @ (F[:, 0:3].T @ NdT)  # A S1 y, (3, m)
     if zw is None:
         phi_f = bf[:, :3]
         xf = cho_solve(schur, phi_f.T - ar)
-        zq = F[:, 6:9] @ (A.T @ xf)                         # psi_d Z x_f, (n_d, m)
+        zq = F[:, 6:9] @ (A.T @ xf)  # psi_d Z x_f, (n_d, m)
     else:
         phi_f = bf
         xf = lu_solve(schur, bf.T - np.vstack([ar, F[:, 3:6].T @ NdT]))

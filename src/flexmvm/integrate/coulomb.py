@@ -49,8 +49,8 @@ from flexmvm.integrate.lcp import eliminate_equalities, solve_checked
 # LCP's bound (lcp.LCP_RTOL), so a frictional step is solved to the same relative accuracy
 COULOMB_RTOL = 1e-8
 MAX_SWEEPS = 200_000
-_CHECK_EVERY = 8      # sweeps between residual evaluations
-SLIP_RTOL = 1e-6      # rim and speed thresholds of stick_slip (reporting only)
+_CHECK_EVERY = 8  # sweeps between residual evaluations
+SLIP_RTOL = 1e-6  # rim and speed thresholds of stick_slip (reporting only)
 
 
 @numba.njit(cache=True)
@@ -91,8 +91,8 @@ def _disc_solve(daa, dab, dbb, ba, bb, r):  # pragma: no cover - compiled
             break
         if abs(nx - r) <= 1e-15 * r:
             break
-        dn = (x1 * x1 / (e1 + a) + x2 * x2 / (e2 + a)) / nx   # -d|x|/da
-        step = (nx - r) / dn * (nx / r)                          # Newton on 1/|x| - 1/r
+        dn = (x1 * x1 / (e1 + a) + x2 * x2 / (e2 + a)) / nx  # -d|x|/da
+        step = (nx - r) / dn * (nx / r)  # Newton on 1/|x| - 1/r
         a = max(a + step, 0.0)
         if step <= 1e-16 * max(a, e1):
             break
@@ -100,7 +100,7 @@ def _disc_solve(daa, dab, dbb, ba, bb, r):  # pragma: no cover - compiled
     x2 = -g2 / (e2 + a)
     nx = np.sqrt(x1 * x1 + x2 * x2)
     if nx > 0.0:
-        x1, x2 = x1 * r / nx, x2 * r / nx     # onto the rim exactly (a fraction 1e-15 off)
+        x1, x2 = x1 * r / nx, x2 * r / nx  # onto the rim exactly (a fraction 1e-15 off)
     return ua * x1 - ub * x2, ub * x1 + ua * x2
 
 
@@ -164,7 +164,7 @@ def _sweeps(D, c, lam, normal, t1, t2, mu, rtol, max_sweeps, check_every):  # pr
                 for j in range(m):
                     w[j] += D[a, j] * da + D[b, j] * db
         if sweep % check_every == 0 or sweep == max_sweeps:
-            w = D @ lam + c           # fresh: no drift of the incremental updates
+            w = D @ lam + c  # fresh: no drift of the incremental updates
             res, scale = _residual(D, c, lam, w, normal, t1, t2, mu)
             if res <= rtol * scale:
                 return sweep, res / scale
@@ -190,20 +190,30 @@ def _blocks(m: int, n_eq: int, tangent: np.ndarray, mu: np.ndarray, fnormal: np.
     return normal.astype(np.int64), t1, t2, mus
 
 
-def solve_coulomb(D: np.ndarray, c: np.ndarray, n_eq: int, normal: np.ndarray,
-                  tangent: np.ndarray, mu: np.ndarray, warm: np.ndarray | None = None,
-                  rtol: float = COULOMB_RTOL) -> tuple[np.ndarray, int]:
+def solve_coulomb(
+    D: np.ndarray,
+    c: np.ndarray,
+    n_eq: int,
+    normal: np.ndarray,
+    tangent: np.ndarray,
+    mu: np.ndarray,
+    warm: np.ndarray | None = None,
+    rtol: float = COULOMB_RTOL,
+) -> tuple[np.ndarray, int]:
     """Impulses l (m,) of the problem above and the number of sweeps. normal (k,) and
     tangent (k, 2): row indices (in D) of the k contacts with friction coefficients mu (k,);
     every other row from n_eq on is a frictionless normal row. warm: a starting guess (m,)."""
     m = len(c)
     if not (np.isfinite(D).all() and np.isfinite(c).all()):
         what = "matrix" if not np.isfinite(D).all() else "right-hand side"
-        raise SolverError(f"constraint problem with friction ({m} rows): non-finite number "
-                          f"(NaN/inf) in its {what}; the state diverged before this step")
+        raise SolverError(
+            f"constraint problem with friction ({m} rows): non-finite number "
+            f"(NaN/inf) in its {what}; the state diverged before this step"
+        )
     D = 0.5 * (D + D.T)
-    nrm, t1, t2, mus = _blocks(m, n_eq, np.asarray(tangent, np.int64),
-                               np.asarray(mu, float), np.asarray(normal, np.int64))
+    nrm, t1, t2, mus = _blocks(
+        m, n_eq, np.asarray(tangent, np.int64), np.asarray(mu, float), np.asarray(normal, np.int64)
+    )
     e, u = slice(0, n_eq), slice(n_eq, m)
     el = eliminate_equalities(D, c, n_eq)
     Dp, cp = (0.5 * (el.D + el.D.T), el.c) if n_eq else (D, c)
@@ -211,8 +221,18 @@ def solve_coulomb(D: np.ndarray, c: np.ndarray, n_eq: int, normal: np.ndarray,
     if warm is not None and len(warm) == m and np.isfinite(warm).all():
         lu = np.array(warm[n_eq:], dtype=float)
         lu[nrm] = np.maximum(lu[nrm], 0.0)
-    sweeps, _ = _sweeps(np.ascontiguousarray(Dp), np.ascontiguousarray(cp), lu, nrm, t1, t2,
-                        mus, rtol, MAX_SWEEPS, _CHECK_EVERY)
+    sweeps, _ = _sweeps(
+        np.ascontiguousarray(Dp),
+        np.ascontiguousarray(cp),
+        lu,
+        nrm,
+        t1,
+        t2,
+        mus,
+        rtol,
+        MAX_SWEEPS,
+        _CHECK_EVERY,
+    )
     out = np.zeros(m)
     out[u] = lu
     if n_eq:
@@ -223,30 +243,52 @@ def solve_coulomb(D: np.ndarray, c: np.ndarray, n_eq: int, normal: np.ndarray,
     return out, sweeps
 
 
-def coulomb_residual(D: np.ndarray, c: np.ndarray, n_eq: int, lam: np.ndarray,
-                     normal: np.ndarray, tangent: np.ndarray, mu: np.ndarray) -> float:
+def coulomb_residual(
+    D: np.ndarray,
+    c: np.ndarray,
+    n_eq: int,
+    lam: np.ndarray,
+    normal: np.ndarray,
+    tangent: np.ndarray,
+    mu: np.ndarray,
+) -> float:
     """Natural residual of lam for the problem (module docstring), relative to the velocity
     scale max(|c|, |D l|): 0 at a solution."""
     m = len(c)
     if m == 0:
         return 0.0
     w = D @ lam + c
-    nrm, t1, t2, mus = _blocks(m, n_eq, np.asarray(tangent, np.int64), np.asarray(mu, float),
-                               np.asarray(normal, np.int64))
+    nrm, t1, t2, mus = _blocks(
+        m, n_eq, np.asarray(tangent, np.int64), np.asarray(mu, float), np.asarray(normal, np.int64)
+    )
     u = slice(n_eq, m)
-    r, scale = _residual(np.ascontiguousarray(D[u, u]), np.ascontiguousarray(c[u]),
-                         np.ascontiguousarray(lam[u]), np.ascontiguousarray(w[u]), nrm, t1, t2,
-                         mus)
+    r, scale = _residual(
+        np.ascontiguousarray(D[u, u]),
+        np.ascontiguousarray(c[u]),
+        np.ascontiguousarray(lam[u]),
+        np.ascontiguousarray(w[u]),
+        nrm,
+        t1,
+        t2,
+        mus,
+    )
     scale = max(scale, float(np.abs(c).max()), float(np.abs(w - c).max()))
     if n_eq:
         r = max(r, float(np.abs(w[:n_eq]).max()))
     return float(r) / scale
 
 
-def solve_coulomb_checked(D: np.ndarray, c: np.ndarray, n_eq: int, normal: np.ndarray,
-                          tangent: np.ndarray, mu: np.ndarray, warm: np.ndarray | None = None,
-                          rtol: float = COULOMB_RTOL, where: str = ""
-                          ) -> tuple[np.ndarray, float]:
+def solve_coulomb_checked(
+    D: np.ndarray,
+    c: np.ndarray,
+    n_eq: int,
+    normal: np.ndarray,
+    tangent: np.ndarray,
+    mu: np.ndarray,
+    warm: np.ndarray | None = None,
+    rtol: float = COULOMB_RTOL,
+    where: str = "",
+) -> tuple[np.ndarray, float]:
     """solve_coulomb, then its natural residual on the full problem; SolverError (naming
     `where`) when it exceeds rtol."""
     Ds = 0.5 * (D + D.T)
@@ -261,15 +303,17 @@ def solve_coulomb_checked(D: np.ndarray, c: np.ndarray, n_eq: int, normal: np.nd
         sweeps += more
         res = coulomb_residual(Ds, c, n_eq, lam, normal, tangent, mu)
     if not res <= rtol:
-        raise SolverError(f"constraint impulses with friction{where}: Coulomb residual "
-                          f"{res:.2e} exceeds {rtol:.0e} after {sweeps} Gauss-Seidel sweeps "
-                          f"({len(c)} rows, {n_eq} equalities, {len(mu)} friction cones)")
+        raise SolverError(
+            f"constraint impulses with friction{where}: Coulomb residual "
+            f"{res:.2e} exceeds {rtol:.0e} after {sweeps} Gauss-Seidel sweeps "
+            f"({len(c)} rows, {n_eq} equalities, {len(mu)} friction cones)"
+        )
     return lam, res
 
 
-
-def solve_contact_impulses(D: np.ndarray, c: np.ndarray, n_joint: int, crows: ContactRows,
-                           warm: np.ndarray | None = None) -> tuple[np.ndarray, float]:
+def solve_contact_impulses(
+    D: np.ndarray, c: np.ndarray, n_joint: int, crows: ContactRows, warm: np.ndarray | None = None
+) -> tuple[np.ndarray, float]:
     """The impulses of one step's constraint problem (joint rows first, then crows) and their
     residual: lcp.solve_checked (exact NNLS) without friction, solve_friction with it."""
     if crows.friction is None:
@@ -277,8 +321,9 @@ def solve_contact_impulses(D: np.ndarray, c: np.ndarray, n_joint: int, crows: Co
     return solve_friction(D, c, n_joint, crows, warm)
 
 
-def solve_friction(D: np.ndarray, c: np.ndarray, n_joint: int, crows: ContactRows,
-                   warm: np.ndarray | None = None) -> tuple[np.ndarray, float]:
+def solve_friction(
+    D: np.ndarray, c: np.ndarray, n_joint: int, crows: ContactRows, warm: np.ndarray | None = None
+) -> tuple[np.ndarray, float]:
     """Constraint impulses of one iteration with rows [joints (n_joint) | contact rows
     crows, which carry friction cones]: solve_coulomb_checked, warm-started from `warm` (the
     last iterate's). Rows without friction cones go to lcp.solve_checked instead (the
@@ -290,8 +335,14 @@ def solve_friction(D: np.ndarray, c: np.ndarray, n_joint: int, crows: ContactRow
     return lam, res
 
 
-def stick_slip(D: np.ndarray, c: np.ndarray, lam: np.ndarray, normal: np.ndarray,
-               tangent: np.ndarray, mu: np.ndarray) -> tuple[int, int]:
+def stick_slip(
+    D: np.ndarray,
+    c: np.ndarray,
+    lam: np.ndarray,
+    normal: np.ndarray,
+    tangent: np.ndarray,
+    mu: np.ndarray,
+) -> tuple[int, int]:
     """(sticking, sliding) cones carrying a compressive impulse at the solution lam: sliding
     when l_T is on the rim (|l_T| >= (1 - SLIP_RTOL) mu l_N) and the tangential velocity
     |w_T| exceeds SLIP_RTOL times the velocity scale max(|c|, |D l|) (that of the residual

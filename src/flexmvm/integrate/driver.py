@@ -57,8 +57,7 @@ class _Recorder:
         for b, (body, st) in enumerate(zip(sysm.bodies, states)):
             Lq = carried(b, st)[0] if (carried is not None and body.nq) else None
             terms = body.inertia_terms(st.q, Lq)
-            kq, mqq_v = (products(b, st) if (products is not None and body.nq)
-                         else (None, None))
+            kq, mqq_v = products(b, st) if (products is not None and body.nq) else (None, None)
             kin += body.kinetic_energy(st.A, st.q, st.v, terms, mqq_v)
             strain += body.strain_energy(st.q, kq)
             pot -= float(sysm.gravity @ (body.inv.mass * st.r + st.A @ terms[0]))
@@ -136,17 +135,27 @@ class AcceptedStep:
 def moreau_jean(exploit_nonrotating: bool = True) -> IntegratorFactory:
     """The default integrator: the Moreau-Jean scheme (moreau_jean.py) with the grid's
     theta of each step size (TimeGrid.theta_rule)."""
+
     def make(system: System, grid: TimeGrid) -> Integrator:
-        return MoreauJeanIntegrator(system, theta=grid.theta_rule(),
-                                    exploit_nonrotating=exploit_nonrotating)
+        return MoreauJeanIntegrator(
+            system, theta=grid.theta_rule(), exploit_nonrotating=exploit_nonrotating
+        )
 
     return make
 
 
-def simulate(system: System, states: list[BodyState], grid: TimeGrid, probes=(),
-             progress: bool = False, t0: float = 0.0, exploit_nonrotating: bool = True,
-             check_overlap: bool = True, integrator: IntegratorFactory | None = None,
-             on_step: Callable[[AcceptedStep], None] | None = None) -> RunResult:
+def simulate(
+    system: System,
+    states: list[BodyState],
+    grid: TimeGrid,
+    probes=(),
+    progress: bool = False,
+    t0: float = 0.0,
+    exploit_nonrotating: bool = True,
+    check_overlap: bool = True,
+    integrator: IntegratorFactory | None = None,
+    on_step: Callable[[AcceptedStep], None] | None = None,
+) -> RunResult:
     """Integrate from t0 over grid.t_end_s; returns histories at every output time.
 
     check_overlap: InputError when a node of a contact surface is more than OVERLAP_TOL_M
@@ -166,8 +175,7 @@ def simulate(system: System, states: list[BodyState], grid: TimeGrid, probes=(),
     loaded machine far more (docs/notes/2026-11-27-comment-measurements.md)."""
     make = integrator if integrator is not None else moreau_jean(exploit_nonrotating)
     with threadpool_limits(limits=1, user_api="blas"):
-        return _simulate(system, states, grid, probes, progress, t0, make, on_step,
-                         check_overlap)
+        return _simulate(system, states, grid, probes, progress, t0, make, on_step, check_overlap)
 
 
 class _Tally:
@@ -181,14 +189,15 @@ class _Tally:
         self.intervals: list[list[float]] = []
         self.max_pen, self.drift = 0.0, 0.0
         self.step_t, self.step_h, self.step_impulse = [], [], []
-        self.row_impulses: dict = {}   # normal contact row key -> [impulse [N s], first time [s]]
+        self.row_impulses: dict = {}  # normal contact row key -> [impulse [N s], first time [s]]
         self.n_loose, self.worst_res, self.worst_lcp = 0, 0.0, 0.0
         self.p_res = np.zeros(3)
-        self.shift = np.zeros(3)      # the momentum the balance of the steps added so far [N s]
-        self.shifts = [self.shift.copy()]   # ... at every output time
-        self.friction = (FrictionSummary() if any(c.mu > 0 for c in system.contacts)
-                         else None)   # runs with friction report it even if no contact closes
-        self.cuts = [0, dt_s]         # steps cut in two, smallest step taken [s]
+        self.shift = np.zeros(3)  # the momentum the balance of the steps added so far [N s]
+        self.shifts = [self.shift.copy()]  # ... at every output time
+        self.friction = (
+            FrictionSummary() if any(c.mu > 0 for c in system.contacts) else None
+        )  # runs with friction report it even if no contact closes
+        self.cuts = [0, dt_s]  # steps cut in two, smallest step taken [s]
 
     def add(self, t_s: float, h_s: float, res: StepResult) -> None:
         """One accepted step from t_s over h_s; its end states measured for penetration."""
@@ -202,7 +211,8 @@ class _Tally:
         f = res.contact.normal_impulse(res.contact_impulses)
         if res.contact.friction is not None:
             self.friction = (self.friction or FrictionSummary()).add(
-                res.contact, res.contact_impulses, h_s)
+                res.contact, res.contact_impulses, h_s
+            )
         if not self.pen.measured and res.contact.gaps.size:
             self.max_pen = max(self.max_pen, float(-res.contact.gaps.min()))
         self.pen.after_step(res.states, t_s + h_s)
@@ -224,28 +234,40 @@ class _Tally:
         self.shifts.append(self.shift.copy())
         self.impulse, self.jimpulse = 0.0, np.zeros_like(self.jimpulse)
 
-    def result(self, rec: _Recorder, integ, wall0: float, failure: str | None = None
-               ) -> RunResult:
+    def result(self, rec: _Recorder, integ, wall0: float, failure: str | None = None) -> RunResult:
         pen = self.pen
         depth = pen.depth if pen.measured else self.max_pen
-        return rec.result(contact_intervals=[tuple(iv) for iv in self.intervals],
-                          max_penetration_m=max(depth, 0.0), max_penetration_at=pen.at,
-                          max_penetration_by_direction_m=pen.by_direction,
-                          max_joint_drift=self.drift, n_steps=self.n_steps,
-                          n_factorizations=integ.n_factorizations,
-                          n_nonrotating_steps=integ.n_nonrotating_steps,
-                          steps_not_converged=self.n_loose, newton_residual_max=self.worst_res,
-                          lcp_residual_max=self.worst_lcp, momentum_residual=self.p_res,
-                          wall_time_s=time.perf_counter() - wall0,
-                          friction=self.friction, contact_row_impulses=self.row_impulses,
-                          steps=StepHistory(np.array(self.step_t), np.array(self.step_h),
-                                            np.array(self.step_impulse, dtype=float)),
-                          step_cuts=self.cuts[0], smallest_step_s=self.cuts[1],
-                          failure=failure, momentum_shift=np.array(self.shifts))
+        return rec.result(
+            contact_intervals=[tuple(iv) for iv in self.intervals],
+            max_penetration_m=max(depth, 0.0),
+            max_penetration_at=pen.at,
+            max_penetration_by_direction_m=pen.by_direction,
+            max_joint_drift=self.drift,
+            n_steps=self.n_steps,
+            n_factorizations=integ.n_factorizations,
+            n_nonrotating_steps=integ.n_nonrotating_steps,
+            steps_not_converged=self.n_loose,
+            newton_residual_max=self.worst_res,
+            lcp_residual_max=self.worst_lcp,
+            momentum_residual=self.p_res,
+            wall_time_s=time.perf_counter() - wall0,
+            friction=self.friction,
+            contact_row_impulses=self.row_impulses,
+            steps=StepHistory(
+                np.array(self.step_t),
+                np.array(self.step_h),
+                np.array(self.step_impulse, dtype=float),
+            ),
+            step_cuts=self.cuts[0],
+            smallest_step_s=self.cuts[1],
+            failure=failure,
+            momentum_shift=np.array(self.shifts),
+        )
 
 
-def _simulate(system, states, grid, probes, progress, t0, make_integrator, on_step,
-              check_overlap) -> RunResult:
+def _simulate(
+    system, states, grid, probes, progress, t0, make_integrator, on_step, check_overlap
+) -> RunResult:
     n_ticks, out_ticks, k_max = grid.ticks()
     fine_ticks = grid.contact_output_ticks()
     integ = make_integrator(system, grid)
@@ -262,8 +284,11 @@ def _simulate(system, states, grid, probes, progress, t0, make_integrator, on_st
     tick, level, last_out = 0, 0, 0
     while tick < n_ticks:
         to_out = out_ticks - tick % out_ticks
-        level = (0 if tally.calm == 0 and tally.n_steps
-                 else _choose_level(system, states, level, tally.calm, k_max, dt))
+        level = (
+            0
+            if tally.calm == 0 and tally.n_steps
+            else _choose_level(system, states, level, tally.calm, k_max, dt)
+        )
         span = 1 << level
         while span > to_out or tick + span > n_ticks and span > 1:
             span >>= 1
@@ -272,8 +297,10 @@ def _simulate(system, states, grid, probes, progress, t0, make_integrator, on_st
         try:
             parts = _advance(integ, t, states, h, h_min, tally.cuts)
         except SolverError as exc:
-            message = (f"at t = {t:.6g} s (step {tally.n_steps + 1}, h = {h:.3g} s, cut down "
-                       f"to {h_min:.3g} s): {exc}")
+            message = (
+                f"at t = {t:.6g} s (step {tally.n_steps + 1}, h = {h:.3g} s, cut down "
+                f"to {h_min:.3g} s): {exc}"
+            )
             if bar is not None:
                 bar.close()
             raise SimulationFailed(message, tally.result(rec, integ, wall0, message)) from exc
@@ -287,14 +314,19 @@ def _simulate(system, states, grid, probes, progress, t0, make_integrator, on_st
         if tick % out_ticks == 0 or tick >= n_ticks or fine:
             span_t = (tick - last_out) * dt
             last_out = tick
-            rec.record(t0 + tick * dt, states, tally.impulse / span_t, tally.jimpulse / span_t,
-                       integ.carried, integ.carried_products)
+            rec.record(
+                t0 + tick * dt,
+                states,
+                tally.impulse / span_t,
+                tally.jimpulse / span_t,
+                integ.carried,
+                integ.carried_products,
+            )
             try:
                 _check_finite(rec.rows[-1], system, t0 + tick * dt)
             except SolverError as exc:
                 rec.rows.pop()
-                raise SimulationFailed(str(exc), tally.result(rec, integ, wall0, str(exc))
-                                       ) from exc
+                raise SimulationFailed(str(exc), tally.result(rec, integ, wall0, str(exc))) from exc
             tally.output()
             if bar is not None:
                 bar.update(min(tick, n_ticks) - bar.n)
@@ -303,8 +335,9 @@ def _simulate(system, states, grid, probes, progress, t0, make_integrator, on_st
     return tally.result(rec, integ, wall0)
 
 
-def _advance(integ, t: float, states, h: float, h_min: float, cuts: list
-             ) -> list[tuple[float, float, object]]:
+def _advance(
+    integ, t: float, states, h: float, h_min: float, cuts: list
+) -> list[tuple[float, float, object]]:
     """Steps from t over h: [(start, size, StepResult)]. A step whose Newton iteration fails
     (it diverges, or has not reached the tolerance or the round-off floor in max_iter
     iterates) is taken as two halves instead, recursively down to h_min = dt_s /
@@ -351,8 +384,11 @@ def _check_finite(row: dict, system, t: float) -> None:
     """SolverError naming the time and the first body whose recorded state is NaN/inf."""
     if np.isfinite(row["kin"] + row["strain"] + row["force"]) and np.isfinite(row["v"]).all():
         return
-    bad = [body.name for body, q, v in zip(system.bodies, row["q"], row["v"])
-           if not (np.isfinite(q).all() and np.isfinite(v).all())]
+    bad = [
+        body.name
+        for body, q, v in zip(system.bodies, row["q"], row["v"])
+        if not (np.isfinite(q).all() and np.isfinite(v).all())
+    ]
     where = f"body {bad[0]!r}" if bad else "the contact force"
     raise SolverError(f"at t = {t:.6g} s: the solution became non-finite (NaN/inf) in {where}")
 
@@ -385,8 +421,12 @@ class _Penetrations:
                 self.by_direction[key] = max(self.by_direction.get(key, 0.0), p.depth_m)
                 if p.depth_m > self.depth:
                     self.depth = p.depth_m
-                    self.at = {"t_s": float(t), "body": bodies[p.body].name, "node": p.node,
-                               "against": bodies[p.against].name}
+                    self.at = {
+                        "t_s": float(t),
+                        "body": bodies[p.body].name,
+                        "node": p.node,
+                        "against": bodies[p.against].name,
+                    }
                 found.append(p)
         return found
 
@@ -404,7 +444,8 @@ class _Penetrations:
                 raise InputError(
                     f"bodies {a!r} and {b!r} overlap at t = {t0:g} s by {p.depth_m:.4g} m (node "
                     f"{p.node} of {a!r} inside the contact surface of {b!r}; tolerance "
-                    f"{OVERLAP_TOL_M:g} m): place them apart or touching")
+                    f"{OVERLAP_TOL_M:g} m): place them apart or touching"
+                )
 
     def after_step(self, states, t: float) -> None:
         if self.measured:
@@ -427,8 +468,9 @@ def _choose_level(system, states, level, calm, k_max, dt) -> int:
 
 
 def _clear_ahead(system, states, horizon: float) -> bool:
-    return all(provider.min_gap_ahead(system.bodies, states, horizon) > 0.0
-               for provider in system.contacts)
+    return all(
+        provider.min_gap_ahead(system.bodies, states, horizon) > 0.0 for provider in system.contacts
+    )
 
 
 def _track_intervals(intervals, in_contact, t0, t1):

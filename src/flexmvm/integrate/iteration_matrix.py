@@ -18,7 +18,7 @@ from flexmvm.constraints.contact import ContactRows
 from flexmvm.constraints.rows import Rows
 from flexmvm.integrate.compliance import DenseCompliance
 
-SMALL_BASIS = 400     # up to this many elastic coordinates: refresh every step (cheap)
+SMALL_BASIS = 400  # up to this many elastic coordinates: refresh every step (cheap)
 # Larger bases: refresh when M_wq moved by this much (relative). The bordered solve uses the
 # M_wq of the last refresh and S follows the drift to first order only, so a drift leaves the
 # first solve's frame rows off by ~the drift times the rotational coupling, and its elastic
@@ -42,19 +42,24 @@ class IterationMatrices:
         self.bodies, self.solvers = bodies, solvers
         self.threads, self.carried, self.images = threads, carried, images
 
-    def prepare(self, states, h: float, refresh_tol: float | None, defer: bool = False
-                ) -> None:
+    def prepare(self, states, h: float, refresh_tol: float | None, defer: bool = False) -> None:
         """Frame blocks of W at `states`; M_wq refreshed when it drifted (always for small
         bases, by COUPLING_TOL for large ones, unconditionally when refresh_tol = 0); defer:
         with the next solve (BodySolver.refresh_coupling)."""
-        self.threads.each(lambda b: self._prepare_body(b, states[b], h, refresh_tol, defer),
-                          range(len(states)))
+        self.threads.each(
+            lambda b: self._prepare_body(b, states[b], h, refresh_tol, defer), range(len(states))
+        )
 
     def _prepare_body(self, b, st, h, refresh_tol, defer=False):
         body, solver = self.bodies[b], self.solvers[b]
         if not body.nq:
-            solver.prepare(h, st.A, body.frame_mass(st.A, body.first_moment(st.q),
-                                                    body.frame_inertia_first_order(st.q)))
+            solver.prepare(
+                h,
+                st.A,
+                body.frame_mass(
+                    st.A, body.first_moment(st.q), body.frame_inertia_first_order(st.q)
+                ),
+            )
             return
         # W's frame block is the mass matrix of ONE configuration: J(q) and M_wq(q) from the
         # same contraction L(q) (the carried one, else made here: O(nodes) for full FE,
@@ -71,8 +76,11 @@ class IterationMatrices:
         # Phi^T with it (docs/notes/2026-11-27-arm-stop.md).
         c = self.carried.of_configuration(b, st)
         Lq = c.Lq if c is not None else body.carried_contractions(st.q)
-        tol = refresh_tol if refresh_tol is not None else (
-            0.0 if body.nq <= SMALL_BASIS else COUPLING_TOL)
+        tol = (
+            refresh_tol
+            if refresh_tol is not None
+            else (0.0 if body.nq <= SMALL_BASIS else COUPLING_TOL)
+        )
         solver.refresh_coupling(h, body.rotational_coupling(st.q, Lq), tol, defer)
         J = body.inertia_terms(st.q, Lq)[1]
         solver.prepare(h, st.A, body.frame_mass(st.A, body.first_moment(st.q), J))
@@ -81,6 +89,7 @@ class IterationMatrices:
         """Y_b = W_b^-1 Phi_b^T for every body touched by rows: for large bodies with nodal
         rows (joints at nodes or frame points) through the cached nodal columns, else by
         back-substitution."""
+
         def one(b):
             bf, bq = rows.blocks[b]
             sel = rows.nodal_selector(b)
@@ -95,6 +104,7 @@ class IterationMatrices:
         velocity correction W_b^-1 Phi_b^T lambda (integrate.compliance). Large bodies with
         nodal rows go through the cached nodal columns of W_qq^-1 (exact; no (nq, m) block),
         others through explicit columns W^-1 Phi^T."""
+
         def one(b):
             bf, bq = crows.rows.blocks[b]
             solver = self.solvers[b]
@@ -113,17 +123,20 @@ class IterationMatrices:
             self.images.solved(b, self.solvers[b], R[b], x[b])
         return [v_plus[b] - x[b] for b in range(len(R))]
 
-    def corrected_free_velocities(self, R, res, scales, v_free, v_plus, rtol: float
-                                  ) -> list[np.ndarray]:
+    def corrected_free_velocities(
+        self, R, res, scales, v_free, v_plus, rtol: float
+    ) -> list[np.ndarray]:
         """The free velocities of a later iterate. res[b] is body b's residual with the last
         iterate's constraint impulses, R_b - Phi_b^T lambda. With W unchanged since that
         iterate, v_plus_b = v_free_b + W_b^-1 Phi_b^T lambda, so v_plus_b - W_b^-1 R_b =
         v_free_b - W_b^-1 res_b: a body whose elastic rows of res_b are below
         FRAME_ONLY_FRACTION rtol gets v_free_b - W_b^-1 [res_f; 0] (no back-substitution,
         solve_frame), the others v_plus_b - W_b^-1 R_b."""
-        frame = [bool(self.bodies[b].nq) and np.abs(res[b][6:]).max()
-                 <= FRAME_ONLY_FRACTION * rtol * max(scales[b], 1e-300)
-                 for b in range(len(R))]
+        frame = [
+            bool(self.bodies[b].nq)
+            and np.abs(res[b][6:]).max() <= FRAME_ONLY_FRACTION * rtol * max(scales[b], 1e-300)
+            for b in range(len(R))
+        ]
         full = [b for b in range(len(R)) if not frame[b]]
         x = self.threads.each(lambda b: self.solvers[b].solve(R[b]), full)
         out = []

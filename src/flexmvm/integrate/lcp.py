@@ -41,8 +41,10 @@ def regularised_cho(D: np.ndarray, what: str):
     try:
         return sla.cho_factor(D + _REG * scale * np.eye(m), lower=True)
     except np.linalg.LinAlgError:
-        raise SolverError(f"{what} constraint matrix is not positive definite (redundant or "
-                          "inconsistent constraints)") from None
+        raise SolverError(
+            f"{what} constraint matrix is not positive definite (redundant or "
+            "inconsistent constraints)"
+        ) from None
 
 
 def solve_mixed_lcp(D: np.ndarray, c: np.ndarray, n_eq: int) -> np.ndarray:
@@ -52,8 +54,10 @@ def solve_mixed_lcp(D: np.ndarray, c: np.ndarray, n_eq: int) -> np.ndarray:
         return np.zeros(0)
     if not (np.isfinite(D).all() and np.isfinite(c).all()):
         what = "matrix" if not np.isfinite(D).all() else "right-hand side"
-        raise SolverError(f"constraint LCP ({m} rows): non-finite number (NaN/inf) in its "
-                          f"{what}; the state diverged before this step")
+        raise SolverError(
+            f"constraint LCP ({m} rows): non-finite number (NaN/inf) in its "
+            f"{what}; the state diverged before this step"
+        )
     D = 0.5 * (D + D.T)
     if n_eq == m:
         return _refine(D, c, n_eq, -sla.cho_solve(regularised_cho(D, "joint"), c))
@@ -93,12 +97,14 @@ def eliminate_equalities(D: np.ndarray, c: np.ndarray, n_eq: int) -> Elimination
     cho_e = regularised_cho(D[e, e], "joint")
     De_inv_Deu = sla.cho_solve(cho_e, D[e, u])
     De_inv_ce = sla.cho_solve(cho_e, c[e])
-    return Elimination(D[u, u] - D[u, e] @ De_inv_Deu, c[u] - D[u, e] @ De_inv_ce, cho_e,
-                       De_inv_Deu, De_inv_ce)
+    return Elimination(
+        D[u, u] - D[u, e] @ De_inv_Deu, c[u] - D[u, e] @ De_inv_ce, cho_e, De_inv_Deu, De_inv_ce
+    )
 
 
-def _refine(D: np.ndarray, c: np.ndarray, n_eq: int, lam: np.ndarray,
-            sweeps: int = 2) -> np.ndarray:
+def _refine(
+    D: np.ndarray, c: np.ndarray, n_eq: int, lam: np.ndarray, sweeps: int = 2
+) -> np.ndarray:
     """Iterative refinement on the rows that hold as equalities at the solution (the joints
     and the active contacts, l > 0): the regularisation _REG * mean(diag D) shifts l by
     ~_REG cond(D) of itself, which for a joint with a stiff and a soft direction (cond ~1e4
@@ -185,7 +191,7 @@ def _refine_passive(D, c, lam, passive, idx, A, z):  # pragma: no cover - compil
     if k == 0:
         return
     r = np.empty(c.shape[0])
-    _velocity(D, c, lam, r)     # only its passive rows are read
+    _velocity(D, c, lam, r)  # only its passive rows are read
     if not _passive_solve(D, r, idx, k, A, z):
         return
     for a in range(k):
@@ -243,7 +249,7 @@ def active_set_qp(D, c, tol, max_passes):  # pragma: no cover - compiled
                 for a in range(k):
                     if idx[a] == j:
                         pos_j = a
-                if z[pos_j] <= 0.0:   # round-off: j cannot enter; try the next row
+                if z[pos_j] <= 0.0:  # round-off: j cannot enter; try the next row
                     passive[j] = False
                     blocked[j] = True
                     break
@@ -270,8 +276,12 @@ def active_set_qp(D, c, tol, max_passes):  # pragma: no cover - compiled
 
 def _active_set(D: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, bool]:
     m = len(c)
-    return active_set_qp(np.ascontiguousarray(D, dtype=float), np.array(c, dtype=float),
-                         1e-13 * float(np.abs(c).max()), 3 * m + 30)
+    return active_set_qp(
+        np.ascontiguousarray(D, dtype=float),
+        np.array(c, dtype=float),
+        1e-13 * float(np.abs(c).max()),
+        3 * m + 30,
+    )
 
 
 def _nnls(D: np.ndarray, c: np.ndarray) -> np.ndarray:
@@ -304,19 +314,25 @@ def complementarity_residual(D: np.ndarray, c: np.ndarray, n_eq: int, lam: np.nd
     r = np.abs(w[:n_eq]).max() if n_eq else 0.0
     if n_eq < m:
         d = np.maximum(np.diag(D)[n_eq:], 0.0)
-        r = max(r, float(np.abs(np.minimum(d * lam[n_eq:], w[n_eq:])).max()),
-                float(np.maximum(-lam[n_eq:], 0.0).max() * d.max()))
+        r = max(
+            r,
+            float(np.abs(np.minimum(d * lam[n_eq:], w[n_eq:])).max()),
+            float(np.maximum(-lam[n_eq:], 0.0).max() * d.max()),
+        )
     return float(r) / scale
 
 
-def solve_checked(D: np.ndarray, c: np.ndarray, n_eq: int, rtol: float = LCP_RTOL,
-                  where: str = "") -> tuple[np.ndarray, float]:
+def solve_checked(
+    D: np.ndarray, c: np.ndarray, n_eq: int, rtol: float = LCP_RTOL, where: str = ""
+) -> tuple[np.ndarray, float]:
     """solve_mixed_lcp, then its complementarity residual; raises SolverError (naming
     `where`, if given) when the residual exceeds rtol (and, from solve_mixed_lcp, when D or c
     is not finite). The time loop adds the step's time to the message."""
     lam = solve_mixed_lcp(D, c, n_eq)
     res = complementarity_residual(0.5 * (D + D.T), c, n_eq, lam)
     if not res <= rtol:
-        raise SolverError(f"constraint impulses{where}: complementarity residual {res:.2e} "
-                          f"exceeds {rtol:.0e} ({len(c)} rows, {n_eq} equalities)")
+        raise SolverError(
+            f"constraint impulses{where}: complementarity residual {res:.2e} "
+            f"exceeds {rtol:.0e} ({len(c)} rows, {n_eq} equalities)"
+        )
     return lam, res

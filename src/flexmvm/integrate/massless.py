@@ -46,10 +46,10 @@ from flexmvm.integrate.lcp import regularised_cho
 class MasslessCoordinates:
     """The elastic coordinates s of one body with zero rows in M_qq and the factor of K_ss."""
 
-    s: np.ndarray              # (ns,) indices into q
-    K_s: sp.csr_matrix         # rows s of k_hat (ns, nq)
-    K_cols: sp.csc_matrix      # columns s of k_hat (nq, ns)
-    solve: object              # x = K_ss^-1 b
+    s: np.ndarray  # (ns,) indices into q
+    K_s: sp.csr_matrix  # rows s of k_hat (ns, nq)
+    K_cols: sp.csc_matrix  # columns s of k_hat (nq, ns)
+    solve: object  # x = K_ss^-1 b
 
     @classmethod
     def of(cls, body) -> MasslessCoordinates | None:
@@ -69,8 +69,10 @@ class MasslessCoordinates:
         if not s.size:
             return None
         if body.c_hat is not None:
-            raise SolverError(f"body {body.name!r}: massless (mass-redistributed) contact nodes "
-                              "with Rayleigh damping are not supported")
+            raise SolverError(
+                f"body {body.name!r}: massless (mass-redistributed) contact nodes "
+                "with Rayleigh damping are not supported"
+            )
         K = sp.csr_matrix(body.k_hat)
         K_s = K[s]
         K_ss = sp.csc_matrix(K_s[:, s])
@@ -81,8 +83,9 @@ class MasslessCoordinates:
                 cho = sla.cho_factor(K_ss.toarray())
                 solve = lambda b, cho=cho: sla.cho_solve(cho, b)
         except (SolverError, np.linalg.LinAlgError) as exc:
-            raise SolverError(f"body {body.name!r}: stiffness of the massless contact nodes "
-                              f"is singular ({exc})") from None
+            raise SolverError(
+                f"body {body.name!r}: stiffness of the massless contact nodes is singular ({exc})"
+            ) from None
         return cls(s, K_s, sp.csc_matrix(K_s.T), solve)
 
     def free_change(self, q: np.ndarray, force_s: np.ndarray) -> np.ndarray:
@@ -91,8 +94,9 @@ class MasslessCoordinates:
         return np.asarray(self.solve(force_s - self.K_s @ q)).ravel()
 
 
-def equilibrate(parts: list[tuple[MasslessCoordinates, np.ndarray, np.ndarray, np.ndarray]]
-                ) -> list[np.ndarray]:
+def equilibrate(
+    parts: list[tuple[MasslessCoordinates, np.ndarray, np.ndarray, np.ndarray]],
+) -> list[np.ndarray]:
     """Changes dq_s of the massless coordinates of several bodies: equilibrium at the end of
     the step with the constraint rows that carried an impulse held,
 
@@ -107,8 +111,10 @@ def equilibrate(parts: list[tuple[MasslessCoordinates, np.ndarray, np.ndarray, n
     m = parts[0][3].shape[0] if parts else 0
     if not m:
         return dq0
-    Y = [np.asarray(ml.solve(np.ascontiguousarray(P.T))).reshape(len(ml.s), m)
-         for ml, _, _, P in parts]
+    Y = [
+        np.asarray(ml.solve(np.ascontiguousarray(P.T))).reshape(len(ml.s), m)
+        for ml, _, _, P in parts
+    ]
     D = sum((P @ y for (_, _, _, P), y in zip(parts, Y)), np.zeros((m, m)))
     rhs = sum((P @ d for (_, _, _, P), d in zip(parts, dq0)), np.zeros(m))
     mu = sla.cho_solve(regularised_cho(0.5 * (D + D.T), "massless-node"), rhs)
@@ -120,15 +126,19 @@ def check_contact_law(system, massless: list[MasslessCoordinates | None]) -> Non
     coordinates (massless: per body, MasslessCoordinates.of)."""
     for provider in system.contacts:
         sides = (getattr(provider, "slave", None), getattr(provider, "master", None))
-        if (getattr(provider, "law", None) is ContactLaw.VELOCITY
-                and any(b is not None and massless[b] is not None for b in sides)):
-            raise SolverError("massless (mass-redistributed) contact nodes need the position "
-                              "contact law: under the velocity law their velocities flip "
-                              "every step (docs/contact_law.md)")
+        if getattr(provider, "law", None) is ContactLaw.VELOCITY and any(
+            b is not None and massless[b] is not None for b in sides
+        ):
+            raise SolverError(
+                "massless (mass-redistributed) contact nodes need the position "
+                "contact law: under the velocity law their velocities flip "
+                "every step (docs/contact_law.md)"
+            )
 
 
-def equilibrate_step_end(massless, bodies, loads: dict, t_theta: float, h: float, states,
-                         new_states, held) -> list[tuple[int, np.ndarray, np.ndarray]]:
+def equilibrate_step_end(
+    massless, bodies, loads: dict, t_theta: float, h: float, states, new_states, held
+) -> list[tuple[int, np.ndarray, np.ndarray]]:
     """Massless coordinates of every body to equilibrium at the step's end (module doc),
     under the step's constraint impulses as forces lambda / h and the point loads acting at
     t_theta = t + theta h, with the rows that carried an impulse held; their velocity the
@@ -138,10 +148,15 @@ def equilibrate_step_end(massless, bodies, loads: dict, t_theta: float, h: float
     todo = [b for b, ml in enumerate(massless) if ml is not None]
     if not todo:
         return []
-    held = [(rows, lam, np.flatnonzero(lam != 0.0)) for rows, lam in held
-            if rows is not None and lam is not None and len(lam)]
-    parts = [_step_end_part(massless[b], b, bodies[b], new_states[b], loads.get(b, ()),
-                            t_theta, h, held) for b in todo]
+    held = [
+        (rows, lam, np.flatnonzero(lam != 0.0))
+        for rows, lam in held
+        if rows is not None and lam is not None and len(lam)
+    ]
+    parts = [
+        _step_end_part(massless[b], b, bodies[b], new_states[b], loads.get(b, ()), t_theta, h, held)
+        for b in todo
+    ]
     # rows with no massless column in any body impose nothing here
     if parts and parts[0][3].shape[0]:
         keep = np.any(np.hstack([p[3] for p in parts]) != 0.0, axis=1)
@@ -158,10 +173,11 @@ def equilibrate_step_end(massless, bodies, loads: dict, t_theta: float, h: float
     return changes
 
 
-def _step_end_part(ml: MasslessCoordinates, b: int, body, new, loads, t_theta: float,
-                   h: float, held) -> tuple:
+def _step_end_part(
+    ml: MasslessCoordinates, b: int, body, new, loads, t_theta: float, h: float, held
+) -> tuple:
     """(coordinates, q, force on them, held rows' columns) of body b for equilibrate."""
-    force = np.zeros(len(ml.s))    # on the massless coordinates only
+    force = np.zeros(len(ml.s))  # on the massless coordinates only
     Phi = [np.zeros((len(on), len(ml.s))) for _, _, on in held]
     for k, (rows, lam, on) in enumerate(held):
         blk = rows.blocks.get(b)
@@ -172,7 +188,8 @@ def _step_end_part(ml: MasslessCoordinates, b: int, body, new, loads, t_theta: f
     force /= h
     for load in loads:
         if t_theta >= load.t_start_s:
-            force += body.point_jacobian(load.node, new.A, new.q,
-                                         np.asarray(load.force_n, float))[1][ml.s]
+            force += body.point_jacobian(load.node, new.A, new.q, np.asarray(load.force_n, float))[
+                1
+            ][ml.s]
     P = np.vstack(Phi) if Phi else np.zeros((0, len(ml.s)))
     return ml, new.q, force, P

@@ -37,8 +37,9 @@ def balanced_residuals(bodies, res, scales, mids) -> tuple[float, np.ndarray, li
     return new_rel, new_t, moves
 
 
-def balance_translation(balanced, ends, v_plus, theta_h: float, rel: float,
-                        res_t: np.ndarray, rtol: float) -> tuple[float, np.ndarray]:
+def balance_translation(
+    balanced, ends, v_plus, theta_h: float, rel: float, res_t: np.ndarray, rtol: float
+) -> tuple[float, np.ndarray]:
     """Take the moves of `balanced` (balanced_residuals of the accepted residual) into
     v_plus and the end states (r += theta h d) unless a row would leave rtol. Returns the
     new (relative residual, translational residual sum), or the given ones if not taken."""

@@ -88,10 +88,10 @@ from flexmvm.integrate.w_images import WImages
 
 __all__ = ["MoreauJeanIntegrator", "StepResult"]
 
-SLOW_ITERATIONS = 6   # from this iterate on (or when the residual grows) W is refreshed
+SLOW_ITERATIONS = 6  # from this iterate on (or when the residual grows) W is refreshed
 ROUNDOFF_FLOOR = 1e-7  # a residual below this that stops decreasing is round-off (large bases)
 TRANSLATION_RTOL = 1e-13  # ...but the frame's translational rows (sums: no such floor) must
-                          # converge to this, so linear momentum drifts < 1e-9 over an impact
+# converge to this, so linear momentum drifts < 1e-9 over an impact
 
 
 @dataclass
@@ -106,12 +106,12 @@ class _Iteration:
     lam: np.ndarray
     contact_compliance: dict | None = None
     contact_delassus: np.ndarray | None = None
-    last_norm: float = np.inf       # largest absolute residual of the last iterate
-    last_rel: float = np.inf        # its relative residual
-    lcp_max: float = 0.0            # largest complementarity residual of the LCP solves
-    relaxed: bool = False           # the last iterate was relaxed (integrate.relaxation)
+    last_norm: float = np.inf  # largest absolute residual of the last iterate
+    last_rel: float = np.inf  # its relative residual
+    lcp_max: float = 0.0  # largest complementarity residual of the LCP solves
+    relaxed: bool = False  # the last iterate was relaxed (integrate.relaxation)
     stalled: bool = False
-    rel: float = np.inf             # relative residual (constraint impulses included)
+    rel: float = np.inf  # relative residual (constraint impulses included)
     rel_translation: float = np.inf  # the same of the translational rows alone
     translation_sum: np.ndarray = field(default_factory=lambda: np.zeros(3))  # [N s]
     residuals: list = field(default_factory=list)  # per body, constraint impulses included
@@ -123,19 +123,28 @@ class MoreauJeanIntegrator:
     2 at theta = 1/2 (implicit midpoint) or with theta(h) - 1/2 = O(h), 1 for a fixed
     theta > 1/2 (error ~ (theta - 1/2) h); tests/test_theta_scheme.py measures them."""
 
-    def __init__(self, system: System, *, theta: float | ThetaRule = DEFAULT_THETA,
-                 rtol: float = 1e-10, max_iter: int = 40, exploit_nonrotating: bool = True):
+    def __init__(
+        self,
+        system: System,
+        *,
+        theta: float | ThetaRule = DEFAULT_THETA,
+        rtol: float = 1e-10,
+        max_iter: int = 40,
+        exploit_nonrotating: bool = True,
+    ):
         if not isinstance(theta, ThetaRule):
             if not 0.5 <= theta <= 1.0:
                 raise SolverError(f"theta must be in [0.5, 1], got {theta!r}")
             theta = ThetaRule(theta)
         self.system = system
         self.theta_rule = theta
-        self.theta = theta.theta       # the fixed theta (with a damping time: not used)
+        self.theta = theta.theta  # the fixed theta (with a damping time: not used)
         bodies = system.bodies
         self.threads = BodyThreads(bodies)
-        self.solvers = [BodySolver(body, theta.at, pool=pool)
-                        for body, pool in zip(bodies, self.threads.solve_pool)]
+        self.solvers = [
+            BodySolver(body, theta.at, pool=pool)
+            for body, pool in zip(bodies, self.threads.solve_pool)
+        ]
         self.rtol = rtol
         self.max_iter = max_iter
         self.n_joint_rows = sum(j.n_rows for j in system.joints)
@@ -150,14 +159,15 @@ class MoreauJeanIntegrator:
         self.massless = [MasslessCoordinates.of(b) for b in bodies]
         check_contact_law(system, self.massless)
         # bodies whose k_hat dq_dot comes from W_qq dq_dot (full FE, undamped)
-        self.images = WImages({b for b in self.threads.sparse
-                               if bodies[b].c_hat is None})
+        self.images = WImages({b for b in self.threads.sparse if bodies[b].c_hat is None})
         self.carried_state = CarriedState(bodies, self.images, self.threads.contraction_pool)
-        self.matrices = IterationMatrices(bodies, self.solvers, self.threads,
-                                          self.carried_state, self.images)
+        self.matrices = IterationMatrices(
+            bodies, self.solvers, self.threads, self.carried_state, self.images
+        )
         # relaxation of a step whose iteration stalls (integrate.relaxation)
-        self.relax = AitkenRelaxation([float(np.ptp(body.X, axis=0).max()) if len(body.X)
-                                       else 1.0 for body in bodies])
+        self.relax = AitkenRelaxation(
+            [float(np.ptp(body.X, axis=0).max()) if len(body.X) else 1.0 for body in bodies]
+        )
 
     @property
     def n_factorizations(self) -> int:
@@ -182,8 +192,9 @@ class MoreauJeanIntegrator:
         """Momentum residuals without constraint forces, midpoint and end configurations
         (per body, on threads when several bodies are full FE: integrate.body_threads);
         th: the step's theta."""
-        out = self.threads.each(lambda b: self._residual(b, t, states[b], v_plus[b], h, th),
-                                range(len(states)))
+        out = self.threads.each(
+            lambda b: self._residual(b, t, states[b], v_plus[b], h, th), range(len(states))
+        )
         R, mids, ends, scales = zip(*(out[b] for b in range(len(states))))
         return list(R), list(mids), list(ends), list(scales)
 
@@ -203,13 +214,49 @@ class MoreauJeanIntegrator:
             inertia, F, momentum = (np.empty(body.nv) for _ in range(3))
             inv, nodal = body.inv, body.nodal
             if nodal is not None:
-                momentum_terms_nodal(mid.A, mid.q, dv, vm, Lq_m, Lqd_m, Kq_m, mqq_dv, mqq_vm,
-                                     inv.mass, inv.S0, inv.S1, inv.G0, nodal.MsX, nodal.node,
-                                     nodal.comp, g, inertia, F, momentum)
+                momentum_terms_nodal(
+                    mid.A,
+                    mid.q,
+                    dv,
+                    vm,
+                    Lq_m,
+                    Lqd_m,
+                    Kq_m,
+                    mqq_dv,
+                    mqq_vm,
+                    inv.mass,
+                    inv.S0,
+                    inv.S1,
+                    inv.G0,
+                    nodal.MsX,
+                    nodal.node,
+                    nodal.comp,
+                    g,
+                    inertia,
+                    F,
+                    momentum,
+                )
             else:
-                momentum_terms(mid.A, mid.q, dv, vm, Lq_m, Lqd_m, Kq_m, mqq_dv, mqq_vm,
-                               inv.mass, inv.S0, inv.S1, inv.G0, body.G1_array,
-                               g, inertia, F, momentum)
+                momentum_terms(
+                    mid.A,
+                    mid.q,
+                    dv,
+                    vm,
+                    Lq_m,
+                    Lqd_m,
+                    Kq_m,
+                    mqq_dv,
+                    mqq_vm,
+                    inv.mass,
+                    inv.S0,
+                    inv.S1,
+                    inv.G0,
+                    body.G1_array,
+                    g,
+                    inertia,
+                    F,
+                    momentum,
+                )
             if body.c_hat is not None:
                 F[6:] -= flat_product(body.c_hat, vm[6:])
         else:
@@ -276,15 +323,24 @@ class MoreauJeanIntegrator:
         th = self.theta_rule.at(h)
         crows, parts = self._candidate_rows(states, h)
         if self.exploit_nonrotating and nonrotating.applies(self.system, states):
-            out = nonrotating.nonrotating_step(self.system, self.solvers, th, self.rtol,
-                                               self.loads, t, states, h, crows)
+            out = nonrotating.nonrotating_step(
+                self.system, self.solvers, th, self.rtol, self.loads, t, states, h, crows
+            )
             if out is not None:
                 self.n_nonrotating_steps += 1
                 new_states, lam_c, res_t, lcp_res = out
                 self._equilibrate_massless(t, h, th, states, new_states, [(crows.rows, lam_c)])
                 self._after_step(parts, lam_c, h)
-                return StepResult(new_states, np.zeros(0), crows, lam_c, 1, 0.0,
-                                  translation_residual=res_t, lcp_residual=lcp_res)
+                return StepResult(
+                    new_states,
+                    np.zeros(0),
+                    crows,
+                    lam_c,
+                    1,
+                    0.0,
+                    translation_residual=res_t,
+                    lcp_residual=lcp_res,
+                )
         return self._newton_step(t, states, h, th, crows, parts)
 
     def _candidate_rows(self, states, h):
@@ -312,7 +368,7 @@ class MoreauJeanIntegrator:
         self.matrices.prepare(states, h, refresh_tol=None, defer=True)
         n_j = self.n_joint_rows
         v0 = [st.v.copy() for st in states]
-        s = _Iteration(v0, v0, np.zeros(n_j + crows.rows.m))    # v_free set by the first iterate
+        s = _Iteration(v0, v0, np.zeros(n_j + crows.rows.m))  # v_free set by the first iterate
         self.images.start(self.system.bodies)
         self.relax.start()
         for it in range(self.max_iter + 1):
@@ -326,23 +382,29 @@ class MoreauJeanIntegrator:
             refreshed = self._refresh_when_slow(s, it, res_norm, mids, h, crows)
             s.last_norm = res_norm
             if it == self.max_iter:
-                raise SolverError(f"Moreau-Jean step at t = {t:.6e} s (h = {h:.3e} s) did "
-                                  f"not converge in {self.max_iter} iterations: "
-                                  + stall_report(self.system.bodies, s.residuals, scales,
-                                                 self.rtol, crows, s.lam[n_j:], n_j))
+                raise SolverError(
+                    f"Moreau-Jean step at t = {t:.6e} s (h = {h:.3e} s) did "
+                    f"not converge in {self.max_iter} iterations: "
+                    + stall_report(
+                        self.system.bodies, s.residuals, scales, self.rtol, crows, s.lam[n_j:], n_j
+                    )
+                )
             if it > 0 and not refreshed and not s.relaxed:
                 # bodies whose residual is all in the frame rows: v_free of the last iterate
                 # minus W^-1 [R_f; 0] (with the constraint impulses of the last iterate in
                 # R_f); the others as on the first iterate, v+ - W^-1 R
-                s.v_free = self.matrices.corrected_free_velocities(R, s.residuals, scales,
-                                                                   s.v_free, s.v_plus, self.rtol)
+                s.v_free = self.matrices.corrected_free_velocities(
+                    R, s.residuals, scales, s.v_free, s.v_plus, self.rtol
+                )
             else:
                 s.v_free = self.matrices.free_velocities(R, s.v_plus)
             self._impulses(s, it, h, th, crows, phi, jrows, jacobian)
-            s.v_plus, s.relaxed = relaxed_iterate(self.relax, self.images.plus, v_before,
-                                                  s.v_plus, image_before, s.stalled)
-        return self._end_of_step(s, it, t, h, th, states, crows, parts, phi, jrows, mids,
-                                 ends, scales)
+            s.v_plus, s.relaxed = relaxed_iterate(
+                self.relax, self.images.plus, v_before, s.v_plus, image_before, s.stalled
+            )
+        return self._end_of_step(
+            s, it, t, h, th, states, crows, parts, phi, jrows, mids, ends, scales
+        )
 
     def _accepted(self, s: _Iteration, it, R, jacobian, crows, phi, scales) -> bool:
         """Convergence test of iterate it > 0: the residual with the last impulses within
@@ -350,12 +412,16 @@ class MoreauJeanIntegrator:
         ROUNDOFF_FLOOR, no longer decreasing, translational rows within TRANSLATION_RTOL or
         max_iter reached: accepted, and counted as not converged in StepResult)."""
         s.rel, s.rel_translation, s.translation_sum, s.residuals = self._relative_residual(
-            R, jacobian, crows.rows, s.lam, self.n_joint_rows, scales)
+            R, jacobian, crows.rows, s.lam, self.n_joint_rows, scales
+        )
         phi_ok = not (phi.size and np.abs(phi).max() > 1e-12)
-        floor = it > 2 and s.rel < ROUNDOFF_FLOOR and (s.rel >= 0.5 * s.last_rel
-                                                       or it >= self.max_iter)
-        if phi_ok and (s.rel <= self.rtol or (floor and (s.rel_translation <= TRANSLATION_RTOL
-                                                         or it >= self.max_iter))):
+        floor = (
+            it > 2 and s.rel < ROUNDOFF_FLOOR and (s.rel >= 0.5 * s.last_rel or it >= self.max_iter)
+        )
+        if phi_ok and (
+            s.rel <= self.rtol
+            or (floor and (s.rel_translation <= TRANSLATION_RTOL or it >= self.max_iter))
+        ):
             return True
         # a residual over the tolerance only in its translational rows is not accepted either,
         # though their balance (integrate.momentum_balance) would bring it within: accepting
@@ -380,8 +446,7 @@ class MoreauJeanIntegrator:
     def _contact_columns(self, s: _Iteration, h, crows) -> None:
         m_c = crows.rows.m
         s.contact_compliance = self.matrices.contact_compliance(crows, h) if m_c else {}
-        s.contact_delassus = sum((c.D for c in s.contact_compliance.values()),
-                                 np.zeros((m_c, m_c)))
+        s.contact_delassus = sum((c.D for c in s.contact_compliance.values()), np.zeros((m_c, m_c)))
 
     def _impulses(self, s: _Iteration, it, h, th, crows, phi, jrows, jacobian) -> None:
         """v+ = v_free + W^-1 Phi^T lambda with the impulses lambda of the mixed LCP on
@@ -412,7 +477,7 @@ class MoreauJeanIntegrator:
         s.lcp_max = max(s.lcp_max, lcp_res)
         lam = s.lam
         v_plus = list(s.v_free)
-        images.plus = dict(images.free)   # (every update makes new arrays)
+        images.plus = dict(images.free)  # (every update makes new arrays)
         for b, Yb in joint_columns.items():
             dv = Yb @ lam[:n_j]
             v_plus[b] = v_plus[b] + dv
@@ -423,8 +488,9 @@ class MoreauJeanIntegrator:
             images.impulses(b, self.solvers[b], crows.rows, lam[n_j:], dv)
         s.v_plus = v_plus
 
-    def _end_of_step(self, s: _Iteration, it, t, h, th, states, crows, parts, phi, jrows,
-                     mids, ends, scales) -> StepResult:
+    def _end_of_step(
+        self, s: _Iteration, it, t, h, th, states, crows, parts, phi, jrows, mids, ends, scales
+    ) -> StepResult:
         """The accepted iterate as the step's result: translational rows balanced (no
         joints), end states with v+, carried contractions advanced, massless coordinates
         to equilibrium."""
@@ -435,27 +501,50 @@ class MoreauJeanIntegrator:
         if not n_j:
             converged_t = res_t
             rel, res_t = balance_translation(
-                balanced_residuals(self.system.bodies, s.residuals, scales, mids), ends,
-                v_plus, th * h, rel, res_t, self.rtol)
+                balanced_residuals(self.system.bodies, s.residuals, scales, mids),
+                ends,
+                v_plus,
+                th * h,
+                rel,
+                res_t,
+                self.rtol,
+            )
             shift = res_t - converged_t
         self._after_step(parts, lam[n_j:], h)
         new_states = [e for e in ends]
         for st, vp in zip(new_states, v_plus):
             st.v = vp
         self.carried_state.advance(states, new_states, h)
-        self._equilibrate_massless(t, h, th, states, new_states,
-                                   [(crows.rows, lam[n_j:]), (jrows if n_j else None, lam[:n_j])])
+        self._equilibrate_massless(
+            t,
+            h,
+            th,
+            states,
+            new_states,
+            [(crows.rows, lam[n_j:]), (jrows if n_j else None, lam[:n_j])],
+        )
         drift = float(np.abs(phi).max()) if phi.size else 0.0
-        return StepResult(new_states, lam[:n_j], crows, lam[n_j:], it, drift,
-                          converged=rel <= self.rtol, residual=rel, translation_residual=res_t,
-                          lcp_residual=s.lcp_max, momentum_shift=shift)
+        return StepResult(
+            new_states,
+            lam[:n_j],
+            crows,
+            lam[n_j:],
+            it,
+            drift,
+            converged=rel <= self.rtol,
+            residual=rel,
+            translation_residual=res_t,
+            lcp_residual=s.lcp_max,
+            momentum_shift=shift,
+        )
 
     def _equilibrate_massless(self, t, h, th, states, new_states, held) -> None:
         """Massless coordinates to equilibrium at the step's end (integrate.massless); the
         carried k_hat q and k_hat q_dot follow (the mass-weighted contractions do not see
         massless coordinates)."""
-        for b, dq, dv in equilibrate_step_end(self.massless, self.system.bodies, self.loads,
-                                              t + th * h, h, states, new_states, held):
+        for b, dq, dv in equilibrate_step_end(
+            self.massless, self.system.bodies, self.loads, t + th * h, h, states, new_states, held
+        ):
             c = self.carried_state.of_state(b, new_states[b])
             if c is not None:
                 K_cols = self.massless[b].K_cols

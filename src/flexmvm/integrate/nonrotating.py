@@ -40,8 +40,17 @@ def applies(system, states: list[BodyState]) -> bool:
     return not system.joints and all(not np.any(st.v[3:6]) for st in states)
 
 
-def nonrotating_step(system, solvers, theta: float, rtol: float, loads: dict, t: float,
-                     states: list[BodyState], h: float, crows: ContactRows):
+def nonrotating_step(
+    system,
+    solvers,
+    theta: float,
+    rtol: float,
+    loads: dict,
+    t: float,
+    states: list[BodyState],
+    h: float,
+    crows: ContactRows,
+):
     """The step above. Returns (new states, contact impulses, translational residual summed
     over the bodies (3,) [N s], complementarity residual of the LCP) or None when a rotational
     residual exceeds rtol times the body's momentum scale (the frame would rotate)."""
@@ -61,16 +70,27 @@ def nonrotating_step(system, solvers, theta: float, rtol: float, loads: dict, t:
     if crows.rows.m:
         lam, lcp_res = _contact_impulses(system, solvers, h, crows, v_free, v_plus)
     for b, (body, st, vp) in enumerate(zip(system.bodies, states, v_plus)):
-        tau = sum((_load_torque(body, load, st, vp, theta, h)
-                   for load in loads.get(b, ()) if t + theta * h >= load.t_start_s),
-                  np.zeros(3))
-        if not _rotation_balanced(body, st, vp, crows, lam, b, tau, g, theta, h, rtol,
-                                  rhs_scale[b]):
+        tau = sum(
+            (
+                _load_torque(body, load, st, vp, theta, h)
+                for load in loads.get(b, ())
+                if t + theta * h >= load.t_start_s
+            ),
+            np.zeros(3),
+        )
+        if not _rotation_balanced(
+            body, st, vp, crows, lam, b, tau, g, theta, h, rtol, rhs_scale[b]
+        ):
             return None
-    res_t = sum((_translation_residual(body, st, vp, crows, lam, b, g, loads.get(b, ()),
-                                       t + theta * h, h)
-                 for b, (body, st, vp) in enumerate(zip(system.bodies, states, v_plus))),
-                np.zeros(3))
+    res_t = sum(
+        (
+            _translation_residual(
+                body, st, vp, crows, lam, b, g, loads.get(b, ()), t + theta * h, h
+            )
+            for b, (body, st, vp) in enumerate(zip(system.bodies, states, v_plus))
+        ),
+        np.zeros(3),
+    )
     new_states = []
     for st, vp in zip(states, v_plus):
         vm = theta * vp + (1.0 - theta) * st.v
@@ -113,8 +133,9 @@ def _free_rhs(body, st, g, loads, t_theta, theta, h) -> np.ndarray:
     return rhs
 
 
-def _contact_impulses(system, solvers, h, crows: ContactRows, v_free, v_plus
-                      ) -> tuple[np.ndarray, float]:
+def _contact_impulses(
+    system, solvers, h, crows: ContactRows, v_free, v_plus
+) -> tuple[np.ndarray, float]:
     """(lambda (m,), complementarity residual) of the LCP on D = Phi W_t^-1 Phi^T; adds W_t^-1 Phi^T lambda to v_plus.
     Bodies with nodal rows go through the cached nodal columns (integrate.compliance)."""
     rows = crows.rows

@@ -78,8 +78,9 @@ class AitkenRelaxation:
         return self.omega
 
 
-def relaxed_iterate(relax: AitkenRelaxation, images: dict, before, after, image_before: dict,
-                    stalled: bool) -> tuple[list[np.ndarray], bool]:
+def relaxed_iterate(
+    relax: AitkenRelaxation, images: dict, before, after, image_before: dict, stalled: bool
+) -> tuple[list[np.ndarray], bool]:
     """(v_plus, relaxed): the iterate ``after`` = G(``before``), or once the step has stalled
     Aitken's relaxed one before + w (after - before); images (the W-images of the full-FE
     bodies, integrate.w_images: linear in v_plus) relaxed alike, in place, from image_before."""

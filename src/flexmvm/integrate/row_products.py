@@ -23,8 +23,11 @@ def body_impulse(rows: Rows, b: int, body, lam: np.ndarray) -> np.ndarray:
         # psi selects DOFs: psi^T y = y at each coordinate's DOF; N^T lam summed entry by
         # entry in row order (as the transposed product does) from N's CSR arrays (a
         # NodalSelector's or a csr matrix's), no transposed matrices made
-        nt_lam = np.bincount(sel.indices, weights=sel.data * np.repeat(lam, np.diff(sel.indptr)),
-                             minlength=sel.shape[1])
+        nt_lam = np.bincount(
+            sel.indices,
+            weights=sel.data * np.repeat(lam, np.diff(sel.indptr)),
+            minlength=sel.shape[1],
+        )
         elastic = nt_lam[body.nodal.dof]
     else:
         elastic = np.asarray(body.psi.T @ (sel.tocsr().T @ lam)).ravel()
@@ -48,10 +51,23 @@ def merge_contacts(a: ContactRows, b: ContactRows) -> ContactRows:
     wb = b.normal_weight if b.normal_weight is not None else np.ones(b.rows.m)
     friction = None
     if a.friction is not None or b.friction is not None:
-        parts = [f for f in (a.friction, b.friction.shifted(a.rows.m) if b.friction else None)
-                 if f is not None]
-        friction = FrictionRows(*(np.concatenate([getattr(f, k) for f in parts])
-                                  for k in ("normal", "tangent", "mu", "directions")))
-    return ContactRows(stack([a.rows, b.rows]), np.concatenate([a.lower, b.lower]),
-                       a.keys + b.keys, np.concatenate([a.gaps, b.gaps]), 0,
-                       np.concatenate([wa, wb]), friction)
+        parts = [
+            f
+            for f in (a.friction, b.friction.shifted(a.rows.m) if b.friction else None)
+            if f is not None
+        ]
+        friction = FrictionRows(
+            *(
+                np.concatenate([getattr(f, k) for f in parts])
+                for k in ("normal", "tangent", "mu", "directions")
+            )
+        )
+    return ContactRows(
+        stack([a.rows, b.rows]),
+        np.concatenate([a.lower, b.lower]),
+        a.keys + b.keys,
+        np.concatenate([a.gaps, b.gaps]),
+        0,
+        np.concatenate([wa, wb]),
+        friction,
+    )

@@ -47,8 +47,9 @@ class TimeGrid:
         dt, out = self.dt_s, self.output_contact_dt_s
         n = round(out / dt)
         if n < 1 or abs(n * dt - out) > 1e-9 * out:
-            raise InputError(f"time: output_contact_dt_s = {out!r} must be a whole multiple of "
-                             f"dt_s = {dt!r}")
+            raise InputError(
+                f"time: output_contact_dt_s = {out!r} must be a whole multiple of dt_s = {dt!r}"
+            )
         return n
 
     def ticks(self) -> tuple[int, int, int]:
@@ -59,7 +60,9 @@ class TimeGrid:
         out = self.output_dt_s or dt
         n_out = round(out / dt)
         if n_out < 1 or abs(n_out * dt - out) > 1e-9 * out:
-            raise InputError(f"time: output_dt_s = {out!r} must be a whole multiple of dt_s = {dt!r}")
+            raise InputError(
+                f"time: output_dt_s = {out!r} must be a whole multiple of dt_s = {dt!r}"
+            )
         dt_max = self.dt_max_s or dt
         k_max = int(np.floor(np.log2(dt_max / dt) + 1e-9)) if dt_max >= dt else 0
         return int(np.ceil(self.t_end_s / dt - 1e-9)), n_out, max(k_max, 0)
@@ -90,9 +93,12 @@ class FrictionSummary:
         """This summary with one more step (rows `contact`, impulses, size h [s])."""
         ft = contact.tangential_impulse(impulses)
         stick, slip = contact.stick_slip
-        return FrictionSummary(self.impulse_ns + ft,
-                               max(self.force_max_n, float(np.linalg.norm(ft)) / h),
-                               max(self.max_sticking, stick), max(self.max_sliding, slip))
+        return FrictionSummary(
+            self.impulse_ns + ft,
+            max(self.force_max_n, float(np.linalg.norm(ft)) / h),
+            max(self.max_sticking, stick),
+            max(self.max_sliding, slip),
+        )
 
 
 @dataclass
@@ -101,20 +107,22 @@ class RunResult:
 
     t: np.ndarray
     body_names: list[str]
-    frame_r: np.ndarray            # (n_out, n_bodies, 3)
-    frame_v: np.ndarray            # (n_out, n_bodies, 6)
+    frame_r: np.ndarray  # (n_out, n_bodies, 3)
+    frame_v: np.ndarray  # (n_out, n_bodies, 6)
     probe_names: list[str]
-    probe_x: np.ndarray            # (n_out, n_probes, 3)
-    probe_v: np.ndarray            # (n_out, n_probes, 3)
-    contact_force: np.ndarray      # (n_out,) normal force, impulse-averaged over the interval ending at t [N]
-    joint_force: np.ndarray        # (n_out, n_joint_rows) averaged constraint forces [N]
+    probe_x: np.ndarray  # (n_out, n_probes, 3)
+    probe_v: np.ndarray  # (n_out, n_probes, 3)
+    contact_force: (
+        np.ndarray
+    )  # (n_out,) normal force, impulse-averaged over the interval ending at t [N]
+    joint_force: np.ndarray  # (n_out, n_joint_rows) averaged constraint forces [N]
     kinetic: np.ndarray
     strain: np.ndarray
     potential: np.ndarray
-    momentum: np.ndarray           # (n_out, 3) total linear momentum [kg m/s]
-    angular_momentum: np.ndarray   # (n_out, 3) about the origin [kg m^2/s]
-    q: list[np.ndarray]            # per body: (n_out, nq) elastic coordinates
-    frame_A: np.ndarray            # (n_out, n_bodies, 3, 3)
+    momentum: np.ndarray  # (n_out, 3) total linear momentum [kg m/s]
+    angular_momentum: np.ndarray  # (n_out, 3) about the origin [kg m^2/s]
+    q: list[np.ndarray]  # per body: (n_out, nq) elastic coordinates
+    frame_A: np.ndarray  # (n_out, n_bodies, 3, 3)
     q_dot: list[np.ndarray] = field(default_factory=list)  # per body: (n_out, nq) their rates
     steps: StepHistory | None = None  # every step: its end time, size and contact impulse
     # (n_out, n_bodies, 3) linear momentum of each body [kg m/s] (None: not recorded)
@@ -125,11 +133,11 @@ class RunResult:
     max_penetration_at: dict | None = None
     # deepest per measured direction, "<body> nodes into <against>" -> depth [m]
     max_penetration_by_direction_m: dict = field(default_factory=dict)
-    max_joint_drift: float = 0.0   # largest joint violation |phi| after any step (position level)
+    max_joint_drift: float = 0.0  # largest joint violation |phi| after any step (position level)
     n_steps: int = 0
     n_factorizations: int = 0
-    n_nonrotating_steps: int = 0   # steps taken by the linear non-rotating step (nonrotating.py)
-    steps_not_converged: int = 0   # steps that stopped above the Newton rtol (round-off floor)
+    n_nonrotating_steps: int = 0  # steps taken by the linear non-rotating step (nonrotating.py)
+    steps_not_converged: int = 0  # steps that stopped above the Newton rtol (round-off floor)
     newton_residual_max: float = 0.0  # largest relative momentum residual at a step's exit
     lcp_residual_max: float = 0.0  # largest complementarity residual of any LCP solve
     # normal contact row (contact name, slave node, master facet) -> [impulse [N s], first
@@ -144,9 +152,9 @@ class RunResult:
     momentum_shift: np.ndarray | None = None
     wall_time_s: float = 0.0
     friction: FrictionSummary | None = None  # None: no contact with friction in the system
-    step_cuts: int = 0             # steps retried as two halves (driver.MAX_STEP_CUTS deep)
-    smallest_step_s: float = 0.0   # the smallest step taken [s] (below dt_s only after cuts)
-    failure: str | None = None     # a run that stopped early: why (the histories end there)
+    step_cuts: int = 0  # steps retried as two halves (driver.MAX_STEP_CUTS deep)
+    smallest_step_s: float = 0.0  # the smallest step taken [s] (below dt_s only after cuts)
+    failure: str | None = None  # a run that stopped early: why (the histories end there)
 
     @property
     def total_energy(self) -> np.ndarray:
@@ -157,16 +165,18 @@ class RunResult:
         try:
             return self.body_names.index(name)
         except ValueError:
-            raise InputError(f"no body {name!r} in this run (bodies: "
-                             f"{', '.join(self.body_names)})") from None
+            raise InputError(
+                f"no body {name!r} in this run (bodies: {', '.join(self.body_names)})"
+            ) from None
 
     def probe(self, name: str) -> ProbeHistory:
         """Position and velocity history of probe ``name`` (global, [m], [m/s])."""
         try:
             i = self.probe_names.index(name)
         except ValueError:
-            raise InputError(f"no probe {name!r} in this run (probes: "
-                             f"{', '.join(self.probe_names) or 'none'})") from None
+            raise InputError(
+                f"no probe {name!r} in this run (probes: {', '.join(self.probe_names) or 'none'})"
+            ) from None
         return ProbeHistory(name, self.t, self.probe_x[:, i], self.probe_v[:, i])
 
     def elastic(self, body: str) -> tuple[np.ndarray, np.ndarray]:
@@ -178,8 +188,11 @@ class RunResult:
     def curves(self, axis: int = 0) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
         """(t, contact force, {probe: velocity component ``axis`` (0 = global x)}): the curves
         that comparisons, history files and figures use."""
-        return self.t, self.contact_force, {n: self.probe_v[:, i, axis]
-                                            for i, n in enumerate(self.probe_names)}
+        return (
+            self.t,
+            self.contact_force,
+            {n: self.probe_v[:, i, axis] for i, n in enumerate(self.probe_names)},
+        )
 
 
 @dataclass(frozen=True)
@@ -206,5 +219,3 @@ class StepHistory:
         """{step size [s]: number of steps taken with it}, smallest first."""
         sizes, counts = np.unique(self.h_s, return_counts=True)
         return {float(h): int(n) for h, n in zip(sizes, counts, strict=True)}
-
-

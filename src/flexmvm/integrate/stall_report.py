@@ -13,8 +13,7 @@ def stall_report(bodies, res, scales, rtol: float, crows: ContactRows, lam_c, n_
     elastic coordinate; for a nodal basis the mesh node and direction), and the contact pairs
     of the step's rows (contact, slave node, master facet) with their impulses. res, scales:
     per body its residual (constraint impulses included) and momentum scale."""
-    worst = max(range(len(res)), key=lambda b: float(np.abs(res[b]).max())
-                / max(scales[b], 1e-300))
+    worst = max(range(len(res)), key=lambda b: float(np.abs(res[b]).max()) / max(scales[b], 1e-300))
     body, r = bodies[worst], res[worst]
     i = int(np.argmax(np.abs(r)))
     rel = float(abs(r[i])) / max(scales[worst], 1e-300)
@@ -32,10 +31,15 @@ def stall_report(bodies, res, scales, rtol: float, crows: ContactRows, lam_c, n_
     if m:
         keys = crows.keys
         on = [k for k, x in zip(keys, lam_c) if x > 0.0]
-        shown = ", ".join(f"{k[0]} node {k[1]} on facet {k[2]}" if len(k) >= 3 else str(k)
-                          for k in (on or keys)[:3])
-        text += (f"; {m} contact row(s), {len(on)} carrying impulse ({shown}"
-                 + (" ..." if len(on or keys) > 3 else "") + ")")
+        shown = ", ".join(
+            f"{k[0]} node {k[1]} on facet {k[2]}" if len(k) >= 3 else str(k)
+            for k in (on or keys)[:3]
+        )
+        text += (
+            f"; {m} contact row(s), {len(on)} carrying impulse ({shown}"
+            + (" ..." if len(on or keys) > 3 else "")
+            + ")"
+        )
     if n_j:
         text += f"; {n_j} joint row(s)"
     return text

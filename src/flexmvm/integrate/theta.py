@@ -38,8 +38,7 @@ class ThetaRule:
     def __post_init__(self):
         if self.damping_time_s is not None:
             if not self.damping_time_s > 0:
-                raise InputError(f"theta: damping time must be > 0 s, got "
-                                 f"{self.damping_time_s!r}")
+                raise InputError(f"theta: damping time must be > 0 s, got {self.damping_time_s!r}")
         elif not 0.5 <= self.theta <= 1.0:
             raise InputError(f"theta must be in [0.5, 1], got {self.theta!r}")
 

@@ -33,9 +33,9 @@ class WImages:
 
     def __init__(self, bodies: set[int]):
         self.bodies = set(bodies)
-        self.plus: dict[int, np.ndarray] = {}    # image of v_plus - v of the iterate
-        self.free: dict[int, np.ndarray] = {}    # image of v_free - v
-        self.size: dict[int, float] = {}         # largest entry of the terms summed (check)
+        self.plus: dict[int, np.ndarray] = {}  # image of v_plus - v of the iterate
+        self.free: dict[int, np.ndarray] = {}  # image of v_free - v
+        self.size: dict[int, float] = {}  # largest entry of the terms summed (check)
         self._countdown = dict.fromkeys(bodies, 0)
         self.n_fallbacks = 0
 
@@ -73,8 +73,7 @@ class WImages:
         self._term(b, phi_t_lam, bt)
         self.plus[b] = self.plus[b] + (phi_t_lam - bt)
 
-    def k_dq(self, b: int, body, mqq: np.ndarray, dqd: np.ndarray, th_h: float
-             ) -> np.ndarray:
+    def k_dq(self, b: int, body, mqq: np.ndarray, dqd: np.ndarray, th_h: float) -> np.ndarray:
         """k_hat dq_dot of body b's iterate (mqq = M_qq dq_dot, th_h = theta h)."""
         if b not in self.bodies:
             return flat_product(body.k_hat, dqd)

@@ -49,8 +49,11 @@ class Group:
 
 def _gmsh_names(m: meshio.Mesh) -> dict[str, tuple[int, int]]:
     """gmsh physical names: name -> (tag, dim)."""
-    return {k: (int(v[0]), int(v[1])) for k, v in m.field_data.items()
-            if np.ndim(v) == 1 and len(v) >= 2}
+    return {
+        k: (int(v[0]), int(v[1]))
+        for k, v in m.field_data.items()
+        if np.ndim(v) == 1 and len(v) >= 2
+    }
 
 
 def _from_cell_sets(m: meshio.Mesh) -> dict[str, list[tuple[int, np.ndarray]]]:
@@ -69,7 +72,7 @@ def _from_physical_tags(m: meshio.Mesh) -> dict[str, list[tuple[int, np.ndarray]
     tags = m.cell_data.get("gmsh:physical")
     out: dict[str, list[tuple[int, np.ndarray]]] = {}
     if tags is None or len(tags) != len(m.cells):  # MSH 4 through meshio: untagged blocks
-        return out                                  # are left out (its cell_sets serve)
+        return out  # are left out (its cell_sets serve)
     for name, (tag, dim) in _gmsh_names(m).items():
         members = out.setdefault(name, [])
         for k, (block, block_tags) in enumerate(zip(m.cells, tags)):
@@ -111,8 +114,11 @@ def group_nodes(m: meshio.Mesh, group: Group, corners: int | None = None) -> np.
 
 def point_sets(m: meshio.Mesh) -> dict[str, np.ndarray]:
     """meshio point_sets (Abaqus NSET and the like): name -> node ids (file numbering)."""
-    return {name: np.asarray(ids, dtype=np.int64).ravel()
-            for name, ids in m.point_sets.items() if not name.startswith("gmsh:")}
+    return {
+        name: np.asarray(ids, dtype=np.int64).ravel()
+        for name, ids in m.point_sets.items()
+        if not name.startswith("gmsh:")
+    }
 
 
 __all__ = ["Group", "cell_dim", "group_nodes", "point_sets", "read_groups"]

@@ -37,8 +37,9 @@ FACES[CellType.TET10] = FACES[CellType.TET4]
 FACES[CellType.HEX27] = FACES[CellType.HEX8]
 
 
-def face_table(nodes: np.ndarray, blocks: list[CellBlock]) -> tuple[np.ndarray, np.ndarray,
-                                                                     np.ndarray, np.ndarray]:
+def face_table(
+    nodes: np.ndarray, blocks: list[CellBlock]
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """Every corner face of every cell, outward for a valid cell.
 
     Returns keys (F, 4) (sorted node ids, -1 padded for triangles: equal keys are the same
@@ -96,9 +97,11 @@ def check_faces(nodes: np.ndarray, blocks: list[CellBlock], where: str) -> np.nd
     if np.any(counts > 2):
         g = int(np.flatnonzero(counts > 2)[0])
         owners = cell[inv == g].tolist()
-        raise MeshError(f"{where}: face {keys[inv == g][0][keys[inv == g][0] >= 0].tolist()} "
-                        f"belongs to {int(counts[g])} cells (running ids {owners}); expected at "
-                        f"most 2 (overlapping or non-manifold cells)")
+        raise MeshError(
+            f"{where}: face {keys[inv == g][0][keys[inv == g][0] >= 0].tolist()} "
+            f"belongs to {int(counts[g])} cells (running ids {owners}); expected at "
+            f"most 2 (overlapping or non-manifold cells)"
+        )
     order = np.argsort(inv, kind="stable")
     pairs = order[np.repeat(counts == 2, counts)].reshape(-1, 2)  # faces sorted by key
     if len(pairs):
@@ -106,10 +109,12 @@ def check_faces(nodes: np.ndarray, blocks: list[CellBlock], where: str) -> np.nd
         bad = np.flatnonzero(np.einsum("ij,ij->i", n[:, 0], n[:, 1]) >= 0)
         if bad.size:
             a, b = cell[pairs[bad[0]]]
-            raise MeshError(f"{where}: cells {int(a)} and {int(b)} (running ids over the blocks) "
-                            f"lie on the same side of their shared face; expected neighbours on "
-                            f"opposite sides ({bad.size} such face(s): folded or overlapping "
-                            f"cells)")
+            raise MeshError(
+                f"{where}: cells {int(a)} and {int(b)} (running ids over the blocks) "
+                f"lie on the same side of their shared face; expected neighbours on "
+                f"opposite sides ({bad.size} such face(s): folded or overlapping "
+                f"cells)"
+            )
     return faces[order[np.repeat(counts == 1, counts)]]
 
 

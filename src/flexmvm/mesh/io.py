@@ -67,8 +67,11 @@ def _volume_blocks(m: meshio.Mesh, where: str) -> list[tuple[CellBlock, np.ndarr
     for k, block in enumerate(m.cells):
         if block.type in _VOLUME_TYPES:
             data = np.asarray(block.data)
-            tag = (np.asarray(tags[k], dtype=np.int64) if tags is not None
-                   else np.full(len(data), -1, dtype=np.int64))
+            tag = (
+                np.asarray(tags[k], dtype=np.int64)
+                if tags is not None
+                else np.full(len(data), -1, dtype=np.int64)
+            )
             by_type.setdefault(_VOLUME_TYPES[block.type], []).append((data, tag))
         elif cell_dim(block.type) == 3:
             raise MeshError(
@@ -78,8 +81,13 @@ def _volume_blocks(m: meshio.Mesh, where: str) -> list[tuple[CellBlock, np.ndarr
     if not by_type:
         found = ", ".join(sorted({b.type for b in m.cells})) or "none"
         raise MeshError(f"{where} has no volume cells (found: {found})")
-    return [(CellBlock(ct, np.concatenate([d for d, _ in parts])),
-             np.concatenate([t for _, t in parts])) for ct, parts in by_type.items()]
+    return [
+        (
+            CellBlock(ct, np.concatenate([d for d, _ in parts])),
+            np.concatenate([t for _, t in parts]),
+        )
+        for ct, parts in by_type.items()
+    ]
 
 
 def _drop_group_copies(blocks: list[tuple[CellBlock, np.ndarray]], where: str) -> list[CellBlock]:
@@ -104,21 +112,25 @@ def _drop_group_copies(blocks: list[tuple[CellBlock, np.ndarray]], where: str) -
                 raise MeshError(
                     f"{where}: {cell_type.value} cells {a} and {b} have the same nodes in a "
                     f"different order ({conn[0].tolist()} vs {conn[1].tolist()}); expected each "
-                    f"element once")
+                    f"element once"
+                )
             if np.any(t < 0) or len(np.unique(t)) != len(t):
-                why = ("no physical group" if np.any(t < 0)
-                       else f"both in physical group {int(t[0])}")
+                why = (
+                    "no physical group" if np.any(t < 0) else f"both in physical group {int(t[0])}"
+                )
                 raise MeshError(
                     f"{where}: {cell_type.value} cell {a} is written {len(ids)} times (also cell "
                     f"{b}; {why}); expected each element once (a repeated cell doubles its "
-                    f"stiffness and mass)")
+                    f"stiffness and mass)"
+                )
             keep[ids[1:]] = False
         out.append(CellBlock(block.cell_type, block.connectivity[keep]))
     return out
 
 
-def _orient_outward(facets: np.ndarray, faces: tuple[np.ndarray, np.ndarray], name: str,
-                    where: str) -> np.ndarray:
+def _orient_outward(
+    facets: np.ndarray, faces: tuple[np.ndarray, np.ndarray], name: str, where: str
+) -> np.ndarray:
     """Facets (n, 3|4) in the outward order of the cell face they match (integrity.face_table's
     keys and faces); MeshError if a facet is no cell face."""
     keys, oriented = faces
@@ -138,27 +150,37 @@ def _orient_outward(facets: np.ndarray, faces: tuple[np.ndarray, np.ndarray], na
     return oriented[match, : facets.shape[1]]
 
 
-def _facet_set(m: meshio.Mesh, group: Group, new_id: np.ndarray, faces, quadratic: QuadraticFaces,
-               where: str) -> FacetSet:
+def _facet_set(
+    m: meshio.Mesh, group: Group, new_id: np.ndarray, faces, quadratic: QuadraticFaces, where: str
+) -> FacetSet:
     """A dim-2 group's facets (renumbered), once each, outward; the faces of quadratic cells
     as linear sub-facets through all their nodes (mesh/subfacets.py)."""
     by_kind: dict[int, list[np.ndarray]] = {3: [], 4: []}
     for k, idx in group.members:
         n_corner = _SURFACE_CORNERS.get(m.cells[k].type)
         if n_corner is None:
-            raise MeshError(f"{where}: surface {group.name!r} has {m.cells[k].type!r} cells; "
-                            f"expected {', '.join(_SURFACE_CORNERS)}")
+            raise MeshError(
+                f"{where}: surface {group.name!r} has {m.cells[k].type!r} cells; "
+                f"expected {', '.join(_SURFACE_CORNERS)}"
+            )
         mapped = new_id[np.asarray(m.cells[k].data)[idx][:, :n_corner]]
         if np.any(mapped < 0):
             raise MeshError(f"{where}: surface {group.name!r} uses nodes of no volume cell")
         by_kind[n_corner].append(mapped)
-    out = {n: (_orient_outward(np.vstack(parts), faces, group.name, where) if parts
-               else np.zeros((0, n), dtype=np.int64)) for n, parts in by_kind.items()}
+    out = {
+        n: (
+            _orient_outward(np.vstack(parts), faces, group.name, where)
+            if parts
+            else np.zeros((0, n), dtype=np.int64)
+        )
+        for n, parts in by_kind.items()
+    }
     return quadratic.split(FacetSet(quads=out[4], tris=out[3]))
 
 
-def _named_sets(m: meshio.Mesh, new_id: np.ndarray, faces, quadratic: QuadraticFaces, where: str
-                ) -> tuple[dict[str, np.ndarray], dict[str, FacetSet]]:
+def _named_sets(
+    m: meshio.Mesh, new_id: np.ndarray, faces, quadratic: QuadraticFaces, where: str
+) -> tuple[dict[str, np.ndarray], dict[str, FacetSet]]:
     """Node sets and facet sets of the file's groups (groups.read_groups): a surface group
     gives a facet set and the node set of its facets' nodes (mid-side nodes included), a
     group of volume, line or point cells the node set of its nodes, an empty group an empty
@@ -176,8 +198,9 @@ def _named_sets(m: meshio.Mesh, new_id: np.ndarray, faces, quadratic: QuadraticF
     return node_sets, facet_sets
 
 
-def _renumbered(m: meshio.Mesh, blocks: list[CellBlock], where: str
-                ) -> tuple[np.ndarray, list[CellBlock], np.ndarray]:
+def _renumbered(
+    m: meshio.Mesh, blocks: list[CellBlock], where: str
+) -> tuple[np.ndarray, list[CellBlock], np.ndarray]:
     """Nodes used by a volume cell (in file order), the blocks renumbered to them, and the map
     file id -> new id (-1: unused). The unused nodes are stated in a MeshWarning."""
     n_points = len(m.points)
@@ -185,15 +208,20 @@ def _renumbered(m: meshio.Mesh, blocks: list[CellBlock], where: str
         c = b.connectivity
         if c.size and (c.min() < 0 or c.max() >= n_points):
             bad = int(c.min()) if c.min() < 0 else int(c.max())
-            raise MeshError(f"{where}: {b.cell_type.value} cells refer to node {bad}; expected "
-                            f"node ids 0..{n_points - 1}")
+            raise MeshError(
+                f"{where}: {b.cell_type.value} cells refer to node {bad}; expected "
+                f"node ids 0..{n_points - 1}"
+            )
     used = np.unique(np.concatenate([b.connectivity.ravel() for b in blocks]))
     if len(used) < n_points:
         unused = np.setdiff1d(np.arange(n_points), used)
         listed = ", ".join(map(str, unused[:5].tolist())) + (", ..." if len(unused) > 5 else "")
-        warnings.warn(f"{where}: {len(unused)} node(s) used by no volume cell dropped "
-                      f"(file ids {listed}); the rest renumbered in file order",
-                      MeshWarning, stacklevel=3)
+        warnings.warn(
+            f"{where}: {len(unused)} node(s) used by no volume cell dropped "
+            f"(file ids {listed}); the rest renumbered in file order",
+            MeshWarning,
+            stacklevel=3,
+        )
     new_id = np.full(n_points, -1, dtype=np.int64)
     new_id[used] = np.arange(len(used))
     nodes = np.asarray(m.points, dtype=float)[used]
@@ -240,8 +268,10 @@ def read_mesh(path: str | os.PathLike, node_sets: Mapping[str, np.ndarray] | Non
     sets, facet_sets = _named_sets(m, new_id, (keys, faces), quadratic, where)
     surface = quadratic.split(skin(boundary))
     if SKIN in facet_sets and not _same_facets(facet_sets[SKIN], surface):
-        raise MeshError(f"{where}: group {SKIN!r} is not the outer skin; expected the name "
-                        f"{SKIN!r} for the whole boundary only (rename the group)")
+        raise MeshError(
+            f"{where}: group {SKIN!r} is not the outer skin; expected the name "
+            f"{SKIN!r} for the whole boundary only (rename the group)"
+        )
     facet_sets[SKIN], sets[SKIN] = surface, surface.nodes
     for name, ids in point_sets(m).items():
         sets[name] = new_id[ids[(ids >= 0) & (ids < len(new_id))]]
@@ -251,8 +281,9 @@ def read_mesh(path: str | os.PathLike, node_sets: Mapping[str, np.ndarray] | Non
     for name, ids in (node_sets or {}).items():
         ids = np.asarray(ids, dtype=np.int64)
         if ids.size and (ids.min() < 0 or ids.max() >= len(m.points)):
-            raise MeshError(f"node set {name!r} refers to nodes outside {str(path)!r} "
-                            f"(0..{len(m.points) - 1})")
+            raise MeshError(
+                f"node set {name!r} refers to nodes outside {str(path)!r} (0..{len(m.points) - 1})"
+            )
         sets[name] = new_id[ids]
     sets = {k: v[v >= 0] for k, v in sets.items()}
     return Mesh(nodes=nodes, cells=tuple(blocks), node_sets=sets, facet_sets=facet_sets)
@@ -260,6 +291,7 @@ def read_mesh(path: str | os.PathLike, node_sets: Mapping[str, np.ndarray] | Non
 
 def _same_facets(a: FacetSet, b: FacetSet) -> bool:
     """Whether two facet sets hold the same facets (as node sets, whatever their order)."""
+
     def keys(fs: FacetSet) -> np.ndarray:
         k = np.full((fs.n_facets, 4), -1, dtype=np.int64)
         k[: len(fs.quads)] = fs.quads
@@ -319,8 +351,10 @@ def write_mesh(
     try:
         fd, tmp = tempfile.mkstemp(dir=path.parent, prefix=f".{path.name}.", suffix=path.suffix)
     except OSError as exc:
-        raise MeshError(f"cannot write mesh file {str(path)!r}: directory {str(path.parent)!r} "
-                        f"is not writable ({exc.strerror or type(exc).__name__})") from None
+        raise MeshError(
+            f"cannot write mesh file {str(path)!r}: directory {str(path.parent)!r} "
+            f"is not writable ({exc.strerror or type(exc).__name__})"
+        ) from None
     try:
         os.fchmod(fd, _FILE_MODE)  # as open() would have created it, not mkstemp's 0o600
     finally:

@@ -137,8 +137,10 @@ class Mesh:
                 f"unknown node set {name!r}; known: {', '.join(sorted(self.node_sets)) or 'none'}"
             ) from None
         if ids.size == 0:
-            raise MeshError(f"node set {name!r} is empty (a group with no node in the mesh); "
-                            "expected at least one node")
+            raise MeshError(
+                f"node set {name!r} is empty (a group with no node in the mesh); "
+                "expected at least one node"
+            )
         return ids
 
     def facet_set(self, name: str) -> FacetSet:
@@ -151,6 +153,8 @@ class Mesh:
                 f"unknown surface {name!r}; known: {', '.join(sorted(self.facet_sets)) or 'none'}"
             ) from None
         if fs.n_facets == 0:
-            raise MeshError(f"surface {name!r} is empty (a group with no facet in the mesh); "
-                            "expected at least one facet")
+            raise MeshError(
+                f"surface {name!r} is empty (a group with no facet in the mesh); "
+                "expected at least one facet"
+            )
         return fs

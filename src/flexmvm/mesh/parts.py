@@ -41,8 +41,10 @@ def _gmsh():
     try:
         import gmsh
     except ImportError:
-        raise InputError("meshing a part needs the optional dependency gmsh, which is not "
-                         "installed; expected `pip install gmsh` (or flexmvm[gmsh])") from None
+        raise InputError(
+            "meshing a part needs the optional dependency gmsh, which is not "
+            "installed; expected `pip install gmsh` (or flexmvm[gmsh])"
+        ) from None
     return gmsh
 
 
@@ -52,8 +54,7 @@ def _positive(**values: float) -> None:
             raise InputError(f"part: {name} must be a finite number > 0, got {value!r}")
 
 
-def _mesh_and_write(gmsh, path: Path, size_m: float, order: int,
-                    refine: Refinement | None) -> Path:
+def _mesh_and_write(gmsh, path: Path, size_m: float, order: int, refine: Refinement | None) -> Path:
     """Size field, 3D mesh of the given order, MSH 4.1 (ASCII) written to ``path``."""
     if order not in (1, 2):
         raise InputError(f"part: order must be 1 (tet4) or 2 (tet10), got {order!r}")
@@ -64,7 +65,8 @@ def _mesh_and_write(gmsh, path: Path, size_m: float, order: int,
         x, y, z = refine.point_m
         dist = gmsh.model.mesh.field.add("MathEval")
         gmsh.model.mesh.field.setString(
-            dist, "F", f"Sqrt((x-({x!r}))^2+(y-({y!r}))^2+(z-({z!r}))^2)")
+            dist, "F", f"Sqrt((x-({x!r}))^2+(y-({y!r}))^2+(z-({z!r}))^2)"
+        )
         th = gmsh.model.mesh.field.add("Threshold")
         gmsh.model.mesh.field.setNumber(th, "InField", dist)
         gmsh.model.mesh.field.setNumber(th, "SizeMin", refine.fine_m)
@@ -85,8 +87,9 @@ def _mesh_and_write(gmsh, path: Path, size_m: float, order: int,
     return path
 
 
-def _run(path: str | os.PathLike, size_m: float, order: int, refine: Refinement | None,
-         build: Callable) -> Path:
+def _run(
+    path: str | os.PathLike, size_m: float, order: int, refine: Refinement | None, build: Callable
+) -> Path:
     """Start gmsh, build the geometry and its physical groups (``build(gmsh)``), mesh, write,
     stop gmsh. A gmsh failure becomes a one-line MeshError."""
     gmsh = _gmsh()
@@ -133,8 +136,15 @@ def _close(a: float, b: float, scale: float) -> bool:
     return abs(a - b) <= 1e-4 * scale
 
 
-def sphere(path: str | os.PathLike, radius_m: float, size_m: float, *, order: int = 1,
-           refine: Refinement | None = None, cap_deg: float = 30.0) -> Path:
+def sphere(
+    path: str | os.PathLike,
+    radius_m: float,
+    size_m: float,
+    *,
+    order: int = 1,
+    refine: Refinement | None = None,
+    cap_deg: float = 30.0,
+) -> Path:
     """Sphere of radius_m centred at the origin. Groups: ``front``, the spherical cap within
     cap_deg of the -z pole (where it strikes when moving along -z), ``back``, the rest of the
     sphere's surface, volume ``sphere``. Returns the path written."""
@@ -159,8 +169,16 @@ def sphere(path: str | os.PathLike, radius_m: float, size_m: float, *, order: in
     return _run(path, size_m, order, refine, build)
 
 
-def block(path: str | os.PathLike, lx_m: float, ly_m: float, lz_m: float, size_m: float, *,
-          order: int = 1, refine: Refinement | None = None) -> Path:
+def block(
+    path: str | os.PathLike,
+    lx_m: float,
+    ly_m: float,
+    lz_m: float,
+    size_m: float,
+    *,
+    order: int = 1,
+    refine: Refinement | None = None,
+) -> Path:
     """Block x in [-lx/2, lx/2], y in [-ly/2, ly/2], z in [-lz, 0] (top face centre at the
     origin). Groups: ``top`` (z = 0), ``bottom`` (z = -lz), ``side`` (the four lateral faces),
     volume ``block``. Returns the path written."""
@@ -174,17 +192,31 @@ def block(path: str | os.PathLike, lx_m: float, ly_m: float, lz_m: float, size_m
         bottom = _faces(gmsh, lambda com, box: _close(com[2], -lz_m, scale))
         _group(gmsh, 2, top, "top")
         _group(gmsh, 2, bottom, "bottom")
-        _group(gmsh, 2, _faces(gmsh, lambda com, box: not (_close(com[2], 0.0, scale)
-                                                          or _close(com[2], -lz_m, scale))),
-               "side")
+        _group(
+            gmsh,
+            2,
+            _faces(
+                gmsh,
+                lambda com, box: not (_close(com[2], 0.0, scale) or _close(com[2], -lz_m, scale)),
+            ),
+            "side",
+        )
         _group(gmsh, 3, [vol], "block")
 
     return _run(path, size_m, order, refine, build)
 
 
-def beam(path: str | os.PathLike, length_m: float, width_m: float, height_m: float,
-         size_m: float, *, patch_m: float | None = None, order: int = 1,
-         refine: Refinement | None = None) -> Path:
+def beam(
+    path: str | os.PathLike,
+    length_m: float,
+    width_m: float,
+    height_m: float,
+    size_m: float,
+    *,
+    patch_m: float | None = None,
+    order: int = 1,
+    refine: Refinement | None = None,
+) -> Path:
     """Beam x in [0, length], y in [-width/2, width/2], z in [-height, 0] (top face at z = 0).
     Groups: ``top``, ``bottom``, ``side`` (y = +-width/2), ``end_a`` (x = 0), ``end_b``
     (x = length), ``mid_top`` (the top face within patch_m/2 of mid-length, default patch_m =
@@ -198,18 +230,36 @@ def beam(path: str | os.PathLike, length_m: float, width_m: float, height_m: flo
 
     def build(gmsh) -> None:
         occ = gmsh.model.occ
-        parts = [occ.addBox(a, -width_m / 2, -height_m, b - a, width_m, height_m)
-                 for a, b in ((0.0, x0), (x0, x1), (x1, length_m))]
+        parts = [
+            occ.addBox(a, -width_m / 2, -height_m, b - a, width_m, height_m)
+            for a, b in ((0.0, x0), (x0, x1), (x1, length_m))
+        ]
         occ.fragment([(3, parts[0])], [(3, p) for p in parts[1:]])
         occ.synchronize()
-        top = _faces(gmsh, lambda com, box: _close(box[2], 0.0, scale) and _close(box[5], 0.0, scale))
+        top = _faces(
+            gmsh, lambda com, box: _close(box[2], 0.0, scale) and _close(box[5], 0.0, scale)
+        )
         _group(gmsh, 2, top, "top")
-        _group(gmsh, 2, [t for t in top if x0 < gmsh.model.occ.getCenterOfMass(2, t)[0] < x1],
-               "mid_top")
-        _group(gmsh, 2, _faces(gmsh, lambda com, box: _close(box[2], -height_m, scale)
-                               and _close(box[5], -height_m, scale)), "bottom")
-        _group(gmsh, 2, _faces(gmsh, lambda com, box: _close(abs(com[1]), width_m / 2, scale)),
-               "side")
+        _group(
+            gmsh,
+            2,
+            [t for t in top if x0 < gmsh.model.occ.getCenterOfMass(2, t)[0] < x1],
+            "mid_top",
+        )
+        _group(
+            gmsh,
+            2,
+            _faces(
+                gmsh,
+                lambda com, box: (
+                    _close(box[2], -height_m, scale) and _close(box[5], -height_m, scale)
+                ),
+            ),
+            "bottom",
+        )
+        _group(
+            gmsh, 2, _faces(gmsh, lambda com, box: _close(abs(com[1]), width_m / 2, scale)), "side"
+        )
         _group(gmsh, 2, _faces(gmsh, lambda com, box: _close(box[3], 0.0, scale)), "end_a")
         _group(gmsh, 2, _faces(gmsh, lambda com, box: _close(box[0], length_m, scale)), "end_b")
         _group(gmsh, 3, [t for _, t in gmsh.model.getEntities(3)], "beam")
@@ -217,9 +267,19 @@ def beam(path: str | os.PathLike, length_m: float, width_m: float, height_m: flo
     return _run(path, size_m, order, refine, build)
 
 
-def arm(path: str | os.PathLike, length_m: float, width_m: float, thickness_m: float,
-        hub_radius_m: float, hole_radius_m: float, size_m: float, *, leg_m: float = 0.0,
-        order: int = 1, refine: Refinement | None = None) -> Path:
+def arm(
+    path: str | os.PathLike,
+    length_m: float,
+    width_m: float,
+    thickness_m: float,
+    hub_radius_m: float,
+    hole_radius_m: float,
+    size_m: float,
+    *,
+    leg_m: float = 0.0,
+    order: int = 1,
+    refine: Refinement | None = None,
+) -> Path:
     """Arm with a pivot hub: a plate of thickness_m (z in [0, thickness]) made of a hub disk
     of hub_radius_m about the origin with a hole of hole_radius_m (the pivot), a bar x in
     [0, length], y in [-width/2, width/2], and with leg_m > 0 a leg at the bar's end, x in
@@ -227,12 +287,19 @@ def arm(path: str | os.PathLike, length_m: float, width_m: float, thickness_m: f
     (the hole's cylindrical face: where a revolute joint acts), ``tip`` (the free end face:
     x = length for a straight arm, y = -width/2 - leg for an L), ``top`` (z = thickness),
     ``bottom`` (z = 0), volume ``arm``. Returns the path written."""
-    _positive(length_m=length_m, width_m=width_m, thickness_m=thickness_m,
-              hub_radius_m=hub_radius_m, hole_radius_m=hole_radius_m)
+    _positive(
+        length_m=length_m,
+        width_m=width_m,
+        thickness_m=thickness_m,
+        hub_radius_m=hub_radius_m,
+        hole_radius_m=hole_radius_m,
+    )
     if not hole_radius_m < hub_radius_m < length_m or width_m / 2 <= hole_radius_m:
-        raise InputError(f"arm: expected hole_radius_m < hub_radius_m < length_m and "
-                         f"hole_radius_m < width_m / 2, got {hole_radius_m!r}, {hub_radius_m!r}, "
-                         f"{length_m!r}, {width_m!r}")
+        raise InputError(
+            f"arm: expected hole_radius_m < hub_radius_m < length_m and "
+            f"hole_radius_m < width_m / 2, got {hole_radius_m!r}, {hub_radius_m!r}, "
+            f"{length_m!r}, {width_m!r}"
+        )
     if leg_m < 0:
         raise InputError(f"arm: leg_m must be >= 0 m, got {leg_m!r}")
     scale = length_m + leg_m
@@ -240,26 +307,39 @@ def arm(path: str | os.PathLike, length_m: float, width_m: float, thickness_m: f
 
     def build(gmsh) -> None:
         occ = gmsh.model.occ
-        shapes = [(2, occ.addDisk(0.0, 0.0, 0.0, hub_radius_m, hub_radius_m)),
-                  (2, occ.addRectangle(0.0, -width_m / 2, 0.0, length_m, width_m))]
+        shapes = [
+            (2, occ.addDisk(0.0, 0.0, 0.0, hub_radius_m, hub_radius_m)),
+            (2, occ.addRectangle(0.0, -width_m / 2, 0.0, length_m, width_m)),
+        ]
         if leg_m > 0:
-            shapes.append((2, occ.addRectangle(length_m - width_m, tip_y, 0.0, width_m,
-                                               width_m + leg_m)))
+            shapes.append(
+                (2, occ.addRectangle(length_m - width_m, tip_y, 0.0, width_m, width_m + leg_m))
+            )
         plate, _ = occ.fuse(shapes[:1], shapes[1:])
         hole = occ.addDisk(0.0, 0.0, 0.0, hole_radius_m, hole_radius_m)
         plate, _ = occ.cut(plate, [(2, hole)])
         occ.extrude(plate, 0.0, 0.0, thickness_m)
         occ.synchronize()
         rim = hole_radius_m + 1e-4 * scale
-        _group(gmsh, 2, _faces(gmsh, lambda com, box: max(map(abs, box[:2] + box[3:5])) <= rim),
-               "hub")
+        _group(
+            gmsh, 2, _faces(gmsh, lambda com, box: max(map(abs, box[:2] + box[3:5])) <= rim), "hub"
+        )
         if leg_m > 0:
             tip = _faces(gmsh, lambda com, box: _close(box[4], tip_y, scale))
         else:
             tip = _faces(gmsh, lambda com, box: _close(box[0], length_m, scale))
         _group(gmsh, 2, tip, "tip")
-        _group(gmsh, 2, _faces(gmsh, lambda com, box: _close(box[2], thickness_m, scale)
-                               and _close(box[5], thickness_m, scale)), "top")
+        _group(
+            gmsh,
+            2,
+            _faces(
+                gmsh,
+                lambda com, box: (
+                    _close(box[2], thickness_m, scale) and _close(box[5], thickness_m, scale)
+                ),
+            ),
+            "top",
+        )
         _group(gmsh, 2, _faces(gmsh, lambda com, box: _close(box[5], 0.0, scale)), "bottom")
         _group(gmsh, 3, [t for _, t in gmsh.model.getEntities(3)], "arm")
 
@@ -283,8 +363,15 @@ def hertz_block_part(path: str | os.PathLike, fine_m: float = HERTZ_BLOCK_COARSE
     docs/notes/2026-11-27-hertz-block.md). 8 mm elsewhere: the block's rigid recoil and its
     global compliance (~0.5 % of the approach) need no more."""
     _positive(fine_m=fine_m)
-    return block(path, 0.060, 0.060, 0.030, 8.0e-3, order=2,
-                 refine=Refinement((0.0, 0.0, 0.0), fine_m, 1.0e-3, 10.0e-3))
+    return block(
+        path,
+        0.060,
+        0.060,
+        0.030,
+        8.0e-3,
+        order=2,
+        refine=Refinement((0.0, 0.0, 0.0), fine_m, 1.0e-3, 10.0e-3),
+    )
 
 
 def hertz_sphere_part(path: str | os.PathLike) -> Path:
@@ -294,8 +381,9 @@ def hertz_sphere_part(path: str | os.PathLike) -> Path:
     curvature on the scale of the contact radius (0.39 mm): a chord of 0.1 mm lies 0.13 um
     inside the sphere (s^2 / 8 R), 1 % of the approach; with 0.4 mm facets (sphere_r10.msh)
     the contact lasted 5 % longer than Hertz's."""
-    return sphere(path, 0.010, 0.0025, refine=Refinement((0.0, 0.0, -0.010), 0.1e-3, 0.6e-3,
-                                                         6.0e-3))
+    return sphere(
+        path, 0.010, 0.0025, refine=Refinement((0.0, 0.0, -0.010), 0.1e-3, 0.6e-3, 6.0e-3)
+    )
 
 
 def hertz_beam_part(path: str | os.PathLike, fine_m: float = 0.2e-3) -> Path:
@@ -311,20 +399,37 @@ def hertz_beam_part(path: str | os.PathLike, fine_m: float = 0.2e-3) -> Path:
     free-free bending frequencies in the impact plane within 0.03, 0.08, 0.21 % of the
     Timoshenko beam's (tet4 at 2 mm: +6.4 to +6.9 %, locking)."""
     _positive(fine_m=fine_m)
-    return beam(path, 0.200, 0.010, 0.010, 5.0e-3, order=2,
-                refine=Refinement((0.100, 0.0, 0.0), fine_m, 0.6e-3, 6.0e-3))
+    return beam(
+        path,
+        0.200,
+        0.010,
+        0.010,
+        5.0e-3,
+        order=2,
+        refine=Refinement((0.100, 0.0, 0.0), fine_m, 0.6e-3, 6.0e-3),
+    )
 
 
-def arm_stop_part(path: str | os.PathLike, size_m: float = 4.0e-3, fine_m: float = 1.0e-3,
-                  order: int = 2) -> Path:
+def arm_stop_part(
+    path: str | os.PathLike, size_m: float = 4.0e-3, fine_m: float = 1.0e-3, order: int = 2
+) -> Path:
     """The aluminium arm of scenarios/arm_stop.toml (``arm``): 300 x 20 x 10 mm on a hub of
     radius 15 mm with a pivot hole of radius 5 mm, tet10 (order 2); fine_m [m] within 3 mm of
     the point of its +y side face where the stop strikes, (0.270, 0.010, 0.005), growing to
     size_m over 12 mm. The stop's Hertz contact radius at the impact (a steel sphere R 10 mm,
     ~700 N on aluminium) is ~0.6 mm, a few node spacings (fine_m / 2) of a tet10 face. The
     tests use the same part at a coarse size in tet4."""
-    return arm(path, 0.300, 0.020, 0.010, 0.015, 0.005, size_m, order=order,
-               refine=Refinement((0.270, 0.010, 0.005), fine_m, 3.0e-3, 12.0e-3))
+    return arm(
+        path,
+        0.300,
+        0.020,
+        0.010,
+        0.015,
+        0.005,
+        size_m,
+        order=order,
+        refine=Refinement((0.270, 0.010, 0.005), fine_m, 3.0e-3, 12.0e-3),
+    )
 
 
 #: The meshes of the shipped scenarios (scenarios/sphere_block.toml, sphere_beam.toml,
@@ -334,8 +439,12 @@ def arm_stop_part(path: str | os.PathLike, size_m: float = 4.0e-3, fine_m: float
 #: sides, fine enough at the contact for Hertz's law; the arm: arm_stop_part, struck by the
 #: stop sphere_r10 (tet4, 0.4 mm at its -z pole, whose nodes are the slave side).
 SCENARIO_MESHES: tuple[tuple[str, Callable[[Path], Path]], ...] = (
-    ("sphere_r10.msh", lambda p: sphere(p, 0.010, 0.0025, refine=Refinement(
-        (0.0, 0.0, -0.010), 0.4e-3, 0.8e-3, 6.0e-3))),
+    (
+        "sphere_r10.msh",
+        lambda p: sphere(
+            p, 0.010, 0.0025, refine=Refinement((0.0, 0.0, -0.010), 0.4e-3, 0.8e-3, 6.0e-3)
+        ),
+    ),
     ("sphere_r10_cap.msh", hertz_sphere_part),
     ("block_60x60x30.msh", hertz_block_part),
     ("beam_200x10x10.msh", hertz_beam_part),
@@ -362,9 +471,22 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-__all__ = ["HERTZ_BLOCK_COARSE_M", "HERTZ_BLOCK_FINE_M", "SCENARIO_MESHES", "Refinement", "arm",
-           "arm_stop_part", "beam", "block", "hertz_beam_part", "hertz_block_part",
-           "hertz_sphere_part", "main", "sphere", "write_scenario_meshes"]
+__all__ = [
+    "HERTZ_BLOCK_COARSE_M",
+    "HERTZ_BLOCK_FINE_M",
+    "SCENARIO_MESHES",
+    "Refinement",
+    "arm",
+    "arm_stop_part",
+    "beam",
+    "block",
+    "hertz_beam_part",
+    "hertz_block_part",
+    "hertz_sphere_part",
+    "main",
+    "sphere",
+    "write_scenario_meshes",
+]
 
 
 if __name__ == "__main__":

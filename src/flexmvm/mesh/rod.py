@@ -374,8 +374,9 @@ def rod_mesh(spec: RodSpec = RodSpec()) -> RodMesh:
         "end_b": _surface(sec.quads + last),
         "side": _surface(side_grid.reshape(-1, 3, 3)),
     }
-    surfaces["surface"] = tuple(np.vstack([part[k] for part in surfaces.values()])
-                                for k in range(2))  # the skin, as read_mesh names it
+    surfaces["surface"] = tuple(
+        np.vstack([part[k] for part in surfaces.values()]) for k in range(2)
+    )  # the skin, as read_mesh names it
     outer = np.flatnonzero(sec.lap == sec.lap.max())
     node_sets = {
         "end_a": np.arange(m),
@@ -384,8 +385,9 @@ def rod_mesh(spec: RodSpec = RodSpec()) -> RodMesh:
         "end_b_centre": np.array([last]),
         "side": (np.arange(len(x))[:, None] * m + outer[None]).ravel(),
     }
-    node_sets["surface"] = np.unique(np.concatenate([node_sets[k] for k in ("end_a", "end_b",
-                                                                             "side")]))
+    node_sets["surface"] = np.unique(
+        np.concatenate([node_sets[k] for k in ("end_a", "end_b", "side")])
+    )
     mesh = Mesh(
         nodes=nodes,
         cells=(CellBlock(CellType.HEX27, conn.reshape(-1, 27)),),

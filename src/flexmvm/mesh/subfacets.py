@@ -29,14 +29,32 @@ from flexmvm.mesh.mesh import CellBlock, CellType, FacetSet
 #: meshio/VTK order (tetra10 nodes 4..9; hexahedron27 nodes 8..19, mesh/quality.HEX27_IJK).
 EDGE_NODES: dict[CellType, tuple[tuple[int, int, int], ...]] = {
     CellType.TET10: ((0, 1, 4), (1, 2, 5), (2, 0, 6), (0, 3, 7), (1, 3, 8), (2, 3, 9)),
-    CellType.HEX27: ((0, 1, 8), (1, 2, 9), (2, 3, 10), (3, 0, 11), (4, 5, 12), (5, 6, 13),
-                     (6, 7, 14), (7, 4, 15), (0, 4, 16), (1, 5, 17), (2, 6, 18), (3, 7, 19)),
+    CellType.HEX27: (
+        (0, 1, 8),
+        (1, 2, 9),
+        (2, 3, 10),
+        (3, 0, 11),
+        (4, 5, 12),
+        (5, 6, 13),
+        (6, 7, 14),
+        (7, 4, 15),
+        (0, 4, 16),
+        (1, 5, 17),
+        (2, 6, 18),
+        (3, 7, 19),
+    ),
 }
 
 #: Face-centre nodes of hexahedron27: (the face's four corners, centre node), VTK order.
 FACE_NODES: dict[CellType, tuple[tuple[tuple[int, int, int, int], int], ...]] = {
-    CellType.HEX27: (((0, 3, 7, 4), 20), ((1, 2, 6, 5), 21), ((0, 1, 5, 4), 22),
-                     ((3, 2, 6, 7), 23), ((0, 1, 2, 3), 24), ((4, 5, 6, 7), 25)),
+    CellType.HEX27: (
+        ((0, 3, 7, 4), 20),
+        ((1, 2, 6, 5), 21),
+        ((0, 1, 5, 4), 22),
+        ((3, 2, 6, 7), 23),
+        ((0, 1, 2, 3), 24),
+        ((4, 5, 6, 7), 25),
+    ),
 }
 
 
@@ -50,12 +68,11 @@ class _Lookup:
         """Values of the rows of k (m, c) (corner ids in any order); -1 where absent."""
         if len(self.keys) == 0 or len(k) == 0:
             return np.full(len(k), -1, dtype=np.int64)
-        _, inv = np.unique(np.vstack([self.keys, np.sort(k, axis=1)]), axis=0,
-                           return_inverse=True)
+        _, inv = np.unique(np.vstack([self.keys, np.sort(k, axis=1)]), axis=0, return_inverse=True)
         inv = inv.ravel()
         owner = np.full(inv.max() + 1, -1, dtype=np.int64)
         owner[inv[: len(self.keys)]] = self.values
-        return owner[inv[len(self.keys):]]
+        return owner[inv[len(self.keys) :]]
 
 
 class QuadraticFaces:
@@ -72,12 +89,13 @@ class QuadraticFaces:
                 faces.append(conn[:, list(corners)])
                 centres.append(conn[:, c])
         self.quadratic = bool(edges)
-        cat = (lambda parts, w: np.vstack(parts) if parts
-               else np.zeros((0, w), dtype=np.int64))
-        self._mid = _Lookup(cat(edges, 2), np.concatenate(mids) if mids
-                            else np.zeros(0, dtype=np.int64))
-        self._centre = _Lookup(cat(faces, 4), np.concatenate(centres) if centres
-                               else np.zeros(0, dtype=np.int64))
+        cat = lambda parts, w: np.vstack(parts) if parts else np.zeros((0, w), dtype=np.int64)
+        self._mid = _Lookup(
+            cat(edges, 2), np.concatenate(mids) if mids else np.zeros(0, dtype=np.int64)
+        )
+        self._centre = _Lookup(
+            cat(faces, 4), np.concatenate(centres) if centres else np.zeros(0, dtype=np.int64)
+        )
 
     def _mids(self, f: np.ndarray) -> list[np.ndarray]:
         """Mid-side node of each edge (f[:, i], f[:, i+1]) of facets f (n, c)."""
@@ -95,8 +113,10 @@ class QuadraticFaces:
         qt = (ab >= 0) & (bc >= 0) & (ca >= 0)
         a, b, c = tris[qt].T
         ab, bc, ca = ab[qt], bc[qt], ca[qt]
-        sub_t = np.stack([np.column_stack(s) for s in ((a, ab, ca), (ab, b, bc), (ca, bc, c),
-                                                       (ab, bc, ca))], axis=1).reshape(-1, 3)
+        sub_t = np.stack(
+            [np.column_stack(s) for s in ((a, ab, ca), (ab, b, bc), (ca, bc, c), (ab, bc, ca))],
+            axis=1,
+        ).reshape(-1, 3)
         out_t = np.vstack([tris[~qt], sub_t])
         if len(quads):
             m1, m2, m3, m4 = self._mids(quads)
@@ -104,9 +124,13 @@ class QuadraticFaces:
             qq = (m1 >= 0) & (m2 >= 0) & (m3 >= 0) & (m4 >= 0) & (o >= 0)
             a, b, c, d = quads[qq].T
             m1, m2, m3, m4, o = m1[qq], m2[qq], m3[qq], m4[qq], o[qq]
-            sub_q = np.stack([np.column_stack(s) for s in (
-                (a, m1, o, m4), (m1, b, m2, o), (o, m2, c, m3), (m4, o, m3, d))],
-                axis=1).reshape(-1, 4)
+            sub_q = np.stack(
+                [
+                    np.column_stack(s)
+                    for s in ((a, m1, o, m4), (m1, b, m2, o), (o, m2, c, m3), (m4, o, m3, d))
+                ],
+                axis=1,
+            ).reshape(-1, 4)
             out_q = np.vstack([quads[~qq], sub_q])
         else:
             out_q = quads

@@ -39,8 +39,9 @@ def _history(name: str, t: object, y: object) -> tuple[np.ndarray, np.ndarray]:
     return t_arr, y_arr
 
 
-def _window(t_ref: np.ndarray, t: np.ndarray, t_window: tuple[float, float] | None
-            ) -> tuple[float, float]:
+def _window(
+    t_ref: np.ndarray, t: np.ndarray, t_window: tuple[float, float] | None
+) -> tuple[float, float]:
     """Common time window of two histories, optionally narrowed to t_window = (start, end) [s]."""
     lo, hi = max(t_ref[0], t[0]), min(t_ref[-1], t[-1])
     if t_window is not None:
@@ -59,9 +60,9 @@ def _window(t_ref: np.ndarray, t: np.ndarray, t_window: tuple[float, float] | No
     return float(lo), float(hi)
 
 
-def _on_common_grid(t_ref: object, y_ref: object, t: object, y: object,
-                    t_window: tuple[float, float] | None
-                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def _on_common_grid(
+    t_ref: object, y_ref: object, t: object, y: object, t_window: tuple[float, float] | None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Reference samples in the common window and the candidate linearly interpolated there."""
     tr, yr = _history("reference", t_ref, y_ref)
     tc, yc = _history("candidate", t, y)
@@ -90,8 +91,14 @@ def pearson(x: np.ndarray, y: np.ndarray) -> float:
     return float(np.clip((dx @ dy) / math.sqrt(sxx * syy), -1.0, 1.0))
 
 
-def ncc(t_ref: object, y_ref: object, t: object, y: object, *,
-        t_window: tuple[float, float] | None = None) -> float:
+def ncc(
+    t_ref: object,
+    y_ref: object,
+    t: object,
+    y: object,
+    *,
+    t_window: tuple[float, float] | None = None,
+) -> float:
     """NCC (seed section 3.1): Pearson r of the candidate (t, y), linearly interpolated onto the
     reference's samples t_ref inside the common time window (optionally narrowed to t_window).
 
@@ -108,8 +115,11 @@ def contact_intervals(t: object, force: object, threshold: float) -> list[tuple[
     interpolation between samples; an interval open at either end of the history is closed there.
     """
     ta, fa = _history("force history", t, force)
-    if isinstance(threshold, bool) or not isinstance(threshold, (int, float)) \
-            or not math.isfinite(threshold):
+    if (
+        isinstance(threshold, bool)
+        or not isinstance(threshold, (int, float))
+        or not math.isfinite(threshold)
+    ):
         raise InputError(f"threshold: expected a finite force in N, got {threshold!r}")
     above = fa > threshold
     out: list[tuple[float, float]] = []
@@ -163,8 +173,9 @@ def _rel(name: str, cand: float, ref: float) -> float:
     return (cand - ref) / ref
 
 
-def compare_force(t_ref: object, f_ref: object, t: object, f: object,
-                  threshold_fraction: float = 0.01) -> Comparison:
+def compare_force(
+    t_ref: object, f_ref: object, t: object, f: object, threshold_fraction: float = 0.01
+) -> Comparison:
     """Compare a candidate contact-force history with a reference over their common window.
 
     NCC as :func:`ncc` over the contact window (``ncc``) and over the whole common window
@@ -176,8 +187,11 @@ def compare_force(t_ref: object, f_ref: object, t: object, f: object,
     threshold_fraction outside [0, 1), a reference with non-positive peak, zero impulse or no
     contact, or a contact window of fewer than 3 samples.
     """
-    if isinstance(threshold_fraction, bool) or not isinstance(threshold_fraction, (int, float)) \
-            or not 0.0 <= threshold_fraction < 1.0:
+    if (
+        isinstance(threshold_fraction, bool)
+        or not isinstance(threshold_fraction, (int, float))
+        or not 0.0 <= threshold_fraction < 1.0
+    ):
         raise InputError(
             f"threshold_fraction: expected a number in [0, 1), got {threshold_fraction!r}"
         )
@@ -207,14 +221,20 @@ def contact_window(t: np.ndarray, intervals: list[tuple[float, float]]) -> np.nd
     lo, hi = min(a for a, _ in intervals), max(b for _, b in intervals)
     inside = (t >= lo) & (t <= hi)
     if np.count_nonzero(inside) < 3:
-        raise InputError(f"contact window [{lo:g}, {hi:g}] s holds {np.count_nonzero(inside)} "
-                         "reference samples; expected at least 3")
+        raise InputError(
+            f"contact window [{lo:g}, {hi:g}] s holds {np.count_nonzero(inside)} "
+            "reference samples; expected at least 3"
+        )
     return inside
 
 
 _TERM = re.compile(r"^\s*([a-z_]+)\s*(>=|<=)\s*(\S+)\s*$")
-_KEYS = {"ncc": (">=", "ncc_min"), "peak": ("<=", "peak_err_max"),
-         "impulse": ("<=", "impulse_err_max"), "duration": ("<=", "duration_err_max")}
+_KEYS = {
+    "ncc": (">=", "ncc_min"),
+    "peak": ("<=", "peak_err_max"),
+    "impulse": ("<=", "impulse_err_max"),
+    "duration": ("<=", "duration_err_max"),
+}
 
 
 @dataclass(frozen=True)
@@ -229,19 +249,29 @@ class Target:
     duration_err_max: float | None = None
 
     def __post_init__(self) -> None:
-        if isinstance(self.ncc_min, bool) or not isinstance(self.ncc_min, (int, float)) \
-                or not -1.0 <= self.ncc_min <= 1.0:
+        if (
+            isinstance(self.ncc_min, bool)
+            or not isinstance(self.ncc_min, (int, float))
+            or not -1.0 <= self.ncc_min <= 1.0
+        ):
             raise InputError(f"Target.ncc_min: expected a number in [-1, 1], got {self.ncc_min!r}")
         for key in ("peak_err_max", "impulse_err_max", "duration_err_max"):
             v = getattr(self, key)
-            if v is not None and (isinstance(v, bool) or not isinstance(v, (int, float))
-                                  or not math.isfinite(v) or v < 0):
+            if v is not None and (
+                isinstance(v, bool)
+                or not isinstance(v, (int, float))
+                or not math.isfinite(v)
+                or v < 0
+            ):
                 raise InputError(f"Target.{key}: expected None or a finite number >= 0, got {v!r}")
 
     def met_by(self, c: Comparison) -> bool:
         """True when c reaches every bound of this target."""
-        checks = ((self.peak_err_max, c.peak_err), (self.impulse_err_max, c.impulse_err),
-                  (self.duration_err_max, c.duration_err))
+        checks = (
+            (self.peak_err_max, c.peak_err),
+            (self.impulse_err_max, c.impulse_err),
+            (self.duration_err_max, c.duration_err),
+        )
         return c.ncc >= self.ncc_min and all(b is None or abs(e) <= b for b, e in checks)
 
     @classmethod

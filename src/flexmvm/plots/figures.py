@@ -36,8 +36,11 @@ def curves_from_run(run: RunResult, probe_axis: int = 0) -> Curves:
     if isinstance(probe_axis, bool) or probe_axis not in (0, 1, 2):
         raise InputError(f"probe_axis: expected 0, 1 or 2 (x, y, z), got {probe_axis!r}")
     v = np.asarray(run.probe_v, dtype=float)
-    return (np.asarray(run.t, dtype=float), np.asarray(run.contact_force, dtype=float),
-            {name: v[:, i, probe_axis] for i, name in enumerate(run.probe_names)})
+    return (
+        np.asarray(run.t, dtype=float),
+        np.asarray(run.contact_force, dtype=float),
+        {name: v[:, i, probe_axis] for i, name in enumerate(run.probe_names)},
+    )
 
 
 def _series(label: str, what: str, t: np.ndarray, y: Any) -> np.ndarray:
@@ -59,7 +62,9 @@ def _checked(runs: Mapping[str, Curves]) -> list[tuple[str, np.ndarray, np.ndarr
             ) from None
         t = np.asarray(t, dtype=float)
         if t.ndim != 1 or t.size < 2:
-            raise InputError(f"run {label!r}: expected a 1D time axis of >= 2 samples, got {t.shape}")
+            raise InputError(
+                f"run {label!r}: expected a 1D time axis of >= 2 samples, got {t.shape}"
+            )
         f = None if force is None else _series(label, "contact_force", t, force)
         v = {name: _series(label, f"probe {name!r}", t, y) for name, y in (probes or {}).items()}
         out.append((str(label), t, f, v))
@@ -72,8 +77,14 @@ def save_figure(fig: Figure, path: str | os.PathLike[str], dpi: int) -> None:
         fig.savefig(tmp, format="png", dpi=dpi)
 
 
-def plot_run(path_png: str | os.PathLike[str], runs: Mapping[str, Curves],
-             theory: Curves | None = None, *, title: str = "", dpi: int = 150) -> None:
+def plot_run(
+    path_png: str | os.PathLike[str],
+    runs: Mapping[str, Curves],
+    theory: Curves | None = None,
+    *,
+    title: str = "",
+    dpi: int = 150,
+) -> None:
     """Seed fig. 5: contact force [N] (top) and probe axial velocity [m/s] (bottom) vs t [ms].
 
     runs: label -> (t [s] (n,), contact force [N] (n,) or None, {probe: velocity [m/s] (n,)});
@@ -91,16 +102,24 @@ def plot_run(path_png: str | os.PathLike[str], runs: Mapping[str, Curves],
     probe_colour = dict(zip(probes, itertools.cycle(COLOURS)))
     fig = Figure(figsize=(7.0, 6.5), layout="constrained")
     ax_f, ax_v = fig.subplots(2, 1, sharex=True)
-    for (label, t, f, v), style, colour in zip(checked, itertools.cycle(STYLES),
-                                               itertools.cycle(COLOURS)):
+    for (label, t, f, v), style, colour in zip(
+        checked, itertools.cycle(STYLES), itertools.cycle(COLOURS)
+    ):
         theo = label == _THEORY
         lw = 1.2 if theo else 1.0
         if f is not None:
-            ax_f.plot(t * 1e3, f, linestyle=style, color="k" if theo else colour, lw=lw,
-                      label=label)
+            ax_f.plot(
+                t * 1e3, f, linestyle=style, color="k" if theo else colour, lw=lw, label=label
+            )
         for name, y in v.items():
-            ax_v.plot(t * 1e3, y, linestyle=style, color=probe_colour[name], lw=lw,
-                      label=f"{label}: {name}")
+            ax_v.plot(
+                t * 1e3,
+                y,
+                linestyle=style,
+                color=probe_colour[name],
+                lw=lw,
+                label=f"{label}: {name}",
+            )
     ax_f.set_ylabel("contact force [N]")
     ax_v.set_ylabel("axial velocity [m/s]")
     ax_v.set_xlabel("time [ms]")
@@ -113,9 +132,14 @@ def plot_run(path_png: str | os.PathLike[str], runs: Mapping[str, Curves],
     save_figure(fig, path_png, dpi)
 
 
-def plot_force_comparison(path_png: str | os.PathLike[str], reference: tuple[Any, Any],
-                          candidates: Mapping[str, tuple[Any, Any]], *,
-                          reference_label: str = "FE", dpi: int = 150) -> dict[str, Comparison]:
+def plot_force_comparison(
+    path_png: str | os.PathLike[str],
+    reference: tuple[Any, Any],
+    candidates: Mapping[str, tuple[Any, Any]],
+    *,
+    reference_label: str = "FE",
+    dpi: int = 150,
+) -> dict[str, Comparison]:
     """Contact force [N] vs t [ms] of candidates over a reference, each legend entry with its
     metrics.ncc.compare_force result (NCC, relative peak, impulse and duration errors).
 
@@ -128,14 +152,23 @@ def plot_force_comparison(path_png: str | os.PathLike[str], reference: tuple[Any
     ax = fig.subplots()
     ax.plot(t_ref * 1e3, f_ref, "k-", lw=1.4, label=reference_label)
     styles: Sequence = STYLES[1:] + STYLES[:1]
-    for (label, (t, f)), style, colour in zip(candidates.items(), itertools.cycle(styles),
-                                              itertools.cycle(COLOURS)):
+    for (label, (t, f)), style, colour in zip(
+        candidates.items(), itertools.cycle(styles), itertools.cycle(COLOURS)
+    ):
         t, f = np.asarray(t, dtype=float), np.asarray(f, dtype=float)
         c = compare_force(t_ref, f_ref, t, f)
         results[label] = c
-        ax.plot(t * 1e3, f, linestyle=style, color=colour, lw=1.0,
-                label=(f"{label}: NCC {c.ncc:.4f}, peak {c.peak_err:+.1%}, "
-                       f"impulse {c.impulse_err:+.1%}, duration {c.duration_err:+.1%}"))
+        ax.plot(
+            t * 1e3,
+            f,
+            linestyle=style,
+            color=colour,
+            lw=1.0,
+            label=(
+                f"{label}: NCC {c.ncc:.4f}, peak {c.peak_err:+.1%}, "
+                f"impulse {c.impulse_err:+.1%}, duration {c.duration_err:+.1%}"
+            ),
+        )
     ax.set_xlabel("time [ms]")
     ax.set_ylabel("contact force [N]")
     ax.grid(True, lw=0.3)

@@ -17,9 +17,17 @@ from flexmvm.plots.figures import COLOURS, save_figure
 __all__ = ["plot_event"]
 
 
-def plot_event(path_png: str | os.PathLike[str], t_s, angle_rad: Mapping[str, np.ndarray],
-               gap_m, force_n, contact_intervals_s=(), *, title: str = "",
-               dpi: int = 150) -> None:
+def plot_event(
+    path_png: str | os.PathLike[str],
+    t_s,
+    angle_rad: Mapping[str, np.ndarray],
+    gap_m,
+    force_n,
+    contact_intervals_s=(),
+    *,
+    title: str = "",
+    dpi: int = 150,
+) -> None:
     """Three panels against t [s]: the angle of every string from the vertical [deg]
     (angle_rad: label -> (n,)), the gap [mm] (NaN: not drawn) and the contact force [N] with
     an inset zoomed on the contact (the first interval's start to the last's end, padded by a
@@ -30,16 +38,24 @@ def plot_event(path_png: str | os.PathLike[str], t_s, angle_rad: Mapping[str, np
         raise InputError(f"plot_event: expected at least 2 output times, got shape {t.shape}")
     gap = np.asarray(gap_m, dtype=float)
     force = np.asarray(force_n, dtype=float)
-    series = {"gap_m": gap, "force_n": force, **{f"angle_rad[{k}]": np.asarray(v, float)
-                                                   for k, v in angle_rad.items()}}
+    series = {
+        "gap_m": gap,
+        "force_n": force,
+        **{f"angle_rad[{k}]": np.asarray(v, float) for k, v in angle_rad.items()},
+    }
     for name, arr in series.items():
         if arr.shape != t.shape:
             raise InputError(f"plot_event: {name} has shape {arr.shape}; expected {t.shape}")
     fig = Figure(figsize=(8.0, 8.5))
     ax_a, ax_g, ax_f = fig.subplots(3, 1, sharex=True)
     for i, (label, a) in enumerate(angle_rad.items()):
-        ax_a.plot(t, np.degrees(np.asarray(a, float)), color=COLOURS[i % len(COLOURS)],
-                  ls="-" if i % 2 == 0 else "--", label=f"string {label}")
+        ax_a.plot(
+            t,
+            np.degrees(np.asarray(a, float)),
+            color=COLOURS[i % len(COLOURS)],
+            ls="-" if i % 2 == 0 else "--",
+            label=f"string {label}",
+        )
     ax_a.set_ylabel("string angle from vertical [deg]")
     ax_a.legend(loc="best", fontsize=8)
     ax_g.plot(t, 1e3 * gap, color="C0")

@@ -35,9 +35,14 @@ def front(points: Sequence[tuple[float, float]]) -> list[tuple[float, float]]:
     return out
 
 
-def plot_ncc_dof_fronts(path_png: str | os.PathLike[str],
-                        kinds: Mapping[str, Sequence[tuple[float, float]]], *,
-                        target: float | None = None, title: str = "", dpi: int = 150) -> None:
+def plot_ncc_dof_fronts(
+    path_png: str | os.PathLike[str],
+    kinds: Mapping[str, Sequence[tuple[float, float]]],
+    *,
+    target: float | None = None,
+    title: str = "",
+    dpi: int = 150,
+) -> None:
     """Force NCC against DOF (log x): per kind (label -> (dof, ncc) points) the points and
     their front; y as 1 - NCC on a log axis so that 0.99 and 0.999 are apart; ``target``: a
     horizontal line at that NCC."""
@@ -52,8 +57,14 @@ def plot_ncc_dof_fronts(path_png: str | os.PathLike[str],
         d, n = np.array(pts).T
         ax.scatter(d, np.clip(1.0 - n, 1e-6, None), s=12, color=colour, alpha=0.45)
         fd, fn = np.array(front(pts)).T
-        ax.step(fd, np.clip(1.0 - fn, 1e-6, None), where="post", color=colour, lw=1.8,
-                label=f"{label}: front")
+        ax.step(
+            fd,
+            np.clip(1.0 - fn, 1e-6, None),
+            where="post",
+            color=colour,
+            lw=1.8,
+            label=f"{label}: front",
+        )
     if target is not None:
         ax.axhline(1.0 - target, color="k", ls=":", lw=1.0, label=f"NCC = {target:g}")
     ax.set_xscale("log")
@@ -78,8 +89,13 @@ def _check(rows: Sequence[Mapping[str, Any]], what: str) -> None:
         raise InputError(f"{what}: expected at least one row, got none")
 
 
-def plot_ncc_map(path_png: str | os.PathLike[str], rows: Sequence[Mapping[str, Any]], *,
-                 title: str = "", dpi: int = 150) -> None:
+def plot_ncc_map(
+    path_png: str | os.PathLike[str],
+    rows: Sequence[Mapping[str, Any]],
+    *,
+    title: str = "",
+    dpi: int = 150,
+) -> None:
     """Seed fig. 7: colour map of ncc_force, node selection 'i-j (n)' x modes; the value is
     written in each evaluated cell, failed/missing cells are blank."""
     _check(rows, "plot_ncc_map")
@@ -89,23 +105,40 @@ def plot_ncc_map(path_png: str | os.PathLike[str], rows: Sequence[Mapping[str, A
     col = {(i, j): c for c, (i, j, _) in enumerate(sels)}
     for r in rows:
         if r.get("ncc_force") is not None:
-            grid[modes.index(int(r["modes"])), col[(int(r["layers"]), int(r["laps"]))]] = \
-                float(r["ncc_force"])
-    fig = Figure(figsize=(max(5.0, 0.45 * len(sels) + 2.5), max(3.0, 0.4 * len(modes) + 1.8)),
-                 layout="constrained")
+            grid[modes.index(int(r["modes"])), col[(int(r["layers"]), int(r["laps"]))]] = float(
+                r["ncc_force"]
+            )
+    fig = Figure(
+        figsize=(max(5.0, 0.45 * len(sels) + 2.5), max(3.0, 0.4 * len(modes) + 1.8)),
+        layout="constrained",
+    )
     ax = fig.subplots()
     finite = grid[np.isfinite(grid)]
     lo = float(finite.min()) if finite.size else 0.0
     hi = float(finite.max()) if finite.size else 1.0
-    im = ax.imshow(np.ma.masked_invalid(grid), origin="lower", aspect="auto", cmap="viridis",
-                   vmin=lo, vmax=hi if hi > lo else lo + 1e-12)
+    im = ax.imshow(
+        np.ma.masked_invalid(grid),
+        origin="lower",
+        aspect="auto",
+        cmap="viridis",
+        vmin=lo,
+        vmax=hi if hi > lo else lo + 1e-12,
+    )
     if len(sels) * len(modes) <= 200:
         for (a, b), v in np.ndenumerate(grid):
             if np.isfinite(v):
-                ax.text(b, a, f"{v:.4f}", ha="center", va="center", fontsize=5,
-                        color="w" if v < 0.5 * (lo + hi) else "k")
-    ax.set_xticks(range(len(sels)), [f"{i}-{j} ({n})" for i, j, n in sels], rotation=90,
-                  fontsize="small")
+                ax.text(
+                    b,
+                    a,
+                    f"{v:.4f}",
+                    ha="center",
+                    va="center",
+                    fontsize=5,
+                    color="w" if v < 0.5 * (lo + hi) else "k",
+                )
+    ax.set_xticks(
+        range(len(sels)), [f"{i}-{j} ({n})" for i, j, n in sels], rotation=90, fontsize="small"
+    )
     ax.set_yticks(range(len(modes)), [str(m) for m in modes])
     ax.set_xlabel("node selection i-j (retained nodes)")
     ax.set_ylabel("modes")
@@ -115,8 +148,14 @@ def plot_ncc_map(path_png: str | os.PathLike[str], rows: Sequence[Mapping[str, A
     save_figure(fig, path_png, dpi)
 
 
-def plot_ncc_modes(path_png: str | os.PathLike[str], rows: Sequence[Mapping[str, Any]], *,
-                   title: str = "", max_lines: int = 8, dpi: int = 150) -> None:
+def plot_ncc_modes(
+    path_png: str | os.PathLike[str],
+    rows: Sequence[Mapping[str, Any]],
+    *,
+    title: str = "",
+    max_lines: int = 8,
+    dpi: int = 150,
+) -> None:
     """Seed fig. 8: ncc_force against modes, one line per selection (at most max_lines,
     spread over the node counts), legend 'i-j: n nodes'."""
     _check(rows, "plot_ncc_modes")
@@ -127,12 +166,23 @@ def plot_ncc_modes(path_png: str | os.PathLike[str], rows: Sequence[Mapping[str,
     fig = Figure(figsize=(7.0, 4.0), layout="constrained")
     ax = fig.subplots()
     for (i, j, n), style, colour in zip(sels, itertools.cycle(STYLES), itertools.cycle(COLOURS)):
-        pts = sorted((int(r["modes"]), float(r["ncc_force"])) for r in rows
-                     if (int(r["layers"]), int(r["laps"])) == (i, j) and r.get("ncc_force") is not None)
+        pts = sorted(
+            (int(r["modes"]), float(r["ncc_force"]))
+            for r in rows
+            if (int(r["layers"]), int(r["laps"])) == (i, j) and r.get("ncc_force") is not None
+        )
         if pts:
             m, v = zip(*pts)
-            ax.plot(m, v, linestyle=style, color=colour, marker="o", ms=3, lw=1.0,
-                    label=f"{i}-{j}: {n} node{'s' if n != 1 else ''}")
+            ax.plot(
+                m,
+                v,
+                linestyle=style,
+                color=colour,
+                marker="o",
+                ms=3,
+                lw=1.0,
+                label=f"{i}-{j}: {n} node{'s' if n != 1 else ''}",
+            )
     _finish_ncc_axes(fig, ax, path_png, title, dpi)
 
 
@@ -148,8 +198,13 @@ def _finish_ncc_axes(fig, ax, path_png, title: str, dpi: int) -> None:
     save_figure(fig, path_png, dpi)
 
 
-def plot_materials(path_png: str | os.PathLike[str], rows: Sequence[Mapping[str, Any]], *,
-                   title: str = "", dpi: int = 150) -> None:
+def plot_materials(
+    path_png: str | os.PathLike[str],
+    rows: Sequence[Mapping[str, Any]],
+    *,
+    title: str = "",
+    dpi: int = 150,
+) -> None:
     """Seed fig. 9: ncc_force against modes, a colour per material, a line style per
     selection; rows carry material, selection ('i-j'), modes, ncc_force. Rows with
     ``valid`` False (a run outside its model's validity, scenarios.guard.invalid_reason) get
@@ -164,22 +219,39 @@ def plot_materials(path_png: str | os.PathLike[str], rows: Sequence[Mapping[str,
     ax = fig.subplots()
     for mat in materials:
         for sel in selections:
-            pts = sorted((int(r["modes"]), float(r["ncc_force"])) for r in rows
-                         if r["material"] == mat and r["selection"] == sel
-                         and r.get("ncc_force") is not None)
+            pts = sorted(
+                (int(r["modes"]), float(r["ncc_force"]))
+                for r in rows
+                if r["material"] == mat and r["selection"] == sel and r.get("ncc_force") is not None
+            )
             if pts:
                 m, v = zip(*pts)
-                ax.plot(m, v, linestyle=style[sel], color=colour[mat], lw=1.0,
-                        label=f"{mat} {sel}")
-                bad = {int(r["modes"]) for r in rows if r["material"] == mat
-                       and r["selection"] == sel and not r.get("valid", True)}
+                ax.plot(m, v, linestyle=style[sel], color=colour[mat], lw=1.0, label=f"{mat} {sel}")
+                bad = {
+                    int(r["modes"])
+                    for r in rows
+                    if r["material"] == mat and r["selection"] == sel and not r.get("valid", True)
+                }
                 for filled in (True, False):
                     mk = [(a, b) for a, b in pts if (a not in bad) is filled]
                     if mk:
-                        ax.plot(*zip(*mk), linestyle="none", marker="o", ms=3 if filled else 5,
-                                color=colour[mat],
-                                markerfacecolor=colour[mat] if filled else "white")
+                        ax.plot(
+                            *zip(*mk),
+                            linestyle="none",
+                            marker="o",
+                            ms=3 if filled else 5,
+                            color=colour[mat],
+                            markerfacecolor=colour[mat] if filled else "white",
+                        )
     if not all(r.get("valid", True) for r in rows):
-        ax.plot([], [], linestyle="none", marker="o", ms=5, color="grey",
-                markerfacecolor="white", label="outside validity (guard / energy)")
+        ax.plot(
+            [],
+            [],
+            linestyle="none",
+            marker="o",
+            ms=5,
+            color="grey",
+            markerfacecolor="white",
+            label="outside validity (guard / energy)",
+        )
     _finish_ncc_axes(fig, ax, path_png, title, dpi)

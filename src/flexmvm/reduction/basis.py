@@ -62,18 +62,18 @@ from flexmvm.reduction.reference import ReferenceCondition
 class BasisKind(Enum):
     """Which reduction basis; values are the names used in scenarios and studies."""
 
-    FULL = "full"                 # reference FE model: every free nodal DOF
-    CRAIG_BAMPTON = "mvm"         # default MVM: retained nodes + fixed-interface modes
-    SEED_BLOCK = "mvm-seed"       # seed eq. (4): whole-body modes on region I, nodes on II
+    FULL = "full"  # reference FE model: every free nodal DOF
+    CRAIG_BAMPTON = "mvm"  # default MVM: retained nodes + fixed-interface modes
+    SEED_BLOCK = "mvm-seed"  # seed eq. (4): whole-body modes on region I, nodes on II
     SEED_FIXED = "mvm-seed-fixed"  # seed eq. (4): region-I modes with region II held, nodes on II
-    MODAL = "modal"               # first N modes of the reference-supported body
-    INTERFACE = "interface"       # contact-patch Ritz vectors + modes by participation
+    MODAL = "modal"  # first N modes of the reference-supported body
+    INTERFACE = "interface"  # contact-patch Ritz vectors + modes by participation
 
 
 class MasslessStatics(Enum):
     """The static columns of the massless retained nodes of a Craig-Bampton basis."""
 
-    ALL = "all"      # every massless DOF's interior static field: span contains Craig-Bampton's
+    ALL = "all"  # every massless DOF's interior static field: span contains Craig-Bampton's
     PATCH = "patch"  # the static fields of massless_patterns: a few columns per body
 
 
@@ -153,15 +153,20 @@ def _node_dofs(nodes: np.ndarray) -> np.ndarray:
 
 def _full(fe: FEModel, reference: ReferenceCondition) -> Basis:
     free = reference.free_dofs(fe.n_dof)
-    psi = sp.csr_matrix((np.ones(free.size), (free, np.arange(free.size))),
-                        shape=(fe.n_dof, free.size))
+    psi = sp.csr_matrix(
+        (np.ones(free.size), (free, np.arange(free.size))), shape=(fe.n_dof, free.size)
+    )
     nodes = np.setdiff1d(np.arange(fe.mesh.n_nodes), reference.nodes)
     return Basis(BasisKind.FULL, psi, nodes, 0, reference, np.zeros(0))
 
 
-def _craig_bampton(fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray,
-                   n_modes: int, statics_kind: MasslessStatics = MasslessStatics.PATCH
-                   ) -> Basis:
+def _craig_bampton(
+    fe: FEModel,
+    reference: ReferenceCondition,
+    nodes: np.ndarray,
+    n_modes: int,
+    statics_kind: MasslessStatics = MasslessStatics.PATCH,
+) -> Basis:
     """Craig-Bampton (1968): constraint modes -K_ii^-1 K_ib and fixed-interface modes; the
     constraint modes of massless retained nodes split (module doc, ``statics_kind``).
 
@@ -189,7 +194,7 @@ def _craig_bampton(fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray
     psi[b, np.arange(b.size)] = 1.0
     psi[interior, : b.size] = statics
     psi[interior, b.size : b.size + extra.shape[1]] = extra
-    psi[interior, b.size + extra.shape[1]:] = modes
+    psi[interior, b.size + extra.shape[1] :] = modes
     return Basis(BasisKind.CRAIG_BAMPTON, psi, nodes, n_modes, reference, freqs)
 
 
@@ -222,10 +227,13 @@ def massless_patterns(X: np.ndarray) -> np.ndarray:
     s1, s2 = d @ t1, d @ t2
     rho = np.hypot(s1, s2)
     top = rho.max()
-    rho, c, s = ((rho / top, s1 / top, s2 / top) if top > 0 else
-                 (rho, np.zeros_like(rho), np.zeros_like(rho)))
-    e_rho = np.outer(c, t1) + np.outer(s, t2)          # rho e_rho
-    e_phi = np.outer(-s, t1) + np.outer(c, t2)         # rho e_phi
+    rho, c, s = (
+        (rho / top, s1 / top, s2 / top)
+        if top > 0
+        else (rho, np.zeros_like(rho), np.zeros_like(rho))
+    )
+    e_rho = np.outer(c, t1) + np.outer(s, t2)  # rho e_rho
+    e_phi = np.outer(-s, t1) + np.outer(c, t2)  # rho e_phi
     fields = [np.outer(rho**k, n) for k in PATCH_NORMAL_POWERS]
     fields += [np.outer(c, n), np.outer(s, n)]
     fields += [e_rho * rho[:, None] ** (k - 1) for k in PATCH_RADIAL_POWERS]
@@ -245,8 +253,9 @@ def _static_columns(fe: FEModel, interior: np.ndarray, fields: np.ndarray) -> np
     return fields @ (v[:, keep] / np.sqrt(w[keep]))
 
 
-def _fixed_interface_modes(fe: FEModel, interior: np.ndarray, k_ii, solve, n_modes: int
-                           ) -> tuple[np.ndarray, np.ndarray]:
+def _fixed_interface_modes(
+    fe: FEModel, interior: np.ndarray, k_ii, solve, n_modes: int
+) -> tuple[np.ndarray, np.ndarray]:
     """First n_modes modes of the interior DOFs with all others held: (phi (len(interior),
     n_modes) M-normalised, frequencies (n_modes,) [Hz]); shift-invert about 0 with `solve`,
     the factor of k_ii. n_modes = 0 gives empty arrays."""
@@ -257,8 +266,9 @@ def _fixed_interface_modes(fe: FEModel, interior: np.ndarray, k_ii, solve, n_mod
     return phi, to_hz(lam)
 
 
-def _seed_block(fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray,
-                n_modes: int) -> Basis:
+def _seed_block(
+    fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray, n_modes: int
+) -> Basis:
     """Seed eq. (4): T = diag(Psi_I, I_II).
 
     Choice made here: Psi_I = the first n_modes modes of the whole body supported by the
@@ -277,8 +287,9 @@ def _seed_block(fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray,
     return Basis(BasisKind.SEED_BLOCK, psi, nodes, n_modes, reference, freqs)
 
 
-def _seed_fixed(fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray,
-                n_modes: int) -> Basis:
+def _seed_fixed(
+    fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray, n_modes: int
+) -> Basis:
     """Seed eq. (4), T = diag(Psi_I, I_II), the other reading: Psi_I = the first n_modes
     modes of region I with the region-II DOFs (and the reference DOFs) held, i.e. the
     fixed-interface modes of Craig-Bampton without its static constraint modes. A region-II
@@ -293,7 +304,8 @@ def _seed_fixed(fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray,
         k_ii = fe.K[interior][:, interior]
         with solver_pool() as pool:
             psi[interior, :n_modes], freqs = _fixed_interface_modes(
-                fe, interior, k_ii, spd_solver(k_ii, pool), n_modes)
+                fe, interior, k_ii, spd_solver(k_ii, pool), n_modes
+            )
     psi[b, n_modes + np.arange(b.size)] = 1.0
     return Basis(BasisKind.SEED_FIXED, psi, nodes, n_modes, reference, freqs)
 
@@ -303,20 +315,36 @@ def _modal(fe: FEModel, reference: ReferenceCondition, n_modes: int) -> Basis:
     return Basis(BasisKind.MODAL, phi, np.zeros(0, dtype=np.int64), n_modes, reference, freqs)
 
 
-def _interface(fe: FEModel, reference: ReferenceCondition, spec: InterfaceSpec | None,
-               n_modes: int, sources: InterfaceSources | None) -> Basis:
+def _interface(
+    fe: FEModel,
+    reference: ReferenceCondition,
+    spec: InterfaceSpec | None,
+    n_modes: int,
+    sources: InterfaceSources | None,
+) -> Basis:
     if not isinstance(spec, InterfaceSpec):
         raise InputError(f"an interface basis needs an InterfaceSpec, got {spec!r}")
     cols = interface_columns(fe, reference, spec, n_modes, sources)
-    return Basis(BasisKind.INTERFACE, cols.psi, np.zeros(0, dtype=np.int64), n_modes, reference,
-                 cols.mode_freqs_hz)
+    return Basis(
+        BasisKind.INTERFACE,
+        cols.psi,
+        np.zeros(0, dtype=np.int64),
+        n_modes,
+        reference,
+        cols.mode_freqs_hz,
+    )
 
 
-def build_basis(fe: FEModel, kind: BasisKind, reference: ReferenceCondition,
-                retained_nodes=(), n_modes: int = 0,
-                interface: InterfaceSpec | None = None,
-                sources: InterfaceSources | None = None,
-                massless_statics: MasslessStatics = MasslessStatics.PATCH) -> Basis:
+def build_basis(
+    fe: FEModel,
+    kind: BasisKind,
+    reference: ReferenceCondition,
+    retained_nodes=(),
+    n_modes: int = 0,
+    interface: InterfaceSpec | None = None,
+    sources: InterfaceSources | None = None,
+    massless_statics: MasslessStatics = MasslessStatics.PATCH,
+) -> Basis:
     """Build the basis ``kind`` of body ``fe`` (see the module table).
 
     retained_nodes: region-II node ids (CRAIG_BAMPTON, SEED_BLOCK, SEED_FIXED: at least one;
@@ -337,8 +365,10 @@ def build_basis(fe: FEModel, kind: BasisKind, reference: ReferenceCondition,
     nodes = _retained(fe, reference, retained_nodes)
     if kind in (BasisKind.FULL, BasisKind.MODAL, BasisKind.INTERFACE) and nodes.size:
         raise InputError(f"a {kind.value} basis takes no retained nodes, got {nodes.size}")
-    if kind in (BasisKind.CRAIG_BAMPTON, BasisKind.SEED_BLOCK, BasisKind.SEED_FIXED) \
-            and not nodes.size:
+    if (
+        kind in (BasisKind.CRAIG_BAMPTON, BasisKind.SEED_BLOCK, BasisKind.SEED_FIXED)
+        and not nodes.size
+    ):
         raise InputError(f"a {kind.value} basis needs at least one retained node, got none")
     if kind is BasisKind.FULL:
         if n_modes:
@@ -355,15 +385,17 @@ def build_basis(fe: FEModel, kind: BasisKind, reference: ReferenceCondition,
         if kind is BasisKind.INTERFACE:
             return _interface(fe, reference, interface, int(n_modes), sources)
         if kind is BasisKind.CRAIG_BAMPTON:
-            return _craig_bampton(fe, reference, nodes, int(n_modes),
-                                  MasslessStatics(massless_statics))
+            return _craig_bampton(
+                fe, reference, nodes, int(n_modes), MasslessStatics(massless_statics)
+            )
         if kind is BasisKind.SEED_FIXED:
             return _seed_fixed(fe, reference, nodes, int(n_modes))
         return _seed_block(fe, reference, nodes, int(n_modes))
 
 
-def reduced_matrices(fe: FEModel, basis: Basis) -> tuple[np.ndarray | sp.csr_matrix,
-                                                         np.ndarray | sp.csr_matrix]:
+def reduced_matrices(
+    fe: FEModel, basis: Basis
+) -> tuple[np.ndarray | sp.csr_matrix, np.ndarray | sp.csr_matrix]:
     """Reduced mass and stiffness m_hat = Psi^T M Psi, k_hat = Psi^T K Psi (seed eq. 5).
 
     Returns (m_hat, k_hat), (nq, nq) [kg], [N/m] in q units; csr for FULL, dense otherwise;

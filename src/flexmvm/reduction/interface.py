@@ -76,7 +76,7 @@ class ModeChoice(StrEnum):
     """How an interface basis picks its vibration modes (values: ``mode_choice``)."""
 
     PARTICIPATION = "participation"  # largest |phi^T f| / omega^2 for the expected load
-    FREQUENCY = "frequency"          # lowest frequencies
+    FREQUENCY = "frequency"  # lowest frequencies
 
 
 @dataclass(frozen=True)
@@ -94,10 +94,13 @@ class InterfaceSpec:
 
     def key(self) -> dict:
         """Setup-cache key inputs (JSON)."""
-        return {"surface": self.surface,
-                "centre_m": None if self.centre_m is None else [float(c) for c in self.centre_m],
-                "radii_m": [float(a) for a in self.radii_m],
-                "mode_choice": ModeChoice(self.mode_choice).value, "pool": self.pool}
+        return {
+            "surface": self.surface,
+            "centre_m": None if self.centre_m is None else [float(c) for c in self.centre_m],
+            "radii_m": [float(a) for a in self.radii_m],
+            "mode_choice": ModeChoice(self.mode_choice).value,
+            "pool": self.pool,
+        }
 
     def pool_size(self, n_modes: int) -> int:
         return int(self.pool) if self.pool is not None else 4 * int(n_modes) + 6
@@ -127,7 +130,7 @@ def contact_patch(mesh: Mesh, surface: str, centre_m=None) -> Patch:
     ``centre_m`` (default: the surface's area centroid), with its outward normal."""
     quads = _quads(mesh, surface)
     X = mesh.nodes
-    p = X[quads]                                       # (f, 4, 3)
+    p = X[quads]  # (f, 4, 3)
     area_n = 0.5 * np.cross(p[:, 2] - p[:, 0], p[:, 3] - p[:, 1])  # area x outward normal
     area = np.linalg.norm(area_n, axis=1)
     if centre_m is None:
@@ -163,8 +166,9 @@ def hertz_load(mesh: Mesh, surface: str, patch: Patch, radius_m: float) -> np.nd
     p = X[quads]
     diam = np.max(np.linalg.norm(p[:, [2, 3]] - p[:, [0, 1]], axis=2), axis=1)
     rel = p - patch.centre_m
-    dist = np.linalg.norm(rel - np.einsum("fkj,j->fk", rel, patch.normal)[..., None]
-                          * patch.normal, axis=2).min(axis=1)
+    dist = np.linalg.norm(
+        rel - np.einsum("fkj,j->fk", rel, patch.normal)[..., None] * patch.normal, axis=2
+    ).min(axis=1)
     near = np.nonzero(dist <= radius_m + diam)[0]
     f = np.zeros(3 * mesh.n_nodes)
     g = np.array([-1.0, 1.0]) / np.sqrt(3.0)
@@ -172,23 +176,26 @@ def hertz_load(mesh: Mesh, surface: str, patch: Patch, radius_m: float) -> np.nd
         s = int(np.clip(np.ceil(SUBCELLS_PER_RADIUS * diam[k] / radius_m), 2, 64))
         edges = np.linspace(-1.0, 1.0, s + 1)
         mid, half = 0.5 * (edges[1:] + edges[:-1]), 1.0 / s
-        xi = (mid[:, None] + half * g[None, :]).ravel()            # (2s,) Gauss abscissae
+        xi = (mid[:, None] + half * g[None, :]).ravel()  # (2s,) Gauss abscissae
         XI, ETA = (a.ravel() for a in np.meshgrid(xi, xi, indexing="ij"))
-        N = 0.25 * np.column_stack([(1 - XI) * (1 - ETA), (1 + XI) * (1 - ETA),
-                                    (1 + XI) * (1 + ETA), (1 - XI) * (1 + ETA)])
+        N = 0.25 * np.column_stack(
+            [(1 - XI) * (1 - ETA), (1 + XI) * (1 - ETA), (1 + XI) * (1 + ETA), (1 - XI) * (1 + ETA)]
+        )
         dxi = 0.25 * np.column_stack([-(1 - ETA), (1 - ETA), (1 + ETA), -(1 + ETA)])
         deta = 0.25 * np.column_stack([-(1 - XI), -(1 + XI), (1 + XI), (1 - XI)])
         x = N @ p[k]
-        an = np.cross(dxi @ p[k], deta @ p[k]) * half * half       # area x outward normal
+        an = np.cross(dxi @ p[k], deta @ p[k]) * half * half  # area x outward normal
         d = x - patch.centre_m
         d -= np.outer(d @ patch.normal, patch.normal)
-        pr = np.sqrt(np.clip(1.0 - np.einsum("ij,ij->i", d, d) / radius_m ** 2, 0.0, None))
-        nodal = -(N * pr[:, None]).T @ an                          # (4, 3): into the body
+        pr = np.sqrt(np.clip(1.0 - np.einsum("ij,ij->i", d, d) / radius_m**2, 0.0, None))
+        nodal = -(N * pr[:, None]).T @ an  # (4, 3): into the body
         np.add.at(f.reshape(-1, 3), quads[k], nodal)
     total = np.linalg.norm(f.reshape(-1, 3).sum(axis=0))
     if total == 0.0:
-        raise InputError(f"patch radius {radius_m:g} m: the Hertz pressure about node "
-                         f"{patch.node} loads no facet of surface {surface!r}")
+        raise InputError(
+            f"patch radius {radius_m:g} m: the Hertz pressure about node "
+            f"{patch.node} loads no facet of surface {surface!r}"
+        )
     return f / total
 
 
@@ -243,8 +250,9 @@ def _excited(force: np.ndarray) -> np.ndarray:
     return np.nonzero(force[6:] > EXCITED_RTOL * force.max())[0]
 
 
-def excited_modes_below(fe: FEModel, f: np.ndarray, f_max_hz: float, pool: int = 16,
-                        free: FreeModes | None = None) -> tuple[np.ndarray, np.ndarray]:
+def excited_modes_below(
+    fe: FEModel, f: np.ndarray, f_max_hz: float, pool: int = 16, free: FreeModes | None = None
+) -> tuple[np.ndarray, np.ndarray]:
     """The elastic free-free modes of ``fe`` below ``f_max_hz`` that the load ``f`` (3n,) [N]
     excites, by the participation choice's rule (modal force |phi^T f| above EXCITED_RTOL of
     the pool's largest): (frequencies [Hz], participations |phi^T f| / omega^2 [m/N]), in
@@ -265,20 +273,22 @@ def excited_modes_below(fe: FEModel, f: np.ndarray, f_max_hz: float, pool: int =
         if f_hz[-1] >= f_max_hz or pool >= n_free:
             break
         if pool >= MAX_POOL:
-            raise InputError(f"the lowest {pool} free-free modes end at {f_hz[-1]:.4g} Hz, "
-                             f"below f_max = {f_max_hz:.4g} Hz; expected f_max within "
-                             f"{MAX_POOL} modes")
+            raise InputError(
+                f"the lowest {pool} free-free modes end at {f_hz[-1]:.4g} Hz, "
+                f"below f_max = {f_max_hz:.4g} Hz; expected f_max within "
+                f"{MAX_POOL} modes"
+            )
         pool = min(2 * pool, MAX_POOL, n_free)
     force = np.abs(modes.T @ f)
     idx = _excited(force)
     idx = idx[f_hz[6:][idx] < f_max_hz]
     omega = 2.0 * np.pi * f_hz[6:][idx]
-    return f_hz[6:][idx], force[6:][idx] / omega ** 2
+    return f_hz[6:][idx], force[6:][idx] / omega**2
 
 
-def chosen_modes(fe: FEModel, spec: InterfaceSpec, n_modes: int, f_exp: np.ndarray,
-                 free: FreeModes | None = None
-                 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def chosen_modes(
+    fe: FEModel, spec: InterfaceSpec, n_modes: int, f_exp: np.ndarray, free: FreeModes | None = None
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(phi (3n, n_modes) free-free elastic modes, M-normalised, their frequencies [Hz] and
     participations |phi^T f| / omega^2 [m/N]) chosen as spec.mode_choice says for the expected
     load f_exp (3n,). free: the source of the free-free modes (default free_modes(fe, k))."""
@@ -298,8 +308,9 @@ def _free_source(fe: FEModel, free: FreeModes | None) -> FreeModes:
     return free if free is not None else (lambda k: free_modes(fe, k))
 
 
-def _participation_pool(fe: FEModel, spec: InterfaceSpec, n_modes: int, f_exp: np.ndarray,
-                        free: FreeModes):
+def _participation_pool(
+    fe: FEModel, spec: InterfaceSpec, n_modes: int, f_exp: np.ndarray, free: FreeModes
+):
     """The participation choice's pool: (pool, elastic frequencies [Hz], elastic modes, their
     |phi^T f_exp|, indices of the excited ones); spec.pool if given, else the default pool
     doubled until it holds n_modes excited modes. InputError (one line) when it holds fewer."""
@@ -308,8 +319,7 @@ def _participation_pool(fe: FEModel, spec: InterfaceSpec, n_modes: int, f_exp: n
     pool = min(spec.pool_size(n_modes), n_free)
     while True:
         if pool < n_modes:
-            raise InputError(f"interface basis: {n_modes} modes asked, the mode pool holds "
-                             f"{pool}")
+            raise InputError(f"interface basis: {n_modes} modes asked, the mode pool holds {pool}")
         f_hz, modes = free(pool + 6)
         force = np.abs(modes.T @ f_exp)
         excited = _excited(force)
@@ -318,9 +328,11 @@ def _participation_pool(fe: FEModel, spec: InterfaceSpec, n_modes: int, f_exp: n
             break
         pool = min(2 * pool, MAX_POOL, n_free)
     if excited.size < n_modes:
-        raise InputError(f"interface basis: the expected load excites {excited.size} of the "
-                         f"lowest {pool} free-free modes, {n_modes} asked; ask for fewer modes"
-                         + (" or a larger mode_pool" if not grow else ""))
+        raise InputError(
+            f"interface basis: the expected load excites {excited.size} of the "
+            f"lowest {pool} free-free modes, {n_modes} asked; ask for fewer modes"
+            + (" or a larger mode_pool" if not grow else "")
+        )
     return pool, f_hz, modes, force, excited
 
 
@@ -331,30 +343,35 @@ def patch_loads(mesh: Mesh, spec: InterfaceSpec) -> tuple[Patch, np.ndarray, np.
     radii = tuple(float(a) for a in spec.radii_m)
     n = 3 * mesh.n_nodes
     patch = contact_patch(mesh, spec.surface, spec.centre_m)
-    loads = np.column_stack([hertz_load(mesh, spec.surface, patch, a) for a in radii]) \
-        if radii else np.zeros((n, 0))
+    loads = (
+        np.column_stack([hertz_load(mesh, spec.surface, patch, a) for a in radii])
+        if radii
+        else np.zeros((n, 0))
+    )
     f_exp = loads.mean(axis=1) if radii else np.zeros(n)
     if not radii:
-        f_exp[3 * patch.node: 3 * patch.node + 3] = -patch.normal
+        f_exp[3 * patch.node : 3 * patch.node + 3] = -patch.normal
     return patch, loads, f_exp
 
 
-def participation_pool(fe: FEModel, spec: InterfaceSpec, n_modes: int,
-                       free: FreeModes | None = None) -> int:
+def participation_pool(
+    fe: FEModel, spec: InterfaceSpec, n_modes: int, free: FreeModes | None = None
+) -> int:
     """The pool of free-free modes from which the participation choice of ``spec`` takes
     ``n_modes`` modes: spec.pool if given, else 4 n_modes + 6 doubled until it holds n_modes
     excited modes. An explicit ``mode_pool`` of this size gives the same basis as the default;
     a study gives it to every mode count of a patch set, so that they share one eigen solve.
     Raises InputError (one line) as interface_columns does when the pool excites too few."""
     if spec.mode_choice is not ModeChoice.PARTICIPATION:
-        raise InputError(f"a mode pool is the participation choice's, got mode_choice "
-                         f"{ModeChoice(spec.mode_choice).value!r}")
+        raise InputError(
+            f"a mode pool is the participation choice's, got mode_choice "
+            f"{ModeChoice(spec.mode_choice).value!r}"
+        )
     _patch, _loads, f_exp = patch_loads(fe.mesh, spec)
     return int(_participation_pool(fe, spec, int(n_modes), f_exp, _free_source(fe, free))[0])
 
 
-def relieved_statics(fe: FEModel, reference: ReferenceCondition, loads: np.ndarray
-                     ) -> np.ndarray:
+def relieved_statics(fe: FEModel, reference: ReferenceCondition, loads: np.ndarray) -> np.ndarray:
     """u = K_ref^-1 P f of each load column f of ``loads`` (3n, k) [N]: the inertia-relieved
     static responses (3n, k) [m], reference DOF rows zero (one sparse factor of K_ref, one
     solve of all columns)."""
@@ -367,9 +384,13 @@ def relieved_statics(fe: FEModel, reference: ReferenceCondition, loads: np.ndarr
     return static
 
 
-def interface_columns(fe: FEModel, reference: ReferenceCondition, spec: InterfaceSpec,
-                      n_modes: int, sources: InterfaceSources | None = None
-                      ) -> InterfaceColumns:
+def interface_columns(
+    fe: FEModel,
+    reference: ReferenceCondition,
+    spec: InterfaceSpec,
+    n_modes: int,
+    sources: InterfaceSources | None = None,
+) -> InterfaceColumns:
     """The interface basis of ``fe`` for ``spec`` with ``n_modes`` modes (module doc); its
     mode pool and patch statics from ``sources`` (default: computed here)."""
     radii = tuple(float(a) for a in spec.radii_m)
@@ -389,8 +410,11 @@ def interface_columns(fe: FEModel, reference: ReferenceCondition, spec: Interfac
         phi, freqs, part = chosen_modes(fe, spec, n_modes, f_exp, sources.free_modes)
     # patch vectors: inertia-relief static responses, then M-orthonormal to the modes and
     # each other (modal truncation augmentation)
-    static = (sources.patch_statics(patch, radii, loads) if sources.patch_statics is not None
-              and radii else relieved_statics(fe, reference, loads))
+    static = (
+        sources.patch_statics(patch, radii, loads)
+        if sources.patch_statics is not None and radii
+        else relieved_statics(fe, reference, loads)
+    )
     cols = [phi]
     basis = phi
     for k in range(len(radii)):
@@ -400,10 +424,12 @@ def interface_columns(fe: FEModel, reference: ReferenceCondition, spec: Interfac
             w = w - basis @ (basis.T @ (fe.M @ w))
         norm = np.sqrt(w @ (fe.M @ w))
         if not norm > DEPENDENT_RTOL * norm0:
-            raise InputError(f"patch radius {radii[k]:g} m adds nothing beyond the other "
-                             "columns of the interface basis; choose distinct radii")
+            raise InputError(
+                f"patch radius {radii[k]:g} m adds nothing beyond the other "
+                "columns of the interface basis; choose distinct radii"
+            )
         w = (w / norm)[:, None]
-        cols.insert(len(cols) - 1, w)   # patch vectors before the modes
+        cols.insert(len(cols) - 1, w)  # patch vectors before the modes
         basis = np.hstack([basis, w])
     U = np.hstack(cols)
     # floating frame: subtract the rigid motion that moves the reference DOFs
@@ -413,7 +439,23 @@ def interface_columns(fe: FEModel, reference: ReferenceCondition, spec: Interfac
     return InterfaceColumns(np.ascontiguousarray(psi), freqs, part, patch, loads, static)
 
 
-__all__ = ["FreeModes", "InterfaceColumns", "InterfaceSources", "InterfaceSpec", "ModeChoice",
-           "Patch", "PatchStatics", "chosen_modes", "contact_patch", "excited_modes_below",
-           "hertz_load", "inertia_relief", "interface_columns", "participation_pool",
-           "patch_loads", "patch_nodes", "relieved_statics", "tangent_distance"]
+__all__ = [
+    "FreeModes",
+    "InterfaceColumns",
+    "InterfaceSources",
+    "InterfaceSpec",
+    "ModeChoice",
+    "Patch",
+    "PatchStatics",
+    "chosen_modes",
+    "contact_patch",
+    "excited_modes_below",
+    "hertz_load",
+    "inertia_relief",
+    "interface_columns",
+    "participation_pool",
+    "patch_loads",
+    "patch_nodes",
+    "relieved_statics",
+    "tangent_distance",
+]

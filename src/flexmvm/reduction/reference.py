@@ -86,8 +86,10 @@ class ReferenceCondition:
         rigid-body motion (condition number of the rigid modes there > RIGID_COND_MAX).
         """
         dofs = np.asarray(fixed_dofs).ravel()
-        if dofs.size and np.issubdtype(dofs.dtype, np.integer) and (
-            dofs.min() < 0 or dofs.max() >= mesh.n_dof
+        if (
+            dofs.size
+            and np.issubdtype(dofs.dtype, np.integer)
+            and (dofs.min() < 0 or dofs.max() >= mesh.n_dof)
         ):
             raise InputError(
                 f"reference DOF ids must be in 0..{mesh.n_dof - 1}, got {dofs.tolist()}"
@@ -190,10 +192,19 @@ def far_reference(mesh: Mesh, contact_nodes: np.ndarray) -> ReferenceCondition:
         if cond <= AUTO_COND_MAX:
             return ref
         best = min(best, cond)
-    raise InputError(f"no well-conditioned 3-2-1 support far from the contacts: best scaled "
-                     f"condition number {best:.3g}, expected <= {AUTO_COND_MAX:g} (nodes on one "
-                     f"line?); name a reference node set instead")
+    raise InputError(
+        f"no well-conditioned 3-2-1 support far from the contacts: best scaled "
+        f"condition number {best:.3g}, expected <= {AUTO_COND_MAX:g} (nodes on one "
+        f"line?); name a reference node set instead"
+    )
 
 
-__all__ = ["AUTO_COND_MAX", "AUTO_FAR_SHARES", "RIGID_COND_MAX", "ReferenceCondition",
-           "far_reference", "rigid_body_modes", "three_two_one"]
+__all__ = [
+    "AUTO_COND_MAX",
+    "AUTO_FAR_SHARES",
+    "RIGID_COND_MAX",
+    "ReferenceCondition",
+    "far_reference",
+    "rigid_body_modes",
+    "three_two_one",
+]

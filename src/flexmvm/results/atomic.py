@@ -178,8 +178,12 @@ def write_table_csv(path, columns, rows) -> None:
     w = csv.writer(buf, lineterminator="\n")
     w.writerow(columns)
     for r in rows:
-        w.writerow(["" if r.get(c) is None else (repr(float(r[c])) if isinstance(r[c], float)
-                                                 else r[c]) for c in columns])
+        w.writerow(
+            [
+                "" if r.get(c) is None else (repr(float(r[c])) if isinstance(r[c], float) else r[c])
+                for c in columns
+            ]
+        )
     write_text_atomic(path, buf.getvalue())
 
 

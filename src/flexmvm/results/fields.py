@@ -97,16 +97,22 @@ def reference_positions(body: FlexibleBody, r0: np.ndarray, A0: np.ndarray) -> n
     return r0 + body.X @ A0.T
 
 
-def displacement(body: FlexibleBody, r: np.ndarray, A: np.ndarray, q: np.ndarray,
-                 r0: np.ndarray, A0: np.ndarray) -> np.ndarray:
+def displacement(
+    body: FlexibleBody, r: np.ndarray, A: np.ndarray, q: np.ndarray, r0: np.ndarray, A0: np.ndarray
+) -> np.ndarray:
     """Global displacement x_k(r, A, q) - x0_k, shape (n, 3) [m], from the undeformed body at
     the initial frame: x0_k = r0 + A0 X_k. With x0 as mesh points, ParaView's Warp By Vector of
     this field gives the deformed body exactly (rigid motion included)."""
     return node_positions(body, r, A, q) - reference_positions(body, r0, A0)
 
 
-def node_velocities(body: FlexibleBody, A: np.ndarray, q: np.ndarray, frame_v: np.ndarray,
-                    q_dot: np.ndarray | None = None) -> np.ndarray:
+def node_velocities(
+    body: FlexibleBody,
+    A: np.ndarray,
+    q: np.ndarray,
+    frame_v: np.ndarray,
+    q_dot: np.ndarray | None = None,
+) -> np.ndarray:
     """Global node velocities x_dot_k = r_dot + A (omega x s_k + psi_k q_dot), (n, 3) [m/s].
 
     frame_v = [r_dot (global), omega (body frame)] (6,); q_dot (nq,) or None for zero elastic
@@ -156,8 +162,9 @@ def _von_mises_rows(S, out):  # pragma: no cover - compiled
         for k in range(S.shape[2]):
             a, b, c = S[node, 0, k], S[node, 1, k], S[node, 2, k]
             d, e, f = S[node, 3, k], S[node, 4, k], S[node, 5, k]
-            out[k, node] = np.sqrt(0.5 * ((a - b) ** 2 + (b - c) ** 2 + (c - a) ** 2)
-                                   + 3.0 * (d * d + e * e + f * f))
+            out[k, node] = np.sqrt(
+                0.5 * ((a - b) ** 2 + (b - c) ** 2 + (c - a) ** 2) + 3.0 * (d * d + e * e + f * f)
+            )
 
 
 class StressOperator:
@@ -174,7 +181,7 @@ class StressOperator:
     def __init__(self, mesh: Mesh, material: Material):
         self.n = n = mesh.n_nodes
         self.lam, self.mu = material.lame
-        self._blocks = []   # (connectivity (c, k), G^T (c, p*3, k))
+        self._blocks = []  # (connectivity (c, k), G^T (c, p*3, k))
         rows, cols = [], []
         offset = 0
         for block in mesh.cells:
@@ -201,8 +208,9 @@ class StressOperator:
                         "node; expected a valid mesh (see mesh.quality.check_quality)"
                     )
                 # G[c, p, n, i] = sum_j dN_n/dxi_j (J^-1)_ji, stored as (c, p, i, n)
-                G = np.matmul(np.linalg.inv(jac).transpose(0, 1, 3, 2),
-                              grads.transpose(0, 2, 1)[None])
+                G = np.matmul(
+                    np.linalg.inv(jac).transpose(0, 1, 3, 2), grads.transpose(0, 2, 1)[None]
+                )
                 Gt[lo : lo + _CHUNK] = G.reshape(len(c), p * 3, k)
             self._blocks.append((conn, Gt))
             rows.append(conn.ravel())
@@ -211,7 +219,7 @@ class StressOperator:
         rows = np.concatenate(rows) if rows else np.zeros(0, int)
         cols = np.concatenate(cols) if cols else np.zeros(0, int)
         count = np.bincount(rows, minlength=n).astype(float)
-        self._node_weight = 1.0 / np.maximum(count, 1.0)   # (n,)
+        self._node_weight = 1.0 / np.maximum(count, 1.0)  # (n,)
         w = self._node_weight[rows]
         # average over the cells sharing a node (unweighted); nodes in no cell get zero
         self._average = sp.csr_matrix((w, (rows, cols)), shape=(n, offset))
@@ -263,8 +271,9 @@ class StressOperator:
             for conn, Gt in self._blocks:
                 c, p3 = Gt.shape[0], Gt.shape[1]
                 h = np.matmul(Gt, Uc[conn])  # (c, p*3, 3 f): h[c, (p, i), (a, field)]
-                _average_stress(h.reshape(c, p3 // 3, 3, 3, f), conn, self._node_weight,
-                                self.lam, self.mu, S)
+                _average_stress(
+                    h.reshape(c, p3 // 3, 3, 3, f), conn, self._node_weight, self.lam, self.mu, S
+                )
             _von_mises_rows(S, out[lo : lo + f])
         return out
 
@@ -324,12 +333,23 @@ def body_geometry(body: FlexibleBody) -> Mesh:
     return Mesh(body.X, body.mesh.cells)
 
 
-def nodal_fields(body: FlexibleBody, material: Material, r: np.ndarray, A: np.ndarray,
-                 q: np.ndarray, frame_v: np.ndarray, q_dot: np.ndarray | None,
-                 r0: np.ndarray, A0: np.ndarray, geometry: Mesh | None = None, *,
-                 stress: StressOperator | None = None, u: np.ndarray | None = None,
-                 u_dot: np.ndarray | None = None,
-                 von_mises: np.ndarray | None = None) -> NodalFields:
+def nodal_fields(
+    body: FlexibleBody,
+    material: Material,
+    r: np.ndarray,
+    A: np.ndarray,
+    q: np.ndarray,
+    frame_v: np.ndarray,
+    q_dot: np.ndarray | None,
+    r0: np.ndarray,
+    A0: np.ndarray,
+    geometry: Mesh | None = None,
+    *,
+    stress: StressOperator | None = None,
+    u: np.ndarray | None = None,
+    u_dot: np.ndarray | None = None,
+    von_mises: np.ndarray | None = None,
+) -> NodalFields:
     """All nodal fields of `body` in state (r, A, q, [r_dot, omega], q_dot), displacement from
     the undeformed body at (r0, A0). geometry: :func:`body_geometry`, stress: its
     :class:`StressOperator`, u / u_dot: :func:`elastic_displacement` of q / q_dot (pass them

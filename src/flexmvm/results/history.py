@@ -20,7 +20,9 @@ from flexmvm.results.atomic import file_sha256, write_text_atomic
 def write_history(path: Path, t, force, probe_v: dict[str, np.ndarray], axis: str = "x") -> Path:
     """Write the history CSV atomically: t_s,contact_force_N,<probe>_v<axis>_mps,... with
     floats in repr form (they read back bit for bit)."""
-    cols = [np.asarray(t, float), np.asarray(force, float)] + [np.asarray(v, float) for v in probe_v.values()]
+    cols = [np.asarray(t, float), np.asarray(force, float)] + [
+        np.asarray(v, float) for v in probe_v.values()
+    ]
     header = ["t_s", "contact_force_N"] + [f"{name}_v{axis}_mps" for name in probe_v]
     buf = io.StringIO()
     buf.write(",".join(header) + "\n")
@@ -41,7 +43,9 @@ def read_history(path: Path) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarr
         raise InputError(f"{path}: not a readable history CSV ({exc})") from None
     if header[:2] != ["t_s", "contact_force_N"] or data.shape[1] != len(header):
         raise InputError(f"{path}: expected header t_s,contact_force_N,<probe>_vx_mps,...")
-    probes = {h[: -len("_vx_mps")]: data[:, i] for i, h in enumerate(header) if h.endswith("_vx_mps")}
+    probes = {
+        h[: -len("_vx_mps")]: data[:, i] for i, h in enumerate(header) if h.endswith("_vx_mps")
+    }
     return data[:, 0], data[:, 1], probes
 
 
@@ -49,17 +53,19 @@ def history_record(path: Path) -> dict:
     """What a stored history keeps beside it to be checked: {sha256 (of the file's bytes),
     rows (samples), t_first_s, t_last_s}. InputError if it is not a history CSV."""
     t, _, _ = read_history(path)
-    return {"sha256": file_sha256(path), "rows": len(t),
-            "t_first_s": float(t[0]) if len(t) else None,
-            "t_last_s": float(t[-1]) if len(t) else None}
+    return {
+        "sha256": file_sha256(path),
+        "rows": len(t),
+        "t_first_s": float(t[0]) if len(t) else None,
+        "t_last_s": float(t[-1]) if len(t) else None,
+    }
 
 
 def _us(t: float) -> str:
     return f"{1e6 * t:.6g}"
 
 
-def history_problem(path: Path, record: dict | None, t_end_s: float | None = None
-                    ) -> str | None:
+def history_problem(path: Path, record: dict | None, t_end_s: float | None = None) -> str | None:
     """None if the history CSV at ``path`` is the one ``record`` (history_record) describes
     and covers [0, t_end_s]; else what is wrong, one line without the path, e.g. "7 of 31
     samples (expected window 0..30 us)". ``record`` None: only readability and the window."""

@@ -43,8 +43,16 @@ PARTIAL_MARKER = ".flexmvm-partial"
 _MANIFEST_VERSION = 1
 _SHOWN = 3  # foreign files named in a refusal
 
-__all__ = ["MARKER", "PARTIAL_MARKER", "check_creatable", "claim_study_dir", "make_out_dir",
-           "manifest_of", "remove_stale_partials", "staged_dir"]
+__all__ = [
+    "MARKER",
+    "PARTIAL_MARKER",
+    "check_creatable",
+    "claim_study_dir",
+    "make_out_dir",
+    "manifest_of",
+    "remove_stale_partials",
+    "staged_dir",
+]
 
 
 def _reason(exc: OSError) -> str:
@@ -63,8 +71,10 @@ def check_creatable(path: str | os.PathLike[str], option: str = "--out") -> Path
     while not parent.exists():
         parent = parent.parent
     if not parent.is_dir():
-        raise InputError(f"{option} {path}: cannot be created, {parent} is a file; expected a "
-                         "path under a directory")
+        raise InputError(
+            f"{option} {path}: cannot be created, {parent} is a file; expected a "
+            "path under a directory"
+        )
     if not os.access(parent, os.W_OK | os.X_OK):
         raise InputError(f"{option} {path}: cannot be created, no write permission in {parent}")
     return path
@@ -97,8 +107,11 @@ def _files(root: Path) -> list[str]:
         rel = Path(dirpath).relative_to(root)
         dirnames[:] = [d for d in dirnames if not (Path(dirpath) / d).is_symlink()]
         out += [(rel / f).as_posix() for f in filenames]
-        out += [(rel / d).as_posix() for d in os.listdir(dirpath)
-                if (Path(dirpath) / d).is_symlink() and (Path(dirpath) / d).is_dir()]
+        out += [
+            (rel / d).as_posix()
+            for d in os.listdir(dirpath)
+            if (Path(dirpath) / d).is_symlink() and (Path(dirpath) / d).is_dir()
+        ]
     return sorted(f for f in out if f not in (MARKER, PARTIAL_MARKER))
 
 
@@ -139,10 +152,12 @@ def _refusal(path: Path, command: str) -> str | None:
     manifest = _read_manifest(path)
     if manifest is None or "files" not in manifest:
         present = _files(path)
-        return (f"holds files not written by {command} ({_names(present or ['?'])}; no flexmvm "
-                "manifest: flexmvm replaces only a directory whose every file it wrote)")
+        return (
+            f"holds files not written by {command} ({_names(present or ['?'])}; no flexmvm "
+            "manifest: flexmvm replaces only a directory whose every file it wrote)"
+        )
     if manifest.get("command") != command:
-        return (f"is an output of {manifest.get('command')!r}, not of {command}")
+        return f"is an output of {manifest.get('command')!r}, not of {command}"
     listed = manifest["files"]
     foreign, changed = [], []
     for rel in _files(path):
@@ -185,24 +200,31 @@ def remove_stale_partials(final: Path, echo=None) -> list[Path]:
         if not d.name.startswith(prefix) or not d.is_dir() or d.is_symlink():
             continue
         try:
-            pid = int(d.name[len(prefix):])
+            pid = int(d.name[len(prefix) :])
             info = json.loads((d / PARTIAL_MARKER).read_text(encoding="utf-8"))
         except (ValueError, OSError):
             continue
-        if not isinstance(info, dict) or info.get("pid") != pid or pid == os.getpid() \
-                or _pid_alive(pid):
+        if (
+            not isinstance(info, dict)
+            or info.get("pid") != pid
+            or pid == os.getpid()
+            or _pid_alive(pid)
+        ):
             continue
         shutil.rmtree(d, ignore_errors=True)
         removed.append(d)
         if echo is not None:
-            echo(f"removed {d}: the unfinished output of {info.get('command', 'flexmvm')} "
-                 f"(process {pid}, no longer running)")
+            echo(
+                f"removed {d}: the unfinished output of {info.get('command', 'flexmvm')} "
+                f"(process {pid}, no longer running)"
+            )
     return removed
 
 
 @contextlib.contextmanager
-def staged_dir(path: str | os.PathLike[str], command: str, option: str = "--out",
-               echo=None) -> Iterator[Path]:
+def staged_dir(
+    path: str | os.PathLike[str], command: str, option: str = "--out", echo=None
+) -> Iterator[Path]:
     """Yield an empty temporary directory beside ``path``; on success it becomes ``path``.
 
     ``command`` (e.g. ``"flexmvm run"``) and the SHA-256 of every file written go to the
@@ -222,12 +244,15 @@ def staged_dir(path: str | os.PathLike[str], command: str, option: str = "--out"
     check_creatable(final, option)
     why = _refusal(final, command) if final.exists() else None
     if why is not None:
-        raise InputError(f"{option} {final}: {why}; expected a new or empty directory, or an "
-                         f"unchanged earlier output of {command} (which is replaced)")
+        raise InputError(
+            f"{option} {final}: {why}; expected a new or empty directory, or an "
+            f"unchanged earlier output of {command} (which is replaced)"
+        )
     cwd = Path.cwd().resolve()
     if final.exists() and (cwd == final.resolve() or final.resolve() in cwd.parents):
-        raise InputError(f"{option} {final}: is the current directory (or holds it); expected "
-                         "another directory")
+        raise InputError(
+            f"{option} {final}: is the current directory (or holds it); expected another directory"
+        )
     parent = final.absolute().parent
     created = [d for d in (parent, *parent.parents) if not d.exists()]
     make_out_dir(parent, option)
@@ -238,7 +263,8 @@ def staged_dir(path: str | os.PathLike[str], command: str, option: str = "--out"
     try:
         tmp.mkdir()
         (tmp / PARTIAL_MARKER).write_text(
-            json.dumps({"command": command, "pid": os.getpid()}) + "\n", encoding="utf-8")
+            json.dumps({"command": command, "pid": os.getpid()}) + "\n", encoding="utf-8"
+        )
     except OSError as exc:
         shutil.rmtree(tmp, ignore_errors=True)
         _remove_empty(created)
@@ -246,8 +272,9 @@ def staged_dir(path: str | os.PathLike[str], command: str, option: str = "--out"
     try:
         yield tmp
         (tmp / PARTIAL_MARKER).unlink()
-        (tmp / MARKER).write_text(json.dumps(manifest_of(tmp, command), indent=1) + "\n",
-                                  encoding="utf-8")
+        (tmp / MARKER).write_text(
+            json.dumps(manifest_of(tmp, command), indent=1) + "\n", encoding="utf-8"
+        )
         _swap_in(tmp, final)
     except BaseException:
         shutil.rmtree(tmp, ignore_errors=True)
@@ -255,8 +282,9 @@ def staged_dir(path: str | os.PathLike[str], command: str, option: str = "--out"
         raise
 
 
-def claim_study_dir(path: str | os.PathLike[str], command: str, own: Iterable[str] = (),
-                    option: str = "--out") -> Path:
+def claim_study_dir(
+    path: str | os.PathLike[str], command: str, own: Iterable[str] = (), option: str = "--out"
+) -> Path:
     """Create or resume the directory of a study written in place by ``command``.
 
     ``path`` may be new, empty, or an earlier study of ``command`` (its :data:`MARKER` says
@@ -275,18 +303,25 @@ def claim_study_dir(path: str | os.PathLike[str], command: str, own: Iterable[st
     if data is not None and data.get("command") == command:
         return out
     if data is not None:
-        raise InputError(f"{option} {out}: is an output of {data.get('command')!r}, not of "
-                         f"{command}; expected a new or empty directory, or an earlier study "
-                         f"of {command} (which is resumed)")
+        raise InputError(
+            f"{option} {out}: is an output of {data.get('command')!r}, not of "
+            f"{command}; expected a new or empty directory, or an earlier study "
+            f"of {command} (which is resumed)"
+        )
     own = set(own)
     foreign = sorted(e.name for e in out.iterdir() if e.name not in own)
     if foreign:
-        raise InputError(f"{option} {out}: holds files not written by {command} "
-                         f"({_names(foreign)}); expected a new or empty directory, or an "
-                         f"earlier study of {command} (which is resumed)")
+        raise InputError(
+            f"{option} {out}: holds files not written by {command} "
+            f"({_names(foreign)}); expected a new or empty directory, or an "
+            f"earlier study of {command} (which is resumed)"
+        )
     try:
-        marker.write_text(json.dumps({"flexmvm_output": _MANIFEST_VERSION, "command": command,
-                                      "study": True}) + "\n", encoding="utf-8")
+        marker.write_text(
+            json.dumps({"flexmvm_output": _MANIFEST_VERSION, "command": command, "study": True})
+            + "\n",
+            encoding="utf-8",
+        )
     except OSError as exc:
         raise InputError(f"{option} {out}: cannot write {MARKER} ({_reason(exc)})") from None
     return out

@@ -30,8 +30,11 @@ def writing(path: Path) -> Iterator[None]:
     except OutputError:
         raise
     except OSError as exc:
-        reason = ("no space left on the device" if _no_space(exc)
-                  else exc.strerror or " ".join(str(exc).split())[:200])
+        reason = (
+            "no space left on the device"
+            if _no_space(exc)
+            else exc.strerror or " ".join(str(exc).split())[:200]
+        )
         raise OutputError(f"cannot write {path}: {reason}") from exc
 
 
@@ -44,8 +47,11 @@ def write_run(out_dir: Path, srun, fields: bool = True) -> dict[str, Path]:
     res = srun.result
     bodies = list(srun.built.system.bodies)
     materials = [info.material for info in srun.built.info]
-    paths = {"history": out_dir / "history.csv", "summary": out_dir / "summary.json",
-             "results": out_dir / "results.h5"}
+    paths = {
+        "history": out_dir / "history.csv",
+        "summary": out_dir / "summary.json",
+        "results": out_dir / "results.h5",
+    }
     with writing(paths["history"]):
         write_history_csv(paths["history"], res, probe_axis=0)
     with writing(paths["summary"]):
@@ -54,6 +60,5 @@ def write_run(out_dir: Path, srun, fields: bool = True) -> dict[str, Path]:
         with writing(paths["results"]):
             write_results_h5(paths["results"], res, bodies)
         with writing(out_dir / "paraview"):
-            paths["paraview"] = write_paraview_series(out_dir / "paraview", res, bodies,
-                                                      materials)
+            paths["paraview"] = write_paraview_series(out_dir / "paraview", res, bodies, materials)
     return paths

@@ -35,9 +35,13 @@ _BLOCK = 32768  # bytes per compressed block (VTK's and meshio's default)
 _VTK_TYPE = {"tetra": 10, "hexahedron": 12, "wedge": 13, "tetra10": 24, "hexahedron27": 29}
 # meshio -> VTK node order where they differ (meshio._vtk_common.meshio_to_vtk_order)
 _VTK_ORDER = {"wedge": np.array([0, 2, 1, 3, 5, 4])}
-_NUMPY_TO_VTK = {np.dtype(np.float64): "Float64", np.dtype(np.float32): "Float32",
-                 np.dtype(np.int64): "Int64", np.dtype(np.int32): "Int32",
-                 np.dtype(np.uint8): "UInt8"}
+_NUMPY_TO_VTK = {
+    np.dtype(np.float64): "Float64",
+    np.dtype(np.float32): "Float32",
+    np.dtype(np.int64): "Int64",
+    np.dtype(np.int32): "Int32",
+    np.dtype(np.uint8): "UInt8",
+}
 
 
 def _encoded(data: np.ndarray, level: int) -> str:
@@ -47,8 +51,7 @@ def _encoded(data: np.ndarray, level: int) -> str:
     blocks = [zlib.compress(raw[i : i + _BLOCK], level) for i in range(0, len(raw), _BLOCK)]
     last = len(raw) - (len(blocks) - 1) * _BLOCK if blocks else 0
     header = np.array([len(blocks), _BLOCK, last] + [len(b) for b in blocks], dtype=np.uint32)
-    return (base64.b64encode(header.tobytes()).decode()
-            + base64.b64encode(b"".join(blocks)).decode())
+    return base64.b64encode(header.tobytes()).decode() + base64.b64encode(b"".join(blocks)).decode()
 
 
 def _data_array(name: str, data: np.ndarray, level: int) -> str:
@@ -57,8 +60,10 @@ def _data_array(name: str, data: np.ndarray, level: int) -> str:
     if vtk_type is None:
         raise InputError(f"VTU array {name!r}: unsupported dtype {data.dtype}")
     comps = f' NumberOfComponents="{data.shape[1]}"' if data.ndim == 2 else ""
-    return (f'<DataArray type="{vtk_type}" Name="{name}"{comps} format="binary">'
-            f"{_encoded(data, level)}</DataArray>\n")
+    return (
+        f'<DataArray type="{vtk_type}" Name="{name}"{comps} format="binary">'
+        f"{_encoded(data, level)}</DataArray>\n"
+    )
 
 
 class VtuSeries:
@@ -67,8 +72,9 @@ class VtuSeries:
     atomically (results/atomic.py). Thread-safe: the encoded points and cells are made once
     and only read afterwards; zlib releases the GIL, so files can be written on threads."""
 
-    def __init__(self, points: np.ndarray, cells: Sequence[tuple[str, np.ndarray]],
-                 level: int = ZLIB_LEVEL):
+    def __init__(
+        self, points: np.ndarray, cells: Sequence[tuple[str, np.ndarray]], level: int = ZLIB_LEVEL
+    ):
         points = np.asarray(points, dtype=np.float64)
         if points.ndim != 2 or points.shape[1] != 3:
             raise InputError(f"VTU points: expected shape (n, 3), got {points.shape}")
@@ -78,15 +84,18 @@ class VtuSeries:
         end = 0
         for name, c in cells:
             if name not in _VTK_TYPE:
-                raise InputError(f"VTU: unsupported cell type {name!r}; expected one of "
-                                 f"{sorted(_VTK_TYPE)}")
+                raise InputError(
+                    f"VTU: unsupported cell type {name!r}; expected one of {sorted(_VTK_TYPE)}"
+                )
             c = np.asarray(c, dtype=np.int64)
             if c.ndim != 2:
-                raise InputError(f"VTU {name} connectivity: expected (cells, nodes), got "
-                                 f"shape {c.shape}")
+                raise InputError(
+                    f"VTU {name} connectivity: expected (cells, nodes), got shape {c.shape}"
+                )
             if c.size and (c.min() < 0 or c.max() >= self.n_points):
-                raise InputError(f"VTU {name} connectivity: node index outside 0..."
-                                 f"{self.n_points - 1}")
+                raise InputError(
+                    f"VTU {name} connectivity: node index outside 0...{self.n_points - 1}"
+                )
             if name in _VTK_ORDER:
                 c = c[:, _VTK_ORDER[name]]
             conn.append(c.ravel())
@@ -94,7 +103,7 @@ class VtuSeries:
             end += c.size
             types.append(np.full(len(c), _VTK_TYPE[name], dtype=np.uint8))
         self.n_cells = sum(len(t) for t in types)
-        cat = (lambda xs, dt: np.concatenate(xs) if xs else np.zeros(0, dt))
+        cat = lambda xs, dt: np.concatenate(xs) if xs else np.zeros(0, dt)
         byte_order = "LittleEndian" if sys.byteorder == "little" else "BigEndian"
         self._head = (
             '<?xml version="1.0"?>\n'
@@ -117,10 +126,12 @@ class VtuSeries:
         for name, data in point_data.items():
             data = np.asarray(data)
             if data.ndim not in (1, 2) or data.shape[0] != self.n_points:
-                raise InputError(f"VTU point data {name!r}: expected {self.n_points} rows, got "
-                                 f"shape {data.shape}")
+                raise InputError(
+                    f"VTU point data {name!r}: expected {self.n_points} rows, got "
+                    f"shape {data.shape}"
+                )
             if any(c in name for c in '<>&"'):
-                raise InputError(f"VTU point data name {name!r}: no <, >, & or \" allowed")
+                raise InputError(f'VTU point data name {name!r}: no <, >, & or " allowed')
             parts.append(_data_array(name, data, self.level))
         body = ("<PointData>\n" + "".join(parts) + "</PointData>\n").encode() if parts else b""
         write_bytes_atomic(path, self._head + body + self._tail)

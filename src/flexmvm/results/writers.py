@@ -124,8 +124,13 @@ def _check_every(name: str, every: int) -> int:
 
 def _write_histories(f: h5py.File, run: RunResult) -> None:
     _dataset(f, "time", run.t, "s", "output times")
-    _dataset(f, "contact_force", run.contact_force, "N",
-             "normal contact force, impulse-averaged over the interval ending at each time")
+    _dataset(
+        f,
+        "contact_force",
+        run.contact_force,
+        "N",
+        "normal contact force, impulse-averaged over the interval ending at each time",
+    )
     _dataset(f, "joint_force", run.joint_force, "N", "averaged joint constraint forces")
     probes = f.create_group("probes")
     for i, name in enumerate(run.probe_names):
@@ -148,8 +153,13 @@ def _write_mesh(g: h5py.Group, body: FlexibleBody) -> None:
     _dataset(mesh, "nodes", body.X, "m", "undeformed nodes, body frame (n, 3)")
     if body.mesh is not None:
         for block in body.mesh.cells:
-            _dataset(mesh, f"cells_{block.cell_type.value}", block.connectivity, "1",
-                     "node ids, meshio/VTK node order")
+            _dataset(
+                mesh,
+                f"cells_{block.cell_type.value}",
+                block.connectivity,
+                "1",
+                "node ids, meshio/VTK node order",
+            )
 
 
 def _write_body(g: h5py.Group, run: RunResult, b: int, body: FlexibleBody, idx: np.ndarray) -> None:
@@ -158,18 +168,37 @@ def _write_body(g: h5py.Group, run: RunResult, b: int, body: FlexibleBody, idx: 
     _dataset(g, "time_index", idx, "1", "rows of /time these fields belong to")
     _dataset(g, "r", run.frame_r[idx, b], "m", "frame origin, global (k, 3)")
     _dataset(g, "A", run.frame_A[idx, b], "1", "rotation body -> global (k, 3, 3)")
-    _dataset(g, "frame_velocity", run.frame_v[idx, b], "m/s, rad/s",
-             "[r_dot (global), omega (body frame)] (k, 6)")
-    _dataset(g, "q", np.asarray(run.q[b])[idx], "basis units",
-             "elastic coordinates (k, nq); nodal displacement u = psi q [m]")
+    _dataset(
+        g,
+        "frame_velocity",
+        run.frame_v[idx, b],
+        "m/s, rad/s",
+        "[r_dot (global), omega (body frame)] (k, 6)",
+    )
+    _dataset(
+        g,
+        "q",
+        np.asarray(run.q[b])[idx],
+        "basis units",
+        "elastic coordinates (k, nq); nodal displacement u = psi q [m]",
+    )
     if len(run.q_dot) > b:
-        _dataset(g, "q_dot", np.asarray(run.q_dot[b])[idx], "basis units / s",
-                 "rates of the elastic coordinates (k, nq)")
+        _dataset(
+            g,
+            "q_dot",
+            np.asarray(run.q_dot[b])[idx],
+            "basis units / s",
+            "rates of the elastic coordinates (k, nq)",
+        )
     _write_mesh(g, body)
 
 
-def write_results_h5(path: str | os.PathLike[str], run: RunResult,
-                     bodies: Sequence[FlexibleBody], fields_every: int = 1) -> None:
+def write_results_h5(
+    path: str | os.PathLike[str],
+    run: RunResult,
+    bodies: Sequence[FlexibleBody],
+    fields_every: int = 1,
+) -> None:
     """HDF5 archive of a run, written atomically (temporary file, then rename).
 
     Layout (every dataset carries a ``units`` attribute): /time (n_out,) [s], /contact_force
@@ -229,9 +258,13 @@ def _pvd_text(entries: list[tuple[float, str]]) -> str:
     )
 
 
-def write_paraview_series(out_dir: str | os.PathLike[str], run: RunResult,
-                          bodies: Sequence[FlexibleBody], materials: Sequence[Material],
-                          every: int | None = None) -> Path:
+def write_paraview_series(
+    out_dir: str | os.PathLike[str],
+    run: RunResult,
+    bodies: Sequence[FlexibleBody],
+    materials: Sequence[Material],
+    every: int | None = None,
+) -> Path:
     """ParaView time series: ``<out_dir>/<body>_<i:06d>.vtu`` at every `every`-th output i and
     one collection ``<out_dir>/<body>.pvd`` per body listing them with their times [s].
 
@@ -261,8 +294,10 @@ def write_paraview_series(out_dir: str | os.PathLike[str], run: RunResult,
                 raise InputError(f"RunResult.q[{b}]: expected shape {(n, body.nq)}, got {q.shape}")
             q_dot = np.asarray(run.q_dot[b], dtype=float) if len(run.q_dot) > b else None
             if q_dot is None or q_dot.shape != q.shape:
-                raise InputError(f"RunResult.q_dot[{b}]: expected shape {q.shape} (the rates "
-                                 f"of q), got {None if q_dot is None else q_dot.shape}")
+                raise InputError(
+                    f"RunResult.q_dot[{b}]: expected shape {q.shape} (the rates "
+                    f"of q), got {None if q_dot is None else q_dot.shape}"
+                )
             idx = np.arange(0, n, every)
             # psi q and the stresses of all written outputs at once (one pass over psi, one
             # product per cell for all fields: StressOperator.von_mises_series)
@@ -270,18 +305,40 @@ def write_paraview_series(out_dir: str | os.PathLike[str], run: RunResult,
             vm = stress.von_mises_series(U)
             # the points (the undeformed body at output 0) and the cells are the same in
             # every file: encoded once
-            series = VtuSeries(reference_positions(body, run.frame_r[0, b], run.frame_A[0, b]),
-                               [(c.cell_type.value, c.connectivity) for c in body.mesh.cells])
+            series = VtuSeries(
+                reference_positions(body, run.frame_r[0, b], run.frame_A[0, b]),
+                [(c.cell_type.value, c.connectivity) for c in body.mesh.cells],
+            )
             entries, writes = [], []
             for k, i in enumerate(idx):
-                fl = nodal_fields(body, material, run.frame_r[i, b], run.frame_A[i, b], q[i],
-                                  run.frame_v[i, b], q_dot[i], run.frame_r[0, b],
-                                  run.frame_A[0, b], geometry, stress=stress, u=U[k], u_dot=Ud[k],
-                                  von_mises=vm[k])
+                fl = nodal_fields(
+                    body,
+                    material,
+                    run.frame_r[i, b],
+                    run.frame_A[i, b],
+                    q[i],
+                    run.frame_v[i, b],
+                    q_dot[i],
+                    run.frame_r[0, b],
+                    run.frame_A[0, b],
+                    geometry,
+                    stress=stress,
+                    u=U[k],
+                    u_dot=Ud[k],
+                    von_mises=vm[k],
+                )
                 fname = f"{name}_{i:06d}.vtu"
-                writes.append(pool.submit(series.write, out / fname, {
-                    "displacement": fl.displacement, "velocity": fl.velocity,
-                    "von_mises": fl.von_mises}))
+                writes.append(
+                    pool.submit(
+                        series.write,
+                        out / fname,
+                        {
+                            "displacement": fl.displacement,
+                            "velocity": fl.velocity,
+                            "von_mises": fl.von_mises,
+                        },
+                    )
+                )
                 entries.append((float(run.t[i]), fname))
             # this body's files are written while the next body's fields are computed
             if pending is not None:
@@ -290,4 +347,3 @@ def write_paraview_series(out_dir: str | os.PathLike[str], run: RunResult,
         if pending is not None:
             _finish(*pending)
     return out
-

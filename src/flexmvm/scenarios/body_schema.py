@@ -217,20 +217,25 @@ class ModelConfig(Frozen):
         if self.kind is ModelKind.INTERFACE:
             radii = self.patch_radii_m
             if self.modes + len(radii) < 1:
-                raise problem("kind 'interface' needs modes >= 1 or at least one patch radius",
-                              "patch_radii_m")
+                raise problem(
+                    "kind 'interface' needs modes >= 1 or at least one patch radius",
+                    "patch_radii_m",
+                )
             if len(set(radii)) != len(radii):
                 raise problem(f"must be distinct radii [m], got {list(radii)}", "patch_radii_m")
             if self.mode_pool is not None and self.mode_pool < self.modes:
-                raise problem(f"must be >= modes = {self.modes}, got {self.mode_pool}",
-                              "mode_pool")
+                raise problem(f"must be >= modes = {self.modes}, got {self.mode_pool}", "mode_pool")
         return self
 
     def interface_spec(self) -> InterfaceSpec:
         """The reduction.interface.InterfaceSpec of the interface kind's keys."""
-        return InterfaceSpec(self.patch_surface, self.patch_centre_m,
-                             tuple(float(a) for a in self.patch_radii_m),
-                             ModeChoice(self.mode_choice), self.mode_pool)
+        return InterfaceSpec(
+            self.patch_surface,
+            self.patch_centre_m,
+            tuple(float(a) for a in self.patch_radii_m),
+            ModeChoice(self.mode_choice),
+            self.mode_pool,
+        )
 
     @property
     def label(self) -> str:
@@ -323,7 +328,11 @@ class BodyConfig(Frozen):
         support far from its contacts, chosen by the builder); a rod's keeps ModelConfig's
         default, end_b (so the dumps, and the study keys made of them, of rod scenarios do not
         change)."""
-        if not isinstance(data, dict) or data.get("mesh_file") is None or data.get("rod") is not None:
+        if (
+            not isinstance(data, dict)
+            or data.get("mesh_file") is None
+            or data.get("rod") is not None
+        ):
             return data
         model = data.get("model")
         if model is None:
@@ -378,26 +387,48 @@ def rigid() -> ModelConfig:
 
 def modal(modes: int, reference: str | None = None) -> ModelConfig:
     """The first ``modes`` modes of the body supported by its reference condition."""
-    return validate_part(ModelConfig, {"kind": ModelKind.MODAL, "modes": modes,
-                                       **_given(reference)}, f"modal({modes!r})")
+    return validate_part(
+        ModelConfig,
+        {"kind": ModelKind.MODAL, "modes": modes, **_given(reference)},
+        f"modal({modes!r})",
+    )
 
 
-def interface(patch_radii_m=(), modes: int = 0, *, mode_choice: str = "participation",
-              patch_surface: str = "end_a", patch_centre_m=None, mode_pool: int | None = None,
-              reference: str | None = None) -> ModelConfig:
+def interface(
+    patch_radii_m=(),
+    modes: int = 0,
+    *,
+    mode_choice: str = "participation",
+    patch_surface: str = "end_a",
+    patch_centre_m=None,
+    mode_pool: int | None = None,
+    reference: str | None = None,
+) -> ModelConfig:
     """Interface model (reduction/interface.py): one static Hertz-patch vector per radius in
     ``patch_radii_m`` [m] about the centre of ``patch_surface`` (or ``patch_centre_m``), plus
     ``modes`` free-free modes chosen by ``mode_choice`` (participation or frequency)."""
-    data = {"kind": ModelKind.INTERFACE, "patch_radii_m": tuple(patch_radii_m), "modes": modes,
-            "mode_choice": mode_choice, "patch_surface": patch_surface,
-            "patch_centre_m": patch_centre_m, "mode_pool": mode_pool, **_given(reference)}
-    return validate_part(ModelConfig, data,
-                         f"interface({list(patch_radii_m)!r}, modes={modes!r})")
+    data = {
+        "kind": ModelKind.INTERFACE,
+        "patch_radii_m": tuple(patch_radii_m),
+        "modes": modes,
+        "mode_choice": mode_choice,
+        "patch_surface": patch_surface,
+        "patch_centre_m": patch_centre_m,
+        "mode_pool": mode_pool,
+        **_given(reference),
+    }
+    return validate_part(ModelConfig, data, f"interface({list(patch_radii_m)!r}, modes={modes!r})")
 
 
-def mvm(selection: str | tuple[int, int] | None = None, modes: int = 0, *,
-        region: RegionSpec | None = None, reference: str | None = None,
-        seed_eq4: bool = False, kind: ModelKind | None = None) -> ModelConfig:
+def mvm(
+    selection: str | tuple[int, int] | None = None,
+    modes: int = 0,
+    *,
+    region: RegionSpec | None = None,
+    reference: str | None = None,
+    seed_eq4: bool = False,
+    kind: ModelKind | None = None,
+) -> ModelConfig:
     """MVM model: the nodes of ``selection`` (the seed's layers-laps 'i-j' or (i, j)) or of
     ``region`` kept as nodal coordinates, plus ``modes`` modes: Craig-Bampton fixed-interface
     modes, or with ``seed_eq4`` the seed's eq. (4) block basis; ``kind`` names any model kind
@@ -406,6 +437,11 @@ def mvm(selection: str | tuple[int, int] | None = None, modes: int = 0, *,
         selection = "-".join(str(int(v)) for v in selection)
     if kind is None:
         kind = ModelKind.MVM_SEED if seed_eq4 else ModelKind.MVM
-    data = {"kind": kind, "selection": selection, "region": region, "modes": modes,
-            **_given(reference)}
+    data = {
+        "kind": kind,
+        "selection": selection,
+        "region": region,
+        "modes": modes,
+        **_given(reference),
+    }
     return validate_part(ModelConfig, data, f"mvm({selection!r}, modes={modes!r})")

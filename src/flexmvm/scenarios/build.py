@@ -59,7 +59,7 @@ class BodyInfo:
     model: ModelKind
     mesh: Mesh
     material: Material
-    dof: int                 # generalized coordinates: 6 frame + nq
+    dof: int  # generalized coordinates: 6 frame + nq
     n_retained_nodes: int
     n_modes: int
     rod: RodMesh | None
@@ -83,8 +83,9 @@ class BuiltScenario:
     info: list[BodyInfo]
 
 
-def build_body(cfg, setup: SetupCache, massless: np.ndarray | None = None,
-               surfaces: tuple[str, ...] = ()) -> tuple[FlexibleBody, BodyInfo]:
+def build_body(
+    cfg, setup: SetupCache, massless: np.ndarray | None = None, surfaces: tuple[str, ...] = ()
+) -> tuple[FlexibleBody, BodyInfo]:
     """The body of ``cfg``; ``massless``: its contact nodes whose mass is redistributed
     (retained ones only for the MVM kinds, none for a modal or rigid model); ``surfaces``: its
     contact surfaces, which an automatic reference keeps away from. A rigid body has no
@@ -105,8 +106,12 @@ def build_body(cfg, setup: SetupCache, massless: np.ndarray | None = None,
         retained = tuple(int(i) for i in retained_nodes(cfg.model, mesh, rod, f"{where}.model"))
     modes = cfg.model.modes if kind.uses_modes or kind is ModelKind.INTERFACE else 0
     interface = cfg.model.interface_spec() if kind is ModelKind.INTERFACE else None
-    if massless is not None and massless.size and kind.basis is not None \
-            and (kind is ModelKind.FULL or kind.retains_nodes):
+    if (
+        massless is not None
+        and massless.size
+        and kind.basis is not None
+        and (kind is ModelKind.FULL or kind.retains_nodes)
+    ):
         nodes = massless if kind is ModelKind.FULL else np.intersect1d(massless, retained)
         if nodes.size:
             key = ContactMass(key, tuple(int(i) for i in nodes))
@@ -116,16 +121,16 @@ def build_body(cfg, setup: SetupCache, massless: np.ndarray | None = None,
         check_cost(cost, cfg.model.allow_costly, f"{where}.model")
     args = (key, material, kind.basis, retained, modes, ref_set, interface)
     body = body_from_parts(cfg.name, mesh, setup.basis(*args), setup.body_parts(*args))
-    n_ret = len(retained) if kind.retains_nodes else (mesh.n_nodes if kind is ModelKind.FULL
-                                                      else 0)
+    n_ret = len(retained) if kind.retains_nodes else (mesh.n_nodes if kind is ModelKind.FULL else 0)
     covered, patch = None, None
     if kind.retains_nodes:
         covered = np.array(retained, dtype=np.int64)
     elif interface is not None:
         patch = contact_patch(mesh, interface.surface, interface.centre_m)
         covered = patch_nodes(mesh, interface.surface, patch, max(interface.radii_m, default=0.0))
-    return body, BodyInfo(cfg.name, kind, mesh, material, body.nv, n_ret, modes, rod,
-                          covered, patch)
+    return body, BodyInfo(
+        cfg.name, kind, mesh, material, body.nv, n_ret, modes, rod, covered, patch
+    )
 
 
 def initial_state(body: FlexibleBody, placement) -> BodyState:
@@ -134,12 +139,14 @@ def initial_state(body: FlexibleBody, placement) -> BodyState:
     v = np.zeros(body.nv)
     v[:3] = placement.velocity_mps
     v[3:6] = placement.angular_velocity_radps
-    return BodyState(np.asarray(placement.position_m, float), np.asarray(A, float),
-                     np.zeros(body.nq), v)
+    return BodyState(
+        np.asarray(placement.position_m, float), np.asarray(A, float), np.zeros(body.nq), v
+    )
 
 
-def _node_set_point(index, body: FlexibleBody, info: BodyInfo, name: str,
-                    where: str) -> NodeSetPoint:
+def _node_set_point(
+    index, body: FlexibleBody, info: BodyInfo, name: str, where: str
+) -> NodeSetPoint:
     """The centroid of node set `name` of the body (constraints.joints.NodeSetPoint)."""
     try:
         ids = info.mesh.node_set(name)
@@ -163,10 +170,18 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
         states.append(initial_state(body, cfg.placement))
     index = {cfg.name: i for i, cfg in enumerate(sc.bodies)}
     t = sc.time
-    grid = TimeGrid(t.t_end_s, t.dt_s, t.dt_max_s, t.output_dt_s, t.theta, t.output_contact_dt_s,
-                    t.hf_damping_time_s)
-    contacts = tuple(_contact(c, k, bodies, infos, index, grid.theta_rule())
-                     for k, c in enumerate(sc.contacts))
+    grid = TimeGrid(
+        t.t_end_s,
+        t.dt_s,
+        t.dt_max_s,
+        t.output_dt_s,
+        t.theta,
+        t.output_contact_dt_s,
+        t.hf_damping_time_s,
+    )
+    contacts = tuple(
+        _contact(c, k, bodies, infos, index, grid.theta_rule()) for k, c in enumerate(sc.contacts)
+    )
     joints = []
     for k, j in enumerate(sc.joints):
         joints.extend(_joint(j, f"joints[{k}]", bodies, infos, index, states))
@@ -194,13 +209,21 @@ def _contact(c, k, bodies, infos, index, theta):
     except MeshError as exc:
         raise InputError(f"{where}: {exc}") from None
     radius = c.search_radius_m if c.search_radius_m is not None else DEFAULT_SEARCH_RADIUS_M
-    return PointToSurfaceContact(bodies, s, slave_nodes, m, master, c.kind,
-                                 radius, name=f"{c.slave}->{c.master}",
-                                 slave_surface=MasterSurface.from_facet_set(slave_facets),
-                                 friction_coefficient=c.friction_coefficient,
-                                 law=c.law, theta=theta,
-                                 **({} if c.penetration_recovery is None
-                                    else {"beta": c.penetration_recovery}))
+    return PointToSurfaceContact(
+        bodies,
+        s,
+        slave_nodes,
+        m,
+        master,
+        c.kind,
+        radius,
+        name=f"{c.slave}->{c.master}",
+        slave_surface=MasterSurface.from_facet_set(slave_facets),
+        friction_coefficient=c.friction_coefficient,
+        law=c.law,
+        theta=theta,
+        **({} if c.penetration_recovery is None else {"beta": c.penetration_recovery}),
+    )
 
 
 def _probe(p, where, infos, index) -> Probe:

@@ -18,8 +18,13 @@ def compare_runs(t_ref, f_ref, probes_ref: dict, t, f, probes: dict) -> dict:
     out: dict = {}
     try:
         c = compare_force(t_ref, f_ref, t, f)
-        out.update(ncc_force=c.ncc, ncc_force_whole=c.ncc_whole, peak_err=c.peak_err,
-                   impulse_err=c.impulse_err, duration_err=c.duration_err)
+        out.update(
+            ncc_force=c.ncc,
+            ncc_force_whole=c.ncc_whole,
+            peak_err=c.peak_err,
+            impulse_err=c.impulse_err,
+            duration_err=c.duration_err,
+        )
     except InputError as exc:
         out["force_comparison_error"] = str(exc)
     for name, y_ref in probes_ref.items():
@@ -29,7 +34,6 @@ def compare_runs(t_ref, f_ref, probes_ref: dict, t, f, probes: dict) -> dict:
             except InputError as exc:
                 out[f"ncc_{name}_error"] = str(exc)
     return {k: (float(v) if isinstance(v, (float, np.floating)) else v) for k, v in out.items()}
-
 
 
 @dataclass(frozen=True)
@@ -49,9 +53,11 @@ class RunComparison:
 
     def as_dict(self) -> dict:
         """The flat form summary.json uses (ncc_force, ..., ncc_<probe>, <item>_error)."""
-        out = {k: getattr(self, k) for k in ("ncc_force", "ncc_force_whole", "peak_err",
-                                             "impulse_err", "duration_err")
-               if getattr(self, k) is not None}
+        out = {
+            k: getattr(self, k)
+            for k in ("ncc_force", "ncc_force_whole", "peak_err", "impulse_err", "duration_err")
+            if getattr(self, k) is not None
+        }
         out.update({f"ncc_{k}": v for k, v in self.ncc_probes.items()})
         out.update({f"{k}_error": v for k, v in self.not_compared.items()})
         return out
@@ -62,17 +68,30 @@ def _curves(run) -> tuple:
         return run
     if hasattr(run, "curves"):
         return run.curves()
-    raise InputError(f"compare: received {type(run).__name__}, expected a run (flexmvm.run), "
-                     "a RunResult or a (t, force, {probe: v}) tuple")
+    raise InputError(
+        f"compare: received {type(run).__name__}, expected a run (flexmvm.run), "
+        "a RunResult or a (t, force, {probe: v}) tuple"
+    )
 
 
 def compare(candidate, reference) -> RunComparison:
     """``candidate`` against ``reference``: each a run (flexmvm.run), a RunResult or a
     (t [s], force [N], {probe: axial velocity [m/s]}) tuple such as theory_histories gives."""
     flat = compare_runs(*_curves(reference), *_curves(candidate))
-    probes = {k[4:]: v for k, v in flat.items()
-              if k.startswith("ncc_") and k not in ("ncc_force", "ncc_force_whole")
-              and not k.endswith("_error")}
+    probes = {
+        k[4:]: v
+        for k, v in flat.items()
+        if k.startswith("ncc_")
+        and k not in ("ncc_force", "ncc_force_whole")
+        and not k.endswith("_error")
+    }
     errors = {k[: -len("_error")]: v for k, v in flat.items() if k.endswith("_error")}
-    return RunComparison(flat.get("ncc_force"), flat.get("peak_err"), flat.get("impulse_err"),
-                         flat.get("duration_err"), probes, errors, flat.get("ncc_force_whole"))
+    return RunComparison(
+        flat.get("ncc_force"),
+        flat.get("peak_err"),
+        flat.get("impulse_err"),
+        flat.get("duration_err"),
+        probes,
+        errors,
+        flat.get("ncc_force_whole"),
+    )

@@ -37,12 +37,18 @@ class BodyCost:
     full_bytes: float
 
     def line(self) -> str:
-        return (f"body {self.name!r}: reduced model {self.dof} DOF, ~{_mb(self.bytes)} of "
-                f"dense matrices; full FE {self.full_dof} DOF, ~{_mb(self.full_bytes)}")
+        return (
+            f"body {self.name!r}: reduced model {self.dof} DOF, ~{_mb(self.bytes)} of "
+            f"dense matrices; full FE {self.full_dof} DOF, ~{_mb(self.full_bytes)}"
+        )
 
     def as_dict(self) -> dict:
-        return {"dof": self.dof, "memory_MB": self.bytes / 1e6, "full_fe_dof": self.full_dof,
-                "full_fe_memory_MB": self.full_bytes / 1e6}
+        return {
+            "dof": self.dof,
+            "memory_MB": self.bytes / 1e6,
+            "full_fe_dof": self.full_dof,
+            "full_fe_memory_MB": self.full_bytes / 1e6,
+        }
 
 
 def _mb(x: float) -> str:
@@ -74,12 +80,16 @@ def check_cost(cost: BodyCost, allow: bool, where: str) -> None:
     if cost.bytes > cost.full_bytes and not allow and cost.bytes <= REFUSE_ABOVE_BYTES:
         import warnings
 
-        warnings.warn(f"{where}: the reduced model costs more than full FE "
-                      f"({cost.line()})", ReducedCostWarning, stacklevel=3)
+        warnings.warn(
+            f"{where}: the reduced model costs more than full FE ({cost.line()})",
+            ReducedCostWarning,
+            stacklevel=3,
+        )
         return
     if cost.bytes > cost.full_bytes and not allow:
         raise InputError(
             f"{where}: the reduced model would cost more than full FE ({cost.dof} DOF, "
             f"~{_mb(cost.bytes)} of dense matrices, against {cost.full_dof} DOF and "
             f"~{_mb(cost.full_bytes)} for kind 'full'); expected a smaller region (a few Hertz "
-            "contact radii), kind 'full', or allow_costly = true")
+            "contact radii), kind 'full', or allow_costly = true"
+        )

@@ -42,12 +42,15 @@ MAX_ACCELERATION = 1e9
 
 def bounded(limit: float, unit: str):
     """A validator: a Vec3 whose magnitude is at most ``limit`` (in ``unit``)."""
+
     def check(value: tuple[float, float, float]) -> tuple[float, float, float]:
         size = math.hypot(*value)
         if not size <= limit:
-            raise problem(f"magnitude must be <= {limit:g} {unit}, got {size:g} {unit} "
-                          f"({list(value)})")
+            raise problem(
+                f"magnitude must be <= {limit:g} {unit}, got {size:g} {unit} ({list(value)})"
+            )
         return value
+
     return check
 
 

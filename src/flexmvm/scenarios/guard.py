@@ -54,15 +54,16 @@ def _suggestion(info, loaded: np.ndarray) -> str:
         from flexmvm.reduction.interface import tangent_distance
 
         r = float(tangent_distance(X, info.patch).max())
-        return f"patch_radii_m reaching {r:.3g} m (the loaded nodes' distance from the patch centre)"
+        return (
+            f"patch_radii_m reaching {r:.3g} m (the loaded nodes' distance from the patch centre)"
+        )
     if info.rod is not None:
         i = int(info.rod.node_layer[loaded].max())
         j = int(info.rod.node_lap[loaded].max())
         return f"selection = '{i}-{j}'"
     c = X.mean(axis=0)
     r = float(np.linalg.norm(X - c, axis=1).max())
-    return (f"region ball centre_m = [{c[0]:.4g}, {c[1]:.4g}, {c[2]:.4g}], "
-            f"radius_m = {r:.3g}")
+    return f"region ball centre_m = [{c[0]:.4g}, {c[1]:.4g}, {c[2]:.4g}], radius_m = {r:.3g}"
 
 
 def contact_guard(result, built) -> dict:
@@ -132,19 +133,24 @@ def energy_gain_warning(summary: dict, threshold: float = ENERGY_GAIN_WARN) -> s
     gain = summary.get("energy_gain_rel_max")
     if gain is None:
         return None
-    if summary.get("energy_conserving_scheme") and gain > min(threshold,
-                                                              CONSERVING_ENERGY_GAIN_WARN):
-        return (f"the total energy rose by {100 * gain:.2g} % of its start with every contact "
-                "on the position law, whose step adds none (~1e-6 at theta = 1/2): an "
-                "alternation at the step's scale grew (as both rods Craig-Bampton did below "
-                "h = 0.5 us before closed pairs kept their geometry, docs/contact_law.md); "
-                "damp it: a shorter time.hf_damping_time_s, or theta = 0.55")
+    if summary.get("energy_conserving_scheme") and gain > min(
+        threshold, CONSERVING_ENERGY_GAIN_WARN
+    ):
+        return (
+            f"the total energy rose by {100 * gain:.2g} % of its start with every contact "
+            "on the position law, whose step adds none (~1e-6 at theta = 1/2): an "
+            "alternation at the step's scale grew (as both rods Craig-Bampton did below "
+            "h = 0.5 us before closed pairs kept their geometry, docs/contact_law.md); "
+            "damp it: a shorter time.hf_damping_time_s, or theta = 0.55"
+        )
     if gain <= threshold:
         return None
-    return (f"the total energy rose by {100 * gain:.2g} % of its start in a run without applied "
-            "loads: the contact added energy (penetration recovery pushing penetrated nodes "
-            "out, chatter); try penetration_recovery = 0 on the contact, law = \"position\", or "
-            "a reduced model covering the contact patch with a ring to spare")
+    return (
+        f"the total energy rose by {100 * gain:.2g} % of its start in a run without applied "
+        "loads: the contact added energy (penetration recovery pushing penetrated nodes "
+        'out, chatter); try penetration_recovery = 0 on the contact, law = "position", or '
+        "a reduced model covering the contact patch with a ring to spare"
+    )
 
 
 #: The entries validity_fields adds to a study row (and its CSV columns), in column order.
@@ -155,8 +161,13 @@ def validity_fields(summary: dict, body: str) -> dict:
     """A study row's validity entries (VALIDITY_KEYS) from a run's summary:
     guard_outside_fraction (of ``body``) and energy_gain_rel_max (None: unknown, or a run with
     applied loads)."""
-    return dict(zip(VALIDITY_KEYS, (outside_fraction(summary, body),
-                                    summary.get("energy_gain_rel_max")), strict=True))
+    return dict(
+        zip(
+            VALIDITY_KEYS,
+            (outside_fraction(summary, body), summary.get("energy_gain_rel_max")),
+            strict=True,
+        )
+    )
 
 
 def invalid_reason(row: dict) -> str | None:
@@ -183,10 +194,21 @@ def guard_warnings(report: dict, threshold: float = WARN_FRACTION) -> list[str]:
                 f"its contact impulse fell on {g['nodes_loaded_outside']} surface node(s) the "
                 f"reduced basis holds stiff, first at t = {g['first_outside_t_s']:.3g} s; "
                 f"the run is outside the model's validity; cover at least the loaded nodes: "
-                f"{g['cover']} (summary.json reduced_contact_guard)")
+                f"{g['cover']} (summary.json reduced_contact_guard)"
+            )
     return lines
 
 
-__all__ = ["CONSERVING_ENERGY_GAIN_WARN", "ENERGY_GAIN_WARN", "VALIDITY_KEYS", "WARN_FRACTION", "contact_guard", "energy_gain_warning",
-           "guard_warnings", "invalid_reason", "outside_fraction", "outside_validity",
-           "validity_fields"]
+__all__ = [
+    "CONSERVING_ENERGY_GAIN_WARN",
+    "ENERGY_GAIN_WARN",
+    "VALIDITY_KEYS",
+    "WARN_FRACTION",
+    "contact_guard",
+    "energy_gain_warning",
+    "guard_warnings",
+    "invalid_reason",
+    "outside_fraction",
+    "outside_validity",
+    "validity_fields",
+]

@@ -55,18 +55,25 @@ def hertz_reference(sc: Scenario, sphere: str = "ball", target: str = "block") -
     ball_mesh, block_mesh = read_mesh(ball.mesh_file), read_mesh(block.mesh_file)
     mat_ball, mat_block = ball.material_obj(), block.material_obj()
     if ball.model.kind is ModelKind.RIGID:
-        e_star = mat_block.E / (1.0 - mat_block.nu ** 2)
+        e_star = mat_block.E / (1.0 - mat_block.nu**2)
     else:
         e_star = effective_modulus(mat_ball.E, mat_ball.nu, mat_block.E, mat_block.nu)
     radius = float(np.linalg.norm(ball_mesh.nodes, axis=1).max())
-    speed = float(np.linalg.norm(np.subtract(ball.placement.velocity_mps,
-                                             block.placement.velocity_mps)))
-    return hertz_impact(radius, speed, e_star, mat_ball.rho * mesh_volume(ball_mesh),
-                        mat_block.rho * mesh_volume(block_mesh))
+    speed = float(
+        np.linalg.norm(np.subtract(ball.placement.velocity_mps, block.placement.velocity_mps))
+    )
+    return hertz_impact(
+        radius,
+        speed,
+        e_star,
+        mat_ball.rho * mesh_volume(ball_mesh),
+        mat_block.rho * mesh_volume(block_mesh),
+    )
 
 
-def hertz_comparison(hz: HertzImpact, force_N: np.ndarray, summary: dict,
-                     target: str = "block") -> dict:
+def hertz_comparison(
+    hz: HertzImpact, force_N: np.ndarray, summary: dict, target: str = "block"
+) -> dict:
     """A run's first contact against the Hertz impact ``hz``: peak_N (of the contact force
     history force_N), duration_s (of the summary's first contact interval, from the steps with
     contact: to one step), the Hertz values hertz_peak_N and hertz_duration_s, the relative
@@ -100,8 +107,9 @@ def compare_with_hertz(sc: Scenario, t_end_s: float = T_END_S) -> dict:
     return hertz_comparison(hz, run.contact_force, run.summary)
 
 
-def sphere_block_scenario(block_mesh: str | Path | None = None,
-                          path: str | Path = SPHERE_BLOCK) -> Scenario:
+def sphere_block_scenario(
+    block_mesh: str | Path | None = None, path: str | Path = SPHERE_BLOCK
+) -> Scenario:
     """The scenario file ``path`` (default scenarios/sphere_block.toml), with the block's mesh
     replaced by ``block_mesh`` if given (the sphere's committed mesh kept)."""
     path = Path(path)
@@ -113,8 +121,9 @@ def sphere_block_scenario(block_mesh: str | Path | None = None,
     return scenario_from_dict(data, source=str(path), base_dir=path.parent)
 
 
-def hertz_block_check(fine_m: float = HERTZ_BLOCK_FINE_M,
-                      directory: str | Path | None = None) -> dict:
+def hertz_block_check(
+    fine_m: float = HERTZ_BLOCK_FINE_M, directory: str | Path | None = None
+) -> dict:
     """The sphere-on-block Hertz check with the block meshed (gmsh, hertz_block_part) at
     element size fine_m [m] at the contact, in ``directory`` (default: a temporary one):
     :func:`compare_with_hertz`'s dict plus fine_m and node_spacing_m (fine_m / 2: tet10).
@@ -129,5 +138,12 @@ def hertz_block_check(fine_m: float = HERTZ_BLOCK_FINE_M,
     return {**out, "fine_m": float(fine_m), "node_spacing_m": float(fine_m) / 2.0}
 
 
-__all__ = ["SPHERE_BLOCK", "T_END_S", "compare_with_hertz", "hertz_block_check", "hertz_comparison",
-           "hertz_reference", "sphere_block_scenario"]
+__all__ = [
+    "SPHERE_BLOCK",
+    "T_END_S",
+    "compare_with_hertz",
+    "hertz_block_check",
+    "hertz_comparison",
+    "hertz_reference",
+    "sphere_block_scenario",
+]

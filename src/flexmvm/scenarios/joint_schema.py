@@ -12,8 +12,16 @@ from flexmvm.constraints.joints import JointType
 from flexmvm.scenarios.fields import Frozen, Name, Positive, SetName, Vec3, Velocity
 from flexmvm.scenarios.problems import problem
 
-_JOINT_FIELDS = ("point_m", "node_set", "ground_m", "body2", "point2_m", "axis", "length_m",
-                 "velocity_mps")
+_JOINT_FIELDS = (
+    "point_m",
+    "node_set",
+    "ground_m",
+    "body2",
+    "point2_m",
+    "axis",
+    "length_m",
+    "velocity_mps",
+)
 # joints whose body point may be a node set's centroid (constraints.joints.NodeSetPoint)
 _NODE_SET_JOINTS = (JointType.SPHERICAL, JointType.REVOLUTE, JointType.FIXED)
 
@@ -47,8 +55,11 @@ class JointConfig(Frozen):
             need = {"point_m"} | other | ({"axis"} if t is JointType.REVOLUTE else set())
             allowed = need | ({"length_m"} if t is JointType.DISTANCE else set())
         if self.node_set is not None and t not in _NODE_SET_JOINTS:
-            raise problem(f"not used by a {t.value!r} joint (a node set's centroid is held by "
-                          "fixed, spherical and revolute joints; give point_m)", "node_set")
+            raise problem(
+                f"not used by a {t.value!r} joint (a node set's centroid is held by "
+                "fixed, spherical and revolute joints; give point_m)",
+                "node_set",
+            )
         if self.node_set is not None:
             # ground_m optional: the centroid held where it is at t = 0
             need, allowed = need - {"point_m", "ground_m"}, (allowed - {"point_m"}) | {"node_set"}

@@ -50,16 +50,18 @@ def _theory(sc, failures: list[dict]):
     try:
         t, f, probes, info = theory_histories(sc)
     except InputError as exc:
-        failures.append({"item": "comparison_vs_theory",
-                         "reason": f"no theory applies: {exc}"})
+        failures.append({"item": "comparison_vs_theory", "reason": f"no theory applies: {exc}"})
         return None
     return t, f, probes, info
 
 
 def _comparison_failures(name: str, comparison: dict) -> list[dict]:
     """The entries of compare_runs that could not be computed (keys ending in _error)."""
-    return [{"item": f"{name}.{key[:-len('_error')]}", "reason": str(value)}
-            for key, value in comparison.items() if key.endswith("_error")]
+    return [
+        {"item": f"{name}.{key[: -len('_error')]}", "reason": str(value)}
+        for key, value in comparison.items()
+        if key.endswith("_error")
+    ]
 
 
 def _labelled(label: str, exc: BaseException) -> BaseException:
@@ -89,10 +91,12 @@ def _run_and_write(sc, label: str, out_dir: Path, fields: bool, progress: bool):
         if exc.partial is None:
             raise
         write_run(out_dir, exc.partial, fields=fields)
-        raise RunStopped(f"{exc} (histories up to t = {exc.partial.result.t[-1]:.6g} s "
-                         "written, summary status 'failed')") from None
+        raise RunStopped(
+            f"{exc} (histories up to t = {exc.partial.result.t[-1]:.6g} s "
+            "written, summary status 'failed')"
+        ) from None
     write_run(out_dir, run, fields=fields)
-    if "pendulum" in run.summary:      # scenarios.run.summarize: a pendulum release
+    if "pendulum" in run.summary:  # scenarios.run.summarize: a pendulum release
         with writing(out_dir / f"{sc.name}_event.png"):
             _plot_event(out_dir / f"{sc.name}_event.png", run, f"{sc.name} ({label})")
     return run.summary, run.result.curves(), run.result.n_steps, run.result.wall_time_s
@@ -103,13 +107,31 @@ def _plot_event(path: Path, run, title: str) -> None:
     from flexmvm.plots.pendulum import plot_event  # matplotlib: imported only here
 
     ev = pendulum.event_histories(run.built, run.result)
-    plot_event(path, ev["t_s"], ev["angle_rad"], ev["gap_m"], ev["force_N"],
-               ev["contact_intervals_s"], title=title)
+    plot_event(
+        path,
+        ev["t_s"],
+        ev["angle_rad"],
+        ev["gap_m"],
+        ev["force_N"],
+        ev["contact_intervals_s"],
+        title=title,
+    )
 
 
-def run_main_job(scenario: Path | str | Scenario, out_dir: Path, *, model=None, t_end=None,
-                 dt=None, fields=True, progress=True, echo=print, jobs: int = 2,
-                 reference: bool | None = None, theory: bool | None = None) -> dict:
+def run_main_job(
+    scenario: Path | str | Scenario,
+    out_dir: Path,
+    *,
+    model=None,
+    t_end=None,
+    dt=None,
+    fields=True,
+    progress=True,
+    echo=print,
+    jobs: int = 2,
+    reference: bool | None = None,
+    theory: bool | None = None,
+) -> dict:
     """Run ``scenario`` (a Scenario or a scenario file) as written and write its files into
     out_dir; returns the top-level summary. A full-FE reference of its reduced bodies (jobs =
     2: in a second process, at the same time) and the theory (flexmvm.theory.scenario: two
@@ -122,16 +144,20 @@ def run_main_job(scenario: Path | str | Scenario, out_dir: Path, *, model=None, 
     sc = sc.with_overrides(model=model, t_end_s=t_end, dt_s=dt)
     want_ref = sc.compare.full_reference if reference is None else reference
     want_theory = sc.compare.theory if theory is None else theory
-    needs_ref = want_ref and model is None and any(
-        b.model.kind not in (ModelKind.FULL, ModelKind.RIGID) for b in sc.bodies)
+    needs_ref = (
+        want_ref
+        and model is None
+        and any(b.model.kind not in (ModelKind.FULL, ModelKind.RIGID) for b in sc.bodies)
+    )
     ref_sc = sc.with_kind(ModelKind.FULL) if needs_ref else None
     own_label = ModelKind(model).value if model is not None else "scenario"
     stopped = None
     with staged_dir(out_dir, "flexmvm run", echo=echo) as tmp:
         try:
-            summary = _run_into(tmp, sc, ref_sc, own_label, fields, progress, echo, jobs,
-                                want_theory)
-        except RunStopped as exc:   # what was computed is kept: DIR gets it, marked failed
+            summary = _run_into(
+                tmp, sc, ref_sc, own_label, fields, progress, echo, jobs, want_theory
+            )
+        except RunStopped as exc:  # what was computed is kept: DIR gets it, marked failed
             stopped = exc
     if stopped is not None:
         raise SolverError(f"{stopped}; in {out_dir}") from stopped
@@ -142,8 +168,10 @@ def run_main_job(scenario: Path | str | Scenario, out_dir: Path, *, model=None, 
         echo(f"warning: {line}")
     failures = summary["failures"]
     if failures:
-        echo(f"not compared ({len(failures)}): "
-             + "; ".join(f"{f['item']}: {f['reason']}" for f in failures))
+        echo(
+            f"not compared ({len(failures)}): "
+            + "; ".join(f"{f['item']}: {f['reason']}" for f in failures)
+        )
     return summary
 
 
@@ -172,8 +200,17 @@ def _stop_workers(pool: ProcessPoolExecutor) -> None:
             proc.terminate()
 
 
-def _run_into(out_dir: Path, sc, ref_sc, own_label: str, fields: bool, progress: bool, echo,
-              jobs: int, want_theory: bool = True) -> dict:
+def _run_into(
+    out_dir: Path,
+    sc,
+    ref_sc,
+    own_label: str,
+    fields: bool,
+    progress: bool,
+    echo,
+    jobs: int,
+    want_theory: bool = True,
+) -> dict:
     """The job proper, writing into out_dir (the staging directory)."""
     needs_ref = ref_sc is not None
     own_what = f"{own_label} run"
@@ -181,17 +218,26 @@ def _run_into(out_dir: Path, sc, ref_sc, own_label: str, fields: bool, progress:
     failures: list[dict] = []
     if needs_ref and jobs > 1:
         ctx = multiprocessing.get_context("spawn")
-        with ProcessPoolExecutor(max_workers=2, mp_context=ctx, initializer=_worker_init,
-                                 initargs=(os.getpid(),)) as pool, _stopped_on_exit(pool):
-            ref_future = pool.submit(_run_and_write, ref_sc, "full", out_dir / "full", fields,
-                                     progress)
+        with (
+            ProcessPoolExecutor(
+                max_workers=2, mp_context=ctx, initializer=_worker_init, initargs=(os.getpid(),)
+            ) as pool,
+            _stopped_on_exit(pool),
+        ):
+            ref_future = pool.submit(
+                _run_and_write, ref_sc, "full", out_dir / "full", fields, progress
+            )
             own_future = pool.submit(_run_and_write, sc, own_label, out_dir, fields, False)
             # while the two runs go: the theory and the figure module (matplotlib: ~1 s)
             theory = _theory(sc, failures) if want_theory else None
             import flexmvm.plots.figures  # noqa: F401
+
             wait([own_future, ref_future], return_when=FIRST_EXCEPTION)
-            failed = [(f, what) for f, what in ((own_future, own_what), (ref_future, ref_what))
-                      if f.done() and f.exception() is not None]
+            failed = [
+                (f, what)
+                for f, what in ((own_future, own_what), (ref_future, ref_what))
+                if f.done() and f.exception() is not None
+            ]
             if failed:
                 if not (own_future.done() and ref_future.done()):
                     _stop_workers(pool)  # the job has failed: do not wait for the other run
@@ -204,8 +250,11 @@ def _run_into(out_dir: Path, sc, ref_sc, own_label: str, fields: bool, progress:
         except Exception as exc:
             raise _labelled(own_what, exc) from exc
         try:
-            ref = (_run_and_write(ref_sc, "full", out_dir / "full", fields, progress)
-                   if needs_ref else None)
+            ref = (
+                _run_and_write(ref_sc, "full", out_dir / "full", fields, progress)
+                if needs_ref
+                else None
+            )
         except Exception as exc:
             raise _labelled(ref_what, exc) from exc
         theory = _theory(sc, failures) if want_theory else None
@@ -214,8 +263,7 @@ def _run_into(out_dir: Path, sc, ref_sc, own_label: str, fields: bool, progress:
     summary = dict(own_summary)
     curves = {_label(own_summary): own_curves}
     if theory is not None:
-        summary["comparison_vs_theory"] = compare_runs(theory[0], theory[1], theory[2],
-                                                       *own_curves)
+        summary["comparison_vs_theory"] = compare_runs(theory[0], theory[1], theory[2], *own_curves)
         summary["theory_law"] = theory[3]["law"]
         failures += _comparison_failures("comparison_vs_theory", summary["comparison_vs_theory"])
     if ref is not None:
@@ -233,8 +281,12 @@ def _run_into(out_dir: Path, sc, ref_sc, own_label: str, fields: bool, progress:
     from flexmvm.plots.figures import plot_run  # matplotlib: 2 s of import, only here
 
     with writing(out_dir / f"{sc.name}.png"):
-        plot_run(out_dir / f"{sc.name}.png", curves, theory=th,
-                 title=f"{sc.name}: contact force and axial velocities")
+        plot_run(
+            out_dir / f"{sc.name}.png",
+            curves,
+            theory=th,
+            title=f"{sc.name}: contact force and axial velocities",
+        )
     return summary
 
 

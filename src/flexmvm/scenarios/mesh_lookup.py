@@ -28,15 +28,19 @@ def retained_nodes(model, mesh: Mesh, rod: RodMesh | None, where: str) -> np.nda
     if reg.node_set is not None:
         ids = mesh.node_set(reg.node_set)
     elif reg.ball is not None:
-        ids = np.nonzero(np.linalg.norm(X - np.asarray(reg.ball.centre_m), axis=1) <= reg.ball.radius_m)[0]
+        ids = np.nonzero(
+            np.linalg.norm(X - np.asarray(reg.ball.centre_m), axis=1) <= reg.ball.radius_m
+        )[0]
     elif reg.box is not None:
         lo, hi = np.asarray(reg.box.min_m), np.asarray(reg.box.max_m)
         ids = np.nonzero(np.all((X >= lo) & (X <= hi), axis=1))[0]
     else:
         ids = np.asarray(reg.node_ids, dtype=np.int64)
         if ids.size and ids.max() >= len(X):
-            raise InputError(f"{where}.region.node_ids: node {int(ids.max())} is outside the mesh "
-                             f"(0..{len(X) - 1})")
+            raise InputError(
+                f"{where}.region.node_ids: node {int(ids.max())} is outside the mesh "
+                f"(0..{len(X) - 1})"
+            )
     if len(ids) == 0:
         raise InputError(f"{where}.region: selects no node of the mesh")
     return np.asarray(ids, dtype=np.int64)
@@ -60,9 +64,12 @@ def contact_nodes(sc, body: str, mesh: Mesh) -> np.ndarray:
 
 def contact_surfaces(sc, body: str) -> tuple[str, ...]:
     """The facet sets of ``body`` named in the scenario's contacts, as slave or master."""
-    names = [surface for c in sc.contacts
-             for who, surface in ((c.slave_body, c.slave_surface), (c.master_body, c.master_surface))
-             if who == body]
+    names = [
+        surface
+        for c in sc.contacts
+        for who, surface in ((c.slave_body, c.slave_surface), (c.master_body, c.master_surface))
+        if who == body
+    ]
     return tuple(dict.fromkeys(names))
 
 
@@ -71,8 +78,10 @@ def nearest_node(mesh: Mesh, point, where: str, tol: float) -> int:
     d = np.linalg.norm(mesh.nodes - np.asarray(point, float), axis=1)
     k = int(np.argmin(d))
     if d[k] > tol:
-        raise InputError(f"{where}: point {list(point)} is {d[k]:.3g} m from the nearest node of "
-                         f"the body (off the body; tolerance {tol:.3g} m)")
+        raise InputError(
+            f"{where}: point {list(point)} is {d[k]:.3g} m from the nearest node of "
+            f"the body (off the body; tolerance {tol:.3g} m)"
+        )
     return k
 
 
@@ -86,7 +95,7 @@ def host_node(mesh: Mesh, point: np.ndarray, where: str) -> int:
     when no cell does (the point is off the body)."""
     best, best_d = -1, np.inf
     for block in mesh.cells:
-        xc = mesh.nodes[block.connectivity]                     # (cells, nodes per cell, 3)
+        xc = mesh.nodes[block.connectivity]  # (cells, nodes per cell, 3)
         lo, hi = xc.min(axis=1), xc.max(axis=1)
         pad = CELL_BOX_PAD * np.linalg.norm(hi - lo, axis=1)[:, None]
         inside = np.all((point >= lo - pad) & (point <= hi + pad), axis=1)
@@ -97,8 +106,10 @@ def host_node(mesh: Mesh, point: np.ndarray, where: str) -> int:
                 best, best_d = int(ids[np.argmin(d)]), float(d.min())
     if best < 0:
         d = float(np.linalg.norm(mesh.nodes - point, axis=1).min())
-        raise InputError(f"{where}: point {point.tolist()} m (body frame) is off the body: in no "
-                         f"cell, {d:.3g} m from the nearest node")
+        raise InputError(
+            f"{where}: point {point.tolist()} m (body frame) is off the body: in no "
+            f"cell, {d:.3g} m from the nearest node"
+        )
     return best
 
 

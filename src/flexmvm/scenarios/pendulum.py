@@ -21,13 +21,17 @@ ONSET_FRACTION = 0.01  # the contact starts when the force reaches this fraction
 
 
 def _states_at(res, k: int, bodies) -> list[BodyState]:
-    return [BodyState(res.frame_r[k, b], res.frame_A[k, b], res.q[b][k], np.zeros(body.nv))
-            for b, body in enumerate(bodies)]
+    return [
+        BodyState(res.frame_r[k, b], res.frame_A[k, b], res.q[b][k], np.zeros(body.nv))
+        for b, body in enumerate(bodies)
+    ]
 
 
 def strings(system) -> list[DistanceJoint]:
     """The distance joints to the ground (the strings)."""
-    return [j for j in system.joints if isinstance(j, DistanceJoint) and not isinstance(j.p2, BodyPoint)]
+    return [
+        j for j in system.joints if isinstance(j, DistanceJoint) and not isinstance(j.p2, BodyPoint)
+    ]
 
 
 def attachment_positions(built, res) -> np.ndarray:
@@ -72,8 +76,13 @@ def event_histories(built, res) -> dict:
             xs = bodies[pair.slave].node_positions(pair.slave_nodes, s.r, s.A, s.q)
             xm = bodies[pair.master].node_positions(pair.master_nodes, m.r, m.A, m.q)
             gap[k] = float(cKDTree(xm).query(xs)[0].min())
-    return {"t_s": res.t, "angle_rad": angles, "gap_m": gap, "force_N": res.contact_force,
-            "contact_intervals_s": [tuple(iv) for iv in res.contact_intervals]}
+    return {
+        "t_s": res.t,
+        "angle_rad": angles,
+        "gap_m": gap,
+        "force_N": res.contact_force,
+        "contact_intervals_s": [tuple(iv) for iv in res.contact_intervals],
+    }
 
 
 def _fine_block(t: np.ndarray, start: float, step: float) -> float:
@@ -112,15 +121,22 @@ def impact_comparison(res, ref, probes=("b2_impact_end", "b2_free_end")) -> dict
     tr = ref.t - r0
     k_ref = (tr >= -1e-12) & (tr <= t[-1] + 1e-12)
     c = compare_force(tr[k_ref], ref.contact_force[k_ref], t, res.contact_force[keep])
-    out = {"window_s": [0.0, float(t[-1])], "first_contact_s": float(t0),
-           "ncc_force": c.ncc, "ncc_force_whole": c.ncc_whole, "peak_err": c.peak_err,
-           "impulse_err": c.impulse_err,
-           "duration_err": c.duration_err,
-           "contact_duration_s": float(res.contact_intervals[-1][1] - t0),
-           "contact_duration_ref_s": float(ref.contact_intervals[-1][1] - r0)}
+    out = {
+        "window_s": [0.0, float(t[-1])],
+        "first_contact_s": float(t0),
+        "ncc_force": c.ncc,
+        "ncc_force_whole": c.ncc_whole,
+        "peak_err": c.peak_err,
+        "impulse_err": c.impulse_err,
+        "duration_err": c.duration_err,
+        "contact_duration_s": float(res.contact_intervals[-1][1] - t0),
+        "contact_duration_ref_s": float(ref.contact_intervals[-1][1] - r0),
+    }
     for name in probes:
         i, i_ref = res.probe_names.index(name), ref.probe_names.index(name)
-        out[f"ncc_{name}"] = ncc(tr[k_ref], ref.probe_v[k_ref, i_ref, 0], t, res.probe_v[keep, i, 0])
+        out[f"ncc_{name}"] = ncc(
+            tr[k_ref], ref.probe_v[k_ref, i_ref, 0], t, res.probe_v[keep, i, 0]
+        )
     return {k: float(v) if isinstance(v, (float, np.floating)) else v for k, v in out.items()}
 
 
@@ -138,8 +154,11 @@ def momenta_after_separation(built, res, ref=None) -> dict:
     sep = res.contact_intervals[-1][1]
     k0 = int(np.searchsorted(res.t, sep - 1e-12))
     tau = float(res.t[-1] - res.t[k0])
-    out: dict = {"t_separation_s": float(sep), "t_sep_output_s": float(res.t[k0]),
-                 "t_end_s": float(res.t[-1])}
+    out: dict = {
+        "t_separation_s": float(sep),
+        "t_sep_output_s": float(res.t[k0]),
+        "t_end_s": float(res.t[-1]),
+    }
     bodies = system.bodies
     states0 = _states_at(res, k0, bodies)
     for b, body in enumerate(bodies):
@@ -153,8 +172,10 @@ def momenta_after_separation(built, res, ref=None) -> dict:
             w = math.sqrt(g / ell)
             x_off = float(j.p1.position(bodies, states0)[0] - np.asarray(j.p2, float)[0])
             px = p0[0] * math.cos(w * tau) - m * w * x_off * math.sin(w * tau)
-            entry.update(p_end_rigid_pendulum_x=px,
-                         p_end_rel_err_x=float((p1[0] - px) / max(abs(px), 1e-300)))
+            entry.update(
+                p_end_rigid_pendulum_x=px,
+                p_end_rel_err_x=float((p1[0] - px) / max(abs(px), 1e-300)),
+            )
         out[body.name] = entry
     if ref is not None:
         sep_r = ref.contact_intervals[-1][1]
@@ -163,7 +184,8 @@ def momenta_after_separation(built, res, ref=None) -> dict:
             pr = ref.body_momentum[kr, b]
             out[body.name]["p_sep_seed_case"] = pr.tolist()
             out[body.name]["p_sep_rel_err_x_vs_seed_case"] = float(
-                (res.body_momentum[k0, b][0] - pr[0]) / max(abs(pr[0]), 1e-300))
+                (res.body_momentum[k0, b][0] - pr[0]) / max(abs(pr[0]), 1e-300)
+            )
     return out
 
 
@@ -192,6 +214,9 @@ def event_summary(built, res) -> dict:
         return {"contact": False}
     k = int(np.searchsorted(res.t, res.contact_intervals[-1][1] - 1e-12))
     E = res.total_energy
-    return {"contact": True, "impact_speed": impact_speed(built, res),
-            "momenta_after_separation": momenta_after_separation(built, res),
-            "energy_rel_at_separation": float(E[k] / E[0] - 1.0)}
+    return {
+        "contact": True,
+        "impact_speed": impact_speed(built, res),
+        "momenta_after_separation": momenta_after_separation(built, res),
+        "energy_rel_at_separation": float(E[k] / E[0] - 1.0),
+    }

@@ -86,5 +86,5 @@ def validate_part(cls: type[BaseModel], data: Mapping[str, Any], source: str, ke
         line = format_error(errors[0])
         if key:
             top = "(top level)"
-            line = key + (line[len(top):] if line.startswith(top) else f".{line}")
+            line = key + (line[len(top) :] if line.startswith(top) else f".{line}")
         raise ScenarioError(f"{source}: {line}{more}") from None

@@ -26,8 +26,16 @@ from flexmvm.results.atomic import canonical_json
 from flexmvm.scenarios.schema import Scenario
 from flexmvm.setup_cache import code_version
 
-__all__ = ["FORMAT", "LIBRARIES", "library_versions", "run_code_version", "run_inputs",
-           "run_key", "stamp", "stamp_mismatch"]
+__all__ = [
+    "FORMAT",
+    "LIBRARIES",
+    "library_versions",
+    "run_code_version",
+    "run_inputs",
+    "run_key",
+    "stamp",
+    "stamp_mismatch",
+]
 
 #: Format of a key; bump when what goes into it changes (every stored result goes stale).
 FORMAT = 2
@@ -43,8 +51,13 @@ def run_code_version() -> str:
     """Hash (16 hex) of every package source file except the validation package: what
     a run's numbers depend on."""
     root = Path(flexmvm.__file__).parent
-    names = tuple(sorted(p.name for p in root.iterdir()
-                         if p.name not in _NOT_RUN_CODE and (p.is_dir() or p.suffix == ".py")))
+    names = tuple(
+        sorted(
+            p.name
+            for p in root.iterdir()
+            if p.name not in _NOT_RUN_CODE and (p.is_dir() or p.suffix == ".py")
+        )
+    )
     return code_version(names)
 
 
@@ -61,15 +74,23 @@ def library_versions() -> dict[str, str]:
 
 def _mesh_files(sc: Scenario) -> dict[str, str]:
     """{body: SHA-256 of its mesh file} of the bodies read from a file."""
-    return {b.name: hashlib.sha256(Path(b.mesh_file).read_bytes()).hexdigest()
-            for b in sc.bodies if b.mesh_file is not None}
+    return {
+        b.name: hashlib.sha256(Path(b.mesh_file).read_bytes()).hexdigest()
+        for b in sc.bodies
+        if b.mesh_file is not None
+    }
 
 
 def run_inputs(sc: Scenario) -> dict[str, Any]:
     """Everything a run of ``sc`` depends on: {format, code, libraries, scenario (the resolved
     scenario's JSON form), mesh_files ({body: SHA-256})}."""
-    return {"format": FORMAT, "code": run_code_version(), "libraries": library_versions(),
-            "scenario": sc.model_dump(mode="json"), "mesh_files": _mesh_files(sc)}
+    return {
+        "format": FORMAT,
+        "code": run_code_version(),
+        "libraries": library_versions(),
+        "scenario": sc.model_dump(mode="json"),
+        "mesh_files": _mesh_files(sc),
+    }
 
 
 def _hash(obj: Any, n: int = 32) -> str:
@@ -85,9 +106,14 @@ def stamp(sc: Scenario) -> dict[str, Any]:
     """The record a stored run keeps: {key, format, code, libraries, scenario_sha256 (16 hex
     of the resolved scenario), mesh_files}; equal stamps, equal keys."""
     inputs = run_inputs(sc)
-    return {"key": _hash(inputs), "format": inputs["format"], "code": inputs["code"],
-            "libraries": inputs["libraries"], "scenario_sha256": _hash(inputs["scenario"], 16),
-            "mesh_files": inputs["mesh_files"]}
+    return {
+        "key": _hash(inputs),
+        "format": inputs["format"],
+        "code": inputs["code"],
+        "libraries": inputs["libraries"],
+        "scenario_sha256": _hash(inputs["scenario"], 16),
+        "mesh_files": inputs["mesh_files"],
+    }
 
 
 def stamp_mismatch(stored: Any, current: Mapping[str, Any]) -> str | None:
@@ -103,8 +129,11 @@ def stamp_mismatch(stored: Any, current: Mapping[str, Any]) -> str | None:
     if stored.get("code") != current["code"]:
         what.append(f"code version {stored.get('code')} (now {current['code']})")
     libs = stored.get("libraries") if isinstance(stored.get("libraries"), Mapping) else {}
-    what += [f"{name} {libs.get(name)} (now {v})" for name, v in current["libraries"].items()
-             if libs.get(name) != v]
+    what += [
+        f"{name} {libs.get(name)} (now {v})"
+        for name, v in current["libraries"].items()
+        if libs.get(name) != v
+    ]
     if stored.get("scenario_sha256") != current["scenario_sha256"]:
         what.append("another resolved scenario")
     if stored.get("mesh_files") != current["mesh_files"]:

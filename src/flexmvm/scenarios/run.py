@@ -69,7 +69,8 @@ MOMENTUM_ERROR_NOTE = (
     "each frame velocity, MoreauJeanIntegrator._balance_translation): round-off by "
     "construction, not evidence of convergence. momentum_rel_error_converged: the same of "
     "the momentum the steps converged to, before that shift (p(t) minus the shifts so far): "
-    "what the Newton tolerance left, it grows when the tolerance is loosened.")
+    "what the Newton tolerance left, it grows when the tolerance is loosened."
+)
 
 
 class ReducedBasisWarning(UserWarning):
@@ -80,8 +81,13 @@ class EnergyGainWarning(UserWarning):
     """The total energy of a run without applied loads rose (energy_gain_warning)."""
 
 
-def run_scenario(sc, label: str = "run", progress: bool = False, warn: bool = True,
-                 setup: SetupCache | None = None) -> ScenarioRun:
+def run_scenario(
+    sc,
+    label: str = "run",
+    progress: bool = False,
+    warn: bool = True,
+    setup: SetupCache | None = None,
+) -> ScenarioRun:
     """Build (through ``setup``, default: the process-wide setup cache) and simulate scenario
     sc; returns the run with its summary. warn: issue a ReducedBasisWarning when the validity
     guard fires (summary reduced_contact_guard).
@@ -107,8 +113,14 @@ def run_scenario(sc, label: str = "run", progress: bool = False, warn: bool = Tr
     return ScenarioRun(label, built, res, summary)
 
 
-def run(scenario: Scenario | str | Path, *, t_end_s: float | None = None,
-        dt_s: float | None = None, progress: bool = False, label: str = "run") -> ScenarioRun:
+def run(
+    scenario: Scenario | str | Path,
+    *,
+    t_end_s: float | None = None,
+    dt_s: float | None = None,
+    progress: bool = False,
+    label: str = "run",
+) -> ScenarioRun:
     """Simulate ``scenario`` (a Scenario, or the path of a scenario file), optionally over
     another end time or contact step [s]; nothing is written. The run's result has the
     histories by name (``probe``, ``elastic``, ``curves``), its ``summary`` the numbers the
@@ -133,8 +145,11 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
     e_err = float((E[-1] - E[0]) / E[0]) if E[0] != 0 else None
     e_err_max = float(np.abs(E - E[0]).max() / abs(E[0])) if E[0] != 0 else None
     # no applied loads: nothing may add energy (scenarios.guard.ENERGY_GAIN_WARN)
-    gain = (float(max(0.0, (E - E[0]).max()) / abs(E[0]))
-            if E[0] != 0 and not built.system.loads else None)
+    gain = (
+        float(max(0.0, (E - E[0]).max()) / abs(E[0]))
+        if E[0] != 0 and not built.system.loads
+        else None
+    )
     return {
         # "completed", or "failed" with the reason: the histories then end at the failure
         "status": "completed" if res.failure is None else "failed",
@@ -165,8 +180,8 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         # it, theta > 1/2 damps; scenarios.guard.CONSERVING_ENERGY_GAIN_WARN)
         "energy_conserving_scheme": bool(
             built.system.contacts
-            and all(getattr(c, "law", None) is ContactLaw.POSITION
-                    for c in built.system.contacts)),
+            and all(getattr(c, "law", None) is ContactLaw.POSITION for c in built.system.contacts)
+        ),
         "max_penetration_m": float(res.max_penetration_m),
         "max_penetration_at": res.max_penetration_at,
         "max_penetration_by_direction_m": dict(res.max_penetration_by_direction_m),
@@ -181,15 +196,15 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         "lcp_residual_max": float(res.lcp_residual_max),
         # the momentum the solves left unbalanced, relative to the initial momentum: what
         # momentum_rel_error can be at most, from the residuals themselves (free systems)
-        "momentum_residual_rel": (float(np.linalg.norm(res.momentum_residual) / scale)
-                                  if free else None),
+        "momentum_residual_rel": (
+            float(np.linalg.norm(res.momentum_residual) / scale) if free else None
+        ),
         # per guarded (MVM or interface) body: the share of its contact impulse carried on
         # surface nodes its basis holds stiff, when it first happened, a model covering them
         "reduced_contact_guard": contact_guard(res, built),
         **_friction_summary(res),
         # strings, gravity and a contact: the pendulum release's own measures
-        **({"pendulum": pendulum.event_summary(built, res)} if pendulum.is_pendulum(built)
-           else {}),
+        **({"pendulum": pendulum.event_summary(built, res)} if pendulum.is_pendulum(built) else {}),
     }
 
 
@@ -202,9 +217,11 @@ def _friction_summary(res) -> dict:
         return {}
     normal = float(res.steps.contact_impulse_Ns.sum()) if res.steps is not None else 0.0
     tangential = float(np.linalg.norm(fr.impulse_ns))
-    return {"max_friction_force_N": fr.force_max_n,
-            "friction_impulse_Ns": tangential,
-            "normal_impulse_Ns": normal,
-            "friction_to_normal_impulse": tangential / normal if normal > 0 else None,
-            "max_sticking_contacts": fr.max_sticking,
-            "max_sliding_contacts": fr.max_sliding}
+    return {
+        "max_friction_force_N": fr.force_max_n,
+        "friction_impulse_Ns": tangential,
+        "normal_impulse_Ns": normal,
+        "friction_to_normal_impulse": tangential / normal if normal > 0 else None,
+        "max_sticking_contacts": fr.max_sticking,
+        "max_sliding_contacts": fr.max_sliding,
+    }

@@ -53,8 +53,9 @@ def _rows_rate(system, states, b: int, eps_s: float = 1e-6) -> np.ndarray:
     return (out[0] - out[1]) / (2 * eps_s)
 
 
-def quasi_static_sag(system, states: list[BodyState], b: int, where: str = "",
-                     passes: int = 2) -> BodyState:
+def quasi_static_sag(
+    system, states: list[BodyState], b: int, where: str = "", passes: int = 2
+) -> BodyState:
     """The state of body b in its quasi-static sag (module docstring), at rest or translating
     (the constraint acceleration then has its velocity terms, v_perp^2 / l for a string);
     InputError if the frame turns or the body vibrates (omega, q_dot != 0). A rigid body
@@ -64,8 +65,10 @@ def quasi_static_sag(system, states: list[BodyState], b: int, where: str = "",
     if body.nq == 0:
         return st
     if np.any(st.v[3:]):
-        raise InputError(f"{where or body.name}: sagged = true needs a body whose frame does not "
-                         f"turn, got angular velocity {st.v[3:6].tolist()} rad/s")
+        raise InputError(
+            f"{where or body.name}: sagged = true needs a body whose frame does not "
+            f"turn, got angular velocity {st.v[3:6].tolist()} rad/s"
+        )
     k_hat = body.k_hat
     solve = factor(sp.csc_matrix(k_hat)) if sp.issparse(k_hat) else None
     cur = [s.copy() for s in states]

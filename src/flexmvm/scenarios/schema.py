@@ -89,8 +89,12 @@ class ContactConfig(Frozen):
         # identities hash these dumps
         data = handler(self)
         if isinstance(data, dict):
-            for key, default in (("friction_coefficient", 0.0), ("redistribute_mass", False),
-                                 ("law", ContactLaw.VELOCITY), ("penetration_recovery", None)):
+            for key, default in (
+                ("friction_coefficient", 0.0),
+                ("redistribute_mass", False),
+                ("law", ContactLaw.VELOCITY),
+                ("penetration_recovery", None),
+            ):
                 if key in data and data[key] == default:
                     data.pop(key)
         return data
@@ -98,13 +102,19 @@ class ContactConfig(Frozen):
     @model_validator(mode="after")
     def _check_friction(self) -> ContactConfig:
         if self.friction_coefficient > 0.0 and self.kind is ContactKind.BONDED:
-            raise problem("a bonded contact locks all three components: friction_coefficient "
-                          f"must be 0, got {self.friction_coefficient!r}", "friction_coefficient")
+            raise problem(
+                "a bonded contact locks all three components: friction_coefficient "
+                f"must be 0, got {self.friction_coefficient!r}",
+                "friction_coefficient",
+            )
         if self.law is ContactLaw.POSITION and self.kind is ContactKind.BONDED:
-            raise problem("law = \"position\" is for frictionless contact, not bonded", "law")
+            raise problem('law = "position" is for frictionless contact, not bonded', "law")
         if self.law is ContactLaw.POSITION and self.penetration_recovery is not None:
-            raise problem("penetration_recovery is the velocity law's: the position law holds "
-                          "the end-of-step gap itself", "penetration_recovery")
+            raise problem(
+                "penetration_recovery is the velocity law's: the position law holds "
+                "the end-of-step gap itself",
+                "penetration_recovery",
+            )
         return self
 
     @property
@@ -151,19 +161,28 @@ def _damped_theta(data: dict) -> Any:
     """time.theta from hf_damping_time_s (a "before" check: numbers of the wrong type are
     left to the fields' own checks)."""
     tau, dt = data["hf_damping_time_s"], data.get("dt_s")
-    if not all(isinstance(x, (int, float)) and not isinstance(x, bool) and x > 0
-               for x in (tau, dt)):
+    if not all(
+        isinstance(x, (int, float)) and not isinstance(x, bool) and x > 0 for x in (tau, dt)
+    ):
         return data.get("theta", DEFAULT_THETA)
     theta = theta_for_damping_time(float(dt), float(tau))
     given = data.get("theta")
-    if given is not None and not (isinstance(given, (int, float)) and not isinstance(given, bool)
-                                  and math.isclose(given, theta, rel_tol=1e-12)):
-        raise problem(f"give theta or hf_damping_time_s, not both (hf_damping_time_s = "
-                      f"{tau!r} s sets theta = 1/2 + dt_s / (4 tau) = {theta!r}, theta = "
-                      f"{given!r})", "theta")
+    if given is not None and not (
+        isinstance(given, (int, float))
+        and not isinstance(given, bool)
+        and math.isclose(given, theta, rel_tol=1e-12)
+    ):
+        raise problem(
+            f"give theta or hf_damping_time_s, not both (hf_damping_time_s = "
+            f"{tau!r} s sets theta = 1/2 + dt_s / (4 tau) = {theta!r}, theta = "
+            f"{given!r})",
+            "theta",
+        )
     if theta > 1.0:
-        raise problem(f"must be >= dt_s / 2 = {dt / 2!r} (theta = 1/2 + dt_s / (4 tau) <= 1), "
-                      f"got {tau!r}", "hf_damping_time_s")
+        raise problem(
+            f"must be >= dt_s / 2 = {dt / 2!r} (theta = 1/2 + dt_s / (4 tau) <= 1), got {tau!r}",
+            "hf_damping_time_s",
+        )
     return theta
 
 
@@ -200,21 +219,26 @@ class TimeConfig(Frozen):
         # with it, theta is derived, not given: a dump edited (dt_s) and read back derives it
         data = handler(self)
         if isinstance(data, dict):
-            data.pop("hf_damping_time_s" if data.get("hf_damping_time_s") is None else "theta",
-                      None)
+            data.pop(
+                "hf_damping_time_s" if data.get("hf_damping_time_s") is None else "theta", None
+            )
         return data
 
     @model_validator(mode="after")
     def _check(self) -> TimeConfig:
-        if self.dt_s > self.t_end_s:       # first: the checks below compare with dt_s
+        if self.dt_s > self.t_end_s:  # first: the checks below compare with dt_s
             raise problem(f"must be <= t_end_s = {self.t_end_s!r}, got {self.dt_s!r}", "dt_s")
         if self.dt_max_s < self.dt_s:
             raise problem(f"must be >= dt_s = {self.dt_s!r}, got {self.dt_max_s!r}", "dt_max_s")
         if self.output_dt_s < self.dt_s:
-            raise problem(f"must be >= dt_s = {self.dt_s!r}, got {self.output_dt_s!r}", "output_dt_s")
+            raise problem(
+                f"must be >= dt_s = {self.dt_s!r}, got {self.output_dt_s!r}", "output_dt_s"
+            )
         if self.output_contact_dt_s is not None and self.output_contact_dt_s < self.dt_s:
-            raise problem(f"must be >= dt_s = {self.dt_s!r}, got {self.output_contact_dt_s!r}",
-                          "output_contact_dt_s")
+            raise problem(
+                f"must be >= dt_s = {self.dt_s!r}, got {self.output_contact_dt_s!r}",
+                "output_contact_dt_s",
+            )
         if self.output_dt_s > self.t_end_s:
             raise problem(
                 f"must be <= t_end_s = {self.t_end_s!r}, got {self.output_dt_s!r}", "output_dt_s"
@@ -266,9 +290,11 @@ class Scenario(Frozen):
                 # a massless node has no velocity of its own (integrate.massless): under the
                 # velocity law its end velocity flips every step, each flip an inelastic
                 # impact (-10 % energy at theta = 1/2, -3 % at 0.55: docs/contact_law.md)
-                raise problem("mass redistribution needs law = \"position\" (a massless "
-                              "contact node has no velocity of its own: docs/contact_law.md)",
-                              f"contacts[{i}].redistribute_mass")
+                raise problem(
+                    'mass redistribution needs law = "position" (a massless '
+                    "contact node has no velocity of its own: docs/contact_law.md)",
+                    f"contacts[{i}].redistribute_mass",
+                )
         seen = [(c.slave, c.master) for c in self.contacts]
         _unique([f"{s} on {m}" for s, m in seen], "contacts", "contact", "")
         for i, j in enumerate(self.joints):
@@ -310,27 +336,34 @@ class Scenario(Frozen):
         for name in change:
             self.body(name)
         source = f"{self._source} ({what})"
-        bodies = tuple(validate_part(BodyConfig, {**dict(b), **change[b.name]}, source,
-                                     f"bodies[{k}]")
-                       if b.name in change else b for k, b in enumerate(self.bodies))
+        bodies = tuple(
+            validate_part(BodyConfig, {**dict(b), **change[b.name]}, source, f"bodies[{k}]")
+            if b.name in change
+            else b
+            for k, b in enumerate(self.bodies)
+        )
         return self._copy(what, bodies=bodies)
 
     def with_model(self, body: str, model: ModelConfig) -> Scenario:
         """A copy with body ``body`` modelled by ``model`` (see :func:`mvm`, :func:`full`,
         :func:`modal`, :func:`rigid`)."""
         if not isinstance(model, ModelConfig):
-            raise ScenarioError(f"{self._source}: with_model({body!r}, ...) received "
-                                f"{type(model).__name__}, expected a ModelConfig (flexmvm.mvm(), "
-                                "flexmvm.full(), ...)")
+            raise ScenarioError(
+                f"{self._source}: with_model({body!r}, ...) received "
+                f"{type(model).__name__}, expected a ModelConfig (flexmvm.mvm(), "
+                "flexmvm.full(), ...)"
+            )
         return self._replace_bodies(f"body {body} as {model.label}", {body: {"model": model}})
 
     def with_models(self, model: ModelConfig, *, keep_rigid: bool = True) -> Scenario:
         """A copy with every body (rigid ones kept, unless ``keep_rigid`` is False) modelled
         by ``model``."""
-        names = [b.name for b in self.bodies
-                 if not (keep_rigid and b.model.kind is ModelKind.RIGID)]
-        return self._replace_bodies(f"every body as {model.label}",
-                                    {n: {"model": model} for n in names})
+        names = [
+            b.name for b in self.bodies if not (keep_rigid and b.model.kind is ModelKind.RIGID)
+        ]
+        return self._replace_bodies(
+            f"every body as {model.label}", {n: {"model": model} for n in names}
+        )
 
     def with_kind(self, kind: ModelKind | str) -> Scenario:
         """A copy with the model kind of every non-rigid body set to ``kind``, each keeping
@@ -338,42 +371,64 @@ class Scenario(Frozen):
         try:
             kind = ModelKind(kind)
         except ValueError:
-            raise ScenarioError(f"{self._source}: model kind {kind!r}; expected one of "
-                                f"{', '.join(k.value for k in ModelKind)}") from None
+            raise ScenarioError(
+                f"{self._source}: model kind {kind!r}; expected one of "
+                f"{', '.join(k.value for k in ModelKind)}"
+            ) from None
         what = f"model kind {kind.value}"
         source = f"{self._source} ({what})"
-        change = {b.name: {"model": validate_part(ModelConfig, {**dict(b.model), "kind": kind},
-                                                  source, f"bodies[{k}].model")}
-                  for k, b in enumerate(self.bodies) if b.model.kind is not ModelKind.RIGID}
+        change = {
+            b.name: {
+                "model": validate_part(
+                    ModelConfig, {**dict(b.model), "kind": kind}, source, f"bodies[{k}].model"
+                )
+            }
+            for k, b in enumerate(self.bodies)
+            if b.model.kind is not ModelKind.RIGID
+        }
         return self._replace_bodies(what, change)
 
-    def with_time(self, *, t_end_s: float | None = None, dt_s: float | None = None,
-                  dt_max_s: float | None = None, output_dt_s: float | None = None,
-                  theta: float | None = None,
-                  output_contact_dt_s: float | None = None) -> Scenario:
+    def with_time(
+        self,
+        *,
+        t_end_s: float | None = None,
+        dt_s: float | None = None,
+        dt_max_s: float | None = None,
+        output_dt_s: float | None = None,
+        theta: float | None = None,
+        output_contact_dt_s: float | None = None,
+    ) -> Scenario:
         """A copy with the given time settings replaced [s]. A ``dt_s`` above ``dt_max_s``
         (and no ``dt_max_s`` given) lifts ``dt_max_s`` to it."""
-        given = {"t_end_s": t_end_s, "dt_s": dt_s, "dt_max_s": dt_max_s,
-                 "output_dt_s": output_dt_s, "theta": theta,
-                 "output_contact_dt_s": output_contact_dt_s}
+        given = {
+            "t_end_s": t_end_s,
+            "dt_s": dt_s,
+            "dt_max_s": dt_max_s,
+            "output_dt_s": output_dt_s,
+            "theta": theta,
+            "output_contact_dt_s": output_contact_dt_s,
+        }
         given = {k: v for k, v in given.items() if v is not None}
         base = dict(self.time)
-        if theta is not None:                 # a theta given replaces a damping time
+        if theta is not None:  # a theta given replaces a damping time
             base.pop("hf_damping_time_s", None)
         elif base.get("hf_damping_time_s") is not None:
-            base.pop("theta")                 # derived again from the (new) dt_s
+            base.pop("theta")  # derived again from the (new) dt_s
         if dt_s is not None and dt_max_s is None:
             given["dt_max_s"] = max(self.time.dt_max_s, dt_s)
         what = ", ".join(f"{k}={v!r}" for k, v in given.items())
-        time = validate_part(TimeConfig, {**base, **given},
-                             f"{self._source} ({what})", "time")
+        time = validate_part(TimeConfig, {**base, **given}, f"{self._source} ({what})", "time")
         return self._copy(what, time=time)
 
     def with_material(self, body: str, material: Material | str) -> Scenario:
         """A copy with body ``body`` made of ``material`` (a Material, or a preset name)."""
         if isinstance(material, Material):
-            spec = MaterialSpec(E_pa=float(material.E), nu=float(material.nu),
-                                rho_kg_m3=float(material.rho), name=material.name)
+            spec = MaterialSpec(
+                E_pa=float(material.E),
+                nu=float(material.nu),
+                rho_kg_m3=float(material.rho),
+                name=material.name,
+            )
             label = material.name
         else:
             spec = label = material
@@ -386,13 +441,21 @@ class Scenario(Frozen):
         what = f"body {body} rod {fields}"
         if cfg.rod is None:
             raise ScenarioError(f"{self._source} ({what}): body {body!r} is not a rod")
-        rod = validate_part(RodConfig, {**dict(cfg.rod), **fields}, f"{self._source} ({what})",
-                            f"bodies[{self.bodies.index(cfg)}].rod")
+        rod = validate_part(
+            RodConfig,
+            {**dict(cfg.rod), **fields},
+            f"{self._source} ({what})",
+            f"bodies[{self.bodies.index(cfg)}].rod",
+        )
         return self._replace_bodies(what, {body: {"rod": rod}})
 
-    def with_overrides(self, model: ModelKind | str | None = None, t_end_s: float | None = None,
-                       dt_s: float | None = None,
-                       body_models: Mapping[str, ModelConfig] | None = None) -> Scenario:
+    def with_overrides(
+        self,
+        model: ModelKind | str | None = None,
+        t_end_s: float | None = None,
+        dt_s: float | None = None,
+        body_models: Mapping[str, ModelConfig] | None = None,
+    ) -> Scenario:
         """The command line's overrides in one call: :meth:`with_kind` ``model``, then
         :meth:`with_model` for each of ``body_models``, then :meth:`with_time`."""
         sc = self
@@ -431,8 +494,9 @@ def _known_body(bodies: Mapping[str, BodyConfig], name: str, key: str) -> None:
         raise problem(f"unknown body {name!r} (bodies: {', '.join(bodies)})", key)
 
 
-def validate_scenario(data: Any, source: str, base_dir: Path | None, *,
-                      keep_source: str | None = None) -> Scenario:
+def validate_scenario(
+    data: Any, source: str, base_dir: Path | None, *, keep_source: str | None = None
+) -> Scenario:
     """Validate ``data`` (a dict, or field values that may be model instances) as a Scenario;
     ScenarioError names ``source``. The scenario remembers ``keep_source`` (default
     ``source``) as where it came from. ``mesh_file`` paths resolve against ``base_dir``."""
@@ -444,5 +508,3 @@ def validate_scenario(data: Any, source: str, base_dir: Path | None, *,
         raise ScenarioError(f"{source}: {format_error(errors[0])}{more}") from None
     scenario._source = keep_source or source
     return scenario
-
-

@@ -64,8 +64,9 @@ def checked_sizes(sizes: Mapping[str, int]) -> dict[str, int]:
     line) otherwise."""
     unknown = set(sizes) - set(CACHE_SIZES)
     if unknown:
-        raise InputError(f"cache sizes: unknown {sorted(unknown)}; expected some of "
-                         f"{', '.join(CACHE_SIZES)}")
+        raise InputError(
+            f"cache sizes: unknown {sorted(unknown)}; expected some of {', '.join(CACHE_SIZES)}"
+        )
     bad = {k: v for k, v in sizes.items() if not isinstance(v, int) or v < 0}
     if bad:
         raise InputError(f"cache sizes: expected integers >= 0, got {bad}")
@@ -120,8 +121,9 @@ class ProcessCaches:
         if isinstance(key, ContactMass):
             fe = self.fe_model(key.key, material)
             m_scalar = redistribute_mass(fe.M_scalar, fe.mesh.nodes, key.nodes)
-            return dataclasses.replace(fe, M_scalar=m_scalar,
-                                       M=sp.csr_matrix(sp.kron(m_scalar, sp.identity(3))))
+            return dataclasses.replace(
+                fe, M_scalar=m_scalar, M=sp.csr_matrix(sp.kron(m_scalar, sp.identity(3)))
+            )
         return setup_cache.cached_fe(mesh_source(key), self.mesh(key), material, assemble)
 
     def reference_condition(self, key: MeshKey, mesh: Mesh, ref_set: str):
@@ -133,33 +135,74 @@ class ProcessCaches:
             return rod_reference(self.rod_mesh(key))
         return support(mesh, ref_set)
 
-    def _basis(self, key: MeshKey, material: Material, kind: BasisKind, retained: tuple,
-               modes: int, ref_set: str, interface: InterfaceSpec | None = None) -> Basis:
+    def _basis(
+        self,
+        key: MeshKey,
+        material: Material,
+        kind: BasisKind,
+        retained: tuple,
+        modes: int,
+        ref_set: str,
+        interface: InterfaceSpec | None = None,
+    ) -> Basis:
         """The basis of these arguments: disk cache, else built from the FE model."""
         ref = self.reference_condition(key, self.mesh(key), ref_set)
         nodes = np.array(retained, dtype=np.int64)
 
         def build() -> Basis:
             fe = self.fe_model(key, material)
-            sources = (self.interface_sources(key, material, fe, ref_set, ref, interface.surface)
-                       if interface is not None else None)
-            return build_basis(fe, kind, ref, retained_nodes=nodes, n_modes=modes,
-                               interface=interface, sources=sources)
+            sources = (
+                self.interface_sources(key, material, fe, ref_set, ref, interface.surface)
+                if interface is not None
+                else None
+            )
+            return build_basis(
+                fe,
+                kind,
+                ref,
+                retained_nodes=nodes,
+                n_modes=modes,
+                interface=interface,
+                sources=sources,
+            )
 
-        return setup_cache.cached_basis(mesh_source(key), material, kind, ref_set, ref, nodes,
-                                        modes, build, extra=interface_inputs(interface))
+        return setup_cache.cached_basis(
+            mesh_source(key),
+            material,
+            kind,
+            ref_set,
+            ref,
+            nodes,
+            modes,
+            build,
+            extra=interface_inputs(interface),
+        )
 
-    def _body_parts(self, key: MeshKey, material: Material, kind: BasisKind, retained: tuple,
-                    modes: int, ref_set: str, interface: InterfaceSpec | None = None
-                    ) -> BodyParts:
+    def _body_parts(
+        self,
+        key: MeshKey,
+        material: Material,
+        kind: BasisKind,
+        retained: tuple,
+        modes: int,
+        ref_set: str,
+        interface: InterfaceSpec | None = None,
+    ) -> BodyParts:
         """Parts of the basis self.basis(same arguments): disk cache, else computed from the
         FE model (loaded only then)."""
         basis = self.basis(key, material, kind, retained, modes, ref_set, interface)
         return setup_cache.cached_body(
-            mesh_source(key), material, kind, ref_set, basis.reference,
-            np.array(retained, dtype=np.int64), modes, basis.psi.shape[1],
+            mesh_source(key),
+            material,
+            kind,
+            ref_set,
+            basis.reference,
+            np.array(retained, dtype=np.int64),
+            modes,
+            basis.psi.shape[1],
             lambda: body_parts(self.fe_model(key, material), basis),
-            extra=interface_inputs(interface))
+            extra=interface_inputs(interface),
+        )
 
     def free_modes(self, key: MeshKey, material: Material, fe: FEModel) -> FreeModes:
         """k -> the lowest k free-free modes of ``fe`` (mesh key ``key``): the disk cache's
@@ -172,19 +215,29 @@ class ProcessCaches:
                 return free_modes(fe, k)
 
         source = mesh_source(key)
-        return lambda k: setup_cache.cached_free_modes(source, material, k, fe.n_dof,
-                                                       lambda: solve(k))
+        return lambda k: setup_cache.cached_free_modes(
+            source, material, k, fe.n_dof, lambda: solve(k)
+        )
 
-    def interface_sources(self, key: MeshKey, material: Material, fe: FEModel, ref_set: str,
-                          ref, surface: str) -> InterfaceSources:
+    def interface_sources(
+        self, key: MeshKey, material: Material, fe: FEModel, ref_set: str, ref, surface: str
+    ) -> InterfaceSources:
         """An interface basis's mode pool and patch statics through the disk cache: keyed
         without the mode count, so the bases of one patch set and pool share them."""
         source = mesh_source(key)
 
         def statics(patch: Patch, radii: tuple[float, ...], loads: np.ndarray) -> np.ndarray:
             return setup_cache.cached_patch_statics(
-                source, material, ref_set, ref, surface, patch.node, radii, fe.n_dof,
-                lambda: relieved_statics(fe, ref, loads))
+                source,
+                material,
+                ref_set,
+                ref,
+                surface,
+                patch.node,
+                radii,
+                fe.n_dof,
+                lambda: relieved_statics(fe, ref, loads),
+            )
 
         return InterfaceSources(self.free_modes(key, material, fe), statics)
 
@@ -197,10 +250,18 @@ class SetupCache:
     tolerance; within a degenerate pair (a rod's two bending planes) the cut may keep a
     different vector of the same eigenspace."""
 
-    def __init__(self, sizes: Mapping[str, int] | None = None, *, mode_floor: int = 0,
-                 caches: ProcessCaches | None = None) -> None:
-        self.caches = (caches if caches is not None
-                       else ProcessCaches(CACHE_SIZES | checked_sizes(sizes or {})))
+    def __init__(
+        self,
+        sizes: Mapping[str, int] | None = None,
+        *,
+        mode_floor: int = 0,
+        caches: ProcessCaches | None = None,
+    ) -> None:
+        self.caches = (
+            caches
+            if caches is not None
+            else ProcessCaches(CACHE_SIZES | checked_sizes(sizes or {}))
+        )
         self.mode_floor = int(mode_floor)
 
     def with_mode_floor(self, n_modes: int) -> SetupCache:
@@ -235,8 +296,16 @@ class SetupCache:
         """The (cached) FE model of a mesh key in ``material`` (ProcessCaches._fe_model)."""
         return self.caches.fe_model(key, material)
 
-    def basis(self, key: MeshKey, material: Material, kind: BasisKind, retained: tuple,
-              modes: int, ref_set: str, interface: InterfaceSpec | None = None) -> Basis:
+    def basis(
+        self,
+        key: MeshKey,
+        material: Material,
+        kind: BasisKind,
+        retained: tuple,
+        modes: int,
+        ref_set: str,
+        interface: InterfaceSpec | None = None,
+    ) -> Basis:
         """The basis of mesh key ``key`` in ``material``: ``kind``, retained node ids,
         ``modes``, reference label; under a mode floor above ``modes`` a Craig-Bampton basis
         is cut from the floor's."""
@@ -245,18 +314,28 @@ class SetupCache:
             return self.caches.basis(key, material, kind, retained, modes, ref_set, interface)
         big = self.caches.basis(key, material, kind, retained, floor, ref_set)
         nb = 3 * len(big.retained_nodes) + big.n_static
-        return dataclasses.replace(big, psi=np.ascontiguousarray(big.psi[:, : nb + modes]),
-                                   n_modes=modes, mode_freqs_hz=big.mode_freqs_hz[:modes].copy())
+        return dataclasses.replace(
+            big,
+            psi=np.ascontiguousarray(big.psi[:, : nb + modes]),
+            n_modes=modes,
+            mode_freqs_hz=big.mode_freqs_hz[:modes].copy(),
+        )
 
-    def body_parts(self, key: MeshKey, material: Material, kind: BasisKind, retained: tuple,
-                   modes: int, ref_set: str, interface: InterfaceSpec | None = None
-                   ) -> BodyParts:
+    def body_parts(
+        self,
+        key: MeshKey,
+        material: Material,
+        kind: BasisKind,
+        retained: tuple,
+        modes: int,
+        ref_set: str,
+        interface: InterfaceSpec | None = None,
+    ) -> BodyParts:
         """Invariants and k_hat of the body whose basis is self.basis(same arguments); under a
         mode floor cut from the floor's parts, as the basis is cut."""
         floor = self.mode_floor
         if kind is not BasisKind.CRAIG_BAMPTON or modes >= floor:
-            return self.caches.body_parts(key, material, kind, retained, modes, ref_set,
-                                          interface)
+            return self.caches.body_parts(key, material, kind, retained, modes, ref_set, interface)
         big = self.caches.body_parts(key, material, kind, retained, floor, ref_set)
         n_static = self.caches.basis(key, material, kind, retained, floor, ref_set).n_static
         return big.leading(3 * len(retained) + n_static + modes)
@@ -282,9 +361,9 @@ class SetupCache:
         fe, free = self.free_modes_source(cfg)
         return participation_pool(fe, spec, modes, free)
 
-    def elimination_order(self, pattern: sp.spmatrix,
-                          compute: Callable[[sp.spmatrix], np.ndarray | None]
-                          ) -> np.ndarray | None:
+    def elimination_order(
+        self, pattern: sp.spmatrix, compute: Callable[[sp.spmatrix], np.ndarray | None]
+    ) -> np.ndarray | None:
         """compute(pattern) through the disk cache, keyed by the sparsity pattern alone
         (setup_cache.cached_elimination_order)."""
         return setup_cache.cached_elimination_order(pattern, compute)

@@ -20,10 +20,12 @@ def with_elimination_order(body: FlexibleBody, setup: SetupCache) -> FlexibleBod
     other body unchanged."""
     if not (body.nq >= ldl.SPLIT_MIN_N and body.is_sparse and sp.issparse(body.k_hat)):
         return body
-    pattern = iteration_pattern(body.inv.M_qq, body.k_hat,
-                                body.c_hat if sp.issparse(body.c_hat) else None)
+    pattern = iteration_pattern(
+        body.inv.M_qq, body.k_hat, body.c_hat if sp.issparse(body.c_hat) else None
+    )
     order = setup.elimination_order(pattern, elimination_order)
     # an empty order: made, none found (the solver then takes SuperLU's minimum degree
     # without looking again)
-    return dataclasses.replace(body, elimination_order=(order if order is not None
-                                                        else np.zeros(0, np.int64)))
+    return dataclasses.replace(
+        body, elimination_order=(order if order is not None else np.zeros(0, np.int64))
+    )

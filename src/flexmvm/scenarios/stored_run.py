@@ -47,8 +47,10 @@ class StoredRun:
 def _outputs(d: Path) -> dict:
     """What key.json keeps to check the run's files: history.csv's record, summary.json's
     SHA-256."""
-    return {"history.csv": history_record(d / "history.csv"),
-            "summary.json": file_sha256(d / "summary.json")}
+    return {
+        "history.csv": history_record(d / "history.csv"),
+        "summary.json": file_sha256(d / "summary.json"),
+    }
 
 
 def stored_run_problem(d: Path, sc: Scenario) -> str | None:
@@ -62,8 +64,7 @@ def stored_run_problem(d: Path, sc: Scenario) -> str | None:
         return "key.json unreadable"
     current = stamp(sc)
     if not isinstance(meta, dict) or meta.get("key") != current["key"]:
-        return stamp_mismatch(meta.get("provenance") if isinstance(meta, dict) else None,
-                              current)
+        return stamp_mismatch(meta.get("provenance") if isinstance(meta, dict) else None, current)
     outputs = meta.get("outputs")
     if not isinstance(outputs, dict):
         return "key.json has no record of its outputs"
@@ -78,19 +79,31 @@ def stored_run_problem(d: Path, sc: Scenario) -> str | None:
     return None
 
 
-def load_or_run(d: Path, sc: Scenario, label: str, recompute: bool = False,
-                progress: bool = True, extra: Callable[[], dict] = dict) -> StoredRun:
+def load_or_run(
+    d: Path,
+    sc: Scenario,
+    label: str,
+    recompute: bool = False,
+    progress: bool = True,
+    extra: Callable[[], dict] = dict,
+) -> StoredRun:
     """The run of ``sc`` stored in ``d`` if it passes its check (stored_run_problem), else
     ``sc`` run now and stored there (key.json last, with ``extra()`` added); a stored run
     that fails is announced as ``<label>: <why>: recomputed``. ``recompute``: ignore it."""
     problem = None if recompute else stored_run_problem(d, sc)
     if problem is None and not recompute:
         t, f, p = read_history(d / "history.csv")
-        return StoredRun(t, f, p, json.loads((d / "summary.json").read_text()),
-                         json.loads((d / "key.json").read_text()))
+        return StoredRun(
+            t,
+            f,
+            p,
+            json.loads((d / "summary.json").read_text()),
+            json.loads((d / "key.json").read_text()),
+        )
     if problem not in (None, "absent"):
         announce_recompute(f"{label}: {problem}: recomputed")
     from flexmvm.scenarios.run import run_scenario
+
     r = run_scenario(sc, progress=progress)
     t, f, p = r.result.curves()
     d.mkdir(parents=True, exist_ok=True)
@@ -98,7 +111,13 @@ def load_or_run(d: Path, sc: Scenario, label: str, recompute: bool = False,
     write_history(d / "history.csv", t, f, p)
     write_json_atomic(d / "summary.json", r.summary)
     prov = stamp(sc)
-    meta = {"key": prov["key"], "provenance": prov, "code_version": prov["code"],
-            **extra(), "inputs": run_inputs(sc), "outputs": _outputs(d)}
+    meta = {
+        "key": prov["key"],
+        "provenance": prov,
+        "code_version": prov["code"],
+        **extra(),
+        "inputs": run_inputs(sc),
+        "outputs": _outputs(d),
+    }
     write_json_atomic(d / "key.json", meta)
     return StoredRun(t, f, p, r.summary, meta)

@@ -43,8 +43,7 @@ FORMAT = 2
 CHECKSUM = "__sha256__"
 
 #: What reading or decoding a corrupt, truncated or foreign entry raises (treated as a miss).
-_UNREADABLE = (OSError, EOFError, ValueError, KeyError, TypeError, IndexError,
-               zipfile.BadZipFile)
+_UNREADABLE = (OSError, EOFError, ValueError, KeyError, TypeError, IndexError, zipfile.BadZipFile)
 
 
 @dataclass(frozen=True)
@@ -89,15 +88,22 @@ def code_version(sources: tuple[str, ...] = CODE_SOURCES) -> str:
 
 def make_key(kind: str, inputs: Mapping, version: str | None = None) -> str:
     """Entry name ``<kind>-<32 hex>`` of ``inputs`` (JSON-able) under a code version."""
-    doc = {"format": FORMAT, "kind": kind, "inputs": inputs,
-           "code": code_version() if version is None else version}
+    doc = {
+        "format": FORMAT,
+        "kind": kind,
+        "inputs": inputs,
+        "code": code_version() if version is None else version,
+    }
     return f"{kind}-{hashlib.sha256(canonical_json(doc).encode()).hexdigest()[:32]}"
 
 
 def rod_source(spec) -> dict:
     """Key inputs of a generated rod mesh: every RodSpec field (enums by value)."""
-    return {"rod": {k: (v.value if isinstance(v, Enum) else v)
-                    for k, v in dataclasses.asdict(spec).items()}}
+    return {
+        "rod": {
+            k: (v.value if isinstance(v, Enum) else v) for k, v in dataclasses.asdict(spec).items()
+        }
+    }
 
 
 def file_source(path: str | os.PathLike[str]) -> dict | None:
@@ -222,12 +228,18 @@ def decoded(key: str, decode: Callable[[Mapping[str, np.ndarray]], object]):
 def csr_arrays(prefix: str, a) -> dict[str, np.ndarray]:
     """The CSR arrays of sparse matrix ``a`` as entry arrays ``<prefix>_data`` ... ``_shape``."""
     a = sp.csr_matrix(a)
-    return {f"{prefix}_data": a.data, f"{prefix}_indices": a.indices,
-            f"{prefix}_indptr": a.indptr, f"{prefix}_shape": np.asarray(a.shape, np.int64)}
+    return {
+        f"{prefix}_data": a.data,
+        f"{prefix}_indices": a.indices,
+        f"{prefix}_indptr": a.indptr,
+        f"{prefix}_shape": np.asarray(a.shape, np.int64),
+    }
 
 
 def csr_from(arrays: Mapping[str, np.ndarray], prefix: str) -> sp.csr_matrix:
     """The sparse matrix stored by csr_arrays(prefix, ...)."""
     shape = tuple(int(n) for n in arrays[f"{prefix}_shape"])
-    return sp.csr_matrix((arrays[f"{prefix}_data"], arrays[f"{prefix}_indices"],
-                          arrays[f"{prefix}_indptr"]), shape=shape)
+    return sp.csr_matrix(
+        (arrays[f"{prefix}_data"], arrays[f"{prefix}_indices"], arrays[f"{prefix}_indptr"]),
+        shape=shape,
+    )

@@ -34,17 +34,28 @@ def _scenario(scenario: Scenario | str | Path) -> Scenario:
     return scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
 
 
-def select(scenario: Scenario | str | Path, body: str, *, layers: Iterable[int] = range(1, 5),
-           laps: Iterable[int] = range(1, 6), modes: Iterable[int] = range(7, 44, 6),
-           target: Target | float = 0.99, search: bool = False,
-           out_dir: str | Path | None = None, workers: int | None = None,
-           scheduler: str | None = None, serial: bool = False,
-           progress: bool = False, kind: ModelKind | str = ModelKind.MVM,
-           patches: Sequence[Sequence[float]] | None = None,
-           interface_modes: Iterable[int] = (5, 10, 20),
-           radii_m: Sequence[float] | None = None, node_sets: Sequence[str] | None = None,
-           centre_m: Sequence[float] | None = None,
-           patch_surface: str | None = None) -> SelectionStudy:
+def select(
+    scenario: Scenario | str | Path,
+    body: str,
+    *,
+    layers: Iterable[int] = range(1, 5),
+    laps: Iterable[int] = range(1, 6),
+    modes: Iterable[int] = range(7, 44, 6),
+    target: Target | float = 0.99,
+    search: bool = False,
+    out_dir: str | Path | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    serial: bool = False,
+    progress: bool = False,
+    kind: ModelKind | str = ModelKind.MVM,
+    patches: Sequence[Sequence[float]] | None = None,
+    interface_modes: Iterable[int] = (5, 10, 20),
+    radii_m: Sequence[float] | None = None,
+    node_sets: Sequence[str] | None = None,
+    centre_m: Sequence[float] | None = None,
+    patch_surface: str | None = None,
+) -> SelectionStudy:
     """Selection study of ``body`` (studies/selection.py): every ``layers`` x ``laps`` x
     ``modes`` Craig-Bampton model of it against its full-FE reference, the other bodies as in
     the scenario (``kind``: the candidates' model, Craig-Bampton by default, or the seed's
@@ -65,23 +76,47 @@ def select(scenario: Scenario | str | Path, body: str, *, layers: Iterable[int] 
     target (``best``) and the summary."""
     target = target if isinstance(target, Target) else Target(float(target))
     serial = in_process_by_default(scheduler, workers, serial)
-    regions = ([RegionFamily(radius_m=float(r)) for r in radii_m or ()]
-               + [RegionFamily(node_set=str(n)) for n in node_sets or ()]) or None
+    regions = (
+        [RegionFamily(radius_m=float(r)) for r in radii_m or ()]
+        + [RegionFamily(node_set=str(n)) for n in node_sets or ()]
+    ) or None
     with _directory(out_dir) as out:
-        return select_models(_scenario(scenario), body, out, layers, laps, modes, target,
-                             search=search, scheduler=scheduler, n_workers=workers,
-                             serial=serial, progress=progress, kind=kind, patches=patches,
-                             interface_modes=interface_modes, regions=regions,
-                             centre_m=centre_m, patch_surface=patch_surface)
+        return select_models(
+            _scenario(scenario),
+            body,
+            out,
+            layers,
+            laps,
+            modes,
+            target,
+            search=search,
+            scheduler=scheduler,
+            n_workers=workers,
+            serial=serial,
+            progress=progress,
+            kind=kind,
+            patches=patches,
+            interface_modes=interface_modes,
+            regions=regions,
+            centre_m=centre_m,
+            patch_surface=patch_surface,
+        )
 
 
-def material_study(scenario: Scenario | str | Path, body: str = "b2", *,
-                   materials: Iterable[str] = SEED_ORDER,
-                   selections: Sequence[tuple[int, int]] | str = ((1, 1), (2, 2)),
-                   modes: Iterable[int] = range(7, 44, 12), out_dir: str | Path | None = None,
-                   workers: int | None = None, scheduler: str | None = None,
-                   serial: bool = False, progress: bool = False,
-                   kind: ModelKind | str = ModelKind.MVM) -> MaterialStudy:
+def material_study(
+    scenario: Scenario | str | Path,
+    body: str = "b2",
+    *,
+    materials: Iterable[str] = SEED_ORDER,
+    selections: Sequence[tuple[int, int]] | str = ((1, 1), (2, 2)),
+    modes: Iterable[int] = range(7, 44, 12),
+    out_dir: str | Path | None = None,
+    workers: int | None = None,
+    scheduler: str | None = None,
+    serial: bool = False,
+    progress: bool = False,
+    kind: ModelKind | str = ModelKind.MVM,
+) -> MaterialStudy:
     """Material study (studies/materials.py): ``body`` made of each of ``materials`` (keys of
     SEED_MATERIALS: W, Cu, Al, PA6), each ``kind`` model (Craig-Bampton by default, or the
     seed's eq. (4) readings mvm-seed / mvm-seed-fixed) of ``selections`` x ``modes`` against
@@ -90,5 +125,15 @@ def material_study(scenario: Scenario | str | Path, body: str = "b2", *,
     serial = in_process_by_default(scheduler, workers, serial)
     with _directory(out_dir) as out:
         return material_studies.material_study(
-            _scenario(scenario), out, body, materials, selections, modes, scheduler, workers,
-            progress, serial=serial, kind=kind)
+            _scenario(scenario),
+            out,
+            body,
+            materials,
+            selections,
+            modes,
+            scheduler,
+            workers,
+            progress,
+            serial=serial,
+            kind=kind,
+        )

@@ -24,9 +24,17 @@ class Batches:
     tries it again) gets the row ``failed_row(case, one line)``, so it is listed, and scored
     as failed, like a run whose solver failed."""
 
-    def __init__(self, out_dir: Path, address: str | None, serial: bool, progress: bool,
-                 fn: Callable[[Case], dict], failed_row: Callable[[Case, str], dict],
-                 version: dict, echo: Callable[[str], Any]) -> None:
+    def __init__(
+        self,
+        out_dir: Path,
+        address: str | None,
+        serial: bool,
+        progress: bool,
+        fn: Callable[[Case], dict],
+        failed_row: Callable[[Case, str], dict],
+        version: dict,
+        echo: Callable[[str], Any],
+    ) -> None:
         self.out_dir, self.address, self.serial, self.progress = out_dir, address, serial, progress
         self.fn, self.failed_row, self.version, self.echo = fn, failed_row, version, echo
         self.made: set[str] = set()
@@ -38,10 +46,20 @@ class Batches:
         kw: dict[str, Any] = {"serial": True} if self.serial else {"scheduler": self.address}
         failures: dict[str, str] = {}
         stored: set[str] = set()
-        res = run_cases(cases, self.fn, self.out_dir, progress=self.progress, failures=failures,
-                        version=self.version, loaded=stored, announce=self.echo, **kw)
+        res = run_cases(
+            cases,
+            self.fn,
+            self.out_dir,
+            progress=self.progress,
+            failures=failures,
+            version=self.version,
+            loaded=stored,
+            announce=self.echo,
+            **kw,
+        )
         for c in cases:
             (self.loaded if c.key in stored else self.made).add(c.key)
-            self.rows[c.key] = (res[c.key] if c.key in res
-                                else self.failed_row(c, failures.get(c.key, "failed")))
+            self.rows[c.key] = (
+                res[c.key] if c.key in res else self.failed_row(c, failures.get(c.key, "failed"))
+            )
         return [self.rows[c.key] for c in cases]

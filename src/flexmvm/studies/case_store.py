@@ -21,8 +21,18 @@ from flexmvm.errors import InputError
 from flexmvm.results.atomic import canonical_json
 from flexmvm.scenarios.provenance import stamp_mismatch
 
-__all__ = ["CASES_DIR", "Case", "Params", "announce_stale", "case_path", "collect", "error_path",
-           "load_stored", "read_record", "result_sha256"]
+__all__ = [
+    "CASES_DIR",
+    "Case",
+    "Params",
+    "announce_stale",
+    "case_path",
+    "collect",
+    "error_path",
+    "load_stored",
+    "read_record",
+    "result_sha256",
+]
 
 _KEY_RE = re.compile(r"[A-Za-z0-9][A-Za-z0-9._-]{0,199}")
 CASES_DIR = "cases"
@@ -195,8 +205,9 @@ def load_stored(case: Case, out_dir: Path, version: Any) -> tuple[dict | None, s
     return record["result"], None
 
 
-def announce_stale(stale: dict[str, list[str]], out_dir: Path,
-                   announce: Callable[[str], Any]) -> None:
+def announce_stale(
+    stale: dict[str, list[str]], out_dir: Path, announce: Callable[[str], Any]
+) -> None:
     """One line per reason: the first case file, how many others, why, "recomputed"."""
     for why, keys in stale.items():
         more = f" and {len(keys) - 1} other case(s)" if len(keys) > 1 else ""

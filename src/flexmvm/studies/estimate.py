@@ -29,8 +29,14 @@ from flexmvm.studies.report import target_dict
 __all__ = ["contact_surface", "estimate_interface", "estimate_selection", "median_ncc"]
 
 
-def estimate_selection(sc: Scenario, body: str, target: Target | None = None, *, k: float = 3.0,
-                       modes: Sequence[int] = tuple(range(7, 44, 6))) -> dict:
+def estimate_selection(
+    sc: Scenario,
+    body: str,
+    target: Target | None = None,
+    *,
+    k: float = 3.0,
+    modes: Sequence[int] = tuple(range(7, 44, 6)),
+) -> dict:
     """A-priori MVM model of ``body`` without a full-FE run (module doc: the rule).
 
     Returns {layers, laps, nodes, modes, dof, f_max_hz, contact_duration_s, window_s,
@@ -60,20 +66,35 @@ def estimate_selection(sc: Scenario, body: str, target: Target | None = None, *,
     sel = tuple(int(i) for i in rod.selection(1, laps))
     cfg = sc.body(body)
     grid = sorted(int(m) for m in modes)
-    basis = default_setup().basis(cfg.rod.spec(), cfg.material_obj(), BasisKind.CRAIG_BAMPTON,
-                                  sel, grid[-1], cfg.model.reference)
+    basis = default_setup().basis(
+        cfg.rod.spec(),
+        cfg.material_obj(),
+        BasisKind.CRAIG_BAMPTON,
+        sel,
+        grid[-1],
+        cfg.model.reference,
+    )
     n_below = int(np.count_nonzero(basis.mode_freqs_hz < f_max))
     m = next((g for g in grid if g >= n_below), grid[-1])
     nodes = len(sel)
-    return {"layers": 1, "laps": laps, "nodes": nodes, "modes": m, "dof": 3 * nodes + m,
-            "f_max_hz": f_max, "k": k, "window_s": window, "n_modes_below_f_max": n_below,
-            "grid_max_modes_insufficient": n_below > grid[-1],
-            "first_mode_hz": float(basis.mode_freqs_hz[0]),
-            "target": None if target is None else target_dict(target),
-            **{f"theory_{k2}": v for k2, v in pulse.items()},
-            "rule": "modes: fixed-interface modes below k/T_c (T_c = 1D wave-Hertz contact "
-                    "duration clipped to the window), rounded up to the grid; nodes: layer 1, "
-                    "the laps inside the Hertz contact radius at the window's peak force"}
+    return {
+        "layers": 1,
+        "laps": laps,
+        "nodes": nodes,
+        "modes": m,
+        "dof": 3 * nodes + m,
+        "f_max_hz": f_max,
+        "k": k,
+        "window_s": window,
+        "n_modes_below_f_max": n_below,
+        "grid_max_modes_insufficient": n_below > grid[-1],
+        "first_mode_hz": float(basis.mode_freqs_hz[0]),
+        "target": None if target is None else target_dict(target),
+        **{f"theory_{k2}": v for k2, v in pulse.items()},
+        "rule": "modes: fixed-interface modes below k/T_c (T_c = 1D wave-Hertz contact "
+        "duration clipped to the window), rounded up to the grid; nodes: layer 1, "
+        "the laps inside the Hertz contact radius at the window's peak force",
+    }
 
 
 def contact_surface(sc: Scenario, body: str) -> str:
@@ -84,8 +105,14 @@ def contact_surface(sc: Scenario, body: str) -> str:
     raise InputError(f"body {body!r} is in no contact of the scenario; the estimate needs one")
 
 
-def estimate_interface(sc: Scenario, body: str, target: Target | None = None, *,
-                       k: float = 3.0, modes: Sequence[int] | None = None) -> dict:
+def estimate_interface(
+    sc: Scenario,
+    body: str,
+    target: Target | None = None,
+    *,
+    k: float = 3.0,
+    modes: Sequence[int] | None = None,
+) -> dict:
     """A-priori interface model of ``body`` without a full-FE run (module doc: the rule):
     ``fm.interface(est["patch_radii_m"], est["modes"])``, patch about the centre of the body's
     contact surface.
@@ -128,12 +155,16 @@ def estimate_interface(sc: Scenario, body: str, target: Target | None = None, *,
     pulse = theory_pulse(sc, body)
     a = float(pulse["contact_radius_m"])
     if not a > 0:
-        raise InputError(f"body {body!r}: the 1D theory gives no Hertz contact radius "
-                         f"(law {pulse['law']}, flat on flat); the interface rule needs one")
+        raise InputError(
+            f"body {body!r}: the 1D theory gives no Hertz contact radius "
+            f"(law {pulse['law']}, flat on flat); the interface rule needs one"
+        )
     window = min(pulse["contact_duration_s"], sc.time.t_end_s)
     f_max = k / window
     surface = contact_surface(sc, body)
-    fe, free = default_setup().free_modes_source(cfg)   # the setup cache's mode pools, shared with the bases
+    fe, free = default_setup().free_modes_source(
+        cfg
+    )  # the setup cache's mode pools, shared with the bases
     patch = contact_patch(fe.mesh, surface)
     load = hertz_load(fe.mesh, surface, patch, a)
     freqs, _ = excited_modes_below(fe, load, f_max, free=free)
@@ -142,18 +173,25 @@ def estimate_interface(sc: Scenario, body: str, target: Target | None = None, *,
     kept = np.zeros(0)
     if m:
         kept = chosen_modes(fe, InterfaceSpec(surface, None, (a,)), m, load, free)[1]
-    return {"patch_radii_m": [a], "modes": m, "dof": 1 + m, "n_modes_below_f_max": n_below,
-            "mode_freqs_hz": [float(f) for f in freqs],
-            "kept_mode_freqs_hz": [float(f) for f in kept],
-            "keeps_modes_below_f_max": bool(all(np.any(np.abs(kept - f) <= 1e-6 * f)
-                                                for f in freqs)),
-            "f_max_hz": f_max, "k": k, "window_s": window, "patch_surface": surface,
-            "grid_max_modes_insufficient": grid is not None and n_below > grid[-1],
-            "target": None if target is None else target_dict(target),
-            **{f"theory_{k2}": v for k2, v in pulse.items()},
-            "rule": "one patch vector at the 1D wave-Hertz contact radius at the window's peak "
-                    "force; the free-free modes that Hertz load excites below k/T_c (T_c = "
-                    "contact duration clipped to the window), rounded up to the grid if given"}
+    return {
+        "patch_radii_m": [a],
+        "modes": m,
+        "dof": 1 + m,
+        "n_modes_below_f_max": n_below,
+        "mode_freqs_hz": [float(f) for f in freqs],
+        "kept_mode_freqs_hz": [float(f) for f in kept],
+        "keeps_modes_below_f_max": bool(all(np.any(np.abs(kept - f) <= 1e-6 * f) for f in freqs)),
+        "f_max_hz": f_max,
+        "k": k,
+        "window_s": window,
+        "patch_surface": surface,
+        "grid_max_modes_insufficient": grid is not None and n_below > grid[-1],
+        "target": None if target is None else target_dict(target),
+        **{f"theory_{k2}": v for k2, v in pulse.items()},
+        "rule": "one patch vector at the 1D wave-Hertz contact radius at the window's peak "
+        "force; the free-free modes that Hertz load excites below k/T_c (T_c = "
+        "contact duration clipped to the window), rounded up to the grid if given",
+    }
 
 
 def median_ncc(rows: Iterable[dict]) -> float:

@@ -33,14 +33,19 @@ def _ints(name: str, values: Iterable[int]) -> list[int]:
 
 def redistributing_contacts(sc: Scenario, body: str) -> list[int]:
     """Indices of the contacts that redistribute the mass of ``body``'s contact nodes."""
-    return [k for k, c in enumerate(sc.contacts)
-            if c.redistribute_mass and body in (c.slave_body, c.master_body)]
+    return [
+        k
+        for k, c in enumerate(sc.contacts)
+        if c.redistribute_mass and body in (c.slave_body, c.master_body)
+    ]
 
 
 #: The console line of a study whose scenario's contact redistributes the study body's mass.
-SEED_SCHEME_NOTE = ("study scheme: the study body's contact on the velocity law without mass "
-                    "redistribution, theta = 0.55 (the seed's models: 3 x nodes + modes "
-                    "coordinates; studies.grid.seed_scheme)")
+SEED_SCHEME_NOTE = (
+    "study scheme: the study body's contact on the velocity law without mass "
+    "redistribution, theta = 0.55 (the seed's models: 3 x nodes + modes "
+    "coordinates; studies.grid.seed_scheme)"
+)
 
 
 def seed_scheme(sc: Scenario, body: str) -> Scenario:
@@ -69,24 +74,29 @@ def check_study_scheme(sc: Scenario, body: str) -> None:
         # a massless retained node adds static columns (reduction/basis.py), so a case's
         # DOF would not be 3 x nodes + modes, the count the grid and the search rank by
         # (the studies' entry points run seed_scheme first)
-        raise InputError(f"contacts[{k}] redistributes the mass of {body!r}'s contact nodes;"
-                         " a selection study counts 3 x nodes + modes coordinates: run it on "
-                         "studies.grid.seed_scheme(scenario, body)")
+        raise InputError(
+            f"contacts[{k}] redistributes the mass of {body!r}'s contact nodes;"
+            " a selection study counts 3 x nodes + modes coordinates: run it on "
+            "studies.grid.seed_scheme(scenario, body)"
+        )
 
 
 def check_grid(sc: Scenario, body: str, layers, laps, modes):
     if sc.body(body).rod is None:
-        raise InputError(f"body {body!r} is a mesh body: its selection study varies region "
-                         "families, ball radii or node sets (fm.select radii_m= / node_sets=, "
-                         "flexmvm select --radii / --node-sets); the i-j layers x laps grid is "
-                         "a rod's")
+        raise InputError(
+            f"body {body!r} is a mesh body: its selection study varies region "
+            "families, ball radii or node sets (fm.select radii_m= / node_sets=, "
+            "flexmvm select --radii / --node-sets); the i-j layers x laps grid is "
+            "a rod's"
+        )
     rod = rod_of(sc, body)
     check_study_scheme(sc, body)
     layers, laps, modes = _ints("layers", layers), _ints("laps", laps), _ints("modes", modes)
     for name, vals, top in (("layers", layers, rod.n_layers), ("laps", laps, rod.n_laps)):
         if vals[-1] > top:
-            raise InputError(f"{name} up to {vals[-1]} exceeds the mesh of body {body!r}: "
-                             f"maximum {top} {name}")
+            raise InputError(
+                f"{name} up to {vals[-1]} exceeds the mesh of body {body!r}: maximum {top} {name}"
+            )
     return rod, layers, laps, modes
 
 
@@ -94,10 +104,15 @@ def case_key(layers: int, laps: int, modes: int) -> str:
     return f"l{layers}-j{laps}-m{modes}"
 
 
-def selection_cases(sc: Scenario, body: str, layers: Iterable[int] = range(1, 5),
-                    laps: Iterable[int] = range(1, 6), modes: Iterable[int] = range(7, 44, 6),
-                    reference: str | Path | None = None,
-                    kind: ModelKind = ModelKind.MVM) -> list[Case]:
+def selection_cases(
+    sc: Scenario,
+    body: str,
+    layers: Iterable[int] = range(1, 5),
+    laps: Iterable[int] = range(1, 6),
+    modes: Iterable[int] = range(7, 44, 6),
+    reference: str | Path | None = None,
+    kind: ModelKind = ModelKind.MVM,
+) -> list[Case]:
     """The cases of the grid layers x laps x modes for body ``body`` of scenario ``sc``, the
     body modelled by ``kind`` (a kind that retains nodes: mvm, the default, mvm-seed or
     mvm-seed-fixed; params carry ``kind`` only when it is not mvm, so that the keys of the
@@ -117,10 +132,24 @@ def selection_cases(sc: Scenario, body: str, layers: Iterable[int] = range(1, 5)
     sha = file_sha256(reference) if reference is not None else None
     top = max(modes)
     extra = {} if kind is ModelKind.MVM else {"kind": kind.value}
-    return [Case(case_key(i, j, m), {"body": body, "layers": i, "laps": j, "modes": m,
-                                     "modes_max": top, "scenario": data, "reference_sha256": sha}
-                 | extra)
-            for i in layers for j in laps for m in modes]
+    return [
+        Case(
+            case_key(i, j, m),
+            {
+                "body": body,
+                "layers": i,
+                "laps": j,
+                "modes": m,
+                "modes_max": top,
+                "scenario": data,
+                "reference_sha256": sha,
+            }
+            | extra,
+        )
+        for i in layers
+        for j in laps
+        for m in modes
+    ]
 
 
 def study_kind(kind: ModelKind | str) -> ModelKind:
@@ -132,8 +161,9 @@ def study_kind(kind: ModelKind | str) -> ModelKind:
         kind = None
     if kind is None or not kind.retains_nodes:
         options = ", ".join(k.value for k in ModelKind if k.retains_nodes)
-        raise InputError(f"kind: a selection study varies node selections; expected one of "
-                         f"{options}")
+        raise InputError(
+            f"kind: a selection study varies node selections; expected one of {options}"
+        )
     return kind
 
 
@@ -151,12 +181,19 @@ def parse_model(text: str) -> ModelConfig | None:
             return mvm(bits[1], int(bits[2]))
         except InputError:
             pass
-    raise InputError(f"model {text!r}: expected 'scenario', 'full' or 'mvm:I-J:M' "
-                     "(e.g. mvm:3-5:40)")
+    raise InputError(
+        f"model {text!r}: expected 'scenario', 'full' or 'mvm:I-J:M' (e.g. mvm:3-5:40)"
+    )
 
 
-def study_scenario(sc: Scenario, body: str, *, t_end_s: float | None = None,
-                   dt_s: float | None = None, other: str | ModelConfig | None = None) -> Scenario:
+def study_scenario(
+    sc: Scenario,
+    body: str,
+    *,
+    t_end_s: float | None = None,
+    dt_s: float | None = None,
+    other: str | ModelConfig | None = None,
+) -> Scenario:
     """The scenario a study runs: end time and contact step overridden, and the model of
     every body other than ``body`` (rigid ones excepted) replaced by ``other`` (a
     ModelConfig or parse_model text; None keeps the scenario's), on the study's scheme
@@ -167,8 +204,11 @@ def study_scenario(sc: Scenario, body: str, *, t_end_s: float | None = None,
         other = parse_model(other)
     models = {}
     if other is not None:
-        models = {b.name: other for b in sc.bodies
-                  if b.name != body and b.model.kind is not ModelKind.RIGID}
+        models = {
+            b.name: other
+            for b in sc.bodies
+            if b.name != body and b.model.kind is not ModelKind.RIGID
+        }
     for name, cfg in models.items():
         sc = sc.with_model(name, cfg)
     if t_end_s is not None or dt_s is not None:
@@ -176,8 +216,9 @@ def study_scenario(sc: Scenario, body: str, *, t_end_s: float | None = None,
     return sc
 
 
-def mvm_scenario(sc: Scenario, body: str, layers: int, laps: int, modes: int,
-                 kind: ModelKind = ModelKind.MVM) -> Scenario:
+def mvm_scenario(
+    sc: Scenario, body: str, layers: int, laps: int, modes: int, kind: ModelKind = ModelKind.MVM
+) -> Scenario:
     """``sc`` with ``body`` as the ``kind`` model (default Craig-Bampton) of selection
     layers-laps + modes."""
     ref = sc.body(body).model.reference
@@ -187,5 +228,3 @@ def mvm_scenario(sc: Scenario, body: str, layers: int, laps: int, modes: int,
 def reference_scenario(sc: Scenario, body: str) -> Scenario:
     """``sc`` with ``body`` full FE: the study's reference."""
     return sc.with_model(body, full(reference=sc.body(body).model.reference))
-
-

@@ -38,9 +38,17 @@ from flexmvm.studies.reference import case_reference, scored_row
 from flexmvm.studies.report import failure_list
 from flexmvm.studies.runner import Case
 
-__all__ = ["interface_cases", "interface_columns", "interface_key", "interface_summary",
-           "is_interface_key", "mode_pools", "parse_patches", "run_interface_case",
-           "write_interface_csv"]
+__all__ = [
+    "interface_cases",
+    "interface_columns",
+    "interface_key",
+    "interface_summary",
+    "is_interface_key",
+    "mode_pools",
+    "parse_patches",
+    "run_interface_case",
+    "write_interface_csv",
+]
 
 
 def parse_patches(text: str) -> list[tuple[float, ...]]:
@@ -57,8 +65,10 @@ def parse_patches(text: str) -> list[tuple[float, ...]]:
         except ValueError:
             radii = ()
         if not radii or min(radii) <= 0 or len(set(radii)) != len(radii):
-            raise InputError(f"--patches {text!r}: expected sets of distinct radii > 0 in mm, "
-                             "comma-separated, sets separated by ';' (e.g. '0.46;0.2,0.46,0.9')")
+            raise InputError(
+                f"--patches {text!r}: expected sets of distinct radii > 0 in mm, "
+                "comma-separated, sets separated by ';' (e.g. '0.46;0.2,0.46,0.9')"
+            )
         sets.append(radii)
     return sets
 
@@ -72,8 +82,9 @@ def is_interface_key(key: str) -> bool:
     return key.startswith("if-")
 
 
-def patch_place(sc: Scenario, body: str, surface: str | None = None,
-                centre_m: Sequence[float] | None = None) -> dict:
+def patch_place(
+    sc: Scenario, body: str, surface: str | None = None, centre_m: Sequence[float] | None = None
+) -> dict:
     """Where the interface kind's patches of ``body`` lie, as interface_cases' keywords: on a
     mesh body the facet set ``surface`` (default: the body's surface in its first contact)
     about ``centre_m`` (default: the centre of that set); on a rod ``surface`` if given (the
@@ -91,10 +102,16 @@ def patch_place(sc: Scenario, body: str, surface: str | None = None,
     return out
 
 
-def interface_cases(sc: Scenario, body: str, patches: Iterable[Sequence[float]],
-                    modes: Iterable[int], reference: str | Path | None = None,
-                    mode_choice: str = "participation", patch_surface: str | None = None,
-                    patch_centre_m: Sequence[float] | None = None) -> list[Case]:
+def interface_cases(
+    sc: Scenario,
+    body: str,
+    patches: Iterable[Sequence[float]],
+    modes: Iterable[int],
+    reference: str | Path | None = None,
+    mode_choice: str = "participation",
+    patch_surface: str | None = None,
+    patch_centre_m: Sequence[float] | None = None,
+) -> list[Case]:
     """The cases patch sets x mode counts of ``body`` as an interface model, each patch set's
     with one ``mode_pool`` (module doc; computing it solves the free-free eigenproblem of the
     body, stored in the setup cache for the runs). ``patch_surface`` / ``patch_centre_m``:
@@ -103,17 +120,20 @@ def interface_cases(sc: Scenario, body: str, patches: Iterable[Sequence[float]],
     patches = [tuple(float(a) for a in radii) for radii in patches]
     for radii in patches:
         if not all(a > 0 for a in radii) or len(set(radii)) != len(radii):
-            raise InputError(f"interface grid: patch radii {list(radii)}: expected distinct "
-                             "radii > 0 [m]")
+            raise InputError(
+                f"interface grid: patch radii {list(radii)}: expected distinct radii > 0 [m]"
+            )
     if len(set(patches)) != len(patches):
-        raise InputError(f"interface grid: a patch set appears twice in {patches}; expected "
-                         "each once")
+        raise InputError(
+            f"interface grid: a patch set appears twice in {patches}; expected each once"
+        )
     counts = sorted({int(v) for v in modes})
     for radii in patches:
         for m in counts:
             if m < 0 or m + len(radii) < 1:
-                raise InputError(f"interface grid: modes {m} with {len(radii)} patch radii "
-                                 "gives no column")
+                raise InputError(
+                    f"interface grid: modes {m} with {len(radii)} patch radii gives no column"
+                )
     data = sc.model_dump(mode="json")
     sha = file_sha256(reference) if reference is not None else None
     place: dict[str, Any] = {}
@@ -125,16 +145,32 @@ def interface_cases(sc: Scenario, body: str, patches: Iterable[Sequence[float]],
     for radii in patches:
         pools = mode_pools(cfg, radii, counts, mode_choice, place)
         for m in counts:
-            cases.append(Case(interface_key(radii, m), {
-                "body": body, "kind": "interface", "patch_radii_m": [float(a) for a in radii],
-                "modes": m, "mode_choice": mode_choice, "mode_pool": pools[m],
-                "scenario": data, "reference_sha256": sha} | place))
+            cases.append(
+                Case(
+                    interface_key(radii, m),
+                    {
+                        "body": body,
+                        "kind": "interface",
+                        "patch_radii_m": [float(a) for a in radii],
+                        "modes": m,
+                        "mode_choice": mode_choice,
+                        "mode_pool": pools[m],
+                        "scenario": data,
+                        "reference_sha256": sha,
+                    }
+                    | place,
+                )
+            )
     return cases
 
 
-def mode_pools(cfg, radii: Sequence[float], counts: Sequence[int],
-               mode_choice: str = "participation",
-               place: dict | None = None) -> dict[int, int | None]:
+def mode_pools(
+    cfg,
+    radii: Sequence[float],
+    counts: Sequence[int],
+    mode_choice: str = "participation",
+    place: dict | None = None,
+) -> dict[int, int | None]:
     """The ``mode_pool`` of each mode count of patch set ``radii`` of body ``cfg`` (module
     doc): the pool of the largest count whose pool exists, for that count and the smaller ones
     (0 excluded); None for the others and for the frequency choice."""
@@ -145,8 +181,14 @@ def mode_pools(cfg, radii: Sequence[float], counts: Sequence[int],
         return pools
     for top in sorted((m for m in counts if m > 0), reverse=True):
         # the spec of the case's own model (as run_interface_case makes it), default pool
-        spec = _model({"patch_radii_m": list(radii), "modes": top,
-                       "mode_choice": mode_choice, **(place or {})}).interface_spec()
+        spec = _model(
+            {
+                "patch_radii_m": list(radii),
+                "modes": top,
+                "mode_choice": mode_choice,
+                **(place or {}),
+            }
+        ).interface_spec()
         try:
             pool = default_setup().interface_mode_pool(cfg, spec, top)
         except InputError:  # too few excited modes within MAX_POOL: those cases fail alone
@@ -157,10 +199,15 @@ def mode_pools(cfg, radii: Sequence[float], counts: Sequence[int],
 
 def _model(p, reference: str = "end_b") -> Any:
     """The interface model of case params ``p`` (its ``mode_pool`` included)."""
-    return interface(list(p["patch_radii_m"]), int(p["modes"]), mode_choice=p["mode_choice"],
-                     mode_pool=p.get("mode_pool"), reference=reference,
-                     patch_surface=p.get("patch_surface", "end_a"),
-                     patch_centre_m=p.get("patch_centre_m"))
+    return interface(
+        list(p["patch_radii_m"]),
+        int(p["modes"]),
+        mode_choice=p["mode_choice"],
+        mode_pool=p.get("mode_pool"),
+        reference=reference,
+        patch_surface=p.get("patch_surface", "end_a"),
+        patch_centre_m=p.get("patch_centre_m"),
+    )
 
 
 def run_interface_case(case: Case, reference: str | Path | None = None) -> dict:
@@ -176,9 +223,15 @@ def run_interface_case(case: Case, reference: str | Path | None = None) -> dict:
     t_ref, f_ref, probes_ref = case_reference(case, reference)
     n_patch = len(p["patch_radii_m"])
     dof = n_patch + int(p["modes"])
-    row: dict[str, Any] = {"model": model.label, "patch_radii_m": list(p["patch_radii_m"]),
-                           "n_patch": n_patch, "modes": int(p["modes"]),
-                           "mode_pool": p.get("mode_pool"), "dof": dof, "dof_total": dof + 6}
+    row: dict[str, Any] = {
+        "model": model.label,
+        "patch_radii_m": list(p["patch_radii_m"]),
+        "n_patch": n_patch,
+        "modes": int(p["modes"]),
+        "mode_pool": p.get("mode_pool"),
+        "dof": dof,
+        "dof_total": dof + 6,
+    }
     try:
         run = run_scenario(sc.with_model(body, model), warn=False)
     except SolverError as exc:
@@ -189,35 +242,69 @@ def run_interface_case(case: Case, reference: str | Path | None = None) -> dict:
 def failed_interface_row(case: Case, line: str) -> dict:
     p = case.params
     n = len(p["patch_radii_m"])
-    return {"model": _model(p).label, "patch_radii_m": list(p["patch_radii_m"]), "n_patch": n,
-            "modes": int(p["modes"]), "mode_pool": p.get("mode_pool"), "dof": n + int(p["modes"]),
-            "dof_total": n + int(p["modes"]) + 6, "failed": line}
+    return {
+        "model": _model(p).label,
+        "patch_radii_m": list(p["patch_radii_m"]),
+        "n_patch": n,
+        "modes": int(p["modes"]),
+        "mode_pool": p.get("mode_pool"),
+        "dof": n + int(p["modes"]),
+        "dof_total": n + int(p["modes"]) + 6,
+        "failed": line,
+    }
 
 
-def interface_summary(rows: dict[str, dict], cases: Sequence[Case], winner_key: str | None,
-                      exact: bool, made: int, loaded: int, patches: Iterable[Sequence[float]],
-                      modes: Iterable[int]) -> dict:
+def interface_summary(
+    rows: dict[str, dict],
+    cases: Sequence[Case],
+    winner_key: str | None,
+    exact: bool,
+    made: int,
+    loaded: int,
+    patches: Iterable[Sequence[float]],
+    modes: Iterable[int],
+) -> dict:
     """selection.json's ``interface`` entry: the grid and its size, the runs of this kind
     (evaluated, made, loaded), its failures and its winner (``winner_key``: the case of the
     kind's best passing candidate by search.rank_key, or None), ``exact`` as
     search.kind_exact says."""
     done = [(c.key, rows[c.key]) for c in cases if c.key in rows]
-    entry = {"passed": winner_key is not None, "exact": bool(exact),
-             "grid": {"patch_radii_m": [list(p) for p in patches],
-                      "modes": sorted({int(m) for m in modes})},
-             "grid_size": len(cases), "runs": len(done), "runs_made": made,
-             "runs_loaded": loaded, "failures": failure_list(done)}
+    entry = {
+        "passed": winner_key is not None,
+        "exact": bool(exact),
+        "grid": {
+            "patch_radii_m": [list(p) for p in patches],
+            "modes": sorted({int(m) for m in modes}),
+        },
+        "grid_size": len(cases),
+        "runs": len(done),
+        "runs_made": made,
+        "runs_loaded": loaded,
+        "failures": failure_list(done),
+    }
     if winner_key is not None:
-        entry |= {k: rows[winner_key].get(k) for k in ("model", "patch_radii_m", "modes",
-                                                       "mode_pool", "dof", "dof_total",
-                                                       "ncc_force", "peak_err")}
+        entry |= {
+            k: rows[winner_key].get(k)
+            for k in (
+                "model",
+                "patch_radii_m",
+                "modes",
+                "mode_pool",
+                "dof",
+                "dof_total",
+                "ncc_force",
+                "peak_err",
+            )
+        }
     return entry
 
 
 def interface_columns(probes: Sequence[str]) -> list[str]:
-    return (["model", "n_patch", "modes", "mode_pool", "dof", "ncc_force"]
-            + [f"ncc_{p}" for p in probes]
-            + ["peak_err", "impulse_err", "duration_err", *VALIDITY_KEYS, "wall_time_s"])
+    return (
+        ["model", "n_patch", "modes", "mode_pool", "dof", "ncc_force"]
+        + [f"ncc_{p}" for p in probes]
+        + ["peak_err", "impulse_err", "duration_err", *VALIDITY_KEYS, "wall_time_s"]
+    )
 
 
 def write_interface_csv(path: Path, rows: Iterable[dict], probes: Sequence[str]) -> None:

@@ -13,8 +13,12 @@ import sys
 import warnings
 from pathlib import Path
 
-__all__ = ["InProcessStudyWarning", "in_process_by_default", "main_guard_advice",
-           "unguarded_main_script"]
+__all__ = [
+    "InProcessStudyWarning",
+    "in_process_by_default",
+    "main_guard_advice",
+    "unguarded_main_script",
+]
 
 
 class InProcessStudyWarning(UserWarning):
@@ -23,12 +27,14 @@ class InProcessStudyWarning(UserWarning):
 
 def _is_main_test(test: ast.expr) -> bool:
     """True for ``__name__ == "__main__"`` (either side)."""
-    if not (isinstance(test, ast.Compare) and len(test.ops) == 1
-            and isinstance(test.ops[0], ast.Eq)):
+    if not (
+        isinstance(test, ast.Compare) and len(test.ops) == 1 and isinstance(test.ops[0], ast.Eq)
+    ):
         return False
     sides = (test.left, test.comparators[0])
-    return (any(isinstance(x, ast.Name) and x.id == "__name__" for x in sides)
-            and any(isinstance(x, ast.Constant) and x.value == "__main__" for x in sides))
+    return any(isinstance(x, ast.Name) and x.id == "__name__" for x in sides) and any(
+        isinstance(x, ast.Constant) and x.value == "__main__" for x in sides
+    )
 
 
 def unguarded_main_script() -> str | None:
@@ -50,12 +56,15 @@ def unguarded_main_script() -> str | None:
 
 
 def main_guard_advice(script: str) -> str:
-    return (f"put the code of {script} under 'if __name__ == \"__main__\":' (worker processes "
-            "re-import the script and would run it again)")
+    return (
+        f"put the code of {script} under 'if __name__ == \"__main__\":' (worker processes "
+        "re-import the script and would run it again)"
+    )
 
 
-def in_process_by_default(scheduler: str | None, n_workers: int | None, serial: bool,
-                          stacklevel: int = 3) -> bool:
+def in_process_by_default(
+    scheduler: str | None, n_workers: int | None, serial: bool, stacklevel: int = 3
+) -> bool:
     """``serial`` as a library study takes it: also True when neither workers nor a
     scheduler are asked for and the main script has no main guard (unguarded_main_script),
     with an InProcessStudyWarning of one line saying what to add for worker processes."""
@@ -64,6 +73,10 @@ def in_process_by_default(scheduler: str | None, n_workers: int | None, serial: 
     script = unguarded_main_script()
     if script is None:
         return False
-    warnings.warn(f"study run in this process, not on worker processes: to use them, "
-                  f"{main_guard_advice(script)}", InProcessStudyWarning, stacklevel=stacklevel)
+    warnings.warn(
+        f"study run in this process, not on worker processes: to use them, "
+        f"{main_guard_advice(script)}",
+        InProcessStudyWarning,
+        stacklevel=stacklevel,
+    )
     return True

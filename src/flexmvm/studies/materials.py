@@ -80,8 +80,17 @@ from flexmvm.studies.runner import (
 )
 from flexmvm.studies.selection import run_selection_case
 
-__all__ = ["SEED_MATERIALS", "SEED_ORDER", "MaterialStudy", "material_scenario", "material_study",
-           "parse_selections", "run_material_case", "run_materials_study", "run_reference_case"]
+__all__ = [
+    "SEED_MATERIALS",
+    "SEED_ORDER",
+    "MaterialStudy",
+    "material_scenario",
+    "material_study",
+    "parse_selections",
+    "run_material_case",
+    "run_materials_study",
+    "run_reference_case",
+]
 
 #: Seed table 2, in the seed's order of decreasing accuracy.
 SEED_MATERIALS: dict[str, Material] = {"W": TUNGSTEN, "Cu": COPPER, "Al": ALUMINIUM, "PA6": PA6}
@@ -90,8 +99,9 @@ SEED_ORDER = ("W", "Cu", "Al", "PA6")
 
 def material_scenario(sc: Scenario, body: str, name: str, material: Material) -> Scenario:
     """``sc`` with body ``body`` made of ``material`` (inline table named ``name``)."""
-    return sc.with_material(body, Material(E=material.E, nu=material.nu, rho=material.rho,
-                                           name=name))
+    return sc.with_material(
+        body, Material(E=material.E, nu=material.nu, rho=material.rho, name=name)
+    )
 
 
 def parse_selections(text: str | Sequence[tuple[int, int]]) -> list[tuple[int, int]]:
@@ -144,12 +154,20 @@ def _drop_failing_reference(sc: Scenario, body: str, mat_dir: Path, record: Path
     record.unlink(missing_ok=True)
 
 
-def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
-                   materials: Iterable[str] = SEED_ORDER,
-                   selections: Sequence[tuple[int, int]] | str = ((1, 1), (2, 2)),
-                   modes: Iterable[int] = range(7, 44, 12), scheduler: str | None = None,
-                   n_workers: int | None = None, progress: bool = False, *,
-                   serial: bool = False, kind: ModelKind | str = ModelKind.MVM) -> MaterialStudy:
+def material_study(
+    sc: Scenario,
+    out_dir: str | Path,
+    body: str = "b2",
+    materials: Iterable[str] = SEED_ORDER,
+    selections: Sequence[tuple[int, int]] | str = ((1, 1), (2, 2)),
+    modes: Iterable[int] = range(7, 44, 12),
+    scheduler: str | None = None,
+    n_workers: int | None = None,
+    progress: bool = False,
+    *,
+    serial: bool = False,
+    kind: ModelKind | str = ModelKind.MVM,
+) -> MaterialStudy:
     """The material study of ``body`` in scenario ``sc`` (module doc), its cases and references
     stored in ``out_dir`` (a rerun resumes); no table, figure or console output (see
     :func:`run_materials_study`). ``kind``: the reduced model (module doc).
@@ -164,12 +182,15 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
     kind = study_kind(kind)
     rod = rod_of(sc, body)
     sc = seed_scheme(sc, body)
-    _, _, _, modes = check_grid(sc, body, [s[0] for s in selections],
-                                 [s[1] for s in selections], modes)
+    _, _, _, modes = check_grid(
+        sc, body, [s[0] for s in selections], [s[1] for s in selections], modes
+    )
     check_cluster_options(scheduler, n_workers, serial)
-    claim_study_dir(out, "flexmvm study materials",
-                    own={"cases", "materials.csv", "materials.json", "fig9_materials.png",
-                         *materials})
+    claim_study_dir(
+        out,
+        "flexmvm study materials",
+        own={"cases", "materials.csv", "materials.json", "fig9_materials.png", *materials},
+    )
     scen = {m: material_scenario(sc, body, m, SEED_MATERIALS[m]) for m in materials}
     ref_cases = _reference_cases(scen, body, out)
     ref_paths = {m: str(out / m / "reference" / "history.csv") for m in materials}
@@ -177,19 +198,42 @@ def material_study(sc: Scenario, out_dir: str | Path, body: str = "b2",
     with study_cluster(scheduler, n_workers, serial) as address:
         kw: dict[str, Any] = {"serial": True} if serial else {"scheduler": address}
         ref_failed: dict[str, str] = {}
-        refs = run_cases(ref_cases, partial(run_reference_case, out_dir=str(out)), out,
-                         progress=progress, failures=ref_failed,
-                         version=lambda c: {"provenance": stamps[c.params["material"]]}, **kw)
+        refs = run_cases(
+            ref_cases,
+            partial(run_reference_case, out_dir=str(out)),
+            out,
+            progress=progress,
+            failures=ref_failed,
+            version=lambda c: {"provenance": stamps[c.params["material"]]},
+            **kw,
+        )
         cases = _material_cases(scen, body, selections, modes, refs, kind)
         case_failed: dict[str, str] = {}
-        results = run_cases(cases, partial(run_material_case, references=ref_paths), out,
-                            progress=progress, failures=case_failed,
-                            version=lambda c: {"provenance": stamps[c.params["material"]],
-                                               "reference_sha256": c.params["reference_sha256"]},
-                            **kw)
+        results = run_cases(
+            cases,
+            partial(run_material_case, references=ref_paths),
+            out,
+            progress=progress,
+            failures=case_failed,
+            version=lambda c: {
+                "provenance": stamps[c.params["material"]],
+                "reference_sha256": c.params["reference_sha256"],
+            },
+            **kw,
+        )
     rows = material_rows(cases, results, case_failed, rod, kind, SEED_MATERIALS)
-    result = material_summary(rows, ref_failed, scen, SEED_MATERIALS, SEED_ORDER, body=body,
-                              kind=kind, selections=selections, modes=modes, rod=rod)
+    result = material_summary(
+        rows,
+        ref_failed,
+        scen,
+        SEED_MATERIALS,
+        SEED_ORDER,
+        body=body,
+        kind=kind,
+        selections=selections,
+        modes=modes,
+        rod=rod,
+    )
     return MaterialStudy(rows, result, material_columns([p.name for p in sc.probes]))
 
 
@@ -198,45 +242,77 @@ def _check_materials(materials: Iterable[str]) -> list[str]:
     materials = list(materials)
     unknown = [m for m in materials if m not in SEED_MATERIALS]
     if unknown or not materials:
-        raise InputError(f"materials: unknown {unknown or 'none given'}; expected some of "
-                         f"{', '.join(SEED_MATERIALS)}")
+        raise InputError(
+            f"materials: unknown {unknown or 'none given'}; expected some of "
+            f"{', '.join(SEED_MATERIALS)}"
+        )
     return materials
 
 
 def _reference_cases(scen: dict[str, Scenario], body: str, out: Path) -> list[Case]:
     """The reference step: case ``ref-<material>`` of every material's scenario ``scen``; a
     stored reference that fails its check is removed first (_drop_failing_reference)."""
-    ref_cases = [Case(f"ref-{m}", {"body": body, "material": m,
-                                   "scenario": sc.model_dump(mode="json")})
-                 for m, sc in scen.items()]
+    ref_cases = [
+        Case(f"ref-{m}", {"body": body, "material": m, "scenario": sc.model_dump(mode="json")})
+        for m, sc in scen.items()
+    ]
     for (m, sc), case in zip(scen.items(), ref_cases, strict=True):
         _drop_failing_reference(sc, body, out / m, case_path(out, case.key))
     return ref_cases
 
 
-def _material_cases(scen: dict[str, Scenario], body: str, selections: Sequence[tuple[int, int]],
-                    modes: Sequence[int], refs: dict[str, dict], kind: ModelKind) -> list[Case]:
+def _material_cases(
+    scen: dict[str, Scenario],
+    body: str,
+    selections: Sequence[tuple[int, int]],
+    modes: Sequence[int],
+    refs: dict[str, dict],
+    kind: ModelKind,
+) -> list[Case]:
     """The grid step: selections x modes of every material whose reference ``refs`` holds
     (by case key ``ref-<material>``; its SHA-256 is in the case's params); ``kind`` in the
     params only when not mvm, as studies.grid.selection_cases."""
     kind_param = {} if kind is ModelKind.MVM else {"kind": kind.value}
-    return [Case(f"{m}-l{i}-j{j}-m{n}",
-                 {"body": body, "layers": i, "laps": j, "modes": n, "material": m,
-                  "modes_max": max(modes), "scenario": sc.model_dump(mode="json"),
-                  "reference_sha256": refs[f"ref-{m}"]["sha256"]} | kind_param)
-            for m, sc in scen.items() if f"ref-{m}" in refs
-            for (i, j) in selections for n in modes]
+    return [
+        Case(
+            f"{m}-l{i}-j{j}-m{n}",
+            {
+                "body": body,
+                "layers": i,
+                "laps": j,
+                "modes": n,
+                "material": m,
+                "modes_max": max(modes),
+                "scenario": sc.model_dump(mode="json"),
+                "reference_sha256": refs[f"ref-{m}"]["sha256"],
+            }
+            | kind_param,
+        )
+        for m, sc in scen.items()
+        if f"ref-{m}" in refs
+        for (i, j) in selections
+        for n in modes
+    ]
 
 
-def run_materials_study(scenario: str | Path | Scenario, out_dir: str | Path, body: str = "b2",
-                        materials: Iterable[str] = SEED_ORDER,
-                        selections: Sequence[tuple[int, int]] | str = ((1, 1), (2, 2)),
-                        modes: Iterable[int] = range(7, 44, 12), scheduler: str | None = None,
-                        n_workers: int | None = None, progress: bool = True, *,
-                        t_end_s: float | None = None, dt_s: float | None = None,
-                        other: str | None = None, serial: bool = False,
-                        echo: Callable[[str], Any] = print,
-                        kind: ModelKind | str = ModelKind.MVM) -> dict:
+def run_materials_study(
+    scenario: str | Path | Scenario,
+    out_dir: str | Path,
+    body: str = "b2",
+    materials: Iterable[str] = SEED_ORDER,
+    selections: Sequence[tuple[int, int]] | str = ((1, 1), (2, 2)),
+    modes: Iterable[int] = range(7, 44, 12),
+    scheduler: str | None = None,
+    n_workers: int | None = None,
+    progress: bool = True,
+    *,
+    t_end_s: float | None = None,
+    dt_s: float | None = None,
+    other: str | None = None,
+    serial: bool = False,
+    echo: Callable[[str], Any] = print,
+    kind: ModelKind | str = ModelKind.MVM,
+) -> dict:
     """The material study of ``body`` in ``scenario`` (a Scenario or a scenario file) with its
     files and console lines (module doc): :func:`material_study`, then materials.csv,
     materials.json, the figure and the summary line. ``t_end_s``, ``dt_s`` and ``other`` as in
@@ -252,8 +328,19 @@ def run_materials_study(scenario: str | Path | Scenario, out_dir: str | Path, bo
     if redistributing_contacts(sc, body):
         echo(SEED_SCHEME_NOTE)
     sc = study_scenario(sc, body, t_end_s=t_end_s, dt_s=dt_s, other=other)
-    study = material_study(sc, out, body, materials, selections, modes, scheduler, n_workers,
-                           progress, serial=serial, kind=kind)
+    study = material_study(
+        sc,
+        out,
+        body,
+        materials,
+        selections,
+        modes,
+        scheduler,
+        n_workers,
+        progress,
+        serial=serial,
+        kind=kind,
+    )
     rows, result = study.rows, study.summary
     materials, per, failures = list(result["materials"]), result["materials"], result["failures"]
     n_per = len(result["selections"]) * len(result["modes"])
@@ -263,29 +350,43 @@ def run_materials_study(scenario: str | Path | Scenario, out_dir: str | Path, bo
     from flexmvm.plots.study_figures import plot_materials
 
     invalid = {b["case"] for b in result["guard_outside_validity"]}
-    plot_materials(out / "fig9_materials.png",
-                   [r | {"valid": material_case_key(r) not in invalid} for r in rows],
-                   title=f"{sc.name}: body {body} of each material, {kind.value} models")
+    plot_materials(
+        out / "fig9_materials.png",
+        [r | {"valid": material_case_key(r) not in invalid} for r in rows],
+        title=f"{sc.name}: body {body} of each material, {kind.value} models",
+    )
     echo_failures(echo, failures, len(materials) * (1 + n_per), out / "materials.json")
-    echo(f"mean NCC of the force ({kind.value}): " + ", ".join(
-        f"{m} {per[m]['mean_ncc_force']:.6f} (over {per[m]['n_cases']} of "
-        f"{n_per} runs)" if per[m]["mean_ncc_force"] is not None
-        else f"{m} (no run compared)" for m in materials)
-        + f"; seed ordering W > Cu > Al > PA6 {'holds' if holds else 'does not hold'}")
+    echo(
+        f"mean NCC of the force ({kind.value}): "
+        + ", ".join(
+            f"{m} {per[m]['mean_ncc_force']:.6f} (over {per[m]['n_cases']} of {n_per} runs)"
+            if per[m]["mean_ncc_force"] is not None
+            else f"{m} (no run compared)"
+            for m in materials
+        )
+        + f"; seed ordering W > Cu > Al > PA6 {'holds' if holds else 'does not hold'}"
+    )
     if result["guard_outside_validity"]:
         bad = result["guard_outside_validity"]
-        echo(f"validity: {len(bad)} run(s) outside their model's validity (more than "
-             f"{100 * WARN_FRACTION:g} % of the contact impulse on nodes the basis holds stiff, "
-             "or the energy rose: chatter), "
-             "e.g. " + ", ".join(f"{b['case']} ({b['reason']})" for b in bad[:3])
-             + f"; over the {len(result['valid_models'])} models valid for every material: "
-             + ", ".join(
-                 f"{m} {per[m]['mean_ncc_force_valid']:.6f} ({per[m]['n_valid']} runs)"
-                 if per[m]["mean_ncc_force_valid"] is not None else f"{m} (none)"
-                 for m in materials)
-             + f"; seed ordering {'holds' if result['seed_ordering_holds_valid'] else 'does not hold'}")
+        echo(
+            f"validity: {len(bad)} run(s) outside their model's validity (more than "
+            f"{100 * WARN_FRACTION:g} % of the contact impulse on nodes the basis holds stiff, "
+            "or the energy rose: chatter), "
+            "e.g. "
+            + ", ".join(f"{b['case']} ({b['reason']})" for b in bad[:3])
+            + f"; over the {len(result['valid_models'])} models valid for every material: "
+            + ", ".join(
+                f"{m} {per[m]['mean_ncc_force_valid']:.6f} ({per[m]['n_valid']} runs)"
+                if per[m]["mean_ncc_force_valid"] is not None
+                else f"{m} (none)"
+                for m in materials
+            )
+            + f"; seed ordering {'holds' if result['seed_ordering_holds_valid'] else 'does not hold'}"
+        )
     if not any(per[m]["n_cases"] for m in materials):
-        raise SolverError(f"material study: no run could be compared ({len(failures)} "
-                          f"failures, first: {failures[0]['case']}: {failures[0]['reason']}); "
-                          f"see {out / 'materials.json'}")
+        raise SolverError(
+            f"material study: no run could be compared ({len(failures)} "
+            f"failures, first: {failures[0]['case']}: {failures[0]['reason']}); "
+            f"see {out / 'materials.json'}"
+        )
     return result

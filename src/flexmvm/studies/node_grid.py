@@ -30,19 +30,26 @@ class NodeGrid:
     ``n_nodes[(i, j)]`` the retained nodes of selection ``i-j``; ``centre`` the patches' centre
     [m] as given (None: studies.interface.patch_place's default, the rod's end_a)."""
 
-    def __init__(self, sc: Scenario, body: str, layers: Iterable[int], laps: Iterable[int],
-                 modes: Iterable[int], kind: ModelKind,
-                 centre_m: Sequence[float] | None = None) -> None:
+    def __init__(
+        self,
+        sc: Scenario,
+        body: str,
+        layers: Iterable[int],
+        laps: Iterable[int],
+        modes: Iterable[int],
+        kind: ModelKind,
+        centre_m: Sequence[float] | None = None,
+    ) -> None:
         rod, self.layers, self.laps, self.modes = check_grid(sc, body, layers, laps, modes)
         self.body, self.kind, self.centre = body, kind, centre_m
-        self.n_nodes = {(i, j): len(rod.selection(i, j)) for i in self.layers
-                        for j in self.laps}
+        self.n_nodes = {(i, j): len(rod.selection(i, j)) for i in self.layers for j in self.laps}
 
     def cases(self, sc: Scenario, reference: str | Path | None) -> list[Case]:
         """The grid's cases (studies.grid.selection_cases), against reference history
         ``reference``."""
-        return selection_cases(sc, self.body, self.layers, self.laps, self.modes,
-                               reference=reference, kind=self.kind)
+        return selection_cases(
+            sc, self.body, self.layers, self.laps, self.modes, reference=reference, kind=self.kind
+        )
 
     def candidate(self, case: Case) -> Candidate:
         """The search's candidate of one of :meth:`cases`: family ``(i, j)``, its DOF."""
@@ -51,8 +58,9 @@ class NodeGrid:
 
     def failed_row(self, case: Case, line: str) -> dict:
         """ncc.csv's row of a case that raised (``line``: the one-line reason)."""
-        return failed_case_row(case, line,
-                               self.n_nodes[(case.params["layers"], case.params["laps"])])
+        return failed_case_row(
+            case, line, self.n_nodes[(case.params["layers"], case.params["laps"])]
+        )
 
     def grid_dict(self) -> dict:
         """selection.json's ``grid``."""

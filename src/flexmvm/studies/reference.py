@@ -53,8 +53,10 @@ def reference_problem(sc: Scenario, body: str, out_dir: Path) -> str | None:
         return f"reference {meta.name}: missing or unreadable"
     ident = {"body": body, "scenario": sc.model_dump(mode="json")}
     if canonical_json(stored.get("identity")) != canonical_json(ident):
-        raise InputError(f"{meta}: the stored reference was run from another scenario or body; "
-                         "expected the same study (use another --out or delete the directory)")
+        raise InputError(
+            f"{meta}: the stored reference was run from another scenario or body; "
+            "expected the same study (use another --out or delete the directory)"
+        )
     stale = stamp_mismatch(stored.get("provenance"), stamp(reference_scenario(sc, body)))
     if stale is not None:
         return f"reference {hist.name}: {stale}"
@@ -64,8 +66,13 @@ def reference_problem(sc: Scenario, body: str, out_dir: Path) -> str | None:
     return None if bad is None else f"reference {hist.name}: {bad}"
 
 
-def reference_history(sc: Scenario, body: str, out_dir: Path, progress: bool = False,
-                      announce: Callable[[str], Any] = announce_recompute) -> tuple[Path, bool]:
+def reference_history(
+    sc: Scenario,
+    body: str,
+    out_dir: Path,
+    progress: bool = False,
+    announce: Callable[[str], Any] = announce_recompute,
+) -> tuple[Path, bool]:
     """The full-FE reference history of the study (computed once, reused while the scenario,
     the code and the file are the same; module doc). A stored reference that fails its check
     is recomputed and ``announce``d (one line). Returns (path of history.csv, True if it was
@@ -81,14 +88,20 @@ def reference_history(sc: Scenario, body: str, out_dir: Path, progress: bool = F
     if problem is not None:
         announce(f"{problem}: recomputed")
     ref_dir.mkdir(parents=True, exist_ok=True)
-    meta.unlink(missing_ok=True)   # a half-rewritten reference never passes its check
+    meta.unlink(missing_ok=True)  # a half-rewritten reference never passes its check
     ref = reference_scenario(sc, body)
     run = run_scenario(ref, label="full", progress=progress)
     t, f, probes = run.result.curves()
     write_history(hist, t, f, probes)
-    write_json_atomic(meta, {"identity": {"body": body, "scenario": sc.model_dump(mode="json")},
-                             "provenance": stamp(ref), "history": history_record(hist),
-                             "summary": run.summary})
+    write_json_atomic(
+        meta,
+        {
+            "identity": {"body": body, "scenario": sc.model_dump(mode="json")},
+            "provenance": stamp(ref),
+            "history": history_record(hist),
+            "summary": run.summary,
+        },
+    )
     return hist, True
 
 
@@ -111,8 +124,9 @@ def case_reference(case, reference=None):
         raise InputError(f"case {case.key}: no reference history given")
     sha = p.get("reference_sha256")
     if sha is not None and file_sha256(reference) != sha:
-        raise InputError(f"case {case.key}: {reference} is not the reference of this case "
-                         "(its SHA-256 differs)")
+        raise InputError(
+            f"case {case.key}: {reference} is not the reference of this case (its SHA-256 differs)"
+        )
     return read_history(Path(reference))
 
 

@@ -117,59 +117,90 @@ class RegionEstimate:
 
     def as_dict(self) -> dict:
         h = self.hertz
-        return {"body": self.body, "contact": self.contact, "partner": self.partner,
-                "surface": self.surface, "centre_m": list(self.centre_m),
-                "contact_point_m": list(self.contact_point_m), "normal": list(self.normal),
-                "closing_speed_mps": self.closing_speed_mps, "speed_given": self.speed_given,
-                "curvature_radius_m": self.curvature_radius_m,
-                "principal_radii_m": list(self.principal_radii_m),
-                "radius_given": self.radius_given, "e_star_pa": h.e_star_pa,
-                "m_star_kg": h.m_star_kg, "hertz_force_max_n": h.force_max_n,
-                "hertz_duration_s": h.duration_s, "contact_radius_m": h.contact_radius_m,
-                "factor": self.factor, "facet_size_m": self.facet_size_m,
-                "rule": "a + h" if self.factor is None else "factor x a",
-                "radius_m": self.radius_m, "nodes": self.nodes,
-                "modes": self.modes, "dof": self.dof,
-                "dof_total": self.cost.dof, "memory_MB": self.cost.bytes / 1e6,
-                "full_fe_dof": self.cost.full_dof, "full_fe_memory_MB": self.cost.full_bytes / 1e6,
-                "costs_more_than_full_fe": self.cost.bytes > self.cost.full_bytes,
-                "region": self.region()}
+        return {
+            "body": self.body,
+            "contact": self.contact,
+            "partner": self.partner,
+            "surface": self.surface,
+            "centre_m": list(self.centre_m),
+            "contact_point_m": list(self.contact_point_m),
+            "normal": list(self.normal),
+            "closing_speed_mps": self.closing_speed_mps,
+            "speed_given": self.speed_given,
+            "curvature_radius_m": self.curvature_radius_m,
+            "principal_radii_m": list(self.principal_radii_m),
+            "radius_given": self.radius_given,
+            "e_star_pa": h.e_star_pa,
+            "m_star_kg": h.m_star_kg,
+            "hertz_force_max_n": h.force_max_n,
+            "hertz_duration_s": h.duration_s,
+            "contact_radius_m": h.contact_radius_m,
+            "factor": self.factor,
+            "facet_size_m": self.facet_size_m,
+            "rule": "a + h" if self.factor is None else "factor x a",
+            "radius_m": self.radius_m,
+            "nodes": self.nodes,
+            "modes": self.modes,
+            "dof": self.dof,
+            "dof_total": self.cost.dof,
+            "memory_MB": self.cost.bytes / 1e6,
+            "full_fe_dof": self.cost.full_dof,
+            "full_fe_memory_MB": self.cost.full_bytes / 1e6,
+            "costs_more_than_full_fe": self.cost.bytes > self.cost.full_bytes,
+            "region": self.region(),
+        }
 
     def lines(self) -> list[str]:
         """The console lines of the estimate."""
         h, mm = self.hertz, 1e3
         c = ", ".join(f"{v * mm:.4g}" for v in self.centre_m)
-        rs = ("given" if self.radius_given else
-              "fitted, principal " + ", ".join(f"{r * mm:.4g}" for r in self.principal_radii_m)
-              + " mm")
+        rs = (
+            "given"
+            if self.radius_given
+            else "fitted, principal "
+            + ", ".join(f"{r * mm:.4g}" for r in self.principal_radii_m)
+            + " mm"
+        )
         given = " (given)" if self.speed_given else ""
         lines = [
-            (f"contacts[{self.contact}]: {self.body}.{self.surface} against {self.partner}; "
-             f"expected first contact at ({c}) mm in {self.body}'s coordinates"),
-            (f"Hertz impact: closing speed {self.closing_speed_mps:.4g} m/s{given}, curvature "
-             f"radius {self.curvature_radius_m * mm:.4g} mm ({rs}), E* "
-             f"{h.e_star_pa / 1e9:.4g} GPa, m* {h.m_star_kg:.4g} kg: peak "
-             f"{h.force_max_n:.4g} N, contact radius a {h.contact_radius_m * mm:.4g} mm, "
-             f"duration {h.duration_s * 1e6:.4g} us"),
-            (f"region: ball of {self._rule()} = {self.radius_m * mm:.4g} mm: {self.nodes} "
-             f"nodes, {self.dof} DOF with {self.modes} modes"),
+            (
+                f"contacts[{self.contact}]: {self.body}.{self.surface} against {self.partner}; "
+                f"expected first contact at ({c}) mm in {self.body}'s coordinates"
+            ),
+            (
+                f"Hertz impact: closing speed {self.closing_speed_mps:.4g} m/s{given}, curvature "
+                f"radius {self.curvature_radius_m * mm:.4g} mm ({rs}), E* "
+                f"{h.e_star_pa / 1e9:.4g} GPa, m* {h.m_star_kg:.4g} kg: peak "
+                f"{h.force_max_n:.4g} N, contact radius a {h.contact_radius_m * mm:.4g} mm, "
+                f"duration {h.duration_s * 1e6:.4g} us"
+            ),
+            (
+                f"region: ball of {self._rule()} = {self.radius_m * mm:.4g} mm: {self.nodes} "
+                f"nodes, {self.dof} DOF with {self.modes} modes"
+            ),
             self.cost.line(),
         ]
         if self.nodes == 0:
-            lines.append("the ball holds no node of the mesh: its elements are coarser than "
-                         "the contact (elements of about a resolve the force); refine the mesh "
-                         "about the contact point or raise the factor (or leave it out: a + h)")
+            lines.append(
+                "the ball holds no node of the mesh: its elements are coarser than "
+                "the contact (elements of about a resolve the force); refine the mesh "
+                "about the contact point or raise the factor (or leave it out: a + h)"
+            )
         if self.cost.bytes > self.cost.full_bytes:
-            lines.append("this region costs more than full FE: a smaller region (or a coarser "
-                         "mesh about the contact), or kind 'full'")
+            lines.append(
+                "this region costs more than full FE: a smaller region (or a coarser "
+                "mesh about the contact), or kind 'full'"
+            )
         return lines
 
     def _rule(self) -> str:
         mm = 1e3
         if self.factor is not None:
             return f"{self.factor:g} a"
-        return (f"a + h (h {self.facet_size_m * mm:.4g} mm: the largest contact facet within "
-                f"a) = {self.radius_m / self.contact_radius_m:.3g} a")
+        return (
+            f"a + h (h {self.facet_size_m * mm:.4g} mm: the largest contact facet within "
+            f"a) = {self.radius_m / self.contact_radius_m:.3g} a"
+        )
 
 
 def _unit(v: np.ndarray) -> np.ndarray:
@@ -227,9 +258,8 @@ def _facet_size(nodes: np.ndarray, fs, point: np.ndarray, a: float) -> float:
     for f in (fs.tris, fs.quads):
         if not len(f):
             continue
-        xf = nodes[f]                                       # (n, k, 3)
-        diam.append(np.max(np.linalg.norm(xf[:, :, None] - xf[:, None, :], axis=3),
-                           axis=(1, 2)))
+        xf = nodes[f]  # (n, k, 3)
+        diam.append(np.max(np.linalg.norm(xf[:, :, None] - xf[:, None, :], axis=3), axis=(1, 2)))
         parts = [(0, 1, 2)] if f.shape[1] == 3 else [(0, 1, 2), (0, 2, 3)]
         dist.append(np.min([_triangle_distance(point, xf[:, list(t)]) for t in parts], axis=0))
     diam, dist = np.concatenate(diam), np.concatenate(dist)
@@ -247,15 +277,17 @@ def _curvature(points: np.ndarray, x0: np.ndarray, n: np.ndarray) -> tuple[np.nd
     d = np.linalg.norm(points - x0, axis=1)
     near = points[np.argsort(d)[:NEIGHBOURS]]
     if len(near) < 6:
-        raise InputError(f"{len(near)} surface nodes about the contact point; the curvature "
-                         "fit needs at least 6: give radius_m")
+        raise InputError(
+            f"{len(near)} surface nodes about the contact point; the curvature "
+            "fit needs at least 6: give radius_m"
+        )
     t1 = _unit(np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0]))
     t2 = np.cross(n, t1)
     rel = near - x0
     rho = float(np.max(np.hypot(rel @ t1, rel @ t2)))
-    u, v, h = rel @ t1 / rho, rel @ t2 / rho, rel @ n / rho   # scaled to the patch
+    u, v, h = rel @ t1 / rho, rel @ t2 / rho, rel @ n / rho  # scaled to the patch
     degree = 4 if len(near) >= 15 else 2
-    terms = [u**i * v**(k - i) for k in range(degree + 1) for i in range(k, -1, -1)]
+    terms = [u**i * v ** (k - i) for k in range(degree + 1) for i in range(k, -1, -1)]
     c = np.linalg.lstsq(np.column_stack(terms), h, rcond=None)[0]
     # c[3], c[4], c[5]: the u^2, u v, v^2 coefficients (of the scaled height)
     k2 = -np.array([[2 * c[3], c[4]], [c[4], 2 * c[5]]]) / rho
@@ -266,13 +298,15 @@ def _curvature(points: np.ndarray, x0: np.ndarray, n: np.ndarray) -> tuple[np.nd
 def _contact_of(sc: Scenario, body: str, contact: int | None) -> int:
     mine = [k for k, c in enumerate(sc.contacts) if body in (c.slave_body, c.master_body)]
     if not mine:
-        raise InputError(f"body {body!r} is in no contact of the scenario; the region estimate "
-                         "needs its contact")
+        raise InputError(
+            f"body {body!r} is in no contact of the scenario; the region estimate needs its contact"
+        )
     if contact is None:
         return mine[0]
     if contact not in mine:
-        raise InputError(f"contact {contact}: body {body!r} is in contacts {mine}; expected one "
-                         "of them")
+        raise InputError(
+            f"contact {contact}: body {body!r} is in contacts {mine}; expected one of them"
+        )
     return contact
 
 
@@ -280,8 +314,9 @@ def _held(sc: Scenario, body: str) -> bool:
     """Whether ``body`` is on a joint to the ground that holds it (not a distance joint)."""
     from flexmvm.constraints.joints import JointType
 
-    return any(j.body == body and j.body2 is None and j.type is not JointType.DISTANCE
-               for j in sc.joints)
+    return any(
+        j.body == body and j.body2 is None and j.type is not JointType.DISTANCE for j in sc.joints
+    )
 
 
 def _mass(sc: Scenario, cfg) -> float:
@@ -296,7 +331,8 @@ def _mass(sc: Scenario, cfg) -> float:
 def _point_velocity(cfg, x: np.ndarray) -> np.ndarray:
     p = cfg.placement
     return np.asarray(p.velocity_mps, float) + np.cross(
-        np.asarray(p.angular_velocity_radps, float), x - np.asarray(p.position_m, float))
+        np.asarray(p.angular_velocity_radps, float), x - np.asarray(p.position_m, float)
+    )
 
 
 def _first_contact(x: np.ndarray, fs, px: np.ndarray, pfs) -> tuple[np.ndarray, np.ndarray]:
@@ -318,9 +354,9 @@ def _first_contact(x: np.ndarray, fs, px: np.ndarray, pfs) -> tuple[np.ndarray, 
     return px[pnode] - float((px[pnode] - x[node]) @ n) * n, n
 
 
-def _equivalent_radius(body_points: np.ndarray, partner_points: np.ndarray,
-                       point: np.ndarray, n: np.ndarray, what: str
-                       ) -> tuple[float, tuple[float, float]]:
+def _equivalent_radius(
+    body_points: np.ndarray, partner_points: np.ndarray, point: np.ndarray, n: np.ndarray, what: str
+) -> tuple[float, tuple[float, float]]:
     """(R_e [m], principal radii (R', R'') [m]) of the two surfaces' summed curvature at
     ``point`` (module doc, step 3); InputError naming ``what`` without curvature."""
     curv_b, rho_b = _curvature(body_points, point, n)
@@ -331,7 +367,8 @@ def _equivalent_radius(body_points: np.ndarray, partner_points: np.ndarray,
         raise InputError(
             f"{what} have no relative curvature at the expected contact point (principal "
             f"curvatures {kappa[0]:.3g}, {kappa[1]:.3g} 1/m: a flat, line or conforming "
-            "contact); give the equivalent curvature radius (radius_m, --radius-mm)")
+            "contact); give the equivalent curvature radius (radius_m, --radius-mm)"
+        )
     principal = (1.0 / kappa[1], 1.0 / kappa[0])
     return math.sqrt(principal[0] * principal[1]), principal
 
@@ -342,9 +379,16 @@ def _positive_or_none(name: str, value: float | None) -> float | None:
     return None if value is None else float(value)
 
 
-def estimate_region(sc: Scenario, body: str, *, factor: float | None = None,
-                    radius_m: float | None = None, speed_mps: float | None = None,
-                    modes: int | None = None, contact: int | None = None) -> RegionEstimate:
+def estimate_region(
+    sc: Scenario,
+    body: str,
+    *,
+    factor: float | None = None,
+    radius_m: float | None = None,
+    speed_mps: float | None = None,
+    modes: int | None = None,
+    contact: int | None = None,
+) -> RegionEstimate:
     """The region body ``body`` of scenario ``sc`` needs for its contact (module doc).
 
     Args:
@@ -372,8 +416,11 @@ def estimate_region(sc: Scenario, body: str, *, factor: float | None = None,
     k = _contact_of(sc, body, contact)
     c, where = sc.contacts[k], f"contacts[{k}]"
     mine = c.slave_body == body
-    surface, partner, other_surface = ((c.slave_surface, c.master_body, c.master_surface) if mine
-                                       else (c.master_surface, c.slave_body, c.slave_surface))
+    surface, partner, other_surface = (
+        (c.slave_surface, c.master_body, c.master_surface)
+        if mine
+        else (c.master_surface, c.slave_body, c.slave_surface)
+    )
     cfg, pcfg = sc.body(body), sc.body(partner)
     setup = default_setup()
     fe, pfe = setup.free_modes_source(cfg)[0], setup.free_modes_source(pcfg)[0]
@@ -385,9 +432,13 @@ def estimate_region(sc: Scenario, body: str, *, factor: float | None = None,
     px = _placed(pcfg, pfe.mesh.nodes)[0]
     point, n = _first_contact(x, fs, px, pfs)
     if radius_m is None:
-        R, principal = _equivalent_radius(x[fs.nodes], px[pfs.nodes], point, n,
-                                          f"{where}: {body}.{surface} and {partner}."
-                                          f"{other_surface}")
+        R, principal = _equivalent_radius(
+            x[fs.nodes],
+            px[pfs.nodes],
+            point,
+            n,
+            f"{where}: {body}.{surface} and {partner}.{other_surface}",
+        )
     else:
         R, principal = radius_m, (radius_m, radius_m)
     v = speed_mps
@@ -397,15 +448,18 @@ def estimate_region(sc: Scenario, body: str, *, factor: float | None = None,
             raise InputError(
                 f"{where}: {body} and {partner} do not close at the expected contact point "
                 f"(normal relative speed {-v:.3g} m/s at their placements); give the closing "
-                "speed (speed_mps, --speed)")
+                "speed (speed_mps, --speed)"
+            )
     m_body, m_partner = _mass(sc, cfg), _mass(sc, pcfg)
     if math.isinf(m_body) and math.isinf(m_partner):
-        raise InputError(f"{where}: {body} and {partner} are both held to the ground; the "
-                         "Hertz impact needs a moving mass")
+        raise InputError(
+            f"{where}: {body} and {partner} are both held to the ground; the "
+            "Hertz impact needs a moving mass"
+        )
     ma, mb = (m_partner, m_body) if math.isfinite(m_partner) else (m_body, m_partner)
     mat, pmat = cfg.material_obj(), pcfg.material_obj()
     hertz = hertz_impact(R, v, effective_modulus(mat.E, mat.nu, pmat.E, pmat.nu), ma, mb)
-    centre = np.round(A.T @ (point - r), 12) + 0.0   # placement round-off, no -0
+    centre = np.round(A.T @ (point - r), 12) + 0.0  # placement round-off, no -0
     a = hertz.contact_radius_m
     h = _facet_size(fe.mesh.nodes, fs, centre, a)
     radius = a + h if factor is None else factor * a
@@ -413,7 +467,24 @@ def estimate_region(sc: Scenario, body: str, *, factor: float | None = None,
     m = int(modes) if modes is not None else (cfg.model.modes or DEFAULT_MODES)
     cost = reduced_cost(body, fe.mesh.n_nodes, 3 * n_nodes + m, fe.K.nnz)
     return RegionEstimate(
-        body, k, partner, surface, tuple(float(c) for c in centre),
-        tuple(float(c) for c in point), tuple(float(c) for c in n), v, speed_mps is not None,
-        R, tuple(float(r) for r in principal), radius_m is not None, hertz,
-        None if factor is None else float(factor), h, radius, n_nodes, m, 3 * n_nodes + m, cost)
+        body,
+        k,
+        partner,
+        surface,
+        tuple(float(c) for c in centre),
+        tuple(float(c) for c in point),
+        tuple(float(c) for c in n),
+        v,
+        speed_mps is not None,
+        R,
+        tuple(float(r) for r in principal),
+        radius_m is not None,
+        hertz,
+        None if factor is None else float(factor),
+        h,
+        radius,
+        n_nodes,
+        m,
+        3 * n_nodes + m,
+        cost,
+    )

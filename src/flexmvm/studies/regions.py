@@ -33,8 +33,14 @@ from flexmvm.studies.reference import case_reference, scored_row
 from flexmvm.studies.runner import Case
 from flexmvm.studies.search import Candidate
 
-__all__ = ["RegionFamily", "RegionGrid", "parse_node_sets", "parse_radii", "region_columns",
-           "run_region_case"]
+__all__ = [
+    "RegionFamily",
+    "RegionGrid",
+    "parse_node_sets",
+    "parse_radii",
+    "region_columns",
+    "run_region_case",
+]
 
 
 @dataclass(frozen=True)
@@ -48,31 +54,40 @@ class RegionFamily:
     def __post_init__(self) -> None:
         if (self.radius_m is None) == (self.node_set is None):
             raise InputError("a region family is a ball radius or a node set; expected one")
-        if self.radius_m is not None and not (math.isfinite(self.radius_m)
-                                              and self.radius_m > 0):
+        if self.radius_m is not None and not (math.isfinite(self.radius_m) and self.radius_m > 0):
             raise InputError(f"region ball radius {self.radius_m!r}: expected > 0 [m]")
 
     @property
     def key(self) -> tuple:
         """The family's sortable key (search.Candidate.region): ('ball', r) or ('set', name)."""
-        return ("ball", float(self.radius_m)) if self.radius_m is not None \
+        return (
+            ("ball", float(self.radius_m))
+            if self.radius_m is not None
             else ("set", str(self.node_set))
+        )
 
     @property
     def label(self) -> str:
-        return (f"ball {self.radius_m * 1e3:g} mm" if self.radius_m is not None
-                else f"set {self.node_set}")
+        return (
+            f"ball {self.radius_m * 1e3:g} mm"
+            if self.radius_m is not None
+            else f"set {self.node_set}"
+        )
 
     def case_key(self, modes: int) -> str:
-        head = (f"ball{round(self.radius_m * 1e6):d}um" if self.radius_m is not None
-                else f"set-{self.node_set}")
+        head = (
+            f"ball{round(self.radius_m * 1e6):d}um"
+            if self.radius_m is not None
+            else f"set-{self.node_set}"
+        )
         return f"{head}-m{int(modes)}"
 
     def spec(self, centre_m: Sequence[float]) -> dict:
         """The scenario's ``region`` table of this family."""
         if self.radius_m is not None:
-            return {"ball": {"centre_m": [float(a) for a in centre_m],
-                             "radius_m": float(self.radius_m)}}
+            return {
+                "ball": {"centre_m": [float(a) for a in centre_m], "radius_m": float(self.radius_m)}
+            }
         return {"node_set": self.node_set}
 
 
@@ -82,10 +97,16 @@ def parse_radii(text: str) -> list[RegionFamily]:
         radii = [float(a) * 1e-3 for a in text.split(",")]
     except ValueError:
         radii = []
-    if not radii or min(radii) <= 0 or len(set(radii)) != len(radii) \
-            or not all(math.isfinite(a) for a in radii):
-        raise InputError(f"--radii {text!r}: expected distinct ball radii > 0 in mm, "
-                         "comma-separated (e.g. '0.4,0.8,1.2')")
+    if (
+        not radii
+        or min(radii) <= 0
+        or len(set(radii)) != len(radii)
+        or not all(math.isfinite(a) for a in radii)
+    ):
+        raise InputError(
+            f"--radii {text!r}: expected distinct ball radii > 0 in mm, "
+            "comma-separated (e.g. '0.4,0.8,1.2')"
+        )
     return [RegionFamily(radius_m=a) for a in radii]
 
 
@@ -93,8 +114,7 @@ def parse_node_sets(text: str) -> list[RegionFamily]:
     """'near,wide' (node-set names of the mesh) -> node-set families."""
     names = [a.strip() for a in text.split(",")]
     if not all(names) or len(set(names)) != len(names):
-        raise InputError(f"--node-sets {text!r}: expected distinct node-set names, "
-                         "comma-separated")
+        raise InputError(f"--node-sets {text!r}: expected distinct node-set names, comma-separated")
     return [RegionFamily(node_set=a) for a in names]
 
 
@@ -118,9 +138,15 @@ class RegionGrid:
     """The region families x mode counts of body ``body`` (module doc), checked against its
     mesh: nodes per family, costs within the full-FE body's (scenarios/cost.py)."""
 
-    def __init__(self, sc: Scenario, body: str, families: Iterable[RegionFamily],
-                 modes: Iterable[int], centre_m=None,
-                 kind: ModelKind = ModelKind.MVM) -> None:
+    def __init__(
+        self,
+        sc: Scenario,
+        body: str,
+        families: Iterable[RegionFamily],
+        modes: Iterable[int],
+        centre_m=None,
+        kind: ModelKind = ModelKind.MVM,
+    ) -> None:
         from flexmvm.scenarios.cost import check_cost, reduced_cost
         from flexmvm.scenarios.mesh_lookup import retained_nodes
         from flexmvm.scenarios.setup import default_setup
@@ -152,11 +178,24 @@ class RegionGrid:
         sha = file_sha256(reference) if reference is not None else None
         extra = {} if self.kind is ModelKind.MVM else {"kind": self.kind.value}
         top = self.modes[-1]
-        return [Case(fam.case_key(m), {"body": self.body, "region": fam.spec(self.centre),
-                                       "label": fam.label, "nodes": self.nodes[fam.key],
-                                       "modes": m, "modes_max": top, "scenario": data,
-                                       "reference_sha256": sha} | extra)
-                for fam in self.families for m in self.modes]
+        return [
+            Case(
+                fam.case_key(m),
+                {
+                    "body": self.body,
+                    "region": fam.spec(self.centre),
+                    "label": fam.label,
+                    "nodes": self.nodes[fam.key],
+                    "modes": m,
+                    "modes_max": top,
+                    "scenario": data,
+                    "reference_sha256": sha,
+                }
+                | extra,
+            )
+            for fam in self.families
+            for m in self.modes
+        ]
 
     def candidate(self, case: Case) -> Candidate:
         fam = _family(case.params["region"])
@@ -164,8 +203,11 @@ class RegionGrid:
         return Candidate(None, m, 3 * self.nodes[fam.key] + m, region=fam.key)
 
     def grid_dict(self) -> dict:
-        return {"regions": [f.label for f in self.families], "centre_m": list(self.centre),
-                "modes": self.modes}
+        return {
+            "regions": [f.label for f in self.families],
+            "centre_m": list(self.centre),
+            "modes": self.modes,
+        }
 
 
 def _family(region: dict) -> RegionFamily:
@@ -177,8 +219,15 @@ def _family(region: dict) -> RegionFamily:
 def _row(p: dict) -> dict[str, Any]:
     fam = _family(p["region"])
     n, m = int(p["nodes"]), int(p["modes"])
-    return {"region": fam.label, "radius_m": fam.radius_m, "node_set": fam.node_set,
-            "nodes": n, "modes": m, "dof": 3 * n + m, "dof_total": 3 * n + m + 6}
+    return {
+        "region": fam.label,
+        "radius_m": fam.radius_m,
+        "node_set": fam.node_set,
+        "nodes": n,
+        "modes": m,
+        "dof": 3 * n + m,
+        "dof_total": 3 * n + m + 6,
+    }
 
 
 def failed_region_row(case: Case, line: str) -> dict:
@@ -197,8 +246,12 @@ def run_region_case(case: Case, reference: str | Path | None = None) -> dict:
     body, m = p["body"], int(p["modes"])
     t_ref, f_ref, probes_ref = case_reference(case, reference)
     row = _row(p)
-    model = mvm(region=RegionSpec(**p["region"]), modes=m,
-                reference=sc.body(body).model.reference, kind=ModelKind(p.get("kind", "mvm")))
+    model = mvm(
+        region=RegionSpec(**p["region"]),
+        modes=m,
+        reference=sc.body(body).model.reference,
+        kind=ModelKind(p.get("kind", "mvm")),
+    )
     setup = default_setup().with_mode_floor(int(p.get("modes_max", m)))
     try:
         run = run_scenario(sc.with_model(body, model), warn=False, setup=setup)
@@ -206,19 +259,30 @@ def run_region_case(case: Case, reference: str | Path | None = None) -> dict:
         return row | {"failed": str(exc).splitlines()[0]}
     info = next(b for b in run.built.info if b.name == body)
     if info.n_retained_nodes != row["nodes"]:
-        raise SolverError(f"case {case.key}: {info.n_retained_nodes} retained nodes, the grid "
-                          f"counted {row['nodes']}")
+        raise SolverError(
+            f"case {case.key}: {info.n_retained_nodes} retained nodes, the grid "
+            f"counted {row['nodes']}"
+        )
     return scored_row(row, run, body, t_ref, f_ref, probes_ref)
 
 
 def row_order(r: dict) -> tuple:
-    return (*_family({"ball": {"radius_m": r["radius_m"]}} if r.get("radius_m") is not None
-                     else {"node_set": r["node_set"]}).key, r["modes"])
+    return (
+        *_family(
+            {"ball": {"radius_m": r["radius_m"]}}
+            if r.get("radius_m") is not None
+            else {"node_set": r["node_set"]}
+        ).key,
+        r["modes"],
+    )
 
 
 def region_key(r: dict) -> str:
-    fam = (RegionFamily(radius_m=r["radius_m"]) if r.get("radius_m") is not None
-           else RegionFamily(node_set=r["node_set"]))
+    fam = (
+        RegionFamily(radius_m=r["radius_m"])
+        if r.get("radius_m") is not None
+        else RegionFamily(node_set=r["node_set"])
+    )
     return fam.case_key(r["modes"])
 
 
@@ -226,16 +290,33 @@ def region_winner(best: Candidate | None, rows: dict[str, dict]) -> dict:
     """selection.json's winner fields of a region study (``rows`` by case key)."""
     if best is None:
         return {"passed": False}
-    fam = RegionFamily(radius_m=best.region[1]) if best.region[0] == "ball" \
+    fam = (
+        RegionFamily(radius_m=best.region[1])
+        if best.region[0] == "ball"
         else RegionFamily(node_set=best.region[1])
+    )
     r = rows[fam.case_key(best.modes)]
-    return {"passed": True} | {k: r.get(k) for k in ("region", "radius_m", "node_set", "nodes",
-                                                     "modes", "dof", "dof_total", "ncc_force")}
+    return {"passed": True} | {
+        k: r.get(k)
+        for k in (
+            "region",
+            "radius_m",
+            "node_set",
+            "nodes",
+            "modes",
+            "dof",
+            "dof_total",
+            "ncc_force",
+        )
+    }
 
 
 def region_columns(probes: Sequence[str]) -> list[str]:
-    return (["region", "nodes", "modes", "dof", "ncc_force"] + [f"ncc_{p}" for p in probes]
-            + ["peak_err", "impulse_err", "duration_err", *VALIDITY_KEYS, "wall_time_s"])
+    return (
+        ["region", "nodes", "modes", "dof", "ncc_force"]
+        + [f"ncc_{p}" for p in probes]
+        + ["peak_err", "impulse_err", "duration_err", *VALIDITY_KEYS, "wall_time_s"]
+    )
 
 
 def write_region_csv(path: Path, rows: Iterable[dict], probes: Sequence[str]) -> None:
@@ -249,4 +330,3 @@ def front_points(rows: Iterable[dict]) -> dict[str, list[tuple[float, float]]]:
         if "ncc_force" in r:
             pts.setdefault(r["region"], []).append((float(r["dof"]), float(r["ncc_force"])))
     return pts
-

@@ -44,8 +44,19 @@ from flexmvm.studies.case_store import (
 from flexmvm.studies.main_guard import main_guard_advice, unguarded_main_script
 from flexmvm.threads import ENV_THREADS
 
-__all__ = ["Case", "Params", "case_path", "check_cluster_options", "cluster_slots", "collect",
-           "error_path", "local_cluster", "run_cases", "study_cluster", "worker_env"]
+__all__ = [
+    "Case",
+    "Params",
+    "case_path",
+    "check_cluster_options",
+    "cluster_slots",
+    "collect",
+    "error_path",
+    "local_cluster",
+    "run_cases",
+    "study_cluster",
+    "worker_env",
+]
 
 
 def _validate(cases: Sequence[Case]) -> None:
@@ -69,8 +80,9 @@ class _Recorder:
     """Driver-side bookkeeping: writes each outcome at once and updates the progress bar
     ``bar`` (a tqdm bar; run_cases's dispatch step sets it when it opens one)."""
 
-    def __init__(self, out_dir: Path, results: dict[str, dict], bar: Any,
-                 version_of: Callable[[Case], Any]) -> None:
+    def __init__(
+        self, out_dir: Path, results: dict[str, dict], bar: Any, version_of: Callable[[Case], Any]
+    ) -> None:
         self.out_dir = out_dir
         self.results = results
         self.bar = bar
@@ -87,8 +99,13 @@ class _Recorder:
         assert isinstance(case.params, Params)
         try:
             plain = json.loads(canonical_json({"result": dict(result)}))["result"]
-            record = {"key": case.key, "params": case.params.to_dict(), "result": plain,
-                      "result_sha256": result_sha256(plain), "version": self.version_of(case)}
+            record = {
+                "key": case.key,
+                "params": case.params.to_dict(),
+                "result": plain,
+                "result_sha256": result_sha256(plain),
+                "version": self.version_of(case),
+            }
             text = canonical_json(record)
         except InputError as exc:
             self.failure(case, exc, "")
@@ -153,18 +170,27 @@ def local_cluster(n_workers: int):
     started, when the main script has no main guard (unguarded_main_script)."""
     script = unguarded_main_script()
     if script is not None:
-        raise InputError(f"a local Dask cluster was asked for from {script}, which has no "
-                         f"main guard; {main_guard_advice(script)}, or pass serial=True")
+        raise InputError(
+            f"a local Dask cluster was asked for from {script}, which has no "
+            f"main guard; {main_guard_advice(script)}, or pass serial=True"
+        )
     import dask
     from distributed import LocalCluster
 
-    with dask.config.set({"distributed.scheduler.worker-saturation": 1.0}), \
-            warnings.catch_warnings():
+    with (
+        dask.config.set({"distributed.scheduler.worker-saturation": 1.0}),
+        warnings.catch_warnings(),
+    ):
         # the scheduler's HTTP routes (health, metrics) move to a free port when 8787 is taken
         # (another cluster on the machine); nothing here uses them, so that is no news
         warnings.filterwarnings("ignore", message="Port 8787 is already in use")
-        return LocalCluster(n_workers=n_workers, threads_per_worker=1, processes=True,
-                            dashboard_address=None, env=worker_env(n_workers))
+        return LocalCluster(
+            n_workers=n_workers,
+            threads_per_worker=1,
+            processes=True,
+            dashboard_address=None,
+            env=worker_env(n_workers),
+        )
 
 
 def check_cluster_options(scheduler: str | None, n_workers: int | None, serial: bool) -> None:
@@ -179,8 +205,9 @@ def check_cluster_options(scheduler: str | None, n_workers: int | None, serial: 
 
 
 @contextlib.contextmanager
-def study_cluster(scheduler: str | None, n_workers: int | None, serial: bool
-                  ) -> Iterator[str | None]:
+def study_cluster(
+    scheduler: str | None, n_workers: int | None, serial: bool
+) -> Iterator[str | None]:
     """The scheduler address a whole study gives run_cases: ``scheduler`` itself, None with
     ``serial`` (in-process), else a LocalCluster of ``n_workers`` (default: one per core)
     processes started here and closed at exit. Options as :func:`check_cluster_options`."""
@@ -349,8 +376,12 @@ def run_cases(
     return _outcome(cases, results, rec.failed, failures, out)
 
 
-def _resume(cases: Sequence[Case], out: Path, version_of: Callable[[Case], Any],
-            announce: Callable[[str], Any]) -> tuple[dict[str, dict], list[Case]]:
+def _resume(
+    cases: Sequence[Case],
+    out: Path,
+    version_of: Callable[[Case], Any],
+    announce: Callable[[str], Any],
+) -> tuple[dict[str, dict], list[Case]]:
     """The resume step: the results of the cases stored in ``out`` that pass their check
     (case_store.load_stored), by key, and the cases to run; the reasons for recomputing
     stored ones announced (case_store.announce_stale)."""
@@ -369,9 +400,16 @@ def _resume(cases: Sequence[Case], out: Path, version_of: Callable[[Case], Any],
     return results, pending
 
 
-def _run_pending(cases: Sequence[Case], pending: Sequence[Case], fn: Callable[[Case], Any],
-                 rec: _Recorder, progress: bool, serial: bool, scheduler: str | None,
-                 n_workers: int | None) -> None:
+def _run_pending(
+    cases: Sequence[Case],
+    pending: Sequence[Case],
+    fn: Callable[[Case], Any],
+    rec: _Recorder,
+    progress: bool,
+    serial: bool,
+    scheduler: str | None,
+    n_workers: int | None,
+) -> None:
     """The dispatch step: ``pending`` in this process (``serial``) or on Dask, each outcome
     recorded by ``rec`` as it comes, under a progress bar over all ``cases``."""
     with tqdm(
@@ -390,8 +428,13 @@ def _run_pending(cases: Sequence[Case], pending: Sequence[Case], fn: Callable[[C
             _run_dask(pending, fn, rec, scheduler, n_workers)
 
 
-def _outcome(cases: Sequence[Case], results: dict[str, dict], failed: list[tuple[str, str]],
-             failures: dict[str, str] | None, out: Path) -> dict[str, dict]:
+def _outcome(
+    cases: Sequence[Case],
+    results: dict[str, dict],
+    failed: list[tuple[str, str]],
+    failures: dict[str, str] | None,
+    out: Path,
+) -> dict[str, dict]:
     """The report step: the results in the order of ``cases``; the ``failed`` (key, one line)
     put in ``failures`` when given, else SolverError naming the first."""
     if failed and failures is not None:

@@ -73,15 +73,22 @@ from enum import StrEnum
 
 from flexmvm.errors import InputError
 
-__all__ = ["Candidate", "FamilyKind", "best_passing", "brute_force", "kind_exact", "rank_key",
-           "smallest_passing"]
+__all__ = [
+    "Candidate",
+    "FamilyKind",
+    "best_passing",
+    "brute_force",
+    "kind_exact",
+    "rank_key",
+    "smallest_passing",
+]
 
 
 class FamilyKind(StrEnum):
     """The kind of a candidate's family; the order of the members is the tie order."""
 
-    NODES = "nodes"            # a node selection (layers, laps) + modes (Craig-Bampton, ...)
-    INTERFACE = "interface"    # a patch-radius set + modes by participation
+    NODES = "nodes"  # a node selection (layers, laps) + modes (Craig-Bampton, ...)
+    INTERFACE = "interface"  # a patch-radius set + modes by participation
 
 
 _KIND_ORDER = {FamilyKind.NODES: 0, FamilyKind.INTERFACE: 1}
@@ -123,12 +130,20 @@ class Candidate:
             )
         if self.region is not None:
             reg = tuple(self.region)
-            ok = len(reg) == 2 and ((reg[0] == "ball" and isinstance(reg[1], float)
-                                     and math.isfinite(reg[1]) and reg[1] > 0)
-                                    or (reg[0] == "set" and isinstance(reg[1], str) and reg[1]))
+            ok = len(reg) == 2 and (
+                (
+                    reg[0] == "ball"
+                    and isinstance(reg[1], float)
+                    and math.isfinite(reg[1])
+                    and reg[1] > 0
+                )
+                or (reg[0] == "set" and isinstance(reg[1], str) and reg[1])
+            )
             if not ok:
-                raise InputError(f"Candidate region {self.region!r}: expected ('ball', radius "
-                                 "> 0 [m]) or ('set', node-set name)")
+                raise InputError(
+                    f"Candidate region {self.region!r}: expected ('ball', radius "
+                    "> 0 [m]) or ('set', node-set name)"
+                )
             object.__setattr__(self, "region", reg)
         elif self.selection is not None:
             sel = tuple(self.selection)
@@ -143,8 +158,10 @@ class Candidate:
             except (TypeError, ValueError):
                 radii = (-1.0,)
             if not all(math.isfinite(a) and a > 0 for a in radii) or len(set(radii)) != len(radii):
-                raise InputError(f"Candidate patch_radii_m {self.patch_radii_m!r}: expected "
-                                 "distinct radii > 0 [m]")
+                raise InputError(
+                    f"Candidate patch_radii_m {self.patch_radii_m!r}: expected "
+                    "distinct radii > 0 [m]"
+                )
             object.__setattr__(self, "patch_radii_m", radii)
         if not isinstance(self.modes, int) or self.modes < 0:
             raise InputError(f"Candidate modes {self.modes!r}: expected an integer >= 0")
@@ -164,8 +181,7 @@ class Candidate:
     @property
     def family(self) -> tuple:
         """Sortable, hashable key of the family: (kind order, selection or patch radii)."""
-        member = next(m for m in (self.selection, self.patch_radii_m, self.region)
-                      if m is not None)
+        member = next(m for m in (self.selection, self.patch_radii_m, self.region) if m is not None)
         return (_KIND_ORDER[self.kind], member)
 
     @property
@@ -183,8 +199,7 @@ def rank_key(candidate: Candidate, score: float) -> tuple:
     the interface kind, fewer static coordinates (``dof - modes``), then the family and
     ``modes`` so the choice is deterministic."""
     kind, member = candidate.family
-    return (candidate.dof, -score, kind, candidate.dof - candidate.modes, member,
-            candidate.modes)
+    return (candidate.dof, -score, kind, candidate.dof - candidate.modes, member, candidate.modes)
 
 
 def _group(candidates: Sequence[Candidate]) -> dict[tuple, list[Candidate]]:
@@ -198,8 +213,7 @@ def _group(candidates: Sequence[Candidate]) -> dict[tuple, list[Candidate]]:
         items.sort(key=lambda c: c.modes)
         for a, b in itertools.pairwise(items):
             if a.modes == b.modes:
-                raise InputError(f"{a.family_label}: {a.modes} modes appears twice; "
-                                 "expected once")
+                raise InputError(f"{a.family_label}: {a.modes} modes appears twice; expected once")
             if b.dof <= a.dof:
                 raise InputError(
                     f"{a.family_label}: dof {a.dof} at {a.modes} modes but {b.dof} at "
@@ -252,7 +266,7 @@ class _FamilySearch:
         end = min(self.hi, cap)
         if self.lo >= end:
             return None
-        if self.hi >= cap:   # no pass known under the cap: its largest candidate decides
+        if self.hi >= cap:  # no pass known under the cap: its largest candidate decides
             return self.items[end - 1]
         return self.items[(self.lo + end) // 2]
 
@@ -264,12 +278,16 @@ class _FamilySearch:
             self.lo = index + 1
 
 
-def best_passing(scores: dict[Candidate, float], passes: Callable[[float], bool],
-                 kind: FamilyKind | None = None) -> Candidate | None:
+def best_passing(
+    scores: dict[Candidate, float], passes: Callable[[float], bool], kind: FamilyKind | None = None
+) -> Candidate | None:
     """The first passing candidate of ``scores`` by :func:`rank_key` (of ``kind`` only, if
     given), or None."""
-    passing = [(rank_key(c, s), c) for c, s in scores.items()
-               if (kind is None or c.kind is kind) and passes(s)]
+    passing = [
+        (rank_key(c, s), c)
+        for c, s in scores.items()
+        if (kind is None or c.kind is kind) and passes(s)
+    ]
     return min(passing, key=lambda item: item[0])[1] if passing else None
 
 
@@ -343,16 +361,24 @@ def brute_force(
     groups = _group(candidates)
     run = _Evaluator(evaluate)
     families = [groups[fam] for fam in sorted(groups)]
-    everything = [items[rank] for rank in range(max((len(g) for g in families), default=0))
-                  for items in families if rank < len(items)]
+    everything = [
+        items[rank]
+        for rank in range(max((len(g) for g in families), default=0))
+        for items in families
+        if rank < len(items)
+    ]
     if everything:
         run(everything)
     return best_passing(run.scores, passes), run.scores
 
 
-def kind_exact(kind: FamilyKind, winner: Candidate | None, scores: dict[Candidate, float],
-               passes: Callable[[float], bool],
-               candidates: Sequence[Candidate] | None = None) -> bool:
+def kind_exact(
+    kind: FamilyKind,
+    winner: Candidate | None,
+    scores: dict[Candidate, float],
+    passes: Callable[[float], bool],
+    candidates: Sequence[Candidate] | None = None,
+) -> bool:
     """Whether ``best_passing(scores, passes, kind)`` (None if nothing of ``kind`` passed) is
     that kind's own answer over its whole grid, after :func:`smallest_passing` returned
     ``(winner, scores)`` for the grid ``candidates`` (module doc): true when no candidate
@@ -366,5 +392,4 @@ def kind_exact(kind: FamilyKind, winner: Candidate | None, scores: dict[Candidat
     own = [c.dof for c, s in scores.items() if c.kind is kind and passes(s)]
     if own:
         return min(own) == winner.dof
-    return candidates is not None and all(c.dof <= winner.dof for c in candidates
-                                          if c.kind is kind)
+    return candidates is not None and all(c.dof <= winner.dof for c in candidates if c.kind is kind)

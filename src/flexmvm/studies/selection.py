@@ -112,8 +112,15 @@ from flexmvm.studies.runner import Case, check_cluster_options, cluster_slots, s
 from flexmvm.studies.search import Candidate, brute_force, smallest_passing
 from flexmvm.studies.selection_summary import Sweep, selection_summary
 
-__all__ = ["FAIL_SCORE", "SelectionStudy", "run_selection_case", "run_selection_study",
-           "run_study_case", "score", "select_models"]
+__all__ = [
+    "FAIL_SCORE",
+    "SelectionStudy",
+    "run_selection_case",
+    "run_selection_study",
+    "run_study_case",
+    "score",
+    "select_models",
+]
 
 #: Families a --search keeps open per case the cluster runs at once (search.smallest_passing's
 #: max_open = this x cluster_slots). All families at once spends runs on families that a
@@ -130,9 +137,19 @@ _METRICS = ("ncc_force", "peak_err", "impulse_err", "duration_err")
 
 #: What a selection study writes in its directory (a study without the marker is accepted
 #: only if it holds nothing else: results.outdir.claim_study_dir).
-STUDY_FILES = frozenset({"cases", "reference", "ncc.csv", "selection.json",
-                         "selection_search.json", "fig7_ncc_map.png", "fig8_ncc_modes.png",
-                         "ncc_interface.csv", "fig_front_ncc_dof.png"})
+STUDY_FILES = frozenset(
+    {
+        "cases",
+        "reference",
+        "ncc.csv",
+        "selection.json",
+        "selection_search.json",
+        "fig7_ncc_map.png",
+        "fig8_ncc_modes.png",
+        "ncc_interface.csv",
+        "fig_front_ncc_dof.png",
+    }
+)
 
 
 def run_selection_case(case: Case, reference: str | Path | None = None) -> dict:
@@ -150,14 +167,23 @@ def run_selection_case(case: Case, reference: str | Path | None = None) -> dict:
     body, i, j, m = p["body"], int(p["layers"]), int(p["laps"]), int(p["modes"])
     t_ref, f_ref, probes_ref = case_reference(case, reference)
     nodes = len(rod_of(sc, body).selection(i, j))
-    row: dict[str, Any] = {"layers": i, "laps": j, "nodes": nodes, "modes": m,
-                           "dof": 3 * nodes + m, "dof_total": 3 * nodes + m + 6}
+    row: dict[str, Any] = {
+        "layers": i,
+        "laps": j,
+        "nodes": nodes,
+        "modes": m,
+        "dof": 3 * nodes + m,
+        "dof_total": 3 * nodes + m + 6,
+    }
     from flexmvm.scenarios.setup import default_setup
 
     setup = default_setup().with_mode_floor(int(p.get("modes_max", m)))
     try:
-        run = run_scenario(mvm_scenario(sc, body, i, j, m, ModelKind(p.get("kind", "mvm"))),
-                           warn=False, setup=setup)
+        run = run_scenario(
+            mvm_scenario(sc, body, i, j, m, ModelKind(p.get("kind", "mvm"))),
+            warn=False,
+            setup=setup,
+        )
     except SolverError as exc:
         return row | {"failed": str(exc).splitlines()[0]}
     info = next(b for b in run.built.info if b.name == body)
@@ -199,18 +225,28 @@ class SelectionStudy:
         return next(r for r in self.rows if tuple(r[k] for k in fields) == key)
 
 
-def select_models(sc: Scenario, body: str, out_dir: str | Path,
-                  layers: Iterable[int] = range(1, 5), laps: Iterable[int] = range(1, 6),
-                  modes: Iterable[int] = range(7, 44, 6), target: Target | None = None, *,
-                  search: bool = False, scheduler: str | None = None,
-                  n_workers: int | None = None, serial: bool = False, progress: bool = False,
-                  echo: Callable[[str], Any] | None = None,
-                  kind: ModelKind | str = ModelKind.MVM,
-                  patches: Sequence[Sequence[float]] | None = None,
-                  interface_modes: Iterable[int] = (5, 10, 20),
-                  regions: Sequence[RegionFamily] | None = None,
-                  centre_m: Sequence[float] | None = None,
-                  patch_surface: str | None = None) -> SelectionStudy:
+def select_models(
+    sc: Scenario,
+    body: str,
+    out_dir: str | Path,
+    layers: Iterable[int] = range(1, 5),
+    laps: Iterable[int] = range(1, 6),
+    modes: Iterable[int] = range(7, 44, 6),
+    target: Target | None = None,
+    *,
+    search: bool = False,
+    scheduler: str | None = None,
+    n_workers: int | None = None,
+    serial: bool = False,
+    progress: bool = False,
+    echo: Callable[[str], Any] | None = None,
+    kind: ModelKind | str = ModelKind.MVM,
+    patches: Sequence[Sequence[float]] | None = None,
+    interface_modes: Iterable[int] = (5, 10, 20),
+    regions: Sequence[RegionFamily] | None = None,
+    centre_m: Sequence[float] | None = None,
+    patch_surface: str | None = None,
+) -> SelectionStudy:
     """The selection study of ``body`` in scenario ``sc`` (module doc), its cases and reference
     stored in ``out_dir`` (a rerun resumes); no table, figure or console output (see
     :func:`run_selection_study`).
@@ -254,22 +290,46 @@ def select_models(sc: Scenario, body: str, out_dir: str | Path,
     version = study_version(sc, hist)
     case_of, if_cases = _candidates(sc, body, grid, hist, patches, interface_modes, where, echo)
     with study_cluster(scheduler, n_workers, serial) as address:
-        batches = Batches(out, address, serial, progress,
-                          functools.partial(run_study_case, reference=str(hist)),
-                          lambda c, line: _failed_row(c, line, grid), version, announce)
-        best, scores = _sweep(case_of, batches, target, search,
-                              lambda: cluster_slots(scheduler, n_workers, serial))
+        batches = Batches(
+            out,
+            address,
+            serial,
+            progress,
+            functools.partial(run_study_case, reference=str(hist)),
+            lambda c, line: _failed_row(c, line, grid),
+            version,
+            announce,
+        )
+        best, scores = _sweep(
+            case_of, batches, target, search, lambda: cluster_slots(scheduler, n_workers, serial)
+        )
     report = selection_summary(
-        grid, Sweep(batches.rows, batches.made, batches.loaded, case_of, best, scores),
-        body=body, kind=kind, search=search, target=target, ref_made=ref_made,
-        if_cases=if_cases, patches=patches, interface_modes=interface_modes)
-    return SelectionStudy(report.table, report.summary, [p.name for p in sc.probes],
-                          report.interface_rows)
+        grid,
+        Sweep(batches.rows, batches.made, batches.loaded, case_of, best, scores),
+        body=body,
+        kind=kind,
+        search=search,
+        target=target,
+        ref_made=ref_made,
+        if_cases=if_cases,
+        patches=patches,
+        interface_modes=interface_modes,
+    )
+    return SelectionStudy(
+        report.table, report.summary, [p.name for p in sc.probes], report.interface_rows
+    )
 
 
-def _study_grid(sc: Scenario, body: str, layers: Iterable[int], laps: Iterable[int],
-                modes: Iterable[int], kind: ModelKind, regions: Sequence[RegionFamily] | None,
-                centre_m: Sequence[float] | None) -> NodeGrid | RegionGrid:
+def _study_grid(
+    sc: Scenario,
+    body: str,
+    layers: Iterable[int],
+    laps: Iterable[int],
+    modes: Iterable[int],
+    kind: ModelKind,
+    regions: Sequence[RegionFamily] | None,
+    centre_m: Sequence[float] | None,
+) -> NodeGrid | RegionGrid:
     """The grid step: region families x ``modes`` (any body) with ``regions``, else the rod's
     ``layers`` x ``laps`` x ``modes``; checked against the mesh (InputError)."""
     if regions:
@@ -278,31 +338,48 @@ def _study_grid(sc: Scenario, body: str, layers: Iterable[int], laps: Iterable[i
     return NodeGrid(sc, body, layers, laps, modes, kind, centre_m)
 
 
-def _candidates(sc: Scenario, body: str, grid: NodeGrid | RegionGrid, hist: Path,
-                patches: Sequence[Sequence[float]] | None, interface_modes: Iterable[int],
-                where: dict, echo: Callable[[str], Any]
-                ) -> tuple[dict[Candidate, Case], list[Case]]:
+def _candidates(
+    sc: Scenario,
+    body: str,
+    grid: NodeGrid | RegionGrid,
+    hist: Path,
+    patches: Sequence[Sequence[float]] | None,
+    interface_modes: Iterable[int],
+    where: dict,
+    echo: Callable[[str], Any],
+) -> tuple[dict[Candidate, Case], list[Case]]:
     """Every candidate's case against reference ``hist``: the grid's, then the interface
     kind's of ``patches`` x ``interface_modes`` (placed as ``where``; also returned apart)."""
     case_of = {grid.candidate(c): c for c in grid.cases(sc, hist)}
     t0 = time.perf_counter()
-    if_cases = (interface_cases(sc, body, patches, interface_modes, reference=hist, **where)
-                if patches else [])
+    if_cases = (
+        interface_cases(sc, body, patches, interface_modes, reference=hist, **where)
+        if patches
+        else []
+    )
     pools = sorted({c.params["mode_pool"] for c in if_cases} - {None})
     if pools:
-        echo(f"interface kind: modes chosen from the lowest {', '.join(map(str, pools))} "
-             f"free-free modes (mode_pool of every mode count of a patch set; "
-             f"{time.perf_counter() - t0:.1f} s)")
+        echo(
+            f"interface kind: modes chosen from the lowest {', '.join(map(str, pools))} "
+            f"free-free modes (mode_pool of every mode count of a patch set; "
+            f"{time.perf_counter() - t0:.1f} s)"
+        )
     for c in if_cases:
         case_of[Candidate.interface(c.params["patch_radii_m"], c.params["modes"])] = c
     return case_of, if_cases
 
 
-def _sweep(case_of: dict[Candidate, Case], batches: Batches, target: Target, search: bool,
-           slots: Callable[[], int]) -> tuple[Candidate | None, dict[Candidate, float]]:
+def _sweep(
+    case_of: dict[Candidate, Case],
+    batches: Batches,
+    target: Target,
+    search: bool,
+    slots: Callable[[], int],
+) -> tuple[Candidate | None, dict[Candidate, float]]:
     """The dispatch step: every candidate (brute force, one batch) or the pruned search's
     (``search``: SEARCH_OPEN_PER_SLOT families open per one of the cluster's ``slots()``),
     scored against ``target``; returns the winner over both kinds and the scores."""
+
     def evaluate(batch: Sequence[Candidate]) -> list[float]:
         rows = batches([case_of[c] for c in batch])
         return [score(r, target) for r in rows]
@@ -311,8 +388,9 @@ def _sweep(case_of: dict[Candidate, Case], batches: Batches, target: Target, sea
         return s >= target.ncc_min
 
     if search:
-        return smallest_passing(list(case_of), evaluate, passes,
-                                max_open=SEARCH_OPEN_PER_SLOT * slots())
+        return smallest_passing(
+            list(case_of), evaluate, passes, max_open=SEARCH_OPEN_PER_SLOT * slots()
+        )
     return brute_force(list(case_of), evaluate, passes)
 
 
@@ -341,20 +419,31 @@ def kind_name(summary: dict) -> str:
     return str(summary.get("kind", "mvm"))
 
 
-def run_selection_study(scenario: str | Path | Scenario, body: str, out_dir: str | Path,
-                        layers: Iterable[int] = range(1, 5), laps: Iterable[int] = range(1, 6),
-                        modes: Iterable[int] = range(7, 44, 6), target: Target | None = None,
-                        search: bool = False, scheduler: str | None = None,
-                        n_workers: int | None = None, progress: bool = True, *,
-                        t_end_s: float | None = None, dt_s: float | None = None,
-                        other: str | None = None, serial: bool = False,
-                        echo: Callable[[str], Any] = print,
-                        kind: ModelKind | str = ModelKind.MVM,
-                        patches: Sequence[Sequence[float]] | None = None,
-                        interface_modes: Iterable[int] = (5, 10, 20),
-                        regions: Sequence[RegionFamily] | None = None,
-                        centre_m: Sequence[float] | None = None,
-                        patch_surface: str | None = None) -> dict:
+def run_selection_study(
+    scenario: str | Path | Scenario,
+    body: str,
+    out_dir: str | Path,
+    layers: Iterable[int] = range(1, 5),
+    laps: Iterable[int] = range(1, 6),
+    modes: Iterable[int] = range(7, 44, 6),
+    target: Target | None = None,
+    search: bool = False,
+    scheduler: str | None = None,
+    n_workers: int | None = None,
+    progress: bool = True,
+    *,
+    t_end_s: float | None = None,
+    dt_s: float | None = None,
+    other: str | None = None,
+    serial: bool = False,
+    echo: Callable[[str], Any] = print,
+    kind: ModelKind | str = ModelKind.MVM,
+    patches: Sequence[Sequence[float]] | None = None,
+    interface_modes: Iterable[int] = (5, 10, 20),
+    regions: Sequence[RegionFamily] | None = None,
+    centre_m: Sequence[float] | None = None,
+    patch_surface: str | None = None,
+) -> dict:
     """The selection study of ``body`` in ``scenario`` (a Scenario or a scenario file) with
     its files and console lines (module doc): :func:`select_models`, then ncc.csv,
     selection.json, the two figures and the summary line. ``t_end_s``, ``dt_s`` override the
@@ -376,11 +465,27 @@ def run_selection_study(scenario: str | Path | Scenario, body: str, out_dir: str
         check_grid(sc, body, layers, laps, modes)
     if switched:
         echo(SEED_SCHEME_NOTE)
-    study = select_models(sc, body, out, layers, laps, modes, target, search=search,
-                          scheduler=scheduler, n_workers=n_workers, serial=serial,
-                          progress=progress, echo=echo, kind=kind, patches=patches,
-                          interface_modes=interface_modes, regions=regions,
-                          centre_m=centre_m, patch_surface=patch_surface)
+    study = select_models(
+        sc,
+        body,
+        out,
+        layers,
+        laps,
+        modes,
+        target,
+        search=search,
+        scheduler=scheduler,
+        n_workers=n_workers,
+        serial=serial,
+        progress=progress,
+        echo=echo,
+        kind=kind,
+        patches=patches,
+        interface_modes=interface_modes,
+        regions=regions,
+        centre_m=centre_m,
+        patch_surface=patch_surface,
+    )
     result = study.summary
     from flexmvm.plots.study_figures import plot_ncc_dof_fronts, plot_ncc_map, plot_ncc_modes
 
@@ -389,25 +494,37 @@ def run_selection_study(scenario: str | Path | Scenario, body: str, out_dir: str
         pts = front_points(study.rows)
     else:
         write_ncc_csv(out / "ncc.csv", study.rows, study.probes)
-        pts = {f"node selections ({kind_name(result)})":
-               [(r["dof"], r["ncc_force"]) for r in study.rows if "ncc_force" in r]}
+        pts = {
+            f"node selections ({kind_name(result)})": [
+                (r["dof"], r["ncc_force"]) for r in study.rows if "ncc_force" in r
+            ]
+        }
     write_json_atomic(out / "selection.json", result)
     if study.rows and not regions:  # none when --search closed every node selection
-        plot_ncc_map(out / "fig7_ncc_map.png", study.rows,
-                     title=f"{sc.name}: NCC of the contact force")
-        plot_ncc_modes(out / "fig8_ncc_modes.png", study.rows,
-                       title=f"{sc.name}: NCC against modes")
+        plot_ncc_map(
+            out / "fig7_ncc_map.png", study.rows, title=f"{sc.name}: NCC of the contact force"
+        )
+        plot_ncc_modes(
+            out / "fig8_ncc_modes.png", study.rows, title=f"{sc.name}: NCC against modes"
+        )
     if study.interface_rows:
         write_interface_csv(out / "ncc_interface.csv", study.interface_rows, study.probes)
-        pts["interface"] = [(r["dof"], r["ncc_force"]) for r in study.interface_rows
-                            if "ncc_force" in r]
+        pts["interface"] = [
+            (r["dof"], r["ncc_force"]) for r in study.interface_rows if "ncc_force" in r
+        ]
     if (study.interface_rows or regions) and any(pts.values()):
-        plot_ncc_dof_fronts(out / "fig_front_ncc_dof.png", pts, target=target.ncc_min,
-                            title=f"{sc.name}: force NCC against DOF of {body}")
+        plot_ncc_dof_fronts(
+            out / "fig_front_ncc_dof.png",
+            pts,
+            target=target.ncc_min,
+            title=f"{sc.name}: force NCC against DOF of {body}",
+        )
     echo_summary(echo, result, target, out / "selection.json")
     failures = result["failures"] + result.get("interface", {}).get("failures", [])
     if failures and len(failures) == result["runs"] + result.get("interface", {}).get("runs", 0):
         first = failures[0]
-        raise SolverError(f"selection study: every run failed ({first['case']}: "
-                          f"{first['reason']}); see {out / 'selection.json'}")
+        raise SolverError(
+            f"selection study: every run failed ({first['case']}: "
+            f"{first['reason']}); see {out / 'selection.json'}"
+        )
     return result

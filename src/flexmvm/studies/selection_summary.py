@@ -26,20 +26,28 @@ from flexmvm.studies.search import Candidate, FamilyKind, best_passing, kind_exa
 __all__ = ["EXACT_NOTE", "Sweep", "selection_summary"]
 
 #: selection.json's note on ``exact`` (node kind) and ``interface.exact``.
-EXACT_NOTE = ("exact: this kind's entry is its smallest model reaching the target over its "
-              "whole grid (always with brute force); false after --search when the other "
-              "kind's winner (best_overall) has fewer DOF and this kind has models above that "
-              "DOF: the search then proved only that nothing of this kind passes up to "
-              "best_overall's DOF, and the entry (if any) is the best of the runs it made")
+EXACT_NOTE = (
+    "exact: this kind's entry is its smallest model reaching the target over its "
+    "whole grid (always with brute force); false after --search when the other "
+    "kind's winner (best_overall) has fewer DOF and this kind has models above that "
+    "DOF: the search then proved only that nothing of this kind passes up to "
+    "best_overall's DOF, and the entry (if any) is the best of the runs it made"
+)
 
-_RUNS_NOTE = ("runs = MVM cases evaluated for this answer = runs_made (computed in this "
-              "invocation) + runs_loaded (found stored in cases/); the full-FE reference "
-              "is not counted")
-_DOF_NOTE = ("dof = 3 x retained nodes + modes (elastic coordinates, seed count); "
-             "dof_total adds the 6 floating-frame coordinates")
-_FAILURES_NOTE = ("failures: the runs that gave no comparison (the solver failed, the "
-                  "case raised: see cases/<key>.error.txt, a rerun tries it again; or a "
-                  "metric could not be computed); they count as not reaching the target")
+_RUNS_NOTE = (
+    "runs = MVM cases evaluated for this answer = runs_made (computed in this "
+    "invocation) + runs_loaded (found stored in cases/); the full-FE reference "
+    "is not counted"
+)
+_DOF_NOTE = (
+    "dof = 3 x retained nodes + modes (elastic coordinates, seed count); "
+    "dof_total adds the 6 floating-frame coordinates"
+)
+_FAILURES_NOTE = (
+    "failures: the runs that gave no comparison (the solver failed, the "
+    "case raised: see cases/<key>.error.txt, a rerun tries it again; or a "
+    "metric could not be computed); they count as not reaching the target"
+)
 
 
 @dataclass(frozen=True)
@@ -76,8 +84,9 @@ class _Counts:
         self.nodes = len(keys) - self.interface
 
 
-def _node_kind(grid: NodeGrid | RegionGrid, rows: dict[str, dict], best: Candidate | None
-               ) -> tuple[list[dict], dict, list[tuple[str, dict]]]:
+def _node_kind(
+    grid: NodeGrid | RegionGrid, rows: dict[str, dict], best: Candidate | None
+) -> tuple[list[dict], dict, list[tuple[str, dict]]]:
     """The node kind's sorted table, winner fields + ``grid``, and (case key, row) pairs."""
     keyed = {k: r for k, r in rows.items() if not is_interface_key(k)}
     if isinstance(grid, RegionGrid):
@@ -90,8 +99,9 @@ def _node_kind(grid: NodeGrid | RegionGrid, rows: dict[str, dict], best: Candida
     return table, summary, [(case_key(r["layers"], r["laps"], r["modes"]), r) for r in table]
 
 
-def _best_overall(best: Candidate | None, case_of: dict[Candidate, Case],
-                  rows: dict[str, dict], kind: ModelKind) -> dict | None:
+def _best_overall(
+    best: Candidate | None, case_of: dict[Candidate, Case], rows: dict[str, dict], kind: ModelKind
+) -> dict | None:
     """selection.json's best_overall: the search's (or brute force's) winner over both kinds."""
     if best is None:
         return None
@@ -105,53 +115,84 @@ def _best_overall(best: Candidate | None, case_of: dict[Candidate, Case],
     return {"kind": name, "model": model, "dof": r["dof"], "ncc_force": r.get("ncc_force")}
 
 
-def _interface_kind(sweep: Sweep, target: Target, search: bool, kind: ModelKind,
-                    if_cases: Sequence[Case], patches: Sequence[Sequence[float]],
-                    interface_modes: Iterable[int]) -> dict:
+def _interface_kind(
+    sweep: Sweep,
+    target: Target,
+    search: bool,
+    kind: ModelKind,
+    if_cases: Sequence[Case],
+    patches: Sequence[Sequence[float]],
+    interface_modes: Iterable[int],
+) -> dict:
     """selection.json's fields of a study with the interface kind (``--patches``)."""
+
     def passes(s: float) -> bool:
         return s >= target.ncc_min
 
     def exact(k: FamilyKind) -> bool:
-        return not search or kind_exact(k, sweep.best, sweep.scores, passes,
-                                        list(sweep.case_of))
+        return not search or kind_exact(k, sweep.best, sweep.scores, passes, list(sweep.case_of))
 
     if_best = best_passing(sweep.scores, passes, FamilyKind.INTERFACE)
     made, loaded = _Counts(sweep.made), _Counts(sweep.loaded)
-    return {"grid_size": len(sweep.case_of) - len(if_cases), "exact": exact(FamilyKind.NODES),
-            "exact_note": EXACT_NOTE,
-            "interface": interface_summary(
-                sweep.rows, if_cases, None if if_best is None else sweep.case_of[if_best].key,
-                exact(FamilyKind.INTERFACE), made.interface, loaded.interface, patches,
-                interface_modes),
-            "best_overall": _best_overall(sweep.best, sweep.case_of, sweep.rows, kind)}
+    return {
+        "grid_size": len(sweep.case_of) - len(if_cases),
+        "exact": exact(FamilyKind.NODES),
+        "exact_note": EXACT_NOTE,
+        "interface": interface_summary(
+            sweep.rows,
+            if_cases,
+            None if if_best is None else sweep.case_of[if_best].key,
+            exact(FamilyKind.INTERFACE),
+            made.interface,
+            loaded.interface,
+            patches,
+            interface_modes,
+        ),
+        "best_overall": _best_overall(sweep.best, sweep.case_of, sweep.rows, kind),
+    }
 
 
-def selection_summary(grid: NodeGrid | RegionGrid, sweep: Sweep, *, body: str,
-                      kind: ModelKind, search: bool, target: Target, ref_made: bool,
-                      if_cases: Sequence[Case] = (),
-                      patches: Sequence[Sequence[float]] | None = None,
-                      interface_modes: Iterable[int] = ()) -> Report:
+def selection_summary(
+    grid: NodeGrid | RegionGrid,
+    sweep: Sweep,
+    *,
+    body: str,
+    kind: ModelKind,
+    search: bool,
+    target: Target,
+    ref_made: bool,
+    if_cases: Sequence[Case] = (),
+    patches: Sequence[Sequence[float]] | None = None,
+    interface_modes: Iterable[int] = (),
+) -> Report:
     """The table and selection.json of a selection study of ``body`` whose candidates of
     model ``kind`` were evaluated in ``sweep`` against ``target`` (``search``: by the pruned
     search; ``ref_made``: the reference was computed in this invocation); ``if_cases`` the
     interface kind's cases of ``patches`` x ``interface_modes`` (none: no interface kind)."""
+
     def passes(s: float) -> bool:
         return s >= target.ncc_min
 
     node_best = best_passing(sweep.scores, passes, FamilyKind.NODES)
     table, summary, keyed = _node_kind(grid, sweep.rows, node_best)
     summary |= {
-        "body": body, "kind": kind.value, "search": bool(search),
+        "body": body,
+        "kind": kind.value,
+        "search": bool(search),
         "target": target_dict(target),
         "runs": sum(c.kind is FamilyKind.NODES for c in sweep.scores),
-        "runs_made": _Counts(sweep.made).nodes, "runs_loaded": _Counts(sweep.loaded).nodes,
-        "runs_note": _RUNS_NOTE, "reference_computed": ref_made, "dof_note": _DOF_NOTE,
+        "runs_made": _Counts(sweep.made).nodes,
+        "runs_loaded": _Counts(sweep.loaded).nodes,
+        "runs_note": _RUNS_NOTE,
+        "reference_computed": ref_made,
+        "dof_note": _DOF_NOTE,
         "failed_cases": sorted(k for k, r in keyed if "failed" in r),
-        "failures": failure_list(keyed), "failures_note": _FAILURES_NOTE,
+        "failures": failure_list(keyed),
+        "failures_note": _FAILURES_NOTE,
     }
     if_rows = [sweep.rows[c.key] for c in if_cases if c.key in sweep.rows]
     if if_cases:
-        summary |= _interface_kind(sweep, target, search, kind, if_cases, patches or (),
-                                   interface_modes)
+        summary |= _interface_kind(
+            sweep, target, search, kind, if_cases, patches or (), interface_modes
+        )
     return Report(table, summary, tuple(sorted(if_rows, key=lambda r: (r["dof"], r["model"]))))

@@ -44,7 +44,7 @@ from flexmvm.errors import InputError, SolverError
 from flexmvm.theory.hertz import positive
 from flexmvm.theory.timoshenko import BeamModes, TimoshenkoBeam, free_free_modes
 
-_MAX_SEGMENTS = 1000        # contact events in one solution (each a restart of solve_ivp)
+_MAX_SEGMENTS = 1000  # contact events in one solution (each a restart of solve_ivp)
 _METHODS = ("DOP853", "RK45", "Radau", "BDF", "LSODA")
 
 
@@ -73,15 +73,19 @@ class SphereOnBeam:
         for name in ("sphere_radius_m", "sphere_mass_kg", "e_star_pa", "speed_mps"):
             positive(name, getattr(self, name))
         if not 0.0 < self.contact_x_m < self.beam.length_m:
-            raise InputError(f"contact_x_m: expected inside the beam (0, {self.beam.length_m}) "
-                             f"m, got {self.contact_x_m!r}")
+            raise InputError(
+                f"contact_x_m: expected inside the beam (0, {self.beam.length_m}) "
+                f"m, got {self.contact_x_m!r}"
+            )
         if self.local_law is not None:
             positive("local_law k", self.local_law[0])
             if not (math.isfinite(self.local_law[1]) and self.local_law[1] >= 1.0):
                 raise InputError(f"local_law exponent: expected >= 1, got {self.local_law[1]!r}")
         if not 2 <= self.n_modes <= 2 * (self.n_elements + 1):
-            raise InputError(f"n_modes: expected 2 .. {2 * (self.n_elements + 1)} (the two "
-                             f"rigid-body modes and elastic ones), got {self.n_modes!r}")
+            raise InputError(
+                f"n_modes: expected 2 .. {2 * (self.n_elements + 1)} (the two "
+                f"rigid-body modes and elastic ones), got {self.n_modes!r}"
+            )
 
     @property
     def hertz_k(self) -> float:
@@ -91,8 +95,11 @@ class SphereOnBeam:
     @property
     def contact_law(self) -> tuple[float, float]:
         """(k, p) of the local law F = k s^p: local_law, or Hertz's (k_H, 3/2)."""
-        return (self.hertz_k, 1.5) if self.local_law is None else (
-            float(self.local_law[0]), float(self.local_law[1]))
+        return (
+            (self.hertz_k, 1.5)
+            if self.local_law is None
+            else (float(self.local_law[0]), float(self.local_law[1]))
+        )
 
     def modes(self) -> BeamModes:
         """All free-free modes of the beam's n_elements elements, a node at the contact (a
@@ -100,8 +107,15 @@ class SphereOnBeam:
         read through the element's interpolation."""
         return free_free_modes(self.beam, self.n_elements, (self.contact_x_m,))
 
-    def solve(self, t_end_s: float, dt_out_s: float, *, probes_x_m: tuple[float, ...] = (),
-              rtol: float = 1e-10, method: str = "DOP853") -> BeamImpactSolution:
+    def solve(
+        self,
+        t_end_s: float,
+        dt_out_s: float,
+        *,
+        probes_x_m: tuple[float, ...] = (),
+        rtol: float = 1e-10,
+        method: str = "DOP853",
+    ) -> BeamImpactSolution:
         """The history on t = 0, dt_out_s, ... <= t_end_s [s] (t = 0 the first touch), with
         w_t and psi_t at probes_x_m [m]. InputError on bad arguments, SolverError if the
         integration fails."""
@@ -153,7 +167,7 @@ class _Model:
         shapes, omega = modes.shapes, modes.omega
         phi_all = (modes.at([imp.contact_x_m])[0] @ shapes)[0]
         static = np.zeros_like(omega)
-        static[n:] = phi_all[n:] / omega[n:] ** 2     # all elastic: n >= 2
+        static[n:] = phi_all[n:] / omega[n:] ** 2  # all elastic: n >= 2
         self.n, self.omega, self.omega2 = n, omega[:n], omega[:n] ** 2
         self.phi_c = phi_all[:n]
         self.c_r = float(phi_all @ static) if imp.residual_flexibility else 0.0
@@ -163,7 +177,7 @@ class _Model:
         self.res_w, self.res_psi = on * (nw @ shapes) @ static, on * (npsi @ shapes) @ static
         translation = np.zeros(shapes.shape[0])
         translation[0::2] = 1.0
-        self.momentum_per_mode = translation @ modes.M @ shapes[:, :n]   # rho A int phi_i dx
+        self.momentum_per_mode = translation @ modes.M @ shapes[:, :n]  # rho A int phi_i dx
         self.m = imp.sphere_mass_kg
         self.k, self.p = imp.contact_law
 
@@ -182,8 +196,10 @@ class _Model:
             s = np.maximum(s - step, 0.0)
             if np.all(np.abs(step) <= 1e-15 * d + 1e-300):
                 return s
-        raise SolverError("sphere on beam: the Hertz indentation did not converge in 60 "
-                          "Newton iterations; expected a few")
+        raise SolverError(
+            "sphere on beam: the Hertz indentation did not converge in 60 "
+            "Newton iterations; expected a few"
+        )
 
     def stiffness(self, s: np.ndarray) -> np.ndarray:
         """dF / d delta [N/m] at indentation s: p k s^(p-1) / (1 + c_r p k s^(p-1))."""
@@ -195,8 +211,8 @@ class _Model:
         delta = y[n] - self.phi_c @ y[:n]
         force = self.k * float(self.indentation(delta)) ** self.p if delta > 0.0 else 0.0
         out = np.empty_like(y)
-        out[:n + 1] = y[n + 1:]
-        out[n + 1:2 * n + 1] = -self.omega2 * y[:n] + self.phi_c * force
+        out[: n + 1] = y[n + 1 :]
+        out[n + 1 : 2 * n + 1] = -self.omega2 * y[:n] + self.phi_c * force
         out[2 * n + 1] = -force / self.m
         return out
 
@@ -204,12 +220,12 @@ class _Model:
         n = self.n
         delta = y[n] - self.phi_c @ y[:n]
         kt = float(self.stiffness(self.indentation(delta))) if delta > 0.0 else 0.0
-        g = np.concatenate([-self.phi_c, [1.0]])          # d delta / d (q, u)
+        g = np.concatenate([-self.phi_c, [1.0]])  # d delta / d (q, u)
         a = np.outer(np.concatenate([self.phi_c, [-1.0 / self.m]]), g) * kt
         a[np.arange(n), np.arange(n)] -= self.omega2
         out = np.zeros((2 * n + 2, 2 * n + 2))
-        out[:n + 1, n + 1:] = np.eye(n + 1)
-        out[n + 1:, :n + 1] = a
+        out[: n + 1, n + 1 :] = np.eye(n + 1)
+        out[n + 1 :, : n + 1] = a
         return out
 
 
@@ -219,26 +235,45 @@ def _integrate(model: _Model, imp: SphereOnBeam, grid: np.ndarray, rtol: float, 
     from flexmvm.theory.hertz import hertz_impact
 
     n, t_end = model.n, float(grid[-1])
-    scale_d = hertz_impact(imp.sphere_radius_m, imp.speed_mps, imp.e_star_pa,
-                           imp.sphere_mass_kg).delta_max_m
+    scale_d = hertz_impact(
+        imp.sphere_radius_m, imp.speed_mps, imp.e_star_pa, imp.sphere_mass_kg
+    ).delta_max_m
     root_m = math.sqrt(imp.beam.mass_kg)
-    atol = rtol * np.concatenate([np.full(n, root_m * scale_d), [scale_d],
-                                  np.full(n, root_m * imp.speed_mps), [imp.speed_mps]])
+    atol = rtol * np.concatenate(
+        [
+            np.full(n, root_m * scale_d),
+            [scale_d],
+            np.full(n, root_m * imp.speed_mps),
+            [imp.speed_mps],
+        ]
+    )
     y = np.zeros(2 * n + 2)
     y[-1] = imp.speed_mps
     rows, events, n_rhs = [y.copy()], [0.0], 0
     in_contact, t0 = True, 0.0
     implicit = {"jac": model.jac} if method in ("Radau", "BDF", "LSODA") else {}
     for _ in range(_MAX_SEGMENTS):
+
         def gap_event(t, y):
             return y[n] - model.phi_c @ y[:n]
+
         gap_event.terminal, gap_event.direction = True, (-1.0 if in_contact else 1.0)
-        sol = solve_ivp(model.rhs, (t0, t_end), y, method=method, t_eval=grid[grid > t0],
-                        events=gap_event, rtol=rtol, atol=atol, **implicit)
+        sol = solve_ivp(
+            model.rhs,
+            (t0, t_end),
+            y,
+            method=method,
+            t_eval=grid[grid > t0],
+            events=gap_event,
+            rtol=rtol,
+            atol=atol,
+            **implicit,
+        )
         n_rhs += sol.nfev
         if sol.status < 0:
-            raise SolverError(f"sphere on beam: solve_ivp ({method}) failed at t = {t0:.6g} "
-                              f"s: {sol.message}")
+            raise SolverError(
+                f"sphere on beam: solve_ivp ({method}) failed at t = {t0:.6g} s: {sol.message}"
+            )
         rows.extend(sol.y.T)
         if sol.status == 0:
             intervals = list(zip(events[0::2], [*events[1::2], t_end]))
@@ -246,32 +281,51 @@ def _integrate(model: _Model, imp: SphereOnBeam, grid: np.ndarray, rtol: float, 
         t0, y = float(sol.t_events[0][0]), sol.y_events[0][0].copy()
         events.append(t0)
         in_contact = not in_contact
-    raise SolverError(f"sphere on beam: more than {_MAX_SEGMENTS} contact events before "
-                      f"t = {t_end:.6g} s; expected a few")
+    raise SolverError(
+        f"sphere on beam: more than {_MAX_SEGMENTS} contact events before "
+        f"t = {t_end:.6g} s; expected a few"
+    )
 
 
-def _solve(imp: SphereOnBeam, t_end: float, dt: float, probes_x_m: tuple[float, ...],
-           rtol: float, method: str) -> BeamImpactSolution:
+def _solve(
+    imp: SphereOnBeam,
+    t_end: float,
+    dt: float,
+    probes_x_m: tuple[float, ...],
+    rtol: float,
+    method: str,
+) -> BeamImpactSolution:
     model = _Model(imp, probes_x_m)
     n_out = math.floor(t_end / dt * (1.0 + 1e-12))
     grid = np.arange(n_out + 1) * dt
     y, contacts, n_rhs = _integrate(model, imp, grid, rtol, method)
     _check_finite("the state", y)
     n = model.n
-    q, u, qd, ud = y[:, :n], y[:, n], y[:, n + 1:2 * n + 1], y[:, 2 * n + 1]
+    q, u, qd, ud = y[:, :n], y[:, n], y[:, n + 1 : 2 * n + 1], y[:, 2 * n + 1]
     delta = u - q @ model.phi_c
     s = model.indentation(delta)
     force = model.k * s**model.p
     force_rate = model.stiffness(s) * (ud - qd @ model.phi_c) * (delta > 0.0)
-    energy = (0.5 * model.m * ud**2 + 0.5 * np.sum(qd**2 + model.omega2 * q**2, axis=1)
-              + model.k * s ** (model.p + 1.0) / (model.p + 1.0) + 0.5 * model.c_r * force**2)
+    energy = (
+        0.5 * model.m * ud**2
+        + 0.5 * np.sum(qd**2 + model.omega2 * q**2, axis=1)
+        + model.k * s ** (model.p + 1.0) / (model.p + 1.0)
+        + 0.5 * model.c_r * force**2
+    )
     return BeamImpactSolution(
-        t=grid, force=force, approach=delta, sphere_velocity=ud,
+        t=grid,
+        force=force,
+        approach=delta,
+        sphere_velocity=ud,
         probe_w_t=qd @ model.probe_w.T + np.outer(force_rate, model.res_w),
         probe_psi_t=qd @ model.probe_psi.T + np.outer(force_rate, model.res_psi),
-        momentum=model.m * ud + qd @ model.momentum_per_mode, energy=energy,
-        contacts=contacts, n_rhs=n_rhs, omega_kept=model.omega,
-        residual_flexibility_m_per_n=model.c_r)
+        momentum=model.m * ud + qd @ model.momentum_per_mode,
+        energy=energy,
+        contacts=contacts,
+        n_rhs=n_rhs,
+        omega_kept=model.omega,
+        residual_flexibility_m_per_n=model.c_r,
+    )
 
 
 __all__ = ["BeamImpactSolution", "SphereOnBeam"]

@@ -53,8 +53,9 @@ def effective_modulus(E1: float, nu1: float, E2: float, nu2: float) -> float:
     return 1.0 / ((1.0 - nu1**2) / positive("E1", E1) + (1.0 - nu2**2) / positive("E2", E2))
 
 
-def hertz_impact(radius_m: float, speed_mps: float, e_star_pa: float, m1_kg: float,
-                 m2_kg: float = math.inf) -> HertzImpact:
+def hertz_impact(
+    radius_m: float, speed_mps: float, e_star_pa: float, m1_kg: float, m2_kg: float = math.inf
+) -> HertzImpact:
     """The scales of the impact (module doc) of a sphere of radius ``radius_m`` at
     ``speed_mps`` with effective modulus ``e_star_pa``, masses m1 and m2 [kg] (m2 = inf: a
     target that does not recoil). InputError for a non-positive input."""
@@ -66,8 +67,7 @@ def hertz_impact(radius_m: float, speed_mps: float, e_star_pa: float, m1_kg: flo
     m_star = m1 if m2 == math.inf else m1 * m2 / (m1 + m2)
     delta = (15.0 * m_star * v * v / (16.0 * E * math.sqrt(R))) ** 0.4
     force = 4.0 / 3.0 * E * math.sqrt(R) * delta**1.5
-    return HertzImpact(E, m_star, delta, force, math.sqrt(R * delta),
-                       DURATION_FACTOR * delta / v)
+    return HertzImpact(E, m_star, delta, force, math.sqrt(R * delta), DURATION_FACTOR * delta / v)
 
 
 __all__ = ["DURATION_FACTOR", "HertzImpact", "effective_modulus", "hertz_impact", "positive"]

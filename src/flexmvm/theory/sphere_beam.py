@@ -39,10 +39,10 @@ from flexmvm.theory.hertz import effective_modulus
 from flexmvm.theory.timoshenko import TimoshenkoBeam
 
 LAW = "timoshenko-hertz"
-_SPHERE_TOL = 1e-3       # radius spread of a sphere's skin nodes, relative
-_PRISM_TOL = 1e-6        # skin volume against the bounding box's, relative
-_ANGLE_TOL = 1e-6        # impact direction against the face normal [rad]
-_SLENDER = 5.0           # length / largest section side of a beam
+_SPHERE_TOL = 1e-3  # radius spread of a sphere's skin nodes, relative
+_PRISM_TOL = 1e-6  # skin volume against the bounding box's, relative
+_ANGLE_TOL = 1e-6  # impact direction against the face normal [rad]
+_SLENDER = 5.0  # length / largest section side of a beam
 
 
 @dataclass(frozen=True)
@@ -109,14 +109,18 @@ def _bodies(sc, c):
     """(sphere cfg, its mesh, centre, R, beam cfg, its mesh) of contact c, or InputError."""
     cfgs = [sc.body(c.slave_body), sc.body(c.master_body)]
     if any(cfg.mesh_file is None for cfg in cfgs):
-        raise InputError("theory: a sphere-on-beam impact needs two mesh_file bodies, got "
-                         + ", ".join(f"{cfg.name!r}" for cfg in cfgs if cfg.mesh_file is None)
-                         + " without one")
+        raise InputError(
+            "theory: a sphere-on-beam impact needs two mesh_file bodies, got "
+            + ", ".join(f"{cfg.name!r}" for cfg in cfgs if cfg.mesh_file is None)
+            + " without one"
+        )
     meshes = [_mesh(cfg.mesh_file) for cfg in cfgs]
     spheres = [_sphere_of(m) for m in meshes]
     if sum(s is not None for s in spheres) != 1:
-        raise InputError(f"theory: expected one sphere among {cfgs[0].name!r} and "
-                         f"{cfgs[1].name!r}, got {sum(s is not None for s in spheres)}")
+        raise InputError(
+            f"theory: expected one sphere among {cfgs[0].name!r} and "
+            f"{cfgs[1].name!r}, got {sum(s is not None for s in spheres)}"
+        )
     i = 0 if spheres[0] is not None else 1
     centre, radius = spheres[i]
     return cfgs[i], meshes[i], centre, radius, cfgs[1 - i], meshes[1 - i]
@@ -127,18 +131,23 @@ def _beam_frame(cfg, mesh):
     lo, hi = mesh.nodes.min(axis=0), mesh.nodes.max(axis=0)
     ext = hi - lo
     if abs(_skin_volume(mesh) / float(np.prod(ext)) - 1.0) > _PRISM_TOL:
-        raise InputError(f"theory: body {cfg.name!r} is not a rectangular prism (its volume "
-                         "differs from its bounding box's)")
+        raise InputError(
+            f"theory: body {cfg.name!r} is not a rectangular prism (its volume "
+            "differs from its bounding box's)"
+        )
     axis = int(np.argmax(ext))
     if ext[axis] < _SLENDER * np.delete(ext, axis).max():
         ratio = ext[axis] / np.delete(ext, axis).max()
-        raise InputError(f"theory: body {cfg.name!r} is not a beam: its length is {ratio:.3g} "
-                         f"times its largest section side, beam theory needs >= {_SLENDER:g}")
+        raise InputError(
+            f"theory: body {cfg.name!r} is not a beam: its length is {ratio:.3g} "
+            f"times its largest section side, beam theory needs >= {_SLENDER:g}"
+        )
     return lo, hi, axis
 
 
-def sphere_beam_case(sc, body: str | None = None, *, n_modes: int = 40,
-                     n_elements: int = 200) -> SphereBeamCase:
+def sphere_beam_case(
+    sc, body: str | None = None, *, n_modes: int = 40, n_elements: int = 200
+) -> SphereBeamCase:
     """The beam-theory view of scenario ``sc`` (module doc), InputError where it does not
     apply."""
     c = _contact(sc, body)
@@ -156,8 +165,10 @@ def sphere_beam_case(sc, body: str | None = None, *, n_modes: int = 40,
         raise InputError(f"theory: the sphere {s_cfg.name!r} does not move")
     normal_idx = int(np.argmax(np.abs(v_loc)))
     if normal_idx == axis or abs(v_loc[normal_idx]) < math.cos(_ANGLE_TOL) * speed:
-        raise InputError(f"theory: the sphere's velocity (beam frame {v_loc.tolist()} m/s) is "
-                         "not normal to a long face of the beam")
+        raise InputError(
+            f"theory: the sphere's velocity (beam frame {v_loc.tolist()} m/s) is "
+            "not normal to a long face of the beam"
+        )
     sign = 1.0 if v_loc[normal_idx] > 0 else -1.0
     n_loc = sign * np.eye(3)[normal_idx]
     width_idx = 3 - axis - normal_idx
@@ -165,55 +176,95 @@ def sphere_beam_case(sc, body: str | None = None, *, n_modes: int = 40,
     face = lo[normal_idx] if sign > 0 else hi[normal_idx]
     skin = s_mesh.nodes[s_mesh.node_set("surface")]
     s_rot = s_cfg.placement.rotation.matrix()
-    skin_loc = (rb.T @ (np.asarray(s_cfg.placement.position_m)[:, None] + s_rot @ skin.T
-                        - np.asarray(pb.position_m)[:, None])).T
+    skin_loc = (
+        rb.T
+        @ (
+            np.asarray(s_cfg.placement.position_m)[:, None]
+            + s_rot @ skin.T
+            - np.asarray(pb.position_m)[:, None]
+        )
+    ).T
     gap = float(np.min(sign * (face - skin_loc[:, normal_idx])))
     x_c = float(c_loc[axis] - lo[axis])
     over = lo[width_idx] < c_loc[width_idx] < hi[width_idx]
     if gap < -1e-9 * radius or not (0.0 < x_c < hi[axis] - lo[axis]) or not over:
-        raise InputError(f"theory: the sphere {s_cfg.name!r} is not in front of the beam's "
-                         f"face (gap {gap:.3g} m, contact at {x_c:.4g} m along the axis)")
+        raise InputError(
+            f"theory: the sphere {s_cfg.name!r} is not in front of the beam's "
+            f"face (gap {gap:.3g} m, contact at {x_c:.4g} m along the axis)"
+        )
     mb, ms = b_cfg.material_obj(), s_cfg.material_obj()
-    e_star = (mb.E / (1.0 - mb.nu**2) if s_cfg.model.kind is ModelKind.RIGID
-              else effective_modulus(ms.E, ms.nu, mb.E, mb.nu))
-    beam = TimoshenkoBeam(float(hi[axis] - lo[axis]), float(hi[width_idx] - lo[width_idx]),
-                          float(hi[normal_idx] - lo[normal_idx]), mb.E, mb.nu, mb.rho)
-    impact = SphereOnBeam(beam, x_c, radius, ms.rho * _skin_volume(s_mesh), e_star, speed,
-                          n_modes=n_modes, n_elements=n_elements)
+    e_star = (
+        mb.E / (1.0 - mb.nu**2)
+        if s_cfg.model.kind is ModelKind.RIGID
+        else effective_modulus(ms.E, ms.nu, mb.E, mb.nu)
+    )
+    beam = TimoshenkoBeam(
+        float(hi[axis] - lo[axis]),
+        float(hi[width_idx] - lo[width_idx]),
+        float(hi[normal_idx] - lo[normal_idx]),
+        mb.E,
+        mb.nu,
+        mb.rho,
+    )
+    impact = SphereOnBeam(
+        beam,
+        x_c,
+        radius,
+        ms.rho * _skin_volume(s_mesh),
+        e_star,
+        speed,
+        n_modes=n_modes,
+        n_elements=n_elements,
+    )
     n_glob, e_glob = rb @ n_loc, rb @ np.eye(3)[axis]
     mid = 0.5 * (lo + hi)
     probes = []
     for p in sc.probes:
         if p.body not in (s_cfg.name, b_cfg.name):
-            raise InputError(f"theory: probe {p.name!r} is on {p.body!r}, neither the sphere "
-                             "nor the beam")
+            raise InputError(
+                f"theory: probe {p.name!r} is on {p.body!r}, neither the sphere nor the beam"
+            )
         mesh = b_mesh if p.body == b_cfg.name else s_mesh
-        loc = (np.asarray(p.point_m) if p.point_m is not None
-               else mesh.nodes[mesh.node_set(p.node_set)].mean(axis=0))
+        loc = (
+            np.asarray(p.point_m)
+            if p.point_m is not None
+            else mesh.nodes[mesh.node_set(p.node_set)].mean(axis=0)
+        )
         if p.body == s_cfg.name:
             probes.append((p.name, "sphere", 0.0, 0.0, float(n_glob[0]), 0.0))
         else:
-            probes.append((p.name, "beam", float(np.clip(loc[axis] - lo[axis], 0.0, beam.length_m)),
-                           float((loc - mid) @ n_loc), float(n_glob[0]), float(e_glob[0])))
+            probes.append(
+                (
+                    p.name,
+                    "beam",
+                    float(np.clip(loc[axis] - lo[axis], 0.0, beam.length_m)),
+                    float((loc - mid) @ n_loc),
+                    float(n_glob[0]),
+                    float(e_glob[0]),
+                )
+            )
     return SphereBeamCase(s_cfg.name, b_cfg.name, impact, max(gap, 0.0) / speed, tuple(probes))
 
 
-def sphere_beam_histories(sc, dt: float | None = None
-                          ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], dict]:
+def sphere_beam_histories(
+    sc, dt: float | None = None
+) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], dict]:
     """(t, contact force, {probe: global x velocity}, info) of the beam theory of scenario sc
     over its end time, sampled every dt [s] (default 0.25 us) from the first touch on."""
     return case_histories(sphere_beam_case(sc), sc.time.t_end_s, dt)
 
 
-def case_histories(case: SphereBeamCase, t_end: float, dt: float | None = None
-                   ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], dict]:
+def case_histories(
+    case: SphereBeamCase, t_end: float, dt: float | None = None
+) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray], dict]:
     """sphere_beam_histories of a case (one whose impact may be changed, e.g. its beam's
     modulus or its local law) up to t_end [s]."""
     dt = 0.25e-6 if dt is None else float(dt)
     t0 = case.t_first_touch_s
     if not t0 < t_end:
-        raise InputError(f"theory: the sphere touches the beam at {t0:.4g} s, after the end "
-                         f"time {t_end:.4g} s")
+        raise InputError(
+            f"theory: the sphere touches the beam at {t0:.4g} s, after the end time {t_end:.4g} s"
+        )
     beam_x = tuple(x for _, where, x, *_ in case.probes if where == "beam")
     sol = case.impact.solve(t_end - t0, dt, probes_x_m=beam_x)
     before = np.arange(math.ceil(t0 / dt)) * dt
@@ -227,13 +278,18 @@ def case_histories(case: SphereBeamCase, t_end: float, dt: float | None = None
         else:
             v = np.concatenate([pad, sol.probe_w_t[:, k] * n_x - eta * sol.probe_psi_t[:, k] * e_x])
             k += 1
-        probes[name] = v + 0.0       # no -0.0 in the history
-    info = {"law": LAW, "v0_mps": case.impact.speed_mps, "striker": case.sphere,
-            "target": case.beam, "t_first_touch_s": t0,
-            "contacts_s": [(t0 + a, t0 + b) for a, b in sol.contacts],
-            "n_modes": case.impact.n_modes, "sphere_mass_kg": case.impact.sphere_mass_kg}
+        probes[name] = v + 0.0  # no -0.0 in the history
+    info = {
+        "law": LAW,
+        "v0_mps": case.impact.speed_mps,
+        "striker": case.sphere,
+        "target": case.beam,
+        "t_first_touch_s": t0,
+        "contacts_s": [(t0 + a, t0 + b) for a, b in sol.contacts],
+        "n_modes": case.impact.n_modes,
+        "sphere_mass_kg": case.impact.sphere_mass_kg,
+    }
     return t, np.concatenate([pad, sol.force]), probes, info
 
 
-__all__ = ["LAW", "SphereBeamCase", "case_histories", "sphere_beam_case",
-           "sphere_beam_histories"]
+__all__ = ["LAW", "SphereBeamCase", "case_histories", "sphere_beam_case", "sphere_beam_histories"]

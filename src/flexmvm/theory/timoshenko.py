@@ -89,8 +89,9 @@ class TimoshenkoBeam:
 
     @property
     def kappa(self) -> float:
-        return (cowper_rectangle(self.nu) if self.shear_coefficient is None
-                else self.shear_coefficient)
+        return (
+            cowper_rectangle(self.nu) if self.shear_coefficient is None else self.shear_coefficient
+        )
 
     @property
     def shear_modulus_pa(self) -> float:
@@ -108,14 +109,34 @@ def _shape_functions(xi: np.ndarray, length: float, phi: float):
     x = np.asarray(xi, dtype=float)[:, None]
     mu = 1.0 / (1.0 + phi)
     one = np.ones_like(x)
-    nw = mu * np.hstack([1 - 3 * x**2 + 2 * x**3 + phi * (1 - x),
-                         length * (x - 2 * x**2 + x**3 + 0.5 * phi * (x - x**2)),
-                         3 * x**2 - 2 * x**3 + phi * x,
-                         length * (-x**2 + x**3 + 0.5 * phi * (x**2 - x))])
-    npsi = mu * np.hstack([6.0 / length * (x**2 - x), 1 - 4 * x + 3 * x**2 + phi * (1 - x),
-                           6.0 / length * (x - x**2), -2 * x + 3 * x**2 + phi * x])
-    dnpsi = mu / length * np.hstack([6.0 / length * (2 * x - 1), -4 + 6 * x - phi,
-                                     6.0 / length * (1 - 2 * x), -2 + 6 * x + phi])
+    nw = mu * np.hstack(
+        [
+            1 - 3 * x**2 + 2 * x**3 + phi * (1 - x),
+            length * (x - 2 * x**2 + x**3 + 0.5 * phi * (x - x**2)),
+            3 * x**2 - 2 * x**3 + phi * x,
+            length * (-(x**2) + x**3 + 0.5 * phi * (x**2 - x)),
+        ]
+    )
+    npsi = mu * np.hstack(
+        [
+            6.0 / length * (x**2 - x),
+            1 - 4 * x + 3 * x**2 + phi * (1 - x),
+            6.0 / length * (x - x**2),
+            -2 * x + 3 * x**2 + phi * x,
+        ]
+    )
+    dnpsi = (
+        mu
+        / length
+        * np.hstack(
+            [
+                6.0 / length * (2 * x - 1),
+                -4 + 6 * x - phi,
+                6.0 / length * (1 - 2 * x),
+                -2 + 6 * x + phi,
+            ]
+        )
+    )
     gamma = mu * phi / length * np.hstack([-one, -0.5 * length * one, one, -0.5 * length * one])
     return nw, npsi, dnpsi, gamma
 
@@ -166,8 +187,11 @@ def beam_nodes(length_m: float, n_elements: int, through: tuple[float, ...] = ()
     cuts = sorted({0.0, length_m, *(float(p) for p in through)})
     if cuts[0] < 0.0 or cuts[-1] > length_m:
         raise InputError(f"node positions {through!r} m: expected within [0, {length_m!r}] m")
-    parts = [np.linspace(a, b, max(1, round(n_elements * (b - a) / length_m)) + 1)[:-1]
-             for a, b in itertools.pairwise(cuts) if b > a]
+    parts = [
+        np.linspace(a, b, max(1, round(n_elements * (b - a) / length_m)) + 1)[:-1]
+        for a, b in itertools.pairwise(cuts)
+        if b > a
+    ]
     return np.concatenate([*parts, [length_m]])
 
 
@@ -192,17 +216,22 @@ class BeamModes:
         if np.any((x < lo) | (x > hi)):
             raise InputError(f"points {x.tolist()} m: expected within the beam [{lo}, {hi}] m")
         e = np.clip(np.searchsorted(self.x_nodes, x, side="right") - 1, 0, len(self.x_nodes) - 2)
-        nw, npsi = np.zeros((len(x), 2 * len(self.x_nodes))), np.zeros((len(x), 2 * len(self.x_nodes)))
+        nw, npsi = (
+            np.zeros((len(x), 2 * len(self.x_nodes))),
+            np.zeros((len(x), 2 * len(self.x_nodes))),
+        )
         for i, (xi, ei) in enumerate(zip(x, e)):
             length = self.x_nodes[ei + 1] - self.x_nodes[ei]
-            w, p, _, _ = _shape_functions(np.array([(xi - self.x_nodes[ei]) / length]), length,
-                                          _phi(self.beam, length))
-            nw[i, 2 * ei:2 * ei + 4], npsi[i, 2 * ei:2 * ei + 4] = w[0], p[0]
+            w, p, _, _ = _shape_functions(
+                np.array([(xi - self.x_nodes[ei]) / length]), length, _phi(self.beam, length)
+            )
+            nw[i, 2 * ei : 2 * ei + 4], npsi[i, 2 * ei : 2 * ei + 4] = w[0], p[0]
         return nw, npsi
 
 
-def free_free_modes(beam: TimoshenkoBeam, n_elements: int = 200,
-                    through: tuple[float, ...] = ()) -> BeamModes:
+def free_free_modes(
+    beam: TimoshenkoBeam, n_elements: int = 200, through: tuple[float, ...] = ()
+) -> BeamModes:
     """All modes of the free-free beam from n_elements elements (nodes at ``through`` [m]).
     SolverError unless exactly two eigenvalues are rigid-body ones (|omega^2| below 1e-8 of
     the first elastic one), which are then set to 0."""
@@ -212,8 +241,10 @@ def free_free_modes(beam: TimoshenkoBeam, n_elements: int = 200,
     scale = lam[np.abs(lam) > 1e-8 * np.max(np.abs(lam))]
     rigid = np.abs(lam) < 1e-8 * (scale.min() if scale.size else 1.0)
     if rigid.sum() != 2 or not np.all(rigid[:2]) or np.any(lam[~rigid] <= 0):
-        raise SolverError(f"free-free beam: expected two rigid-body modes and positive "
-                          f"elastic eigenvalues, got omega^2 = {lam[:4].tolist()} ...")
+        raise SolverError(
+            f"free-free beam: expected two rigid-body modes and positive "
+            f"elastic eigenvalues, got omega^2 = {lam[:4].tolist()} ..."
+        )
     lam = np.where(rigid, 0.0, lam)
     return BeamModes(beam, x, np.sqrt(lam), vec, kk, mm)
 
@@ -223,14 +254,14 @@ def euler_bernoulli_free_free_beta(n: int) -> float:
     cos(bL) cosh(bL) = 1 (4.7300, 7.8532, 10.9956, ...; Blevins, "Formulas for Natural
     Frequency and Mode Shape", table 8-1)."""
     guess = (n + 0.5) * math.pi
-    return brentq(lambda b: math.cos(b) - 1.0 / math.cosh(b), guess - 0.3, guess + 0.3,
-                  xtol=1e-14)
+    return brentq(lambda b: math.cos(b) - 1.0 / math.cosh(b), guess - 0.3, guess + 0.3, xtol=1e-14)
 
 
 def euler_bernoulli_omega(beam: TimoshenkoBeam, beta_l: float) -> float:
     """omega = (beta L)^2 sqrt(E I / (rho A L^4)) [rad/s]."""
-    return beta_l**2 * math.sqrt(beam.E_pa * beam.second_moment_m4
-                                 / (beam.rho_kg_m3 * beam.area_m2 * beam.length_m**4))
+    return beta_l**2 * math.sqrt(
+        beam.E_pa * beam.second_moment_m4 / (beam.rho_kg_m3 * beam.area_m2 * beam.length_m**4)
+    )
 
 
 def simply_supported_omega(beam: TimoshenkoBeam, n: int) -> float:
@@ -242,7 +273,7 @@ def simply_supported_omega(beam: TimoshenkoBeam, n: int) -> float:
     rho_a = beam.rho_kg_m3 * beam.area_m2
     rho_i = beam.rho_kg_m3 * beam.second_moment_m4 if beam.rotary_inertia else 0.0
     ei = beam.E_pa * beam.second_moment_m4
-    if not beam.shear_deformation:        # kGA -> infinity: E I a^4 = (rho A + rho I a^2) w^2
+    if not beam.shear_deformation:  # kGA -> infinity: E I a^4 = (rho A + rho I a^2) w^2
         return math.sqrt(ei * a**4 / (rho_a + rho_i * a**2))
     ga = beam.kappa * beam.shear_modulus_pa * beam.area_m2
     # (ga a^2 - rho_a s)(ei a^2 + ga - rho_i s) - (ga a)^2 = qa s^2 + qb s + qc = 0, s = w^2
@@ -252,6 +283,15 @@ def simply_supported_omega(beam: TimoshenkoBeam, n: int) -> float:
     return math.sqrt(2.0 * qc / (-qb + math.sqrt(qb * qb - 4.0 * qa * qc)))  # no cancellation
 
 
-__all__ = ["BeamModes", "TimoshenkoBeam", "beam_matrices", "beam_nodes", "cowper_rectangle",
-           "element_matrices", "euler_bernoulli_free_free_beta", "euler_bernoulli_omega",
-           "free_free_modes", "simply_supported_omega"]
+__all__ = [
+    "BeamModes",
+    "TimoshenkoBeam",
+    "beam_matrices",
+    "beam_nodes",
+    "cowper_rectangle",
+    "element_matrices",
+    "euler_bernoulli_free_free_beta",
+    "euler_bernoulli_omega",
+    "free_free_modes",
+    "simply_supported_omega",
+]

@@ -181,8 +181,10 @@ class WaveSolution:
         fields: rho A int (v_rigid + vL + vR) dx. Raises InputError outside the time span."""
         t = self._check_time(t)
         out = []
-        for rod, v_out, v_rigid in ((self.params.rod1, self.v1_out, self.params.v0),
-                                    (self.params.rod2, self.v2_out, 0.0)):
+        for rod, v_out, v_rigid in (
+            (self.params.rod1, self.v1_out, self.params.v0),
+            (self.params.rod2, self.v2_out, 0.0),
+        ):
             d, v_l, v_r = self._fields(rod, v_out, t)
             out.append(float(rod.rho * rod.area_m2 * np.trapezoid(v_rigid + v_l + v_r, d)))
         return out[0], out[1]
@@ -197,8 +199,10 @@ class WaveSolution:
         mirror for rod 2), plus the Hertz contact energy 2/5 k delta^{5/2}."""
         t = self._check_time(t)
         total = 0.0
-        for rod, v_out, v_rigid in ((self.params.rod1, self.v1_out, self.params.v0),
-                                    (self.params.rod2, self.v2_out, 0.0)):
+        for rod, v_out, v_rigid in (
+            (self.params.rod1, self.v1_out, self.params.v0),
+            (self.params.rod2, self.v2_out, 0.0),
+        ):
             d, v_l, v_r = self._fields(rod, v_out, t)
             density = (v_rigid + v_l + v_r) ** 2 + (v_l - v_r) ** 2
             total += 0.5 * rod.rho * rod.area_m2 * np.trapezoid(density, d)
@@ -316,8 +320,9 @@ def _delayed(v_out: np.ndarray, pos: np.ndarray) -> np.ndarray:
     return np.interp(pos, np.arange(v_out.size, dtype=float), v_out, left=0.0)
 
 
-def _hertz_chunk(delta0: float, w: list[float], w_mid: list[float], kz: float,
-                 dt: float) -> list[float]:
+def _hertz_chunk(
+    delta0: float, w: list[float], w_mid: list[float], kz: float, dt: float
+) -> list[float]:
     """Classical RK4 for d(delta)/dt = w(t) - kz max(delta,0)^1.5 over len(w_mid) steps.
 
     w: free approach rate at the len(w_mid)+1 grid instants, w_mid: at the step midpoints.
@@ -363,14 +368,14 @@ def _solve_hertz(p: WaveParams, t: np.ndarray) -> WaveSolution:
         k1 = min(k0 + chunk, n - 1)
         idx = np.arange(k0, k1 + 1, dtype=float)
         mid = idx[:-1] + 0.5
-        v1_in[k0:k1 + 1] = _delayed(v1_out, idx - p1)
-        v2_in[k0:k1 + 1] = _delayed(v2_out, idx - p2)
-        w = v0 + 2.0 * v1_in[k0:k1 + 1] - 2.0 * v2_in[k0:k1 + 1]
+        v1_in[k0 : k1 + 1] = _delayed(v1_out, idx - p1)
+        v2_in[k0 : k1 + 1] = _delayed(v2_out, idx - p2)
+        w = v0 + 2.0 * v1_in[k0 : k1 + 1] - 2.0 * v2_in[k0 : k1 + 1]
         w_mid = v0 + 2.0 * _delayed(v1_out, mid - p1) - 2.0 * _delayed(v2_out, mid - p2)
-        delta[k0 + 1:k1 + 1] = _hertz_chunk(delta[k0], w.tolist(), w_mid.tolist(), kz, dt)
-        force[k0 + 1:k1 + 1] = k * np.maximum(delta[k0 + 1:k1 + 1], 0.0) ** 1.5
-        v1_out[k0 + 1:k1 + 1] = v1_in[k0 + 1:k1 + 1] - force[k0 + 1:k1 + 1] / z1
-        v2_out[k0 + 1:k1 + 1] = v2_in[k0 + 1:k1 + 1] + force[k0 + 1:k1 + 1] / z2
+        delta[k0 + 1 : k1 + 1] = _hertz_chunk(delta[k0], w.tolist(), w_mid.tolist(), kz, dt)
+        force[k0 + 1 : k1 + 1] = k * np.maximum(delta[k0 + 1 : k1 + 1], 0.0) ** 1.5
+        v1_out[k0 + 1 : k1 + 1] = v1_in[k0 + 1 : k1 + 1] - force[k0 + 1 : k1 + 1] / z1
+        v2_out[k0 + 1 : k1 + 1] = v2_in[k0 + 1 : k1 + 1] + force[k0 + 1 : k1 + 1] / z2
         k0 = k1
     if not np.all(np.isfinite(delta)):
         raise SolverError(f"HERTZ wave solution diverged (non-finite approach) with dt = {dt!r} s")
@@ -390,8 +395,15 @@ def _solve_hertz(p: WaveParams, t: np.ndarray) -> WaveSolution:
     )
 
 
-def two_rod_impact(rod1: Rod1D, rod2: Rod1D, v0: float, t_end: float, law: ContactLaw,
-                   sphere_radius_m: float | None = None, dt: float | None = None) -> WaveSolution:
+def two_rod_impact(
+    rod1: Rod1D,
+    rod2: Rod1D,
+    v0: float,
+    t_end: float,
+    law: ContactLaw,
+    sphere_radius_m: float | None = None,
+    dt: float | None = None,
+) -> WaveSolution:
     """Two-rod impact by the 1D wave equation (module docstring: equations and sign convention).
 
     rod1 strikes rod2 at v0 [m/s] (> 0, in +x); solution on ``t = 0, dt, ..., <= t_end`` [s].

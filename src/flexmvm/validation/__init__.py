@@ -25,6 +25,22 @@ from flexmvm.validation.cases import (
 from flexmvm.validation.paths import git_commit
 from flexmvm.validation.runs import Case, case_inputs, case_key, run_case
 
-__all__ = ["CASES", "DT", "SHORT_FINE_MESH", "T_FLAT", "T_SEED", "T_STEP", "Case", "case_inputs",
-           "case_key", "flat_vs_st_venant", "git_commit", "pendulum_case", "run_case",
-           "seed_vs_theory", "short_case", "short_scenario", "step_convergence"]
+__all__ = [
+    "CASES",
+    "DT",
+    "SHORT_FINE_MESH",
+    "T_FLAT",
+    "T_SEED",
+    "T_STEP",
+    "Case",
+    "case_inputs",
+    "case_key",
+    "flat_vs_st_venant",
+    "git_commit",
+    "pendulum_case",
+    "run_case",
+    "seed_vs_theory",
+    "short_case",
+    "short_scenario",
+    "step_convergence",
+]

@@ -31,8 +31,12 @@ class Bound(enum.Enum):
     ABS_BELOW = "|x| <"
 
     def holds(self, value: float, threshold: float) -> bool:
-        op = {Bound.AT_LEAST: operator.ge, Bound.AT_MOST: operator.le,
-              Bound.BELOW: operator.lt, Bound.ABS_BELOW: lambda v, t: abs(v) < t}[self]
+        op = {
+            Bound.AT_LEAST: operator.ge,
+            Bound.AT_MOST: operator.le,
+            Bound.BELOW: operator.lt,
+            Bound.ABS_BELOW: lambda v, t: abs(v) < t,
+        }[self]
         return bool(op(value, threshold))
 
 
@@ -64,25 +68,48 @@ class Criterion:
 def _conservation(section: str, run: str, steps_not_converged: int = 0) -> list[Criterion]:
     """What every run of a case must conserve: momentum, the LCPs solved, Newton converged."""
     return [
-        Criterion(section, (*run, "momentum_rel_error"), Bound.BELOW, 1e-9,
-                  "free bodies: the translational rows are linear and the impulses come in "
-                  "equal and opposite pairs, so only round-off may change the momentum"),
-        Criterion(section, (*run, "lcp_residual_max"), Bound.AT_MOST, 1e-8,
-                  "every LCP solved: a tensile impulse or one on an opening gap reads ~1"),
-        Criterion(section, (*run, "steps_not_converged"), Bound.AT_MOST, steps_not_converged,
-                  "every Newton step converged to its rtol"),
+        Criterion(
+            section,
+            (*run, "momentum_rel_error"),
+            Bound.BELOW,
+            1e-9,
+            "free bodies: the translational rows are linear and the impulses come in "
+            "equal and opposite pairs, so only round-off may change the momentum",
+        ),
+        Criterion(
+            section,
+            (*run, "lcp_residual_max"),
+            Bound.AT_MOST,
+            1e-8,
+            "every LCP solved: a tensile impulse or one on an opening gap reads ~1",
+        ),
+        Criterion(
+            section,
+            (*run, "steps_not_converged"),
+            Bound.AT_MOST,
+            steps_not_converged,
+            "every Newton step converged to its rtol",
+        ),
     ]
 
 
 def _penetration(run: str) -> list[Criterion]:
     return [
-        Criterion("seed", (run, "max_penetration_m"), Bound.BELOW,
-                  0.10 * SEED_HERTZ_APPROACH_M,
-                  "either surface into the other within 10 % of the peak Hertz approach (b1's "
-                  "nodes sit in b2's facets by their chord error, 1.8 um measured)"),
-        Criterion("seed", (run, "max_penetration_by_direction_m", "b2 nodes into b1"),
-                  Bound.BELOW, 0.02 * SEED_HERTZ_APPROACH_M,
-                  "b2's slave nodes into b1, held by the constraint: within 2 % of it"),
+        Criterion(
+            "seed",
+            (run, "max_penetration_m"),
+            Bound.BELOW,
+            0.10 * SEED_HERTZ_APPROACH_M,
+            "either surface into the other within 10 % of the peak Hertz approach (b1's "
+            "nodes sit in b2's facets by their chord error, 1.8 um measured)",
+        ),
+        Criterion(
+            "seed",
+            (run, "max_penetration_by_direction_m", "b2 nodes into b1"),
+            Bound.BELOW,
+            0.02 * SEED_HERTZ_APPROACH_M,
+            "b2's slave nodes into b1, held by the constraint: within 2 % of it",
+        ),
     ]
 
 
@@ -95,90 +122,217 @@ def _hertz_block(size: str) -> list[Criterion]:
     """Issue "Your own geometry": peak force and contact duration within 3 % of Hertz at each
     of two element sizes; every step converged."""
     return [
-        Criterion("hertz_block", (size, "peak_err"), Bound.ABS_BELOW, 0.03,
-                  "peak force against Hertz with the block's recoil (measured +1.4 % at "
-                  "0.3 mm, +0.9 % at 0.2 mm; corner-only tet10 faces read -18 %)", _HERTZ),
-        Criterion("hertz_block", (size, "duration_err"), Bound.ABS_BELOW, 0.03,
-                  "contact duration against Hertz (measured -1.4 % and -0.8 %; the sphere as "
-                  "the slave side read -10 % on a 0.4 mm block)", _HERTZ),
-        Criterion("hertz_block", (size, "steps_not_converged"), Bound.AT_MOST, 0,
-                  "every Newton step converged to its rtol"),
-        Criterion("hertz_block", (size, "lcp_residual_max"), Bound.AT_MOST, 1e-8,
-                  "every LCP solved"),
+        Criterion(
+            "hertz_block",
+            (size, "peak_err"),
+            Bound.ABS_BELOW,
+            0.03,
+            "peak force against Hertz with the block's recoil (measured +1.4 % at "
+            "0.3 mm, +0.9 % at 0.2 mm; corner-only tet10 faces read -18 %)",
+            _HERTZ,
+        ),
+        Criterion(
+            "hertz_block",
+            (size, "duration_err"),
+            Bound.ABS_BELOW,
+            0.03,
+            "contact duration against Hertz (measured -1.4 % and -0.8 %; the sphere as "
+            "the slave side read -10 % on a 0.4 mm block)",
+            _HERTZ,
+        ),
+        Criterion(
+            "hertz_block",
+            (size, "steps_not_converged"),
+            Bound.AT_MOST,
+            0,
+            "every Newton step converged to its rtol",
+        ),
+        Criterion(
+            "hertz_block", (size, "lcp_residual_max"), Bound.AT_MOST, 1e-8, "every LCP solved"
+        ),
     ]
+
 
 ACCEPTANCE: tuple[Criterion, ...] = (
     # --- flat variant, full FE, against St Venant (issue 4)
-    Criterion("flat_vs_st_venant", ("plateau_err",), Bound.ABS_BELOW, 0.03,
-              "mean force over the first plateau against v0 Z1 Z2 / (Z1 + Z2): the 3D "
-              "rods' dispersion and contact patch, a few tenths of a percent measured",
-              _FLAT),
-    Criterion("flat_vs_st_venant", ("jump_err",), Bound.ABS_BELOW, 0.02,
-              "free end of b2 reaches half of 2 F0 / Z2 at L / c2: the bar wave speed",
-              _FLAT),
+    Criterion(
+        "flat_vs_st_venant",
+        ("plateau_err",),
+        Bound.ABS_BELOW,
+        0.03,
+        "mean force over the first plateau against v0 Z1 Z2 / (Z1 + Z2): the 3D "
+        "rods' dispersion and contact patch, a few tenths of a percent measured",
+        _FLAT,
+    ),
+    Criterion(
+        "flat_vs_st_venant",
+        ("jump_err",),
+        Bound.ABS_BELOW,
+        0.02,
+        "free end of b2 reaches half of 2 F0 / Z2 at L / c2: the bar wave speed",
+        _FLAT,
+    ),
     *_conservation("flat_vs_st_venant", ()),
     # --- seed case: full FE against the 1D wave-Hertz solution (issue 4), MVM against full FE
-    Criterion("seed", ("full_vs_theory", "ncc_force"), Bound.AT_LEAST, 0.98,
-              "issue 4's bound on the force history's NCC", _THEORY),
-    Criterion("seed", ("full_vs_theory", "ncc_b2_free_end"), Bound.AT_LEAST, 0.99,
-              "issue 4's bound on the free-end velocity's NCC", _THEORY),
-    Criterion("seed", ("full_vs_theory", "peak_err"), Bound.ABS_BELOW, 0.03,
-              "issue 4: peak force within 3 % of the 1D solution's", _THEORY),
-    Criterion("seed", ("full_vs_theory", "duration_err"), Bound.ABS_BELOW, 0.05,
-              "issue 4: end of contact within 5 %", _THEORY),
-    Criterion("seed", ("full_vs_theory", "ncc_force"), Bound.AT_LEAST, 0.999,
-              "measured 0.99957 over the contact: the bound lets 1 - r grow 2.3 x; a contact "
-              "law off by a few percent in stiffness, a mesh one level coarser (the short "
-              "case's coarse-vs-refined 1 - r is 2.7e-3) or a lost wave reflection breaks it"),
-    Criterion("seed", ("full_vs_theory", "ncc_b2_free_end"), Bound.AT_LEAST, 0.999,
-              "measured 0.99965"),
-    Criterion("seed", ("mvm_dof", "b2"), Bound.AT_MOST, 150 + 6,
-              "issue 4: at most 150 DOF in b2, plus its 6 frame DOF", _MVM),
-    Criterion("seed", ("mvm_vs_full", "ncc_force"), Bound.AT_LEAST, 0.99,
-              "issue 4's bound on the MVM force history against full FE", _MVM),
-    Criterion("seed", ("mvm_vs_full", "ncc_force"), Bound.AT_LEAST, 0.9995,
-              "measured 0.99981 over the contact; the seed's 1-1 + 37 reads 0.8976 and a "
-              "basis missing its constraint modes (eq. 4) 0.84 on the short case"),
-    *_conservation("seed", ("full",)), *_penetration("full"),
-    *_conservation("seed", ("mvm",)), *_penetration("mvm"),
+    Criterion(
+        "seed",
+        ("full_vs_theory", "ncc_force"),
+        Bound.AT_LEAST,
+        0.98,
+        "issue 4's bound on the force history's NCC",
+        _THEORY,
+    ),
+    Criterion(
+        "seed",
+        ("full_vs_theory", "ncc_b2_free_end"),
+        Bound.AT_LEAST,
+        0.99,
+        "issue 4's bound on the free-end velocity's NCC",
+        _THEORY,
+    ),
+    Criterion(
+        "seed",
+        ("full_vs_theory", "peak_err"),
+        Bound.ABS_BELOW,
+        0.03,
+        "issue 4: peak force within 3 % of the 1D solution's",
+        _THEORY,
+    ),
+    Criterion(
+        "seed",
+        ("full_vs_theory", "duration_err"),
+        Bound.ABS_BELOW,
+        0.05,
+        "issue 4: end of contact within 5 %",
+        _THEORY,
+    ),
+    Criterion(
+        "seed",
+        ("full_vs_theory", "ncc_force"),
+        Bound.AT_LEAST,
+        0.999,
+        "measured 0.99957 over the contact: the bound lets 1 - r grow 2.3 x; a contact "
+        "law off by a few percent in stiffness, a mesh one level coarser (the short "
+        "case's coarse-vs-refined 1 - r is 2.7e-3) or a lost wave reflection breaks it",
+    ),
+    Criterion(
+        "seed", ("full_vs_theory", "ncc_b2_free_end"), Bound.AT_LEAST, 0.999, "measured 0.99965"
+    ),
+    Criterion(
+        "seed",
+        ("mvm_dof", "b2"),
+        Bound.AT_MOST,
+        150 + 6,
+        "issue 4: at most 150 DOF in b2, plus its 6 frame DOF",
+        _MVM,
+    ),
+    Criterion(
+        "seed",
+        ("mvm_vs_full", "ncc_force"),
+        Bound.AT_LEAST,
+        0.99,
+        "issue 4's bound on the MVM force history against full FE",
+        _MVM,
+    ),
+    Criterion(
+        "seed",
+        ("mvm_vs_full", "ncc_force"),
+        Bound.AT_LEAST,
+        0.9995,
+        "measured 0.99981 over the contact; the seed's 1-1 + 37 reads 0.8976 and a "
+        "basis missing its constraint modes (eq. 4) 0.84 on the short case",
+    ),
+    *_conservation("seed", ("full",)),
+    *_penetration("full"),
+    *_conservation("seed", ("mvm",)),
+    *_penetration("mvm"),
     # --- time step: the seed full-FE force at h and h/2 over the first 0.2 ms
-    Criterion("step_convergence", ("h_half_vs_h", "ncc_force"), Bound.AT_LEAST, 0.999,
-              "halving the step changes the force history little", _STEP),
-    Criterion("step_convergence", ("h_half_vs_h", "peak_err"), Bound.ABS_BELOW, 0.01,
-              "and its peak by less than 1 %", _STEP),
+    Criterion(
+        "step_convergence",
+        ("h_half_vs_h", "ncc_force"),
+        Bound.AT_LEAST,
+        0.999,
+        "halving the step changes the force history little",
+        _STEP,
+    ),
+    Criterion(
+        "step_convergence",
+        ("h_half_vs_h", "peak_err"),
+        Bound.ABS_BELOW,
+        0.01,
+        "and its peak by less than 1 %",
+        _STEP,
+    ),
     # --- the pendulum release, the whole event (issue 14)
-    Criterion("pendulum", ("impact_speed_err",), Bound.ABS_BELOW, 0.005,
-              "impact speed against sqrt(2 g h) (issue 14; measured -9.5e-4 with b2 MVM: the "
-              "swing's numerical damping, theta(h) = 1 on its 256 us steps, and the strings' "
-              "sag)", _PEND),
-    Criterion("pendulum", ("vs_seed", "ncc_force"), Bound.AT_LEAST, 0.995,
-              "the impact against the seed case with the same models and scheme, aligned at "
-              "first contact (issue 14; measured 0.9999: the strings and gravity change the "
-              "0.66 ms impact by their tilt and weight only)", _PEND),
-    *(Criterion("pendulum", ("momenta", b, "p_end_rel_err_x"), Bound.ABS_BELOW, 1e-3,
-                f"{b}'s momentum at the end against a rigid pendulum swinging on from the "
-                "separation (measured 2e-6 and 6e-6: the rods' vibration moves their centres "
-                "of mass by micrometres, the swing by 4.5 ms of a 1.4 s period)", _PEND)
-      for b in ("b1", "b2")),
-    Criterion("pendulum", ("max_joint_drift_m",), Bound.BELOW, 1e-9,
-              "position-level string rows: measured 4.0e-13 m"),
-    Criterion("pendulum", ("newton_residual_max",), Bound.BELOW, 2e-10,
-              "every Newton step within 2 x its rtol 1e-10 (a step that stalls is accepted up "
-              "to ROUNDOFF_FLOOR = 1e-7: a looser bound would let one stall unseen)"),
-    Criterion("pendulum", ("steps_not_converged",), Bound.AT_MOST, 10,
-              "at most 10 steps stopped on the round-off floor (measured 1 of 2,881, "
-              "residual 1.4e-10)"),
-    Criterion("pendulum", ("lcp_residual_max",), Bound.AT_MOST, 1e-8,
-              "every LCP solved"),
+    Criterion(
+        "pendulum",
+        ("impact_speed_err",),
+        Bound.ABS_BELOW,
+        0.005,
+        "impact speed against sqrt(2 g h) (issue 14; measured -9.5e-4 with b2 MVM: the "
+        "swing's numerical damping, theta(h) = 1 on its 256 us steps, and the strings' "
+        "sag)",
+        _PEND,
+    ),
+    Criterion(
+        "pendulum",
+        ("vs_seed", "ncc_force"),
+        Bound.AT_LEAST,
+        0.995,
+        "the impact against the seed case with the same models and scheme, aligned at "
+        "first contact (issue 14; measured 0.9999: the strings and gravity change the "
+        "0.66 ms impact by their tilt and weight only)",
+        _PEND,
+    ),
+    *(
+        Criterion(
+            "pendulum",
+            ("momenta", b, "p_end_rel_err_x"),
+            Bound.ABS_BELOW,
+            1e-3,
+            f"{b}'s momentum at the end against a rigid pendulum swinging on from the "
+            "separation (measured 2e-6 and 6e-6: the rods' vibration moves their centres "
+            "of mass by micrometres, the swing by 4.5 ms of a 1.4 s period)",
+            _PEND,
+        )
+        for b in ("b1", "b2")
+    ),
+    Criterion(
+        "pendulum",
+        ("max_joint_drift_m",),
+        Bound.BELOW,
+        1e-9,
+        "position-level string rows: measured 4.0e-13 m",
+    ),
+    Criterion(
+        "pendulum",
+        ("newton_residual_max",),
+        Bound.BELOW,
+        2e-10,
+        "every Newton step within 2 x its rtol 1e-10 (a step that stalls is accepted up "
+        "to ROUNDOFF_FLOOR = 1e-7: a looser bound would let one stall unseen)",
+    ),
+    Criterion(
+        "pendulum",
+        ("steps_not_converged",),
+        Bound.AT_MOST,
+        10,
+        "at most 10 steps stopped on the round-off floor (measured 1 of 2,881, residual 1.4e-10)",
+    ),
+    Criterion("pendulum", ("lcp_residual_max",), Bound.AT_MOST, 1e-8, "every LCP solved"),
     # --- a rigid sphere on a meshed block against Hertz (issue "Your own geometry")
-    *_hertz_block("coarse"), *_hertz_block("fine"),
+    *_hertz_block("coarse"),
+    *_hertz_block("fine"),
 )
 
 
 def criteria(section: str, statement: str | None = None) -> tuple[Criterion, ...]:
     """The rows of a section; with ``statement``, only those the report states under it."""
-    return tuple(c for c in ACCEPTANCE if c.section == section
-                 and (statement is None or c.statement == statement))
+    return tuple(
+        c
+        for c in ACCEPTANCE
+        if c.section == section and (statement is None or c.statement == statement)
+    )
 
 
 def threshold(section: str, path: tuple[str, ...], statement: str) -> float:
@@ -194,8 +348,11 @@ def met(numbers: Mapping[str, Any], section: str, statement: str) -> bool:
 
 def failures(numbers: Mapping[str, Any], section: str) -> list[str]:
     """Every row of ``section`` that does not hold, as 'row (value)': empty when all hold."""
-    return [f"{c.describe()} (value {c.value(numbers):.6g}: {c.why})"
-            for c in criteria(section) if not c.holds(numbers)]
+    return [
+        f"{c.describe()} (value {c.value(numbers):.6g}: {c.why})"
+        for c in criteria(section)
+        if not c.holds(numbers)
+    ]
 
 
 __all__ = [

@@ -55,15 +55,20 @@ def _with_rod(sc: Scenario, **rod) -> Scenario:
 
 def _plot(path: Path, runs: dict, theory, title: str) -> None:
     from flexmvm.plots.figures import plot_run
+
     plot_run(path, runs, theory=theory, title=title)
 
 
-def flat_vs_st_venant(out: Path, t_end: float = T_FLAT, dt: float | None = DT,
-                      recompute: bool = False) -> dict:
+def flat_vs_st_venant(
+    out: Path, t_end: float = T_FLAT, dt: float | None = DT, recompute: bool = False
+) -> dict:
     """Flat-ended rods, full FE, against St Venant's plateau force v0 Z1 Z2 / (Z1 + Z2) and
     the free end's jump at L / c2 (timed at half the 1D amplitude 2 F0 / Z2)."""
-    sc = load_scenario(scenario_path("rod_impact_flat.toml")).with_kind(
-        ModelKind.FULL).with_time(t_end_s=t_end, dt_s=dt)
+    sc = (
+        load_scenario(scenario_path("rod_impact_flat.toml"))
+        .with_kind(ModelKind.FULL)
+        .with_time(t_end_s=t_end, dt_s=dt)
+    )
     c = run_case(out, "flat_full", sc, recompute)
     t, f, p = c.curves
     b1, b2 = sc.body("b1"), sc.body("b2")
@@ -75,14 +80,26 @@ def flat_vs_st_venant(out: Path, t_end: float = T_FLAT, dt: float | None = DT,
     v = p["b2_free_end"]
     vp = 2 * F0 / r2.impedance
     jump = float(t[np.argmax(v > 0.5 * vp)])
-    return {"F0_N": F0, "plateau_mean_N": float(f[mid].mean()),
-            "plateau_err": float(f[mid].mean() / F0 - 1), "free_end_jump_s": jump,
-            "L_over_c_s": r2.length_m / r2.c, "jump_err": jump / (r2.length_m / r2.c) - 1,
-            **conservation(c.summary), "case": case_meta(c)}
+    return {
+        "F0_N": F0,
+        "plateau_mean_N": float(f[mid].mean()),
+        "plateau_err": float(f[mid].mean() / F0 - 1),
+        "free_end_jump_s": jump,
+        "L_over_c_s": r2.length_m / r2.c,
+        "jump_err": jump / (r2.length_m / r2.c) - 1,
+        **conservation(c.summary),
+        "case": case_meta(c),
+    }
 
 
-def seed_vs_theory(out: Path, t_end: float = T_SEED, dt: float | None = DT,
-                   recompute: bool = False, with_1_1: bool = False, plot: bool = False) -> dict:
+def seed_vs_theory(
+    out: Path,
+    t_end: float = T_SEED,
+    dt: float | None = DT,
+    recompute: bool = False,
+    with_1_1: bool = False,
+    plot: bool = False,
+) -> dict:
     """The seed case: full FE and the scenario's MVM against the 1D wave-Hertz solution and
     each other; with_1_1: the seed's own 1-1 + 37 model against full FE too."""
     sc = load_scenario(scenario_path("rod_impact.toml")).with_time(t_end_s=t_end, dt_s=dt)
@@ -90,12 +107,16 @@ def seed_vs_theory(out: Path, t_end: float = T_SEED, dt: float | None = DT,
     full = run_case(out, "seed_full", sc.with_kind(ModelKind.FULL), recompute)
     mvm = run_case(out, "seed_mvm", sc, recompute)
     b2 = sc.body("b2").model
-    rep = {"full_vs_theory": compare_runs(tt, ft, pt, *full.curves),
-           "mvm_vs_full": compare_runs(*full.curves, *mvm.curves),
-           "mvm_vs_theory": compare_runs(tt, ft, pt, *mvm.curves),
-           "full": conservation(full.summary), "mvm": conservation(mvm.summary),
-           "mvm_dof": mvm.summary["dof"], "mvm_model": f"{b2.selection} + {b2.modes} modes",
-           "cases": {"full": case_meta(full), "mvm": case_meta(mvm)}}
+    rep = {
+        "full_vs_theory": compare_runs(tt, ft, pt, *full.curves),
+        "mvm_vs_full": compare_runs(*full.curves, *mvm.curves),
+        "mvm_vs_theory": compare_runs(tt, ft, pt, *mvm.curves),
+        "full": conservation(full.summary),
+        "mvm": conservation(mvm.summary),
+        "mvm_dof": mvm.summary["dof"],
+        "mvm_model": f"{b2.selection} + {b2.modes} modes",
+        "cases": {"full": case_meta(full), "mvm": case_meta(mvm)},
+    }
     runs = {"FE": full.curves, f"MVM {b2.selection} + {b2.modes}": mvm.curves}
     if with_1_1:
         m11 = mvm_model("1-1", b2.modes, reference=b2.reference)
@@ -105,24 +126,42 @@ def seed_vs_theory(out: Path, t_end: float = T_SEED, dt: float | None = DT,
         rep["cases"]["mvm11"] = case_meta(s11)
         runs[f"MVM 1-1 + {b2.modes}"] = s11.curves
     if plot:  # the report's figure; the pytest checks leave the case folder as it is
-        _plot(out / "seed_fig5.png", runs, (tt, ft, pt),
-              f"seed case: full FE, MVM (b2 {b2.selection} + {b2.modes} modes, "
-              f"{mvm.summary['dof']['b2']} DOF), 1D wave-Hertz")
+        _plot(
+            out / "seed_fig5.png",
+            runs,
+            (tt, ft, pt),
+            f"seed case: full FE, MVM (b2 {b2.selection} + {b2.modes} modes, "
+            f"{mvm.summary['dof']['b2']} DOF), 1D wave-Hertz",
+        )
     return rep
 
 
-def step_convergence(out: Path, t_end: float = T_STEP, dt: float = DT,
-                     t_end_h: float | None = None, recompute: bool = False) -> dict:
+def step_convergence(
+    out: Path,
+    t_end: float = T_STEP,
+    dt: float = DT,
+    t_end_h: float | None = None,
+    recompute: bool = False,
+) -> dict:
     """Full-FE seed force at h = dt and h/2 over [0, t_end]. The h run may be a longer one
     (``t_end_h``, e.g. the seed_full case: the same steps up to t_end), truncated to t_end."""
     sc = load_scenario(scenario_path("rod_impact.toml")).with_kind(ModelKind.FULL)
     t_h = t_end if t_end_h is None else t_end_h
-    a = run_case(out, "seed_full" if t_h == T_SEED and dt == DT else f"seed_full_dt{dt:g}",
-                 sc.with_time(t_end_s=t_h, dt_s=dt), recompute)
-    b = run_case(out, f"seed_full_dt{dt / 2:g}", sc.with_time(t_end_s=t_end, dt_s=dt / 2),
-                 recompute)
-    return {"h": dt, "t_end": t_end, "h_half_vs_h": compare_runs(*b.curves, *truncate(a, t_end)),
-            "cases": {"h": case_meta(a), "h_half": case_meta(b)}}
+    a = run_case(
+        out,
+        "seed_full" if t_h == T_SEED and dt == DT else f"seed_full_dt{dt:g}",
+        sc.with_time(t_end_s=t_h, dt_s=dt),
+        recompute,
+    )
+    b = run_case(
+        out, f"seed_full_dt{dt / 2:g}", sc.with_time(t_end_s=t_end, dt_s=dt / 2), recompute
+    )
+    return {
+        "h": dt,
+        "t_end": t_end,
+        "h_half_vs_h": compare_runs(*b.curves, *truncate(a, t_end)),
+        "cases": {"h": case_meta(a), "h_half": case_meta(b)},
+    }
 
 
 def short_scenario() -> Scenario:
@@ -137,28 +176,52 @@ def short_case(out: Path, recompute: bool = False, plot: bool = False) -> dict:
     tt, ft, pt, _ = theory_histories(sc)
     full = run_case(out, "short_full", sc.with_kind(ModelKind.FULL), recompute)
     mvm = run_case(out, "short_mvm", sc, recompute)
-    fine = run_case(out, "short_full_fine", _with_rod(sc.with_kind(ModelKind.FULL),
-                                                      **SHORT_FINE_MESH), recompute)
-    half = run_case(out, "short_full_dt_half",
-                    sc.with_kind(ModelKind.FULL).with_time(dt_s=sc.time.dt_s / 2), recompute)
+    fine = run_case(
+        out,
+        "short_full_fine",
+        _with_rod(sc.with_kind(ModelKind.FULL), **SHORT_FINE_MESH),
+        recompute,
+    )
+    half = run_case(
+        out,
+        "short_full_dt_half",
+        sc.with_kind(ModelKind.FULL).with_time(dt_s=sc.time.dt_s / 2),
+        recompute,
+    )
     b2 = sc.body("b2").model
     if plot:
-        _plot(out / "short_fig.png", {"FE": full.curves, "FE fine": fine.curves,
-                                      f"MVM {b2.selection} + {b2.modes}": mvm.curves},
-              (tt, ft, pt), "short case (0.1 m rods): full FE, refined FE, MVM, 1D wave-Hertz")
-    return {"full_vs_theory": compare_runs(tt, ft, pt, *full.curves),
-            "fine_vs_theory": compare_runs(tt, ft, pt, *fine.curves),
-            "mvm_vs_theory": compare_runs(tt, ft, pt, *mvm.curves),
-            "mvm_vs_full": compare_runs(*full.curves, *mvm.curves),
-            "full_vs_fine": compare_runs(*fine.curves, *full.curves),
-            "full_vs_dt_half": compare_runs(*half.curves, *full.curves),
-            "theory_peak_N": float(ft.max()), "theory_end_s": float(tt[ft > 0].max()),
-            "full": conservation(full.summary), "mvm": conservation(mvm.summary),
-            "fine": conservation(fine.summary), "dt_half": conservation(half.summary),
-            "mvm_model": f"{b2.selection} + {b2.modes} modes",
-            "fine_mesh": SHORT_FINE_MESH, "dt": sc.time.dt_s, "t_end": sc.time.t_end_s,
-            "cases": {k: case_meta(c) for k, c in
-                      (("full", full), ("mvm", mvm), ("fine", fine), ("dt_half", half))}}
+        _plot(
+            out / "short_fig.png",
+            {
+                "FE": full.curves,
+                "FE fine": fine.curves,
+                f"MVM {b2.selection} + {b2.modes}": mvm.curves,
+            },
+            (tt, ft, pt),
+            "short case (0.1 m rods): full FE, refined FE, MVM, 1D wave-Hertz",
+        )
+    return {
+        "full_vs_theory": compare_runs(tt, ft, pt, *full.curves),
+        "fine_vs_theory": compare_runs(tt, ft, pt, *fine.curves),
+        "mvm_vs_theory": compare_runs(tt, ft, pt, *mvm.curves),
+        "mvm_vs_full": compare_runs(*full.curves, *mvm.curves),
+        "full_vs_fine": compare_runs(*fine.curves, *full.curves),
+        "full_vs_dt_half": compare_runs(*half.curves, *full.curves),
+        "theory_peak_N": float(ft.max()),
+        "theory_end_s": float(tt[ft > 0].max()),
+        "full": conservation(full.summary),
+        "mvm": conservation(mvm.summary),
+        "fine": conservation(fine.summary),
+        "dt_half": conservation(half.summary),
+        "mvm_model": f"{b2.selection} + {b2.modes} modes",
+        "fine_mesh": SHORT_FINE_MESH,
+        "dt": sc.time.dt_s,
+        "t_end": sc.time.t_end_s,
+        "cases": {
+            k: case_meta(c)
+            for k, c in (("full", full), ("mvm", mvm), ("fine", fine), ("dt_half", half))
+        },
+    }
 
 
 def _as_run(c: Case) -> SimpleNamespace:
@@ -166,9 +229,13 @@ def _as_run(c: Case) -> SimpleNamespace:
     contact intervals and the probes' axial velocities."""
     names = list(c.probes)
     v = np.stack([c.probes[n] for n in names], axis=1)[:, :, None] if names else None
-    return SimpleNamespace(t=c.t, contact_force=c.force, probe_names=names, probe_v=v,
-                           contact_intervals=[tuple(iv) for iv in
-                                              c.summary.get("contact_intervals_s") or []])
+    return SimpleNamespace(
+        t=c.t,
+        contact_force=c.force,
+        probe_names=names,
+        probe_v=v,
+        contact_intervals=[tuple(iv) for iv in c.summary.get("contact_intervals_s") or []],
+    )
 
 
 def pendulum_case(out: Path, recompute: bool = False) -> dict:
@@ -178,8 +245,9 @@ def pendulum_case(out: Path, recompute: bool = False) -> dict:
     scheme (the seed_mvm case: rod_impact.toml to 1 ms) aligned at first contact, the momenta
     after the separation against the rigid pendulum, the strings' drift."""
     from flexmvm.scenarios.pendulum import impact_comparison
+
     sc = load_scenario(scenario_path("pendulum_release.toml"))
-    c = run_case(out, "pendulum", sc, recompute)   # its summary's "pendulum": scenarios.run
+    c = run_case(out, "pendulum", sc, recompute)  # its summary's "pendulum": scenarios.run
     seed = load_scenario(scenario_path("rod_impact.toml")).with_time(t_end_s=T_SEED, dt_s=DT)
     ref = run_case(out, "seed_mvm", seed, recompute)
     ev = c.summary["pendulum"]
@@ -187,15 +255,20 @@ def pendulum_case(out: Path, recompute: bool = False) -> dict:
     h = float(sc.body("b1").placement.position_m[2])
     v_th = float(np.sqrt(2.0 * g * h))
     v = ev["impact_speed"]["v_mps"]
-    return {"impact_speed_mps": v, "impact_speed_theory_mps": v_th, "release_height_m": h,
-            "impact_speed_err": v / v_th - 1.0, "vs_seed": impact_comparison(_as_run(c),
-                                                                           _as_run(ref)),
-            "momenta": ev["momenta_after_separation"],
-            "energy_rel_at_separation": ev["energy_rel_at_separation"],
-            "max_joint_drift_m": c.summary["max_joint_drift"],
-            "step_size_counts": c.summary["step_size_counts"],
-            "models": c.summary["model"], **conservation(c.summary),
-            "cases": {"pendulum": case_meta(c), "seed": case_meta(ref)}}
+    return {
+        "impact_speed_mps": v,
+        "impact_speed_theory_mps": v_th,
+        "release_height_m": h,
+        "impact_speed_err": v / v_th - 1.0,
+        "vs_seed": impact_comparison(_as_run(c), _as_run(ref)),
+        "momenta": ev["momenta_after_separation"],
+        "energy_rel_at_separation": ev["energy_rel_at_separation"],
+        "max_joint_drift_m": c.summary["max_joint_drift"],
+        "step_size_counts": c.summary["step_size_counts"],
+        "models": c.summary["model"],
+        **conservation(c.summary),
+        "cases": {"pendulum": case_meta(c), "seed": case_meta(ref)},
+    }
 
 
 #: The Hertz block case's element sizes at the contact [m]: the committed block's and a finer
@@ -207,6 +280,7 @@ def _hertz_block_mesh(out: Path, fine_m: float) -> Path:
     """The block meshed at fine_m under out/meshes/, made once (written beside and renamed:
     a run killed while gmsh writes leaves no partial mesh to be read next time)."""
     from flexmvm.mesh.parts import hertz_block_part
+
     path = out / "meshes" / f"block_{fine_m * 1e6:.0f}um.msh"
     if not path.exists():
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -225,15 +299,18 @@ def hertz_block_case(out: Path, recompute: bool = False) -> dict:
         hertz_reference,
         sphere_block_scenario,
     )
+
     numbers: dict = {"cases": {}}
     for label, fine_m in HERTZ_BLOCK_SIZES_M.items():
         block = None if fine_m is None else _hertz_block_mesh(out, fine_m)
         sc = sphere_block_scenario(block, path=scenario_path("sphere_block.toml"))
         sc = sc.with_time(t_end_s=T_END_S)
         c = run_case(out, f"hertz_block_{label}", sc, recompute)
-        numbers[label] = {**conservation(c.summary),
-                          **hertz_comparison(hertz_reference(sc), c.force, c.summary),
-                          "element_m": fine_m if fine_m is not None else "committed"}
+        numbers[label] = {
+            **conservation(c.summary),
+            **hertz_comparison(hertz_reference(sc), c.force, c.summary),
+            "element_m": fine_m if fine_m is not None else "committed",
+        }
         numbers["cases"][label] = case_meta(c)
     return numbers
 
@@ -251,21 +328,37 @@ class ValidationCase:
 
 #: The report's cases, in the order they run (validation.json's keys).
 CASES: tuple[ValidationCase, ...] = (
-    ValidationCase("flat_vs_st_venant", lambda out, rc: flat_vs_st_venant(out, recompute=rc),
-                   {"flat_full": ""}),
-    ValidationCase("seed", lambda out, rc: seed_vs_theory(out, recompute=rc, with_1_1=True,
-                                                          plot=True),
-                   {"seed_full": "full", "seed_mvm": "mvm", "seed_mvm_1-1": "mvm11"}),
-    ValidationCase("step_convergence",
-                   lambda out, rc: step_convergence(out, t_end_h=T_SEED, recompute=rc),
-                   {"seed_full_dt_half": "h_half"}),
-    ValidationCase("short", lambda out, rc: short_case(out, recompute=rc, plot=True),
-                   {"short_full": "full", "short_mvm": "mvm", "short_fine": "fine",
-                    "short_dt_half": "dt_half"}),
-    ValidationCase("pendulum", lambda out, rc: pendulum_case(out, recompute=rc),
-                   {"pendulum": "pendulum"}),
-    ValidationCase("hertz_block", lambda out, rc: hertz_block_case(out, recompute=rc),
-                   {"hertz_block_coarse": "coarse", "hertz_block_fine": "fine"}),
+    ValidationCase(
+        "flat_vs_st_venant", lambda out, rc: flat_vs_st_venant(out, recompute=rc), {"flat_full": ""}
+    ),
+    ValidationCase(
+        "seed",
+        lambda out, rc: seed_vs_theory(out, recompute=rc, with_1_1=True, plot=True),
+        {"seed_full": "full", "seed_mvm": "mvm", "seed_mvm_1-1": "mvm11"},
+    ),
+    ValidationCase(
+        "step_convergence",
+        lambda out, rc: step_convergence(out, t_end_h=T_SEED, recompute=rc),
+        {"seed_full_dt_half": "h_half"},
+    ),
+    ValidationCase(
+        "short",
+        lambda out, rc: short_case(out, recompute=rc, plot=True),
+        {
+            "short_full": "full",
+            "short_mvm": "mvm",
+            "short_fine": "fine",
+            "short_dt_half": "dt_half",
+        },
+    ),
+    ValidationCase(
+        "pendulum", lambda out, rc: pendulum_case(out, recompute=rc), {"pendulum": "pendulum"}
+    ),
+    ValidationCase(
+        "hertz_block",
+        lambda out, rc: hertz_block_case(out, recompute=rc),
+        {"hertz_block_coarse": "coarse", "hertz_block_fine": "fine"},
+    ),
 )
 
 
@@ -289,6 +382,22 @@ def case(key: str) -> ValidationCase:
     return next(c for c in CASES if c.key == key)
 
 
-__all__ = ["CASES", "DT", "HERTZ_BLOCK_SIZES_M", "SHORT_FINE_MESH", "T_FLAT", "T_SEED", "T_STEP", "ValidationCase",
-           "case", "flat_vs_st_venant", "hertz_block_case", "pendulum_case", "seed_vs_theory", "short_case",
-           "short_scenario", "step_convergence", "stored_cases"]
+__all__ = [
+    "CASES",
+    "DT",
+    "HERTZ_BLOCK_SIZES_M",
+    "SHORT_FINE_MESH",
+    "T_FLAT",
+    "T_SEED",
+    "T_STEP",
+    "ValidationCase",
+    "case",
+    "flat_vs_st_venant",
+    "hertz_block_case",
+    "pendulum_case",
+    "seed_vs_theory",
+    "short_case",
+    "short_scenario",
+    "step_convergence",
+    "stored_cases",
+]

@@ -40,8 +40,10 @@ def default_outputs() -> tuple[Path, Path]:
     Raises InputError outside a checkout (installed from a wheel): give --out."""
     root = repository()
     if root is None:
-        raise InputError("the validation report's default place is a repository checkout's "
-                         "docs/; installed from a wheel, give --out DIR (and --md FILE)")
+        raise InputError(
+            "the validation report's default place is a repository checkout's "
+            "docs/; installed from a wheel, give --out DIR (and --md FILE)"
+        )
     return root / "docs" / "validation", root / "docs" / "validation.md"
 
 
@@ -53,14 +55,28 @@ def git_commit(root: Path | None = None) -> str:
     if root is None:
         return "unknown"
     try:
-        head = subprocess.run(["git", "-C", str(root), "rev-parse", "--short=12", "HEAD"],
-                              capture_output=True, text=True, check=True).stdout.strip()
-        status = subprocess.run(["git", "-C", str(root), "status", "--porcelain", "--",
-                                 *RUN_INPUTS], capture_output=True, text=True, check=True).stdout
+        head = subprocess.run(
+            ["git", "-C", str(root), "rev-parse", "--short=12", "HEAD"],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout.strip()
+        status = subprocess.run(
+            ["git", "-C", str(root), "status", "--porcelain", "--", *RUN_INPUTS],
+            capture_output=True,
+            text=True,
+            check=True,
+        ).stdout
     except (OSError, subprocess.CalledProcessError):
         return "unknown"
     return head + ("-dirty" if status.strip() else "")
 
 
-__all__ = ["RUN_INPUTS", "SCENARIOS", "default_outputs", "git_commit", "repository",
-           "scenario_path"]
+__all__ = [
+    "RUN_INPUTS",
+    "SCENARIOS",
+    "default_outputs",
+    "git_commit",
+    "repository",
+    "scenario_path",
+]

@@ -24,12 +24,24 @@ from flexmvm.validation.paths import git_commit
 Case = StoredRun
 
 #: The summary entries a case's report keeps of each run: conservation, solver health, cost.
-CONSERVATION_KEYS = ("momentum_rel_error", "momentum_rel_error_converged",
-                     "momentum_residual_rel", "energy_rel_error", "max_penetration_m",
-                     "max_penetration_at", "max_penetration_by_direction_m", "lcp_residual_max",
-                     "steps_not_converged", "newton_residual_max", "min_contact_force_N",
-                     "max_contact_force_N", "wall_time_s", "n_steps", "dof",
-                     "contact_intervals_s")
+CONSERVATION_KEYS = (
+    "momentum_rel_error",
+    "momentum_rel_error_converged",
+    "momentum_residual_rel",
+    "energy_rel_error",
+    "max_penetration_m",
+    "max_penetration_at",
+    "max_penetration_by_direction_m",
+    "lcp_residual_max",
+    "steps_not_converged",
+    "newton_residual_max",
+    "min_contact_force_N",
+    "max_contact_force_N",
+    "wall_time_s",
+    "n_steps",
+    "dof",
+    "contact_intervals_s",
+)
 
 
 def case_inputs(sc: Scenario) -> dict:
@@ -47,13 +59,20 @@ def now() -> str:
     return _dt.datetime.now(_dt.UTC).strftime("%Y-%m-%d %H:%M UTC")
 
 
-def run_case(out: Path, name: str, sc: Scenario, recompute: bool = False,
-             progress: bool = True) -> Case:
+def run_case(
+    out: Path, name: str, sc: Scenario, recompute: bool = False, progress: bool = True
+) -> Case:
     """Run scenario ``sc`` as case ``name`` under ``out``, or load it if a stored case has the
     same key and its outputs pass their check (module doc); a stored case that fails is
     recomputed and announced in one line."""
-    return load_or_run(out / name, sc, f"validation case {name}", recompute, progress,
-                       lambda: {"commit": git_commit(), "computed_utc": now()})
+    return load_or_run(
+        out / name,
+        sc,
+        f"validation case {name}",
+        recompute,
+        progress,
+        lambda: {"commit": git_commit(), "computed_utc": now()},
+    )
 
 
 def conservation(summary: dict) -> dict:
@@ -72,5 +91,14 @@ def truncate(c: Case, t_end: float) -> tuple:
     return c.t[keep], c.force[keep], {k: v[keep] for k, v in c.probes.items()}
 
 
-__all__ = ["CONSERVATION_KEYS", "Case", "case_inputs", "case_key", "case_meta", "conservation",
-           "now", "run_case", "truncate"]
+__all__ = [
+    "CONSERVATION_KEYS",
+    "Case",
+    "case_inputs",
+    "case_key",
+    "case_meta",
+    "conservation",
+    "now",
+    "run_case",
+    "truncate",
+]

@@ -22,5 +22,15 @@ from flexmvm.fe.solvers.spd import (
 )
 from flexmvm.fe.solvers.superlu import SPD_LU, Solve, factor, superlu_spd
 
-__all__ = ["CHOLESKY_MIN_N", "ENV_CHOLESKY", "SPD_LU", "CholeskyBackend", "Solve",
-           "cholesky_backend", "factor", "solver_pool", "spd_solver", "superlu_spd"]
+__all__ = [
+    "CHOLESKY_MIN_N",
+    "ENV_CHOLESKY",
+    "SPD_LU",
+    "CholeskyBackend",
+    "Solve",
+    "cholesky_backend",
+    "factor",
+    "solver_pool",
+    "spd_solver",
+    "superlu_spd",
+]

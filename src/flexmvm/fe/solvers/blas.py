@@ -13,10 +13,12 @@ from llvmlite import binding as _llvm
 from numba import types
 from numba.extending import get_cython_function_address
 
-_ROUTINES = {"dpotrf": ("scipy.linalg.cython_lapack", 5),
-             "dtrsm": ("scipy.linalg.cython_blas", 11),
-             "dsyrk": ("scipy.linalg.cython_blas", 10),
-             "dgemm": ("scipy.linalg.cython_blas", 13)}
+_ROUTINES = {
+    "dpotrf": ("scipy.linalg.cython_lapack", 5),
+    "dtrsm": ("scipy.linalg.cython_blas", 11),
+    "dsyrk": ("scipy.linalg.cython_blas", 10),
+    "dgemm": ("scipy.linalg.cython_blas", 13),
+}
 
 
 def _bind(name: str):

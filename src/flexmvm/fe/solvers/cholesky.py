@@ -42,8 +42,27 @@ def _no_fronts(ns):  # pragma: no cover - compiled
 
 
 @numba.njit(nogil=True, cache=True)
-def _numeric(sns, Ap, Ai, Ax, p, pinv, starts, r_off, rows, child_ptr, child_idx, sn_parent,
-             t_off, b_off, tri, rect, d, fronts, other):  # pragma: no cover - compiled
+def _numeric(
+    sns,
+    Ap,
+    Ai,
+    Ax,
+    p,
+    pinv,
+    starts,
+    r_off,
+    rows,
+    child_ptr,
+    child_idx,
+    sn_parent,
+    t_off,
+    b_off,
+    tri,
+    rect,
+    d,
+    fronts,
+    other,
+):  # pragma: no cover - compiled
     """Multifrontal L D L^T of a[p][:, p] over the supernodes sns (ascending: children
     first) into fe.solvers.ldl's packed layout (tri: unit lower triangles, row-major; rect: the rows
     below, row-major; d). A supernode's front is left in fronts for its parent; a child's is
@@ -53,8 +72,8 @@ def _numeric(sns, Ap, Ai, Ax, p, pinv, starts, r_off, rows, child_ptr, child_idx
     n = p.shape[0]
     pos = np.empty(n, np.int64)
     ch = np.empty(4, np.uint8)
-    ch[0], ch[1], ch[2], ch[3] = 76, 82, 84, 78            # 'L', 'R', 'T', 'N'
-    iv = np.empty(4, np.int32)                             # w, m, r, info
+    ch[0], ch[1], ch[2], ch[3] = 76, 82, 84, 78  # 'L', 'R', 'T', 'N'
+    iv = np.empty(4, np.int32)  # w, m, r, info
     dv = np.empty(2)
     dv[0], dv[1] = 1.0, -1.0
     for k in range(sns.shape[0]):
@@ -64,7 +83,7 @@ def _numeric(sns, Ap, Ai, Ax, p, pinv, starts, r_off, rows, child_ptr, child_idx
         base = r_off[s]
         r = r_off[s + 1] - base
         m = w + r
-        F = np.zeros(m * m)                                # column-major front, lower part
+        F = np.zeros(m * m)  # column-major front, lower part
         for a in range(w):
             pos[c0 + a] = a
         for i in range(r):
@@ -76,7 +95,7 @@ def _numeric(sns, Ap, Ai, Ax, p, pinv, starts, r_off, rows, child_ptr, child_idx
                 i = pinv[Ai[q]]
                 if i >= j:
                     F[pos[i] + a * m] += Ax[q]
-        for t in range(child_ptr[s], child_ptr[s + 1]):    # extend-add
+        for t in range(child_ptr[s], child_ptr[s + 1]):  # extend-add
             c = child_idx[t]
             Fc = fronts[c]
             if Fc.shape[0] == 0:
@@ -98,12 +117,32 @@ def _numeric(sns, Ap, Ai, Ax, p, pinv, starts, r_off, rows, child_ptr, child_idx
             return c0 + iv[3] - 1
         if r > 0:
             below = F[w:]
-            dtrsm(ch[1:].ctypes, ch[0:].ctypes, ch[2:].ctypes, ch[3:].ctypes, iv[2:].ctypes,
-                   iv[0:].ctypes, dv[0:].ctypes, F.ctypes, iv[1:].ctypes, below.ctypes,
-                   iv[1:].ctypes)
-            update = F[w + w * m:]
-            dsyrk(ch[0:].ctypes, ch[3:].ctypes, iv[2:].ctypes, iv[0:].ctypes, dv[1:].ctypes,
-                   below.ctypes, iv[1:].ctypes, dv[0:].ctypes, update.ctypes, iv[1:].ctypes)
+            dtrsm(
+                ch[1:].ctypes,
+                ch[0:].ctypes,
+                ch[2:].ctypes,
+                ch[3:].ctypes,
+                iv[2:].ctypes,
+                iv[0:].ctypes,
+                dv[0:].ctypes,
+                F.ctypes,
+                iv[1:].ctypes,
+                below.ctypes,
+                iv[1:].ctypes,
+            )
+            update = F[w + w * m :]
+            dsyrk(
+                ch[0:].ctypes,
+                ch[3:].ctypes,
+                iv[2:].ctypes,
+                iv[0:].ctypes,
+                dv[1:].ctypes,
+                below.ctypes,
+                iv[1:].ctypes,
+                dv[0:].ctypes,
+                update.ctypes,
+                iv[1:].ctypes,
+            )
         t0 = t_off[s]
         b0 = b_off[s]
         for a in range(w):
@@ -118,6 +157,7 @@ def _numeric(sns, Ap, Ai, Ax, p, pinv, starts, r_off, rows, child_ptr, child_idx
             fronts[s] = F
     return -1
 
+
 def numeric_factor(symbolic: SymbolicFactor, a: sp.spmatrix, pool=None):
     """The packed L D L^T of a (the pattern `symbolic` was made for): (tri, rect, d). With a
     pool, the two elimination-tree halves (fe.solvers.ldl.etree_halves) are factored on two threads
@@ -125,20 +165,37 @@ def numeric_factor(symbolic: SymbolicFactor, a: sp.spmatrix, pool=None):
     Raises SolverError when a pivot is not positive (a is not positive definite)."""
     a = symmetric_csc(a)
     if not symbolic.matches(a):
-        raise SolverError("Cholesky factor: the matrix has another sparsity pattern than "
-                          "its symbolic analysis")
+        raise SolverError(
+            "Cholesky factor: the matrix has another sparsity pattern than its symbolic analysis"
+        )
     if not np.isfinite(a.data).all():
-        raise SolverError(f"Cholesky factor of a {symbolic.n}x{symbolic.n} matrix: it holds "
-                          "a non-finite number (NaN/inf)")
+        raise SolverError(
+            f"Cholesky factor of a {symbolic.n}x{symbolic.n} matrix: it holds "
+            "a non-finite number (NaN/inf)"
+        )
     tri = np.zeros(symbolic.t_off[-1])
     rect = np.empty(symbolic.b_off[-1])
     d = np.empty(symbolic.n)
     ns = symbolic.starts.shape[0] - 1
     mine, theirs = _no_fronts(ns), _no_fronts(ns)
-    args = (symbolic._pattern[0], symbolic._pattern[1], np.asarray(a.data, np.float64),
-            symbolic.order, symbolic.inverse, symbolic.starts, symbolic.r_off, symbolic.rows,
-            symbolic.child_ptr, symbolic.child_idx, symbolic.sn_parent, symbolic.t_off,
-            symbolic.b_off, tri, rect, d)
+    args = (
+        symbolic._pattern[0],
+        symbolic._pattern[1],
+        np.asarray(a.data, np.float64),
+        symbolic.order,
+        symbolic.inverse,
+        symbolic.starts,
+        symbolic.r_off,
+        symbolic.rows,
+        symbolic.child_ptr,
+        symbolic.child_idx,
+        symbolic.sn_parent,
+        symbolic.t_off,
+        symbolic.b_off,
+        tri,
+        rect,
+        d,
+    )
     # one BLAS thread: a threaded dsyrk rounds differently from a serial one, and the same
     # matrix must give the same factor (and modes) whatever the caller's BLAS setting
     with threadpool_limits(limits=1, user_api="blas"):
@@ -153,9 +210,11 @@ def numeric_factor(symbolic: SymbolicFactor, a: sp.spmatrix, pool=None):
             if bad < 0:
                 bad = _numeric(top, *args, mine, theirs)
     if bad >= 0:
-        raise SolverError(f"Cholesky factor of a {symbolic.n}x{symbolic.n} matrix: pivot "
-                          f"{bad} of its elimination order is not positive (the matrix is not "
-                          "positive definite)")
+        raise SolverError(
+            f"Cholesky factor of a {symbolic.n}x{symbolic.n} matrix: pivot "
+            f"{bad} of its elimination order is not positive (the matrix is not "
+            "positive definite)"
+        )
     return tri, rect, d
 
 
@@ -178,8 +237,15 @@ def cholesky_ldl(a: sp.spmatrix, pool=None, symbolic: SymbolicFactor | None = No
     elif not symbolic.matches(csc):
         symbolic = SymbolicFactor(csc, symbolic.given_order)
     tri, rect, d = numeric_factor(symbolic, csc, pool)
-    factor = (symbolic.starts, symbolic.t_off, symbolic.b_off, symbolic.r_off, tri, rect,
-              symbolic.rows)
+    factor = (
+        symbolic.starts,
+        symbolic.t_off,
+        symbolic.b_off,
+        symbolic.r_off,
+        tri,
+        rect,
+        symbolic.rows,
+    )
     return ldl.SupernodalLDL(symbolic.inverse, factor, d, symbolic.halves, pool, a=a)
 
 
@@ -189,7 +255,7 @@ def ldl_factor(a: sp.spmatrix, pool=None):
     return cholesky_ldl(a, pool).solve
 
 
-_WARM = False   # the kernels are loaded in this process (warm_kernels ran)
+_WARM = False  # the kernels are loaded in this process (warm_kernels ran)
 
 
 def warm_kernels() -> None:

@@ -36,26 +36,36 @@ class CholmodFactor:
 
     def __init__(self, a: sp.spmatrix):
         if not available():
-            raise SolverError(f"the CHOLMOD backend needs the {PACKAGE} package "
-                              "(pip install flexmvm[cholmod])")
+            raise SolverError(
+                f"the CHOLMOD backend needs the {PACKAGE} package (pip install flexmvm[cholmod])"
+            )
         from cholespy import CholeskySolverD, MatrixType
+
         csc = sp.csc_matrix(a)
         self.n = csc.shape[0]
         if not np.isfinite(csc.data).all():
-            raise SolverError(f"CHOLMOD factor of a {self.n}x{self.n} matrix: it holds a "
-                              "non-finite number (NaN/inf)")
+            raise SolverError(
+                f"CHOLMOD factor of a {self.n}x{self.n} matrix: it holds a "
+                "non-finite number (NaN/inf)"
+            )
         try:
-            self._solver = CholeskySolverD(self.n, csc.indptr.astype(np.int32),
-                                           csc.indices.astype(np.int32),
-                                           np.ascontiguousarray(csc.data, np.float64),
-                                           MatrixType.CSC)
+            self._solver = CholeskySolverD(
+                self.n,
+                csc.indptr.astype(np.int32),
+                csc.indices.astype(np.int32),
+                np.ascontiguousarray(csc.data, np.float64),
+                MatrixType.CSC,
+            )
         except (ValueError, RuntimeError) as exc:
-            raise SolverError(f"CHOLMOD factor of a {self.n}x{self.n} matrix failed: "
-                              f"{exc}") from None
+            raise SolverError(
+                f"CHOLMOD factor of a {self.n}x{self.n} matrix failed: {exc}"
+            ) from None
         err = backward_error(csc, self.solve)
         if not err <= BACKWARD_RTOL:
-            raise SolverError(f"CHOLMOD solve has a backward error of {err:.1e} (the matrix "
-                              "is not symmetric positive definite?)")
+            raise SolverError(
+                f"CHOLMOD solve has a backward error of {err:.1e} (the matrix "
+                "is not symmetric positive definite?)"
+            )
 
     def solve(self, b: np.ndarray) -> np.ndarray:
         b = np.ascontiguousarray(b, np.float64)

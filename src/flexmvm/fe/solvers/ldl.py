@@ -31,7 +31,7 @@ from flexmvm.fe.solvers.blas import dgemm, dtrsm
 BACKWARD_RTOL = 1e-12
 
 
-_FAST = {"reassoc", "contract"}   # lets LLVM vectorise the dot products (round-off only)
+_FAST = {"reassoc", "contract"}  # lets LLVM vectorise the dot products (round-off only)
 
 
 @numba.njit(nogil=True, cache=True)
@@ -71,7 +71,7 @@ def _forward(sns, starts, t_off, b_off, r_off, tri, rect, rows, y):  # pragma: n
         s = sns[j]
         c0 = starts[s]
         w = starts[s + 1] - c0
-        T = tri[t_off[s]: t_off[s + 1]]
+        T = tri[t_off[s] : t_off[s + 1]]
         for a in range(w):
             for c in range(k):
                 acc = y[c0 + a, c]
@@ -81,7 +81,7 @@ def _forward(sns, starts, t_off, b_off, r_off, tri, rect, rows, y):  # pragma: n
         for a in range(w):
             for c in range(k):
                 y[c0 + a, c] = ys[c, a]
-        B = rect[b_off[s]: b_off[s + 1]]
+        B = rect[b_off[s] : b_off[s + 1]]
         r0 = r_off[s]
         for i in range(r_off[s + 1] - r0):
             ri = rows[r0 + i]
@@ -115,7 +115,7 @@ def _backward(sns, starts, t_off, b_off, r_off, tri, rect, rows, y):  # pragma: 
         for a in range(w):
             for c in range(k):
                 ys[c, a] = y[c0 + a, c]
-        B = rect[b_off[s]: b_off[s + 1]]
+        B = rect[b_off[s] : b_off[s + 1]]
         r0 = r_off[s]
         for i in range(r_off[s + 1] - r0):
             ri = rows[r0 + i]
@@ -124,7 +124,7 @@ def _backward(sns, starts, t_off, b_off, r_off, tri, rect, rows, y):  # pragma: 
                 if yr != 0.0:
                     for a in range(w):
                         ys[c, a] -= B[i * w + a] * yr
-        T = tri[t_off[s]: t_off[s + 1]]
+        T = tri[t_off[s] : t_off[s + 1]]
         for a in range(w - 1, -1, -1):
             for c in range(k):
                 xa = ys[c, a]
@@ -155,11 +155,11 @@ def _forward_blas(sns, starts, t_off, b_off, r_off, tri, rect, rows, y):  # prag
     i.e. their transpose column-major) solved against the unit triangle (dtrsm; the
     row-major triangle is its transpose column-major), the rows below updated by one dgemm."""
     k = y.shape[1]
-    flat = y.reshape(y.size)                             # a view: y is C-contiguous
+    flat = y.reshape(y.size)  # a view: y is C-contiguous
     z = np.empty(_widest_below(r_off) * k)
     ch = np.empty(4, np.uint8)
-    ch[0], ch[1], ch[2], ch[3] = 82, 85, 78, 84           # 'R', 'U', 'N', 'T'
-    iv = np.empty(3, np.int32)                            # k, w, r
+    ch[0], ch[1], ch[2], ch[3] = 82, 85, 78, 84  # 'R', 'U', 'N', 'T'
+    iv = np.empty(3, np.int32)  # k, w, r
     dv = np.empty(2)
     dv[0], dv[1] = 1.0, 0.0
     for j in range(sns.shape[0]):
@@ -169,16 +169,38 @@ def _forward_blas(sns, starts, t_off, b_off, r_off, tri, rect, rows, y):  # prag
         r0 = r_off[s]
         r = r_off[s + 1] - r0
         iv[0], iv[1], iv[2] = k, w, r
-        block = flat[c0 * k:]
-        T = tri[t_off[s]:]
-        dtrsm(ch[0:].ctypes, ch[1:].ctypes, ch[2:].ctypes, ch[1:].ctypes, iv[0:].ctypes,
-              iv[1:].ctypes, dv[0:].ctypes, T.ctypes, iv[1:].ctypes, block.ctypes,
-              iv[0:].ctypes)
+        block = flat[c0 * k :]
+        T = tri[t_off[s] :]
+        dtrsm(
+            ch[0:].ctypes,
+            ch[1:].ctypes,
+            ch[2:].ctypes,
+            ch[1:].ctypes,
+            iv[0:].ctypes,
+            iv[1:].ctypes,
+            dv[0:].ctypes,
+            T.ctypes,
+            iv[1:].ctypes,
+            block.ctypes,
+            iv[0:].ctypes,
+        )
         if r > 0:
-            B = rect[b_off[s]:]
-            dgemm(ch[2:].ctypes, ch[2:].ctypes, iv[0:].ctypes, iv[2:].ctypes, iv[1:].ctypes,
-                  dv[0:].ctypes, block.ctypes, iv[0:].ctypes, B.ctypes, iv[1:].ctypes,
-                  dv[1:].ctypes, z.ctypes, iv[0:].ctypes)
+            B = rect[b_off[s] :]
+            dgemm(
+                ch[2:].ctypes,
+                ch[2:].ctypes,
+                iv[0:].ctypes,
+                iv[2:].ctypes,
+                iv[1:].ctypes,
+                dv[0:].ctypes,
+                block.ctypes,
+                iv[0:].ctypes,
+                B.ctypes,
+                iv[1:].ctypes,
+                dv[1:].ctypes,
+                z.ctypes,
+                iv[0:].ctypes,
+            )
             for i in range(r):
                 ri = rows[r0 + i]
                 for c in range(k):
@@ -190,11 +212,11 @@ def _backward_blas(sns, starts, t_off, b_off, r_off, tri, rect, rows, y):  # pra
     """_backward with each supernode's block through BLAS: the rows below gathered, one
     dgemm into the block, then the transposed unit triangle solved (dtrsm)."""
     k = y.shape[1]
-    flat = y.reshape(y.size)                             # a view: y is C-contiguous
+    flat = y.reshape(y.size)  # a view: y is C-contiguous
     g = np.empty(_widest_below(r_off) * k)
     ch = np.empty(4, np.uint8)
-    ch[0], ch[1], ch[2], ch[3] = 82, 85, 78, 84           # 'R', 'U', 'N', 'T'
-    iv = np.empty(3, np.int32)                            # k, w, r
+    ch[0], ch[1], ch[2], ch[3] = 82, 85, 78, 84  # 'R', 'U', 'N', 'T'
+    iv = np.empty(3, np.int32)  # k, w, r
     dv = np.empty(2)
     dv[0], dv[1] = 1.0, -1.0
     for j in range(sns.shape[0] - 1, -1, -1):
@@ -204,20 +226,42 @@ def _backward_blas(sns, starts, t_off, b_off, r_off, tri, rect, rows, y):  # pra
         r0 = r_off[s]
         r = r_off[s + 1] - r0
         iv[0], iv[1], iv[2] = k, w, r
-        block = flat[c0 * k:]
+        block = flat[c0 * k :]
         if r > 0:
             for i in range(r):
                 ri = rows[r0 + i]
                 for c in range(k):
                     g[i * k + c] = y[ri, c]
-            B = rect[b_off[s]:]
-            dgemm(ch[2:].ctypes, ch[3:].ctypes, iv[0:].ctypes, iv[1:].ctypes, iv[2:].ctypes,
-                  dv[1:].ctypes, g.ctypes, iv[0:].ctypes, B.ctypes, iv[1:].ctypes,
-                  dv[0:].ctypes, block.ctypes, iv[0:].ctypes)
-        T = tri[t_off[s]:]
-        dtrsm(ch[0:].ctypes, ch[1:].ctypes, ch[3:].ctypes, ch[1:].ctypes, iv[0:].ctypes,
-              iv[1:].ctypes, dv[0:].ctypes, T.ctypes, iv[1:].ctypes, block.ctypes,
-              iv[0:].ctypes)
+            B = rect[b_off[s] :]
+            dgemm(
+                ch[2:].ctypes,
+                ch[3:].ctypes,
+                iv[0:].ctypes,
+                iv[1:].ctypes,
+                iv[2:].ctypes,
+                dv[1:].ctypes,
+                g.ctypes,
+                iv[0:].ctypes,
+                B.ctypes,
+                iv[1:].ctypes,
+                dv[0:].ctypes,
+                block.ctypes,
+                iv[0:].ctypes,
+            )
+        T = tri[t_off[s] :]
+        dtrsm(
+            ch[0:].ctypes,
+            ch[1:].ctypes,
+            ch[3:].ctypes,
+            ch[1:].ctypes,
+            iv[0:].ctypes,
+            iv[1:].ctypes,
+            dv[0:].ctypes,
+            T.ctypes,
+            iv[1:].ctypes,
+            block.ctypes,
+            iv[0:].ctypes,
+        )
 
 
 @numba.njit(nogil=True, cache=True)
@@ -252,16 +296,16 @@ def etree_halves(starts, r_off, rows, min_gain: float):
     col_sn = np.repeat(np.arange(ns), width)
     parent = np.full(ns, -1, np.int64)
     for s in np.flatnonzero(below):
-        parent[s] = col_sn[rows[r_off[s]: r_off[s + 1]].min()]
+        parent[s] = col_sn[rows[r_off[s] : r_off[s + 1]].min()]
     subtree = work.copy()
     children: list[list[int]] = [[] for _ in range(ns)]
-    for s in range(ns):           # parents come after their children
+    for s in range(ns):  # parents come after their children
         if parent[s] >= 0:
             subtree[parent[s]] += subtree[s]
             children[parent[s]].append(s)
     total = float(work.sum())
 
-    def bins(frontier):             # largest subtree first, to the lighter half
+    def bins(frontier):  # largest subtree first, to the lighter half
         loads, half = [0.0, 0.0], {}
         for s in sorted(frontier, key=lambda s: -subtree[s]):
             h = int(np.argmin(loads))
@@ -313,8 +357,9 @@ def _inf_norm(a) -> float:
     """max_i sum_j |a_ij| in one pass (scipy.sparse.linalg.norm(a, inf) of a CSC matrix
     builds abs(a) and a product: docs/notes/2026-11-27-comment-measurements.md)."""
     a = sp.csr_matrix(a) if not sp.issparse(a) or a.format not in ("csr", "csc") else a
-    sums = _abs_row_sums(a.indptr, a.indices, np.asarray(a.data, float), a.shape[0],
-                         a.format == "csr")
+    sums = _abs_row_sums(
+        a.indptr, a.indices, np.asarray(a.data, float), a.shape[0], a.format == "csr"
+    )
     return float(sums.max()) if sums.size else 0.0
 
 
@@ -357,8 +402,7 @@ class SupernodalLDL:
     (etree_halves) on two threads; the arithmetic is the same with or without the pool, so
     the results are identical bit for bit."""
 
-    def __init__(self, perm: np.ndarray, factor: tuple, d: np.ndarray, halves, pool=None,
-                 a=None):
+    def __init__(self, perm: np.ndarray, factor: tuple, d: np.ndarray, halves, pool=None, a=None):
         """perm with (P b)[perm[i]] = b[i]; factor = (starts, t_off, b_off, r_off, tri, rect,
         rows), the packed supernodes (fe.solvers.cholesky); d the pivots; halves: split_halves
         of the factor; a (sparse): the matrix, for the check by the backward error of one solve
@@ -375,11 +419,13 @@ class SupernodalLDL:
             self._halves = None
         else:
             first, second, top = halves
-            cols = [np.concatenate([np.arange(starts[s], starts[s + 1]) for s in part]
-                                   + [np.zeros(0, np.int64)])   # the top may be empty
-                    for part in (second, top)]
-            self._halves = (first, second, top, cols[0].astype(np.int64),
-                            cols[1].astype(np.int64))
+            cols = [
+                np.concatenate(
+                    [np.arange(starts[s], starts[s + 1]) for s in part] + [np.zeros(0, np.int64)]
+                )  # the top may be empty
+                for part in (second, top)
+            ]
+            self._halves = (first, second, top, cols[0].astype(np.int64), cols[1].astype(np.int64))
         if a is not None:
             self._check(a)
 
@@ -390,8 +436,10 @@ class SupernodalLDL:
         unsymmetric a, whose lower triangle was factored)."""
         err = backward_error(a, self.solve)
         if not err <= BACKWARD_RTOL:
-            raise SolverError(f"LDL^T solve has a backward error of {err:.1e} (the matrix "
-                              "is not symmetric positive definite?)")
+            raise SolverError(
+                f"LDL^T solve has a backward error of {err:.1e} (the matrix "
+                "is not symmetric positive definite?)"
+            )
 
     @property
     def split(self) -> bool:

@@ -50,7 +50,7 @@ def mmd_order(a: sp.spmatrix) -> np.ndarray:
         ilu = spla.spilu(dominant, drop_tol=np.inf, fill_factor=1.0, **SPD_LU)
     perm_c = np.asarray(ilu.perm_c, np.int64)
     order = np.empty_like(perm_c)
-    order[perm_c] = np.arange(perm_c.size)      # perm_c[i]: position of column i
+    order[perm_c] = np.arange(perm_c.size)  # perm_c[i]: position of column i
     return order
 
 
@@ -79,7 +79,7 @@ def dissection_order(a: sp.spmatrix) -> np.ndarray | None:
     level = _levels(pattern, 0)
     if np.any(level < 0):
         return None
-    level = _levels(pattern, int(np.argmax(level)))   # from a pseudo-peripheral vertex
+    level = _levels(pattern, int(np.argmax(level)))  # from a pseudo-peripheral vertex
     mid = int(np.searchsorted(np.cumsum(np.bincount(level)), n / 2))
     sep = np.flatnonzero(level == mid)
     if not (0 < mid < level.max()) or len(sep) > MAX_SEPARATOR_FRACTION * n:
@@ -87,8 +87,7 @@ def dissection_order(a: sp.spmatrix) -> np.ndarray | None:
     # minimum degree of the pattern with the separator a clique (values: a diagonally
     # dominant SPD matrix of that pattern, for SuperLU's ordering only)
     k = len(sep)
-    clique = sp.csr_matrix((np.ones(k * k), (np.repeat(sep, k), np.tile(sep, k))),
-                           shape=a.shape)
+    clique = sp.csr_matrix((np.ones(k * k), (np.repeat(sep, k), np.tile(sep, k))), shape=a.shape)
     aug = ((pattern + pattern.T + clique) != 0).astype(float)
     aug = sp.csc_matrix(aug + sp.diags(np.asarray(aug.sum(axis=1)).ravel() + 1.0))
     order = mmd_order(aug)
@@ -104,8 +103,9 @@ def elimination_order(a: sp.spmatrix) -> np.ndarray | None:
     return dissection_order(a) if a.shape[0] >= ldl.SPLIT_MIN_N else None
 
 
-def iteration_pattern(M_qq: sp.spmatrix, k_hat: sp.spmatrix,
-                      c_hat: sp.spmatrix | None = None) -> sp.csr_matrix:
+def iteration_pattern(
+    M_qq: sp.spmatrix, k_hat: sp.spmatrix, c_hat: sp.spmatrix | None = None
+) -> sp.csr_matrix:
     """The sparsity pattern (ones) of W = M_qq + theta h C + (theta h)^2 K, the same for
     every step size."""
     parts = [M_qq, k_hat] + ([c_hat] if c_hat is not None else [])

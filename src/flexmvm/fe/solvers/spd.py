@@ -39,8 +39,8 @@ CHOLESKY_MIN_N = 2000
 class CholeskyBackend(enum.Enum):
     """The Cholesky factorization behind spd_solver (module docstring)."""
 
-    SUPERNODAL = "supernodal"   #: fe.solvers.cholesky + fe.solvers.ldl: the default
-    CHOLMOD = "cholmod"         #: SuiteSparse's CHOLMOD through cholespy: optional
+    SUPERNODAL = "supernodal"  #: fe.solvers.cholesky + fe.solvers.ldl: the default
+    CHOLMOD = "cholmod"  #: SuiteSparse's CHOLMOD through cholespy: optional
 
 
 def cholesky_backend() -> CholeskyBackend:
@@ -67,8 +67,9 @@ def solver_pool() -> Iterator[ThreadPoolExecutor | None]:
         yield pool
 
 
-def spd_solver(a: sp.spmatrix, pool: ThreadPoolExecutor | None = None,
-               backend: CholeskyBackend | None = None) -> Solve:
+def spd_solver(
+    a: sp.spmatrix, pool: ThreadPoolExecutor | None = None, backend: CholeskyBackend | None = None
+) -> Solve:
     """x = solve(b) for the SPD sparse matrix a (b (n,) or (n, k)): from CHOLESKY_MIN_N rows
     the Cholesky of ``backend`` (default: cholesky_backend(), the FLEXMVM_CHOLESKY setting);
     the supernodal one solves several right-hand sides in one pass over the factor, the two
@@ -80,20 +81,31 @@ def spd_solver(a: sp.spmatrix, pool: ThreadPoolExecutor | None = None,
         backend = cholesky_backend()
     if backend is CholeskyBackend.CHOLMOD:
         from flexmvm.fe.solvers import cholmod
+
         if not cholmod.available():
-            raise SolverError(f"{ENV_CHOLESKY}=cholmod needs the {cholmod.PACKAGE} package "
-                              "(pip install flexmvm[cholmod])")
+            raise SolverError(
+                f"{ENV_CHOLESKY}=cholmod needs the {cholmod.PACKAGE} package "
+                "(pip install flexmvm[cholmod])"
+            )
     if a.shape[0] < CHOLESKY_MIN_N:
         return superlu_spd(a).solve
     try:
         if backend is CholeskyBackend.CHOLMOD:
             from flexmvm.fe.solvers.cholmod import CholmodFactor
+
             return CholmodFactor(a).solve
         from flexmvm.fe.solvers.cholesky import cholesky_ldl
+
         return cholesky_ldl(a, pool).solve
     except SolverError:
         return superlu_spd(a).solve
 
 
-__all__ = ["CHOLESKY_MIN_N", "ENV_CHOLESKY", "CholeskyBackend", "cholesky_backend",
-           "solver_pool", "spd_solver"]
+__all__ = [
+    "CHOLESKY_MIN_N",
+    "ENV_CHOLESKY",
+    "CholeskyBackend",
+    "cholesky_backend",
+    "solver_pool",
+    "spd_solver",
+]

@@ -21,8 +21,11 @@ from flexmvm.errors import SolverError
 Solve = Callable[[np.ndarray], np.ndarray]
 
 #: SuperLU options for symmetric positive definite matrices (module docstring).
-SPD_LU = {"permc_spec": "MMD_AT_PLUS_A", "diag_pivot_thresh": 0.0,
-          "options": {"SymmetricMode": True}}
+SPD_LU = {
+    "permc_spec": "MMD_AT_PLUS_A",
+    "diag_pivot_thresh": 0.0,
+    "options": {"SymmetricMode": True},
+}
 
 
 def factor(a: sp.spmatrix, spd: bool = True) -> Solve:
@@ -45,8 +48,10 @@ def superlu_spd(a: sp.spmatrix):
 def _superlu(a: sp.spmatrix, options: dict):
     data = a.data if sp.issparse(a) else np.asarray(a)
     if not np.isfinite(data).all():
-        raise SolverError(f"sparse LU of a {a.shape[0]}x{a.shape[0]} matrix: it holds a "
-                          "non-finite number (NaN/inf)")
+        raise SolverError(
+            f"sparse LU of a {a.shape[0]}x{a.shape[0]} matrix: it holds a "
+            "non-finite number (NaN/inf)"
+        )
     try:
         return spla.splu(sp.csc_matrix(a), **options)
     except RuntimeError as exc:

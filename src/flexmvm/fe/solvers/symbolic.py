@@ -87,7 +87,7 @@ def _column_counts(Ap, Ai, p, pinv, parent):  # pragma: no cover - compiled
     delta = np.zeros(n, np.int64)
     for k in range(n):
         j = k
-        delta[j] = 1 if first[j] == -1 else 0      # a leaf of the tree
+        delta[j] = 1 if first[j] == -1 else 0  # a leaf of the tree
         while j != -1 and first[j] == -1:
             first[j] = k
             j = parent[j]
@@ -98,12 +98,12 @@ def _column_counts(Ap, Ai, p, pinv, parent):  # pragma: no cover - compiled
         for q in range(Ap[col], Ap[col + 1]):
             i = pinv[Ai[q]]
             if i <= j or first[j] <= maxfirst[i]:
-                continue                            # j is not a leaf of row i's subtree
+                continue  # j is not a leaf of row i's subtree
             maxfirst[i] = first[j]
             jprev = prevleaf[i]
             prevleaf[i] = j
             delta[j] += 1
-            if jprev != -1:                         # subtract at the least common ancestor
+            if jprev != -1:  # subtract at the least common ancestor
                 lca = jprev
                 while lca != ancestor[lca]:
                     lca = ancestor[lca]
@@ -140,11 +140,11 @@ def _supernodes(parent, counts, relax_width, relax_zeros):  # pragma: no cover -
     for s in range(ns):
         for j in range(fs[s], fs[s + 1]):
             col_sn[j] = s
-    width = np.empty(ns, np.int64)     # of the group starting at s (s and what merged into it)
+    width = np.empty(ns, np.int64)  # of the group starting at s (s and what merged into it)
     first_count = np.empty(ns, np.int64)
     entries = np.empty(ns, np.float64)
     zeros = np.empty(ns, np.float64)
-    merged = np.zeros(ns, np.bool_)    # s + 1's group was merged into s
+    merged = np.zeros(ns, np.bool_)  # s + 1's group was merged into s
     for s in range(ns - 1, -1, -1):
         w = fs[s + 1] - fs[s]
         c = counts[fs[s]]
@@ -157,8 +157,12 @@ def _supernodes(parent, counts, relax_width, relax_zeros):  # pragma: no cover -
             tot = ww * cc - ww * (ww - 1) / 2.0
             z = tot - own - (entries[s + 1] - zeros[s + 1])
             frac = z / tot
-            ok = (ww <= relax_width[0] or (ww <= relax_width[1] and frac < relax_zeros[0])
-                  or (ww <= relax_width[2] and frac < relax_zeros[1]) or frac < relax_zeros[2])
+            ok = (
+                ww <= relax_width[0]
+                or (ww <= relax_width[1] and frac < relax_zeros[0])
+                or (ww <= relax_width[2] and frac < relax_zeros[1])
+                or frac < relax_zeros[2]
+            )
             if ok:
                 merged[s] = True
                 width[s], first_count[s], entries[s], zeros[s] = ww, cc, tot, z
@@ -234,8 +238,9 @@ def _structure(Ap, Ai, p, pinv, parent, starts, sn_count):  # pragma: no cover -
                 cnt = _add_row(rows[q], s, c1, mark, rows, base, cnt, size)
         if cnt != size:
             raise ValueError("supernode row structure differs from its column count")
-        rows[base: base + size].sort()
+        rows[base : base + size].sort()
     return r_off, rows, sn_parent, child_ptr, child_idx
+
 
 class SymbolicFactor:
     """The ordering and supernodal structure of L for one sparsity pattern (reusable for
@@ -253,15 +258,17 @@ class SymbolicFactor:
         pinv0[p0] = np.arange(n)
         parent0 = _etree(Ap, Ai, p0, pinv0)
         post = _postorder(parent0)
-        p = p0[post]                          # postordered: same fill, supernodes contiguous
+        p = p0[post]  # postordered: same fill, supernodes contiguous
         pinv = np.empty(n, np.int64)
         pinv[p] = np.arange(n)
         parent = _relabel(parent0, post)
         counts = _column_counts(Ap, Ai, p, pinv, parent)
-        starts, sn_count = _supernodes(parent, counts, np.asarray(RELAX_WIDTH, np.int64),
-                                       np.asarray(RELAX_ZEROS, np.float64))
-        r_off, rows, sn_parent, child_ptr, child_idx = _structure(Ap, Ai, p, pinv, parent,
-                                                                  starts, sn_count)
+        starts, sn_count = _supernodes(
+            parent, counts, np.asarray(RELAX_WIDTH, np.int64), np.asarray(RELAX_ZEROS, np.float64)
+        )
+        r_off, rows, sn_parent, child_ptr, child_idx = _structure(
+            Ap, Ai, p, pinv, parent, starts, sn_count
+        )
         width = np.diff(starts)
         below = np.diff(r_off)
         self.n = n
@@ -280,8 +287,12 @@ class SymbolicFactor:
         """Whether a has the sparsity pattern this analysis was made for."""
         a = symmetric_csc(a)
         Ap, Ai = self._pattern
-        return (a.shape == (self.n, self.n) and a.nnz == Ai.size
-                and np.array_equal(a.indptr, Ap) and np.array_equal(a.indices, Ai))
+        return (
+            a.shape == (self.n, self.n)
+            and a.nnz == Ai.size
+            and np.array_equal(a.indptr, Ap)
+            and np.array_equal(a.indices, Ai)
+        )
 
     @property
     def nnz(self) -> int:
@@ -295,6 +306,7 @@ def _relabel(parent0: np.ndarray, post: np.ndarray) -> np.ndarray:
     where[post] = np.arange(post.size)
     up = parent0[post]
     return np.where(up >= 0, where[np.maximum(up, 0)], -1).astype(np.int64)
+
 
 def symmetric_csc(a: sp.spmatrix) -> sp.csc_matrix:
     """a as CSC; of a symmetric CSR matrix its transpose (the same matrix, no copy)."""
