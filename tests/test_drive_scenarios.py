@@ -167,7 +167,6 @@ def _arm(mesh: Path, model: dict, placement: dict, joints: list, t_end=1e-3, dt=
     }
 
 
-PIVOT = [0.0, 0.0, 0.005]  # the hole's axis at mid-thickness, in the arm's mesh [m]
 TIP_PIN = {
     "type": "revolute",
     "name": "pin",
@@ -268,3 +267,28 @@ def test_flexible_arm_spin_up_follows_the_drive(arm_mesh):
     assert np.abs(Hz - Hz[0] - impulse).max() < 1e-8 * abs(Hz[-1])
     assert np.abs(E - E[0] - work).max() < 1e-8 * E[-1]
     assert np.abs(tau).max() == pytest.approx(inertia * 2 * ws / T, rel=0.1)
+
+
+def test_prescribed_frame_from_a_scenario(arm_mesh):
+    """A rigid arm's frame prescribed from the scenario file: its hub point on a path given
+    by a table of velocities (0 to 1 m/s along x over 10 ms: d = 50 t^2 m) and turned about z
+    by a table of angular velocities (0 to 5 rad/s: angle = 250 t^2 rad). The point p, 0.1 m
+    along the arm, follows x_0 + d(t), the frame turns by R_z(angle), so the frame origin is
+    x_0 + d(t) - R p: both to round-off (1e-12) at every output."""
+    p = np.array([0.1, 0.0, 0.005])
+    joint = {
+        "type": "prescribed",
+        "name": "carriage",
+        "body": "arm",
+        "point_m": list(p),
+        "path": {"velocity_mps": [[0.0, 0.0, 0.0, 0.0], [0.01, 1.0, 0.0, 0.0]]},
+        "axis": [0, 0, 1],
+        "drive": {"angular_velocity_radps": {"table": [[0.0, 0.0], [0.01, 5.0]]}},
+    }
+    res = fm.run(scenario_from_dict(_arm(arm_mesh, {"kind": "rigid"}, {}, [joint], 0.01))).result
+    for t, r, A in zip(res.t, res.frame_r[:, 0], res.frame_A[:, 0], strict=True):
+        c, s = math.cos(250.0 * t * t), math.sin(250.0 * t * t)
+        R = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
+        np.testing.assert_allclose(A, R, rtol=0, atol=1e-12)
+        np.testing.assert_allclose(r, p + [50.0 * t * t, 0.0, 0.0] - R @ p, rtol=0, atol=1e-12)
+    assert set(res.drive_torque) == {"carriage"}
