@@ -26,6 +26,7 @@ from flexmvm.mesh import parts
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
 ROD_IMPACT = tomllib.loads((SCENARIOS / "rod_impact.toml").read_text())
 SPIN = {"spin_up": {"final": 20.0, "duration_s": 0.02}}  # [rad/s], [s]
+SPIN_DRIVE = {"angular_velocity_radps": SPIN}
 
 
 def _with_joint(joint: dict, **placement) -> dict:
@@ -292,3 +293,16 @@ def test_prescribed_frame_from_a_scenario(arm_mesh):
         np.testing.assert_allclose(A, R, rtol=0, atol=1e-12)
         np.testing.assert_allclose(r, p + [50.0 * t * t, 0.0, 0.0] - R @ p, rtol=0, atol=1e-12)
     assert set(res.drive_torque) == {"carriage"}
+
+
+def test_dumps_without_the_new_keys_are_as_before_and_round_trip():
+    """Study keys and cache identities hash scenario dumps: a scenario without drives, paths,
+    joint names or rigid_motion dumps without those keys; one with them reads back from its
+    dump to the same dump."""
+    plain = fm.load_scenario(SCENARIOS / "pendulum_release.toml").model_dump(mode="json")
+    assert all(not {"name", "drive", "path"} & set(j) for j in plain["joints"])
+    assert all("rigid_motion" not in b["placement"] for b in plain["bodies"])
+    motion = {"angular_velocity_radps": [0, 0, 1.0], "about_joint": "pin"}
+    data = _with_joint({**REV_AXIS, "name": "pin", "drive": SPIN_DRIVE}, rigid_motion=motion)
+    dump = scenario_from_dict(data).model_dump(mode="json")
+    assert scenario_from_dict(dump).model_dump(mode="json") == dump
