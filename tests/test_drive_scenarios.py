@@ -292,7 +292,12 @@ def test_prescribed_frame_from_a_scenario(arm_mesh):
         R = np.array([[c, -s, 0], [s, c, 0], [0, 0, 1]])
         np.testing.assert_allclose(A, R, rtol=0, atol=1e-12)
         np.testing.assert_allclose(r, p + [50.0 * t * t, 0.0, 0.0] - R @ p, rtol=0, atol=1e-12)
-    assert set(res.drive_torque) == {"carriage"}
+    assert (
+        set(res.drive_torque) == {"carriage"}
+        and res.torque("carriage") is res.drive_torque["carriage"]
+    )
+    with pytest.raises(InputError, match=r"^no drive 'motor' in this run \(drives: carriage\)$"):
+        res.torque("motor")
 
 
 def test_dumps_without_the_new_keys_are_as_before_and_round_trip():
