@@ -19,6 +19,7 @@ integrated period ~1-2 s; the first run in a worktree compiles numba kernels).
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 import math
 
@@ -29,12 +30,19 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 from _cantilever import scenario
 
+from flexmvm.bodies.build import body_from_fe
 from flexmvm.bodies.damping import ModalDamping, RayleighDamping, rayleigh_from_ratios
-from flexmvm.errors import InputError
+from flexmvm.errors import InputError, SolverError
+from flexmvm.fe.assembly import assemble
+from flexmvm.fe.mass_redistribution import redistribute_mass
 from flexmvm.fe.modes import shift_invert_modes
 from flexmvm.integrate.driver import simulate
+from flexmvm.integrate.massless import MasslessCoordinates
 from flexmvm.integrate.run_result import TimeGrid
 from flexmvm.integrate.state import BodyState
+from flexmvm.materials import ALUMINIUM
+from flexmvm.reduction.basis import BasisKind, build_basis
+from flexmvm.reduction.clamp import clamp_condition
 from flexmvm.scenarios.build import build_scenario
 from flexmvm.scenarios.load import scenario_from_dict
 from flexmvm.scenarios.setup import SetupCache
@@ -222,3 +230,30 @@ def test_damping_forms_refuse_bad_input():
         RayleighDamping(0.0, -1.0)
     with pytest.raises(InputError, match="expected numbers >= 0"):
         ModalDamping(())
+
+
+@pytest.mark.parametrize(
+    "damping, accepted",
+    [(RayleighDamping(20.0, 0.0), True), (RayleighDamping(0.0, 1e-6), False)],
+    ids=["mass-proportional", "stiffness-proportional"],
+)
+def test_massless_contact_nodes_take_damping_that_leaves_them_undamped(damping, accepted):
+    """Contact nodes without mass (fe.mass_redistribution) are held in equilibrium at step
+    ends (integrate.massless), which holds only if nothing damps them: alpha M leaves their
+    rows of c_hat zero and is accepted; beta K does not and is refused in one line."""
+    built = _rod("full")
+    body = built.system.bodies[0]
+    mesh = built.info[0].mesh
+    fe = assemble(mesh, ALUMINIUM)
+    fe = dataclasses.replace(
+        fe, M_scalar=redistribute_mass(fe.M_scalar, mesh.nodes, mesh.node_set("end_a_centre"))
+    )
+    basis = build_basis(fe, BasisKind.FULL, clamp_condition(mesh, mesh.node_set("end_b")))
+    damped = body_from_fe("beam", fe, basis, damping=damping)
+    if accepted:
+        assert MasslessCoordinates.of(damped).s.size == 3  # the free end's centre node
+    else:
+        with pytest.raises(SolverError, match="stiffness-proportional damping") as e:
+            MasslessCoordinates.of(damped)
+        assert "\n" not in str(e.value)
+    assert body.nq == basis.nq
