@@ -45,6 +45,7 @@ from flexmvm.reduction.basis import BasisKind, build_basis
 from flexmvm.reduction.clamp import clamp_condition
 from flexmvm.scenarios.build import build_scenario
 from flexmvm.scenarios.load import scenario_from_dict
+from flexmvm.scenarios.problems import ScenarioError
 from flexmvm.scenarios.setup import SetupCache
 
 # zeta = 2 % at 50 Hz and 2 % at 2 kHz: 2.4 % at the rod's first bending mode (40.5 Hz),
@@ -168,8 +169,10 @@ def test_modal_ratios_on_the_rayleigh_curve_equal_rayleigh():
     c_cb = _rod("mvm", ("modal", *zeta_cb)).system.bodies[0].c_hat
     np.testing.assert_allclose(c_cb[3:, 3:], cb.c_hat[3:, 3:], atol=1e-9 * np.abs(cb.c_hat).max())
     assert not np.any(c_cb[:3]) and not np.any(c_cb[:, :3])
-    with pytest.raises(InputError, match="2 modal damping ratios for 4 modes"):
+    with pytest.raises(ScenarioError, match="2 ratios for 4 modes"):
         _rod("modal", ("modal", 0.01, 0.02))
+    with pytest.raises(InputError, match="2 modal damping ratios for 4 modes"):
+        ModalDamping((0.01, 0.02)).per_mode(4, "beam")
 
 
 @pytest.mark.parametrize("kind", ["full", "mvm"])
