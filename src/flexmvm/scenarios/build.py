@@ -52,6 +52,7 @@ from flexmvm.scenarios.mesh_lookup import (
 from flexmvm.scenarios.sag import quasi_static_sag
 from flexmvm.scenarios.setup import SetupCache, default_setup
 from flexmvm.scenarios.solver_choice import with_elimination_order
+from flexmvm.scenarios.supports import clamp_label, support_joints
 
 DEFAULT_SEARCH_RADIUS_M = 2e-4  # broad-phase margin beyond the distance closed in one step
 
@@ -89,13 +90,18 @@ class BuiltScenario:
 
 
 def build_body(
-    cfg, setup: SetupCache, massless: np.ndarray | None = None, surfaces: tuple[str, ...] = ()
+    cfg,
+    setup: SetupCache,
+    massless: np.ndarray | None = None,
+    surfaces: tuple[str, ...] = (),
+    supports=(),
 ) -> tuple[FlexibleBody, BodyInfo]:
     """The body of ``cfg``; ``massless``: its contact nodes whose mass is redistributed
     (retained ones only for the MVM kinds, none for a modal or rigid model); ``surfaces``: its
-    contact surfaces, which an automatic reference keeps away from. A rigid body has no
-    reference condition (nothing to support: no elastic coordinates). Meshes, FE models, bases
-    and body parts come through ``setup``."""
+    contact surfaces, which an automatic reference keeps away from; ``supports``: the
+    scenario's, of which a clamp of this body replaces its reference (scenarios.supports). A
+    rigid body has no reference condition (nothing to support: no elastic coordinates).
+    Meshes, FE models, bases and body parts come through ``setup``."""
     where = f"bodies[{cfg.name}]"
     material = cfg.material_obj()
     key = mesh_key(cfg)
@@ -105,10 +111,12 @@ def build_body(
     if kind.basis is None:
         body = rigid_body_from_fe(cfg.name, setup.fe_model(key, material))
         return body, BodyInfo(cfg.name, kind, mesh, material, 6, 0, 0, rod)
-    ref_set = reference_label(cfg.model.reference, mesh, surfaces, f"{where}.model.reference")
     retained: tuple = ()
     if kind.retains_nodes:
         retained = tuple(int(i) for i in retained_nodes(cfg.model, mesh, rod, f"{where}.model"))
+    ref_set = clamp_label(cfg, mesh, supports, retained) or reference_label(
+        cfg.model.reference, mesh, surfaces, f"{where}.model.reference"
+    )
     modes = cfg.model.modes if kind.uses_modes or kind is ModelKind.INTERFACE else 0
     interface = cfg.model.interface_spec() if kind is ModelKind.INTERFACE else None
     if (
@@ -125,7 +133,9 @@ def build_body(
         cost = reduced_cost(cfg.name, mesh.n_nodes, 3 * len(retained) + modes, fe.K.nnz)
         check_cost(cost, cfg.model.allow_costly, f"{where}.model")
     args = (key, material, kind.basis, retained, modes, ref_set, interface)
-    body = body_from_parts(cfg.name, mesh, setup.basis(*args), setup.body_parts(*args))
+    body = body_from_parts(
+        cfg.name, mesh, setup.basis(*args), setup.body_parts(*args), damping=cfg.damping_obj()
+    )
     n_ret = len(retained) if kind.retains_nodes else (mesh.n_nodes if kind is ModelKind.FULL else 0)
     covered, patch = None, None
     if kind.retains_nodes:
@@ -169,7 +179,7 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
         massless = None
         if any(c.redistribute_mass for c in sc.contacts):
             massless = contact_nodes(sc, cfg.name, setup.mesh(mesh_key(cfg)))
-        body, info = build_body(cfg, setup, massless, contact_surfaces(sc, cfg.name))
+        body, info = build_body(cfg, setup, massless, contact_surfaces(sc, cfg.name), sc.supports)
         bodies.append(body)
         infos.append(info)
         states.append(initial_state(body, cfg.placement))
@@ -188,7 +198,8 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
         _contact(c, k, bodies, infos, index, grid.theta_rule()) for k, c in enumerate(sc.contacts)
     )
     groups = [_joint(j, k, bodies, infos, index, states) for k, j in enumerate(sc.joints)]
-    joints = [joint for group in groups for joint in group]
+    supported = [support_joints([s], index, states) for s in sc.supports]
+    joints = [joint for group in (*groups, *supported) for joint in group]
     states = with_rigid_motions(sc, bodies, states, groups)
     probes = [_probe(p, f"probes[{k}]", infos, index) for k, p in enumerate(sc.probes)]
     grid.ticks()
@@ -199,7 +210,8 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
         if cfg.placement.sagged:
             states[k] = quasi_static_sag(system, states, k, f"bodies[{cfg.name}].placement")
     labels = [joint_label(j, k) for k, j in enumerate(sc.joints)]
-    check_joint_velocities(system.bodies, states, groups, labels)
+    labels += [f"supports[{k}]" for k in range(len(sc.supports))]
+    check_joint_velocities(system.bodies, states, groups + supported, labels)
     return BuiltScenario(system, states, probes, grid, infos)
 
 
