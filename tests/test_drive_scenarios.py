@@ -11,11 +11,13 @@ import math
 import tomllib
 from pathlib import Path
 
+import h5py
 import numpy as np
 import pytest
 
 import flexmvm as fm
 from flexmvm.errors import InputError
+from flexmvm.results.writers import write_results_h5
 from flexmvm.scenarios import ScenarioError, scenario_from_dict
 from flexmvm.scenarios.build import build_scenario
 
@@ -222,7 +224,7 @@ def test_initial_velocities_that_violate_a_joint_are_an_error(arm_mesh):
         build_scenario(scenario_from_dict(data))
 
 
-def test_flexible_arm_spin_up_follows_the_drive(arm_mesh):
+def test_flexible_arm_spin_up_follows_the_drive(arm_mesh, tmp_path):
     """The full-FE arm (coarse tet4) spun up about its hub by the drive's spin-up profile to
     20 rad/s over T = 20 ms (Kane et al. 1987), no gravity, theta = 1/2, h = 0.2 ms. Checked:
     - the frame turns by the prescribed angle to round-off (the step closes phi to 1e-12);
@@ -259,6 +261,10 @@ def test_flexible_arm_spin_up_follows_the_drive(arm_mesh):
     np.testing.assert_allclose(turned, angle, rtol=0, atol=1e-10)
     tau = res.drive_torque["motor"]
     assert run.summary["drive_torque_max_abs_Nm"]["motor"] == pytest.approx(np.abs(tau).max())
+    write_results_h5(tmp_path / "r.h5", res, run.built.system.bodies)
+    with h5py.File(tmp_path / "r.h5") as f:  # the torque in the archive, with its unit
+        np.testing.assert_array_equal(f["drive_torque/motor"][()], tau)
+        assert f["drive_torque/motor"].attrs["units"] == "N m"
     pivot = run.built.system.joints[0].p2
     Hz = (res.angular_momentum - np.cross(pivot, res.momentum))[:, 2]
     impulse = np.concatenate([[0.0], np.cumsum(tau[1:] * np.diff(t))])
