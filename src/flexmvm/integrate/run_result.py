@@ -12,6 +12,7 @@ import numpy as np
 
 from flexmvm.errors import InputError
 from flexmvm.integrate import DEFAULT_THETA
+from flexmvm.integrate.energy_ledger import EnergyLedgerHistory
 from flexmvm.integrate.theta import ThetaRule
 
 
@@ -155,6 +156,8 @@ class RunResult:
     step_cuts: int = 0  # steps retried as two halves (driver.MAX_STEP_CUTS deep)
     smallest_step_s: float = 0.0  # the smallest step taken [s] (below dt_s only after cuts)
     failure: str | None = None  # a run that stopped early: why (the histories end there)
+    # cumulative works and dissipations at the outputs (integrate.energy_ledger)
+    energy_ledger: EnergyLedgerHistory | None = None
 
     @property
     def total_energy(self) -> np.ndarray:
