@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from flexmvm.integrate.energy_ledger import load_label
+
 #: relative size below which the sum of a joint row's translational parts is zero (round-off)
 CANCEL_TOL = 1e-12
 
@@ -148,7 +150,7 @@ def momentum_report(res, built) -> tuple[str | None, dict]:
     for k, load in enumerate(system.loads):
         if getattr(load, "external", True):
             who = ", ".join(repr(names[b]) for b in sorted(_load_bodies(load)))
-            reasons.append(f"loads[{k}] ({type(load).__name__}) pushes {who} from outside")
+            reasons.append(f"{load_label(k, load)} pushes {who} from outside")
             held |= _load_bodies(load)
     if not reasons:
         return None, {}

@@ -44,7 +44,8 @@ def build_loads(sc, bodies, infos, index, states) -> tuple:
     """The loads and springs of scenario sc, in that order (System.loads)."""
     out = []
     for k, c in enumerate(sc.loads):
-        where, name = f"loads[{k}]", c.name or ""
+        where = f"loads[{k}]"
+        name = c.name or f"{where} {c.type.value}"  # the key of its work in summary.json
         history = c.history()
         follower = c.frame is LoadFrame.BODY
         if c.type is LoadType.FORCE:
@@ -56,7 +57,8 @@ def build_loads(sc, bodies, infos, index, states) -> tuple:
         else:
             out.append(MotorTorque(_axis(sc, c.joint, index, states), history, name))
     for k, c in enumerate(sc.springs):
-        where, name = f"springs[{k}]", c.name or ""
+        where = f"springs[{k}]"
+        name = c.name or f"{where} {c.type.value}"
         if c.type is SpringType.ROTATIONAL:
             axis = _axis(sc, c.joint, index, states)
             rest = math.radians(c.rest_angle_deg or 0.0)

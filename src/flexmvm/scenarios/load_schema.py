@@ -59,7 +59,10 @@ def history_of(value: Any, times_s: Any, width: int, key: str) -> TimeHistory:
     try:
         if times_s is None:
             ok = (width == 1 and _number(value)) or (
-                width == 3 and isinstance(value, (list, tuple)) and all(map(_number, value))
+                width == 3
+                and isinstance(value, (list, tuple))
+                and len(value) == 3
+                and all(map(_number, value))
             )
             if not ok:
                 shape = "a number" if width == 1 else "3 numbers [x, y, z]"
