@@ -30,6 +30,17 @@ ENERGY_LEDGER_NOTE = (
 )
 
 
+def report_entries(res, built, why_not: str | None, subsystems: dict) -> dict:
+    """summary.json's entries of this module: why momentum_rel_error is None (gravity, a
+    joint or load to the ground: momentum_report's reason) and the error of each free
+    subsystem instead, then the energy ledger."""
+    return {
+        "momentum_error_undefined_because": why_not,
+        "subsystem_momentum_rel_error": subsystems,
+        **energy_ledger_summary(res, built),
+    }
+
+
 def energy_ledger_summary(res, built) -> dict:
     """The ``energy_ledger`` entry of summary.json ({} without a ledger)."""
     led = res.energy_ledger

@@ -14,7 +14,7 @@ from flexmvm.integrate.driver import simulate
 from flexmvm.integrate.run_result import ProbeHistory, RunResult, StepHistory
 from flexmvm.scenarios import pendulum
 from flexmvm.scenarios.build import BuiltScenario, build_scenario
-from flexmvm.scenarios.energy_report import energy_ledger_summary, momentum_report
+from flexmvm.scenarios.energy_report import momentum_report, report_entries
 from flexmvm.scenarios.guard import contact_guard, energy_gain_warning, guard_warnings
 from flexmvm.scenarios.load import load_scenario
 from flexmvm.scenarios.schema import Scenario
@@ -174,11 +174,7 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         "momentum_rel_error": mom_err,
         "momentum_rel_error_converged": mom_err_converged,
         "momentum_error_note": MOMENTUM_ERROR_NOTE,
-        # why momentum_rel_error is None (gravity, a joint or load to the ground) and the
-        # error of each free subsystem instead (scenarios.energy_report)
-        "momentum_error_undefined_because": why_not,
-        "subsystem_momentum_rel_error": subsystems,
-        **energy_ledger_summary(res, built),
+        **report_entries(res, built, why_not, subsystems),  # scenarios.energy_report
         "energy_rel_error": e_err,
         "energy_rel_error_max": e_err_max,
         # the largest rise of the total energy over its start [-] (None with applied loads)
