@@ -16,7 +16,8 @@ with the factor ~ theta^2 h^2 k / m_eff per iterate for a spring between masses 
 theta h c / m_eff for its damper): it converges in the default iteration limit while these
 are well below 1, i.e. for a spring far softer than the body (k << m_eff / (theta h)^2) and a
 step that resolves the spring's own period (h << 2 pi sqrt(m_eff / k)), as any accurate run
-has. tests/test_loads.py runs the showcase values.
+has (measurements: docs/notes/2026-11-27-loads-and-energy-ledger.md; the driven rod of
+tests/test_loads_scenario.py converges at every step).
 """
 
 from __future__ import annotations
