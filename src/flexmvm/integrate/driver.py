@@ -283,7 +283,7 @@ def _simulate(
     rec.record(t0, states, 0.0, np.zeros(integ.n_joint_rows))
     bar = _progress(progress, n_ticks)
     tally = _Tally(system, integ.n_joint_rows, pen, grid.dt_s)
-    tally.ledger = EnergyLedger(system, integ.carried)
+    tally.ledger = EnergyLedger(system, integ.carried, getattr(integ, "carried_state", None))
     tally.ledger.record(states)
     wall0 = time.perf_counter()
     h_min = grid.dt_s / (1 << MAX_STEP_CUTS)

@@ -87,6 +87,9 @@ class EnergyLedger:
 
     system: object
     carried: object = None
+    # the integrator's carried state (integrate.carried.CarriedState), whose k_hat q and
+    # M_qq q_dot of a step's end give the dissipation's products for free; None: computed
+    fresh: object = None
     w_loads: np.ndarray = field(init=False)
     d_loads: np.ndarray = field(init=False)
     w_joints: np.ndarray = field(init=False)
@@ -100,6 +103,7 @@ class EnergyLedger:
         self.w_joints = np.zeros(len(self.system.joints))
         self.sums = np.zeros(3)
         self.rows = []
+        self._ends: dict = {}  # body -> (q, v, k_hat q, M_qq q_dot) of the last step's end
 
     def add(self, step) -> None:
         """One accepted step (driver.AcceptedStep: t_s, h_s, theta, start states, result)."""
@@ -141,8 +145,8 @@ class EnergyLedger:
                 total += float(dv @ body.mass_times(s1.A, s1.q, dv))
                 continue
             dqd = dv[6:]
-            mqq_dqd = flat_product(body.inv.M_qq, dqd)
-            total += float(dq @ flat_product(body.k_hat, dq)) + float(dqd @ mqq_dqd)
+            k_dq, mqq_dqd = self._products(b, body, s0, s1, dq, dqd)
+            total += float(dq @ k_dq) + float(dqd @ mqq_dqd)
             coupling = s1.A @ (body.inv.S1 @ dqd)  # A S1 dq_dot, the translation-elastic part
             total += body.inv.mass * float(dv[:3] @ dv[:3]) + 2.0 * float(dv[:3] @ coupling)
             if np.any(dv[3:6]):
@@ -152,6 +156,17 @@ class EnergyLedger:
                 total += float(dw @ (J @ dw)) + 2.0 * float(dw @ (M_wq @ dqd))
                 total += 2.0 * float(dv[:3] @ (s1.A @ np.cross(dw, S)))
         return total
+
+    def _products(self, b, body, s0, s1, dq, dqd) -> tuple[np.ndarray, np.ndarray]:
+        """(k_hat dq, M_qq dq_dot): differences of the carried k_hat q and M_qq q_dot of the
+        step's two ends when the integrator carried both (its Newton step: integrate.carried,
+        Kq+ = Kq- + h k_hat q_dot_m), else one product each."""
+        c1 = self.fresh.of_state(b, s1) if self.fresh is not None else None
+        c0 = self._ends.get(b)
+        self._ends[b] = None if c1 is None else (s1.q, s1.v, c1.Kq, c1.Mqd)
+        if c1 is not None and c0 is not None and c0[0] is s0.q and c0[1] is s0.v:
+            return c1.Kq - c0[2], c1.Mqd - c0[3]
+        return flat_product(body.k_hat, dq), flat_product(body.inv.M_qq, dqd)
 
     def record(self, states) -> None:
         """The sums so far, and the springs' stored energy at states: one output."""
