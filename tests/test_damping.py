@@ -98,6 +98,9 @@ def measured_ratio(built, phi: np.ndarray, w: float, zeta: float) -> float:
     dissipated = np.diff(res.t) * np.einsum("ni,ni->n", v_m, (body.c_hat @ v_m.T).T)
     lost = -np.diff(np.asarray(res.kinetic) + np.asarray(res.strain))
     assert np.abs(lost - dissipated).max() <= 1e-6 * dissipated.max()
+    # the run's energy ledger (integrate.energy_ledger) tallies the same dissipation
+    tally = res.energy_ledger.damping
+    assert np.abs(tally[1:] - np.cumsum(dissipated)).max() <= 1e-9 * dissipated.sum()
     ratio = np.interp(damped_period, res.t, energy) / energy[0]
     return -math.log(ratio) / (2 * w * damped_period)
 

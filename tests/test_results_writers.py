@@ -10,6 +10,7 @@ q_dot (to round-off).
 from __future__ import annotations
 
 import csv
+import dataclasses
 import json
 import xml.etree.ElementTree as ET
 
@@ -21,6 +22,7 @@ import scipy.sparse as sp
 
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.errors import InputError
+from flexmvm.integrate.energy_ledger import EnergyLedgerHistory
 from flexmvm.integrate.run_result import RunResult
 from flexmvm.materials import ALUMINIUM, BRASS
 from flexmvm.mesh.mesh import CellBlock, CellType, Mesh
@@ -206,6 +208,32 @@ def test_summary_json(tmp_path):
 
 
 # -- HDF5 ---------------------------------------------------------------------------------------
+
+
+def test_results_h5_keeps_the_energy_ledger(tmp_path, run, bodies):
+    """/energy/ledger holds the ledger's histories as given, in J, with the loads' and joints'
+    names (json) as attributes."""
+    n = len(run.t)
+    ramp = np.linspace(0.0, 1.0, n)
+    led = EnergyLedgerHistory(
+        ["push"],
+        [],
+        ramp[:, None],
+        0 * ramp[:, None],
+        0 * ramp[:, None],
+        np.zeros((n, 0)),
+        -ramp,
+        0 * ramp,
+        0.5 * ramp,
+    )
+    path = tmp_path / "ledger.h5"
+    write_results_h5(path, dataclasses.replace(run, energy_ledger=led), bodies)
+    with h5py.File(path, "r") as f:
+        g = f["energy/ledger"]
+        assert json.loads(g.attrs["load_names"]) == ["push"]
+        np.testing.assert_array_equal(g["loads"][()], led.loads)
+        np.testing.assert_array_equal(g["contact"][()], -ramp)
+        assert g["joints"].shape == (n, 0) and g["numerical"].attrs["units"] == "J"
 
 
 def test_results_h5_layout_values_and_units(tmp_path, run, bodies, rod):

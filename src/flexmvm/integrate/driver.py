@@ -21,6 +21,7 @@ from threadpoolctl import threadpool_limits
 
 from flexmvm.constraints.drives import drive_torques
 from flexmvm.errors import InputError, SimulationFailed, SolverError
+from flexmvm.integrate.energy_ledger import EnergyLedger, step_theta
 from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
 from flexmvm.integrate.run_result import FrictionSummary, RunResult, StepHistory, TimeGrid
 from flexmvm.integrate.state import BodyState
@@ -124,6 +125,7 @@ class AcceptedStep:
     h_s: float
     start: list[BodyState]
     result: StepResult
+    theta: float = 0.5  # the scheme's theta of this step (energy_ledger.step_theta)
 
     @property
     def t_end_s(self) -> float:
@@ -201,6 +203,7 @@ class _Tally:
             FrictionSummary() if any(c.mu > 0 for c in system.contacts) else None
         )  # runs with friction report it even if no contact closes
         self.cuts = [0, dt_s]  # steps cut in two, smallest step taken [s]
+        self.ledger: EnergyLedger | None = None  # the works of the steps (energy_ledger)
 
     def add(self, t_s: float, h_s: float, res: StepResult) -> None:
         """One accepted step from t_s over h_s; its end states measured for penetration."""
@@ -265,6 +268,7 @@ class _Tally:
             smallest_step_s=self.cuts[1],
             failure=failure,
             momentum_shift=np.array(self.shifts),
+            energy_ledger=self.ledger.history(len(rec.rows)) if self.ledger else None,
         )
 
 
@@ -282,6 +286,8 @@ def _simulate(
     rec.record(t0, states, 0.0, np.zeros(integ.n_joint_rows))
     bar = _progress(progress, n_ticks)
     tally = _Tally(system, integ.n_joint_rows, pen, grid.dt_s)
+    tally.ledger = EnergyLedger(system, integ.carried, getattr(integ, "carried_state", None))
+    tally.ledger.record(states)
     wall0 = time.perf_counter()
     h_min = grid.dt_s / (1 << MAX_STEP_CUTS)
     tick, level, last_out = 0, 0, 0
@@ -310,8 +316,10 @@ def _simulate(
         for t_s, h_s, res in parts:
             start, states = states, res.states
             tally.add(t_s, h_s, res)
+            step = AcceptedStep(t_s, h_s, start, res, step_theta(integ, h_s))
+            tally.ledger.add(step)
             if on_step is not None:
-                on_step(AcceptedStep(t_s, h_s, start, res))
+                on_step(step)
         tick += span
         fine = fine_ticks is not None and level == 0 and tick % fine_ticks == 0
         if tick % out_ticks == 0 or tick >= n_ticks or fine:
@@ -331,6 +339,7 @@ def _simulate(
                 rec.rows.pop()
                 raise SimulationFailed(str(exc), tally.result(rec, integ, wall0, str(exc))) from exc
             tally.output()
+            tally.ledger.record(states)
             if bar is not None:
                 bar.update(min(tick, n_ticks) - bar.n)
     if bar is not None:

@@ -40,6 +40,7 @@ from flexmvm.constraints.contact import ContactLaw
 from flexmvm.errors import SolverError
 from flexmvm.fe.cholesky import ldl_factor
 from flexmvm.integrate.lcp import regularised_cho
+from flexmvm.loads.applied import applied_forces
 
 
 @dataclass
@@ -140,7 +141,7 @@ def check_contact_law(system, massless: list[MasslessCoordinates | None]) -> Non
 
 
 def equilibrate_step_end(
-    massless, bodies, loads: dict, t_theta: float, h: float, states, new_states, held
+    massless, bodies, loads: tuple, t_theta: float, h: float, states, new_states, held
 ) -> list[tuple[int, np.ndarray, np.ndarray]]:
     """Massless coordinates of every body to equilibrium at the step's end (module doc),
     under the step's constraint impulses as forces lambda / h and the point loads acting at
@@ -156,10 +157,8 @@ def equilibrate_step_end(
         for rows, lam in held
         if rows is not None and lam is not None and len(lam)
     ]
-    parts = [
-        _step_end_part(massless[b], b, bodies[b], new_states[b], loads.get(b, ()), t_theta, h, held)
-        for b in todo
-    ]
+    applied = applied_forces(loads, bodies, new_states, t_theta)
+    parts = [_step_end_part(massless[b], b, new_states[b], applied.get(b), h, held) for b in todo]
     # rows with no massless column in any body impose nothing here
     if parts and parts[0][3].shape[0]:
         keep = np.any(np.hstack([p[3] for p in parts]) != 0.0, axis=1)
@@ -176,9 +175,7 @@ def equilibrate_step_end(
     return changes
 
 
-def _step_end_part(
-    ml: MasslessCoordinates, b: int, body, new, loads, t_theta: float, h: float, held
-) -> tuple:
+def _step_end_part(ml: MasslessCoordinates, b: int, new, f_applied, h: float, held) -> tuple:
     """(coordinates, q, force on them, held rows' columns) of body b for equilibrate."""
     force = np.zeros(len(ml.s))  # on the massless coordinates only
     Phi = [np.zeros((len(on), len(ml.s))) for _, _, on in held]
@@ -189,10 +186,7 @@ def _step_end_part(
             force += cols.T @ lam
             Phi[k] = cols[on]
     force /= h
-    for load in loads:
-        if t_theta >= load.t_start_s:
-            force += body.point_jacobian(load.node, new.A, new.q, np.asarray(load.force_n, float))[
-                1
-            ][ml.s]
+    if f_applied is not None:
+        force += f_applied[6:][ml.s]
     P = np.vstack(Phi) if Phi else np.zeros((0, len(ml.s)))
     return ml, new.q, force, P

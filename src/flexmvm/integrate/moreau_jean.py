@@ -85,6 +85,7 @@ from flexmvm.integrate.step import StepResult
 from flexmvm.integrate.system import ContactRows, System
 from flexmvm.integrate.theta import ThetaRule
 from flexmvm.integrate.w_images import WImages
+from flexmvm.loads.applied import midpoint_forces
 
 __all__ = ["MoreauJeanIntegrator", "StepResult"]
 
@@ -151,9 +152,7 @@ class MoreauJeanIntegrator:
         self.exploit_nonrotating = exploit_nonrotating
         self.order = theta.order
         self.n_nonrotating_steps = 0
-        self.loads: dict[int, list] = {}
-        for load in system.loads:
-            self.loads.setdefault(load.body, []).append(load)
+        self.loads = tuple(system.loads)
         self.gravity = np.asarray(system.gravity, dtype=float)
         # coordinates without mass (redistributed contact nodes): equilibrium at step ends
         self.massless = [MasslessCoordinates.of(b) for b in bodies]
@@ -192,15 +191,17 @@ class MoreauJeanIntegrator:
         """Momentum residuals without constraint forces, midpoint and end configurations
         (per body, on threads when several bodies are full FE: integrate.body_threads);
         th: the step's theta."""
+        applied = midpoint_forces(self.loads, self.system.bodies, states, v_plus, h, th, t)
         out = self.threads.each(
-            lambda b: self._residual(b, t, states[b], v_plus[b], h, th), range(len(states))
+            lambda b: self._residual(b, t, states[b], v_plus[b], h, th, applied.get(b)),
+            range(len(states)),
         )
         R, mids, ends, scales = zip(*(out[b] for b in range(len(states))))
         return list(R), list(mids), list(ends), list(scales)
 
-    def _residual(self, b, t, st, vp, h, th):
+    def _residual(self, b, t, st, vp, h, th, applied=None):
         """Body b's residual M(x_m) (v+ - v-) - h F(x_m, v_m), its midpoint and end states
-        and its momentum scale."""
+        and its momentum scale; applied: the applied loads' force on it (loads.applied)."""
         body, g = self.system.bodies[b], self.gravity
         vm = th * vp + (1.0 - th) * st.v
         mid = st.advanced(vm, th * h)
@@ -266,12 +267,8 @@ class MoreauJeanIntegrator:
             if np.any(g):
                 F += body.gravity_forces(mid.A, mid.q, g, terms[0])
             momentum = body.mass_times(mid.A, mid.q, vm, terms)
-        for load in self.loads.get(b, ()):
-            if t + th * h >= load.t_start_s:
-                fvec = np.asarray(load.force_n, float)
-                fr, qp = body.point_jacobian(load.node, mid.A, mid.q, fvec)
-                F[:6] += fr
-                F[6:] += qp
+        if applied is not None:
+            F += applied
         scale = max(np.abs(inertia).max(), h * np.abs(F).max(), np.abs(momentum).max())
         return inertia - h * F, mid, end, scale
 

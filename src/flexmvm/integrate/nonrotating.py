@@ -33,11 +33,17 @@ from flexmvm.integrate.compliance import DenseCompliance
 from flexmvm.integrate.coulomb import solve_contact_impulses
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import ContactRows
+from flexmvm.loads.applied import applied_forces
 
 
 def applies(system, states: list[BodyState]) -> bool:
-    """True when no joint acts and every frame enters the step with omega exactly 0."""
-    return not system.joints and all(not np.any(st.v[3:6]) for st in states)
+    """True when no joint acts, every load is fixed in space (loads: state_independent) and
+    every frame enters the step with omega exactly 0."""
+    return (
+        not system.joints
+        and all(getattr(load, "state_independent", False) for load in system.loads)
+        and all(not np.any(st.v[3:6]) for st in states)
+    )
 
 
 def nonrotating_step(
@@ -45,7 +51,7 @@ def nonrotating_step(
     solvers,
     theta: float,
     rtol: float,
-    loads: dict,
+    loads: tuple,
     t: float,
     states: list[BodyState],
     h: float,
@@ -55,10 +61,11 @@ def nonrotating_step(
     over the bodies (3,) [N s], complementarity residual of the LCP) or None when a rotational
     residual exceeds rtol times the body's momentum scale (the frame would rotate)."""
     g = system.gravity
+    f0 = applied_forces(loads, system.bodies, states, t + theta * h)  # fixed in space
     v_free, rhs_scale = [], []
     for b, (body, solver, st) in enumerate(zip(system.bodies, solvers, states)):
         solver.prepare_translation(h, st.A)
-        rhs = _free_rhs(body, st, g, loads.get(b, ()), t + theta * h, theta, h)
+        rhs = _free_rhs(body, st, g, f0.get(b), theta, h)
         dv = solver.solve_translation(rhs)
         v = st.v.copy()
         v[:3] += dv[:3]
@@ -69,24 +76,16 @@ def nonrotating_step(
     lam, lcp_res = np.zeros(crows.rows.m), 0.0
     if crows.rows.m:
         lam, lcp_res = _contact_impulses(system, solvers, h, crows, v_free, v_plus)
+    taus = _load_torques(system.bodies, loads, states, v_plus, theta, h, t)
     for b, (body, st, vp) in enumerate(zip(system.bodies, states, v_plus)):
-        tau = sum(
-            (
-                _load_torque(body, load, st, vp, theta, h)
-                for load in loads.get(b, ())
-                if t + theta * h >= load.t_start_s
-            ),
-            np.zeros(3),
-        )
+        tau = taus[b][3:6] if b in taus else np.zeros(3)
         if not _rotation_balanced(
             body, st, vp, crows, lam, b, tau, g, theta, h, rtol, rhs_scale[b]
         ):
             return None
     res_t = sum(
         (
-            _translation_residual(
-                body, st, vp, crows, lam, b, g, loads.get(b, ()), t + theta * h, h
-            )
+            _translation_residual(body, st, vp, crows, lam, b, g, f0.get(b), h)
             for b, (body, st, vp) in enumerate(zip(system.bodies, states, v_plus))
         ),
         np.zeros(3),
@@ -98,23 +97,22 @@ def nonrotating_step(
     return new_states, lam, res_t, lcp_res
 
 
-def _translation_residual(body, st, vp, crows, lam, b, g, loads, t_theta, h) -> np.ndarray:
+def _translation_residual(body, st, vp, crows, lam, b, g, f_applied, h) -> np.ndarray:
     """Translational rows of the scheme at the step's solution [N s] (global frame):
     m dr_dot + A S1 dq_dot - h (m g + f) - Phi_r^T lambda."""
     dv = vp - st.v
     res = body.inv.mass * dv[:3] - h * body.inv.mass * g
     if body.nq:
         res += st.A @ (body.inv.S1 @ dv[6:])
-    for load in loads:
-        if t_theta >= load.t_start_s:
-            res -= h * np.asarray(load.force_n, float)
+    if f_applied is not None:
+        res -= h * f_applied[:3]
     blk = crows.rows.blocks.get(b)
     if blk is not None:
         res -= blk[0][:, :3].T @ lam
     return res
 
 
-def _free_rhs(body, st, g, loads, t_theta, theta, h) -> np.ndarray:
+def _free_rhs(body, st, g, f_applied, theta, h) -> np.ndarray:
     """Right-hand side [h (m g + f_r), h (S1^T A^T g + f_q - K q_pred - C q_dot)] (3 + nq,)."""
     rhs = np.zeros(3 + body.nq)
     if np.any(g):
@@ -124,12 +122,9 @@ def _free_rhs(body, st, g, loads, t_theta, theta, h) -> np.ndarray:
     if body.nq:
         q_pred = st.q + (theta * h) * st.v[6:]
         rhs[3:] += h * body.elastic_forces(q_pred, st.v[6:])
-    for load in loads:
-        if t_theta >= load.t_start_s:
-            f = np.asarray(load.force_n, float)
-            fr, fq = body.point_jacobian(load.node, st.A, st.q, f)
-            rhs[:3] += h * fr[:3]
-            rhs[3:] += h * fq
+    if f_applied is not None:
+        rhs[:3] += h * f_applied[:3]
+        rhs[3:] += h * f_applied[6:]
     return rhs
 
 
@@ -162,10 +157,15 @@ def _contact_impulses(
     return lam, res
 
 
-def _load_torque(body, load, st, vp, theta, h) -> np.ndarray:
-    q_m = st.q + theta * h * (theta * vp[6:] + (1.0 - theta) * st.v[6:])
-    fr, _ = body.point_jacobian(load.node, st.A, q_m, np.asarray(load.force_n, float))
-    return fr[3:]
+def _load_torques(bodies, loads, states, v_plus, theta, h, t) -> dict[int, np.ndarray]:
+    """The applied loads' generalized forces at the step's elastic midpoint q_m (frames fixed)."""
+    if not loads:
+        return {}
+    mids = []
+    for st, vp in zip(states, v_plus):
+        vm = theta * vp + (1.0 - theta) * st.v
+        mids.append(BodyState(st.r, st.A, st.q + theta * h * vm[6:], vm))
+    return applied_forces(loads, bodies, mids, t + theta * h)
 
 
 def _rotation_balanced(body, st, vp, crows, lam, b, tau, g, theta, h, rtol, rhs_scale) -> bool:

@@ -12,6 +12,7 @@ import numpy as np
 
 from flexmvm.errors import InputError
 from flexmvm.integrate import DEFAULT_THETA
+from flexmvm.integrate.energy_ledger import EnergyLedgerHistory
 from flexmvm.integrate.theta import ThetaRule
 
 
@@ -158,6 +159,8 @@ class RunResult:
     # per driven joint (constraints.drives, by name): its drive torque on body 1 about the
     # axis [N m] at the output times (its joint_force column: impulse over the output interval)
     drive_torque: dict[str, np.ndarray] = field(default_factory=dict)
+    # cumulative works and dissipations at the outputs (integrate.energy_ledger)
+    energy_ledger: EnergyLedgerHistory | None = None
 
     @property
     def total_energy(self) -> np.ndarray:

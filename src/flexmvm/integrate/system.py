@@ -1,4 +1,4 @@
-"""A multibody system: bodies, joints, contact providers, gravity."""
+"""A multibody system: bodies, joints, contact providers, gravity, applied loads (flexmvm.loads)."""
 
 from __future__ import annotations
 
@@ -8,18 +8,14 @@ import numpy as np
 
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.constraints.contact import ContactProvider, ContactRows
+from flexmvm.loads.point_force import PointForce
 
 __all__ = ["ContactProvider", "ContactRows", "NodeLoad", "System"]
 
 
-@dataclass(frozen=True)
-class NodeLoad:
-    """A constant global force [N] on node `node` of body `body`, applied from t_start_s on."""
-
-    body: int
-    node: int
-    force_n: tuple[float, float, float]
-    t_start_s: float = 0.0
+#: NodeLoad(body, node, force_n, t_start_s=0.0): a constant global force [N] on a node from
+#: t_start_s on, the PointForce of loads.point_force that it became
+NodeLoad = PointForce.on_node
 
 
 @dataclass(frozen=True)
@@ -28,4 +24,5 @@ class System:
     joints: tuple = ()
     contacts: tuple = ()
     gravity: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    loads: tuple[NodeLoad, ...] = ()
+    # applied loads (flexmvm.loads: forces, torques, springs), each with forces(bodies, states, t)
+    loads: tuple = ()

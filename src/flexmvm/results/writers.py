@@ -6,6 +6,7 @@ complete new one. Units are SI and named in CSV headers and HDF5 ``units`` attri
 
 from __future__ import annotations
 
+import json
 import math
 import os
 import re
@@ -150,11 +151,26 @@ def _write_histories(f: h5py.File, run: RunResult) -> None:
     _dataset(energy, "kinetic", run.kinetic, "J")
     _dataset(energy, "strain", run.strain, "J")
     _dataset(energy, "potential", run.potential, "J", "gravity potential")
+    if run.energy_ledger is not None:
+        _write_ledger(energy.create_group("ledger"), run.energy_ledger)
     momentum = f.create_group("momentum")
     _dataset(momentum, "linear", run.momentum, "kg m/s", "total, global (n_out, 3)")
     _dataset(momentum, "angular", run.angular_momentum, "kg m^2/s", "about the origin (n_out, 3)")
     iv = np.asarray(run.contact_intervals, dtype=float).reshape(-1, 2)
     _dataset(f, "contact_intervals", iv, "s", "(start, end) of each contact interval")
+
+
+def _write_ledger(g: h5py.Group, led) -> None:
+    """The energy ledger's cumulative works and dissipations (integrate.energy_ledger)."""
+    g.attrs["load_names"] = json.dumps(led.load_names)
+    g.attrs["joint_names"] = json.dumps(led.joint_names)
+    _dataset(g, "loads", led.loads, "J", "work of each load (n_out, n_loads), load_names")
+    _dataset(g, "load_damping", led.load_damping, "J", "dissipated by each load's damper")
+    _dataset(g, "load_energy", led.load_energy, "J", "energy stored in each spring")
+    _dataset(g, "joints", led.joints, "J", "work of each joint's impulses, joint_names")
+    _dataset(g, "contact", led.contact, "J", "work of the contact impulses")
+    _dataset(g, "damping", led.damping, "J", "dissipated by the bodies' damping")
+    _dataset(g, "numerical", led.numerical, "J", "the scheme's numerical dissipation")
 
 
 def _write_mesh(g: h5py.Group, body: FlexibleBody) -> None:
@@ -214,7 +230,8 @@ def write_results_h5(
     (n_out,) [N], /joint_force (n_out, n_rows) [N], /drive_torque/<joint name> (n_out,) [N m]
     (driven joints: constraints.drives), /contact_intervals (k, 2) [s],
     /probes/<name>/{position [m], velocity [m/s]} (n_out, 3), /energy/{kinetic, strain,
-    potential} [J], /momentum/{linear [kg m/s], angular [kg m^2/s]} (n_out, 3), and per body
+    potential} [J] and /energy/ledger/{loads, load_damping, load_energy, joints, contact,
+    damping, numerical} [J] (integrate.energy_ledger), /momentum/{linear [kg m/s], angular [kg m^2/s]} (n_out, 3), and per body
     /bodies/<name>/{time_index, r (k, 3), A (k, 3, 3), frame_velocity (k, 6), q (k, nq),
     q_dot (k, nq)} at every `fields_every`-th output (rows time_index of /time), /bodies/<name>/mesh/{nodes (n, 3),
     cells_<meshio type> (n_cells, npc)}. Root attributes: run counters. `bodies` must be the

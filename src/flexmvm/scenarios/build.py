@@ -42,6 +42,7 @@ from flexmvm.scenarios.drive_build import (
     revolute_joints,
 )
 from flexmvm.scenarios.initial_motion import check_joint_velocities, with_rigid_motions
+from flexmvm.scenarios.load_build import build_loads
 from flexmvm.scenarios.mesh_lookup import (
     body_point,
     contact_nodes,
@@ -205,7 +206,10 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
     grid.ticks()
     grid.contact_output_ticks()
     bodies = [with_elimination_order(b, setup) for b in bodies]
-    system = System(tuple(bodies), tuple(joints), contacts, np.asarray(sc.gravity_mps2, float))
+    loads = build_loads(sc, bodies, infos, index, states)  # [[loads]], [[springs]]
+    system = System(
+        tuple(bodies), tuple(joints), contacts, np.asarray(sc.gravity_mps2, float), loads
+    )
     for k, cfg in enumerate(sc.bodies):  # joint lengths stay those of the undeformed placement
         if cfg.placement.sagged:
             states[k] = quasi_static_sag(system, states, k, f"bodies[{cfg.name}].placement")

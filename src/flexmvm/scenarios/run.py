@@ -14,6 +14,7 @@ from flexmvm.integrate.driver import simulate
 from flexmvm.integrate.run_result import ProbeHistory, RunResult, StepHistory
 from flexmvm.scenarios import pendulum
 from flexmvm.scenarios.build import BuiltScenario, build_scenario
+from flexmvm.scenarios.energy_report import momentum_report, report_entries
 from flexmvm.scenarios.guard import contact_guard, energy_gain_warning, guard_warnings
 from flexmvm.scenarios.load import load_scenario
 from flexmvm.scenarios.schema import Scenario
@@ -134,7 +135,8 @@ def run(
 def summarize(res: RunResult, built: BuiltScenario) -> dict:
     """Numbers every run reports (units in the keys)."""
     p0 = res.momentum[0]
-    free = not built.system.joints and not np.any(built.system.gravity)
+    why_not, subsystems = momentum_report(res, built)
+    free = why_not is None
     scale = max(np.linalg.norm(p0), 1e-300)
     mom_err = float(np.abs(res.momentum - p0).max() / scale) if free else None
     mom_err_converged = None
@@ -172,6 +174,7 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         "momentum_rel_error": mom_err,
         "momentum_rel_error_converged": mom_err_converged,
         "momentum_error_note": MOMENTUM_ERROR_NOTE,
+        **report_entries(res, built, why_not, subsystems),  # scenarios.energy_report
         "energy_rel_error": e_err,
         "energy_rel_error_max": e_err_max,
         # the largest rise of the total energy over its start [-] (None with applied loads)

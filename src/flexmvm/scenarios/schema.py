@@ -63,6 +63,12 @@ from flexmvm.scenarios.fields import (
 )
 from flexmvm.scenarios.initial_motion import check_motion_names
 from flexmvm.scenarios.joint_schema import JointConfig
+from flexmvm.scenarios.load_schema import (
+    LoadConfig,
+    SpringConfig,
+    check_load_references,
+    drop_empty_tables,
+)
 from flexmvm.scenarios.problems import ScenarioError, format_error, problem, validate_part
 from flexmvm.scenarios.support_schema import SupportConfig, check_supports, without_empty
 
@@ -271,11 +277,13 @@ class Scenario(Frozen):
     supports: tuple[SupportConfig, ...] = ()
     probes: tuple[ProbeConfig, ...] = ()
     compare: CompareConfig = CompareConfig()
+    loads: tuple[LoadConfig, ...] = ()  # applied forces and torques (load_schema.py)
+    springs: tuple[SpringConfig, ...] = ()
     _source: str = PrivateAttr(default="scenario")
 
     @model_serializer(mode="wrap")
-    def _dump(self, handler):  # without supports: as before the key existed (study keys)
-        return without_empty(handler(self), "supports")
+    def _dump(self, handler):  # without empty tables: as before the keys existed (study keys)
+        return drop_empty_tables(without_empty(handler(self), "supports"))
 
     @model_validator(mode="after")
     def _cross_references(self) -> Scenario:
@@ -314,6 +322,7 @@ class Scenario(Frozen):
                 _check_string_length(j, bodies, f"joints[{i}]")
         check_motion_names(self.joints, self.bodies)
         check_supports(self.supports, bodies, self.joints)
+        check_load_references(self.loads, self.springs, self.joints, bodies, _known_body)
         for i, p in enumerate(self.probes):
             _known_body(bodies, p.body, f"probes[{i}].body")
             if p.node_set is not None and bodies[p.body].rod is not None:
