@@ -271,10 +271,10 @@ def write_paraview_series(
     Points are the undeformed body at the initial frame, r0 + A0 X (output 0); point data:
     ``displacement`` (n, 3) global [m] (Warp By Vector gives the deformed body),
     ``velocity`` (n, 3) global [m/s] and ``von_mises`` (n,) [Pa] (results/fields.py). The
-    elastic part of the velocity uses the run's q_dot. every=None writes at most MAX_PARAVIEW_STEPS steps.
-    `bodies` and `materials` follow run.body_names. Each file is written atomically, the .pvd
-    last. Returns out_dir (created if missing). Raises InputError on inconsistent inputs or a
-    body without a mesh.
+    elastic part of the velocity uses the run's q_dot. every=None writes at most
+    MAX_PARAVIEW_STEPS steps. `bodies` and `materials` follow run.body_names. Each file is
+    written atomically, the .pvd last. Returns out_dir (created if missing). Raises
+    InputError on inconsistent inputs or a body without a mesh.
     """
     n = _check_run(run)
     bodies = _bodies_by_name(run, bodies)
