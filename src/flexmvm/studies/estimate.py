@@ -8,9 +8,8 @@ radius ``a`` of the theory at the window's peak force (the static response of th
 the expected Hertz pressure), plus the free-free modes that this Hertz load excites (modal
 force above EXCITED_RTOL of the largest, the participation choice's rule) with frequency
 below ``f_max = k / T_c``, ``T_c`` the theory's contact duration clipped to the window (as
-for node selections). On the seed case (docs/studies.md settings) this is 1 patch + 1 mode
-(the first axial mode, 2.6 kHz; f_max 4.64 kHz), 2 DOF, which gives force NCC 0.989 and a
-peak 11.7 % high (docs/interface_basis.md): a starting point for ``--search``, not an answer.
+for node selections). On the seed case the rule gives a model of a few DOF whose force peak
+is too high (docs/interface_basis.md): a starting point for ``--search``, not an answer.
 """
 
 from __future__ import annotations
