@@ -55,6 +55,7 @@ from flexmvm.constraints.rows import Rows
 from flexmvm.contact.geometry import BroadPhase, MasterSurface
 from flexmvm.contact.held_pairs import gap_offsets, hold_pairs
 from flexmvm.contact.nodes import ContactNodes
+from flexmvm.contact.pair_options import pair_options
 from flexmvm.contact.pair_rows import active_pairs, predicted_min_gap
 from flexmvm.contact.penetration import Penetration, SurfaceMeasure
 from flexmvm.contact.projection import DEGENERATE_QUAD, DEGENERATE_TRI
@@ -119,18 +120,9 @@ class PointToSurfaceContact:
     ):
         if slave == master:
             raise InputError(f"{name}: slave and master must be different bodies")
-        mu = float(friction_coefficient)
-        if not (np.isfinite(mu) and mu >= 0.0):
-            raise InputError(
-                f"{name}: friction coefficient must be a finite number >= 0, "
-                f"got {friction_coefficient!r}"
-            )
-        if mu > 0.0 and kind is ContactKind.BONDED:
-            raise InputError(
-                f"{name}: bonded contact locks all three components and takes "
-                f"no friction coefficient, got {mu!r}"
-            )
-        self.mu = mu
+        self.mu, self.beta, self.law, self.theta = pair_options(
+            name, kind, friction_coefficient, beta, law, theta
+        )
         self._last = (None, 0)  # the last candidate rows' pairs and bond-row count
         self._bond_normal: dict = {}  # bonded slave node -> the normal it was locked with
         self.slave, self.master = slave, master
@@ -150,20 +142,6 @@ class PointToSurfaceContact:
         self.kind = kind
         self.search_radius = float(search_radius_m)
         self.gap_tol = float(gap_tol_m)
-        if not 0.0 <= beta <= 1.0:
-            raise InputError(f"{name}: penetration recovery beta must be in [0, 1], got {beta!r}")
-        self.beta = float(beta)
-        # law = position: theta must be the integrator's (the end gap is g + h v_m . n), a
-        # number or the integrator's theta of the step size h (integrate.theta.ThetaRule)
-        self.law = ContactLaw(law)
-        if self.law is ContactLaw.POSITION:
-            if theta is None or (not callable(theta) and not 0.5 <= theta <= 1.0):
-                raise InputError(
-                    f"{name}: the position law needs the scheme's theta in [0.5, 1], got {theta!r}"
-                )
-            if kind is ContactKind.BONDED:
-                raise InputError(f"{name}: the position law is not for bonded contact")
-        self.theta = None if theta is None else (theta if callable(theta) else float(theta))
         self.name = name
         self._bonds: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._setup(bodies)

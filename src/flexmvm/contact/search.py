@@ -3,7 +3,7 @@
 The numpy path (geometry.BroadPhase, geometry.project_points, geometry.closest_facets, the
 clamping of outside projections in pairs) is the specification, reproduced pair by pair to
 round-off. What differs is the search: per slave node a cached superset of its broad-phase
-candidates, rebuilt from a grid of the facets (search_state.facet_grid), and a warm start
+candidates, rebuilt from a grid of the facets (contact.candidate_lists), and a warm start
 from the facet chosen at the previous step, with facets pruned by a distance bound (see
 :func:`_closest`). What it reads and keeps comes in three typed tuples (contact.search_state):
 the facets (FacetSurface), the per-node state (SearchState) and the kept projections
@@ -14,9 +14,9 @@ and hand their arrays to the per-node helpers (see :func:`_search_node` for why)
 Projections made at unchanged node positions are kept and read again (search_state.
 ProjectionMemo, :func:`_try`): the penetration measure at the end of a step and the next
 step's search project the same pairs at the same positions. The small helpers of the search
-(_try, _closest, _candidates, ...) are separate compiled functions, not inlined: inlining them
-into the scans (numba ``inline="always"``, same results bit for bit) saves a few percent of a
-run but doubles the first-run compilation of the MVM path
+(_try, _closest, candidate_lists.node_candidates, ...) are separate compiled functions, not
+inlined: inlining them into the scans (numba ``inline="always"``, same results bit for bit)
+saves a few percent of a run but doubles the first-run compilation of the MVM path
 (docs/notes/2026-11-27-comment-measurements.md).
 
 Units: metres, seconds. Node arrays hold the contact nodes of one body only ("local" node
@@ -28,6 +28,7 @@ from __future__ import annotations
 import numba
 import numpy as np
 
+from flexmvm.contact.candidate_lists import node_candidates
 from flexmvm.contact.geometry import TIE_ABS, TIE_REL
 from flexmvm.contact.projection import (
     REC_DIST,
@@ -39,78 +40,6 @@ from flexmvm.contact.projection import (
     REC_XI,
     project_pair,
 )
-
-
-@numba.njit(cache=True)
-def _distance(p, c):
-    return np.sqrt((p[0] - c[0]) ** 2 + (p[1] - c[1]) ** 2 + (p[2] - c[2]) ** 2)
-
-
-@numba.njit(cache=True)
-def _refresh_list(i, p, reach, rho, geo, lists, ref, gmeta, gdims, gstart, gfacets):
-    """Candidate superset of node i: facets g with |p - c_g| - R_g <= reach + rho (geo (nf, 4):
-    centroid, circumradius), stored in lists[i] (count first; -1 when it overflows: all
-    facets then); ref[i] = (p, reach + rho). The facets come from the cells of the facet grid
-    (search_state.FacetGrid: gmeta = origin, cell edge, largest R; gdims; CSR gstart,
-    gfacets) within reach + rho + R_max of p: a node's rebuild reads the facets about it,
-    not all of them."""
-    radius = reach + rho
-    cap = lists.shape[1] - 1
-    n = 0
-    edge = gmeta[3]
-    lo = np.empty(3, dtype=np.int64)
-    hi = np.empty(3, dtype=np.int64)
-    for j in range(3):
-        top = gdims[j] - 1.0
-        # clipped to the grid in floating point, then truncated (= floor of a value >= 0)
-        lo[j] = np.int64(min(max((p[j] - radius - gmeta[4] - gmeta[j]) / edge, 0.0), top))
-        hi[j] = np.int64(min(max((p[j] + radius + gmeta[4] - gmeta[j]) / edge, 0.0), top))
-    overflow = False
-    for ci in range(lo[0], hi[0] + 1):
-        for cj in range(lo[1], hi[1] + 1):
-            for ck in range(lo[2], hi[2] + 1):
-                cell = (ci * gdims[1] + cj) * gdims[2] + ck
-                for e in range(gstart[cell], gstart[cell + 1]):
-                    g = gfacets[e]
-                    if _distance(p, geo[g]) - geo[g, 3] <= radius:
-                        if n == cap:
-                            overflow = True
-                            break
-                        lists[i, 1 + n] = g
-                        n += 1
-                if overflow:
-                    break
-            if overflow:
-                break
-        if overflow:
-            break
-    lists[i, 0] = -1 if overflow else n
-    ref[i, 0], ref[i, 1], ref[i, 2], ref[i, 3] = p[0], p[1], p[2], radius
-
-
-@numba.njit(cache=True)
-def _candidates(i, p, reach, rho, geo, lists, ref, mark, tag, cand, lb, grid):
-    """Broad-phase candidates of node i, exactly BroadPhase.query's set {g : |p - c_g| <=
-    reach + R_g}, from its cached superset; the superset is rebuilt when the node has moved
-    so far (|p - p_ref| + reach > radius_ref, with a round-off margin) that it may miss one.
-    Marks mark[g] = tag, writes cand[:n] and lower bounds lb[:n] = |p - c_g| - R_g [m].
-    Returns n."""
-    radius = ref[i, 3]
-    moved = _distance(p, ref[i, :3])
-    if radius < 0.0 or moved + reach > radius - (1e-12 + 1e-9 * radius):
-        _refresh_list(i, p, reach, rho, geo, lists, ref, grid[0], grid[1], grid[2], grid[3])
-    n_list = lists[i, 0]
-    n_all = geo.shape[0] if n_list < 0 else n_list
-    n = 0
-    for k in range(n_all):
-        g = k if n_list < 0 else lists[i, 1 + k]
-        d = _distance(p, geo[g])
-        if d <= reach + geo[g, 3]:
-            mark[g] = tag
-            cand[n] = g
-            lb[n] = d - geo[g, 3]
-            n += 1
-    return n
 
 
 @numba.njit(cache=True)
@@ -324,7 +253,7 @@ def _search_node(
         return False, 0, -1
     counter[0] += 2
     tag = counter[0]
-    n = _candidates(i, p, reach, rho, geo, lists, ref, mark, tag, cand, lb, grid)
+    n = node_candidates(i, p, reach, rho, geo, lists, ref, mark, tag, cand, lb, grid)
     if n == 0:
         return False, 0, -1
     status, g = _closest(
@@ -422,6 +351,21 @@ def scan_nodes(xs, vs, xm, vm, r_m, A_m, reach, u_max, surface, state, memo, fac
 
 # -- the penetration measure (contact.penetration) ------------------------------------------------
 @numba.njit(cache=True)
+def _counted_depth(best, radius, edge_tol):
+    """Depth -gap [m] of a node whose closest projection is best, on a facet of circumradius
+    radius [m], when it counts (penetration_scan: a negative gap, inside the facet or outside
+    by a lateral offset sqrt(distance^2 - gap^2) <= edge_tol * radius); -inf when not."""
+    gap = best[REC_GAP]
+    if gap >= 0.0:
+        return -np.inf
+    if best[REC_IN] == 0.0:
+        lateral2 = best[REC_DIST] ** 2 - gap * gap
+        if lateral2 > (edge_tol * radius) ** 2:
+            return -np.inf
+    return -gap
+
+
+@numba.njit(cache=True)
 def penetration_scan(xs, xm, r_m, A_m, reach, u_max, surface, state, memo, edge_tol, floor):
     """Deepest penetration of the nodes xs (ns, 3) [m] into the facets of `surface`
     (search_state.FacetSurface) over the nodes xm (nm, 3), searched as search.scan_nodes does
@@ -498,13 +442,7 @@ def penetration_scan(xs, xm, r_m, A_m, reach, u_max, surface, state, memo, edge_
         if g < 0:
             continue
         prev[i] = g
-        gap = best[REC_GAP]
-        if gap >= 0.0:
-            continue
-        if best[REC_IN] == 0.0:
-            lateral2 = best[REC_DIST] ** 2 - gap * gap
-            if lateral2 > (edge_tol * geo[g, 3]) ** 2:
-                continue
-        if -gap > depth:
-            depth, node, at = -gap, i, g
+        d = _counted_depth(best, geo[g, 3], edge_tol)
+        if d > depth:
+            depth, node, at = d, i, g
     return 0, -1, depth if node >= 0 else 0.0, node, at

@@ -298,10 +298,10 @@ def write_paraview_series(
     Points are the undeformed body at the initial frame, r0 + A0 X (output 0); point data:
     ``displacement`` (n, 3) global [m] (Warp By Vector gives the deformed body),
     ``velocity`` (n, 3) global [m/s] and ``von_mises`` (n,) [Pa] (results/fields.py). The
-    elastic part of the velocity uses the run's q_dot. every=None writes at most MAX_PARAVIEW_STEPS steps.
-    `bodies` and `materials` follow run.body_names. Each file is written atomically, the .pvd
-    last. Returns out_dir (created if missing). Raises InputError on inconsistent inputs or a
-    body without a mesh.
+    elastic part of the velocity uses the run's q_dot. every=None writes at most
+    MAX_PARAVIEW_STEPS steps. `bodies` and `materials` follow run.body_names. Each file is
+    written atomically, the .pvd last. Returns out_dir (created if missing). Raises
+    InputError on inconsistent inputs or a body without a mesh.
     """
     n = _check_run(run)
     bodies = _bodies_by_name(run, bodies)
@@ -314,59 +314,10 @@ def write_paraview_series(
     with ThreadPoolExecutor(max_workers=2) as pool:  # zlib releases the GIL
         for b, (body, material) in enumerate(zip(bodies, materials)):
             name = _safe_name("body", body.name)
-            geometry = body_geometry(body)
-            stress = StressOperator(geometry, material)
-            q = np.asarray(run.q[b], dtype=float)
-            if q.shape != (n, body.nq):
-                raise InputError(f"RunResult.q[{b}]: expected shape {(n, body.nq)}, got {q.shape}")
-            q_dot = np.asarray(run.q_dot[b], dtype=float) if len(run.q_dot) > b else None
-            if q_dot is None or q_dot.shape != q.shape:
-                raise InputError(
-                    f"RunResult.q_dot[{b}]: expected shape {q.shape} (the rates "
-                    f"of q), got {None if q_dot is None else q_dot.shape}"
-                )
-            idx = np.arange(0, n, every)
-            # psi q and the stresses of all written outputs at once (one pass over psi, one
-            # product per cell for all fields: StressOperator.von_mises_series)
-            U, Ud = _elastic_series(body, q[idx]), _elastic_series(body, q_dot[idx])
-            vm = stress.von_mises_series(U)
-            # the points (the undeformed body at output 0) and the cells are the same in
-            # every file: encoded once
-            series = VtuSeries(
-                reference_positions(body, run.frame_r[0, b], run.frame_A[0, b]),
-                [(c.cell_type.value, c.connectivity) for c in body.mesh.cells],
+            q, q_dot = _body_rates(run, b, body, n)
+            entries, writes = _submit_body_series(
+                pool, out, name, run, b, body, material, q, q_dot, np.arange(0, n, every)
             )
-            entries, writes = [], []
-            for k, i in enumerate(idx):
-                fl = nodal_fields(
-                    body,
-                    material,
-                    run.frame_r[i, b],
-                    run.frame_A[i, b],
-                    q[i],
-                    run.frame_v[i, b],
-                    q_dot[i],
-                    run.frame_r[0, b],
-                    run.frame_A[0, b],
-                    geometry,
-                    stress=stress,
-                    u=U[k],
-                    u_dot=Ud[k],
-                    von_mises=vm[k],
-                )
-                fname = f"{name}_{i:06d}.vtu"
-                writes.append(
-                    pool.submit(
-                        series.write,
-                        out / fname,
-                        {
-                            "displacement": fl.displacement,
-                            "velocity": fl.velocity,
-                            "von_mises": fl.von_mises,
-                        },
-                    )
-                )
-                entries.append((float(run.t[i]), fname))
             # this body's files are written while the next body's fields are computed
             if pending is not None:
                 _finish(*pending)
@@ -374,3 +325,63 @@ def write_paraview_series(
         if pending is not None:
             _finish(*pending)
     return out
+
+
+def _body_rates(run: RunResult, b: int, body: FlexibleBody, n: int):
+    """(q, q_dot) (n, nq) of body b of the run, as float arrays; InputError on a shape that is
+    not the body's."""
+    q = np.asarray(run.q[b], dtype=float)
+    if q.shape != (n, body.nq):
+        raise InputError(f"RunResult.q[{b}]: expected shape {(n, body.nq)}, got {q.shape}")
+    q_dot = np.asarray(run.q_dot[b], dtype=float) if len(run.q_dot) > b else None
+    if q_dot is None or q_dot.shape != q.shape:
+        raise InputError(
+            f"RunResult.q_dot[{b}]: expected shape {q.shape} (the rates "
+            f"of q), got {None if q_dot is None else q_dot.shape}"
+        )
+    return q, q_dot
+
+
+def _submit_body_series(pool, out, name, run, b, body, material, q, q_dot, idx):
+    """The fields of body b (named ``name`` in the files) at the outputs idx, computed here, and
+    their .vtu files submitted to the thread pool. Returns (entries: (time [s], file name)
+    per output, the pool's futures of the writes)."""
+    geometry = body_geometry(body)
+    stress = StressOperator(geometry, material)
+    # psi q and the stresses of all written outputs at once (one pass over psi, one
+    # product per cell for all fields: StressOperator.von_mises_series)
+    U, Ud = _elastic_series(body, q[idx]), _elastic_series(body, q_dot[idx])
+    vm = stress.von_mises_series(U)
+    # the points (the undeformed body at output 0) and the cells are the same in
+    # every file: encoded once
+    series = VtuSeries(
+        reference_positions(body, run.frame_r[0, b], run.frame_A[0, b]),
+        [(c.cell_type.value, c.connectivity) for c in body.mesh.cells],
+    )
+    entries, writes = [], []
+    for k, i in enumerate(idx):
+        fl = nodal_fields(
+            body,
+            material,
+            run.frame_r[i, b],
+            run.frame_A[i, b],
+            q[i],
+            run.frame_v[i, b],
+            q_dot[i],
+            run.frame_r[0, b],
+            run.frame_A[0, b],
+            geometry,
+            stress=stress,
+            u=U[k],
+            u_dot=Ud[k],
+            von_mises=vm[k],
+        )
+        fname = f"{name}_{i:06d}.vtu"
+        fields = {
+            "displacement": fl.displacement,
+            "velocity": fl.velocity,
+            "von_mises": fl.von_mises,
+        }
+        writes.append(pool.submit(series.write, out / fname, fields))
+        entries.append((float(run.t[i]), fname))
+    return entries, writes

@@ -200,6 +200,9 @@ def _stop_workers(pool: ProcessPoolExecutor) -> None:
             proc.terminate()
 
 
+_REF_WHAT = "full-FE reference"  # the reference run, as failures name it
+
+
 def _run_into(
     out_dir: Path,
     sc,
@@ -212,52 +215,12 @@ def _run_into(
     want_theory: bool = True,
 ) -> dict:
     """The job proper, writing into out_dir (the staging directory)."""
-    needs_ref = ref_sc is not None
-    own_what = f"{own_label} run"
-    ref_what = "full-FE reference"
     failures: list[dict] = []
-    if needs_ref and jobs > 1:
-        ctx = multiprocessing.get_context("spawn")
-        with (
-            ProcessPoolExecutor(
-                max_workers=2, mp_context=ctx, initializer=_worker_init, initargs=(os.getpid(),)
-            ) as pool,
-            _stopped_on_exit(pool),
-        ):
-            ref_future = pool.submit(
-                _run_and_write, ref_sc, "full", out_dir / "full", fields, progress
-            )
-            own_future = pool.submit(_run_and_write, sc, own_label, out_dir, fields, False)
-            # while the two runs go: the theory and the figure module (matplotlib: ~1 s)
-            theory = _theory(sc, failures) if want_theory else None
-            import flexmvm.plots.figures  # noqa: F401
-
-            wait([own_future, ref_future], return_when=FIRST_EXCEPTION)
-            failed = [
-                (f, what)
-                for f, what in ((own_future, own_what), (ref_future, ref_what))
-                if f.done() and f.exception() is not None
-            ]
-            if failed:
-                if not (own_future.done() and ref_future.done()):
-                    _stop_workers(pool)  # the job has failed: do not wait for the other run
-                future, what = failed[0]
-                raise _labelled(what, future.exception()) from future.exception()
-            own, ref = own_future.result(), ref_future.result()
+    runs = (out_dir, sc, ref_sc, own_label, fields, progress, want_theory, failures)
+    if ref_sc is not None and jobs > 1:
+        own, ref, theory = _runs_side_by_side(*runs)
     else:
-        try:
-            own = _run_and_write(sc, own_label, out_dir, fields, progress)
-        except Exception as exc:
-            raise _labelled(own_what, exc) from exc
-        try:
-            ref = (
-                _run_and_write(ref_sc, "full", out_dir / "full", fields, progress)
-                if needs_ref
-                else None
-            )
-        except Exception as exc:
-            raise _labelled(ref_what, exc) from exc
-        theory = _theory(sc, failures) if want_theory else None
+        own, ref, theory = _runs_one_after_other(*runs)
     own_summary, own_curves, n_own, wall_own = own
     echo(f"{own_label}: {n_own} steps in {wall_own:.1f} s")
     summary = dict(own_summary)
@@ -288,6 +251,57 @@ def _run_into(
             title=f"{sc.name}: contact force and axial velocities",
         )
     return summary
+
+
+def _runs_side_by_side(out_dir, sc, ref_sc, own_label, fields, progress, want_theory, failures):
+    """The run of sc and the full-FE reference ref_sc in two worker processes, the theory
+    (into failures, if want_theory) meanwhile. Returns (own, ref, theory); the first run that
+    fails stops the other and is raised, labelled."""
+    ctx = multiprocessing.get_context("spawn")
+    with (
+        ProcessPoolExecutor(
+            max_workers=2, mp_context=ctx, initializer=_worker_init, initargs=(os.getpid(),)
+        ) as pool,
+        _stopped_on_exit(pool),
+    ):
+        ref_future = pool.submit(_run_and_write, ref_sc, "full", out_dir / "full", fields, progress)
+        own_future = pool.submit(_run_and_write, sc, own_label, out_dir, fields, False)
+        # while the two runs go: the theory and the figure module (matplotlib: ~1 s)
+        theory = _theory(sc, failures) if want_theory else None
+        import flexmvm.plots.figures  # noqa: F401
+
+        wait([own_future, ref_future], return_when=FIRST_EXCEPTION)
+        failed = [
+            (f, what)
+            for f, what in ((own_future, f"{own_label} run"), (ref_future, _REF_WHAT))
+            if f.done() and f.exception() is not None
+        ]
+        if failed:
+            if not (own_future.done() and ref_future.done()):
+                _stop_workers(pool)  # the job has failed: do not wait for the other run
+            future, what = failed[0]
+            raise _labelled(what, future.exception()) from future.exception()
+        return own_future.result(), ref_future.result(), theory
+
+
+def _runs_one_after_other(out_dir, sc, ref_sc, own_label, fields, progress, want_theory, failures):
+    """The run of sc, then the full-FE reference ref_sc (if any), then the theory (into
+    failures, if want_theory), in this process. Returns (own, ref or None, theory or None);
+    a run that fails is raised, labelled."""
+    try:
+        own = _run_and_write(sc, own_label, out_dir, fields, progress)
+    except Exception as exc:
+        raise _labelled(f"{own_label} run", exc) from exc
+    try:
+        ref = (
+            _run_and_write(ref_sc, "full", out_dir / "full", fields, progress)
+            if ref_sc is not None
+            else None
+        )
+    except Exception as exc:
+        raise _labelled(_REF_WHAT, exc) from exc
+    theory = _theory(sc, failures) if want_theory else None
+    return own, ref, theory
 
 
 def _label(summary: dict) -> str:

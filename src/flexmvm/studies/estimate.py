@@ -8,9 +8,8 @@ radius ``a`` of the theory at the window's peak force (the static response of th
 the expected Hertz pressure), plus the free-free modes that this Hertz load excites (modal
 force above EXCITED_RTOL of the largest, the participation choice's rule) with frequency
 below ``f_max = k / T_c``, ``T_c`` the theory's contact duration clipped to the window (as
-for node selections). On the seed case (docs/studies.md settings) this is 1 patch + 1 mode
-(the first axial mode, 2.6 kHz; f_max 4.64 kHz), 2 DOF, which gives force NCC 0.989 and a
-peak 11.7 % high (docs/interface_basis.md): a starting point for ``--search``, not an answer.
+for node selections). On the seed case the rule gives a model of a few DOF whose force peak
+is too high (docs/interface_basis.md): a starting point for ``--search``, not an answer.
 """
 
 from __future__ import annotations
@@ -136,14 +135,6 @@ def estimate_interface(
         InputError: k <= 0, an empty grid, an unknown body, no rod-on-rod contact of the body,
             or a flat-on-flat contact (St Venant: the theory gives no Hertz radius).
     """
-    from flexmvm.reduction.interface import (
-        InterfaceSpec,
-        chosen_modes,
-        contact_patch,
-        excited_modes_below,
-        hertz_load,
-    )
-    from flexmvm.scenarios.setup import default_setup
     from flexmvm.theory.scenario import theory_pulse
 
     if not k > 0:
@@ -162,17 +153,8 @@ def estimate_interface(
     window = min(pulse["contact_duration_s"], sc.time.t_end_s)
     f_max = k / window
     surface = contact_surface(sc, body)
-    fe, free = default_setup().free_modes_source(
-        cfg
-    )  # the setup cache's mode pools, shared with the bases
-    patch = contact_patch(fe.mesh, surface)
-    load = hertz_load(fe.mesh, surface, patch, a)
-    freqs, _ = excited_modes_below(fe, load, f_max, free=free)
+    freqs, kept, m = _interface_modes(cfg, surface, a, f_max, grid)
     n_below = int(freqs.size)
-    m = n_below if grid is None else next((g for g in grid if g >= n_below), grid[-1])
-    kept = np.zeros(0)
-    if m:
-        kept = chosen_modes(fe, InterfaceSpec(surface, None, (a,)), m, load, free)[1]
     return {
         "patch_radii_m": [a],
         "modes": m,
@@ -192,6 +174,32 @@ def estimate_interface(
         "force; the free-free modes that Hertz load excites below k/T_c (T_c = "
         "contact duration clipped to the window), rounded up to the grid if given",
     }
+
+
+def _interface_modes(cfg, surface: str, a: float, f_max: float, grid: list[int] | None):
+    """(freqs [Hz] of the free-free modes the Hertz load of radius a [m] on ``surface``
+    excites below f_max [Hz], kept [Hz]: those the participation choice keeps for the count
+    m, m: that count, rounded up to ``grid`` (its largest if none is enough)) of body cfg."""
+    from flexmvm.reduction.interface import (
+        InterfaceSpec,
+        chosen_modes,
+        contact_patch,
+        excited_modes_below,
+        hertz_load,
+    )
+    from flexmvm.scenarios.setup import default_setup
+
+    # the setup cache's mode pools, shared with the bases
+    fe, free = default_setup().free_modes_source(cfg)
+    patch = contact_patch(fe.mesh, surface)
+    load = hertz_load(fe.mesh, surface, patch, a)
+    freqs, _ = excited_modes_below(fe, load, f_max, free=free)
+    n_below = int(freqs.size)
+    m = n_below if grid is None else next((g for g in grid if g >= n_below), grid[-1])
+    kept = np.zeros(0)
+    if m:
+        kept = chosen_modes(fe, InterfaceSpec(surface, None, (a,)), m, load, free)[1]
+    return freqs, kept, m
 
 
 def median_ncc(rows: Iterable[dict]) -> float:

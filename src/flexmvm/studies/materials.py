@@ -192,9 +192,34 @@ def material_study(
         own={"cases", "materials.csv", "materials.json", "fig9_materials.png", *materials},
     )
     scen = {m: material_scenario(sc, body, m, SEED_MATERIALS[m]) for m in materials}
+    cases, results, case_failed, ref_failed = _run_material_cases(
+        scen, body, out, selections, modes, kind, (scheduler, n_workers, serial), progress
+    )
+    rows = material_rows(cases, results, case_failed, rod, kind, SEED_MATERIALS)
+    result = material_summary(
+        rows,
+        ref_failed,
+        scen,
+        SEED_MATERIALS,
+        SEED_ORDER,
+        body=body,
+        kind=kind,
+        selections=selections,
+        modes=modes,
+        rod=rod,
+    )
+    return MaterialStudy(rows, result, material_columns([p.name for p in sc.probes]))
+
+
+def _run_material_cases(scen, body, out, selections, modes, kind, cluster, progress):
+    """The references, then the grid, of every material's scenario ``scen`` on one cluster
+    (``cluster`` = (scheduler, n_workers, serial), as studies.runner.study_cluster), stored in
+    ``out``. Returns (the grid's cases, their results, the failed cases' and failed
+    references' reasons by key)."""
+    scheduler, n_workers, serial = cluster
     ref_cases = _reference_cases(scen, body, out)
-    ref_paths = {m: str(out / m / "reference" / "history.csv") for m in materials}
-    stamps = {m: stamp(scen[m]) for m in materials}
+    ref_paths = {m: str(out / m / "reference" / "history.csv") for m in scen}
+    stamps = {m: stamp(sc) for m, sc in scen.items()}
     with study_cluster(scheduler, n_workers, serial) as address:
         kw: dict[str, Any] = {"serial": True} if serial else {"scheduler": address}
         ref_failed: dict[str, str] = {}
@@ -221,20 +246,7 @@ def material_study(
             },
             **kw,
         )
-    rows = material_rows(cases, results, case_failed, rod, kind, SEED_MATERIALS)
-    result = material_summary(
-        rows,
-        ref_failed,
-        scen,
-        SEED_MATERIALS,
-        SEED_ORDER,
-        body=body,
-        kind=kind,
-        selections=selections,
-        modes=modes,
-        rod=rod,
-    )
-    return MaterialStudy(rows, result, material_columns([p.name for p in sc.probes]))
+    return cases, results, case_failed, ref_failed
 
 
 def _check_materials(materials: Iterable[str]) -> list[str]:
@@ -295,6 +307,44 @@ def _material_cases(
     ]
 
 
+def _echo_summary(
+    echo: Callable[[str], Any], result: dict, kind: ModelKind, n_per: int, where: Path
+) -> None:
+    """The study's console lines: its failures (see ``where``), the mean force NCC of every
+    material with the seed ordering's verdict, and the runs outside their model's validity
+    with the means over the models valid for every material."""
+    materials, per, failures = list(result["materials"]), result["materials"], result["failures"]
+    holds = result["seed_ordering_holds"]
+    echo_failures(echo, failures, len(materials) * (1 + n_per), where)
+    echo(
+        f"mean NCC of the force ({kind.value}): "
+        + ", ".join(
+            f"{m} {per[m]['mean_ncc_force']:.6f} (over {per[m]['n_cases']} of {n_per} runs)"
+            if per[m]["mean_ncc_force"] is not None
+            else f"{m} (no run compared)"
+            for m in materials
+        )
+        + f"; seed ordering W > Cu > Al > PA6 {'holds' if holds else 'does not hold'}"
+    )
+    if result["guard_outside_validity"]:
+        bad = result["guard_outside_validity"]
+        echo(
+            f"validity: {len(bad)} run(s) outside their model's validity (more than "
+            f"{100 * WARN_FRACTION:g} % of the contact impulse on nodes the basis holds stiff, "
+            "or the energy rose: chatter), "
+            "e.g. "
+            + ", ".join(f"{b['case']} ({b['reason']})" for b in bad[:3])
+            + f"; over the {len(result['valid_models'])} models valid for every material: "
+            + ", ".join(
+                f"{m} {per[m]['mean_ncc_force_valid']:.6f} ({per[m]['n_valid']} runs)"
+                if per[m]["mean_ncc_force_valid"] is not None
+                else f"{m} (none)"
+                for m in materials
+            )
+            + f"; seed ordering {'holds' if result['seed_ordering_holds_valid'] else 'does not hold'}"
+        )
+
+
 def run_materials_study(
     scenario: str | Path | Scenario,
     out_dir: str | Path,
@@ -344,7 +394,6 @@ def run_materials_study(
     rows, result = study.rows, study.summary
     materials, per, failures = list(result["materials"]), result["materials"], result["failures"]
     n_per = len(result["selections"]) * len(result["modes"])
-    holds = result["seed_ordering_holds"]
     write_table_csv(out / "materials.csv", study.columns, rows)
     write_json_atomic(out / "materials.json", result)
     from flexmvm.plots.study_figures import plot_materials
@@ -355,34 +404,7 @@ def run_materials_study(
         [r | {"valid": material_case_key(r) not in invalid} for r in rows],
         title=f"{sc.name}: body {body} of each material, {kind.value} models",
     )
-    echo_failures(echo, failures, len(materials) * (1 + n_per), out / "materials.json")
-    echo(
-        f"mean NCC of the force ({kind.value}): "
-        + ", ".join(
-            f"{m} {per[m]['mean_ncc_force']:.6f} (over {per[m]['n_cases']} of {n_per} runs)"
-            if per[m]["mean_ncc_force"] is not None
-            else f"{m} (no run compared)"
-            for m in materials
-        )
-        + f"; seed ordering W > Cu > Al > PA6 {'holds' if holds else 'does not hold'}"
-    )
-    if result["guard_outside_validity"]:
-        bad = result["guard_outside_validity"]
-        echo(
-            f"validity: {len(bad)} run(s) outside their model's validity (more than "
-            f"{100 * WARN_FRACTION:g} % of the contact impulse on nodes the basis holds stiff, "
-            "or the energy rose: chatter), "
-            "e.g. "
-            + ", ".join(f"{b['case']} ({b['reason']})" for b in bad[:3])
-            + f"; over the {len(result['valid_models'])} models valid for every material: "
-            + ", ".join(
-                f"{m} {per[m]['mean_ncc_force_valid']:.6f} ({per[m]['n_valid']} runs)"
-                if per[m]["mean_ncc_force_valid"] is not None
-                else f"{m} (none)"
-                for m in materials
-            )
-            + f"; seed ordering {'holds' if result['seed_ordering_holds_valid'] else 'does not hold'}"
-        )
+    _echo_summary(echo, result, kind, n_per, out / "materials.json")
     if not any(per[m]["n_cases"] for m in materials):
         raise SolverError(
             f"material study: no run could be compared ({len(failures)} "

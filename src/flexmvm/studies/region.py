@@ -36,24 +36,12 @@ The rule a + h. The ball must hold every node of the facets the contact circle t
 outside the region moves only as the basis lets it: held stiff, the contact force comes out
 high). Such a node is at most a (the circle) + h (its facet's diameter) from the point, so
 a + h holds them all, on any mesh; a fixed multiple of a cannot (the former default 2 a
-assumed elements of about a). Measured over 1 ms on the sphere-on-beam showcase, MVM against
-full FE (docs/notes/2026-11-27-select-on-meshes.md; Hertz a = 0.379 mm, an upper bound: the
-free beam's peak is 258 N against the half-space's 438 N, its contact radius ~0.30 mm):
-
-- tet10 beam refined for the contact (0.2 mm elements, sub-facets h = 0.115 mm), the beam's
-  top as slave: a + h = 0.49 mm (1.30 a, 256 nodes, 798 DOF with 30 modes). Peak error with
-  20 / 30 modes by ball radius: 0.25 mm (0.66 a, 18-20 % of the contact impulse outside the
-  region) +20 / +17 %; 0.3 mm (0.79 a) +3.1 / +0.05 %; 0.4 mm +1.0 / -0.08 %; 0.5 mm (~a + h) +0.09
-  / -0.01 %; 0.6 mm +4.7 / +0.8 % (more interface, the same modes). Force NCC >= 0.99999
-  from 0.3 to 0.5 mm with 30 modes. a + h is where the peak no longer depends on the modes;
-  2 a (0.76 mm) kept 624 nodes, 1,902 DOF.
-- tet4 beam with 0.4 mm elements at the contact (h = 0.41 mm), the sphere's pole the only
-  slave: a + h = 0.78 mm (2.07 a, the former 2 a); from 1.06 a (4 nodes) on, the radius no
-  longer mattered and the modes did (NCC 0.999998 at 60 modes); 0.66 a (2 nodes) left a third
-  of the contact outside (0.977 / 0.966 with 30 / 60 modes).
+assumed elements of about a). On the sphere-on-beam showcase, MVM against full FE, a + h is
+where the peak force no longer depends on the mode count, and a smaller ball leaves part of
+the contact impulse on nodes held stiff (measurements: docs/notes/2026-11-27-select-on-meshes.md).
 
 The estimate is a starting point: `flexmvm select` finds the smallest model that reaches an
-accuracy (here 0.3 mm + 20 modes, 221 DOF, for force NCC >= 0.999, its peak +3.1 %).
+accuracy.
 """
 
 from __future__ import annotations
@@ -66,15 +54,11 @@ import numpy as np
 from flexmvm.errors import InputError, MeshError
 from flexmvm.scenarios import Scenario
 from flexmvm.scenarios.cost import BodyCost, reduced_cost
+from flexmvm.studies.contact_point import equivalent_radius, facet_size, first_contact
 from flexmvm.theory.hertz import HertzImpact, effective_modulus, hertz_impact
 
 __all__ = ["RegionEstimate", "estimate_region"]
 
-#: Surface nodes about the contact point fitted for the curvature (>= 6 unknowns of the fit).
-NEIGHBOURS = 30
-#: Below this curvature x fit radius a surface counts as flat: a deviation from its tangent
-#: plane of ~1e-6 of the fitted patch, the round-off of a mesh's coordinates.
-FLAT = 1e-6
 #: Mode count of the estimated model when the body's model gives none.
 DEFAULT_MODES = 30
 
@@ -203,96 +187,11 @@ class RegionEstimate:
         )
 
 
-def _unit(v: np.ndarray) -> np.ndarray:
-    return v / np.linalg.norm(v)
-
-
 def _placed(cfg, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(global node positions (n, 3), rotation A (3, 3), frame origin (3,)) at placement."""
     A = cfg.placement.rotation.matrix()
     r = np.asarray(cfg.placement.position_m, float)
     return r + nodes @ A.T, A, r
-
-
-def _node_normals(x: np.ndarray, fs) -> np.ndarray:
-    """Outward unit normals (n, 3) at the nodes of facet set ``fs`` (positions ``x``): the
-    area-weighted mean of the normals of the facets at each node (zero off the surface)."""
-    acc = np.zeros_like(x)
-    for f in (fs.tris, fs.quads):
-        if not len(f):
-            continue
-        if f.shape[1] == 3:
-            nf = np.cross(x[f[:, 1]] - x[f[:, 0]], x[f[:, 2]] - x[f[:, 0]])
-        else:
-            nf = np.cross(x[f[:, 2]] - x[f[:, 0]], x[f[:, 3]] - x[f[:, 1]])
-        for corner in f.T:
-            np.add.at(acc, corner, nf)
-    norm = np.linalg.norm(acc, axis=1)
-    return np.divide(acc, norm[:, None], out=np.zeros_like(acc), where=norm[:, None] > 0)
-
-
-def _triangle_distance(p: np.ndarray, tri: np.ndarray) -> np.ndarray:
-    """Distances [m] from point ``p`` (3,) to the triangles ``tri`` (n, 3 corners, 3): to the
-    foot of ``p`` in the plane where it falls inside, else to the nearest edge."""
-    a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
-    nrm = np.cross(b - a, c - a)
-    nn = np.einsum("ij,ij->i", nrm, nrm)
-    foot = p - (np.einsum("ij,ij->i", p - a, nrm) / nn)[:, None] * nrm
-    # barycentric signs: the foot inside when it is on the inner side of all three edges
-    inside = np.ones(len(tri), bool)
-    for u, v in ((a, b), (b, c), (c, a)):
-        inside &= np.einsum("ij,ij->i", np.cross(v - u, foot - u), nrm) >= 0.0
-    d = np.where(inside, np.linalg.norm(p - foot, axis=1), np.inf)
-    for u, v in ((a, b), (b, c), (c, a)):
-        e = v - u
-        t = np.clip(np.einsum("ij,ij->i", p - u, e) / np.einsum("ij,ij->i", e, e), 0.0, 1.0)
-        d = np.minimum(d, np.linalg.norm(p - (u + t[:, None] * e), axis=1))
-    return d
-
-
-def _facet_size(nodes: np.ndarray, fs, point: np.ndarray, a: float) -> float:
-    """h of the rule a + h [m] (module doc, step 6): the largest diameter (largest node-to-node
-    distance) of the facets of ``fs`` (node positions ``nodes``) that the ball of radius ``a``
-    about ``point`` meets; the facet nearest the point if none (a mesh coarser than a)."""
-    diam, dist = [], []
-    for f in (fs.tris, fs.quads):
-        if not len(f):
-            continue
-        xf = nodes[f]  # (n, k, 3)
-        diam.append(np.max(np.linalg.norm(xf[:, :, None] - xf[:, None, :], axis=3), axis=(1, 2)))
-        parts = [(0, 1, 2)] if f.shape[1] == 3 else [(0, 1, 2), (0, 2, 3)]
-        dist.append(np.min([_triangle_distance(point, xf[:, list(t)]) for t in parts], axis=0))
-    diam, dist = np.concatenate(diam), np.concatenate(dist)
-    touched = dist <= a
-    return float(diam[touched].max() if touched.any() else diam[np.argmin(dist)])
-
-
-def _curvature(points: np.ndarray, x0: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, float]:
-    """(curvature tensor (3, 3) in the tangent plane of ``n``, convex positive [1/m]; radius of
-    the fitted patch [m]) of the surface nodes ``points`` nearest ``x0`` (module doc, step 3).
-    The height is fitted by a polynomial of degree 4 in (u, v) (2 with fewer than 15 nodes),
-    so that the quartic fall-off of a sphere over a patch of a few elements (r^4 / 8 R^3) is
-    not read as curvature: on a sphere meshed at R / 4 the quadratic fit alone gives R 10 %
-    small."""
-    d = np.linalg.norm(points - x0, axis=1)
-    near = points[np.argsort(d)[:NEIGHBOURS]]
-    if len(near) < 6:
-        raise InputError(
-            f"{len(near)} surface nodes about the contact point; the curvature "
-            "fit needs at least 6: give radius_m"
-        )
-    t1 = _unit(np.cross(n, [1.0, 0.0, 0.0] if abs(n[0]) < 0.9 else [0.0, 1.0, 0.0]))
-    t2 = np.cross(n, t1)
-    rel = near - x0
-    rho = float(np.max(np.hypot(rel @ t1, rel @ t2)))
-    u, v, h = rel @ t1 / rho, rel @ t2 / rho, rel @ n / rho  # scaled to the patch
-    degree = 4 if len(near) >= 15 else 2
-    terms = [u**i * v ** (k - i) for k in range(degree + 1) for i in range(k, -1, -1)]
-    c = np.linalg.lstsq(np.column_stack(terms), h, rcond=None)[0]
-    # c[3], c[4], c[5]: the u^2, u v, v^2 coefficients (of the scaled height)
-    k2 = -np.array([[2 * c[3], c[4]], [c[4], 2 * c[5]]]) / rho
-    T = np.column_stack([t1, t2])
-    return T @ k2 @ T.T, rho
 
 
 def _contact_of(sc: Scenario, body: str, contact: int | None) -> int:
@@ -335,48 +234,76 @@ def _point_velocity(cfg, x: np.ndarray) -> np.ndarray:
     )
 
 
-def _first_contact(x: np.ndarray, fs, px: np.ndarray, pfs) -> tuple[np.ndarray, np.ndarray]:
-    """(expected first contact point (3,), the body's outward unit normal there (3,)), global,
-    from the body's nodes ``x`` and surface ``fs`` and the partner's ``px``, ``pfs`` (module
-    doc, step 2)."""
-    from scipy.spatial import cKDTree
-
-    mine, theirs = fs.nodes, pfs.nodes
-    normals = _node_normals(x, fs)
-    nearest = mine[cKDTree(x[mine]).query(px[theirs])[1]]
-    gap = np.einsum("ij,ij->i", px[theirs] - x[nearest], normals[nearest])
-    # ties (a flat face on a flat face): the tied node nearest the middle of the tied ones
-    tied = np.flatnonzero(gap <= gap.min() + 1e-9 * np.ptp(px[theirs], axis=0).max())
-    mid = px[theirs[tied]].mean(axis=0)
-    j = int(tied[np.argmin(np.linalg.norm(px[theirs[tied]] - mid, axis=1))])
-    node, pnode = int(nearest[j]), int(theirs[j])
-    n = normals[node]
-    return px[pnode] - float((px[pnode] - x[node]) @ n) * n, n
+def _sides(c, body: str) -> tuple[str, str, str]:
+    """(body's surface, partner body, partner's surface) of contact c, seen from ``body``."""
+    if c.slave_body == body:
+        return c.slave_surface, c.master_body, c.master_surface
+    return c.master_surface, c.slave_body, c.slave_surface
 
 
-def _equivalent_radius(
-    body_points: np.ndarray, partner_points: np.ndarray, point: np.ndarray, n: np.ndarray, what: str
-) -> tuple[float, tuple[float, float]]:
-    """(R_e [m], principal radii (R', R'') [m]) of the two surfaces' summed curvature at
-    ``point`` (module doc, step 3); InputError naming ``what`` without curvature."""
-    curv_b, rho_b = _curvature(body_points, point, n)
-    curv_p, rho_p = _curvature(partner_points, point, -n)
-    T = np.linalg.svd(np.eye(3) - np.outer(n, n))[0][:, :2]
-    kappa = np.linalg.eigvalsh(T.T @ (curv_b + curv_p) @ T)
-    if kappa[0] * max(rho_b, rho_p) < FLAT:
+def _closing_speed(cfg, pcfg, point: np.ndarray, n: np.ndarray, where: str) -> float:
+    """Normal closing speed [m/s] of bodies cfg and pcfg at ``point`` (normal n out of cfg's
+    surface), from their placements; InputError when they do not close there."""
+    v = float((_point_velocity(cfg, point) - _point_velocity(pcfg, point)) @ n)
+    if not v > 0:
         raise InputError(
-            f"{what} have no relative curvature at the expected contact point (principal "
-            f"curvatures {kappa[0]:.3g}, {kappa[1]:.3g} 1/m: a flat, line or conforming "
-            "contact); give the equivalent curvature radius (radius_m, --radius-mm)"
+            f"{where} do not close at the expected contact point "
+            f"(normal relative speed {-v:.3g} m/s at their placements); give the closing "
+            "speed (speed_mps, --speed)"
         )
-    principal = (1.0 / kappa[1], 1.0 / kappa[0])
-    return math.sqrt(principal[0] * principal[1]), principal
+    return v
+
+
+def _hertz(sc: Scenario, cfg, pcfg, R: float, v: float, where: str) -> HertzImpact:
+    """The Hertz impact (module doc, step 5) of bodies cfg and pcfg at equivalent radius R [m]
+    and closing speed v [m/s]; InputError when both are held to the ground."""
+    m_body, m_partner = _mass(sc, cfg), _mass(sc, pcfg)
+    if math.isinf(m_body) and math.isinf(m_partner):
+        raise InputError(
+            f"{where} are both held to the ground; the Hertz impact needs a moving mass"
+        )
+    ma, mb = (m_partner, m_body) if math.isfinite(m_partner) else (m_body, m_partner)
+    mat, pmat = cfg.material_obj(), pcfg.material_obj()
+    return hertz_impact(R, v, effective_modulus(mat.E, mat.nu, pmat.E, pmat.nu), ma, mb)
+
+
+def _facet_sets(cfg, pcfg, surface: str, other_surface: str, where: str):
+    """(fe, facet set) of body cfg's ``surface`` and of the partner pcfg's ``other_surface``,
+    from the setup cache's full-FE bodies; InputError for an unknown or empty surface."""
+    from flexmvm.scenarios.setup import default_setup
+
+    setup = default_setup()
+    fe, pfe = setup.free_modes_source(cfg)[0], setup.free_modes_source(pcfg)[0]
+    try:
+        fs, pfs = fe.mesh.facet_set(surface), pfe.mesh.facet_set(other_surface)
+    except MeshError as exc:  # an unknown or empty surface, said in one line
+        raise InputError(f"{where}: {exc}") from None
+    return fe, fs, pfe, pfs
+
+
+def _ball(nodes: np.ndarray, fs, centre: np.ndarray, a: float, factor: float | None):
+    """(h, radius, nodes inside) of the region ball about ``centre`` (module doc, step 6):
+    radius a + h, h the facet size there, or factor x a."""
+    h = facet_size(nodes, fs, centre, a)
+    radius = a + h if factor is None else factor * a
+    return h, radius, int(np.count_nonzero(np.linalg.norm(nodes - centre, axis=1) <= radius))
 
 
 def _positive_or_none(name: str, value: float | None) -> float | None:
     if value is not None and not (math.isfinite(value) and value > 0):
         raise InputError(f"{name}: expected a number > 0, got {value!r}")
     return None if value is None else float(value)
+
+
+def _checked_options(factor, radius_m, speed_mps, modes) -> tuple[float | None, float | None]:
+    """(radius_m, speed_mps) as floats or None, the four options of estimate_region checked:
+    InputError for a non-positive factor, radius or speed, or a negative mode count."""
+    _positive_or_none("factor", factor)
+    radius_m = _positive_or_none("radius_m", radius_m)
+    speed_mps = _positive_or_none("speed_mps", speed_mps)
+    if modes is not None and int(modes) < 0:
+        raise InputError(f"modes: expected an integer >= 0, got {modes!r}")
+    return radius_m, speed_mps
 
 
 def estimate_region(
@@ -406,33 +333,17 @@ def estimate_region(
         InputError: a non-positive factor, radius or speed; no contact of ``body``; surfaces
             without curvature or bodies without closing speed, each saying what to give.
     """
-    from flexmvm.scenarios.setup import default_setup
-
-    _positive_or_none("factor", factor)
-    radius_m = _positive_or_none("radius_m", radius_m)
-    speed_mps = _positive_or_none("speed_mps", speed_mps)
-    if modes is not None and int(modes) < 0:
-        raise InputError(f"modes: expected an integer >= 0, got {modes!r}")
+    radius_m, speed_mps = _checked_options(factor, radius_m, speed_mps, modes)
     k = _contact_of(sc, body, contact)
-    c, where = sc.contacts[k], f"contacts[{k}]"
-    mine = c.slave_body == body
-    surface, partner, other_surface = (
-        (c.slave_surface, c.master_body, c.master_surface)
-        if mine
-        else (c.master_surface, c.slave_body, c.slave_surface)
-    )
+    where = f"contacts[{k}]"
+    surface, partner, other_surface = _sides(sc.contacts[k], body)
     cfg, pcfg = sc.body(body), sc.body(partner)
-    setup = default_setup()
-    fe, pfe = setup.free_modes_source(cfg)[0], setup.free_modes_source(pcfg)[0]
-    try:
-        fs, pfs = fe.mesh.facet_set(surface), pfe.mesh.facet_set(other_surface)
-    except MeshError as exc:  # an unknown or empty surface, said in one line
-        raise InputError(f"{where}: {exc}") from None
+    fe, fs, pfe, pfs = _facet_sets(cfg, pcfg, surface, other_surface, where)
     x, A, r = _placed(cfg, fe.mesh.nodes)
     px = _placed(pcfg, pfe.mesh.nodes)[0]
-    point, n = _first_contact(x, fs, px, pfs)
+    point, n = first_contact(x, fs, px, pfs)
     if radius_m is None:
-        R, principal = _equivalent_radius(
+        R, principal = equivalent_radius(
             x[fs.nodes],
             px[pfs.nodes],
             point,
@@ -443,27 +354,11 @@ def estimate_region(
         R, principal = radius_m, (radius_m, radius_m)
     v = speed_mps
     if v is None:
-        v = float((_point_velocity(cfg, point) - _point_velocity(pcfg, point)) @ n)
-        if not v > 0:
-            raise InputError(
-                f"{where}: {body} and {partner} do not close at the expected contact point "
-                f"(normal relative speed {-v:.3g} m/s at their placements); give the closing "
-                "speed (speed_mps, --speed)"
-            )
-    m_body, m_partner = _mass(sc, cfg), _mass(sc, pcfg)
-    if math.isinf(m_body) and math.isinf(m_partner):
-        raise InputError(
-            f"{where}: {body} and {partner} are both held to the ground; the "
-            "Hertz impact needs a moving mass"
-        )
-    ma, mb = (m_partner, m_body) if math.isfinite(m_partner) else (m_body, m_partner)
-    mat, pmat = cfg.material_obj(), pcfg.material_obj()
-    hertz = hertz_impact(R, v, effective_modulus(mat.E, mat.nu, pmat.E, pmat.nu), ma, mb)
+        v = _closing_speed(cfg, pcfg, point, n, f"{where}: {body} and {partner}")
+    hertz = _hertz(sc, cfg, pcfg, R, v, f"{where}: {body} and {partner}")
     centre = np.round(A.T @ (point - r), 12) + 0.0  # placement round-off, no -0
     a = hertz.contact_radius_m
-    h = _facet_size(fe.mesh.nodes, fs, centre, a)
-    radius = a + h if factor is None else factor * a
-    n_nodes = int(np.count_nonzero(np.linalg.norm(fe.mesh.nodes - centre, axis=1) <= radius))
+    h, radius, n_nodes = _ball(fe.mesh.nodes, fs, centre, a, factor)
     m = int(modes) if modes is not None else (cfg.model.modes or DEFAULT_MODES)
     cost = reduced_cost(body, fe.mesh.n_nodes, 3 * n_nodes + m, fe.K.nnz)
     return RegionEstimate(

@@ -55,10 +55,8 @@ every family open, the first round runs one candidate of each, most of them in f
 a passing candidate of a cheaper family closes a round later; with few open, a passing
 candidate closes the others before they cost a run, but the rounds are many and a cluster's
 workers idle in rounds smaller than the cluster. ``max_open=1`` is the sequential search.
-studies.selection opens SEARCH_OPEN_PER_SLOT families per case the cluster runs at once (the
-seed study's table, two workers, ncc >= 0.99, replayed: 11 runs in 5 rounds, against 34 runs
-in 3 rounds with every family open and bisection from the first probe, as before 2026-11-25;
-docs/studies.md).
+studies.selection opens SEARCH_OPEN_PER_SLOT families per case the cluster runs at once
+(replays of the seed study's table: docs/notes/2026-11-27-comment-measurements.md).
 """
 
 from __future__ import annotations

@@ -53,20 +53,14 @@ A-priori estimate (studies/estimate.py ``estimate_selection``; the interface kin
   radius lies inside the Hertz contact radius ``a = (3 F_max R / 4 E*)^(1/3)`` at the theory's
   peak force (at least lap 1, the axis node).
 
-On tests/data/tiny_impact.toml (30 us window, b2 aluminium, grid 1..2 x 1..2 x {7, 13}) the
-estimate is 1-1 with 13 modes, 16 DOF: a = 0.16 mm is inside the first ring (0.25 mm), T_c is
-clipped to the 30 us window so f_max = 100 kHz, and 13 fixed-interface modes lie below it
-(the first at 11.7 kHz). Brute force: every model has a force NCC above 0.99998 in that window
-(the force is still rising); for ``ncc>=0.99`` the smallest is 1-1 with 7 modes (10 DOF, the
-estimate is conservative), for the median NCC of the grid (0.9999914) it is 1-1 with 13 modes,
-the estimate (tests/test_studies.py checks that the estimate reaches the median target and is
-no larger than the brute-force winner there).
+The estimate is checked against a brute-force grid in tests/test_studies.py: it reaches the
+grid's median NCC and is no larger than the brute-force winner there (the tiny case's numbers:
+docs/notes/2026-11-27-comment-measurements.md).
 """
 
 from __future__ import annotations
 
 import functools
-import time
 from collections.abc import Callable, Iterable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -74,7 +68,6 @@ from typing import Any
 
 from flexmvm.errors import SolverError, announce_recompute
 from flexmvm.metrics.ncc import Comparison, Target
-from flexmvm.results.atomic import write_json_atomic
 from flexmvm.results.outdir import claim_study_dir
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario, scenario_from_dict
 from flexmvm.scenarios.guard import invalid_reason
@@ -82,7 +75,6 @@ from flexmvm.studies.batches import Batches
 from flexmvm.studies.grid import (
     SEED_SCHEME_NOTE,
     check_grid,
-    check_study_scheme,
     mvm_scenario,
     redistributing_contacts,
     rod_of,
@@ -92,10 +84,8 @@ from flexmvm.studies.grid import (
 )
 from flexmvm.studies.interface import (
     failed_interface_row,
-    interface_cases,
     patch_place,
     run_interface_case,
-    write_interface_csv,
 )
 from flexmvm.studies.node_grid import NodeGrid
 from flexmvm.studies.reference import case_reference, reference_history, scored_row, study_version
@@ -103,13 +93,13 @@ from flexmvm.studies.regions import (
     RegionFamily,
     RegionGrid,
     failed_region_row,
-    front_points,
     run_region_case,
-    write_region_csv,
 )
-from flexmvm.studies.report import echo_summary, write_ncc_csv
+from flexmvm.studies.report import echo_summary
 from flexmvm.studies.runner import Case, check_cluster_options, cluster_slots, study_cluster
 from flexmvm.studies.search import Candidate, brute_force, smallest_passing
+from flexmvm.studies.selection_candidates import candidate_cases, study_grid
+from flexmvm.studies.selection_files import write_selection_files
 from flexmvm.studies.selection_summary import Sweep, selection_summary
 
 __all__ = [
@@ -125,10 +115,8 @@ __all__ = [
 #: Families a --search keeps open per case the cluster runs at once (search.smallest_passing's
 #: max_open = this x cluster_slots). All families at once spends runs on families that a
 #: passing candidate of a cheaper family closes a round later; one per slot leaves workers
-#: idle in the rounds where a family closes. Replayed on the seed study's 140-run table with
-#: two workers (docs/studies.md), ncc >= 0.99: 11 runs in 5 rounds with 4 open, 11 in 7 with
-#: 2, 23 in 4 with all open; measured, 23.4-25.6 s with 4 open against 66.6-69.4 s for the
-#: search before 2026-11-25 (all open, bisection from the first probe: 34 runs).
+#: idle in the rounds where a family closes (replays of the seed study's table:
+#: docs/notes/2026-11-27-comment-measurements.md).
 SEARCH_OPEN_PER_SLOT = 2
 
 #: Score of a run that failed or misses a non-NCC bound of the target (below any NCC).
@@ -279,33 +267,20 @@ def select_models(
     sc.body(body)
     sc = seed_scheme(sc, body)
     kind = study_kind(kind)
-    grid = _study_grid(sc, body, layers, laps, modes, kind, regions, centre_m)
+    grid = study_grid(sc, body, layers, laps, modes, kind, regions, centre_m)
     where = patch_place(sc, body, patch_surface, grid.centre) if patches else {}
     check_cluster_options(scheduler, n_workers, serial)
     claim_study_dir(out, "flexmvm select", own=STUDY_FILES)
-    announce = announce_recompute if echo is None else echo
-    echo = echo or (lambda _line: None)
-    hist, ref_made = reference_history(sc, body, out, progress=progress, announce=announce)
-    echo(f"reference (full FE {body}): {'computed' if ref_made else 'loaded'} {hist}")
-    version = study_version(sc, hist)
-    case_of, if_cases = _candidates(sc, body, grid, hist, patches, interface_modes, where, echo)
-    with study_cluster(scheduler, n_workers, serial) as address:
-        batches = Batches(
-            out,
-            address,
-            serial,
-            progress,
-            functools.partial(run_study_case, reference=str(hist)),
-            lambda c, line: _failed_row(c, line, grid),
-            version,
-            announce,
-        )
-        best, scores = _sweep(
-            case_of, batches, target, search, lambda: cluster_slots(scheduler, n_workers, serial)
-        )
+    announce, echo = (announce_recompute, _silent) if echo is None else (echo, echo)
+    hist, ref_made = _reference(sc, body, out, progress, announce, echo)
+    case_of, if_cases = candidate_cases(sc, body, grid, hist, patches, interface_modes, where, echo)
+    cluster = (scheduler, n_workers, serial)
+    sweep = _run_candidates(
+        sc, case_of, target, search, cluster, progress, out, hist, grid, announce
+    )
     report = selection_summary(
         grid,
-        Sweep(batches.rows, batches.made, batches.loaded, case_of, best, scores),
+        sweep,
         body=body,
         kind=kind,
         search=search,
@@ -320,53 +295,40 @@ def select_models(
     )
 
 
-def _study_grid(
-    sc: Scenario,
-    body: str,
-    layers: Iterable[int],
-    laps: Iterable[int],
-    modes: Iterable[int],
-    kind: ModelKind,
-    regions: Sequence[RegionFamily] | None,
-    centre_m: Sequence[float] | None,
-) -> NodeGrid | RegionGrid:
-    """The grid step: region families x ``modes`` (any body) with ``regions``, else the rod's
-    ``layers`` x ``laps`` x ``modes``; checked against the mesh (InputError)."""
-    if regions:
-        check_study_scheme(sc, body)
-        return RegionGrid(sc, body, regions, modes, centre_m, kind)
-    return NodeGrid(sc, body, layers, laps, modes, kind, centre_m)
+def _silent(_line: str) -> None:
+    """The console of a study without console lines."""
 
 
-def _candidates(
-    sc: Scenario,
-    body: str,
-    grid: NodeGrid | RegionGrid,
-    hist: Path,
-    patches: Sequence[Sequence[float]] | None,
-    interface_modes: Iterable[int],
-    where: dict,
-    echo: Callable[[str], Any],
-) -> tuple[dict[Candidate, Case], list[Case]]:
-    """Every candidate's case against reference ``hist``: the grid's, then the interface
-    kind's of ``patches`` x ``interface_modes`` (placed as ``where``; also returned apart)."""
-    case_of = {grid.candidate(c): c for c in grid.cases(sc, hist)}
-    t0 = time.perf_counter()
-    if_cases = (
-        interface_cases(sc, body, patches, interface_modes, reference=hist, **where)
-        if patches
-        else []
-    )
-    pools = sorted({c.params["mode_pool"] for c in if_cases} - {None})
-    if pools:
-        echo(
-            f"interface kind: modes chosen from the lowest {', '.join(map(str, pools))} "
-            f"free-free modes (mode_pool of every mode count of a patch set; "
-            f"{time.perf_counter() - t0:.1f} s)"
+def _reference(sc, body, out, progress, announce, echo) -> tuple[Path, bool]:
+    """The reference step: the full-FE history of ``body`` in ``out`` (computed, or loaded
+    when stored and valid: studies.reference.reference_history) and its console line.
+    Returns (its path, whether it was computed)."""
+    hist, ref_made = reference_history(sc, body, out, progress=progress, announce=announce)
+    echo(f"reference (full FE {body}): {'computed' if ref_made else 'loaded'} {hist}")
+    return hist, ref_made
+
+
+def _run_candidates(sc, case_of, target, search, cluster, progress, out, hist, grid, announce):
+    """Every candidate's case (brute force) or the search's (:func:`_sweep`) run against the
+    reference history ``hist`` of scenario sc on one cluster (``cluster`` = (scheduler,
+    n_workers, serial), as studies.runner.study_cluster), stored in ``out``. Returns the
+    Sweep: the rows, run counts, cases, winner (or None) and scores."""
+    scheduler, n_workers, serial = cluster
+    with study_cluster(scheduler, n_workers, serial) as address:
+        batches = Batches(
+            out,
+            address,
+            serial,
+            progress,
+            functools.partial(run_study_case, reference=str(hist)),
+            lambda c, line: _failed_row(c, line, grid),
+            study_version(sc, hist),
+            announce,
         )
-    for c in if_cases:
-        case_of[Candidate.interface(c.params["patch_radii_m"], c.params["modes"])] = c
-    return case_of, if_cases
+        best, scores = _sweep(
+            case_of, batches, target, search, lambda: cluster_slots(scheduler, n_workers, serial)
+        )
+    return Sweep(batches.rows, batches.made, batches.loaded, case_of, best, scores)
 
 
 def _sweep(
@@ -413,10 +375,6 @@ def _failed_row(case: Case, line: str, grid: NodeGrid | RegionGrid) -> dict:
         return failed_region_row(case, line)
     assert isinstance(grid, NodeGrid), grid
     return grid.failed_row(case, line)
-
-
-def kind_name(summary: dict) -> str:
-    return str(summary.get("kind", "mvm"))
 
 
 def run_selection_study(
@@ -487,38 +445,7 @@ def run_selection_study(
         patch_surface=patch_surface,
     )
     result = study.summary
-    from flexmvm.plots.study_figures import plot_ncc_dof_fronts, plot_ncc_map, plot_ncc_modes
-
-    if regions:
-        write_region_csv(out / "ncc.csv", study.rows, study.probes)
-        pts = front_points(study.rows)
-    else:
-        write_ncc_csv(out / "ncc.csv", study.rows, study.probes)
-        pts = {
-            f"node selections ({kind_name(result)})": [
-                (r["dof"], r["ncc_force"]) for r in study.rows if "ncc_force" in r
-            ]
-        }
-    write_json_atomic(out / "selection.json", result)
-    if study.rows and not regions:  # none when --search closed every node selection
-        plot_ncc_map(
-            out / "fig7_ncc_map.png", study.rows, title=f"{sc.name}: NCC of the contact force"
-        )
-        plot_ncc_modes(
-            out / "fig8_ncc_modes.png", study.rows, title=f"{sc.name}: NCC against modes"
-        )
-    if study.interface_rows:
-        write_interface_csv(out / "ncc_interface.csv", study.interface_rows, study.probes)
-        pts["interface"] = [
-            (r["dof"], r["ncc_force"]) for r in study.interface_rows if "ncc_force" in r
-        ]
-    if (study.interface_rows or regions) and any(pts.values()):
-        plot_ncc_dof_fronts(
-            out / "fig_front_ncc_dof.png",
-            pts,
-            target=target.ncc_min,
-            title=f"{sc.name}: force NCC against DOF of {body}",
-        )
+    write_selection_files(out, study, sc.name, body, target, bool(regions))
     echo_summary(echo, result, target, out / "selection.json")
     failures = result["failures"] + result.get("interface", {}).get("failures", [])
     if failures and len(failures) == result["runs"] + result.get("interface", {}).get("runs", 0):

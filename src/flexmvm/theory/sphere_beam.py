@@ -145,20 +145,10 @@ def _beam_frame(cfg, mesh):
     return lo, hi, axis
 
 
-def sphere_beam_case(
-    sc, body: str | None = None, *, n_modes: int = 40, n_elements: int = 200
-) -> SphereBeamCase:
-    """The beam-theory view of scenario ``sc`` (module doc), InputError where it does not
-    apply."""
-    c = _contact(sc, body)
-    s_cfg, s_mesh, s_centre, radius, b_cfg, b_mesh = _bodies(sc, c)
-    if b_cfg.model.kind is ModelKind.RIGID:
-        raise InputError(f"theory: the beam {b_cfg.name!r} is rigid; expected a flexible beam")
-    lo, hi, axis = _beam_frame(b_cfg, b_mesh)
-    pb = b_cfg.placement
-    if np.any(np.asarray(pb.velocity_mps)) or np.any(np.asarray(pb.angular_velocity_radps)):
-        raise InputError(f"theory: the beam {b_cfg.name!r} must be at rest at t = 0")
-    rb = pb.rotation.matrix()
+def _impact_direction(s_cfg, rb: np.ndarray, axis: int) -> tuple[float, int, float]:
+    """(speed [m/s], index of the beam-frame axis it is along, its sign) of the sphere s_cfg
+    at t = 0 (beam rotation rb); InputError unless it moves normal to a long face (not along
+    the beam axis ``axis``)."""
     v_loc = rb.T @ np.asarray(s_cfg.placement.velocity_mps, dtype=float)
     speed = float(np.linalg.norm(v_loc))
     if speed == 0.0:
@@ -169,9 +159,17 @@ def sphere_beam_case(
             f"theory: the sphere's velocity (beam frame {v_loc.tolist()} m/s) is "
             "not normal to a long face of the beam"
         )
-    sign = 1.0 if v_loc[normal_idx] > 0 else -1.0
-    n_loc = sign * np.eye(3)[normal_idx]
+    return speed, normal_idx, 1.0 if v_loc[normal_idx] > 0 else -1.0
+
+
+def _gap_and_contact_x(s_cfg, s_mesh, s_centre, radius, pb, lo, hi, axis, n_loc):
+    """(gap [m] from the sphere's skin to the struck face along n_loc (beam frame, the
+    sphere's direction), contact position along the beam axis [m] from its end lo); the beam
+    placed at pb, box (lo, hi). InputError unless the sphere is in front of the face."""
+    normal_idx = int(np.argmax(np.abs(n_loc)))
+    sign = float(n_loc[normal_idx])
     width_idx = 3 - axis - normal_idx
+    rb = pb.rotation.matrix()
     c_loc = rb.T @ (s_cfg.placement.to_global(s_centre) - np.asarray(pb.position_m))
     face = lo[normal_idx] if sign > 0 else hi[normal_idx]
     skin = s_mesh.nodes[s_mesh.node_set("surface")]
@@ -192,6 +190,62 @@ def sphere_beam_case(
             f"theory: the sphere {s_cfg.name!r} is not in front of the beam's "
             f"face (gap {gap:.3g} m, contact at {x_c:.4g} m along the axis)"
         )
+    return gap, x_c
+
+
+def _case_probes(sc, s_cfg, s_mesh, b_cfg, b_mesh, lo, hi, axis, n_loc, n_glob, e_glob):
+    """SphereBeamCase.probes of the scenario's probes: (name, "sphere" or "beam", position
+    along the beam [m] from its end lo, offset from the mid-plane along n_loc [m], global x
+    components of the impact direction n_glob and of the beam axis e_glob); InputError for a
+    probe on another body."""
+    mid = 0.5 * (lo + hi)
+    length = float(hi[axis] - lo[axis])
+    probes = []
+    for p in sc.probes:
+        if p.body not in (s_cfg.name, b_cfg.name):
+            raise InputError(
+                f"theory: probe {p.name!r} is on {p.body!r}, neither the sphere nor the beam"
+            )
+        mesh = b_mesh if p.body == b_cfg.name else s_mesh
+        loc = (
+            np.asarray(p.point_m)
+            if p.point_m is not None
+            else mesh.nodes[mesh.node_set(p.node_set)].mean(axis=0)
+        )
+        if p.body == s_cfg.name:
+            probes.append((p.name, "sphere", 0.0, 0.0, float(n_glob[0]), 0.0))
+        else:
+            probes.append(
+                (
+                    p.name,
+                    "beam",
+                    float(np.clip(loc[axis] - lo[axis], 0.0, length)),
+                    float((loc - mid) @ n_loc),
+                    float(n_glob[0]),
+                    float(e_glob[0]),
+                )
+            )
+    return tuple(probes)
+
+
+def sphere_beam_case(
+    sc, body: str | None = None, *, n_modes: int = 40, n_elements: int = 200
+) -> SphereBeamCase:
+    """The beam-theory view of scenario ``sc`` (module doc), InputError where it does not
+    apply."""
+    c = _contact(sc, body)
+    s_cfg, s_mesh, s_centre, radius, b_cfg, b_mesh = _bodies(sc, c)
+    if b_cfg.model.kind is ModelKind.RIGID:
+        raise InputError(f"theory: the beam {b_cfg.name!r} is rigid; expected a flexible beam")
+    lo, hi, axis = _beam_frame(b_cfg, b_mesh)
+    pb = b_cfg.placement
+    if np.any(np.asarray(pb.velocity_mps)) or np.any(np.asarray(pb.angular_velocity_radps)):
+        raise InputError(f"theory: the beam {b_cfg.name!r} must be at rest at t = 0")
+    rb = pb.rotation.matrix()
+    speed, normal_idx, sign = _impact_direction(s_cfg, rb, axis)
+    n_loc = sign * np.eye(3)[normal_idx]
+    width_idx = 3 - axis - normal_idx
+    gap, x_c = _gap_and_contact_x(s_cfg, s_mesh, s_centre, radius, pb, lo, hi, axis, n_loc)
     mb, ms = b_cfg.material_obj(), s_cfg.material_obj()
     e_star = (
         mb.E / (1.0 - mb.nu**2)
@@ -217,33 +271,8 @@ def sphere_beam_case(
         n_elements=n_elements,
     )
     n_glob, e_glob = rb @ n_loc, rb @ np.eye(3)[axis]
-    mid = 0.5 * (lo + hi)
-    probes = []
-    for p in sc.probes:
-        if p.body not in (s_cfg.name, b_cfg.name):
-            raise InputError(
-                f"theory: probe {p.name!r} is on {p.body!r}, neither the sphere nor the beam"
-            )
-        mesh = b_mesh if p.body == b_cfg.name else s_mesh
-        loc = (
-            np.asarray(p.point_m)
-            if p.point_m is not None
-            else mesh.nodes[mesh.node_set(p.node_set)].mean(axis=0)
-        )
-        if p.body == s_cfg.name:
-            probes.append((p.name, "sphere", 0.0, 0.0, float(n_glob[0]), 0.0))
-        else:
-            probes.append(
-                (
-                    p.name,
-                    "beam",
-                    float(np.clip(loc[axis] - lo[axis], 0.0, beam.length_m)),
-                    float((loc - mid) @ n_loc),
-                    float(n_glob[0]),
-                    float(e_glob[0]),
-                )
-            )
-    return SphereBeamCase(s_cfg.name, b_cfg.name, impact, max(gap, 0.0) / speed, tuple(probes))
+    probes = _case_probes(sc, s_cfg, s_mesh, b_cfg, b_mesh, lo, hi, axis, n_loc, n_glob, e_glob)
+    return SphereBeamCase(s_cfg.name, b_cfg.name, impact, max(gap, 0.0) / speed, probes)
 
 
 def sphere_beam_histories(

@@ -42,6 +42,110 @@ def _no_fronts(ns):  # pragma: no cover - compiled
 
 
 @numba.njit(nogil=True, cache=True)
+def _front_from_a(s, pos, Ap, Ai, Ax, p, pinv, starts, r_off, rows):  # pragma: no cover
+    """Supernode s's front F (m x m, column-major, lower part; m = w + r: its w columns and
+    r rows below) with A's entries of its columns scattered in; pos maps a row of the
+    elimination order to its place in the front. Returns F."""
+    c0 = starts[s]
+    w = starts[s + 1] - c0
+    base = r_off[s]
+    r = r_off[s + 1] - base
+    m = w + r
+    F = np.zeros(m * m)
+    for a in range(w):
+        pos[c0 + a] = a
+    for i in range(r):
+        pos[rows[base + i]] = w + i
+    for a in range(w):
+        j = c0 + a
+        col = p[j]
+        for q in range(Ap[col], Ap[col + 1]):
+            i = pinv[Ai[q]]
+            if i >= j:
+                F[pos[i] + a * m] += Ax[q]
+    return F
+
+
+@numba.njit(nogil=True, cache=True)
+def _extend_add(
+    F, m, s, pos, starts, r_off, rows, child_ptr, child_idx, fronts, other
+):  # pragma: no cover
+    """Add the update matrices of supernode s's children into its front F (m x m): a child's
+    front from fronts, else from other (the other etree half's list); both released after
+    use."""
+    for t in range(child_ptr[s], child_ptr[s + 1]):
+        c = child_idx[t]
+        Fc = fronts[c]
+        if Fc.shape[0] == 0:
+            Fc = other[c]
+            other[c] = np.empty(0)
+        wc = starts[c + 1] - starts[c]
+        cb0 = r_off[c]
+        rc = r_off[c + 1] - cb0
+        mc = wc + rc
+        for b in range(rc):
+            jb = pos[rows[cb0 + b]] * m
+            src = (wc + b) * mc + wc
+            for a in range(b, rc):
+                F[pos[rows[cb0 + a]] + jb] += Fc[src + a]
+        fronts[c] = np.empty(0)
+
+
+@numba.njit(nogil=True, cache=True)
+def _factor_front(F, w, m, r, ch, iv, dv):  # pragma: no cover - compiled
+    """Dense Cholesky of front F's pivot block (dpotrf), the rows below solved against it
+    (dtrsm) and the update matrix F_22 - L_21 L_21^T formed (dsyrk), in place. ch: the
+    characters 'L', 'R', 'T', 'N'; iv, dv: work for the integer and double arguments.
+    Returns LAPACK's info (0, or the 1-based column of a pivot that was not positive)."""
+    iv[0], iv[1], iv[2], iv[3] = w, m, r, 0
+    dpotrf(ch[0:].ctypes, iv[0:].ctypes, F.ctypes, iv[1:].ctypes, iv[3:].ctypes)
+    if iv[3] != 0 or r == 0:
+        return iv[3]
+    below = F[w:]
+    dtrsm(
+        ch[1:].ctypes,
+        ch[0:].ctypes,
+        ch[2:].ctypes,
+        ch[3:].ctypes,
+        iv[2:].ctypes,
+        iv[0:].ctypes,
+        dv[0:].ctypes,
+        F.ctypes,
+        iv[1:].ctypes,
+        below.ctypes,
+        iv[1:].ctypes,
+    )
+    update = F[w + w * m :]
+    dsyrk(
+        ch[0:].ctypes,
+        ch[3:].ctypes,
+        iv[2:].ctypes,
+        iv[0:].ctypes,
+        dv[1:].ctypes,
+        below.ctypes,
+        iv[1:].ctypes,
+        dv[0:].ctypes,
+        update.ctypes,
+        iv[1:].ctypes,
+    )
+    return 0
+
+
+@numba.njit(nogil=True, cache=True)
+def _pack_front(F, w, m, r, c0, t0, b0, tri, rect, d):  # pragma: no cover - compiled
+    """The factored front F's columns in fe.solvers.ldl's packed layout: L = L_c D^(1/2)
+    (L_c the Cholesky factor) as unit lower triangle tri, rows below rect, pivots d."""
+    for a in range(w):
+        piv = F[a + a * m]
+        d[c0 + a] = piv * piv
+        inv = 1.0 / piv
+        for a2 in range(a + 1, w):
+            tri[t0 + a2 * w + a] = F[a2 + a * m] * inv
+        for i in range(r):
+            rect[b0 + i * w + a] = F[w + i + a * m] * inv
+
+
+@numba.njit(nogil=True, cache=True)
 def _numeric(
     sns,
     Ap,
@@ -69,8 +173,7 @@ def _numeric(
     taken from fronts, else from other (the list of the other etree half, whose subtrees a
     top supernode also has as children). Returns -1, or the column at which a pivot was not
     positive (the matrix is not positive definite)."""
-    n = p.shape[0]
-    pos = np.empty(n, np.int64)
+    pos = np.empty(p.shape[0], np.int64)
     ch = np.empty(4, np.uint8)
     ch[0], ch[1], ch[2], ch[3] = 76, 82, 84, 78  # 'L', 'R', 'T', 'N'
     iv = np.empty(4, np.int32)  # w, m, r, info
@@ -80,79 +183,14 @@ def _numeric(
         s = sns[k]
         c0 = starts[s]
         w = starts[s + 1] - c0
-        base = r_off[s]
-        r = r_off[s + 1] - base
+        r = r_off[s + 1] - r_off[s]
         m = w + r
-        F = np.zeros(m * m)  # column-major front, lower part
-        for a in range(w):
-            pos[c0 + a] = a
-        for i in range(r):
-            pos[rows[base + i]] = w + i
-        for a in range(w):
-            j = c0 + a
-            col = p[j]
-            for q in range(Ap[col], Ap[col + 1]):
-                i = pinv[Ai[q]]
-                if i >= j:
-                    F[pos[i] + a * m] += Ax[q]
-        for t in range(child_ptr[s], child_ptr[s + 1]):  # extend-add
-            c = child_idx[t]
-            Fc = fronts[c]
-            if Fc.shape[0] == 0:
-                Fc = other[c]
-                other[c] = np.empty(0)
-            wc = starts[c + 1] - starts[c]
-            cb0 = r_off[c]
-            rc = r_off[c + 1] - cb0
-            mc = wc + rc
-            for b in range(rc):
-                jb = pos[rows[cb0 + b]] * m
-                src = (wc + b) * mc + wc
-                for a in range(b, rc):
-                    F[pos[rows[cb0 + a]] + jb] += Fc[src + a]
-            fronts[c] = np.empty(0)
-        iv[0], iv[1], iv[2], iv[3] = w, m, r, 0
-        dpotrf(ch[0:].ctypes, iv[0:].ctypes, F.ctypes, iv[1:].ctypes, iv[3:].ctypes)
-        if iv[3] != 0:
-            return c0 + iv[3] - 1
-        if r > 0:
-            below = F[w:]
-            dtrsm(
-                ch[1:].ctypes,
-                ch[0:].ctypes,
-                ch[2:].ctypes,
-                ch[3:].ctypes,
-                iv[2:].ctypes,
-                iv[0:].ctypes,
-                dv[0:].ctypes,
-                F.ctypes,
-                iv[1:].ctypes,
-                below.ctypes,
-                iv[1:].ctypes,
-            )
-            update = F[w + w * m :]
-            dsyrk(
-                ch[0:].ctypes,
-                ch[3:].ctypes,
-                iv[2:].ctypes,
-                iv[0:].ctypes,
-                dv[1:].ctypes,
-                below.ctypes,
-                iv[1:].ctypes,
-                dv[0:].ctypes,
-                update.ctypes,
-                iv[1:].ctypes,
-            )
-        t0 = t_off[s]
-        b0 = b_off[s]
-        for a in range(w):
-            piv = F[a + a * m]
-            d[c0 + a] = piv * piv
-            inv = 1.0 / piv
-            for a2 in range(a + 1, w):
-                tri[t0 + a2 * w + a] = F[a2 + a * m] * inv
-            for i in range(r):
-                rect[b0 + i * w + a] = F[w + i + a * m] * inv
+        F = _front_from_a(s, pos, Ap, Ai, Ax, p, pinv, starts, r_off, rows)
+        _extend_add(F, m, s, pos, starts, r_off, rows, child_ptr, child_idx, fronts, other)
+        info = _factor_front(F, w, m, r, ch, iv, dv)
+        if info != 0:
+            return c0 + info - 1
+        _pack_front(F, w, m, r, c0, t_off[s], b_off[s], tri, rect, d)
         if sn_parent[s] != -1:
             fronts[s] = F
     return -1
