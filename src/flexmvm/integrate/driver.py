@@ -19,10 +19,10 @@ from dataclasses import dataclass
 import numpy as np
 from threadpoolctl import threadpool_limits
 
-from flexmvm.constraints.drives import drive_torques
 from flexmvm.errors import InputError, SimulationFailed, SolverError
 from flexmvm.integrate.energy_ledger import EnergyLedger, step_theta
 from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
+from flexmvm.integrate.recorder import OutputRecorder
 from flexmvm.integrate.run_result import FrictionSummary, RunResult, StepHistory, TimeGrid
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.step import Integrator, StepResult
@@ -37,76 +37,6 @@ MAX_STEP_CUTS = 6
 # bodies (InputError). 1e-9 m: the constraint pass's gap tolerance (contact.pairs gap_tol_m);
 # seven orders above the round-off of metre-scale coordinates, far below any physical overlap.
 OVERLAP_TOL_M = 1e-9
-
-
-class _Recorder:
-    def __init__(self, system: System, probes, n_out_max: int, n_joint_rows: int):
-        self.system, self.probes = system, list(probes)
-        nb, npb = len(system.bodies), len(self.probes)
-        self.rows: list[dict] = []
-        self.n_joint_rows = n_joint_rows
-        self.shape = (nb, npb)
-
-    def record(self, t, states, force, jforce, carried=None, products=None):
-        """carried(b, state) -> (L(q), L(q_dot)): the integrator's carried contractions;
-        products(b, state) -> (k_hat q, M_qq q_dot), the same for the energies."""
-        sysm = self.system
-        rec = {"t": t, "force": force, "jforce": jforce}
-        kin = strain = pot = 0.0
-        p = np.zeros(3)
-        h = np.zeros(3)
-        pb = []
-        for b, (body, st) in enumerate(zip(sysm.bodies, states)):
-            Lq = carried(b, st)[0] if (carried is not None and body.nq) else None
-            terms = body.inertia_terms(st.q, Lq)
-            kq, mqq_v = products(b, st) if (products is not None and body.nq) else (None, None)
-            kin += body.kinetic_energy(st.A, st.q, st.v, terms, mqq_v)
-            strain += body.strain_energy(st.q, kq)
-            pot -= float(sysm.gravity @ (body.inv.mass * st.r + st.A @ terms[0]))
-            pb.append(body.linear_momentum(st.A, st.q, st.v, terms))
-            p += pb[-1]
-            h += body.angular_momentum(st.r, st.A, st.q, st.v, terms)
-        rec.update(kin=kin, strain=strain, pot=pot, p=p, h=h, pb=np.array(pb))
-        rec["r"] = np.array([st.r for st in states])
-        rec["A"] = np.array([st.A for st in states])
-        rec["v"] = np.array([st.v[:6] for st in states])
-        rec["q"] = [st.q.copy() for st in states]
-        rec["qd"] = [st.v[6:].copy() for st in states]
-        px, pv = [], []
-        for pr in self.probes:
-            body, st = sysm.bodies[pr.body], states[pr.body]
-            node = np.array([pr.node])
-            px.append(body.node_positions(node, st.r, st.A, st.q)[0])
-            pv.append(body.node_velocities(node, st.A, st.q, st.v)[0])
-        rec["px"], rec["pv"] = np.array(px).reshape(-1, 3), np.array(pv).reshape(-1, 3)
-        self.rows.append(rec)
-
-    def result(self, **extra) -> RunResult:
-        R = self.rows
-        nb = self.shape[0]
-        jforce = np.array([r["jforce"] for r in R]).reshape(len(R), self.n_joint_rows)
-        return RunResult(
-            t=np.array([r["t"] for r in R]),
-            body_names=[b.name for b in self.system.bodies],
-            frame_r=np.array([r["r"] for r in R]),
-            frame_v=np.array([r["v"] for r in R]),
-            probe_names=[p.name for p in self.probes],
-            probe_x=np.array([r["px"] for r in R]),
-            probe_v=np.array([r["pv"] for r in R]),
-            contact_force=np.array([r["force"] for r in R]),
-            joint_force=jforce,
-            drive_torque=drive_torques(self.system.joints, jforce),
-            kinetic=np.array([r["kin"] for r in R]),
-            strain=np.array([r["strain"] for r in R]),
-            potential=np.array([r["pot"] for r in R]),
-            momentum=np.array([r["p"] for r in R]),
-            angular_momentum=np.array([r["h"] for r in R]),
-            q=[np.array([r["q"][b] for r in R]) for b in range(nb)],
-            q_dot=[np.array([r["qd"][b] for r in R]) for b in range(nb)],
-            frame_A=np.array([r["A"] for r in R]),
-            body_momentum=np.array([r["pb"] for r in R]),
-            **extra,
-        )
 
 
 #: What chooses the integrator of a run: (system, grid) -> an integrator (integrate.step's
@@ -240,7 +170,9 @@ class _Tally:
         self.shifts.append(self.shift.copy())
         self.impulse, self.jimpulse = 0.0, np.zeros_like(self.jimpulse)
 
-    def result(self, rec: _Recorder, integ, wall0: float, failure: str | None = None) -> RunResult:
+    def result(
+        self, rec: OutputRecorder, integ, wall0: float, failure: str | None = None
+    ) -> RunResult:
         pen = self.pen
         depth = pen.depth if pen.measured else self.max_pen
         return rec.result(
@@ -279,7 +211,7 @@ def _simulate(
     fine_ticks = grid.contact_output_ticks()
     integ = make_integrator(system, grid)
     dt = grid.dt_s
-    rec = _Recorder(system, probes, n_ticks // out_ticks + 2, integ.n_joint_rows)
+    rec = OutputRecorder(system, probes, n_ticks // out_ticks + 2, integ.n_joint_rows)
     states = [s.copy() for s in states]
     pen = _Penetrations(system)
     pen.start(states, t0, check_overlap)

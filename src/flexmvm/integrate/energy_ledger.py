@@ -24,7 +24,7 @@ dq^T K dq, and -q_m^T K dq is the elastic force's work h (-K q_m) . q_dot_m. Hen
 
     E(t) - E(0) - W_loads - W_joints - W_contact + D_damping + D_numerical = residual
 
-with E = kinetic + strain + gravity potential (driver._Recorder), which closes to the Newton
+with E = kinetic + strain + gravity potential (integrate.recorder.OutputRecorder), which closes to the Newton
 tolerance for bodies whose mass matrix is constant over the step (frames that do not rotate)
 and to the scheme's order otherwise (M(x) and the frame's rotation make the step's kinetic
 energy identity approximate: O(h^2) per unit time at theta = 1/2). dv^T M dv uses the mass

@@ -1,0 +1,81 @@
+"""What a run keeps at its output times: energies (kinetic, strain, gravity potential), linear
+and angular momentum, frame states, elastic coordinates and rates, probes, contact and joint
+forces (integrate.driver records one row per output; RunResult is made from the rows)."""
+
+from __future__ import annotations
+
+import numpy as np
+
+from flexmvm.constraints.drives import drive_torques
+from flexmvm.integrate.run_result import RunResult
+from flexmvm.integrate.system import System
+
+
+class OutputRecorder:
+    def __init__(self, system: System, probes, n_out_max: int, n_joint_rows: int):
+        self.system, self.probes = system, list(probes)
+        nb, npb = len(system.bodies), len(self.probes)
+        self.rows: list[dict] = []
+        self.n_joint_rows = n_joint_rows
+        self.shape = (nb, npb)
+
+    def record(self, t, states, force, jforce, carried=None, products=None):
+        """carried(b, state) -> (L(q), L(q_dot)): the integrator's carried contractions;
+        products(b, state) -> (k_hat q, M_qq q_dot), the same for the energies."""
+        sysm = self.system
+        rec = {"t": t, "force": force, "jforce": jforce}
+        kin = strain = pot = 0.0
+        p = np.zeros(3)
+        h = np.zeros(3)
+        pb = []
+        for b, (body, st) in enumerate(zip(sysm.bodies, states)):
+            Lq = carried(b, st)[0] if (carried is not None and body.nq) else None
+            terms = body.inertia_terms(st.q, Lq)
+            kq, mqq_v = products(b, st) if (products is not None and body.nq) else (None, None)
+            kin += body.kinetic_energy(st.A, st.q, st.v, terms, mqq_v)
+            strain += body.strain_energy(st.q, kq)
+            pot -= float(sysm.gravity @ (body.inv.mass * st.r + st.A @ terms[0]))
+            pb.append(body.linear_momentum(st.A, st.q, st.v, terms))
+            p += pb[-1]
+            h += body.angular_momentum(st.r, st.A, st.q, st.v, terms)
+        rec.update(kin=kin, strain=strain, pot=pot, p=p, h=h, pb=np.array(pb))
+        rec["r"] = np.array([st.r for st in states])
+        rec["A"] = np.array([st.A for st in states])
+        rec["v"] = np.array([st.v[:6] for st in states])
+        rec["q"] = [st.q.copy() for st in states]
+        rec["qd"] = [st.v[6:].copy() for st in states]
+        px, pv = [], []
+        for pr in self.probes:
+            body, st = sysm.bodies[pr.body], states[pr.body]
+            node = np.array([pr.node])
+            px.append(body.node_positions(node, st.r, st.A, st.q)[0])
+            pv.append(body.node_velocities(node, st.A, st.q, st.v)[0])
+        rec["px"], rec["pv"] = np.array(px).reshape(-1, 3), np.array(pv).reshape(-1, 3)
+        self.rows.append(rec)
+
+    def result(self, **extra) -> RunResult:
+        R = self.rows
+        nb = self.shape[0]
+        jforce = np.array([r["jforce"] for r in R]).reshape(len(R), self.n_joint_rows)
+        return RunResult(
+            t=np.array([r["t"] for r in R]),
+            body_names=[b.name for b in self.system.bodies],
+            frame_r=np.array([r["r"] for r in R]),
+            frame_v=np.array([r["v"] for r in R]),
+            probe_names=[p.name for p in self.probes],
+            probe_x=np.array([r["px"] for r in R]),
+            probe_v=np.array([r["pv"] for r in R]),
+            contact_force=np.array([r["force"] for r in R]),
+            joint_force=jforce,
+            drive_torque=drive_torques(self.system.joints, jforce),
+            kinetic=np.array([r["kin"] for r in R]),
+            strain=np.array([r["strain"] for r in R]),
+            potential=np.array([r["pot"] for r in R]),
+            momentum=np.array([r["p"] for r in R]),
+            angular_momentum=np.array([r["h"] for r in R]),
+            q=[np.array([r["q"][b] for r in R]) for b in range(nb)],
+            q_dot=[np.array([r["qd"][b] for r in R]) for b in range(nb)],
+            frame_A=np.array([r["A"] for r in R]),
+            body_momentum=np.array([r["pb"] for r in R]),
+            **extra,
+        )
