@@ -73,6 +73,11 @@ class MasslessCoordinates:
                 f"body {body.name!r}: massless (mass-redistributed) contact nodes "
                 "with Rayleigh damping are not supported"
             )
+        if body.stiffening is not None:
+            raise SolverError(
+                f"body {body.name!r}: massless (mass-redistributed) contact nodes "
+                "with geometric stiffening are not supported"
+            )
         K = sp.csr_matrix(body.k_hat)
         K_s = K[s]
         K_ss = sp.csc_matrix(K_s[:, s])
