@@ -40,6 +40,9 @@ from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import System
 from flexmvm.materials import ALUMINIUM
+from flexmvm.mesh.io import write_mesh
+from flexmvm.scenarios import ScenarioError, scenario_from_dict
+from flexmvm.scenarios.build import build_scenario
 
 L, WIDTH, THICK = 1.0, 0.04, 0.02
 K1 = 1.193  # Southwell coefficient, first flapwise mode, hub radius 0
@@ -223,3 +226,41 @@ def test_bad_input(cantilever):
         spin_geometric_stiffness(c.fe, [0.0, 0.0, 0.0], c.fixed)
     with pytest.raises(InputError, match="supports"):
         spin_geometric_stiffness(c.fe, [0.0, 0.0, 1.0], c.fixed[:2])
+
+
+def _scenario(mesh_path, stiffening) -> dict:
+    """A scenario of the cantilever's mesh file as a full-FE body (3-2-1 reference on its root
+    face) with the given geometric_stiffening table (None: without the key)."""
+    model = {"kind": "full", "reference": "root"}
+    if stiffening is not None:
+        model["geometric_stiffening"] = stiffening
+    body = {"name": "beam", "material": "aluminium", "mesh_file": str(mesh_path), "model": model}
+    time = {"t_end_s": 1e-3, "dt_s": 1e-5, "output_dt_s": 1e-4}
+    return {"name": "spin", "time": time, "bodies": [body]}
+
+
+def test_scenario_key(cantilever, tmp_path):
+    """[bodies.model] geometric_stiffening on a full-FE body: the built body carries the
+    stiffening of its (normalized) axis, the prestress supported by its 3-2-1 reference on the
+    root face, whose virial is the clamped one's (every support at x = 0: v^T K_G v =
+    rho A L^3/3 for v_z = x, to 1e-9); a scenario without the key dumps without it (study keys
+    hash the dumps), and a zero axis is a one-line ScenarioError naming the key."""
+    X = cantilever.fe.mesh.nodes
+    mesh = dataclasses.replace(
+        cantilever.fe.mesh, node_sets={"root": np.flatnonzero(np.isclose(X[:, 0], 0.0))}
+    )
+    path = tmp_path / "beam.vtu"
+    write_mesh(path, mesh)
+    sc = scenario_from_dict(_scenario(path, {"axis": [0, 0, 2]}))
+    body = build_scenario(sc).system.bodies[0]
+    assert np.array_equal(body.stiffening.axis, [0.0, 0.0, 1.0])
+    v = np.zeros_like(X)
+    v[:, 2] = X[:, 0]
+    vq = body.psi.T @ v.ravel()  # the full-FE basis selects the free DOFs
+    expected = ALUMINIUM.rho * WIDTH * THICK * L**3 / 3.0
+    assert float(vq @ (body.stiffening.K_G @ vq)) == pytest.approx(expected, rel=1e-9)
+    assert 0.0 < body.stiffening.spin_crit < np.inf
+    plain = scenario_from_dict(_scenario(path, None))
+    assert "geometric_stiffening" not in plain.model_dump()["bodies"][0]["model"]
+    with pytest.raises(ScenarioError, match="geometric_stiffening.axis: must be non-zero"):
+        scenario_from_dict(_scenario(path, {"axis": [0, 0, 0]}))

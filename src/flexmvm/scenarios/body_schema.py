@@ -18,6 +18,7 @@ from pydantic import (
     Tag,
     ValidationInfo,
     field_validator,
+    model_serializer,
     model_validator,
 )
 
@@ -43,6 +44,7 @@ from flexmvm.scenarios.fields import (
     check_rod_set,
 )
 from flexmvm.scenarios.problems import problem, validate_part
+from flexmvm.scenarios.stiffening_schema import StiffeningConfig
 
 _SELECTION_RE = re.compile(r"^(\d+)-(\d+)$")
 
@@ -196,6 +198,16 @@ class ModelConfig(Frozen):
     # build a reduced body even when its dense matrices would take more memory than the
     # full-FE body's sparse ones (scenarios.cost; refused by default)
     allow_costly: bool = False
+    # the spin's geometric stiffening (stiffening_schema.py; a rigid kind ignores it); None: off
+    geometric_stiffening: StiffeningConfig | None = None
+
+    @model_serializer(mode="wrap")
+    def _dump(self, handler):
+        # a model without stiffening dumps as before the key existed (study keys hash dumps)
+        data = handler(self)
+        if isinstance(data, dict) and data.get("geometric_stiffening") is None:
+            data.pop("geometric_stiffening", None)
+        return data
 
     @field_validator("selection")
     @classmethod
