@@ -14,6 +14,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from flexmvm.bodies.body import FlexibleBody
+from flexmvm.bodies.damping import Damping, reduced_damping
 from flexmvm.bodies.invariants import InertiaInvariants, inertia_invariants, leading_columns
 from flexmvm.reduction.basis import BasisKind
 
@@ -98,11 +99,12 @@ def body_parts(fe, basis) -> BodyParts:
 
 
 def body_from_parts(
-    name: str, mesh, basis, parts: BodyParts, *, rayleigh: tuple[float, float] | None = None
+    name: str, mesh, basis, parts: BodyParts, *, damping: Damping | None = None
 ) -> FlexibleBody:
     """The body of mesh (nodes X (n, 3) [m]) and basis psi (3n, nq) with precomputed parts.
 
-    rayleigh = (alpha [1/s], beta [s]) gives damping C = alpha M_qq + beta k_hat (off by default).
+    damping: Rayleigh (C = alpha M_qq + beta k_hat) or modal ratios (bodies.damping; off by
+    default).
     """
     psi = sp.csr_matrix(basis.psi) if sp.issparse(basis.psi) else basis.psi
     if psi.shape != (3 * mesh.n_nodes, parts.inv.nq):
@@ -110,10 +112,7 @@ def body_from_parts(
             f"body {name}: basis {psi.shape} does not match its parts "
             f"({3 * mesh.n_nodes}, {parts.inv.nq})"
         )
-    c_hat = None
-    if rayleigh is not None:
-        alpha, beta = rayleigh
-        c_hat = alpha * parts.inv.M_qq + beta * parts.k_hat
+    c_hat = reduced_damping(damping, parts.inv.M_qq, parts.k_hat, basis, name)
     return FlexibleBody(
         name,
         np.asarray(mesh.nodes, float),
@@ -126,15 +125,13 @@ def body_from_parts(
     )
 
 
-def body_from_fe(
-    name: str, fe, basis, *, rayleigh: tuple[float, float] | None = None
-) -> FlexibleBody:
+def body_from_fe(name: str, fe, basis, *, damping: Damping | None = None) -> FlexibleBody:
     """The floating-frame body of FE model `fe` (M_scalar, K) with basis psi.
 
-    rayleigh = (alpha [1/s], beta [s]) gives damping C = alpha M_qq + beta k_hat (off by default).
+    damping: see body_from_parts (off by default).
     A basis with no columns gives a rigid body with the FE model's mass distribution.
     """
-    return body_from_parts(name, fe.mesh, basis, body_parts(fe, basis), rayleigh=rayleigh)
+    return body_from_parts(name, fe.mesh, basis, body_parts(fe, basis), damping=damping)
 
 
 def rigid_body_from_fe(name: str, fe) -> FlexibleBody:

@@ -68,10 +68,13 @@ class MasslessCoordinates:
         s = np.flatnonzero(row_abs == 0.0)
         if not s.size:
             return None
-        if body.c_hat is not None:
+        if body.c_hat is not None and np.any(np.asarray(abs(sp.csr_matrix(body.c_hat)[s]).sum())):
+            # damped massless coordinates are not algebraic (C_ss q_s' + K_ss q_s = f_s);
+            # mass-proportional and modal damping leave them undamped (bodies.damping)
             raise SolverError(
-                f"body {body.name!r}: massless (mass-redistributed) contact nodes "
-                "with Rayleigh damping are not supported"
+                f"body {body.name!r}: massless (mass-redistributed) contact nodes with "
+                "stiffness-proportional damping are not supported (beta_s = 0, or modal "
+                "ratios, leave them undamped)"
             )
         if body.stiffening is not None:
             raise SolverError(

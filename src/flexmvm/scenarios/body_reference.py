@@ -16,6 +16,7 @@ from flexmvm.errors import InputError, MeshError
 from flexmvm.mesh.mesh import Mesh
 from flexmvm.reduction.reference import ReferenceCondition, far_reference, three_two_one
 from flexmvm.scenarios.body_schema import AUTO_REFERENCE
+from flexmvm.scenarios.supports import clamp_reference
 
 _AUTO_OPEN, _AUTO_CLOSE = f"{AUTO_REFERENCE}[", "]"
 
@@ -51,7 +52,11 @@ def reference_label(reference: str, mesh: Mesh, surfaces: tuple[str, ...], where
 def support(mesh: Mesh, label: str) -> ReferenceCondition:
     """The 3-2-1 support of reference label ``label`` on ``mesh``: far_reference from the
     nodes of an automatic label's surfaces, else three_two_one on the named node set (a rod's
-    end_b is build.reference_condition's, rod_reference)."""
+    end_b is build.reference_condition's, rod_reference); a clamp's label (supports.py) gives
+    its ClampCondition, every DOF of the clamped set held."""
+    clamp = clamp_reference(mesh, label)
+    if clamp is not None:
+        return clamp
     surfaces = auto_surfaces(label)
     if surfaces is None:
         return three_two_one(mesh, mesh.node_set(label))

@@ -28,6 +28,7 @@ from flexmvm.errors import InputError
 from flexmvm.materials import PRESETS, Material
 from flexmvm.mesh.rod import EndShape, RodSpec
 from flexmvm.reduction.interface import InterfaceSpec, ModeChoice
+from flexmvm.scenarios.damping_schema import DampingConfig
 from flexmvm.scenarios.fields import (
     ROD_FACET_SETS,
     ROD_NODE_SETS,
@@ -312,6 +313,16 @@ class BodyConfig(Frozen):
     mesh_file: Path | None = None
     model: ModelConfig = ModelConfig()
     placement: Placement = Placement()
+    # structural damping (damping_schema.py); None: undamped
+    damping: DampingConfig | None = None
+
+    @model_serializer(mode="wrap")
+    def _dump(self, handler):
+        # an undamped body dumps as before the key existed (study keys hash these dumps)
+        data = handler(self)
+        if isinstance(data, dict) and data.get("damping") is None:
+            data.pop("damping", None)
+        return data
 
     @field_validator("material")
     @classmethod
@@ -371,7 +382,20 @@ class BodyConfig(Frozen):
             check_rod_set(self.model.reference, ROD_NODE_SETS, "model.reference")
             if self.model.kind is ModelKind.INTERFACE:
                 check_rod_set(self.model.patch_surface, ROD_FACET_SETS, "model.patch_surface")
+        kind = self.model.kind
+        if self.damping is not None and kind is ModelKind.RIGID:
+            raise problem("a rigid body has no elastic coordinates to damp", "damping")
+        if self.damping is not None and self.damping.is_modal and kind is ModelKind.FULL:
+            raise problem(
+                "modal ratios need a reduced body (kind full has no modes): give "
+                "alpha_per_s/beta_s or rayleigh_ratios",
+                "damping.modal_ratios",
+            )
         return self
+
+    def damping_obj(self):
+        """The bodies.damping form of the damping table, or None (undamped)."""
+        return None if self.damping is None else self.damping.damping()
 
     def material_obj(self) -> Material:
         """The material as a flexmvm.materials.Material."""

@@ -48,6 +48,7 @@ from flexmvm.scenarios.sag import quasi_static_sag
 from flexmvm.scenarios.setup import SetupCache, default_setup
 from flexmvm.scenarios.solver_choice import with_elimination_order
 from flexmvm.scenarios.stiffening_schema import stiffened
+from flexmvm.scenarios.supports import clamp_label, support_joints
 
 DEFAULT_SEARCH_RADIUS_M = 2e-4  # broad-phase margin beyond the distance closed in one step
 
@@ -85,13 +86,18 @@ class BuiltScenario:
 
 
 def build_body(
-    cfg, setup: SetupCache, massless: np.ndarray | None = None, surfaces: tuple[str, ...] = ()
+    cfg,
+    setup: SetupCache,
+    massless: np.ndarray | None = None,
+    surfaces: tuple[str, ...] = (),
+    supports=(),
 ) -> tuple[FlexibleBody, BodyInfo]:
     """The body of ``cfg``; ``massless``: its contact nodes whose mass is redistributed
     (retained ones only for the MVM kinds, none for a modal or rigid model); ``surfaces``: its
-    contact surfaces, which an automatic reference keeps away from. A rigid body has no
-    reference condition (nothing to support: no elastic coordinates). Meshes, FE models, bases
-    and body parts come through ``setup``."""
+    contact surfaces, which an automatic reference keeps away from; ``supports``: the
+    scenario's, of which a clamp of this body replaces its reference (scenarios.supports). A
+    rigid body has no reference condition (nothing to support: no elastic coordinates).
+    Meshes, FE models, bases and body parts come through ``setup``."""
     where = f"bodies[{cfg.name}]"
     material = cfg.material_obj()
     key = mesh_key(cfg)
@@ -101,10 +107,12 @@ def build_body(
     if kind.basis is None:
         body = rigid_body_from_fe(cfg.name, setup.fe_model(key, material))
         return body, BodyInfo(cfg.name, kind, mesh, material, 6, 0, 0, rod)
-    ref_set = reference_label(cfg.model.reference, mesh, surfaces, f"{where}.model.reference")
     retained: tuple = ()
     if kind.retains_nodes:
         retained = tuple(int(i) for i in retained_nodes(cfg.model, mesh, rod, f"{where}.model"))
+    ref_set = clamp_label(cfg, mesh, supports, retained) or reference_label(
+        cfg.model.reference, mesh, surfaces, f"{where}.model.reference"
+    )
     modes = cfg.model.modes if kind.uses_modes or kind is ModelKind.INTERFACE else 0
     interface = cfg.model.interface_spec() if kind is ModelKind.INTERFACE else None
     if (
@@ -121,7 +129,9 @@ def build_body(
         cost = reduced_cost(cfg.name, mesh.n_nodes, 3 * len(retained) + modes, fe.K.nnz)
         check_cost(cost, cfg.model.allow_costly, f"{where}.model")
     args = (key, material, kind.basis, retained, modes, ref_set, interface)
-    body = body_from_parts(cfg.name, mesh, setup.basis(*args), setup.body_parts(*args))
+    body = body_from_parts(
+        cfg.name, mesh, setup.basis(*args), setup.body_parts(*args), damping=cfg.damping_obj()
+    )
     if cfg.model.geometric_stiffening is not None:  # bodies.stiffening
         fe = setup.fe_model(mesh_key(cfg), material)
         spec, at = cfg.model.geometric_stiffening, f"{where}.model.geometric_stiffening"
@@ -169,7 +179,7 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
         massless = None
         if any(c.redistribute_mass for c in sc.contacts):
             massless = contact_nodes(sc, cfg.name, setup.mesh(mesh_key(cfg)))
-        body, info = build_body(cfg, setup, massless, contact_surfaces(sc, cfg.name))
+        body, info = build_body(cfg, setup, massless, contact_surfaces(sc, cfg.name), sc.supports)
         bodies.append(body)
         infos.append(info)
         states.append(initial_state(body, cfg.placement))
@@ -190,6 +200,7 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
     joints = []
     for k, j in enumerate(sc.joints):
         joints.extend(_joint(j, f"joints[{k}]", bodies, infos, index, states))
+    joints.extend(support_joints(sc.supports, index, states))
     probes = [_probe(p, f"probes[{k}]", infos, index) for k, p in enumerate(sc.probes)]
     grid.ticks()
     grid.contact_output_ticks()

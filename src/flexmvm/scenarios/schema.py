@@ -63,6 +63,7 @@ from flexmvm.scenarios.fields import (
 )
 from flexmvm.scenarios.joint_schema import JointConfig
 from flexmvm.scenarios.problems import ScenarioError, format_error, problem, validate_part
+from flexmvm.scenarios.support_schema import SupportConfig, check_supports, without_empty
 
 
 class ContactConfig(Frozen):
@@ -266,9 +267,14 @@ class Scenario(Frozen):
     bodies: tuple[BodyConfig, ...] = Field(min_length=1)
     contacts: tuple[ContactConfig, ...] = ()
     joints: tuple[JointConfig, ...] = ()
+    supports: tuple[SupportConfig, ...] = ()
     probes: tuple[ProbeConfig, ...] = ()
     compare: CompareConfig = CompareConfig()
     _source: str = PrivateAttr(default="scenario")
+
+    @model_serializer(mode="wrap")
+    def _dump(self, handler):  # without supports: as before the key existed (study keys)
+        return without_empty(handler(self), "supports")
 
     @model_validator(mode="after")
     def _cross_references(self) -> Scenario:
@@ -305,6 +311,7 @@ class Scenario(Frozen):
                     raise problem(f"must differ from body {j.body!r}", f"joints[{i}].body2")
             if j.type is JointType.DISTANCE and j.length_m is None:
                 _check_string_length(j, bodies, f"joints[{i}]")
+        check_supports(self.supports, bodies, self.joints)
         for i, p in enumerate(self.probes):
             _known_body(bodies, p.body, f"probes[{i}].body")
             if p.node_set is not None and bodies[p.body].rod is not None:
