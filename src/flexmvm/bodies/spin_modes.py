@@ -91,4 +91,22 @@ def spin_frequencies(body: FlexibleBody, omega, stiffening: bool = True) -> np.n
     return np.sort(lam.imag[lam.imag > 0.0])
 
 
-__all__ = ["DENSE_MAX_NQ", "spin_frequencies", "spin_matrices"]
+def spin_quasi_static(body: FlexibleBody, omega, alpha, stiffening: bool = True) -> np.ndarray:
+    """q (nq,) [m]: the elastic coordinates that balance, at rest in the frame, its spin omega
+    and angular acceleration alpha (3,) [rad/s, rad/s^2], body frame, the frame's origin at
+    rest: (k_hat + s K_G_hat + K_W) q = -sum_ab Om_ab G1[b][a] - M_wq(0)^T alpha (the
+    centrifugal load of the undeformed body and the Euler load; module doc). The lag of a
+    cantilever spun up slowly against its first period follows it (docs/spin_up.md). Raises
+    as spin_matrices, and SolverError when K is singular."""
+    _, _, K = spin_matrices(body, omega, stiffening)
+    W = skew(np.asarray(omega, dtype=float))
+    Om = W @ W
+    G1 = body.G1_array  # [a, b] = G1[a][b]
+    load = -np.einsum("ab,bak->k", Om, G1) - body.rotational_coupling(np.zeros(body.nq)).T @ alpha
+    try:
+        return sla.solve(K, load, assume_a="sym")
+    except (sla.LinAlgError, ValueError):
+        raise SolverError(f"body {body.name!r}: singular stiffness at this spin") from None
+
+
+__all__ = ["DENSE_MAX_NQ", "spin_frequencies", "spin_matrices", "spin_quasi_static"]
