@@ -22,6 +22,7 @@ import numpy as np
 import pytest
 
 from flexmvm.bodies.spin_modes import spin_quasi_static
+from flexmvm.integrate.body_solver import SPIN_TOL
 from flexmvm.mesh.structured import spin_up_beam_part
 from flexmvm.scenarios import scenario_from_dict
 from flexmvm.scenarios.run import run_scenario
@@ -66,6 +67,11 @@ def test_spin_up_with_stiffening_follows_quasi_static(stiffened_run):
     assert peak == pytest.approx(peak_qs, rel=0.03)
     assert np.abs(lag[t >= 15.0]).max() < 0.01 * peak
     assert res.steps_not_converged == 0
+    # W refactored only as the spin grew: each refactorization multiplies s + spin_crit by at
+    # least 1 + SPIN_TOL (BodySolver.use_spin), so at most ln(1 + 36 / spin_crit) / ln(1.1)
+    # of them after the first factorization, none once the spin is steady
+    bound = np.log(1.0 + 36.0 / body.stiffening.spin_crit) / np.log(1.0 + SPIN_TOL)
+    assert 0.5 * bound <= res.n_factorizations - 1 <= bound
     assert res.frame_v[-1, 0, 5] == pytest.approx(6.0, rel=1e-9)  # the drive's steady speed
 
 
