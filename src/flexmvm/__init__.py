@@ -35,6 +35,7 @@ _API = {
     "rigid": "flexmvm.scenarios.body_schema",
     "ModelKind": "flexmvm.bodies.build",
     "Material": "flexmvm.materials",
+    "rayleigh_from_ratios": "flexmvm.bodies.damping",
     # runs and comparisons
     "run": "flexmvm.scenarios.run",
     "ScenarioRun": "flexmvm.scenarios.run",
@@ -85,6 +86,7 @@ __all__ = [
     "material_study",
     "modal",
     "mvm",
+    "rayleigh_from_ratios",
     "rigid",
     "run",
     "scenario_from_dict",

@@ -28,10 +28,12 @@ from flexmvm.scenarios.body_schema import (
     mvm,
     rigid,
 )
+from flexmvm.scenarios.damping_schema import DampingConfig
 from flexmvm.scenarios.fields import ROD_FACET_SETS, ROD_NODE_SETS
 from flexmvm.scenarios.load import load_scenario, scenario_from_dict
 from flexmvm.scenarios.problems import ScenarioError
 from flexmvm.scenarios.schema import ContactConfig, JointConfig, ProbeConfig, Scenario, TimeConfig
+from flexmvm.scenarios.support_schema import SupportConfig, SupportType
 
 __all__ = [
     "ROD_FACET_SETS",
@@ -41,6 +43,7 @@ __all__ = [
     "Box",
     "ContactConfig",
     "ContactKind",
+    "DampingConfig",
     "EndShape",
     "JointConfig",
     "JointType",
@@ -54,6 +57,8 @@ __all__ = [
     "Rotation",
     "Scenario",
     "ScenarioError",
+    "SupportConfig",
+    "SupportType",
     "TimeConfig",
     "full",
     "interface",

@@ -401,6 +401,12 @@ class BodyConfig(Frozen):
                 "alpha_per_s/beta_s or rayleigh_ratios",
                 "damping.modal_ratios",
             )
+        n = len(self.damping.modal_ratios or ()) if self.damping is not None else 0
+        if n > 1 and n != self.model.modes:
+            raise problem(
+                f"{n} ratios for {self.model.modes} modes; expected one or one per mode",
+                "damping.modal_ratios",
+            )
         return self
 
     def damping_obj(self):
