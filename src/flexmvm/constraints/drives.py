@@ -6,8 +6,8 @@ revolute's five,
 
 whose multiplier is the drive torque [N m] on body 1 about the axis (minus that on body 2):
 an ordinary joint row, so the integrator, the recorded joint forces and any tally of the
-joints' impulses see it as they see the others (Shabana, Dynamics of Multibody Systems,
-sec. 3.6 and 6.8, driving constraints).
+joints' impulses see it as they see the others (a driving constraint: Haug 1989, Computer-Aided
+Kinematics and Dynamics of Mechanical Systems; its multiplier the driving torque).
 
 The angle. Reference directions perpendicular to the axis are fixed at the placement in both
 frames (e_1 = A_1 u_1, e_2 = A_2 u_2; the ground's are global) and the axis a = A_2 a_2 turns

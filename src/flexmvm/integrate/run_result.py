@@ -182,6 +182,15 @@ class RunResult:
             ) from None
         return ProbeHistory(name, self.t, self.probe_x[:, i], self.probe_v[:, i])
 
+    def torque(self, drive: str) -> np.ndarray:
+        """The drive torque history [N m] of the driven joint named ``drive`` (at t)."""
+        try:
+            return self.drive_torque[drive]
+        except KeyError:
+            raise InputError(
+                f"no drive {drive!r} in this run (drives: {', '.join(self.drive_torque) or 'none'})"
+            ) from None
+
     def elastic(self, body: str) -> tuple[np.ndarray, np.ndarray]:
         """(q, q_dot) of body ``body`` at the output times, each (n_out, nq): its elastic
         coordinates and their rates as the scheme integrated them (not differenced)."""

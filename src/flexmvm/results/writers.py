@@ -132,6 +132,15 @@ def _write_histories(f: h5py.File, run: RunResult) -> None:
         "normal contact force, impulse-averaged over the interval ending at each time",
     )
     _dataset(f, "joint_force", run.joint_force, "N", "averaged joint constraint forces")
+    drives = f.create_group("drive_torque")
+    for name, torque in run.drive_torque.items():
+        _dataset(
+            drives,
+            _safe_name("drive", name),
+            torque,
+            "N m",
+            "drive torque on body 1 about the axis",
+        )
     probes = f.create_group("probes")
     for i, name in enumerate(run.probe_names):
         g = probes.create_group(_safe_name("probe", name))
@@ -202,7 +211,8 @@ def write_results_h5(
     """HDF5 archive of a run, written atomically (temporary file, then rename).
 
     Layout (every dataset carries a ``units`` attribute): /time (n_out,) [s], /contact_force
-    (n_out,) [N], /joint_force (n_out, n_rows) [N], /contact_intervals (k, 2) [s],
+    (n_out,) [N], /joint_force (n_out, n_rows) [N], /drive_torque/<joint name> (n_out,) [N m]
+    (driven joints: constraints.drives), /contact_intervals (k, 2) [s],
     /probes/<name>/{position [m], velocity [m/s]} (n_out, 3), /energy/{kinetic, strain,
     potential} [J], /momentum/{linear [kg m/s], angular [kg m^2/s]} (n_out, 3), and per body
     /bodies/<name>/{time_index, r (k, 3), A (k, 3, 3), frame_velocity (k, 6), q (k, nq),

@@ -304,9 +304,19 @@ class Placement(Frozen):
     # the initial motion about a point instead (scenarios/initial_motion.py)
     rigid_motion: RigidMotionConfig | None = None
 
+    @model_serializer(mode="wrap")
+    def _dump(self, handler):
+        # without rigid_motion a dump is as before the key existed (study keys and cache
+        # identities hash these dumps)
+        data = handler(self)
+        if isinstance(data, dict) and data.get("rigid_motion") is None:
+            data.pop("rigid_motion", None)
+        return data
+
     @model_validator(mode="after")
     def _one_motion(self) -> Placement:
-        given = {"velocity_mps", "angular_velocity_radps"} & self.model_fields_set
+        # non-zero ones only: a dump of the placement carries both at their defaults
+        given = {k for k in ("velocity_mps", "angular_velocity_radps") if any(getattr(self, k))}
         if self.rigid_motion is not None and given:
             raise problem(f"give the motion by rigid_motion or by {min(given)}, not both")
         return self

@@ -203,9 +203,9 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
         _contact(c, k, bodies, infos, index, grid.theta_rule()) for k, c in enumerate(sc.contacts)
     )
     groups = [_joint(j, k, bodies, infos, index, states) for k, j in enumerate(sc.joints)]
-    joints = [joint for group in groups for joint in group]
+    supported = [support_joints([s], index, states) for s in sc.supports]
+    joints = [joint for group in (*groups, *supported) for joint in group]
     states = with_rigid_motions(sc, bodies, states, groups)
-    joints.extend(support_joints(sc.supports, index, states))
     probes = [_probe(p, f"probes[{k}]", infos, index) for k, p in enumerate(sc.probes)]
     grid.ticks()
     grid.contact_output_ticks()
@@ -215,7 +215,8 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
         if cfg.placement.sagged:
             states[k] = quasi_static_sag(system, states, k, f"bodies[{cfg.name}].placement")
     labels = [joint_label(j, k) for k, j in enumerate(sc.joints)]
-    check_joint_velocities(system.bodies, states, groups, labels)
+    labels += [f"supports[{k}]" for k in range(len(sc.supports))]
+    check_joint_velocities(system.bodies, states, groups + supported, labels)
     return BuiltScenario(system, states, probes, grid, infos)
 
 

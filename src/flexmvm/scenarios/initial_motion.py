@@ -3,8 +3,8 @@ velocities satisfy the joints.
 
 Rigid motion about a point P (a body's ``placement.rigid_motion``): angular velocity w
 (global axes [rad/s]) and the velocity v_P of P (global [m/s], default 0); the frame's
-velocities follow from the rigid-body velocity field (Shabana, Dynamics of Multibody Systems,
-sec. 2.6):
+velocities follow from the rigid-body velocity field (Euler's formula for the velocity of a
+point of a rigid body; Shabana, Dynamics of Multibody Systems, ch. 2):
 
     v_O = v_P + w x (r_O - r_P),   omega (body frame) = A^T w
 

@@ -6,7 +6,7 @@ from __future__ import annotations
 
 import math
 
-from pydantic import model_validator
+from pydantic import model_serializer, model_validator
 
 from flexmvm.constraints.joints import JointType
 from flexmvm.scenarios.drive_schema import DriveConfig, PathConfig
@@ -52,6 +52,17 @@ class JointConfig(Frozen):
     velocity_mps: Velocity | None = None
     drive: DriveConfig | None = None
     path: PathConfig | None = None
+
+    @model_serializer(mode="wrap")
+    def _dump(self, handler):
+        # name, drive and path unset dump as before the keys existed (study keys and cache
+        # identities hash these dumps)
+        data = handler(self)
+        if isinstance(data, dict):
+            for key in ("name", "drive", "path"):
+                if key in data and data[key] is None:
+                    data.pop(key)
+        return data
 
     @model_validator(mode="after")
     def _check(self) -> JointConfig:

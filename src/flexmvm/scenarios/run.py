@@ -186,6 +186,8 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         "max_penetration_at": res.max_penetration_at,
         "max_penetration_by_direction_m": dict(res.max_penetration_by_direction_m),
         "max_joint_drift": float(res.max_joint_drift),
+        # per driven joint (by name) its largest drive torque in magnitude [N m]
+        "drive_torque_max_abs_Nm": {k: float(np.abs(v).max()) for k, v in res.drive_torque.items()},
         # steps accepted on the Newton iteration's round-off floor above rtol, at the
         # smallest step (integrate.driver: such a step is first cut in halves)
         "steps_not_converged": int(res.steps_not_converged),

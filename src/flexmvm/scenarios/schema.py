@@ -312,8 +312,8 @@ class Scenario(Frozen):
                     raise problem(f"must differ from body {j.body!r}", f"joints[{i}].body2")
             if j.type is JointType.DISTANCE and j.length_m is None:
                 _check_string_length(j, bodies, f"joints[{i}]")
-        check_supports(self.supports, bodies, self.joints)
         check_motion_names(self.joints, self.bodies)
+        check_supports(self.supports, bodies, self.joints)
         for i, p in enumerate(self.probes):
             _known_body(bodies, p.body, f"probes[{i}].body")
             if p.node_set is not None and bodies[p.body].rod is not None:
