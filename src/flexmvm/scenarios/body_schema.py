@@ -46,7 +46,7 @@ from flexmvm.scenarios.fields import (
 )
 from flexmvm.scenarios.initial_motion import RigidMotionConfig
 from flexmvm.scenarios.problems import problem, validate_part
-from flexmvm.scenarios.stiffening_schema import StiffeningConfig
+from flexmvm.scenarios.stiffening_schema import StiffeningKey
 
 _SELECTION_RE = re.compile(r"^(\d+)-(\d+)$")
 
@@ -200,16 +200,7 @@ class ModelConfig(Frozen):
     # build a reduced body even when its dense matrices would take more memory than the
     # full-FE body's sparse ones (scenarios.cost; refused by default)
     allow_costly: bool = False
-    # the spin's geometric stiffening (stiffening_schema.py; a rigid kind ignores it); None: off
-    geometric_stiffening: StiffeningConfig | None = None
-
-    @model_serializer(mode="wrap")
-    def _dump(self, handler):
-        # a model without stiffening dumps as before the key existed (study keys hash dumps)
-        data = handler(self)
-        if isinstance(data, dict) and data.get("geometric_stiffening") is None:
-            data.pop("geometric_stiffening", None)
-        return data
+    geometric_stiffening: StiffeningKey = None  # stiffening_schema.py; a rigid kind ignores it
 
     @field_validator("selection")
     @classmethod

@@ -13,8 +13,9 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from typing import Annotated
 
-from pydantic import field_validator
+from pydantic import Field, field_validator
 
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.bodies.stiffening import geometric_stiffening
@@ -37,6 +38,11 @@ class StiffeningConfig(Frozen):
         return axis
 
 
+#: The model's key: None (off) is left out of a dump, so a model without it dumps as before
+#: the key existed (study keys and cache identities hash the dumps)
+StiffeningKey = Annotated[StiffeningConfig | None, Field(exclude_if=lambda value: value is None)]
+
+
 def stiffened(body: FlexibleBody, spec: StiffeningConfig, fe, basis, where: str) -> FlexibleBody:
     """``body`` (built on ``basis`` from the FE model ``fe``) with the geometric stiffening of
     ``spec``, the unit-spin prestress held at the basis' reference DOFs (its clamp's, or its
@@ -50,4 +56,4 @@ def stiffened(body: FlexibleBody, spec: StiffeningConfig, fe, basis, where: str)
     return dataclasses.replace(body, stiffening=st)
 
 
-__all__ = ["StiffeningConfig", "stiffened"]
+__all__ = ["StiffeningConfig", "StiffeningKey", "stiffened"]
