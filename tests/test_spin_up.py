@@ -21,10 +21,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flexmvm.bodies.spin_modes import spin_quasi_static
+from flexmvm.bodies.spin_modes import spin_frequencies, spin_quasi_static
 from flexmvm.integrate.body_solver import SPIN_TOL
 from flexmvm.mesh.structured import spin_up_beam_part
-from flexmvm.scenarios import scenario_from_dict
+from flexmvm.scenarios import load_scenario, scenario_from_dict
+from flexmvm.scenarios.build import build_scenario
 from flexmvm.scenarios.run import run_scenario
 from flexmvm.time_functions import SpinUp
 
@@ -86,3 +87,18 @@ def test_spin_up_without_stiffening_diverges(tmp_path, stiffened_run):
     assert abs(lag[-1]) > 10.0 * np.abs(lag_s).max()
     k, k_s = np.argmin(np.abs(t - 3.0)), np.argmin(np.abs(t_s - 3.0))
     assert lag[k] == pytest.approx(lag_s[k_s], rel=0.02)
+
+
+def test_shipped_scenario_builds():
+    """scenarios/spin_up.toml as shipped: a clamp with ground_frame = false adds no ground
+    joint (the frame is the hub's: 5 revolute rows + 1 drive row), the beam's basis has the
+    root face's DOFs removed (12 clamped modes), and its first in-plane frequency at rest is
+    Euler-Bernoulli's 3.516 sqrt(E I / (rho A L^4)) = 3.798 rad/s within 1 % (20 HEX27 cells:
+    measured +0.39 %). ~2 s."""
+    built = build_scenario(load_scenario(SCENARIO))
+    assert sum(j.n_rows for j in built.system.joints) == 6
+    body = built.system.bodies[0]
+    assert body.nq == 12 and body.stiffening is not None
+    w = spin_frequencies(body, np.zeros(3))
+    inplane = 3.516015 * np.sqrt(7e10 * 2e-7 / (3000.0 * 4e-4 * 10.0**4))
+    assert w[np.argmin(np.abs(w - inplane))] == pytest.approx(inplane, rel=0.01)
