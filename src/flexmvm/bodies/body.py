@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.sparse as sp
@@ -26,6 +27,9 @@ from flexmvm.bodies.invariants import InertiaInvariants, inertia_invariants
 from flexmvm.bodies.nodal_contraction import NodalContraction
 from flexmvm.bodies.rotation import cross3, skew
 from flexmvm.mesh.mesh import Mesh
+
+if TYPE_CHECKING:
+    from flexmvm.bodies.stiffening import GeometricStiffening
 
 _CYCLIC = ((0, 1, 2), (1, 2, 0), (2, 0, 1))
 # From this many coordinates the packed one-pass G2 contraction beats the stacked product
@@ -55,6 +59,8 @@ class FlexibleBody:
     #: sparse factors (fe.ordering.dissection_order; empty: none exists, SuperLU's minimum
     #: degree; None: not made, the integrator makes it if needed)
     elimination_order: np.ndarray | None = field(default=None, compare=False, repr=False)
+    #: The geometric stiffening of the body's spin (bodies.stiffening); None: off
+    stiffening: GeometricStiffening | None = field(default=None, compare=False, repr=False)
 
     @classmethod
     def build(cls, name, X, M_scalar, psi, k_hat, *, mesh=None, c_hat=None, label=""):

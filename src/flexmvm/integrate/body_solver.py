@@ -31,6 +31,9 @@ from flexmvm.integrate.dense_solve import cho_solve, lu_solve
 # contact step level by level and goes back up after the separation must not refactor
 # (~3 s per level for a 25,000-DOF rod; a full-FE factor holds ~100 MB).
 MAX_CACHED = 10
+# W is refactored when the spin squared of a stiffened body moved by this fraction of
+# (its value in W + the body's spin_crit): BodySolver.use_spin
+SPIN_TOL = 0.1
 
 
 @dataclass
@@ -73,6 +76,28 @@ class BodySolver:
         self._pending = None  # (h, M_wq) of a deferred refresh (refresh_coupling)
         self._frame_args = None
         self.n_coupling_updates = 0
+        self.spin = 0.0  # s [rad^2/s^2] of the geometric stiffening in W (use_spin)
+        self.n_spin_updates = 0
+
+    def use_spin(self, s: float, tol: float = SPIN_TOL) -> None:
+        """Take W_qq = M_qq + (theta h)^2 (k_hat + s K_G) (bodies.stiffening) when the spin
+        squared s [rad^2/s^2] moved from the one in W by more than tol (s_W + spin_crit):
+        the cached factors are dropped and made again on use. The modified Newton iteration
+        then contracts the stale part by at least tol per iterate (|ds| x^T K_G x over
+        x^T (k_hat + s_W K_G) x <= |ds| / (spin_crit + s_W) for a tensile prestress); tol = 0:
+        exactly s. A spin-up from rest to s_end refactors about ln(1 + s_end / spin_crit) /
+        ln(1 + tol) times. Bodies without stiffening ignore it."""
+        stiffening = self.body.stiffening
+        if stiffening is None or s == self.spin:
+            return
+        if abs(s - self.spin) <= tol * (self.spin + stiffening.spin_crit):
+            return
+        self.spin = s
+        self._cache.clear()
+        self._order.clear()
+        self._pending = None
+        self._dMw = None
+        self.n_spin_updates += 1
 
     def _factor(self, h: float) -> _Factor:
         f = self._cache.get(h)
@@ -84,6 +109,8 @@ class BodySolver:
         b = self.body
         th = self.theta(h) if callable(self.theta) else self.theta
         W = b.inv.M_qq + (th * th * h * h) * b.k_hat
+        if self.spin:  # geometric stiffening at the spin squared s of use_spin
+            W = W + (th * th * h * h * self.spin) * b.stiffening.K_G
         if b.c_hat is not None:
             W = W + (th * h) * b.c_hat
         data = W.data if sp.issparse(W) else np.asarray(W)
@@ -285,6 +312,7 @@ class BodySolver:
                 f"body {self.body.name!r}: non-finite number (NaN/inf) in the "
                 "frame rotation; the state diverged"
             )
+        self.use_spin(0.0, 0.0)  # omega = 0: no prestress, and the step is linear in v+
         m = self.body.inv.mass
         if not self.body.nq:
             self._f = None

@@ -52,6 +52,8 @@ class IterationMatrices:
 
     def _prepare_body(self, b, st, h, refresh_tol, defer=False):
         body, solver = self.bodies[b], self.solvers[b]
+        if body.stiffening is not None:  # W's stiffening at this spin (BodySolver.use_spin)
+            solver.use_spin(body.stiffening.scale(st.v[3:6]))
         if not body.nq:
             solver.prepare(
                 h,

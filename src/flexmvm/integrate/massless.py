@@ -77,6 +77,11 @@ class MasslessCoordinates:
                 "stiffness-proportional damping are not supported (beta_s = 0, or modal "
                 "ratios, leave them undamped)"
             )
+        if body.stiffening is not None:
+            raise SolverError(
+                f"body {body.name!r}: massless (mass-redistributed) contact nodes "
+                "with geometric stiffening are not supported"
+            )
         K = sp.csr_matrix(body.k_hat)
         K_s = K[s]
         K_ss = sp.csc_matrix(K_s[:, s])

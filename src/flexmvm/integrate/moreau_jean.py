@@ -9,7 +9,8 @@ configuration x_m = x(t) (+) theta h v_m (Lie-group update of A):
     M(x_m) (v+ - v-) = h F(x_m, v_m) + Phi^T lambda            (impulse-momentum over the step)
     x(t + h) = x(t) (+) h v_m
 
-F = -k_hat q_m (- c_hat q_dot_m) + gravity + quadratic-velocity terms. theta = 1/2 is the
+F = -k_hat q_m (- c_hat q_dot_m) (- s K_G q_m: a spinning body's geometric stiffening,
+bodies.stiffening) + gravity + quadratic-velocity terms. theta = 1/2 is the
 implicit midpoint rule: second order, symplectic, conserving the energy of the linear elastic
 part exactly. theta > 1/2 (Jean 1999) damps the components with omega h >> 1 (amplification
 (1 - theta)/theta at infinity) at a first-order cost (damping ratio ~ (theta - 1/2) omega h / 2
@@ -157,8 +158,9 @@ class MoreauJeanIntegrator:
         # coordinates without mass (redistributed contact nodes): equilibrium at step ends
         self.massless = [MasslessCoordinates.of(b) for b in bodies]
         check_contact_law(system, self.massless)
-        # bodies whose k_hat dq_dot comes from W_qq dq_dot (full FE, undamped)
-        self.images = WImages({b for b in self.threads.sparse if bodies[b].c_hat is None})
+        # bodies whose k_hat dq_dot comes from W_qq dq_dot (full FE, undamped, not stiffened)
+        plain = {b for b in self.threads.sparse if bodies[b].c_hat is None}
+        self.images = WImages({b for b in plain if bodies[b].stiffening is None})
         self.carried_state = CarriedState(bodies, self.images, self.threads.contraction_pool)
         self.matrices = IterationMatrices(
             bodies, self.solvers, self.threads, self.carried_state, self.images
@@ -260,6 +262,8 @@ class MoreauJeanIntegrator:
                 )
             if body.c_hat is not None:
                 F[6:] -= flat_product(body.c_hat, vm[6:])
+            if body.stiffening is not None:  # the spin's prestress (bodies.stiffening)
+                F[6:] -= body.stiffening.force(vm[3:6], mid.q)
         else:
             terms = body.inertia_terms(mid.q)
             inertia = body.mass_times(mid.A, mid.q, dv, terms)

@@ -46,6 +46,7 @@ from flexmvm.scenarios.fields import (
 )
 from flexmvm.scenarios.initial_motion import RigidMotionConfig
 from flexmvm.scenarios.problems import problem, validate_part
+from flexmvm.scenarios.stiffening_schema import StiffeningKey
 
 _SELECTION_RE = re.compile(r"^(\d+)-(\d+)$")
 
@@ -199,6 +200,7 @@ class ModelConfig(Frozen):
     # build a reduced body even when its dense matrices would take more memory than the
     # full-FE body's sparse ones (scenarios.cost; refused by default)
     allow_costly: bool = False
+    geometric_stiffening: StiffeningKey = None  # stiffening_schema.py; a rigid kind ignores it
 
     @field_validator("selection")
     @classmethod

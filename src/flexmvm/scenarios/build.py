@@ -53,6 +53,7 @@ from flexmvm.scenarios.mesh_lookup import (
 from flexmvm.scenarios.sag import quasi_static_sag
 from flexmvm.scenarios.setup import SetupCache, default_setup
 from flexmvm.scenarios.solver_choice import with_elimination_order
+from flexmvm.scenarios.stiffening_schema import stiffened
 from flexmvm.scenarios.supports import clamp_label, support_joints
 
 DEFAULT_SEARCH_RADIUS_M = 2e-4  # broad-phase margin beyond the distance closed in one step
@@ -137,6 +138,10 @@ def build_body(
     body = body_from_parts(
         cfg.name, mesh, setup.basis(*args), setup.body_parts(*args), damping=cfg.damping_obj()
     )
+    if cfg.model.geometric_stiffening is not None:  # bodies.stiffening
+        fe = setup.fe_model(mesh_key(cfg), material)
+        spec, at = cfg.model.geometric_stiffening, f"{where}.model.geometric_stiffening"
+        body = stiffened(body, spec, fe, setup.basis(*args), at)
     n_ret = len(retained) if kind.retains_nodes else (mesh.n_nodes if kind is ModelKind.FULL else 0)
     covered, patch = None, None
     if kind.retains_nodes:

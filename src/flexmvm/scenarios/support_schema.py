@@ -38,6 +38,10 @@ class SupportConfig(Frozen):
     type: SupportType
     body: Name
     node_set: SetName
+    # false: the clamp holds the set in the body's frame only, and the scenario's joints move
+    # the frame (a cantilever clamped on a hub that a driven revolute joint turns: the
+    # spin-up of docs/spin_up.md); true: the frame is also fixed at its placement
+    ground_frame: bool = True
 
 
 def check_supports(supports: Sequence[SupportConfig], bodies: Mapping, joints: Sequence) -> None:
@@ -65,7 +69,11 @@ def check_supports(supports: Sequence[SupportConfig], bodies: Mapping, joints: S
                 f"{key}.body",
             )
     for i, j in enumerate(joints):
-        if j.type is JointType.GROUND and j.body in clamped:
+        if (
+            j.type is JointType.GROUND
+            and j.body in clamped
+            and supports[clamped[j.body]].ground_frame
+        ):
             raise problem(
                 f"body {j.body!r} is clamped by supports[{clamped[j.body]}], which fixes its "
                 "frame already; remove the ground joint",

@@ -58,10 +58,12 @@ def clamp_label(cfg, mesh: Mesh, supports, retained=()) -> str | None:
 
 
 def support_joints(supports, index: dict[str, int], states) -> list:
-    """The ground joints (frame fixed at its placement: 6 rows) of the clamped bodies."""
+    """The ground joints (frame fixed at its placement: 6 rows) of the clamped bodies whose
+    frame the clamp fixes (ground_frame)."""
     joints = []
     for s in supports:
-        joints.extend(ground_joint(index[s.body], states))
+        if s.ground_frame:
+            joints.extend(ground_joint(index[s.body], states))
     return joints
 
 
