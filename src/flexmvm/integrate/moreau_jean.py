@@ -31,20 +31,8 @@ Constraints (seed eq. 11, at impulse level):
   a separation speed beta (1 - theta) |u_N-| the next step (two rigid rods: restitution
   beta (1 - theta) instead of 0).
 
-Penetration (measured after every step on both surfaces, contact.penetration). For a pair that
-is a row at the start of a step, g(t + h) = g + h (theta u_N+ + (1 - theta) u_N-) with
-u_N+ >= min(beta max(0, -g)/h, max(0, -u_N-)): a node arriving with u_N- < 0 goes in by
-h (1 - theta) |u_N-| (not h |u_N-| / 2: that is theta = 1/2); a pair held at rest keeps that
-penetration (its recovery is capped by its closing speed, 0), and one that closes again
-recovers at most its closing speed. A node that is not a row at the start of a step (its
-predicted gap g + h u_N above gap_tol) is not held during it, and |u_N-| is the pair's own
-approach speed, which the ringing of the contact nodes can make several times the impact
-speed: there is no a-priori bound in terms of the impact speed. The constraint holds slave
-nodes only; master surface nodes sit inside the slave facets by the chord error of the slave
-face over the curved master (about a^2 / (8 R), facet size a, master radius R), independent
-of h. tests/test_contact_impact.py holds the flat full-FE impact within 1.1 h (1 - theta) v0
-(v0 the impact speed); the penetrations measured per case are in
-docs/notes/2026-11-27-comment-measurements.md.
+Penetration through a step (how deep a node arriving at speed goes, what a held pair keeps):
+docs/contact_law.md, "Penetration through a step".
 
 Massless coordinates (contact nodes whose mass was redistributed, fe.mass_redistribution) are
 algebraic: after every step they are put in equilibrium at the step's end (integrate.massless),
@@ -63,12 +51,9 @@ a stalled iteration (relaxation.py).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
-
 import numpy as np
 
 from flexmvm.bodies.momentum import momentum_terms, momentum_terms_nodal
-from flexmvm.constraints.rows import Rows, stack
 from flexmvm.errors import SolverError
 from flexmvm.integrate import DEFAULT_THETA, nonrotating
 from flexmvm.integrate.body_solver import BodySolver
@@ -78,8 +63,9 @@ from flexmvm.integrate.coulomb import solve_contact_impulses
 from flexmvm.integrate.iteration_matrix import IterationMatrices
 from flexmvm.integrate.massless import MasslessCoordinates, check_contact_law, equilibrate_step_end
 from flexmvm.integrate.momentum_balance import balance_translation, balanced_residuals
+from flexmvm.integrate.newton_iterate import NewtonIterate, joint_rows, relative_residual
 from flexmvm.integrate.relaxation import ACTIVATE_RATIO, AitkenRelaxation, relaxed_iterate
-from flexmvm.integrate.row_products import body_impulse, flat_product, merge_contacts
+from flexmvm.integrate.row_products import flat_product, merge_contacts
 from flexmvm.integrate.stall_report import stall_report
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.step import StepResult
@@ -94,29 +80,6 @@ SLOW_ITERATIONS = 6  # from this iterate on (or when the residual grows) W is re
 ROUNDOFF_FLOOR = 1e-7  # a residual below this that stops decreasing is round-off (large bases)
 TRANSLATION_RTOL = 1e-13  # ...but the frame's translational rows (sums: no such floor) must
 # converge to this, so linear momentum drifts < 1e-9 over an impact
-
-
-@dataclass
-class _Iteration:
-    """The modified Newton iteration of one step: the iterate v+ (per body), the free
-    velocity v_free = v+ - W^-1 R it came from, the constraint impulses lambda (joint rows
-    first), the contact rows' compliance per body and their Delassus matrix D_cc (made
-    once, again when W is refreshed), and what the convergence test keeps."""
-
-    v_plus: list[np.ndarray]
-    v_free: list[np.ndarray]
-    lam: np.ndarray
-    contact_compliance: dict | None = None
-    contact_delassus: np.ndarray | None = None
-    last_norm: float = np.inf  # largest absolute residual of the last iterate
-    last_rel: float = np.inf  # its relative residual
-    lcp_max: float = 0.0  # largest complementarity residual of the LCP solves
-    relaxed: bool = False  # the last iterate was relaxed (integrate.relaxation)
-    stalled: bool = False
-    rel: float = np.inf  # relative residual (constraint impulses included)
-    rel_translation: float = np.inf  # the same of the translational rows alone
-    translation_sum: np.ndarray = field(default_factory=lambda: np.zeros(3))  # [N s]
-    residuals: list = field(default_factory=list)  # per body, constraint impulses included
 
 
 class MoreauJeanIntegrator:
@@ -276,46 +239,6 @@ class MoreauJeanIntegrator:
         scale = max(np.abs(inertia).max(), h * np.abs(F).max(), np.abs(momentum).max())
         return inertia - h * F, mid, end, scale
 
-    def _joint_rows(self, t, h, mids, ends):
-        """(phi at the end configurations, rows Phi_v at the midpoint) of the joints."""
-        if not self.system.joints:
-            return np.zeros(0), Rows.empty()
-        bodies = self.system.bodies
-        phis, parts = [], []
-        for joint in self.system.joints:
-            _, rows = joint.evaluate(bodies, mids, t + 0.5 * h)
-            phi, _ = joint.evaluate(bodies, ends, t + h)
-            phis.append(phi)
-            parts.append(rows)
-        return np.concatenate(phis), stack(parts)
-
-    def _relative_residual(self, R, joint_jacobian, crows: Rows, lam, n_j, scales) -> tuple:
-        """Largest momentum residual (constraint impulses included) relative to each body's
-        momentum scale (the largest of its inertia, force, momentum and constraint impulse
-        terms); the same for the translational rows alone; the sum over bodies of
-        the translational rows [N s] (the step's linear-momentum error: internal and constraint
-        forces cancel between bodies); and per body its residual with the constraint impulses."""
-        worst, worst_t = 0.0, 0.0
-        res_t = np.zeros(3)
-        residuals = []
-        for b, (r, sc) in enumerate(zip(R, scales)):
-            res = r
-            # the scale includes the constraint impulses on the body: a body held still by a
-            # joint (a grounded wall) balances them alone, with no momentum of its own
-            if b in joint_jacobian:
-                imp = joint_jacobian[b].T @ lam[:n_j]
-                res = res - imp
-                sc = max(sc, float(np.abs(imp).max()))
-            if b in crows.blocks:
-                imp = body_impulse(crows, b, self.system.bodies[b], lam[n_j:])
-                res = res - imp
-                sc = max(sc, float(np.abs(imp).max()))
-            worst = max(worst, float(np.abs(res).max()) / max(sc, 1e-300))
-            worst_t = max(worst_t, float(np.abs(res[:3]).max()) / max(sc, 1e-300))
-            res_t += res[:3]
-            residuals.append(res)
-        return worst, worst_t, res_t, residuals
-
     # ---------------------------------------------------------------- the step
     def step(self, t: float, states: list[BodyState], h: float) -> StepResult:
         """One step from t to t + h. Frames that do not rotate (omega = 0, no joints) take the
@@ -369,13 +292,13 @@ class MoreauJeanIntegrator:
         self.matrices.prepare(states, h, refresh_tol=None, defer=True)
         n_j = self.n_joint_rows
         v0 = [st.v.copy() for st in states]
-        s = _Iteration(v0, v0, np.zeros(n_j + crows.rows.m))  # v_free set by the first iterate
+        s = NewtonIterate(v0, v0, np.zeros(n_j + crows.rows.m))  # v_free set by the first iterate
         self.images.start(self.system.bodies)
         self.relax.start()
         for it in range(self.max_iter + 1):
             v_before, image_before = s.v_plus, dict(self.images.plus)
             R, mids, ends, scales = self._residuals(t, states, s.v_plus, h, th)
-            phi, jrows = self._joint_rows(t, h, mids, ends)
+            phi, jrows = joint_rows(self.system, t, h, mids, ends)
             jacobian = {b: jrows.body_matrix(b) for b in jrows.blocks} if n_j else {}
             res_norm = max(float(np.abs(r).max()) for r in R) if it else np.inf
             if it > 0 and self._accepted(s, it, R, jacobian, crows, phi, scales):
@@ -407,13 +330,13 @@ class MoreauJeanIntegrator:
             s, it, t, h, th, states, crows, parts, phi, jrows, mids, ends, scales
         )
 
-    def _accepted(self, s: _Iteration, it, R, jacobian, crows, phi, scales) -> bool:
+    def _accepted(self, s: NewtonIterate, it, R, jacobian, crows, phi, scales) -> bool:
         """Convergence test of iterate it > 0: the residual with the last impulses within
         rtol and the joints closed, or a residual on the round-off floor (below
         ROUNDOFF_FLOOR, no longer decreasing, translational rows within TRANSLATION_RTOL or
         max_iter reached: accepted, and counted as not converged in StepResult)."""
-        s.rel, s.rel_translation, s.translation_sum, s.residuals = self._relative_residual(
-            R, jacobian, crows.rows, s.lam, self.n_joint_rows, scales
+        s.rel, s.rel_translation, s.translation_sum, s.residuals = relative_residual(
+            self.system.bodies, R, jacobian, crows.rows, s.lam, self.n_joint_rows, scales
         )
         phi_ok = not (phi.size and np.abs(phi).max() > 1e-12)
         floor = (
@@ -431,7 +354,7 @@ class MoreauJeanIntegrator:
         s.last_rel = s.rel
         return False
 
-    def _refresh_when_slow(self, s: _Iteration, it, res_norm, mids, h, crows) -> bool:
+    def _refresh_when_slow(self, s: NewtonIterate, it, res_norm, mids, h, crows) -> bool:
         """W's coupling refreshed at the midpoint configuration when the iteration is slow
         (SLOW_ITERATIONS) or its residual grew; True if refreshed."""
         if not (it == SLOW_ITERATIONS or (it > 1 and res_norm > s.last_norm)):
@@ -444,12 +367,12 @@ class MoreauJeanIntegrator:
             self._contact_columns(s, h, crows)
         return True
 
-    def _contact_columns(self, s: _Iteration, h, crows) -> None:
+    def _contact_columns(self, s: NewtonIterate, h, crows) -> None:
         m_c = crows.rows.m
         s.contact_compliance = self.matrices.contact_compliance(crows, h) if m_c else {}
         s.contact_delassus = sum((c.D for c in s.contact_compliance.values()), np.zeros((m_c, m_c)))
 
-    def _impulses(self, s: _Iteration, it, h, th, crows, phi, jrows, jacobian) -> None:
+    def _impulses(self, s: NewtonIterate, it, h, th, crows, phi, jrows, jacobian) -> None:
         """v+ = v_free + W^-1 Phi^T lambda with the impulses lambda of the mixed LCP on
         D = Phi W^-1 Phi^T (joints: equalities closing phi at the step's end; contacts:
         u_N(v+) >= the lower bounds of contact.pairs, lambda_N >= 0, complementary)."""
@@ -490,7 +413,7 @@ class MoreauJeanIntegrator:
         s.v_plus = v_plus
 
     def _end_of_step(
-        self, s: _Iteration, it, t, h, th, states, crows, parts, phi, jrows, mids, ends, scales
+        self, s: NewtonIterate, it, t, h, th, states, crows, parts, phi, jrows, mids, ends, scales
     ) -> StepResult:
         """The accepted iterate as the step's result: translational rows balanced (no
         joints), end states with v+, carried contractions advanced, massless coordinates

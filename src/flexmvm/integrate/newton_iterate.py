@@ -1,0 +1,78 @@
+"""The state of one step's modified Newton iteration (NewtonIterate) and what it measures:
+the joints' constraint values and rows (joint_rows) and the momentum residual relative to each
+body's momentum scale, constraint impulses included (relative_residual). Used by the scheme,
+integrate.moreau_jean."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from flexmvm.constraints.rows import Rows, stack
+from flexmvm.integrate.row_products import body_impulse
+
+
+@dataclass
+class NewtonIterate:
+    """The modified Newton iteration of one step: the iterate v+ (per body), the free
+    velocity v_free = v+ - W^-1 R it came from, the constraint impulses lambda (joint rows
+    first), the contact rows' compliance per body and their Delassus matrix D_cc (made
+    once, again when W is refreshed), and what the convergence test keeps."""
+
+    v_plus: list[np.ndarray]
+    v_free: list[np.ndarray]
+    lam: np.ndarray
+    contact_compliance: dict | None = None
+    contact_delassus: np.ndarray | None = None
+    last_norm: float = np.inf  # largest absolute residual of the last iterate
+    last_rel: float = np.inf  # its relative residual
+    lcp_max: float = 0.0  # largest complementarity residual of the LCP solves
+    relaxed: bool = False  # the last iterate was relaxed (integrate.relaxation)
+    stalled: bool = False
+    rel: float = np.inf  # relative residual (constraint impulses included)
+    rel_translation: float = np.inf  # the same of the translational rows alone
+    translation_sum: np.ndarray = field(default_factory=lambda: np.zeros(3))  # [N s]
+    residuals: list = field(default_factory=list)  # per body, constraint impulses included
+
+
+def joint_rows(system, t, h, mids, ends):
+    """(phi at the end configurations, rows Phi_v at the midpoint) of the joints."""
+    if not system.joints:
+        return np.zeros(0), Rows.empty()
+    bodies = system.bodies
+    phis, parts = [], []
+    for joint in system.joints:
+        _, rows = joint.evaluate(bodies, mids, t + 0.5 * h)
+        phi, _ = joint.evaluate(bodies, ends, t + h)
+        phis.append(phi)
+        parts.append(rows)
+    return np.concatenate(phis), stack(parts)
+
+
+def relative_residual(bodies, R, joint_jacobian, crows: Rows, lam, n_j, scales) -> tuple:
+    """Largest momentum residual (constraint impulses included) relative to each body's
+    momentum scale (the largest of its inertia, force, momentum and constraint impulse
+    terms); the same for the translational rows alone; the sum over bodies of
+    the translational rows [N s] (the step's linear-momentum error: internal and constraint
+    forces cancel between bodies); and per body its residual with the constraint impulses."""
+    worst, worst_t = 0.0, 0.0
+    res_t = np.zeros(3)
+    residuals = []
+    for b, (r, sc) in enumerate(zip(R, scales)):
+        res = r
+        # the scale includes the constraint impulses on the body: a body held still by a
+        # joint (a grounded wall) balances them alone, with no momentum of its own
+        if b in joint_jacobian:
+            imp = joint_jacobian[b].T @ lam[:n_j]
+            res = res - imp
+            sc = max(sc, float(np.abs(imp).max()))
+        if b in crows.blocks:
+            imp = body_impulse(crows, b, bodies[b], lam[n_j:])
+            res = res - imp
+            sc = max(sc, float(np.abs(imp).max()))
+        worst = max(worst, float(np.abs(res).max()) / max(sc, 1e-300))
+        worst_t = max(worst_t, float(np.abs(res[:3]).max()) / max(sc, 1e-300))
+        res_t += res[:3]
+        residuals.append(res)
+    return worst, worst_t, res_t, residuals

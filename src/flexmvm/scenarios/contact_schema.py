@@ -1,0 +1,107 @@
+"""The scenario's ``[[contacts]]`` and ``[[probes]]`` tables (pydantic v2): a contact's surfaces,
+law and options, a probe's body point; scenarios/schema.py checks their cross-references
+(bodies, surfaces) and docs/scenario_format.md lists the keys."""
+
+from __future__ import annotations
+
+from typing import Annotated
+
+from annotated_types import Ge, Le
+from pydantic import (
+    Strict,
+    StringConstraints,
+    model_serializer,
+    model_validator,
+)
+
+from flexmvm.constraints.contact import ContactKind, ContactLaw
+from flexmvm.scenarios.fields import (
+    Frozen,
+    Name,
+    Positive,
+    SetName,
+    Vec3,
+)
+from flexmvm.scenarios.problems import problem
+
+
+class ContactConfig(Frozen):
+    """Slave nodes of ``slave`` ('body.surface') against the master facets of ``master``."""
+
+    slave: Annotated[str, StringConstraints(pattern=r"^[A-Za-z0-9_]+\.[A-Za-z0-9_]+$")]
+    master: Annotated[str, StringConstraints(pattern=r"^[A-Za-z0-9_]+\.[A-Za-z0-9_]+$")]
+    kind: ContactKind = ContactKind.FRICTIONLESS
+    search_radius_m: Positive | None = None
+    # Coulomb friction coefficient [-] of the pair; 0: frictionless rows, the exact LCP
+    friction_coefficient: Annotated[float, Strict(), Ge(0.0)] = 0.0
+    # the contact nodes of both surfaces carry no mass (fe/mass_redistribution.py)
+    redistribute_mass: bool = False
+    # the normal rows' law (constraints.contact.ContactLaw): velocity (Moreau, beta recovery)
+    # or position (the gap at the end of the step, with the scenario's time.theta)
+    law: ContactLaw = ContactLaw.VELOCITY
+    # the velocity law's penetration recovery beta [-]: u_N+ >= beta max(0, -g) / h
+    # (None: contact.pairs.PENETRATION_RECOVERY); docs/studies.md "Material study" for when 0
+    penetration_recovery: Annotated[float, Strict(), Ge(0.0), Le(1.0)] | None = None
+
+    @model_serializer(mode="wrap")
+    def _dump(self, handler):
+        # options at their defaults dump as before the keys existed: study case keys and cache
+        # identities hash these dumps
+        data = handler(self)
+        if isinstance(data, dict):
+            for key, default in (
+                ("friction_coefficient", 0.0),
+                ("redistribute_mass", False),
+                ("law", ContactLaw.VELOCITY),
+                ("penetration_recovery", None),
+            ):
+                if key in data and data[key] == default:
+                    data.pop(key)
+        return data
+
+    @model_validator(mode="after")
+    def _check_friction(self) -> ContactConfig:
+        if self.friction_coefficient > 0.0 and self.kind is ContactKind.BONDED:
+            raise problem(
+                "a bonded contact locks all three components: friction_coefficient "
+                f"must be 0, got {self.friction_coefficient!r}",
+                "friction_coefficient",
+            )
+        if self.law is ContactLaw.POSITION and self.kind is ContactKind.BONDED:
+            raise problem('law = "position" is for frictionless contact, not bonded', "law")
+        if self.law is ContactLaw.POSITION and self.penetration_recovery is not None:
+            raise problem(
+                "penetration_recovery is the velocity law's: the position law holds "
+                "the end-of-step gap itself",
+                "penetration_recovery",
+            )
+        return self
+
+    @property
+    def slave_body(self) -> str:
+        return self.slave.split(".")[0]
+
+    @property
+    def slave_surface(self) -> str:
+        return self.slave.split(".")[1]
+
+    @property
+    def master_body(self) -> str:
+        return self.master.split(".")[0]
+
+    @property
+    def master_surface(self) -> str:
+        return self.master.split(".")[1]
+
+
+class ProbeConfig(Frozen):
+    name: Name
+    body: Name
+    node_set: SetName | None = None
+    point_m: Vec3 | None = None
+
+    @model_validator(mode="after")
+    def _check(self) -> ProbeConfig:
+        if (self.node_set is None) == (self.point_m is None):
+            raise problem("needs exactly one of node_set or point_m", "node_set")
+        return self
