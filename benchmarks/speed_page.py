@@ -14,6 +14,7 @@ from __future__ import annotations
 import datetime as _dt
 import os
 import platform
+import textwrap
 from importlib import metadata
 from pathlib import Path
 
@@ -111,7 +112,8 @@ def _header(res: dict, command: str) -> list[str]:
     if res["t_end_s"] < 2e-3:
         window = f"{res['t_end_s'] * 1e3:g} ms"
         text += f" `--quick`: {window} of simulation instead of 2 ms, a look, not the record."
-    return [text]
+    # wrapped as the hand-written pages are (a code span may break: Markdown reads a space)
+    return textwrap.wrap(text, 100, break_long_words=False, break_on_hyphens=False)
 
 
 def _ratios(res: dict) -> list[str]:
