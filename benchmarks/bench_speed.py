@@ -1,11 +1,14 @@
 """Speed of the seed case (issue 10): simulation walls, end-to-end commands, basis builds.
 
     python benchmarks/bench_speed.py [--quick] [--vs REV] [--main-job] [--scaling]
-                                     [--figure PNG] [--out benchmarks/results]
+                                     [--figure PNG] [--out benchmarks/results] [--write-docs]
 
 Every figure comes from a fresh Python process, as a user would see it (after one warm-up
 process that compiles the numba kernels, reported apart). Prints a table and writes
-speed_<commit>.json. Items:
+speed_<commit>.json (with the machine: CPU model, cores, memory, load average, versions).
+With --write-docs it also rewrites the "Current figures" block of docs/performance.md from
+this run (speed_page.py: ratios of walls measured side by side here, absolute times, the
+machine; no code version on the page). Items:
 
 - all-MVM seed run (both rods MVM, the scenario's selections), 2 ms: simulation wall, ms per
   step; full FE over the same 2 ms and the ratio of the two walls (same run, same machine);
@@ -13,7 +16,8 @@ speed_<commit>.json. Items:
 - `flexmvm run scenarios/rod_impact.toml --model mvm --no-fields` end to end, first run (empty
   setup cache) and second run;
 - one Craig-Bampton basis (b2, 1-3 + 43 modes) built cold (no disk cache);
-- --main-job: README command 1 after install (both runs, theory, files, figure);
+- --main-job: README command 1 after install (both runs, theory, files, figure), and the
+  walls of its shipped model and full-FE reference, run side by side (its summary.json);
 - --scaling: time per contact step against b2's retained nodes and modes, and a full-FE
   step against the mesh size;
 - --vs REV: the all-MVM, shipped-scenario and full-FE runs (over --vs-t-end, default 0.2 ms)
@@ -32,6 +36,10 @@ import sys
 import tempfile
 import time
 from pathlib import Path
+
+from speed_page import load_average, machine_facts, write_page
+
+from flexmvm.errors import InputError
 
 ROOT = Path(__file__).resolve().parents[1]
 SCENARIO = ROOT / "scenarios" / "rod_impact.toml"
@@ -261,9 +269,26 @@ def _warm(env: dict) -> None:
         _sim(model, 5e-6, env, TINY)
 
 
+def _main_job(tmp: Path) -> dict:
+    """README command 1 end to end, and the simulation walls of its two runs (the shipped
+    model and the full-FE reference, side by side in two processes) from its summary.json."""
+    out = tmp / "main"
+    wall = _command(
+        ["run", str(SCENARIO), "--out", str(out)], {"FLEXMVM_CACHE_DIR": str(tmp / "mc")}
+    )
+    summary = json.loads((out / "summary.json").read_text())
+    if "reference_full" not in summary:
+        raise SystemExit(f"bench_speed: {SCENARIO.name}'s main job ran no full-FE reference")
+    runs = {
+        "shipped_wall_s": summary["wall_time_s"],
+        "full_wall_s": summary["reference_full"]["wall_time_s"],
+    }
+    return {"main_job_s": wall, "main_job_runs": runs}
+
+
 def _print(res: dict) -> None:
     s = res["seed_runs"]
-    print(f"commit {res['commit']}, t_end {res['t_end_s'] * 1e3:g} ms, 2-core machine")
+    print(f"commit {res['commit']}, t_end {res['t_end_s'] * 1e3:g} ms, {res['machine']['cpu']}")
     print(f"{'quantity':58s} {'value':>12s}")
     for key, label in (
         ("all_mvm", "all-MVM seed run, simulation wall [s]"),
@@ -285,6 +310,12 @@ def _print(res: dict) -> None:
     ):
         if key in res:
             print(f"{label:58s} {res[key]:12.2f}")
+    if "main_job_runs" in res:
+        mj = res["main_job_runs"]
+        print(
+            f"  inside it, side by side: shipped model {mj['shipped_wall_s']:.2f} s, full-FE "
+            f"reference {mj['full_wall_s']:.2f} s"
+        )
     if "vs" in res:
         v = res["vs"]
         print(f"vs {v['old']['commit']} over {v['t_end_s'] * 1e3:g} ms (simulation walls):")
@@ -318,9 +349,15 @@ def main() -> None:
     ap.add_argument("--scaling", action="store_true")
     ap.add_argument("--out", type=Path, default=ROOT / "benchmarks" / "results")
     ap.add_argument("--figure", type=Path, help="scaling figure (PNG), with --scaling")
+    ap.add_argument(
+        "--write-docs",
+        action="store_true",
+        help="rewrite the Current figures block of docs/performance.md from this run",
+    )
     args = ap.parse_args()
     t_end = 4e-4 if args.quick else 2e-3
     res: dict = {"commit": _commit(), "t_end_s": t_end, "cpu_count": os.cpu_count()}
+    res["machine"] = machine_facts()
     with tempfile.TemporaryDirectory() as tmp_name:
         tmp = Path(tmp_name)
         cache = {"FLEXMVM_CACHE_DIR": str(tmp / "cache")}
@@ -334,14 +371,12 @@ def main() -> None:
         res.update(_commands(tmp))
         res.update(_child(_BASIS, [], {"FLEXMVM_NO_CACHE": "1"}))
         if args.main_job:
-            res["main_job_s"] = _command(
-                ["run", str(SCENARIO), "--out", str(tmp / "main")],
-                {"FLEXMVM_CACHE_DIR": str(tmp / "main_cache")},
-            )
+            res.update(_main_job(tmp))
         if args.scaling:
             res["scaling"] = _scaling(min(t_end, 4e-4), cache, tmp)
         if args.vs:
             res["vs"] = _vs(args.vs, args.vs_t_end, tmp)
+    res["machine"]["load_avg_end"] = load_average()
     _print(res)
     if args.figure and "scaling" in res:
         _figure(res["scaling"], args.figure)
@@ -350,6 +385,21 @@ def main() -> None:
     path = args.out / f"speed_{res['commit']}.json"
     path.write_text(json.dumps(res, indent=1))
     print(f"wrote {path}")
+    if args.write_docs:
+        _write_docs(res, args)
+
+
+def _write_docs(res: dict, args: argparse.Namespace) -> None:
+    """The Current figures block of docs/performance.md from ``res``; the command it names is
+    the one that made it (its flags that change the figures, not local paths)."""
+    flags = [f for f, on in (("--quick", args.quick), ("--main-job", args.main_job)) if on]
+    command = " ".join(["python benchmarks/bench_speed.py", *flags, "--write-docs"])
+    page = ROOT / "docs" / "performance.md"
+    try:
+        write_page(page, res, command)
+    except InputError as exc:
+        raise SystemExit(f"bench_speed: {exc}") from None
+    print(f"wrote {page}")
 
 
 if __name__ == "__main__":
