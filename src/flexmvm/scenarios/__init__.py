@@ -2,7 +2,8 @@
 error lines problems.py), reading
 files and dicts (load.py), building a System from a scenario (build.py, through the setup cache
 of setup.py), running it (run.py),
-comparing runs (compare.py) and the main job (main_job.py).
+comparing runs (compare.py) and the main job (main_job.py); a mechanism's tables made from Python
+(mechanism.py).
 
 ``load_scenario(path)`` reads and validates a file (docs/scenario_format.md) and returns a frozen
 :class:`Scenario`; every problem is one :class:`ScenarioError` line (file, key path, problem).
@@ -29,8 +30,11 @@ from flexmvm.scenarios.body_schema import (
     rigid,
 )
 from flexmvm.scenarios.damping_schema import DampingConfig
+from flexmvm.scenarios.drive_schema import DriveConfig, HistoryConfig, PathConfig, SpinUpConfig
 from flexmvm.scenarios.fields import ROD_FACET_SETS, ROD_NODE_SETS
+from flexmvm.scenarios.initial_motion import RigidMotionConfig
 from flexmvm.scenarios.load import load_scenario, scenario_from_dict
+from flexmvm.scenarios.load_schema import LoadConfig, LoadFrame, LoadType, SpringConfig, SpringType
 from flexmvm.scenarios.problems import ScenarioError
 from flexmvm.scenarios.schema import ContactConfig, JointConfig, ProbeConfig, Scenario, TimeConfig
 from flexmvm.scenarios.support_schema import SupportConfig, SupportType
@@ -44,19 +48,29 @@ __all__ = [
     "ContactConfig",
     "ContactKind",
     "DampingConfig",
+    "DriveConfig",
     "EndShape",
+    "HistoryConfig",
     "JointConfig",
     "JointType",
+    "LoadConfig",
+    "LoadFrame",
+    "LoadType",
     "MaterialSpec",
     "ModelConfig",
     "ModelKind",
+    "PathConfig",
     "Placement",
     "ProbeConfig",
     "RegionSpec",
+    "RigidMotionConfig",
     "RodConfig",
     "Rotation",
     "Scenario",
     "ScenarioError",
+    "SpinUpConfig",
+    "SpringConfig",
+    "SpringType",
     "SupportConfig",
     "SupportType",
     "TimeConfig",
