@@ -244,6 +244,9 @@ def test_mechanism_constructors_equal_the_file_tables():
         ],
     }
     assert fm.scenario_from_dict(made).model_dump() == fm.scenario_from_dict(as_dicts).model_dump()
+    bare = fm.scenario_from_dict({**made, "loads": [], "springs": []})
+    again = bare.with_tables(loads=made["loads"], springs=made["springs"])
+    assert again.model_dump() == fm.scenario_from_dict(as_dicts).model_dump()
     rows = [[0.0, 0.0], [0.1, 0.5]]
     assert (
         fm.drive(angle_rad=rows)
@@ -273,9 +276,18 @@ def test_mechanism_constructors_equal_the_file_tables():
         (lambda: fm.damping(alpha_per_s=1.0, modal_ratios=[0.1]), "needs exactly one of"),
         (lambda: fm.rigid_motion((0, 0, 1), about_joint="a", about_m=(0, 0, 0)), "give one of"),
         (lambda: fm.prescribed_path(), "give exactly one of displacement_m, velocity_mps"),
+        (lambda: fm.load_scenario(SHORT).with_tables(spring=[]), "(with spring): spring: unknown"),
+        (
+            lambda: fm.load_scenario(SHORT).with_tables(
+                loads=[fm.applied_load("motor", joint=0, torque_nm=1.0)]
+            ),
+            "(with loads): loads[0].joint: no joints[0] (0 joint(s))",
+        ),
     ],
 )
 def test_mechanism_constructors_refuse_in_one_line(make, words):
+    """Each bad table, and a bad table given to Scenario.with_tables, is one ScenarioError
+    line naming the call (or the copy) and the key."""
     with pytest.raises(fm.ScenarioError) as info:
         make()
     assert words in str(info.value) and "\n" not in str(info.value)

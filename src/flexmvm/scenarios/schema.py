@@ -15,7 +15,8 @@ The option enums are the code's own, shared with the stages that act on them: Mo
 
 A Scenario is changed by typed copies, each validated again: ``with_model(body, model)``,
 ``with_models(model)``, ``with_kind(kind)``, ``with_time(...)``, ``with_material(body, m)``,
-``with_rod(body, ...)``; body_schema's full, mvm, modal, rigid build the model blocks.
+``with_rod(body, ...)``, ``with_tables(**tables)``; body_schema's full, mvm, modal, rigid build
+the model blocks.
 """
 
 from __future__ import annotations
@@ -382,6 +383,13 @@ class Scenario(Frozen):
             f"bodies[{self.bodies.index(cfg)}].rod",
         )
         return self._replace_bodies(what, {body: {"rod": rod}})
+
+    def with_tables(self, **tables: Any) -> Scenario:
+        """A copy with the given top-level tables replaced (``joints``, ``supports``,
+        ``loads``, ``springs``, ``contacts``, ``probes``, ``gravity_mps2``, ...), each given as
+        a file gives it or as the tables ``fm.joint``, ``fm.clamp``, ``fm.spring``, ... make;
+        validated again as a whole."""
+        return self._copy(f"with {', '.join(tables)}", **tables)
 
     def with_overrides(
         self,
