@@ -61,15 +61,15 @@ class Loading:
 class StaticPath:
     """Converged equilibria: displacement (n_steps, 3n) [m], reaction (n_steps, m) [N] at the
     fixed DOFs (f_int - f_ext there), equivalent_plastic_strain (n_steps, n_points) [-],
-    residuals (per step, the relative free residual of every iteration), state (the last
-    step's PointState) and stress (n_points, 6) [Pa] of the last step."""
+    residuals (per step, the relative free residual of every iteration), stress (n_steps,
+    n_points, 6) [Pa] and state (the last step's PointState)."""
 
     displacement: np.ndarray
     reaction: np.ndarray
     equivalent_plastic_strain: np.ndarray
     residuals: tuple[tuple[float, ...], ...]
-    state: PointState
     stress: np.ndarray
+    state: PointState
 
 
 def _check(body: PlasticBody, loading: Loading) -> np.ndarray:
@@ -108,7 +108,7 @@ def solve_static(
     u = np.zeros(body.n_dof) if u0 is None else np.array(u0, dtype=float)
     resp = body.respond(u, state)
     scale = max(np.linalg.norm(resp.force), 1e-300)
-    out_u, out_r, out_a, out_res = [], [], [], []
+    out_u, out_r, out_a, out_res, out_s = [], [], [], [], []
     for k in range(loading.n_steps):
         f_ext = loading.force[k]
         residuals = []
@@ -139,6 +139,7 @@ def solve_static(
         out_r.append((resp.force - f_ext)[fixed])
         out_a.append(state.equivalent_plastic_strain)
         out_res.append(tuple(residuals))
+        out_s.append(resp.stress)
     return StaticPath(
-        np.array(out_u), np.array(out_r), np.array(out_a), tuple(out_res), state, resp.stress
+        np.array(out_u), np.array(out_r), np.array(out_a), tuple(out_res), np.array(out_s), state
     )
