@@ -99,47 +99,47 @@ class PlasticBody:
                 f"plastic body: u must have shape ({self.n_dof},) and the state "
                 f"{self.n_points} points, got {u.shape} and {state.n_points}"
             )
-        force, rows, cols, vals, stress, states, yielding = (
-            np.zeros(self.n_dof),
-            [],
-            [],
-            [],
-            [],
-            [],
-            [],
-        )
-        start = 0
+        parts, start = [], 0
         for block in self.blocks:
             for lo in range(0, len(block.nodes), _CHUNK):
                 cells = slice(lo, lo + _CHUNK)
-                ne, nqp = block.dx[cells].shape
-                pts = slice(start, start + ne * nqp)
-                start += ne * nqp
-                ids = (3 * block.nodes[cells][:, :, None] + np.arange(3)).reshape(ne, -1)
-                b = strain_matrices(block.grad[cells])
-                strain = np.einsum("eqIk,ek->eqI", b, u[ids]).reshape(-1, 6)
-                resp = radial_return(self.material, self.plastic, strain, _slice(state, pts))
-                dx = block.dx[cells]
-                sig = resp.stress.reshape(ne, nqp, 6)
-                np.add.at(force, ids, np.einsum("eqIk,eqI,eq->ek", b, sig, dx))
-                d = resp.tangent.reshape(ne, nqp, 6, 6) * dx[:, :, None, None]
-                k = np.zeros((ne, ids.shape[1], ids.shape[1]))
-                for q in range(nqp):
-                    k += np.swapaxes(b[:, q], 1, 2) @ (d[:, q] @ b[:, q])
-                p = ids.shape[1]
-                rows.append(np.repeat(ids, p, axis=1).ravel())
-                cols.append(np.tile(ids, (1, p)).ravel())
-                vals.append(k.ravel())
-                stress.append(resp.stress)
-                states.append(resp.state)
-                yielding.append(resp.yielding)
+                n_pts = block.dx[cells].size
+                pts = _slice(state, slice(start, start + n_pts))
+                parts.append(self._chunk(block, cells, u, pts))
+                start += n_pts
+        force, rows, cols = np.zeros(self.n_dof), [], []
+        for ids, f_e, _, _ in parts:  # cell blocks differ in nodes per cell: one by one
+            np.add.at(force, ids, f_e)
+            rows.append(np.repeat(ids, ids.shape[1], axis=1).ravel())
+            cols.append(np.tile(ids, (1, ids.shape[1])).ravel())
+        vals = np.concatenate([p[2].ravel() for p in parts])
         tangent = sp.csr_matrix(
-            (np.concatenate(vals), (np.concatenate(rows), np.concatenate(cols))),
-            shape=(self.n_dof, self.n_dof),
+            (vals, (np.concatenate(rows), np.concatenate(cols))), shape=(self.n_dof, self.n_dof)
         )
+        resp = [p[3] for p in parts]
         return BodyResponse(
-            force, tangent, np.vstack(stress), _concat(states), np.concatenate(yielding)
+            force,
+            tangent,
+            np.vstack([r.stress for r in resp]),
+            _concat([r.state for r in resp]),
+            np.concatenate([r.yielding for r in resp]),
         )
+
+    def _chunk(self, block: BlockPoints, cells: slice, u: np.ndarray, state: PointState):
+        """Element DOF ids (ne, 3 nloc), element forces (ne, 3 nloc) [N], element tangents
+        (ne, 3 nloc, 3 nloc) [N/m] and the PointResponse of the cells ``cells`` of a block."""
+        ne, nqp = block.dx[cells].shape
+        ids = (3 * block.nodes[cells][:, :, None] + np.arange(3)).reshape(ne, -1)
+        b = strain_matrices(block.grad[cells])
+        strain = np.einsum("eqIk,ek->eqI", b, u[ids]).reshape(-1, 6)
+        resp = radial_return(self.material, self.plastic, strain, state)
+        dx = block.dx[cells]
+        f_e = np.einsum("eqIk,eqI,eq->ek", b, resp.stress.reshape(ne, nqp, 6), dx)
+        d = resp.tangent.reshape(ne, nqp, 6, 6) * dx[:, :, None, None]
+        k_e = np.zeros((ne, ids.shape[1], ids.shape[1]))
+        for q in range(nqp):
+            k_e += np.swapaxes(b[:, q], 1, 2) @ (d[:, q] @ b[:, q])
+        return ids, f_e, k_e, resp
 
 
 def _slice(state: PointState, pts: slice) -> PointState:

@@ -19,9 +19,9 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-import scipy.sparse.linalg as spla
 
 from flexmvm.errors import InputError, SolverError
+from flexmvm.fe.solvers.superlu import factor
 from flexmvm.plasticity.body import PlasticBody
 from flexmvm.plasticity.return_mapping import PointState
 
@@ -92,6 +92,16 @@ def _check(body: PlasticBody, loading: Loading) -> np.ndarray:
     return free
 
 
+def _solve(k_ff, rhs: np.ndarray) -> np.ndarray:
+    """K_FF^-1 rhs: SuperLU with the symmetric ordering (the consistent tangent of J2 with
+    associative flow is symmetric and, with hardening, positive definite); the general LU
+    where diagonal pivots fail (a perfectly plastic tangent near its limit)."""
+    try:
+        return factor(k_ff, spd=True)(rhs)
+    except SolverError:
+        return factor(k_ff, spd=False)(rhs)
+
+
 def solve_static(
     body: PlasticBody,
     loading: Loading,
@@ -118,7 +128,7 @@ def solve_static(
             r = resp.force - f_ext
             k_t = resp.tangent.tocsc()
             rhs = -(r[free] + k_t[free][:, fixed] @ du[fixed])
-            du[free] = spla.spsolve(k_t[free][:, free], rhs)
+            du[free] = _solve(k_t[free][:, free], rhs)
             u = u + du
             du[:] = 0.0
             resp = body.respond(u, state)
@@ -132,7 +142,8 @@ def solve_static(
         if not residuals[-1] <= rtol:
             raise SolverError(
                 f"static Newton: step {k + 1} of {loading.n_steps} did not converge in "
-                f"{len(residuals)} iterations (relative residual {residuals[-1]:.3g} > {rtol:g})"
+                f"{len(residuals)} iterations (relative residuals "
+                f"{', '.join(f'{r:.2g}' for r in residuals[-4:])}; tolerance {rtol:g})"
             )
         state = resp.state
         out_u.append(u.copy())

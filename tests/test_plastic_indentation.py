@@ -1,0 +1,112 @@
+"""A rigid sphere pressed statically into a block (flexmvm.plasticity.indentation): the
+machinery of the active set and the plastic body.
+
+Default run (about 5 s): a quarter of a block (HEX27, 4 x 4 x 2 cells, symmetry planes
+x = 0 and y = 0 through the sphere's axis), pressed and released. Checked: no face node
+above the sphere (to 1e-9 of the depth, the active set's tolerance), no contact force
+pulling (every active node's force >= 0), the force growing with the depth; an elastic
+block springs back to zero displacement (to 1e-9 of the depth: round-off of the solves),
+a plastic one keeps a dent with no force on it.
+
+Validation run only (``pytest -m validation``, about 4 min on two loaded cores): the shipped
+gmsh block (scenarios/meshes/block_60x60x30.msh, tet10, 0.3 mm at the contact) of
+aluminium 6061-T6 (Y = 276 MPa, ASM Handbook vol. 2) under a sphere R = 60 mm, so that
+Hertz's contact radius at first yield (0.53 mm) spans about two elements. Yield starts
+where the elastic FE peak von Mises stress reaches Y: the Hertz peak pressure there is
+compared with Hertz's p0 = 1.65 Y (nu = 0.33; theory.hertz_yield) within 15 %, the mesh's
+accuracy measured in the same run (the FE peak von Mises stress of the elastic steps is
+~11 % above Hertz's); the first yielding point lies below the surface near the axis; the
+unloaded block keeps a dent.
+"""
+
+from __future__ import annotations
+
+import math
+from pathlib import Path
+
+import numpy as np
+import pytest
+from test_fe import box_hex
+
+from flexmvm.materials import ALUMINIUM, Material
+from flexmvm.plasticity import J2Plasticity, PlasticBody
+from flexmvm.plasticity.indentation import indent_with_sphere, sphere_surface
+from flexmvm.plasticity.return_mapping import von_mises
+from flexmvm.theory.hertz_yield import axis_von_mises, yield_onset
+
+STEEL = Material(E=200e9, nu=0.3, rho=7800.0, name="steel")
+
+
+def _quarter(plastic: J2Plasticity):
+    size = (0.01, 0.01, 0.005)
+    mesh = box_hex((4, 4, 2), size, order=2)
+    x = mesh.nodes
+    face = np.flatnonzero(np.isclose(x[:, 2], size[2]))
+    support = np.concatenate(
+        [
+            3 * np.flatnonzero(x[:, 0] == 0),
+            3 * np.flatnonzero(x[:, 1] == 0) + 1,
+            3 * np.flatnonzero(x[:, 2] == 0) + 2,
+        ]
+    )
+    return PlasticBody.build(mesh, STEEL, plastic), face, support, size[2]
+
+
+@pytest.mark.parametrize("yield_pa", [1e30, 250e6], ids=["elastic", "plastic"])
+def test_quarter_block_press_and_release(yield_pa):
+    body, face, support, top = _quarter(J2Plasticity(yield_pa, hardening_pa=1e9))
+    radius = 0.02
+    depths = np.array([2e-6, 4e-6, 8e-6, 0.0])
+    res = indent_with_sphere(body, face, support, radius, depths, z_top_m=top)
+    xy = body.mesh.nodes[face, :2]
+    for k, d in enumerate(depths):
+        target = sphere_surface(xy, d, radius, (0.0, 0.0), top) - top
+        uz = res.displacement[k, 3 * face + 2]
+        assert np.all(uz <= target + 1e-9 * depths.max())
+        assert np.all(res.contact_forces[k] >= 0.0)
+    assert 0 < res.force[0] < res.force[1] < res.force[2]
+    assert res.force[3] == 0.0 and len(res.contact_nodes[3]) == 0
+    dent = -res.displacement[3, 3 * face + 2].min()
+    if yield_pa > 1e20:
+        assert np.max(np.abs(res.displacement[3])) < 1e-9 * depths.max()
+    else:
+        assert res.equivalent_plastic_strain[2].max() > 0
+        assert 1e-3 * depths.max() < dent < depths.max()
+
+
+@pytest.mark.validation
+def test_gmsh_block_yield_onset_against_hertz():
+    from flexmvm.mesh.io import read_mesh
+
+    mesh = read_mesh(Path(__file__).resolve().parents[1] / "scenarios/meshes/block_60x60x30.msh")
+    y, radius, nu = 276e6, 0.06, ALUMINIUM.nu
+    e_star = ALUMINIUM.E / (1 - nu**2)
+    onset = yield_onset(y, e_star, radius, nu)
+    body = PlasticBody.build(mesh, ALUMINIUM, J2Plasticity(y))
+    bottom = mesh.node_set("bottom")
+    support = (3 * bottom[:, None] + np.arange(3)).ravel()
+    depths = onset.delta_m * np.array([0.5, 0.75, 1.25, 2.0, 0.0])
+    res = indent_with_sphere(body, mesh.node_set("top"), support, radius, depths)
+    plastic = res.equivalent_plastic_strain.max(axis=1) > 0
+    assert not plastic[:2].any() and plastic[2:4].all()
+    # the elastic steps: FE force and peak von Mises stress against Hertz at the FE force
+    k = 1
+    f = res.force[k]
+    p0 = (6 * f * e_star**2 / (math.pi**3 * radius**2)) ** (1 / 3)
+    peak_hertz = p0 * float(axis_von_mises(onset.depth_over_a, nu))
+    peak_fe = von_mises(res.stress[k]).max()
+    f_hertz = 4 / 3 * e_star * math.sqrt(radius) * depths[k] ** 1.5
+    assert f == pytest.approx(f_hertz, rel=0.06)
+    stress_error = peak_fe / peak_hertz - 1
+    assert abs(stress_error) < 0.15
+    # onset: the elastic FE peak stress scales as F^(1/3) (Hertz) and reaches Y at p0_on
+    p0_on = p0 * y / peak_fe
+    assert p0_on / y == pytest.approx(onset.p0_over_y, rel=0.15)
+    # the first yielding points: below the surface, near the axis
+    a = math.sqrt(radius * depths[2])
+    first = res.equivalent_plastic_strain[2] > 0
+    xp = body.point_coordinates()[first]
+    assert np.all(xp[:, 2] < -0.1 * a) and np.all(np.hypot(xp[:, 0], xp[:, 1]) < 1.5 * a)
+    # unloaded: no force, a dent
+    assert res.force[4] == 0.0
+    assert -res.displacement[4, 3 * mesh.node_set("top") + 2].min() > 0.01 * depths[3]
