@@ -110,3 +110,16 @@ def test_gmsh_block_yield_onset_against_hertz():
     # unloaded: no force, a dent
     assert res.force[4] == 0.0
     assert -res.displacement[4, 3 * mesh.node_set("top") + 2].min() > 0.01 * depths[3]
+
+
+def test_hertz_yield_onset_is_johnsons():
+    """Johnson (1985, sect. 6.2): von Mises yield first at p0 = 1.60 Y, 0.48 a below the
+    centre, for nu = 0.3 (his figures are given to two digits: tolerance 0.01)."""
+    onset = yield_onset(250e6, 100e9, 0.01, 0.3)
+    assert onset.p0_over_y == pytest.approx(1.60, abs=0.015)
+    assert onset.depth_over_a == pytest.approx(0.48, abs=0.01)
+    # the force and approach at onset satisfy Hertz: p0 = 3 F / (2 pi a^2), a^2 = R delta
+    assert 3 * onset.force_n / (2 * math.pi * onset.radius_m**2) == pytest.approx(
+        onset.p0_over_y * 250e6, rel=1e-12
+    )
+    assert onset.radius_m**2 == pytest.approx(0.01 * onset.delta_m, rel=1e-12)
