@@ -41,7 +41,8 @@ def refuse_dynamic(scenario) -> None:
     plastic = [b.name for b in scenario.bodies if plasticity_of(b) is not None]
     if plastic:
         raise InputError(
-            f"bodies {', '.join(repr(n) for n in plastic)}: material.plasticity is not "
+            f"{'body' if len(plastic) == 1 else 'bodies'} {', '.join(repr(n) for n in plastic)}: "
+            "material.plasticity is not "
             "supported by the dynamic run yet (static solves only: flexmvm.plasticity."
             "solve_static); remove the plasticity table to run the elastic model"
         )
