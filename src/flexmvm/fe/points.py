@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from flexmvm.fe.assembly import _block_basis, _shape_arrays
+from flexmvm.fe.assembly import block_basis, shape_arrays
 from flexmvm.mesh.mesh import CellType, Mesh
 
 
@@ -45,8 +45,8 @@ def integration_points(mesh: Mesh) -> tuple[BlockPoints, ...]:
     for block in mesh.cells:
         if len(block.connectivity) == 0:
             continue
-        basis, dof_to_node = _block_basis(mesh.nodes, block)
+        basis, dof_to_node = block_basis(mesh.nodes, block)
         nodes = dof_to_node[basis.element_dofs.T]
-        values, grad, dx = _shape_arrays(basis, slice(None))
+        values, grad, dx = shape_arrays(basis, slice(None))
         out.append(BlockPoints(block.cell_type, nodes, values, np.ascontiguousarray(grad), dx))
     return tuple(out)
