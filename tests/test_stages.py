@@ -18,6 +18,7 @@ STAGES = [
     "materials",
     "mesh",
     "fe",
+    "plasticity",
     "reduction",
     "bodies",
     "constraints",

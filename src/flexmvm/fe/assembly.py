@@ -173,7 +173,7 @@ def local_permutation(cell_type: CellType) -> np.ndarray:
     return perm
 
 
-def _block_basis(nodes: np.ndarray, block: CellBlock) -> tuple[skfem.CellBasis, np.ndarray]:
+def block_basis(nodes: np.ndarray, block: CellBlock) -> tuple[skfem.CellBasis, np.ndarray]:
     """skfem scalar basis of one block and its DOF -> node-id map, shape (n_skfem_dofs,).
 
     Raises MeshError if neighbouring cells disagree on a shared mid-edge/face node.
@@ -216,9 +216,7 @@ def _hrz_diagonal(basis: skfem.CellBasis, rho: float) -> np.ndarray:
     return diag * (rho * dx.sum(axis=1) / diag.sum(axis=0))
 
 
-def _shape_arrays(
-    basis: skfem.CellBasis, cells: slice
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def shape_arrays(basis: skfem.CellBasis, cells: slice) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Shape functions at the quadrature points of the cells ``cells``, from scikit-fem.
 
     Returns N (ne, nloc, nqp), grad N (ne, nloc, 3, nqp) [1/m] and dx = |det J| w (ne, nqp)
@@ -267,7 +265,7 @@ def _assemble_block(
     """
     n = len(nodes)
     lam, mu = material.lame
-    basis, dof_to_node = _block_basis(nodes, block)
+    basis, dof_to_node = block_basis(nodes, block)
     cell_nodes = dof_to_node[basis.element_dofs.T]  # (ne, nloc) our node ids
     m_sum, k_sum, volume = sp.csr_matrix((n, n)), sp.csr_matrix((3 * n, 3 * n)), 0.0
     if lumped:
@@ -276,7 +274,7 @@ def _assemble_block(
         m_sum = sp.csr_matrix((vals.ravel(), (ids, ids)), shape=(n, n))
     for start in range(0, len(cell_nodes), _CHUNK):
         sub = slice(start, start + _CHUNK)
-        nval, grad, dx = _shape_arrays(basis, sub)
+        nval, grad, dx = shape_arrays(basis, sub)
         volume += float(dx.sum())
         if not lumped:
             m_sum = m_sum + _scatter(_element_mass(nval, dx, material.rho), cell_nodes[sub], n)
@@ -318,4 +316,4 @@ def assemble(mesh: Mesh, material: Material, lumped: bool = False) -> FEModel:
     )
 
 
-__all__ = ["FEModel", "assemble", "local_permutation"]
+__all__ = ["FEModel", "assemble", "block_basis", "local_permutation", "shape_arrays"]

@@ -45,6 +45,7 @@ from flexmvm.scenarios.fields import (
     check_rod_set,
 )
 from flexmvm.scenarios.initial_motion import RigidMotionConfig
+from flexmvm.scenarios.plasticity_schema import PlasticitySpec
 from flexmvm.scenarios.problems import problem, validate_part
 from flexmvm.scenarios.stiffening_schema import StiffeningKey
 
@@ -62,6 +63,16 @@ class MaterialSpec(Frozen):
     nu: Num
     rho_kg_m3: Num
     name: Name | None = None
+    # J2 plasticity (scenarios/plasticity_schema.py); None: linear elastic
+    plasticity: PlasticitySpec | None = None
+
+    @model_serializer(mode="wrap")
+    def _dump(self, handler):
+        # an elastic material dumps as before the key existed (cache and study keys hash it)
+        data = handler(self)
+        if isinstance(data, dict) and data.get("plasticity", 0) is None:
+            data.pop("plasticity")
+        return data
 
     @model_validator(mode="after")
     def _check(self) -> MaterialSpec:

@@ -50,6 +50,7 @@ from flexmvm.scenarios.mesh_lookup import (
     nearest_node,
     retained_nodes,
 )
+from flexmvm.scenarios.plasticity_schema import refuse_dynamic
 from flexmvm.scenarios.sag import quasi_static_sag
 from flexmvm.scenarios.setup import SetupCache, default_setup
 from flexmvm.scenarios.solver_choice import with_elimination_order
@@ -179,6 +180,7 @@ def _node_set_point(
 def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
     """Meshes, FE models, bases, bodies, joints, contacts and probes of a Scenario, built
     through ``setup`` (default: the process-wide default_setup())."""
+    refuse_dynamic(sc)
     setup = default_setup() if setup is None else setup
     bodies, infos, states = [], [], []
     for cfg in sc.bodies:
