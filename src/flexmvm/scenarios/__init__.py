@@ -22,15 +22,11 @@ from flexmvm.scenarios.body_schema import (
     RegionSpec,
     RodConfig,
     Rotation,
-    full,
-    interface,
-    modal,
-    mvm,
-    rigid,
 )
 from flexmvm.scenarios.damping_schema import DampingConfig
 from flexmvm.scenarios.fields import ROD_FACET_SETS, ROD_NODE_SETS
 from flexmvm.scenarios.load import load_scenario, scenario_from_dict
+from flexmvm.scenarios.model_constructors import full, interface, modal, mvm, rigid
 from flexmvm.scenarios.problems import ScenarioError
 from flexmvm.scenarios.schema import ContactConfig, JointConfig, ProbeConfig, Scenario, TimeConfig
 from flexmvm.scenarios.support_schema import SupportConfig, SupportType
