@@ -119,7 +119,7 @@ class _SkfemCell:
 
 
 #: Cells per chunk of element matrices (a HEX27 stiffness is 81 x 81 doubles = 52 kB).
-_CHUNK = 1024
+ELEMENT_CHUNK = 1024
 
 _SKFEM: dict[CellType, _SkfemCell] = {
     CellType.HEX8: _SkfemCell(skfem.MeshHex1, skfem.MeshHex1, skfem.ElementHex1, 3),
@@ -248,7 +248,7 @@ def _element_stiffness(g: np.ndarray, dx: np.ndarray, lam: float, mu: float) -> 
     return k.reshape(ne, 3 * nloc, 3 * nloc)
 
 
-def _scatter(blocks: np.ndarray, ids: np.ndarray, n: int) -> sp.csr_matrix:
+def scatter(blocks: np.ndarray, ids: np.ndarray, n: int) -> sp.csr_matrix:
     """Sum element matrices blocks (ne, p, p) with global ids (ne, p) into an (n, n) csr."""
     p = ids.shape[1]
     rows = np.repeat(ids, p, axis=1).ravel()
@@ -261,7 +261,7 @@ def _assemble_block(
 ) -> tuple[sp.csr_matrix, sp.csr_matrix, float]:
     """Scalar mass (n x n), stiffness (3n x 3n) and volume of one cell block.
 
-    Cells are processed in chunks of _CHUNK so element matrices never fill memory.
+    Cells are processed in chunks of ELEMENT_CHUNK so element matrices never fill memory.
     """
     n = len(nodes)
     lam, mu = material.lame
@@ -272,14 +272,14 @@ def _assemble_block(
         vals = _hrz_diagonal(basis, material.rho)
         ids = cell_nodes.T.ravel()
         m_sum = sp.csr_matrix((vals.ravel(), (ids, ids)), shape=(n, n))
-    for start in range(0, len(cell_nodes), _CHUNK):
-        sub = slice(start, start + _CHUNK)
+    for start in range(0, len(cell_nodes), ELEMENT_CHUNK):
+        sub = slice(start, start + ELEMENT_CHUNK)
         nval, grad, dx = shape_arrays(basis, sub)
         volume += float(dx.sum())
         if not lumped:
-            m_sum = m_sum + _scatter(_element_mass(nval, dx, material.rho), cell_nodes[sub], n)
+            m_sum = m_sum + scatter(_element_mass(nval, dx, material.rho), cell_nodes[sub], n)
         vec_ids = (3 * cell_nodes[sub][:, :, None] + np.arange(3)).reshape(len(dx), -1)
-        k_sum = k_sum + _scatter(_element_stiffness(grad, dx, lam, mu), vec_ids, 3 * n)
+        k_sum = k_sum + scatter(_element_stiffness(grad, dx, lam, mu), vec_ids, 3 * n)
     return m_sum, k_sum, volume
 
 
