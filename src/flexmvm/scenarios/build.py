@@ -24,6 +24,7 @@ from flexmvm.constraints.joints import (
     ground_joint,
     revolute_joint,
 )
+from flexmvm.constraints.prismatic import prismatic_joint
 from flexmvm.contact.geometry import MasterSurface
 from flexmvm.contact.pairs import PointToSurfaceContact
 from flexmvm.errors import InputError, MeshError
@@ -251,9 +252,14 @@ def _joint(j, where, bodies, infos, index, states):
     if t is JointType.PRESCRIBED:
         x0 = p1.position(bodies, states)
         return [PrescribedMotion(p1, tuple(x0), tuple(j.velocity_mps))]
+    if t is JointType.PRISMATIC:
+        return prismatic_joint(p1, j.ground_m, j.axis, bodies, states)
     if j.body2 is not None:
         b2 = index[j.body2]
-        p2 = body_point(b2, bodies[b2], infos[b2].mesh, j.point2_m, f"{where}.point2_m")
+        at = j.point2_m
+        if at is None:  # body2's point where the node set's centroid is at t = 0
+            at = states[b2].A.T @ (p1.position(bodies, states) - states[b2].r)
+        p2 = body_point(b2, bodies[b2], infos[b2].mesh, at, f"{where}.point2_m")
     elif j.ground_m is not None:
         p2 = np.asarray(j.ground_m, float)
     else:  # a node set's centroid, held where it starts (schema.JointConfig)
