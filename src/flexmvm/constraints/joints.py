@@ -156,12 +156,17 @@ def _anchor_position(a: Anchor, bodies, states) -> np.ndarray:
 
 
 class Joint:
-    """Base: n_rows rows; evaluate(bodies, states, t) -> (phi, Rows)."""
+    """Base: n_rows rows; evaluate(bodies, states, t) -> (phi, Rows); time_rate: the explicit
+    time derivative d phi / d t at fixed configuration (zero but for prescribed motions), so
+    that d phi / d t = Phi_v v + time_rate along a motion."""
 
     n_rows: int = 0
 
     def evaluate(self, bodies, states, t: float) -> tuple[np.ndarray, Rows]:
         raise NotImplementedError
+
+    def time_rate(self, bodies, states, t: float) -> np.ndarray:
+        return np.zeros(self.n_rows)
 
 
 @dataclass(frozen=True)
@@ -222,6 +227,9 @@ class PrescribedMotion(Joint):
         for i, e in enumerate(np.eye(3)):
             self.p1.add_row(rows, i, e, 1.0, bodies, states)
         return phi, rows
+
+    def time_rate(self, bodies, states, t):
+        return -np.asarray(self.velocity, float)
 
 
 @dataclass(frozen=True)

@@ -19,6 +19,7 @@ from dataclasses import dataclass
 import numpy as np
 from threadpoolctl import threadpool_limits
 
+from flexmvm.constraints.drives import drive_torques
 from flexmvm.errors import InputError, SimulationFailed, SolverError
 from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
 from flexmvm.integrate.run_result import FrictionSummary, RunResult, StepHistory, TimeGrid
@@ -82,6 +83,7 @@ class _Recorder:
     def result(self, **extra) -> RunResult:
         R = self.rows
         nb = self.shape[0]
+        jforce = np.array([r["jforce"] for r in R]).reshape(len(R), self.n_joint_rows)
         return RunResult(
             t=np.array([r["t"] for r in R]),
             body_names=[b.name for b in self.system.bodies],
@@ -91,7 +93,8 @@ class _Recorder:
             probe_x=np.array([r["px"] for r in R]),
             probe_v=np.array([r["pv"] for r in R]),
             contact_force=np.array([r["force"] for r in R]),
-            joint_force=np.array([r["jforce"] for r in R]).reshape(len(R), self.n_joint_rows),
+            joint_force=jforce,
+            drive_torque=drive_torques(self.system.joints, jforce),
             kinetic=np.array([r["kin"] for r in R]),
             strain=np.array([r["strain"] for r in R]),
             potential=np.array([r["pot"] for r in R]),

@@ -155,6 +155,9 @@ class RunResult:
     step_cuts: int = 0  # steps retried as two halves (driver.MAX_STEP_CUTS deep)
     smallest_step_s: float = 0.0  # the smallest step taken [s] (below dt_s only after cuts)
     failure: str | None = None  # a run that stopped early: why (the histories end there)
+    # per driven joint (constraints.drives, by name): its drive torque on body 1 about the
+    # axis [N m] at the output times (its joint_force column: impulse over the output interval)
+    drive_torque: dict[str, np.ndarray] = field(default_factory=dict)
 
     @property
     def total_energy(self) -> np.ndarray:

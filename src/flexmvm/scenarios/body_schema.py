@@ -42,6 +42,7 @@ from flexmvm.scenarios.fields import (
     Velocity,
     check_rod_set,
 )
+from flexmvm.scenarios.initial_motion import RigidMotionConfig
 from flexmvm.scenarios.problems import problem, validate_part
 
 _SELECTION_RE = re.compile(r"^(\d+)-(\d+)$")
@@ -287,6 +288,15 @@ class Placement(Frozen):
     angular_velocity_radps: AngularVelocity = ZERO3
     # start in the quasi-static sag on the body's joints under gravity (at rest; scenarios/sag.py)
     sagged: Annotated[bool, Strict()] = False
+    # the initial motion about a point instead (scenarios/initial_motion.py)
+    rigid_motion: RigidMotionConfig | None = None
+
+    @model_validator(mode="after")
+    def _one_motion(self) -> Placement:
+        given = {"velocity_mps", "angular_velocity_radps"} & self.model_fields_set
+        if self.rigid_motion is not None and given:
+            raise problem(f"give the motion by rigid_motion or by {min(given)}, not both")
+        return self
 
     def to_global(self, point_m: tuple[float, float, float]) -> np.ndarray:
         """Initial global position (3,) of a body-local point [m]."""

@@ -18,11 +18,9 @@ from flexmvm.constraints.joints import (
     DistanceJoint,
     JointType,
     NodeSetPoint,
-    PrescribedMotion,
     SphericalJoint,
     fixed_joint,
     ground_joint,
-    revolute_joint,
 )
 from flexmvm.constraints.prismatic import prismatic_joint
 from flexmvm.contact.geometry import MasterSurface
@@ -38,6 +36,13 @@ from flexmvm.reduction.interface import Patch, contact_patch, patch_nodes
 from flexmvm.scenarios.body_reference import reference_label
 from flexmvm.scenarios.cache_keys import ContactMass, mesh_key
 from flexmvm.scenarios.cost import check_cost, reduced_cost
+from flexmvm.scenarios.drive_build import (
+    joint_label,
+    joint_name,
+    prescribed_joints,
+    revolute_joints,
+)
+from flexmvm.scenarios.initial_motion import check_joint_velocities, with_rigid_motions
 from flexmvm.scenarios.mesh_lookup import (
     body_point,
     contact_nodes,
@@ -183,9 +188,9 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
     contacts = tuple(
         _contact(c, k, bodies, infos, index, grid.theta_rule()) for k, c in enumerate(sc.contacts)
     )
-    joints = []
-    for k, j in enumerate(sc.joints):
-        joints.extend(_joint(j, f"joints[{k}]", bodies, infos, index, states))
+    groups = [_joint(j, k, bodies, infos, index, states) for k, j in enumerate(sc.joints)]
+    joints = [joint for group in groups for joint in group]
+    states = with_rigid_motions(sc, bodies, states, groups)
     probes = [_probe(p, f"probes[{k}]", infos, index) for k, p in enumerate(sc.probes)]
     grid.ticks()
     grid.contact_output_ticks()
@@ -194,6 +199,8 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
     for k, cfg in enumerate(sc.bodies):  # joint lengths stay those of the undeformed placement
         if cfg.placement.sagged:
             states[k] = quasi_static_sag(system, states, k, f"bodies[{cfg.name}].placement")
+    labels = [joint_label(j, k) for k, j in enumerate(sc.joints)]
+    check_joint_velocities(system.bodies, states, groups, labels)
     return BuiltScenario(system, states, probes, grid, infos)
 
 
@@ -240,7 +247,8 @@ def _probe(p, where, infos, index) -> Probe:
     return Probe(p.name, b, nearest_node(mesh, p.point_m, f"{where}.point_m", tol))
 
 
-def _joint(j, where, bodies, infos, index, states):
+def _joint(j, k, bodies, infos, index, states):
+    where, name = f"joints[{k}]", joint_name(j, k)
     b = index[j.body]
     t = j.type
     if t is JointType.GROUND:
@@ -250,8 +258,7 @@ def _joint(j, where, bodies, infos, index, states):
     else:
         p1 = body_point(b, bodies[b], infos[b].mesh, j.point_m, f"{where}.point_m")
     if t is JointType.PRESCRIBED:
-        x0 = p1.position(bodies, states)
-        return [PrescribedMotion(p1, tuple(x0), tuple(j.velocity_mps))]
+        return prescribed_joints(j, name, p1, bodies, states)
     if t is JointType.PRISMATIC:
         return prismatic_joint(p1, j.ground_m, j.axis, bodies, states)
     if j.body2 is not None:
@@ -272,5 +279,5 @@ def _joint(j, where, bodies, infos, index, states):
     if t is JointType.SPHERICAL:
         return [SphericalJoint(p1, p2)]
     if t is JointType.REVOLUTE:
-        return revolute_joint(p1, p2, j.axis, states)
+        return revolute_joints(j, name, p1, p2, states)
     return fixed_joint(p1, p2, states)

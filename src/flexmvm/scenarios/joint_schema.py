@@ -9,6 +9,7 @@ import math
 from pydantic import model_validator
 
 from flexmvm.constraints.joints import JointType
+from flexmvm.scenarios.drive_schema import DriveConfig, PathConfig
 from flexmvm.scenarios.fields import Frozen, Name, Positive, SetName, Vec3, Velocity
 from flexmvm.scenarios.problems import problem
 
@@ -21,6 +22,8 @@ _JOINT_FIELDS = (
     "axis",
     "length_m",
     "velocity_mps",
+    "drive",
+    "path",
 )
 # joints whose body point may be a node set's centroid (constraints.joints.NodeSetPoint)
 _NODE_SET_JOINTS = (JointType.SPHERICAL, JointType.REVOLUTE, JointType.FIXED, JointType.PRISMATIC)
@@ -30,7 +33,12 @@ class JointConfig(Frozen):
     """A joint; points are body-local (the nearest node is used), ``ground_m`` is global.
     ``node_set`` instead of ``point_m`` (spherical, revolute, fixed joints): the joint holds
     the centroid of that node set of ``body`` (a pin in a hole: the hole face's nodes); to the
-    ground, ``ground_m`` may then be left out: the centroid is held where it is at t = 0."""
+    ground, ``ground_m`` may then be left out: the centroid is held where it is at t = 0.
+    ``drive`` (revolute; prescribed with ``axis``) and ``path`` (prescribed, instead of
+    ``velocity_mps``): scenarios/drive_schema.py; ``name`` names the joint in outputs and
+    errors (its drive torque) and in a body's ``rigid_motion.about_joint``."""
+
+    name: Name | None = None
 
     type: JointType
     body: Name
@@ -42,6 +50,8 @@ class JointConfig(Frozen):
     axis: Vec3 | None = None
     length_m: Positive | None = None
     velocity_mps: Velocity | None = None
+    drive: DriveConfig | None = None
+    path: PathConfig | None = None
 
     @model_validator(mode="after")
     def _check(self) -> JointConfig:
@@ -49,13 +59,14 @@ class JointConfig(Frozen):
         need: set[str] = set()
         allowed: set[str] = set()
         if t is JointType.PRESCRIBED:
-            need = allowed = {"point_m", "velocity_mps"}
+            need, allowed = _prescribed_keys(self)
         elif t is JointType.PRISMATIC:  # to the ground; ground_m: a point of the guide line
             need, allowed = {"point_m", "axis"}, {"point_m", "axis", "ground_m"}
         elif t is not JointType.GROUND:
             other = {"body2", "point2_m"} if self.body2 is not None else {"ground_m"}
             need = {"point_m"} | other | ({"axis"} if t is JointType.REVOLUTE else set())
             allowed = need | ({"length_m"} if t is JointType.DISTANCE else set())
+            allowed |= {"drive"} if t is JointType.REVOLUTE else set()
         if self.node_set is not None and t not in _NODE_SET_JOINTS:
             raise problem(
                 f"not used by a {t.value!r} joint (a node set's centroid is held by "
@@ -83,6 +94,17 @@ class JointConfig(Frozen):
         if self.axis is not None and math.hypot(*self.axis) == 0.0:
             raise problem(f"must be non-zero, got {list(self.axis)}", "axis")
         return self
+
+
+def _prescribed_keys(j: JointConfig) -> tuple[set[str], set[str]]:
+    """(needed, allowed) keys of a prescribed joint: a point on a constant velocity or on a
+    path; with ``axis`` and ``drive`` its body's frame turned about the axis too."""
+    if j.velocity_mps is not None and j.path is not None:
+        raise problem("give one of velocity_mps (constant) and path (a table), not both", "path")
+    need = {"point_m", "path" if j.path is not None else "velocity_mps"}
+    if j.axis is not None or j.drive is not None:
+        need |= {"axis", "drive"}
+    return need, set(need)
 
 
 __all__ = ["JointConfig"]

@@ -61,6 +61,7 @@ from flexmvm.scenarios.fields import (
     Vec3,
     check_rod_set,
 )
+from flexmvm.scenarios.initial_motion import check_motion_names
 from flexmvm.scenarios.joint_schema import JointConfig
 from flexmvm.scenarios.problems import ScenarioError, format_error, problem, validate_part
 
@@ -305,6 +306,7 @@ class Scenario(Frozen):
                     raise problem(f"must differ from body {j.body!r}", f"joints[{i}].body2")
             if j.type is JointType.DISTANCE and j.length_m is None:
                 _check_string_length(j, bodies, f"joints[{i}]")
+        check_motion_names(self.joints, self.bodies)
         for i, p in enumerate(self.probes):
             _known_body(bodies, p.body, f"probes[{i}].body")
             if p.node_set is not None and bodies[p.body].rod is not None:
