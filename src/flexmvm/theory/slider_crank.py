@@ -114,4 +114,16 @@ class SliderCrank:
         return np.sin(k * math.pi / 2) @ sol.y[:modes]
 
 
-__all__ = ["SliderCrank"]
+def chord_deflection(pin_a, mid, pin_b) -> np.ndarray:
+    """The signed distance [m] of the point ``mid`` from the line through ``pin_a`` and
+    ``pin_b``, in the (x, y) plane of motion, along n = z x (pin_b - pin_a) / |...|, minus its
+    value at the first sample: the mid-span deflection of a rod from three of its points'
+    histories (each (n, 3), global; the rigid offset of points off the axis removed)."""
+    a, m, b = (np.asarray(x, float)[:, :2] for x in (pin_a, mid, pin_b))
+    chord = b - a
+    n = np.stack([-chord[:, 1], chord[:, 0]], axis=1) / np.linalg.norm(chord, axis=1)[:, None]
+    d = np.einsum("ij,ij->i", m - a, n)
+    return d - d[0]
+
+
+__all__ = ["SliderCrank", "chord_deflection"]
