@@ -162,3 +162,36 @@ def test_flexible_rod_deflection_short(coarse_runs):
     run_m, w_m = coarse_runs["mvm"]
     assert ncc(t, w, run_m.t, w_m) >= 0.999
     assert w_m.max() == pytest.approx(w.max(), rel=1e-2)
+
+
+@pytest.mark.parametrize(
+    ("edit", "expected"),
+    [
+        ({"axis": None}, "axis: required by a 'prismatic' joint"),
+        ({"body2": "crank"}, "body2: not used by a 'prismatic' joint"),
+        ({"axis": [0.0, 0.0, 0.0]}, "axis: must be non-zero"),
+    ],
+)
+def test_prismatic_joint_keys_are_checked(edit, expected):
+    """A prismatic joint without axis, with a body2 (it slides on the ground only) or with a
+    zero axis: one line naming the key (no run: the schema alone; < 1 s)."""
+    d = _data(1e-3, 1e-4, {})
+    joint = d["joints"][3]
+    assert joint["type"] == "prismatic"
+    for key, value in edit.items():
+        if value is None:
+            joint.pop(key)
+        else:
+            joint[key] = value
+    with pytest.raises(fm.ScenarioError) as info:
+        fm.scenario_from_dict(d)
+    assert expected in str(info.value) and "\n" not in str(info.value)
+
+
+def test_prismatic_point_off_its_line_is_an_error():
+    """ground_m given off the slider point's guide line: one InputError line saying by how
+    much (the rigid mechanism is built, not run; a few seconds)."""
+    d = _data(1e-3, 1e-4, {"kind": "rigid"})
+    d["joints"][3]["ground_m"] = [0.0, 1.0e-3, 0.0]
+    with pytest.raises(fm.InputError, match=r"starts 0\.001 m off its guide line"):
+        fm.run(fm.scenario_from_dict(d))
