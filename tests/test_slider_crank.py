@@ -7,7 +7,7 @@ The crank turns at a constant 150 rad/s on its driven revolute joint (constraint
 rod is steel, 300 x 8 x 8 mm, the slider 75.5 g (Simeon 1996).
 
 Measured duration on the shared 2-core machine (load 15-20): see each test's docstring; the
-whole file ~3.5 min there (about 40 s of CPU).
+whole file 66 s at load ~10 (17 s of CPU).
 """
 
 from __future__ import annotations
