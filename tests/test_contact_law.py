@@ -16,6 +16,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 from _recording import simulate_recording
+from _short_case import short_run
 
 from flexmvm.constraints.contact import ContactLaw
 from flexmvm.contact.pairs import PointToSurfaceContact
@@ -169,15 +170,14 @@ def test_mvm_contact_coordinates_massless_at_the_midpoint_rule():
     position law and redistribution: b2's 25 retained face nodes are massless coordinates (their
     constraint modes split, reduction/basis.py) held in equilibrium at the step ends like b1's
     cap nodes; rates below 1 m/s (5 x the impact speed) and the energy error below 1e-4 over
-    0.2 ms (measured 5e-6 to 0.25 ms at h = 0.5 us; before the split b2's face coordinates
-    kept the interior mass their constraint modes drag and rang 2.4 x more: docs/contact_law.md)."""
-    data = load_scenario(SHORT_SEED).model_dump(mode="json")
-    data["contacts"][0].update(law="position", redistribute_mass=True)
-    sc = scenario_from_dict(data).with_time(theta=0.5, dt_s=0.5e-6, t_end_s=2e-4)
-    built = build_scenario(sc)
+    0.25 ms (measured 5e-6 to 0.25 ms at h = 0.5 us; before the split b2's face coordinates
+    kept the interior mass their constraint modes drag and rang 2.4 x more: docs/contact_law.md).
+    The run is the 0.25 ms one tests/_short_case.py shares with test_contact_ringing."""
+    shared, _ = short_run("midpoint")
+    built, run = shared.built, shared.result
+    assert built.grid.theta == 0.5 and built.grid.dt_s == 0.5e-6 and run.t[-1] >= 2e-4
     b2 = built.system.bodies[1]
     assert MasslessCoordinates.of(b2).s.tolist() == list(range(75))
-    run = driver.simulate(built.system, built.states, built.grid, built.probes)
     assert _energy_error(run) < 1e-4
     for b, body in enumerate(built.system.bodies):
         ml = MasslessCoordinates.of(body)
