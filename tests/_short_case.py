@@ -55,7 +55,8 @@ def scenario(scheme: str = "scenario", dt_s: float | None = None):
 def short_run(
     scheme: str = "scenario", dt_s: float | None = None
 ) -> tuple[ScenarioRun, SlaveNodeTrace]:
-    """The run (as run_scenario returns it) and its slave-node trace, once per process."""
+    """The run (as run_scenario returns it, without its guard and energy warnings, which no
+    reader of these runs checks) and its slave-node trace, once per process."""
     built = build_scenario(scenario(scheme, dt_s))
     prov = built.system.contacts[0]
     nodes = ContactNodes(built.system.bodies[prov.slave], prov.slave_nodes)
