@@ -16,55 +16,29 @@ Three schemes of the same models (b1 full FE, b2 Craig-Bampton 1-3 + 37), h = 0.
 from __future__ import annotations
 
 import functools
-from pathlib import Path
 
 import numpy as np
-from _recording import simulate_recording
+from _short_case import short_run
 
-from flexmvm.contact.nodes import ContactNodes
-from flexmvm.scenarios import load_scenario
-from flexmvm.scenarios.build import build_scenario
-from flexmvm.studies.grid import seed_scheme
-
-SHORT = Path(__file__).parents[1] / "scenarios" / "rod_impact_short.toml"
 V0 = 0.21
 
 
 @functools.cache
 def _ring(scheme: str) -> tuple[float, float, float]:
-    """(v_m ring, v+ ring, theta) of the short case on ``scheme``."""
-    sc = load_scenario(SHORT)
-    if scheme == "midpoint":
-        sc = sc.with_time(theta=0.5)
-    elif scheme == "damped":
-        sc = seed_scheme(sc, "b2")
-    built = build_scenario(sc)
-    prov = built.system.contacts[0]
-    nodes = ContactNodes(built.system.bodies[prov.slave], prov.slave_nodes)
-    x, v, force, touched = [], [], [], set()
-
-    def record(t, states, h, res):
-        nodes.update(res.states[prov.slave])
-        x.append(nodes.x[:, 0].copy())
-        v.append(nodes.xd[:, 0].copy())
-        lam = res.contact_impulses
-        force.append(float(res.contact.normal_impulse(lam)) / h)
-        last = prov._last[0]  # (slave index, master facet nodes, weights, normal)
-        if last is not None and lam.size:
-            touched.update(int(p) for p in last[0][np.nonzero(lam[: len(last[0])] > 0)[0]])
-
-    simulate_recording(built, record)
-    h = built.grid.dt_s
-    on = np.nonzero(np.array(force) > 0)[0]
+    """(v_m ring, v+ ring, theta) of the short case on ``scheme`` (the shared run,
+    tests/_short_case.py)."""
+    run, trace = short_run(scheme)
+    h = run.built.grid.dt_s
+    on = np.nonzero(trace.force > 0)[0]
     ks = np.arange(max(on[0], 1), on[-1])  # the contact interval's steps, all at dt_s
-    cols = sorted(touched)
-    X, U = np.array(x)[:, cols], np.array(v)[:, cols]
-    Vm = np.vstack([np.full((1, len(cols)), np.nan), np.diff(X, axis=0) / h])
+    assert np.all(trace.h[ks[0] - 1 : ks[-1] + 2] == h)
+    X, U = trace.x, trace.v
+    Vm = np.vstack([np.full((1, X.shape[1]), np.nan), np.diff(X, axis=0) / h])
 
     def ring(W):
         return float(np.nanmean(np.abs(W[ks + 1] - 2 * W[ks] + W[ks - 1])) / V0)
 
-    return ring(Vm), ring(U), built.grid.theta
+    return ring(Vm), ring(U), run.built.grid.theta
 
 
 def test_contact_nodes_ring_no_more_than_on_the_damped_scheme():

@@ -222,13 +222,13 @@ def test_matches_scikit_fem_assembly(order):
 def test_stiffness_symmetric_and_element_kernel_symmetric(case):
     """K is exactly symmetric (symmetrised) and the raw element kernel is symmetric to
     round-off (rel 1e-13) before that, so symmetrising hides no modelling error."""
-    from flexmvm.fe.assembly import _block_basis, _element_stiffness, _shape_arrays
+    from flexmvm.fe.assembly import _element_stiffness, block_basis, shape_arrays
 
     _, fe = case
     assert abs(fe.K - fe.K.T).max() == 0.0
     block = fe.mesh.cells[0]
-    basis, _ = _block_basis(fe.mesh.nodes, block)
-    _, grad, dx = _shape_arrays(basis, slice(0, 4))
+    basis, _ = block_basis(fe.mesh.nodes, block)
+    _, grad, dx = shape_arrays(basis, slice(0, 4))
     ke = _element_stiffness(grad, dx, *STEEL.lame)
     assert np.max(np.abs(ke - np.swapaxes(ke, 1, 2))) <= 1e-13 * np.max(np.abs(ke))
 

@@ -6,8 +6,9 @@
    37 modes) against its full FE.
 2. An `mvm-seed` (seed eq. 4) body, a `modal` body and a `rigid` body in contact, on the same
    short rods (striker: the scenario's b1 mvm model, 3-5 + 40 modes, to keep them cheap).
-3. Contact with gravity and joints together: scenarios/pendulum_release.toml started 20 us
-   before impact.
+(Contact with gravity and joints together, scenarios/pendulum_release.toml started just
+before the impact, is checked on the short event that tests/test_pendulum.py runs for its
+other checks: test_short_pendulum_impact_with_gravity_and_strings.)
 
 Tolerances come from the short case's measured convergence (docs/validation.md, "Short seed
 case", made by `python -m flexmvm.validation`): halving the step changes the force by NCC
@@ -24,19 +25,16 @@ end has volume pi r^2 (L - r/3); that alone makes the theory's momentum transfer
 from __future__ import annotations
 
 import functools
-import math
 from pathlib import Path
 
 import numpy as np
+from _short_case import short_run
 
 from flexmvm import validation
-from flexmvm.integrate.driver import simulate
 from flexmvm.materials import ALUMINIUM, BRASS, Material
-from flexmvm.scenarios import ModelConfig, load_scenario, scenario_from_dict
-from flexmvm.scenarios.build import build_scenario
+from flexmvm.scenarios import ModelConfig
 from flexmvm.scenarios.compare import compare_runs
-from flexmvm.scenarios.pendulum import attachment_positions, strings
-from flexmvm.scenarios.run import run_scenario, summarize
+from flexmvm.scenarios.run import run_scenario
 from flexmvm.studies.grid import seed_scheme
 from flexmvm.theory.scenario import theory_histories
 from flexmvm.theory.wave import ContactLaw, Rod1D, two_rod_impact
@@ -66,7 +64,10 @@ def _penetration_ok(summary: dict, slave_factor: float = 1.0) -> None:
 def _short(which: str):
     """The short seed case with the models ``which``, on its own scheme (theta = 1/2 + dt_s /
     (4 tau) = 0.51, position law, mass redistribution) or, with a "-damped" suffix, on the damped one: Moreau's velocity
-    law (restitution 0) without redistribution, theta = 0.55 (studies.grid.seed_scheme)."""
+    law (restitution 0) without redistribution, theta = 0.55 (studies.grid.seed_scheme). The
+    scenario's own models are the run tests/_short_case.py shares with other tests."""
+    if which == "mvm":
+        return short_run("scenario")[0]
     sc = validation.short_scenario()
     if which.endswith("-damped"):
         which = which.removesuffix("-damped")
@@ -418,86 +419,3 @@ def test_two_rigid_bodies_rebound_with_the_schemes_restitution():
     assert abs(-s["energy_rel_error"] - (1 - e_scheme**2) * m2 / (m1 + m2)) < 1e-4
     assert len(s["contact_intervals_s"]) == 1
     assert s["contact_intervals_s"][0][1] <= 2 * 2e-6
-
-
-# --- 3. the pendulum, started just before impact -----------------------------------------------
-
-PENDULUM = ROOT / "scenarios" / "pendulum_release.toml"
-T0 = 20e-6  # the striker starts this long before its apex reaches b2 (gap 4.2 um)
-
-
-def _pendulum_short(dt_s: float, b1_model: ModelConfig | None = STRIKER):
-    """pendulum_release.toml with b1 placed on its swing arc T0 before the bottom, at the
-    speed it has there (sqrt(v0^2 - 2 g dz), v0 = 0.21 m/s at the bottom), the strings at the
-    same lengths as in the scenario's geometry; b1 as its mvm model (3-5 + 40) unless given;
-    outputs every 2 us to 0.72 ms (the 1 m rods' contact lasts 659 us)."""
-    data = load_scenario(PENDULUM).model_dump(mode="json")
-    ell, g = 0.5, 9.81
-    phi = V0 * T0 / ell
-    dz = ell * (1 - math.cos(phi))
-    v = math.sqrt(V0**2 - 2 * g * dz)
-    b1 = data["bodies"][0]
-    b1["placement"]["position_m"] = [-ell * math.sin(phi), 0.0, dz]
-    b1["placement"]["velocity_mps"] = [v * math.cos(phi), 0.0, -v * math.sin(phi)]
-    if b1_model is not None:
-        b1["model"] = b1_model.model_dump(mode="json")
-    data["time"].update(t_end_s=0.72e-3, dt_s=dt_s, dt_max_s=dt_s, output_dt_s=2e-6)
-    sc = scenario_from_dict(data, "pendulum_release.toml (started 20 us before impact)")
-    built = build_scenario(sc)
-    res = simulate(built.system, built.states, built.grid, built.probes)
-    return built, res, summarize(res, built)
-
-
-@functools.cache
-def _pendulum():
-    return _pendulum_short(0.5e-6)
-
-
-def test_pendulum_impact_with_gravity_and_strings():
-    """Contact with gravity and joints together (b1 MVM 3-5 + 40, b2 MVM 1-3 + 37, four
-    distance joints, contact step 0.5 us, the seed's validated step). Over 0.72 ms the strings
-    barely act along x (pendulum period 1.4 s), so the impact is the free seed case's, shifted
-    by T0. Measured (3315d09 + tests): first contact 19.5 us, force vs the seed's 1D wave-Hertz
-    solution shifted by T0: NCC 0.99924, peak +1.9 %, impulse -0.6 %, contact end 677 vs 679 us;
-    string drift 1.3e-13 m; momentum balance error 1.4e-9 of p0. Required:
-    - contact begins at T0 (within 2 us, one output step; measured 19.5 us: the interval of
-      the 0.5 us step that closes the gap, ending at T0) and is never tensile;
-    - NCC >= 0.99, peak within 3 %, contact end within 3 % of the contact duration (the free
-      seed case's acceptance of docs/validation.md);
-    - the joints hold: position-level string rows, drift < 1e-9 m;
-    - momentum balance: the change of total momentum equals the string impulses (lambda along
-      each string, direction from the attachment points, midpoint over each 2 us output
-      interval) plus M g t, to 1e-7 of the initial momentum in each component (the direction
-      turns by v dt / l ~ 1e-6 rad per interval). The contact forces are internal and drop
-      out; with the strings attached at their points (vertical at the bottom) they pull along
-      x only by the swing's own tilt, x / l <= 4e-4 rad here: |dp_x| < 2e-5 p0 (measured
-      2.9e-6 p0; it was 3.0e-4 kg m/s, 5.5e-4 p0, with the strings on the nodes 0.01 m off)."""
-    built, res, s = _pendulum()
-    t, f = res.t, res.contact_force
-    first = s["contact_intervals_s"][0][0]
-    assert abs(first - T0) <= 2e-6
-    assert s["lcp_residual_max"] <= 1e-8 and s["steps_not_converged"] == 0
-    sc_seed = load_scenario(ROOT / "scenarios" / "rod_impact.toml").with_overrides(t_end_s=0.72e-3)
-    tt, ft, _, _ = theory_histories(sc_seed)
-    c = compare_runs(tt + T0, ft, {}, t, f, {})
-    assert c["ncc_force"] >= 0.99
-    assert abs(c["peak_err"]) < 0.03
-    end, end_th = s["contact_intervals_s"][-1][1], T0 + tt[ft > 0].max()
-    assert abs(end - end_th) < 0.03 * (end_th - T0)
-    assert s["max_joint_drift"] < 1e-9
-    # momentum balance
-    joints = strings(built.system)
-    assert len(joints) == len(built.system.joints) == 4
-    ground = np.array([j.p2 for j in joints], float)
-    e = attachment_positions(built, res) - ground[None]
-    e /= np.linalg.norm(e, axis=2)[:, :, None]
-    mid = 0.5 * (e[1:] + e[:-1])  # string directions over each output interval
-    dt = np.diff(t)[:, None]
-    J = np.vstack([np.zeros(3), np.cumsum((res.joint_force[1:, :, None] * mid).sum(1) * dt, 0)])
-    M = sum(float(b.inv.mass) for b in built.system.bodies)
-    dp = res.momentum - res.momentum[0]
-    err = dp - J - M * built.system.gravity[None] * (t - t[0])[:, None]
-    assert np.abs(err).max() < 1e-7 * np.linalg.norm(res.momentum[0]), np.abs(err).max(0)
-    assert abs(dp[-1, 0]) < 2e-5 * np.linalg.norm(res.momentum[0])
-    # and the impact moved b2 forward (its frame) while b1 slowed
-    assert res.frame_v[-1, 1, 0] > 0.1 and res.frame_v[-1, 0, 0] < V0

@@ -28,6 +28,7 @@ class JointType(StrEnum):
     REVOLUTE = "revolute"  # point coincidence + axis: 5 constraints
     DISTANCE = "distance"  # constant distance between two points (a string): 1 constraint
     PRESCRIBED = "prescribed"  # a point moves with a constant global velocity: 3 constraints
+    PRISMATIC = "prismatic"  # slides along a fixed global axis, no rotation: 5 (prismatic.py)
 
 
 @dataclass(frozen=True)

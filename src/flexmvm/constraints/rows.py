@@ -81,7 +81,9 @@ class Rows:
         if nq:
             bq[row] += elastic
         known = self._entries.get(body, ([], 0))
-        if nodal is None or known is None:
+        # a rigid body (nodal n_dofs = 0) gets no selector: nothing reads an (m, 0) one, and
+        # building it at every joint evaluation cost most of a rigid mechanism's step
+        if nodal is None or known is None or not nodal[2]:
             self._entries[body] = None
         else:
             dofs, values, n_dofs = nodal

@@ -119,7 +119,7 @@ class _SkfemCell:
 
 
 #: Cells per chunk of element matrices (a HEX27 stiffness is 81 x 81 doubles = 52 kB).
-_CHUNK = 1024
+ELEMENT_CHUNK = 1024
 
 _SKFEM: dict[CellType, _SkfemCell] = {
     CellType.HEX8: _SkfemCell(skfem.MeshHex1, skfem.MeshHex1, skfem.ElementHex1, 3),
@@ -173,7 +173,7 @@ def local_permutation(cell_type: CellType) -> np.ndarray:
     return perm
 
 
-def _block_basis(nodes: np.ndarray, block: CellBlock) -> tuple[skfem.CellBasis, np.ndarray]:
+def block_basis(nodes: np.ndarray, block: CellBlock) -> tuple[skfem.CellBasis, np.ndarray]:
     """skfem scalar basis of one block and its DOF -> node-id map, shape (n_skfem_dofs,).
 
     Raises MeshError if neighbouring cells disagree on a shared mid-edge/face node.
@@ -216,9 +216,7 @@ def _hrz_diagonal(basis: skfem.CellBasis, rho: float) -> np.ndarray:
     return diag * (rho * dx.sum(axis=1) / diag.sum(axis=0))
 
 
-def _shape_arrays(
-    basis: skfem.CellBasis, cells: slice
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def shape_arrays(basis: skfem.CellBasis, cells: slice) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Shape functions at the quadrature points of the cells ``cells``, from scikit-fem.
 
     Returns N (ne, nloc, nqp), grad N (ne, nloc, 3, nqp) [1/m] and dx = |det J| w (ne, nqp)
@@ -250,7 +248,7 @@ def _element_stiffness(g: np.ndarray, dx: np.ndarray, lam: float, mu: float) -> 
     return k.reshape(ne, 3 * nloc, 3 * nloc)
 
 
-def _scatter(blocks: np.ndarray, ids: np.ndarray, n: int) -> sp.csr_matrix:
+def scatter(blocks: np.ndarray, ids: np.ndarray, n: int) -> sp.csr_matrix:
     """Sum element matrices blocks (ne, p, p) with global ids (ne, p) into an (n, n) csr."""
     p = ids.shape[1]
     rows = np.repeat(ids, p, axis=1).ravel()
@@ -263,25 +261,25 @@ def _assemble_block(
 ) -> tuple[sp.csr_matrix, sp.csr_matrix, float]:
     """Scalar mass (n x n), stiffness (3n x 3n) and volume of one cell block.
 
-    Cells are processed in chunks of _CHUNK so element matrices never fill memory.
+    Cells are processed in chunks of ELEMENT_CHUNK so element matrices never fill memory.
     """
     n = len(nodes)
     lam, mu = material.lame
-    basis, dof_to_node = _block_basis(nodes, block)
+    basis, dof_to_node = block_basis(nodes, block)
     cell_nodes = dof_to_node[basis.element_dofs.T]  # (ne, nloc) our node ids
     m_sum, k_sum, volume = sp.csr_matrix((n, n)), sp.csr_matrix((3 * n, 3 * n)), 0.0
     if lumped:
         vals = _hrz_diagonal(basis, material.rho)
         ids = cell_nodes.T.ravel()
         m_sum = sp.csr_matrix((vals.ravel(), (ids, ids)), shape=(n, n))
-    for start in range(0, len(cell_nodes), _CHUNK):
-        sub = slice(start, start + _CHUNK)
-        nval, grad, dx = _shape_arrays(basis, sub)
+    for start in range(0, len(cell_nodes), ELEMENT_CHUNK):
+        sub = slice(start, start + ELEMENT_CHUNK)
+        nval, grad, dx = shape_arrays(basis, sub)
         volume += float(dx.sum())
         if not lumped:
-            m_sum = m_sum + _scatter(_element_mass(nval, dx, material.rho), cell_nodes[sub], n)
+            m_sum = m_sum + scatter(_element_mass(nval, dx, material.rho), cell_nodes[sub], n)
         vec_ids = (3 * cell_nodes[sub][:, :, None] + np.arange(3)).reshape(len(dx), -1)
-        k_sum = k_sum + _scatter(_element_stiffness(grad, dx, lam, mu), vec_ids, 3 * n)
+        k_sum = k_sum + scatter(_element_stiffness(grad, dx, lam, mu), vec_ids, 3 * n)
     return m_sum, k_sum, volume
 
 
@@ -318,4 +316,4 @@ def assemble(mesh: Mesh, material: Material, lumped: bool = False) -> FEModel:
     )
 
 
-__all__ = ["FEModel", "assemble", "local_permutation"]
+__all__ = ["FEModel", "assemble", "block_basis", "local_permutation", "shape_arrays"]

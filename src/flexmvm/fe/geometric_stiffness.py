@@ -31,7 +31,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from flexmvm.errors import InputError
-from flexmvm.fe.assembly import _CHUNK, FEModel, _block_basis, _scatter, _shape_arrays
+from flexmvm.fe.assembly import ELEMENT_CHUNK, FEModel, block_basis, scatter, shape_arrays
 from flexmvm.fe.solvers import spd_solver
 
 
@@ -103,13 +103,13 @@ def prestress_geometric_stiffness(fe: FEModel, u: np.ndarray) -> sp.csr_matrix:
     for block in mesh.cells:
         if len(block.connectivity) == 0:
             continue
-        basis, dof_to_node = _block_basis(mesh.nodes, block)
+        basis, dof_to_node = block_basis(mesh.nodes, block)
         cell_nodes = dof_to_node[basis.element_dofs.T]  # (ne, nloc) our node ids
-        for start in range(0, len(cell_nodes), _CHUNK):
-            sub = slice(start, start + _CHUNK)
-            _, grad, dx = _shape_arrays(basis, sub)
+        for start in range(0, len(cell_nodes), ELEMENT_CHUNK):
+            sub = slice(start, start + ELEMENT_CHUNK)
+            _, grad, dx = shape_arrays(basis, sub)
             sigma = _point_stress(grad, u_nodes[cell_nodes[sub]], lam, mu)
-            s_sum = s_sum + _scatter(_scalar_geometric(grad, sigma, dx), cell_nodes[sub], n)
+            s_sum = s_sum + scatter(_scalar_geometric(grad, sigma, dx), cell_nodes[sub], n)
     s_sum = 0.5 * (s_sum + s_sum.T)
     return sp.csr_matrix(sp.kron(s_sum, sp.identity(3, format="csr"), format="csr"))
 

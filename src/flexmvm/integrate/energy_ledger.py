@@ -12,6 +12,9 @@ v_m = theta v+ + (1 - theta) v- and x_m the step's midpoint (integrate.moreau_je
   prescribed motion, a drive): generic over every Joint (evaluate's rows);
 - contacts: W += lambda_C . (Phi_C v_m) (the step's contact rows);
 - damping: D += h v_m^T c_hat v_m over the elastic rows;
+- a spinning body's geometric stiffening (bodies.stiffening): W += h (-s K_G q_m) . q_dot_m,
+  counted as the work of an applied force: its stiffness s(t) K_G changes with the spin, so
+  1/2 s q^T K_G q is not a stored energy of the body (the strain energy is 1/2 q^T k_hat q);
 - the scheme's numerical dissipation at theta > 1/2:
   D += (theta - 1/2) (dv^T M dv + dq^T k_hat dq), dq = q(t + h) - q(t).
 
@@ -70,11 +73,14 @@ class EnergyLedgerHistory:
     contact: np.ndarray
     damping: np.ndarray
     numerical: np.ndarray
+    stiffening: np.ndarray | None = None  # work of the geometric stiffening forces
 
     def residual(self, total_energy: np.ndarray) -> np.ndarray:
         """E(t) - E(0) - works + dissipations (n_out,) [J] (module doc)."""
         E = np.asarray(total_energy)[: len(self.contact)]
         works = self.loads.sum(axis=1) + self.joints.sum(axis=1) + self.contact
+        if self.stiffening is not None:
+            works = works + self.stiffening
         return E - E[0] - works + self.damping + self.numerical
 
 
@@ -93,7 +99,7 @@ class EnergyLedger:
     w_loads: np.ndarray = field(init=False)
     d_loads: np.ndarray = field(init=False)
     w_joints: np.ndarray = field(init=False)
-    sums: np.ndarray = field(init=False)  # contact, damping, numerical
+    sums: np.ndarray = field(init=False)  # contact, damping, numerical, stiffening
     rows: list = field(init=False)
 
     def __post_init__(self) -> None:
@@ -101,7 +107,7 @@ class EnergyLedger:
         self.w_loads = np.zeros(len(self.system.loads))
         self.d_loads = np.zeros(len(self.system.loads))
         self.w_joints = np.zeros(len(self.system.joints))
-        self.sums = np.zeros(3)
+        self.sums = np.zeros(4)
         self.rows = []
         self._ends: dict = {}  # body -> (q, v, k_hat q, M_qq q_dot) of the last step's end
 
@@ -130,6 +136,10 @@ class EnergyLedger:
         for body, vm in zip(bodies, vms):
             if body.c_hat is not None and body.nq:
                 self.sums[1] += h * float(vm[6:] @ flat_product(body.c_hat, vm[6:]))
+        for b, body in enumerate(bodies):
+            if body.stiffening is not None and body.nq:  # the residual's -s K_G q_m
+                f = body.stiffening.force(vms[b][3:6], mids[b].q)
+                self.sums[3] -= h * float(f @ vms[b][6:])
         if theta != 0.5:
             self.sums[2] += (theta - 0.5) * self._increment_norms(start, end)
 
@@ -200,6 +210,7 @@ class EnergyLedger:
             col(4),
             col(5),
             col(6),
+            col(7) if any(b.stiffening is not None for b in self.system.bodies) else None,
         )
 
 

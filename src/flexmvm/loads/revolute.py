@@ -30,7 +30,7 @@ import numpy as np
 from flexmvm.bodies.rotation import cross3
 from flexmvm.errors import InputError
 from flexmvm.loads.history import TimeHistory
-from flexmvm.loads.spring import _nonnegative
+from flexmvm.loads.spring import nonnegative
 
 
 @dataclass(frozen=True, eq=False)
@@ -113,8 +113,8 @@ class RotationalSpring:
 
     def __post_init__(self) -> None:
         what = f"rotational spring {self.name!r}"
-        _nonnegative(self.stiffness_nm_per_rad, f"{what}: stiffness [N m/rad]")
-        _nonnegative(self.damping_nms_per_rad, f"{what}: damping [N m s/rad]")
+        nonnegative(self.stiffness_nm_per_rad, f"{what}: stiffness [N m/rad]")
+        nonnegative(self.damping_nms_per_rad, f"{what}: damping [N m s/rad]")
         if not math.isfinite(self.rest_angle_rad):
             raise InputError(f"{what}: rest angle must be finite, got {self.rest_angle_rad!r}")
 

@@ -31,7 +31,7 @@ from flexmvm.constraints.rows import Rows
 from flexmvm.errors import InputError
 
 
-def _nonnegative(value: float, what: str) -> float:
+def nonnegative(value: float, what: str) -> float:
     v = float(value)
     if not (np.isfinite(v) and v >= 0.0):
         raise InputError(f"{what} must be a finite number >= 0, got {value!r}")
@@ -52,9 +52,9 @@ class PointSpring:
 
     def __post_init__(self) -> None:
         what = f"spring {self.name!r}"
-        _nonnegative(self.stiffness_n_per_m, f"{what}: stiffness [N/m]")
-        _nonnegative(self.damping_n_s_per_m, f"{what}: damping [N s/m]")
-        _nonnegative(self.rest_length_m, f"{what}: rest length [m]")
+        nonnegative(self.stiffness_n_per_m, f"{what}: stiffness [N/m]")
+        nonnegative(self.damping_n_s_per_m, f"{what}: damping [N s/m]")
+        nonnegative(self.rest_length_m, f"{what}: rest length [m]")
         if not self._p2_on_body and np.shape(self.p2) != (3,):
             raise InputError(f"{what}: a ground point must be 3 numbers [m], got {self.p2!r}")
 

@@ -453,8 +453,11 @@ SCENARIO_MESHES: tuple[tuple[str, Callable[[Path], Path]], ...] = (
 
 
 def write_scenario_meshes(directory: str | os.PathLike) -> list[Path]:
-    """Mesh every part of SCENARIO_MESHES into ``directory``; returns the paths written."""
-    return [make(Path(directory) / name) for name, make in SCENARIO_MESHES]
+    """Mesh every part of SCENARIO_MESHES and mesh.link's into ``directory``; returns the paths
+    written."""
+    from flexmvm.mesh.link import SLIDER_CRANK_MESHES  # link imports this module
+
+    return [make(Path(directory) / n) for n, make in SCENARIO_MESHES + SLIDER_CRANK_MESHES]
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -30,7 +30,7 @@ import numpy as np
 
 from flexmvm.errors import InputError
 from flexmvm.mesh.mesh import Mesh
-from flexmvm.reduction.reference import ReferenceCondition, _check_rigid, three_two_one
+from flexmvm.reduction.reference import ReferenceCondition, check_rigid, three_two_one
 
 
 @dataclass(frozen=True)
@@ -62,7 +62,7 @@ def clamp_condition(mesh: Mesh, node_ids) -> ClampCondition:
             f"clamped node ids must be in 0..{mesh.n_nodes - 1}, got {ids[0]}..{ids[-1]}"
         )
     support = three_two_one(mesh, ids)  # InputError if < 3 nodes, collinear or ill-posed
-    _check_rigid(mesh, support.fixed_dofs)
+    check_rigid(mesh, support.fixed_dofs)
     return ClampCondition(tuple(int(k) for k in ids), np.zeros(0, np.int64))
 
 

@@ -96,7 +96,7 @@ class ReferenceCondition:
             )
         nodes = tuple(dict.fromkeys(int(d) // 3 for d in dofs)) if dofs.size else ()
         ref = cls(nodes, dofs)
-        _check_rigid(mesh, ref.fixed_dofs)
+        check_rigid(mesh, ref.fixed_dofs)
         return ref
 
     def free_dofs(self, n_dof: int) -> np.ndarray:
@@ -104,7 +104,7 @@ class ReferenceCondition:
         return np.setdiff1d(np.arange(n_dof), self.fixed_dofs)
 
 
-def _check_rigid(mesh: Mesh, dofs: np.ndarray) -> None:
+def check_rigid(mesh: Mesh, dofs: np.ndarray) -> None:
     cond = _rigid_condition(mesh, dofs)
     if not cond <= RIGID_COND_MAX:
         raise InputError(
@@ -144,7 +144,7 @@ def three_two_one(mesh: Mesh, node_ids: np.ndarray) -> ReferenceCondition:
     c_dir = int(np.argmax(np.abs(n)))
     dofs = np.concatenate([3 * node_a + np.arange(3), 3 * node_b + b_dirs, [3 * node_c + c_dir]])
     ref = ReferenceCondition((node_a, node_b, node_c), dofs.astype(np.int64))
-    _check_rigid(mesh, ref.fixed_dofs)
+    check_rigid(mesh, ref.fixed_dofs)
     return ref
 
 

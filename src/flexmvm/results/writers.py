@@ -171,6 +171,8 @@ def _write_ledger(g: h5py.Group, led) -> None:
     _dataset(g, "contact", led.contact, "J", "work of the contact impulses")
     _dataset(g, "damping", led.damping, "J", "dissipated by the bodies' damping")
     _dataset(g, "numerical", led.numerical, "J", "the scheme's numerical dissipation")
+    if led.stiffening is not None:
+        _dataset(g, "stiffening", led.stiffening, "J", "work of the geometric stiffening force")
 
 
 def _write_mesh(g: h5py.Group, body: FlexibleBody) -> None:

@@ -23,11 +23,6 @@ from flexmvm.scenarios.body_schema import (
     RegionSpec,
     RodConfig,
     Rotation,
-    full,
-    interface,
-    modal,
-    mvm,
-    rigid,
 )
 from flexmvm.scenarios.damping_schema import DampingConfig
 from flexmvm.scenarios.drive_schema import DriveConfig, HistoryConfig, PathConfig, SpinUpConfig
@@ -35,6 +30,7 @@ from flexmvm.scenarios.fields import ROD_FACET_SETS, ROD_NODE_SETS
 from flexmvm.scenarios.initial_motion import RigidMotionConfig
 from flexmvm.scenarios.load import load_scenario, scenario_from_dict
 from flexmvm.scenarios.load_schema import LoadConfig, LoadFrame, LoadType, SpringConfig, SpringType
+from flexmvm.scenarios.model_constructors import full, interface, modal, mvm, rigid
 from flexmvm.scenarios.problems import ScenarioError
 from flexmvm.scenarios.schema import ContactConfig, JointConfig, ProbeConfig, Scenario, TimeConfig
 from flexmvm.scenarios.support_schema import SupportConfig, SupportType

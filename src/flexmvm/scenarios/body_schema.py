@@ -1,6 +1,6 @@
-"""Scenario tables of one body: material, rod geometry, the model of its deformation (with
-the constructors :func:`full`, :func:`mvm`, :func:`modal`, :func:`rigid`), its retained region
-and its placement. The scenario as a whole, its contacts, joints, probes and time settings
+"""Scenario tables of one body: material, rod geometry, the model of its deformation (its
+constructors fm.full(), fm.mvm(), ...: model_constructors.py), its retained region and its
+placement. The scenario as a whole, its contacts, joints, probes and time settings
 are in schema.py."""
 
 from __future__ import annotations
@@ -45,7 +45,8 @@ from flexmvm.scenarios.fields import (
     check_rod_set,
 )
 from flexmvm.scenarios.initial_motion import RigidMotionConfig
-from flexmvm.scenarios.problems import problem, validate_part
+from flexmvm.scenarios.plasticity_schema import PlasticitySpec
+from flexmvm.scenarios.problems import problem
 from flexmvm.scenarios.stiffening_schema import StiffeningKey
 
 _SELECTION_RE = re.compile(r"^(\d+)-(\d+)$")
@@ -62,6 +63,16 @@ class MaterialSpec(Frozen):
     nu: Num
     rho_kg_m3: Num
     name: Name | None = None
+    # J2 plasticity (scenarios/plasticity_schema.py); None: linear elastic
+    plasticity: PlasticitySpec | None = None
+
+    @model_serializer(mode="wrap")
+    def _dump(self, handler):
+        # an elastic material dumps as before the key existed (cache and study keys hash it)
+        data = handler(self)
+        if isinstance(data, dict) and data.get("plasticity", 0) is None:
+            data.pop("plasticity")
+        return data
 
     @model_validator(mode="after")
     def _check(self) -> MaterialSpec:
@@ -420,81 +431,3 @@ class BodyConfig(Frozen):
             return PRESETS[self.material]
         m = self.material
         return Material(E=m.E_pa, nu=m.nu, rho=m.rho_kg_m3, name=m.name or self.name)
-
-
-def _given(reference: str | None) -> dict[str, str]:
-    """The reference key of a constructor: none when not given, so that the body decides
-    (end_b for a rod, auto for a mesh_file body: BodyConfig._default_reference)."""
-    return {} if reference is None else {"reference": reference}
-
-
-def full(reference: str | None = None) -> ModelConfig:
-    """Full FE model: every nodal DOF but the reference condition's six."""
-    return validate_part(ModelConfig, {"kind": ModelKind.FULL, **_given(reference)}, "full()")
-
-
-def rigid() -> ModelConfig:
-    """Rigid body: no elastic coordinates."""
-    return validate_part(ModelConfig, {"kind": ModelKind.RIGID}, "rigid()")
-
-
-def modal(modes: int, reference: str | None = None) -> ModelConfig:
-    """The first ``modes`` modes of the body supported by its reference condition."""
-    return validate_part(
-        ModelConfig,
-        {"kind": ModelKind.MODAL, "modes": modes, **_given(reference)},
-        f"modal({modes!r})",
-    )
-
-
-def interface(
-    patch_radii_m=(),
-    modes: int = 0,
-    *,
-    mode_choice: str = "participation",
-    patch_surface: str = "end_a",
-    patch_centre_m=None,
-    mode_pool: int | None = None,
-    reference: str | None = None,
-) -> ModelConfig:
-    """Interface model (reduction/interface.py): one static Hertz-patch vector per radius in
-    ``patch_radii_m`` [m] about the centre of ``patch_surface`` (or ``patch_centre_m``), plus
-    ``modes`` free-free modes chosen by ``mode_choice`` (participation or frequency)."""
-    data = {
-        "kind": ModelKind.INTERFACE,
-        "patch_radii_m": tuple(patch_radii_m),
-        "modes": modes,
-        "mode_choice": mode_choice,
-        "patch_surface": patch_surface,
-        "patch_centre_m": patch_centre_m,
-        "mode_pool": mode_pool,
-        **_given(reference),
-    }
-    return validate_part(ModelConfig, data, f"interface({list(patch_radii_m)!r}, modes={modes!r})")
-
-
-def mvm(
-    selection: str | tuple[int, int] | None = None,
-    modes: int = 0,
-    *,
-    region: RegionSpec | None = None,
-    reference: str | None = None,
-    seed_eq4: bool = False,
-    kind: ModelKind | None = None,
-) -> ModelConfig:
-    """MVM model: the nodes of ``selection`` (the seed's layers-laps 'i-j' or (i, j)) or of
-    ``region`` kept as nodal coordinates, plus ``modes`` modes: Craig-Bampton fixed-interface
-    modes, or with ``seed_eq4`` the seed's eq. (4) block basis; ``kind`` names any model kind
-    that retains nodes (mvm, mvm-seed, mvm-seed-fixed) instead."""
-    if isinstance(selection, tuple):
-        selection = "-".join(str(int(v)) for v in selection)
-    if kind is None:
-        kind = ModelKind.MVM_SEED if seed_eq4 else ModelKind.MVM
-    data = {
-        "kind": kind,
-        "selection": selection,
-        "region": region,
-        "modes": modes,
-        **_given(reference),
-    }
-    return validate_part(ModelConfig, data, f"mvm({selection!r}, modes={modes!r})")

@@ -22,6 +22,7 @@ from flexmvm.constraints.joints import (
     fixed_joint,
     ground_joint,
 )
+from flexmvm.constraints.prismatic import prismatic_joint
 from flexmvm.contact.geometry import MasterSurface
 from flexmvm.contact.pairs import PointToSurfaceContact
 from flexmvm.errors import InputError, MeshError
@@ -50,6 +51,7 @@ from flexmvm.scenarios.mesh_lookup import (
     nearest_node,
     retained_nodes,
 )
+from flexmvm.scenarios.plasticity_schema import refuse_dynamic
 from flexmvm.scenarios.sag import quasi_static_sag
 from flexmvm.scenarios.setup import SetupCache, default_setup
 from flexmvm.scenarios.solver_choice import with_elimination_order
@@ -179,6 +181,7 @@ def _node_set_point(
 def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
     """Meshes, FE models, bases, bodies, joints, contacts and probes of a Scenario, built
     through ``setup`` (default: the process-wide default_setup())."""
+    refuse_dynamic(sc)
     setup = default_setup() if setup is None else setup
     bodies, infos, states = [], [], []
     for cfg in sc.bodies:
@@ -279,9 +282,14 @@ def _joint(j, k, bodies, infos, index, states):
         p1 = body_point(b, bodies[b], infos[b].mesh, j.point_m, f"{where}.point_m")
     if t is JointType.PRESCRIBED:
         return prescribed_joints(j, name, p1, bodies, states)
+    if t is JointType.PRISMATIC:
+        return prismatic_joint(p1, j.ground_m, j.axis, bodies, states)
     if j.body2 is not None:
         b2 = index[j.body2]
-        p2 = body_point(b2, bodies[b2], infos[b2].mesh, j.point2_m, f"{where}.point2_m")
+        at = j.point2_m
+        if at is None:  # body2's point where the node set's centroid is at t = 0
+            at = states[b2].A.T @ (p1.position(bodies, states) - states[b2].r)
+        p2 = body_point(b2, bodies[b2], infos[b2].mesh, at, f"{where}.point2_m")
     elif j.ground_m is not None:
         p2 = np.asarray(j.ground_m, float)
     else:  # a node set's centroid, held where it starts (schema.JointConfig)

@@ -26,7 +26,7 @@ _JOINT_FIELDS = (
     "path",
 )
 # joints whose body point may be a node set's centroid (constraints.joints.NodeSetPoint)
-_NODE_SET_JOINTS = (JointType.SPHERICAL, JointType.REVOLUTE, JointType.FIXED)
+_NODE_SET_JOINTS = (JointType.SPHERICAL, JointType.REVOLUTE, JointType.FIXED, JointType.PRISMATIC)
 
 
 class JointConfig(Frozen):
@@ -71,6 +71,8 @@ class JointConfig(Frozen):
         allowed: set[str] = set()
         if t is JointType.PRESCRIBED:
             need, allowed = _prescribed_keys(self)
+        elif t is JointType.PRISMATIC:  # to the ground; ground_m: a point of the guide line
+            need, allowed = {"point_m", "axis"}, {"point_m", "axis", "ground_m"}
         elif t is not JointType.GROUND:
             other = {"body2", "point2_m"} if self.body2 is not None else {"ground_m"}
             need = {"point_m"} | other | ({"axis"} if t is JointType.REVOLUTE else set())
@@ -79,12 +81,13 @@ class JointConfig(Frozen):
         if self.node_set is not None and t not in _NODE_SET_JOINTS:
             raise problem(
                 f"not used by a {t.value!r} joint (a node set's centroid is held by "
-                "fixed, spherical and revolute joints; give point_m)",
+                "fixed, spherical, revolute and prismatic joints; give point_m)",
                 "node_set",
             )
         if self.node_set is not None:
-            # ground_m optional: the centroid held where it is at t = 0
-            need, allowed = need - {"point_m", "ground_m"}, (allowed - {"point_m"}) | {"node_set"}
+            # ground_m, point2_m optional: the centroid held where it is at t = 0
+            need = need - {"point_m", "ground_m", "point2_m"}
+            allowed = (allowed - {"point_m"}) | {"node_set"}
         for key in _JOINT_FIELDS:
             given = getattr(self, key) is not None
             if key in need and not given:

@@ -15,8 +15,8 @@ The option enums are the code's own, shared with the stages that act on them: Mo
 
 A Scenario is changed by typed copies, each validated again: ``with_model(body, model)``,
 ``with_models(model)``, ``with_kind(kind)``, ``with_time(...)``, ``with_material(body, m)``,
-``with_rod(body, ...)``, ``with_tables(**tables)``; body_schema's full, mvm, modal, rigid build
-the model blocks.
+``with_rod(body, ...)``, ``with_tables(**tables)``; model_constructors' full, mvm, modal, rigid
+build the model blocks.
 """
 
 from __future__ import annotations
