@@ -108,9 +108,9 @@ def joint(
     path: PathConfig | None = None,
 ) -> JointConfig:
     """A ``[[joints]]`` entry: ``type`` one of ground, fixed, spherical, revolute, distance,
-    prescribed, on ``body``; ``point_m`` body-local [m] or ``node_set`` (its centroid),
+    prismatic, prescribed, on ``body``; ``point_m`` body-local [m] or ``node_set`` (its centroid),
     to the ground point ``ground_m`` (global [m]) or to ``point2_m`` of ``body2``; ``axis``
-    (global at t = 0) of a revolute joint; ``length_m`` [m] of a distance joint; a
+    (global at t = 0) of a revolute or prismatic joint; ``length_m`` [m] of a distance joint; a
     prescribed point's ``velocity_mps`` [m/s] or ``path``; a revolute joint's ``drive`` (:func:`drive`).
     The keys each type needs and allows: docs/scenario_format.md, "[[joints]]"."""
     keys = dict(locals())
