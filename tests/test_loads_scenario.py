@@ -88,6 +88,9 @@ def test_driven_rod_converges_and_its_ledger_closes():
     w_in = led["balance_reference_J"]
     assert abs(sum(led["work_joints_J"].values())) < 1e-6 * w_in
     assert led["load_damper_dissipation_J"]["springs[1] linear"] > 0
+    # the energy guard counts the loads' work as input: no rise beyond it (scenarios.run
+    # energy_gain; the run's energy rises from 0 by the motor's work)
+    assert s["energy_gain_rel_max"] is not None and s["energy_gain_rel_max"] < 1e-6
     assert s["momentum_rel_error"] is None
     why = s["momentum_error_undefined_because"]
     assert "joints[0] (SphericalJoint) holds 'rod' to the ground" in why
@@ -150,3 +153,25 @@ def test_rod_swings_the_way_the_motor_turns():
     res = _run().result
     A = res.frame_A[-1, 0]
     assert np.arctan2(A[1, 0], A[0, 0]) > 0
+
+
+def test_energy_gain_counts_inputs_and_catches_the_rest():
+    """scenarios.run.energy_gain: a rise of the energy equal to the loads' and joints' work is
+    no gain; 1 J more than they did is (relative to the largest input work when E(0) = 0)."""
+    from types import SimpleNamespace
+
+    from flexmvm.scenarios.run import energy_gain
+
+    t = np.linspace(0.0, 1.0, 5)
+    works = SimpleNamespace(
+        contact=np.zeros(5),
+        loads=np.c_[4.0 * t],
+        joints=np.c_[6.0 * t],
+        stiffening=None,
+    )
+    fed = SimpleNamespace(total_energy=10.0 * t, energy_ledger=works)
+    assert energy_gain(fed) == pytest.approx(0.0, abs=1e-15)
+    extra = SimpleNamespace(total_energy=10.0 * t + np.r_[0, 0, 1.0, 0, 0], energy_ledger=works)
+    assert energy_gain(extra) == pytest.approx(0.1)
+    alone = SimpleNamespace(total_energy=np.r_[2.0, 2.5, 2.0, 2.0, 2.0], energy_ledger=None)
+    assert energy_gain(alone) == pytest.approx(0.25)

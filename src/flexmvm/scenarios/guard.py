@@ -1,5 +1,5 @@
 """The validity checks of a run: the guard of reduced bases (issue 12, part 3) and the energy
-rise of a run without applied loads (issue 12, part 4).
+rise of a run beyond the work of its loads and drives (issue 12, part 4).
 
 A reduced basis leaves the contact free only where it was built for it: the retained nodes of
 an MVM model (Craig-Bampton, seed eq. 4), the contact patch (the patch surface's nodes within
@@ -108,8 +108,8 @@ def outside_validity(fraction: float | None, threshold: float = WARN_FRACTION) -
     return fraction is not None and fraction > threshold
 
 
-#: A run without applied loads whose total energy rises above its start by more than this
-#: share gets a warning. Nothing in it can add energy: the Moreau-Jean step with theta >= 1/2
+#: A run whose total energy rises above its start, beyond the work of its loads, drives and
+#: spin (scenarios.run.energy_gain), by more than this share gets a warning. Nothing in it can add energy: the Moreau-Jean step with theta >= 1/2
 #: and frictionless or Coulomb contact, joints and gravity (in the potential) keep or lose it;
 #: what could was the velocity law's penetration recovery when it pushed a penetrated node out
 #: at beta (-g) / h whatever its mass: on reduced bodies whose contact reached the edge of the
@@ -146,8 +146,8 @@ def energy_gain_warning(summary: dict, threshold: float = ENERGY_GAIN_WARN) -> s
     if gain <= threshold:
         return None
     return (
-        f"the total energy rose by {100 * gain:.2g} % of its start in a run without applied "
-        "loads: the contact added energy (penetration recovery pushing penetrated nodes "
+        f"the total energy rose by {100 * gain:.2g} % of its start beyond the work of the "
+        "loads and drives: the contact added energy (penetration recovery pushing penetrated nodes "
         'out, chatter); try penetration_recovery = 0 on the contact, law = "position", or '
         "a reduced model covering the contact patch with a ring to spare"
     )
