@@ -15,7 +15,14 @@ import os
 from pathlib import Path
 
 from flexmvm.errors import InputError
-from flexmvm.mesh.parts import _close, _faces, _group, _positive, _run, block
+from flexmvm.mesh.gmsh_session import (
+    check_positive,
+    close_to,
+    faces_where,
+    physical_group,
+    run_gmsh,
+)
+from flexmvm.mesh.parts import block
 
 #: The rod of scenarios/slider_crank.toml: length, width (in the mechanism's plane), height [m].
 ROD_LENGTH_M, ROD_WIDTH_M, ROD_HEIGHT_M = 0.300, 0.008, 0.008
@@ -37,7 +44,7 @@ def connecting_rod(
     reduced rod's retained nodes); ``mid``: the mid-span section (inside the bar: the rod's
     reference support, away from the pins); volume ``rod``.
     Returns the path written."""
-    _positive(length_m=length_m, width_m=width_m, height_m=height_m)
+    check_positive(length_m=length_m, width_m=width_m, height_m=height_m)
     if max(width_m, height_m) >= length_m:
         raise InputError(
             f"connecting_rod: expected a slender bar, width and height < length = "
@@ -51,19 +58,19 @@ def connecting_rod(
         b = occ.addBox(half, -width_m / 2, -height_m / 2, half, width_m, height_m)
         occ.fragment([(3, a)], [(3, b)])
         occ.synchronize()
-        end_a = _faces(gmsh, lambda com, box: _close(box[3], 0.0, length_m))
-        end_b = _faces(gmsh, lambda com, box: _close(box[0], length_m, length_m))
-        _group(gmsh, 2, end_a, "end_a")
-        _group(gmsh, 2, end_b, "end_b")
-        _group(gmsh, 2, end_a + end_b, "ends")
-        mid = _faces(
+        end_a = faces_where(gmsh, lambda com, box: close_to(box[3], 0.0, length_m))
+        end_b = faces_where(gmsh, lambda com, box: close_to(box[0], length_m, length_m))
+        physical_group(gmsh, 2, end_a, "end_a")
+        physical_group(gmsh, 2, end_b, "end_b")
+        physical_group(gmsh, 2, end_a + end_b, "ends")
+        mid = faces_where(
             gmsh,
-            lambda com, box: _close(box[0], half, length_m) and _close(box[3], half, length_m),
+            lambda com, box: close_to(box[0], half, length_m) and close_to(box[3], half, length_m),
         )
-        _group(gmsh, 2, mid, "mid")
-        _group(gmsh, 3, [t for _, t in gmsh.model.getEntities(3)], "rod")
+        physical_group(gmsh, 2, mid, "mid")
+        physical_group(gmsh, 3, [t for _, t in gmsh.model.getEntities(3)], "rod")
 
-    return _run(path, size_m, order, None, build)
+    return run_gmsh(path, size_m, order, None, build)
 
 
 def slider_crank_rod(path: str | os.PathLike, size_m: float = 4.0e-3) -> Path:

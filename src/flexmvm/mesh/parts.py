@@ -19,121 +19,17 @@ import math
 import os
 import sys
 from collections.abc import Callable
-from dataclasses import dataclass
 from pathlib import Path
 
-from flexmvm.errors import InputError, MeshError
-
-
-@dataclass(frozen=True)
-class Refinement:
-    """Local refinement: element size fine_m [m] within radius_m [m] of point_m (body frame),
-    growing linearly to the part's size_m over a further grow_m [m]."""
-
-    point_m: tuple[float, float, float]
-    fine_m: float
-    radius_m: float
-    grow_m: float
-
-
-def _gmsh():
-    """The gmsh module, or a one-line InputError if the optional dependency is missing."""
-    try:
-        import gmsh
-    except ImportError:
-        raise InputError(
-            "meshing a part needs the optional dependency gmsh, which is not "
-            "installed; expected `pip install gmsh` (or flexmvm[gmsh])"
-        ) from None
-    return gmsh
-
-
-def _positive(**values: float) -> None:
-    for name, value in values.items():
-        if not (isinstance(value, (int, float)) and math.isfinite(value) and value > 0):
-            raise InputError(f"part: {name} must be a finite number > 0, got {value!r}")
-
-
-def _mesh_and_write(gmsh, path: Path, size_m: float, order: int, refine: Refinement | None) -> Path:
-    """Size field, 3D mesh of the given order, MSH 4.1 (ASCII) written to ``path``."""
-    if order not in (1, 2):
-        raise InputError(f"part: order must be 1 (tet4) or 2 (tet10), got {order!r}")
-    gmsh.option.setNumber("Mesh.MeshSizeMax", size_m)
-    gmsh.option.setNumber("Mesh.MeshSizeMin", size_m if refine is None else refine.fine_m)
-    if refine is not None:
-        _positive(fine_m=refine.fine_m, radius_m=refine.radius_m, grow_m=refine.grow_m)
-        x, y, z = refine.point_m
-        dist = gmsh.model.mesh.field.add("MathEval")
-        gmsh.model.mesh.field.setString(
-            dist, "F", f"Sqrt((x-({x!r}))^2+(y-({y!r}))^2+(z-({z!r}))^2)"
-        )
-        th = gmsh.model.mesh.field.add("Threshold")
-        gmsh.model.mesh.field.setNumber(th, "InField", dist)
-        gmsh.model.mesh.field.setNumber(th, "SizeMin", refine.fine_m)
-        gmsh.model.mesh.field.setNumber(th, "SizeMax", size_m)
-        gmsh.model.mesh.field.setNumber(th, "DistMin", refine.radius_m)
-        gmsh.model.mesh.field.setNumber(th, "DistMax", refine.radius_m + refine.grow_m)
-        gmsh.model.mesh.field.setAsBackgroundMesh(th)
-        for key in ("MeshSizeExtendFromBoundary", "MeshSizeFromPoints", "MeshSizeFromCurvature"):
-            gmsh.option.setNumber(f"Mesh.{key}", 0)
-    gmsh.option.setNumber("Mesh.ElementOrder", order)
-    gmsh.option.setNumber("Mesh.SecondOrderLinear", 0)
-    gmsh.option.setNumber("Mesh.Optimize", 1)
-    gmsh.option.setNumber("Mesh.MshFileVersion", 4.1)
-    gmsh.option.setNumber("Mesh.Binary", 0)
-    gmsh.model.mesh.generate(3)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    gmsh.write(str(path))
-    return path
-
-
-def _run(
-    path: str | os.PathLike, size_m: float, order: int, refine: Refinement | None, build: Callable
-) -> Path:
-    """Start gmsh, build the geometry and its physical groups (``build(gmsh)``), mesh, write,
-    stop gmsh. A gmsh failure becomes a one-line MeshError."""
-    gmsh = _gmsh()
-    _positive(size_m=size_m)
-    path = Path(path)
-    started = not gmsh.isInitialized()
-    if started:
-        gmsh.initialize(interruptible=False)
-    try:
-        gmsh.option.setNumber("General.Terminal", 0)
-        gmsh.model.add(path.stem)
-        build(gmsh)
-        return _mesh_and_write(gmsh, path, size_m, order, refine)
-    except Exception as exc:
-        if isinstance(exc, InputError):
-            raise
-        detail = str(exc).splitlines()[0] if str(exc) else type(exc).__name__
-        raise MeshError(f"gmsh failed meshing {str(path)!r}: {detail}") from None
-    finally:
-        gmsh.model.remove()
-        if started:
-            gmsh.finalize()
-
-
-def _faces(gmsh, test: Callable[[tuple[float, ...], tuple[float, ...]], bool]) -> list[int]:
-    """Surface tags whose (centre of mass, bounding box) satisfy ``test``."""
-    out = []
-    for dim, tag in gmsh.model.getEntities(2):
-        com = gmsh.model.occ.getCenterOfMass(dim, tag)
-        box = gmsh.model.getBoundingBox(dim, tag)
-        if test(com, box):
-            out.append(tag)
-    return out
-
-
-def _group(gmsh, dim: int, tags: list[int], name: str) -> None:
-    if not tags:
-        raise MeshError(f"part: physical group {name!r} found no entity (geometry changed?)")
-    gmsh.model.addPhysicalGroup(dim, tags, name=name)
-
-
-def _close(a: float, b: float, scale: float) -> bool:
-    """a == b up to 1e-4 of the part's size (OCC pads bounding boxes by its tolerance)."""
-    return abs(a - b) <= 1e-4 * scale
+from flexmvm.errors import InputError
+from flexmvm.mesh.gmsh_session import (
+    Refinement,
+    check_positive,
+    close_to,
+    faces_where,
+    physical_group,
+    run_gmsh,
+)
 
 
 def sphere(
@@ -148,7 +44,7 @@ def sphere(
     """Sphere of radius_m centred at the origin. Groups: ``front``, the spherical cap within
     cap_deg of the -z pole (where it strikes when moving along -z), ``back``, the rest of the
     sphere's surface, volume ``sphere``. Returns the path written."""
-    _positive(radius_m=radius_m)
+    check_positive(radius_m=radius_m)
     if not 0.0 < cap_deg < 90.0:
         raise InputError(f"sphere: cap_deg must be in (0, 90) degrees, got {cap_deg!r}")
     r, z_cap = radius_m, -radius_m * math.cos(math.radians(cap_deg))
@@ -162,11 +58,11 @@ def sphere(
         occ.synchronize()
         curved = [t for _, t in gmsh.model.getEntities(2) if gmsh.model.getType(2, t) != "Plane"]
         front = [t for t in curved if gmsh.model.occ.getCenterOfMass(2, t)[2] < z_cap]
-        _group(gmsh, 2, front, "front")
-        _group(gmsh, 2, [t for t in curved if t not in front], "back")
-        _group(gmsh, 3, [t for _, t in gmsh.model.getEntities(3)], "sphere")
+        physical_group(gmsh, 2, front, "front")
+        physical_group(gmsh, 2, [t for t in curved if t not in front], "back")
+        physical_group(gmsh, 3, [t for _, t in gmsh.model.getEntities(3)], "sphere")
 
-    return _run(path, size_m, order, refine, build)
+    return run_gmsh(path, size_m, order, refine, build)
 
 
 def block(
@@ -182,28 +78,30 @@ def block(
     """Block x in [-lx/2, lx/2], y in [-ly/2, ly/2], z in [-lz, 0] (top face centre at the
     origin). Groups: ``top`` (z = 0), ``bottom`` (z = -lz), ``side`` (the four lateral faces),
     volume ``block``. Returns the path written."""
-    _positive(lx_m=lx_m, ly_m=ly_m, lz_m=lz_m)
+    check_positive(lx_m=lx_m, ly_m=ly_m, lz_m=lz_m)
     scale = max(lx_m, ly_m, lz_m)
 
     def build(gmsh) -> None:
         vol = gmsh.model.occ.addBox(-lx_m / 2, -ly_m / 2, -lz_m, lx_m, ly_m, lz_m)
         gmsh.model.occ.synchronize()
-        top = _faces(gmsh, lambda com, box: _close(com[2], 0.0, scale))
-        bottom = _faces(gmsh, lambda com, box: _close(com[2], -lz_m, scale))
-        _group(gmsh, 2, top, "top")
-        _group(gmsh, 2, bottom, "bottom")
-        _group(
+        top = faces_where(gmsh, lambda com, box: close_to(com[2], 0.0, scale))
+        bottom = faces_where(gmsh, lambda com, box: close_to(com[2], -lz_m, scale))
+        physical_group(gmsh, 2, top, "top")
+        physical_group(gmsh, 2, bottom, "bottom")
+        physical_group(
             gmsh,
             2,
-            _faces(
+            faces_where(
                 gmsh,
-                lambda com, box: not (_close(com[2], 0.0, scale) or _close(com[2], -lz_m, scale)),
+                lambda com, box: (
+                    not (close_to(com[2], 0.0, scale) or close_to(com[2], -lz_m, scale))
+                ),
             ),
             "side",
         )
-        _group(gmsh, 3, [vol], "block")
+        physical_group(gmsh, 3, [vol], "block")
 
-    return _run(path, size_m, order, refine, build)
+    return run_gmsh(path, size_m, order, refine, build)
 
 
 def beam(
@@ -221,9 +119,9 @@ def beam(
     Groups: ``top``, ``bottom``, ``side`` (y = +-width/2), ``end_a`` (x = 0), ``end_b``
     (x = length), ``mid_top`` (the top face within patch_m/2 of mid-length, default patch_m =
     width: a patch of ``top``, in both groups), volume ``beam``. Returns the path written."""
-    _positive(length_m=length_m, width_m=width_m, height_m=height_m)
+    check_positive(length_m=length_m, width_m=width_m, height_m=height_m)
     patch = width_m if patch_m is None else patch_m
-    _positive(patch_m=patch)
+    check_positive(patch_m=patch)
     if patch >= length_m:
         raise InputError(f"beam: patch_m must be < length_m = {length_m!r} m, got {patch!r}")
     x0, x1, scale = (length_m - patch) / 2, (length_m + patch) / 2, length_m
@@ -236,35 +134,61 @@ def beam(
         ]
         occ.fragment([(3, parts[0])], [(3, p) for p in parts[1:]])
         occ.synchronize()
-        top = _faces(
-            gmsh, lambda com, box: _close(box[2], 0.0, scale) and _close(box[5], 0.0, scale)
+        top = faces_where(
+            gmsh, lambda com, box: close_to(box[2], 0.0, scale) and close_to(box[5], 0.0, scale)
         )
-        _group(gmsh, 2, top, "top")
-        _group(
+        physical_group(gmsh, 2, top, "top")
+        physical_group(
             gmsh,
             2,
             [t for t in top if x0 < gmsh.model.occ.getCenterOfMass(2, t)[0] < x1],
             "mid_top",
         )
-        _group(
+        physical_group(
             gmsh,
             2,
-            _faces(
+            faces_where(
                 gmsh,
                 lambda com, box: (
-                    _close(box[2], -height_m, scale) and _close(box[5], -height_m, scale)
+                    close_to(box[2], -height_m, scale) and close_to(box[5], -height_m, scale)
                 ),
             ),
             "bottom",
         )
-        _group(
-            gmsh, 2, _faces(gmsh, lambda com, box: _close(abs(com[1]), width_m / 2, scale)), "side"
+        physical_group(
+            gmsh,
+            2,
+            faces_where(gmsh, lambda com, box: close_to(abs(com[1]), width_m / 2, scale)),
+            "side",
         )
-        _group(gmsh, 2, _faces(gmsh, lambda com, box: _close(box[3], 0.0, scale)), "end_a")
-        _group(gmsh, 2, _faces(gmsh, lambda com, box: _close(box[0], length_m, scale)), "end_b")
-        _group(gmsh, 3, [t for _, t in gmsh.model.getEntities(3)], "beam")
+        physical_group(
+            gmsh, 2, faces_where(gmsh, lambda com, box: close_to(box[3], 0.0, scale)), "end_a"
+        )
+        physical_group(
+            gmsh, 2, faces_where(gmsh, lambda com, box: close_to(box[0], length_m, scale)), "end_b"
+        )
+        physical_group(gmsh, 3, [t for _, t in gmsh.model.getEntities(3)], "beam")
 
-    return _run(path, size_m, order, refine, build)
+    return run_gmsh(path, size_m, order, refine, build)
+
+
+def _check_arm(length_m, width_m, thickness_m, hub_radius_m, hole_radius_m, leg_m) -> None:
+    """One-line InputErrors for an arm's dimensions (arm)."""
+    check_positive(
+        length_m=length_m,
+        width_m=width_m,
+        thickness_m=thickness_m,
+        hub_radius_m=hub_radius_m,
+        hole_radius_m=hole_radius_m,
+    )
+    if not hole_radius_m < hub_radius_m < length_m or width_m / 2 <= hole_radius_m:
+        raise InputError(
+            f"arm: expected hole_radius_m < hub_radius_m < length_m and "
+            f"hole_radius_m < width_m / 2, got {hole_radius_m!r}, {hub_radius_m!r}, "
+            f"{length_m!r}, {width_m!r}"
+        )
+    if leg_m < 0:
+        raise InputError(f"arm: leg_m must be >= 0 m, got {leg_m!r}")
 
 
 def arm(
@@ -287,21 +211,7 @@ def arm(
     (the hole's cylindrical face: where a revolute joint acts), ``tip`` (the free end face:
     x = length for a straight arm, y = -width/2 - leg for an L), ``top`` (z = thickness),
     ``bottom`` (z = 0), volume ``arm``. Returns the path written."""
-    _positive(
-        length_m=length_m,
-        width_m=width_m,
-        thickness_m=thickness_m,
-        hub_radius_m=hub_radius_m,
-        hole_radius_m=hole_radius_m,
-    )
-    if not hole_radius_m < hub_radius_m < length_m or width_m / 2 <= hole_radius_m:
-        raise InputError(
-            f"arm: expected hole_radius_m < hub_radius_m < length_m and "
-            f"hole_radius_m < width_m / 2, got {hole_radius_m!r}, {hub_radius_m!r}, "
-            f"{length_m!r}, {width_m!r}"
-        )
-    if leg_m < 0:
-        raise InputError(f"arm: leg_m must be >= 0 m, got {leg_m!r}")
+    _check_arm(length_m, width_m, thickness_m, hub_radius_m, hole_radius_m, leg_m)
     scale = length_m + leg_m
     tip_y = -width_m / 2 - leg_m
 
@@ -321,29 +231,34 @@ def arm(
         occ.extrude(plate, 0.0, 0.0, thickness_m)
         occ.synchronize()
         rim = hole_radius_m + 1e-4 * scale
-        _group(
-            gmsh, 2, _faces(gmsh, lambda com, box: max(map(abs, box[:2] + box[3:5])) <= rim), "hub"
-        )
-        if leg_m > 0:
-            tip = _faces(gmsh, lambda com, box: _close(box[4], tip_y, scale))
-        else:
-            tip = _faces(gmsh, lambda com, box: _close(box[0], length_m, scale))
-        _group(gmsh, 2, tip, "tip")
-        _group(
+        physical_group(
             gmsh,
             2,
-            _faces(
+            faces_where(gmsh, lambda com, box: max(map(abs, box[:2] + box[3:5])) <= rim),
+            "hub",
+        )
+        if leg_m > 0:
+            tip = faces_where(gmsh, lambda com, box: close_to(box[4], tip_y, scale))
+        else:
+            tip = faces_where(gmsh, lambda com, box: close_to(box[0], length_m, scale))
+        physical_group(gmsh, 2, tip, "tip")
+        physical_group(
+            gmsh,
+            2,
+            faces_where(
                 gmsh,
                 lambda com, box: (
-                    _close(box[2], thickness_m, scale) and _close(box[5], thickness_m, scale)
+                    close_to(box[2], thickness_m, scale) and close_to(box[5], thickness_m, scale)
                 ),
             ),
             "top",
         )
-        _group(gmsh, 2, _faces(gmsh, lambda com, box: _close(box[5], 0.0, scale)), "bottom")
-        _group(gmsh, 3, [t for _, t in gmsh.model.getEntities(3)], "arm")
+        physical_group(
+            gmsh, 2, faces_where(gmsh, lambda com, box: close_to(box[5], 0.0, scale)), "bottom"
+        )
+        physical_group(gmsh, 3, [t for _, t in gmsh.model.getEntities(3)], "arm")
 
-    return _run(path, size_m, order, refine, build)
+    return run_gmsh(path, size_m, order, refine, build)
 
 
 #: Element size [m] at the contact point of the sphere_block meshes (hertz_block_part): the
@@ -362,7 +277,7 @@ def hertz_block_part(path: str | os.PathLike, fine_m: float = HERTZ_BLOCK_COARSE
     (a / h = 2.6 with h the node spacing) and 1.022 at 0.2 mm (tests/test_quadratic_contact.py,
     docs/notes/2026-11-27-hertz-block.md). 8 mm elsewhere: the block's rigid recoil and its
     global compliance (~0.5 % of the approach) need no more."""
-    _positive(fine_m=fine_m)
+    check_positive(fine_m=fine_m)
     return block(
         path,
         0.060,
@@ -398,7 +313,7 @@ def hertz_beam_part(path: str | os.PathLike, fine_m: float = 0.2e-3) -> Path:
     0.2 mm. 5 mm elsewhere, two quadratic tetrahedra through the 10 mm depth: the first three
     free-free bending frequencies in the impact plane within 0.03, 0.08, 0.21 % of the
     Timoshenko beam's (tet4 at 2 mm: +6.4 to +6.9 %, locking)."""
-    _positive(fine_m=fine_m)
+    check_positive(fine_m=fine_m)
     return beam(
         path,
         0.200,
