@@ -18,7 +18,7 @@ from pathlib import Path
 import numpy as np
 
 from flexmvm.metrics.ncc import ncc
-from flexmvm.scenarios import ModelKind, load_scenario
+from flexmvm.scenarios import ModelKind, Scenario, load_scenario
 from flexmvm.scenarios.compare import compare_runs
 from flexmvm.validation.paths import scenario_path
 from flexmvm.validation.runs import Case, case_meta, conservation, run_case
@@ -75,13 +75,19 @@ def arm_stop_case(out: Path, recompute: bool = False, plot: bool = False) -> dic
     sc = load_scenario(scenario_path("arm_stop.toml"))
     full = run_case(out, "arm_stop_full", sc.with_kind(ModelKind.FULL), recompute)
     mvm = run_case(out, "arm_stop_mvm", sc.with_kind(ModelKind.MVM), recompute)
+    return arm_stop_numbers(sc, full, mvm, out if plot else None)
+
+
+def arm_stop_numbers(sc: Scenario, full: Case, mvm: Case, fig_dir: Path | None = None) -> dict:
+    """The case's numbers from its two runs (full FE, MVM) of scenario ``sc``; with fig_dir,
+    the figures there too."""
     (motor,) = (ld for ld in sc.loads if ld.name == "motor")
     t_drive = float(motor.times_s[-1])
     model = sc.body("arm").model
     runs = {"full": full, "mvm": mvm}
     label = f"MVM ball {1e3 * model.region.ball.radius_m:g} mm + {model.modes} modes"
-    if plot:
-        _figures(out, full, mvm, label)
+    if fig_dir is not None:
+        _figures(fig_dir, full, mvm, label)
     return {
         "mvm_vs_full": {
             **compare_runs(*full.curves, *mvm.curves),
@@ -100,4 +106,4 @@ def arm_stop_case(out: Path, recompute: bool = False, plot: bool = False) -> dic
     }
 
 
-__all__ = ["TIP", "arm_stop_case"]
+__all__ = ["TIP", "arm_stop_case", "arm_stop_numbers"]

@@ -346,6 +346,7 @@ def _arm_stop(arm: dict) -> str:
             acc.threshold("arm_stop", ("ledger", "full", "balance_residual_rel_max"), stated)
         ),
         met=_met(acc.met(arm, "arm_stop", stated)),
+        full_loose=f["steps_not_converged"],
     )
 
 
