@@ -59,6 +59,13 @@ def test_pendulum_whole_event():
     _check(validation.pendulum_case(OUT), "pendulum")
 
 
+def test_arm_spun_up_into_a_stop():
+    """Issue 35's showcase: the MVM arm against the full-FE one (force and tip velocity NCC),
+    both runs' energy ledger closed to 0.1 % of the motor's work, every step converged
+    (acceptance rows of "arm_stop"; the full-FE run takes a quarter of an hour)."""
+    _check(validation.arm_stop_case(OUT), "arm_stop")
+
+
 @pytest.mark.parametrize("section", ["flat_vs_st_venant", "seed", "step_convergence", "pendulum"])
 def test_stored_report_meets_the_table(section):
     """The numbers of docs/validation/validation.json (those docs/validation.md shows) meet

@@ -95,6 +95,6 @@ def test_command_help_and_unknown_case(tmp_path, capsys, monkeypatch):
     assert captured.err.strip().splitlines() == [
         (
             "flexmvm: error: unknown validation case 'nope'; expected one of flat_vs_st_venant, "
-            "seed, step_convergence, short, pendulum, hertz_block"
+            "seed, step_convergence, short, pendulum, hertz_block, arm_stop"
         )
     ]

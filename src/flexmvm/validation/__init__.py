@@ -8,6 +8,7 @@ from a checkout; its default outputs, docs/validation.md and docs/validation/, a
 checkout's.
 """
 
+from flexmvm.validation.arm_stop import arm_stop_case
 from flexmvm.validation.cases import (
     CASES,
     DT,
@@ -33,6 +34,7 @@ __all__ = [
     "T_SEED",
     "T_STEP",
     "Case",
+    "arm_stop_case",
     "case_inputs",
     "case_key",
     "flat_vs_st_venant",

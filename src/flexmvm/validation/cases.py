@@ -10,7 +10,9 @@
 5. the pendulum release (pendulum_release.toml), the whole event: impact speed, the impact
    against the seed case, the momenta after it against the rigid pendulum;
 6. a rigid sphere on a meshed block (sphere_block.toml) against Hertz at two element sizes at
-   the contact: the committed block and one meshed finer by gmsh at run time.
+   the contact: the committed block and one meshed finer by gmsh at run time;
+7. the arm spun up by a motor and swung into a stop (arm_stop.toml): MVM against full FE, the
+   energy ledger's balance (validation/arm_stop.py).
 Every run also reports its conservation (runs.conservation).
 
 To add a case: a function ``(out, recompute) -> dict`` of its numbers (each stored run through
@@ -33,6 +35,7 @@ from flexmvm.scenarios import mvm as mvm_model
 from flexmvm.scenarios.compare import compare_runs
 from flexmvm.theory.scenario import theory_histories
 from flexmvm.theory.wave import Rod1D, st_venant_force
+from flexmvm.validation.arm_stop import arm_stop_case
 from flexmvm.validation.paths import scenario_path
 from flexmvm.validation.runs import Case, case_meta, conservation, run_case, truncate
 
@@ -358,6 +361,11 @@ CASES: tuple[ValidationCase, ...] = (
         "hertz_block",
         lambda out, rc: hertz_block_case(out, recompute=rc),
         {"hertz_block_coarse": "coarse", "hertz_block_fine": "fine"},
+    ),
+    ValidationCase(
+        "arm_stop",
+        lambda out, rc: arm_stop_case(out, recompute=rc, plot=True),
+        {"arm_stop_full": "full", "arm_stop_mvm": "mvm"},
     ),
 )
 

@@ -302,6 +302,54 @@ def _hertz_block(hb: dict) -> str:
     )
 
 
+def _arm_stop(arm: dict) -> str:
+    f, m = arm["full"], arm["mvm"]
+    lf, lm = arm["ledger"]["full"], arm["ledger"]["mvm"]
+    rows = [
+        ("DOF (arm)", f"{arm['dof']['full']:,}", f"{arm['dof']['mvm']:,}"),
+        (
+            "steps, not converged, cut",
+            *(f"{r['n_steps']}, {r['steps_not_converged']}, {r['step_cuts']}" for r in (f, m)),
+        ),
+        (
+            "contacts [us]",
+            *(
+                ", ".join(f"{1e6 * a:.1f}-{1e6 * b:.1f}" for a, b in r["contact_intervals_s"])
+                for r in (f, m)
+            ),
+        ),
+        ("peak force", *(f"{r['max_contact_force_N']:.1f} N" for r in (f, m))),
+        ("motor work", *(f"{1e3 * r['work_motor_J']:.3f} mJ" for r in (lf, lm))),
+        (
+            "numerical dissipation",
+            *(f"{1e3 * r['dissipation_numerical_J']:.3f} mJ" for r in (lf, lm)),
+        ),
+        ("energy balance / input work", *(_e(r["balance_residual_rel_max"]) for r in (lf, lm))),
+        ("wall time", *(f"{r['wall_time_s']:.0f} s" for r in (f, m))),
+    ]
+    c = arm["mvm_vs_full"]
+    stated = "arm into a stop"
+    return _template("arm_stop").substitute(
+        drive_end=f"{1e3 * arm['drive_end_s']:g}",
+        dof_full=f"{arm['dof']['full']:,}",
+        dof_mvm=f"{arm['dof']['mvm']:,}",
+        mvm_model=arm["mvm_model"],
+        rows="\n".join(f"| {a} | {b} | {d} |" for a, b, d in rows),
+        ncc_force=_n(c["ncc_force"]),
+        peak_err=_p(c["peak_err"]),
+        impulse_err=_p(c["impulse_err"]),
+        ncc_tip=_n(c["ncc_tip_after_drive"]),
+        cost=f"{arm['cost_ratio_full_over_mvm']:.1f}",
+        ncc_bound=f"{acc.threshold('arm_stop', ('mvm_vs_full', 'ncc_force'), stated):g}",
+        tip_bound=f"{acc.threshold('arm_stop', ('mvm_vs_full', 'ncc_tip_after_drive'), stated):g}",
+        ledger_bound=_pct(
+            acc.threshold("arm_stop", ("ledger", "full", "balance_residual_rel_max"), stated)
+        ),
+        met=_met(acc.met(arm, "arm_stop", stated)),
+        full_loose=f["steps_not_converged"],
+    )
+
+
 #: The page's sections in order: (case key in the report, its renderer); a case the report
 #: does not hold is left out.
 SECTIONS = (
@@ -311,6 +359,7 @@ SECTIONS = (
     ("short", _short),
     ("pendulum", _pendulum),
     ("hertz_block", _hertz_block),
+    ("arm_stop", _arm_stop),
 )
 
 
