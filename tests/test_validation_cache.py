@@ -141,3 +141,21 @@ def test_edited_or_cut_history_is_recomputed_not_checked(tmp_path, monkeypatch):
     assert len(calls) == 4
     validation.run_case(tmp_path, "c", sc, progress=False)
     assert len(calls) == 4
+
+
+def test_key_holds_a_mesh_file_by_name_and_content_not_its_place(tmp_path):
+    """A scenario and its mesh copied to another directory (a fresh clone, another checkout)
+    keep their key; the same file name with other content is another key."""
+    src = Path(__file__).parents[1] / "scenarios"
+    for where in ("a", "b"):
+        (tmp_path / where / "meshes").mkdir(parents=True)
+        (tmp_path / where / "sphere_block.toml").write_bytes(
+            (src / "sphere_block.toml").read_bytes()
+        )
+        for name in ("block_60x60x30.msh", "sphere_r10.msh", "sphere_r10_cap.msh"):
+            (tmp_path / where / "meshes" / name).write_bytes((src / "meshes" / name).read_bytes())
+    key_a = validation.case_key(load_scenario(tmp_path / "a" / "sphere_block.toml"))
+    assert validation.case_key(load_scenario(tmp_path / "b" / "sphere_block.toml")) == key_a
+    block_b = tmp_path / "b" / "meshes" / "block_60x60x30.msh"
+    block_b.write_bytes(block_b.read_bytes() + b"\n")
+    assert validation.case_key(load_scenario(tmp_path / "b" / "sphere_block.toml")) != key_a

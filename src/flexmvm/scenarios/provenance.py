@@ -38,7 +38,9 @@ __all__ = [
 ]
 
 #: Format of a key; bump when what goes into it changes (every stored result goes stale).
-FORMAT = 2
+#: 3: a mesh file enters by its name and content, not its absolute path (a fresh clone or
+#: another checkout reuses what this one stored).
+FORMAT = 3
 
 #: The libraries whose versions are part of the key.
 LIBRARIES = ("numpy", "scipy", "numba")
@@ -81,14 +83,24 @@ def _mesh_files(sc: Scenario) -> dict[str, str]:
     }
 
 
+def _scenario_form(sc: Scenario) -> dict[str, Any]:
+    """The resolved scenario's JSON form with each mesh_file reduced to its file name: where
+    the checkout lies changes no run, the file's content (mesh_files) does."""
+    form = sc.model_dump(mode="json")
+    for body in form["bodies"]:
+        if body.get("mesh_file") is not None:
+            body["mesh_file"] = Path(body["mesh_file"]).name
+    return form
+
+
 def run_inputs(sc: Scenario) -> dict[str, Any]:
     """Everything a run of ``sc`` depends on: {format, code, libraries, scenario (the resolved
-    scenario's JSON form), mesh_files ({body: SHA-256})}."""
+    scenario's JSON form, mesh files by name), mesh_files ({body: SHA-256})}."""
     return {
         "format": FORMAT,
         "code": run_code_version(),
         "libraries": library_versions(),
-        "scenario": sc.model_dump(mode="json"),
+        "scenario": _scenario_form(sc),
         "mesh_files": _mesh_files(sc),
     }
 
