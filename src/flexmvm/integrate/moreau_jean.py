@@ -63,7 +63,13 @@ from flexmvm.integrate.coulomb import solve_contact_impulses
 from flexmvm.integrate.iteration_matrix import IterationMatrices
 from flexmvm.integrate.massless import MasslessCoordinates, check_contact_law, equilibrate_step_end
 from flexmvm.integrate.momentum_balance import balance_translation, balanced_residuals
-from flexmvm.integrate.newton_iterate import NewtonIterate, joint_rows, relative_residual
+from flexmvm.integrate.newton_iterate import (
+    NewtonIterate,
+    at_roundoff,
+    joint_rows,
+    relative_residual,
+    roundoff_momenta,
+)
 from flexmvm.integrate.relaxation import ACTIVATE_RATIO, AitkenRelaxation, relaxed_iterate
 from flexmvm.integrate.row_products import flat_product, merge_contacts
 from flexmvm.integrate.stall_report import stall_report
@@ -111,6 +117,7 @@ class MoreauJeanIntegrator:
             for body, pool in zip(bodies, self.threads.solve_pool)
         ]
         self.rtol = rtol
+        self.roundoff_kgm = roundoff_momenta(bodies)
         self.max_iter = max_iter
         self.n_joint_rows = sum(j.n_rows for j in system.joints)
         self.exploit_nonrotating = exploit_nonrotating
@@ -301,7 +308,7 @@ class MoreauJeanIntegrator:
             phi, jrows = joint_rows(self.system, t, h, mids, ends)
             jacobian = {b: jrows.body_matrix(b) for b in jrows.blocks} if n_j else {}
             res_norm = max(float(np.abs(r).max()) for r in R) if it else np.inf
-            if it > 0 and self._accepted(s, it, R, jacobian, crows, phi, scales):
+            if it > 0 and self._accepted(s, it, h, R, jacobian, crows, phi, scales):
                 break
             refreshed = self._refresh_when_slow(s, it, res_norm, mids, h, crows)
             s.last_norm = res_norm
@@ -330,20 +337,23 @@ class MoreauJeanIntegrator:
             s, it, t, h, th, states, crows, parts, phi, jrows, mids, ends, scales
         )
 
-    def _accepted(self, s: NewtonIterate, it, R, jacobian, crows, phi, scales) -> bool:
+    def _accepted(self, s: NewtonIterate, it, h, R, jacobian, crows, phi, scales) -> bool:
         """Convergence test of iterate it > 0: the residual with the last impulses within
         rtol and the joints closed, or a residual on the round-off floor (below
         ROUNDOFF_FLOOR, no longer decreasing, translational rows within TRANSLATION_RTOL or
-        max_iter reached: accepted, and counted as not converged in StepResult)."""
+        max_iter reached: accepted, and counted as not converged in StepResult, unless every
+        body's residual is below the round-off of its positions, newton_iterate.at_roundoff:
+        converged)."""
         s.rel, s.rel_translation, s.translation_sum, s.residuals = relative_residual(
             self.system.bodies, R, jacobian, crows.rows, s.lam, self.n_joint_rows, scales
         )
         phi_ok = not (phi.size and np.abs(phi).max() > 1e-12)
-        floor = (
-            it > 2 and s.rel < ROUNDOFF_FLOOR and (s.rel >= 0.5 * s.last_rel or it >= self.max_iter)
-        )
+        stalled = it > 2 and (s.rel >= 0.5 * s.last_rel or it >= self.max_iter)
+        floor = stalled and s.rel < ROUNDOFF_FLOOR
+        s.at_roundoff = stalled and at_roundoff(s.residuals, self.roundoff_kgm, h)
         if phi_ok and (
             s.rel <= self.rtol
+            or s.at_roundoff
             or (floor and (s.rel_translation <= TRANSLATION_RTOL or it >= self.max_iter))
         ):
             return True
@@ -455,7 +465,7 @@ class MoreauJeanIntegrator:
             lam[n_j:],
             it,
             drift,
-            converged=rel <= self.rtol,
+            converged=rel <= self.rtol or s.at_roundoff,
             residual=rel,
             translation_residual=res_t,
             lcp_residual=s.lcp_max,

@@ -1,6 +1,7 @@
 """The state of one step's modified Newton iteration (NewtonIterate) and what it measures:
 the joints' constraint values and rows (joint_rows) and the momentum residual relative to each
-body's momentum scale, constraint impulses included (relative_residual). Used by the scheme,
+body's momentum scale, constraint impulses included (relative_residual), and the residual that
+round-off in the positions alone leaves (roundoff_momenta, at_roundoff). Used by the scheme,
 integrate.moreau_jean."""
 
 from __future__ import annotations
@@ -30,6 +31,7 @@ class NewtonIterate:
     lcp_max: float = 0.0  # largest complementarity residual of the LCP solves
     relaxed: bool = False  # the last iterate was relaxed (integrate.relaxation)
     stalled: bool = False
+    at_roundoff: bool = False  # stopped on the round-off of the positions (at_roundoff)
     rel: float = np.inf  # relative residual (constraint impulses included)
     rel_translation: float = np.inf  # the same of the translational rows alone
     translation_sum: np.ndarray = field(default_factory=lambda: np.zeros(3))  # [N s]
@@ -76,3 +78,26 @@ def relative_residual(bodies, R, joint_jacobian, crows: Rows, lam, n_j, scales) 
         res_t += res[:3]
         residuals.append(res)
     return worst, worst_t, res_t, residuals
+
+
+def roundoff_momenta(bodies) -> np.ndarray:
+    """eps m L per body [kg m] (m its mass, L the largest extent of its undeformed nodes):
+    divided by the step h, the momentum of a position error of one unit in the last place
+    over the step, eps L / h, on the whole body. No residual of the step's momentum balance
+    can be trusted below it: positions carry that error, velocities derived from them over
+    one step carry eps L / h."""
+    eps = np.finfo(float).eps
+    out = np.empty(len(bodies))
+    for b, body in enumerate(bodies):
+        extent = float(np.ptp(body.X, axis=0).max()) if len(body.X) else 1.0
+        out[b] = eps * float(body.inv.mass) * extent
+    return out
+
+
+def at_roundoff(residuals, momenta_kgm: np.ndarray, h: float) -> bool:
+    """True if every body's residual (constraint impulses included) [N s, N m s] is below
+    its round-off momentum eps m L / h (roundoff_momenta): an iteration stalled there has
+    converged as far as the positions allow. A body at rest holds a momentum scale of
+    round-off (a joint's impulse against the round-off of its constraint), so that a
+    residual relative to it cannot fall below the floor that relative_residual assumes."""
+    return all(float(np.abs(r).max(initial=0.0)) <= p / h for r, p in zip(residuals, momenta_kgm))
