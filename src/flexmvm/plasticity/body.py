@@ -176,7 +176,7 @@ class PlasticBody:
             (data, pattern.indices.copy(), pattern.indptr.copy()),
             shape=(self.n_dof, self.n_dof),
         )
-        tangent.has_sorted_indices = True
+        tangent.has_canonical_format = True  # sorted, no duplicates: np.unique made it
         return BodyResponse(force, tangent, stress, new, yielding)
 
     @cached_property
