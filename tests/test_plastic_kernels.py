@@ -17,7 +17,8 @@ virgin state) yields about half of the points, then a second random field of the
 applied from that history, so that the second call holds points that never yielded (virgin,
 elastic), points that yield again (plastic loading with history) and points that yielded
 before and now unload elastically. Each case runs in well under a second after the kernels
-are compiled (first run in a checkout: about 30 s). About 4 s in all.
+are compiled (the first run in a checkout compiles them: about 20 s at load 7). About 4 s
+in all (3-5 s measured at load 7).
 """
 
 from __future__ import annotations
