@@ -1,7 +1,8 @@
 """Small-strain J2 (von Mises) plasticity of the solid elements: the material's plastic part
 (material), the radial return at integration points (return_mapping), the internal force
-and consistent tangent of a body (body), static equilibrium by full Newton (static_newton)
-and a rigid sphere pressed into a flat face by an active set (indentation)."""
+and consistent tangent of a body (body), their compiled loops (kernels) and the numpy form
+they are checked against (reference), static equilibrium by full Newton (static_newton) and
+a rigid sphere pressed into a flat face by an active set (indentation)."""
 
 from flexmvm.plasticity.body import BodyResponse, PlasticBody
 from flexmvm.plasticity.indentation import Indentation, indent_with_sphere

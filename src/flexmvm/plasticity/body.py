@@ -10,11 +10,18 @@ stress sigma_q and tangent D_q of the radial return (return_mapping.py) give
 Gauss rules of fe/assembly.py (fe/points.py): in the elastic range K_t is assembly's K and
 f_int = K u. History (plastic strain, equivalent plastic strain, back stress) lives per
 integration point in one PointState, points numbered block by block, cell-major.
+
+respond runs the compiled kernels (kernels.block_response: return and element assembly per
+cell, the element tangents added straight into the CSR data through a slot map found once
+per body); reference.py keeps the numpy form they are checked against. A body restricted to
+some cells (on_cells) costs what those cells cost: the time step evaluates only the cells
+that can yield.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 import scipy.sparse as sp
@@ -23,11 +30,9 @@ from flexmvm.errors import InputError
 from flexmvm.fe.points import BlockPoints, integration_points
 from flexmvm.materials import Material
 from flexmvm.mesh.mesh import Mesh
+from flexmvm.plasticity.kernels import block_response
 from flexmvm.plasticity.material import J2Plasticity
-from flexmvm.plasticity.return_mapping import PointState, radial_return
-
-#: Cells per chunk of element tangents (a HEX27 tangent is 81 x 81 doubles = 52 kB).
-_CHUNK = 512
+from flexmvm.plasticity.return_mapping import PointState, material_constants
 
 #: Strain row I (Voigt xx, yy, zz, xy, yz, zx) = sum over (component i, gradient j) pairs.
 _B_PAIRS = ((0, 0, 0), (1, 1, 1), (2, 2, 2), (3, 0, 1), (3, 1, 0), (4, 1, 2), (4, 2, 1))
@@ -58,17 +63,69 @@ def strain_matrices(grad: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True)
 class PlasticBody:
-    """An FE body of ``material`` with J2 plasticity ``plastic`` on ``mesh`` (module doc)."""
+    """An FE body of ``material`` with J2 plasticity ``plastic`` on ``mesh`` (module doc),
+    on all its cells or on the cells ``cell_ids`` (ids in Mesh.cells order, block by block,
+    ascending; None: all) of a body restricted by on_cells."""
 
     mesh: Mesh
     material: Material
     plastic: J2Plasticity
     blocks: tuple[BlockPoints, ...]
+    cell_ids: np.ndarray | None = None
 
     @classmethod
     def build(cls, mesh: Mesh, material: Material, plastic: J2Plasticity) -> PlasticBody:
         """The body with its integration points (fe/points.py); MeshError as fe.assemble."""
-        return cls(mesh, material, plastic, integration_points(mesh))
+        blocks = integration_points(mesh)
+        return cls(mesh, material, plastic, tuple(_take_cells(b, slice(None)) for b in blocks))
+
+    @property
+    def cells(self) -> np.ndarray:
+        """Ids (Mesh.cells order) of the body's cells, in state order (ascending)."""
+        return np.arange(self.mesh.n_cells) if self.cell_ids is None else self.cell_ids
+
+    def on_cells(self, cells) -> PlasticBody:
+        """This body on the cells ``cells`` (ids as in ``cells``, any order, no repeats) only:
+        the same mesh, DOFs and kernels, its state the points of those cells in this body's
+        order (point_ids gives their positions in this body's state), its force and tangent
+        the part of theirs (3n,), (3n, 3n). Slicing only; the tangent's structure is found on
+        its first respond. Raises InputError for an empty set, repeats or foreign ids."""
+        pos = self._positions(cells)
+        blocks, start = [], 0
+        for b in self.blocks:
+            local = pos[(pos >= start) & (pos < start + len(b.nodes))] - start
+            if len(local):
+                blocks.append(_take_cells(b, local))
+            start += len(b.nodes)
+        return PlasticBody(self.mesh, self.material, self.plastic, tuple(blocks), self.cells[pos])
+
+    def point_ids(self, cells) -> np.ndarray:
+        """Positions in this body's state of the points of ``cells``, in the state order of
+        ``on_cells(cells)``: ``state.take(body.point_ids(c))`` is the sub-body's state and
+        ``state.put(ids, response.state)`` writes its new state back. InputError as on_cells."""
+        pos = self._positions(cells)
+        per_cell = np.concatenate([np.full(len(b.nodes), b.dx.shape[1]) for b in self.blocks])
+        first = np.concatenate([[0], np.cumsum(per_cell)])[pos]
+        count = per_cell[pos]
+        ends = np.cumsum(count)
+        return np.repeat(first - (ends - count), count) + np.arange(ends[-1])
+
+    def _positions(self, cells) -> np.ndarray:
+        """Sorted positions in self.cells of the ids ``cells``; InputError unless valid."""
+        ids = np.asarray(cells).ravel()
+        if ids.size == 0 or not np.issubdtype(ids.dtype, np.integer):
+            raise InputError(
+                f"plastic body: cells must be a non-empty set of cell ids, got {cells!r}"
+            )
+        own = self.cells
+        pos = np.searchsorted(own, ids)
+        bad = (pos >= len(own)) | (own[np.minimum(pos, len(own) - 1)] != ids)
+        if bad.any():
+            raise InputError(f"plastic body: cell {int(ids[bad][0])} is not a cell of this body")
+        pos = np.sort(pos)
+        if np.any(np.diff(pos) == 0):
+            raise InputError("plastic body: cells must not repeat")
+        return pos
 
     @property
     def n_dof(self) -> int:
@@ -92,65 +149,79 @@ class PlasticBody:
 
     def respond(self, u: np.ndarray, state: PointState) -> BodyResponse:
         """f_int, K_t, stress and trial state at displacement u (3n,) [m] from the converged
-        ``state`` of the last step. Raises InputError if the shapes do not match the body."""
-        u = np.asarray(u, dtype=float)
+        ``state`` of the last step, by the compiled kernels (kernels.block_response). Raises
+        InputError if the shapes do not match the body."""
+        u = np.ascontiguousarray(u, dtype=float)
         if u.shape != (self.n_dof,) or state.n_points != self.n_points:
             raise InputError(
                 f"plastic body: u must have shape ({self.n_dof},) and the state "
                 f"{self.n_points} points, got {u.shape} and {state.n_points}"
             )
-        parts, start = [], 0
-        for block in self.blocks:
-            for lo in range(0, len(block.nodes), _CHUNK):
-                cells = slice(lo, lo + _CHUNK)
-                n_pts = block.dx[cells].size
-                pts = _slice(state, slice(start, start + n_pts))
-                parts.append(self._chunk(block, cells, u, pts))
-                start += n_pts
-        force, rows, cols = np.zeros(self.n_dof), [], []
-        for ids, f_e, _, _ in parts:  # cell blocks differ in nodes per cell: one by one
-            np.add.at(force, ids, f_e)
-            rows.append(np.repeat(ids, ids.shape[1], axis=1).ravel())
-            cols.append(np.tile(ids, (1, ids.shape[1])).ravel())
-        vals = np.concatenate([p[2].ravel() for p in parts])
+        pattern = self._pattern
+        n = self.n_points
+        force, data = np.zeros(self.n_dof), np.zeros(len(pattern.indices))
+        stress, yielding = np.empty((n, 6)), np.empty(n, dtype=np.bool_)
+        new = PointState(np.empty((n, 6)), np.empty(n), np.empty((n, 6)))
+        old = [np.ascontiguousarray(a, dtype=float) for a in _arrays(state)]
+        mat = material_constants(self.material, self.plastic)
+        start = 0
+        for block, slots in zip(self.blocks, pattern.slots, strict=True):
+            pts = slice(start, start + block.n_points)
+            block_response(
+                block.nodes, block.grad, block.dx, u, *(a[pts] for a in old), mat, slots,
+                force, data, stress[pts], *(a[pts] for a in _arrays(new)), yielding[pts],
+            )  # fmt: skip
+            start += block.n_points
         tangent = sp.csr_matrix(
-            (vals, (np.concatenate(rows), np.concatenate(cols))), shape=(self.n_dof, self.n_dof)
+            (data, pattern.indices.copy(), pattern.indptr.copy()),
+            shape=(self.n_dof, self.n_dof),
         )
-        resp = [p[3] for p in parts]
-        return BodyResponse(
-            force,
-            tangent,
-            np.vstack([r.stress for r in resp]),
-            _concat([r.state for r in resp]),
-            np.concatenate([r.yielding for r in resp]),
-        )
+        tangent.has_canonical_format = True  # sorted, no duplicates: np.unique made it
+        return BodyResponse(force, tangent, stress, new, yielding)
 
-    def _chunk(self, block: BlockPoints, cells: slice, u: np.ndarray, state: PointState):
-        """Element DOF ids (ne, 3 nloc), element forces (ne, 3 nloc) [N], element tangents
-        (ne, 3 nloc, 3 nloc) [N/m] and the PointResponse of the cells ``cells`` of a block."""
-        ne, nqp = block.dx[cells].shape
-        ids = (3 * block.nodes[cells][:, :, None] + np.arange(3)).reshape(ne, -1)
-        b = strain_matrices(block.grad[cells])
-        strain = np.einsum("eqIk,ek->eqI", b, u[ids]).reshape(-1, 6)
-        resp = radial_return(self.material, self.plastic, strain, state)
-        dx = block.dx[cells]
-        f_e = np.einsum("eqIk,eqI,eq->ek", b, resp.stress.reshape(ne, nqp, 6), dx)
-        d = resp.tangent.reshape(ne, nqp, 6, 6) * dx[:, :, None, None]
-        k_e = np.zeros((ne, ids.shape[1], ids.shape[1]))
-        for q in range(nqp):
-            k_e += np.swapaxes(b[:, q], 1, 2) @ (d[:, q] @ b[:, q])
-        return ids, f_e, k_e, resp
+    @cached_property
+    def _pattern(self) -> _Pattern:
+        """The tangent's CSR structure and each element entry's position in it, computed on
+        the first respond (np.unique over the element entries) and kept with the body."""
+        ids = [
+            (3 * b.nodes[:, :, None] + np.arange(3)).reshape(len(b.nodes), -1) for b in self.blocks
+        ]
+        keys = np.concatenate([(i[:, :, None] * self.n_dof + i[:, None, :]).ravel() for i in ids])
+        unique, inverse = np.unique(keys, return_inverse=True)
+        dtype = np.int32 if len(unique) < 2**31 - 1 else np.int64
+        indptr = np.zeros(self.n_dof + 1, dtype=dtype)
+        np.cumsum(np.bincount(unique // self.n_dof, minlength=self.n_dof), out=indptr[1:])
+        slots, start = [], 0
+        for i in ids:
+            count = i.shape[0] * i.shape[1] ** 2
+            slots.append(
+                inverse[start : start + count].astype(dtype).reshape(len(i), *[i.shape[1]] * 2)
+            )
+            start += count
+        return _Pattern((unique % self.n_dof).astype(dtype), indptr, tuple(slots))
 
 
-def _slice(state: PointState, pts: slice) -> PointState:
-    return PointState(
-        state.plastic_strain[pts], state.equivalent_plastic_strain[pts], state.back_stress[pts]
+@dataclass(frozen=True)
+class _Pattern:
+    """CSR indices (nnz,) and indptr (3n + 1,) of a body's tangent and, per cell block, the
+    position slots (ne, 3 nloc, 3 nloc) of each element entry in its data."""
+
+    indices: np.ndarray
+    indptr: np.ndarray
+    slots: tuple[np.ndarray, ...]
+
+
+def _take_cells(block: BlockPoints, cells) -> BlockPoints:
+    """The cells ``cells`` of a block, as C-contiguous arrays (node ids int64) the kernels
+    take without copying."""
+    return BlockPoints(
+        block.cell_type,
+        np.ascontiguousarray(block.nodes[cells], dtype=np.int64),
+        np.ascontiguousarray(block.values[cells]),
+        np.ascontiguousarray(block.grad[cells]),
+        np.ascontiguousarray(block.dx[cells]),
     )
 
 
-def _concat(states: list[PointState]) -> PointState:
-    return PointState(
-        np.vstack([s.plastic_strain for s in states]),
-        np.concatenate([s.equivalent_plastic_strain for s in states]),
-        np.vstack([s.back_stress for s in states]),
-    )
+def _arrays(state: PointState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    return state.plastic_strain, state.equivalent_plastic_strain, state.back_stress

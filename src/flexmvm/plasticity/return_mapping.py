@@ -13,6 +13,8 @@ modulus kappa, shear modulus mu and the state (eps_p, alpha, beta) of step n:
     C     = kappa 1 (x) 1 + 2 mu theta (I - 1/3 1 (x) 1) - 2 mu theta_bar n (x) n
     theta = 1 - 2 mu dgam / ||xi_tr||,  theta_bar = 1 / (1 + (H_iso + H_kin) / (3 mu)) - (1 - theta)
 
+The compiled per-point kernel is kernels.return_point; reference.py keeps the numpy form.
+
 Voigt storage, order (xx, yy, zz, xy, yz, zx): strains (the input strain and the plastic
 strain) carry engineering shears gamma_ij = 2 eps_ij, as B u gives them; stresses and the
 back stress carry tensor components. The tangent D (6 x 6) is d sigma / d strain in that
@@ -28,14 +30,14 @@ import numpy as np
 
 from flexmvm.errors import InputError
 from flexmvm.materials import Material
+from flexmvm.plasticity.kernels import return_points
 from flexmvm.plasticity.material import J2Plasticity
 
 #: Tensor-component inner product weights in Voigt order: a : b = sum_I w_I a_I b_I.
 _WEIGHT = np.array([1.0, 1.0, 1.0, 2.0, 2.0, 2.0])
 _ONE = np.array([1.0, 1.0, 1.0, 0.0, 0.0, 0.0])
 #: d eps (tensor components) / d strain (engineering shears): the symmetric identity.
-_I_SYM = np.diag([1.0, 1.0, 1.0, 0.5, 0.5, 0.5])
-_I_DEV = _I_SYM - np.outer(_ONE, _ONE) / 3.0
+_I_DEV = np.diag([1.0, 1.0, 1.0, 0.5, 0.5, 0.5]) - np.outer(_ONE, _ONE) / 3.0
 
 
 @dataclass(frozen=True)
@@ -55,6 +57,27 @@ class PointState:
     @property
     def n_points(self) -> int:
         return len(self.equivalent_plastic_strain)
+
+    def take(self, points: np.ndarray) -> PointState:
+        """The history of the points ``points`` (index array or slice), in that order."""
+        return PointState(
+            self.plastic_strain[points],
+            self.equivalent_plastic_strain[points],
+            self.back_stress[points],
+        )
+
+    def put(self, points: np.ndarray, part: PointState) -> PointState:
+        """A copy of this history with the points ``points`` replaced by ``part`` (the
+        inverse of take: ``state.put(ids, state.take(ids))`` equals ``state``)."""
+        out = PointState(
+            self.plastic_strain.copy(),
+            self.equivalent_plastic_strain.copy(),
+            self.back_stress.copy(),
+        )
+        out.plastic_strain[points] = part.plastic_strain
+        out.equivalent_plastic_strain[points] = part.equivalent_plastic_strain
+        out.back_stress[points] = part.back_stress
+        return out
 
 
 @dataclass(frozen=True)
@@ -102,28 +125,41 @@ def radial_return(
         raise InputError(
             f"radial_return: strain must have shape ({state.n_points}, 6), got {strain.shape}"
         )
-    lam, mu = material.lame
-    kappa = lam + 2.0 * mu / 3.0
-    h_iso, h_kin = plastic.hardening_pa, plastic.kinematic_hardening_pa
-    elastic_strain = (strain - state.plastic_strain) @ _I_SYM  # tensor components
-    s_trial = 2.0 * mu * deviator(elastic_strain)
-    xi = s_trial - state.back_stress
-    xi_norm = tensor_norm(xi)
-    radius = math.sqrt(2.0 / 3.0) * (plastic.yield_pa + h_iso * state.equivalent_plastic_strain)
-    f_trial = xi_norm - radius
-    yielding = f_trial > 0.0
-    dgam = np.where(yielding, f_trial / (2.0 * mu + (2.0 / 3.0) * (h_iso + h_kin)), 0.0)
-    n = xi / np.where(yielding, xi_norm, 1.0)[:, None]
-    step = dgam[:, None] * n
-    volumetric = kappa * elastic_strain[:, :3].sum(axis=1)
-    stress = s_trial - 2.0 * mu * step + volumetric[:, None] * _ONE
-    new_state = PointState(
-        plastic_strain=state.plastic_strain + step * _WEIGHT,
-        equivalent_plastic_strain=state.equivalent_plastic_strain + math.sqrt(2.0 / 3.0) * dgam,
-        back_stress=state.back_stress + (2.0 / 3.0) * h_kin * step,
+    mat = material_constants(material, plastic)
+    n = len(strain)
+    stress, tangent = np.empty((n, 6)), np.empty((n, 6, 6))
+    new = PointState(np.empty((n, 6)), np.empty(n), np.empty((n, 6)))
+    yielding = np.empty(n, dtype=np.bool_)
+    return_points(
+        np.ascontiguousarray(strain),
+        *_contiguous(state),
+        mat,
+        stress,
+        tangent,
+        *_arrays(new),
+        yielding,
     )
-    theta = 1.0 - 2.0 * mu * dgam / np.where(yielding, xi_norm, 1.0)
-    theta_bar = np.where(yielding, 1.0 / (1.0 + (h_iso + h_kin) / (3.0 * mu)) - (1.0 - theta), 0.0)
-    tangent = kappa * np.outer(_ONE, _ONE) + 2.0 * mu * theta[:, None, None] * _I_DEV
-    tangent -= (2.0 * mu * theta_bar)[:, None, None] * (n[:, :, None] * n[:, None, :])
-    return PointResponse(stress, tangent, new_state, yielding)
+    return PointResponse(stress, tangent, new, yielding)
+
+
+def material_constants(material: Material, plastic: J2Plasticity) -> np.ndarray:
+    """(kappa, mu, Y, H_iso, H_kin) [Pa], the material vector of the kernels."""
+    lam, mu = material.lame
+    return np.array(
+        [
+            lam + 2.0 * mu / 3.0,
+            mu,
+            plastic.yield_pa,
+            plastic.hardening_pa,
+            plastic.kinematic_hardening_pa,
+        ]
+    )
+
+
+def _arrays(state: PointState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    return state.plastic_strain, state.equivalent_plastic_strain, state.back_stress
+
+
+def _contiguous(state: PointState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The state's arrays as float64 C-contiguous arrays (no copy when they are)."""
+    return tuple(np.ascontiguousarray(a, dtype=float) for a in _arrays(state))
