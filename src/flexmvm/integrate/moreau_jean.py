@@ -64,6 +64,7 @@ from flexmvm.integrate.iteration_matrix import IterationMatrices
 from flexmvm.integrate.massless import MasslessCoordinates, check_contact_law, equilibrate_step_end
 from flexmvm.integrate.momentum_balance import balance_translation, balanced_residuals
 from flexmvm.integrate.newton_iterate import NewtonIterate, joint_rows, relative_residual
+from flexmvm.integrate.plastic_bodies import PlasticBodies
 from flexmvm.integrate.relaxation import ACTIVATE_RATIO, AitkenRelaxation, relaxed_iterate
 from flexmvm.integrate.row_products import flat_product, merge_contacts
 from flexmvm.integrate.stall_report import stall_report
@@ -121,6 +122,10 @@ class MoreauJeanIntegrator:
         # coordinates without mass (redistributed contact nodes): equilibrium at step ends
         self.massless = [MasslessCoordinates.of(b) for b in bodies]
         check_contact_law(system, self.massless)
+        # elastic-plastic bodies: their history beside the states (integrate.plastic_bodies)
+        self.plastic = PlasticBodies(system)
+        if any(self.massless[b] is not None for b in self.plastic.history):
+            raise SolverError("plastic bodies cannot have massless (redistributed) contact nodes")
         # bodies whose k_hat dq_dot comes from W_qq dq_dot (full FE, undamped, not stiffened)
         plain = {b for b in self.threads.sparse if bodies[b].c_hat is None}
         self.images = WImages({b for b in plain if bodies[b].stiffening is None})
@@ -174,6 +179,9 @@ class MoreauJeanIntegrator:
         dv = vp - st.v
         if body.nq:
             Lq_m, Lqd_m, Kq_m = self.carried_state.midpoint(b, st, vp, th, h)
+            if b in self.plastic:  # the return at the midpoint (integrate.plastic_bodies)
+                c_q = self.plastic.midpoint_force(b, mid.q)
+                Kq_m = Kq_m if c_q is None else Kq_m + c_q
             # M is linear: M v_m = M v- + th M dv, and M_qq v- is carried with the state
             mqq_dv = self.carried_state.mass_increment(b)
             mqq_vm = self.carried_state.at(b, st).Mqd + th * mqq_dv
@@ -250,7 +258,14 @@ class MoreauJeanIntegrator:
             out = nonrotating.nonrotating_step(
                 self.system, self.solvers, th, self.rtol, self.loads, t, states, h, crows
             )
+            if (
+                out is not None
+                and self.plastic
+                and not self.plastic.elastic_step(states, out[0], th)
+            ):
+                out = None  # a plastic body yields: the Newton step with its return
             if out is not None:
+                self.plastic.commit(states, out[0])
                 self.n_nonrotating_steps += 1
                 new_states, lam_c, res_t, lcp_res = out
                 self._equilibrate_massless(t, h, th, states, new_states, [(crows.rows, lam_c)])
@@ -418,6 +433,7 @@ class MoreauJeanIntegrator:
         """The accepted iterate as the step's result: translational rows balanced (no
         joints), end states with v+, carried contractions advanced, massless coordinates
         to equilibrium."""
+        self.plastic.check()  # before anything moves on: a refused step raises
         n_j = self.n_joint_rows
         lam, v_plus = s.lam, s.v_plus
         rel, res_t = s.rel, s.translation_sum
@@ -439,6 +455,7 @@ class MoreauJeanIntegrator:
         for st, vp in zip(new_states, v_plus):
             st.v = vp
         self.carried_state.advance(states, new_states, h)
+        plastic_work = self.plastic.commit(states, new_states)
         self._equilibrate_massless(
             t,
             h,
@@ -460,6 +477,7 @@ class MoreauJeanIntegrator:
             translation_residual=res_t,
             lcp_residual=s.lcp_max,
             momentum_shift=shift,
+            plastic_work=plastic_work,
         )
 
     def _equilibrate_massless(self, t, h, th, states, new_states, held) -> None:

@@ -1,0 +1,159 @@
+"""Elastic-plastic full-FE bodies in the Moreau-Jean step (docs/plasticity.md, "The dynamic
+step").
+
+The internal force of a plastic body at the step's midpoint q_m is the return mapping at
+eps(u_m), u_m = psi q_m, from the last accepted history (the flow rule integrated by backward
+Euler on the grid of midpoints: plan item 1, docs/notes/2026-11-27-plastic-region-plan.md):
+
+    F_q = -(k_hat q_m + psi^T c(psi q_m))        c: plasticity/step_history.py
+
+so the carried k_hat q of the elastic step stays as it is and the correction is one return
+over the plastic cell set per iterate. The iteration matrix stays the elastic W (factored once
+per h): modified Newton, the residual exact. The accepted iterate's return becomes the next
+step's history; a refused or cut step never commits its return. Energy: the work of the
+correction, sum over the steps of psi^T c(q_m) . (q(t + h) - q(t)), less the difference between
+the elastic energy and 1/2 q^T k_hat q at the output (StepHistory.strain_energy_correction), is
+the plastic work (dissipation and stored hardening, to the scheme's order): the ledger's
+``plastic`` term, which closes the balance to the Newton tolerance (integrate.energy_ledger).
+
+The history lives here, beside the BodyState: a run without plastic bodies makes none of it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from flexmvm.errors import InputError, SolverError
+from flexmvm.plasticity.body import PlasticBody
+from flexmvm.plasticity.step_history import StepHistory
+
+
+@dataclass(frozen=True)
+class PlasticPart:
+    """A plastic body of a System: its index in System.bodies and its PlasticBody (mesh,
+    elastic material and J2Plasticity; the mesh the body's psi maps to)."""
+
+    body: int
+    model: PlasticBody
+
+
+@dataclass(frozen=True)
+class PlasticReport:
+    """What a run leaves in a plastic body: cell_equivalent_plastic_strain (n_cells,) [-]
+    (volume average per cell, mesh block order), point_equivalent_plastic_strain (n_points,)
+    [-], plastic_work_j (sum of sigma : d eps_p dx over the steps) [J], hardening_energy_j
+    (stored, at the end) [J], residual_displacement (3n,) [m] (the body's static field of its
+    final plastic strain: unloaded and at rest, in its frame, relative to its reference
+    condition), n_set_cells (cells returned) and n_refused (steps taken again because a cell
+    outside the set reached yield)."""
+
+    cell_equivalent_plastic_strain: np.ndarray
+    point_equivalent_plastic_strain: np.ndarray
+    plastic_work_j: float
+    hardening_energy_j: float
+    residual_displacement: np.ndarray
+    n_set_cells: int
+    n_refused: int
+
+    @property
+    def peak_equivalent_plastic_strain(self) -> float:
+        return float(self.point_equivalent_plastic_strain.max(initial=0.0))
+
+
+class PlasticBodies:
+    """The plastic bodies of a system through a run (module doc)."""
+
+    def __init__(self, system):
+        self.bodies = system.bodies
+        self.history: dict[int, StepHistory] = {}
+        for part in getattr(system, "plastic", ()):
+            body = self.bodies[part.body]
+            if not body.is_sparse or body.psi.shape[0] != part.model.n_dof:
+                raise InputError(
+                    f"body {body.name!r}: plasticity needs a full-FE body (psi of "
+                    f"{part.model.n_dof} rows, sparse), got a psi of shape {body.psi.shape}"
+                )
+            self.history[part.body] = StepHistory(part.model)
+        self._mid: dict[int, tuple[np.ndarray, np.ndarray | None]] = {}
+
+    def __bool__(self) -> bool:
+        return bool(self.history)
+
+    def __contains__(self, b: int) -> bool:
+        return b in self.history
+
+    def midpoint_force(self, b: int, q_m: np.ndarray) -> np.ndarray | None:
+        """psi^T c(psi q_m) (nq,) [N] of body b at the midpoint q_m, None where it is zero;
+        the return is the step's trial."""
+        psi = self.bodies[b].psi
+        u = psi @ q_m
+        c = self.history[b].correction(u)
+        c_q = None if c is None else psi.T @ c
+        self._mid[b] = (u, c_q)
+        return c_q
+
+    def elastic_step(self, states, new_states, theta: float) -> bool:
+        """True if the step states -> new_states (the linear non-rotating step) leaves every
+        plastic body elastic at its midpoint q + theta (q+ - q): then it is the step of the
+        plastic scheme as well; False: the step must be taken by Newton."""
+        for b, hist in self.history.items():
+            q_m = states[b].q + theta * (new_states[b].q - states[b].q)
+            if not hist.check(self.bodies[b].psi @ q_m):
+                return False
+            if self.midpoint_force(b, q_m) is not None:
+                return False
+        return True
+
+    def check(self) -> None:
+        """Screen the accepted iterate's midpoints (StepHistory.check); SolverError (the
+        driver takes the step again in halves, the set enlarged) if a cell outside the set
+        had reached yield."""
+        for b, hist in self.history.items():
+            if not hist.check(self._mid[b][0]):
+                raise SolverError(
+                    f"body {self.bodies[b].name!r}: a cell outside the plastic set reached "
+                    "yield; the set grew and the step is taken again"
+                )
+
+    def commit(self, states, new_states) -> float:
+        """Commit the accepted returns; the work [J] of the correction over the step,
+        sum of psi^T c(q_m) . (q+ - q)."""
+        work = 0.0
+        for b, hist in self.history.items():
+            c_q = self._mid[b][1]
+            if c_q is not None:
+                work += float(c_q @ (new_states[b].q - states[b].q))
+            hist.commit()
+        self._mid.clear()
+        return work
+
+    def strain_energy_correction(self, states) -> float:
+        """Elastic energy minus 1/2 q^T k_hat q of the plastic bodies at states [J]."""
+        return sum(
+            hist.strain_energy_correction(self.bodies[b].psi @ states[b].q)
+            for b, hist in self.history.items()
+        )
+
+    def reports(self) -> dict[str, PlasticReport]:
+        """PlasticReport per plastic body name (one sparse factorization of k_hat each)."""
+        out = {}
+        for b, hist in self.history.items():
+            body = self.bodies[b]
+            c_q = body.psi.T @ hist.committed_correction()
+            q_res = np.zeros(body.nq)
+            if np.any(c_q):
+                q_res = spla.spsolve(sp.csc_matrix(body.k_hat), -c_q)
+            out[body.name] = PlasticReport(
+                hist.cell_equivalent_plastic_strain(),
+                hist.state.equivalent_plastic_strain.copy(),
+                hist.plastic_work,
+                hist.hardening_energy(),
+                body.psi @ q_res,
+                hist.n_set_cells,
+                hist.n_refused,
+            )
+        return out
