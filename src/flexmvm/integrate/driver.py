@@ -201,7 +201,11 @@ class _Tally:
             failure=failure,
             momentum_shift=np.array(self.shifts),
             energy_ledger=self.ledger.history(len(rec.rows)) if self.ledger else None,
-            plastic=self.ledger.plastic.reports() if self.ledger and self.ledger.plastic else None,
+            plastic=(
+                self.ledger.plastic.reports([r["plastic"] for r in rec.rows])
+                if self.ledger and self.ledger.plastic
+                else None
+            ),
         )
 
 

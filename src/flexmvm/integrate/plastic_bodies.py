@@ -44,7 +44,8 @@ class PlasticPart:
 @dataclass(frozen=True)
 class PlasticReport:
     """What a run leaves in a plastic body: cell_equivalent_plastic_strain (n_cells,) [-]
-    (volume average per cell, mesh block order), point_equivalent_plastic_strain (n_points,)
+    (volume average per cell, mesh block order) at the end and cell_history (n_out, n_cells)
+    [-] at the outputs, point_equivalent_plastic_strain (n_points,)
     [-], plastic_work_j (sum of sigma : d eps_p dx over the steps) [J], hardening_energy_j
     (stored, at the end) [J], residual_displacement (3n,) [m] (the body's static field of its
     final plastic strain: unloaded and at rest, in its frame, relative to its reference
@@ -52,6 +53,7 @@ class PlasticReport:
     outside the set reached yield)."""
 
     cell_equivalent_plastic_strain: np.ndarray
+    cell_history: np.ndarray
     point_equivalent_plastic_strain: np.ndarray
     plastic_work_j: float
     hardening_energy_j: float
@@ -138,17 +140,25 @@ class PlasticBodies:
             for b, hist in self.history.items()
         )
 
-    def reports(self) -> dict[str, PlasticReport]:
-        """PlasticReport per plastic body name (one sparse factorization of k_hat each)."""
+    def cell_fields(self) -> dict[int, np.ndarray]:
+        """Per plastic body: its cells' equivalent plastic strain (n_cells,) [-] now."""
+        return {b: hist.cell_equivalent_plastic_strain() for b, hist in self.history.items()}
+
+    def reports(self, outputs=()) -> dict[str, PlasticReport]:
+        """PlasticReport per plastic body name (one sparse factorization of k_hat each);
+        outputs: cell_fields() of every output, in order."""
         out = {}
         for b, hist in self.history.items():
+            cells = hist.cell_equivalent_plastic_strain()
+            history = np.array([row[b] for row in outputs]).reshape(len(outputs), len(cells))
             body = self.bodies[b]
             c_q = body.psi.T @ hist.committed_correction()
             q_res = np.zeros(body.nq)
             if np.any(c_q):
                 q_res = spla.spsolve(sp.csc_matrix(body.k_hat), -c_q)
             out[body.name] = PlasticReport(
-                hist.cell_equivalent_plastic_strain(),
+                cells,
+                history,
                 hist.state.equivalent_plastic_strain.copy(),
                 hist.plastic_work,
                 hist.hardening_energy(),

@@ -43,6 +43,7 @@ class OutputRecorder:
             h += body.angular_momentum(st.r, st.A, st.q, st.v, terms)
         if self.plastic is not None:
             strain += self.plastic.strain_energy_correction(states)
+            rec["plastic"] = self.plastic.cell_fields()
         rec.update(kin=kin, strain=strain, pot=pot, p=p, h=h, pb=np.array(pb))
         rec["r"] = np.array([st.r for st in states])
         rec["A"] = np.array([st.A for st in states])
