@@ -354,8 +354,11 @@ class MoreauJeanIntegrator:
             self.system.bodies, R, jacobian, crows.rows, s.lam, self.n_joint_rows, scales
         )
         phi_ok = not (phi.size and np.abs(phi).max() > 1e-12)
+        stall = self.plastic.stall_ratio(0.5)  # yielding returns converge slower (plastic_bodies)
         floor = (
-            it > 2 and s.rel < ROUNDOFF_FLOOR and (s.rel >= 0.5 * s.last_rel or it >= self.max_iter)
+            it > 2
+            and s.rel < ROUNDOFF_FLOOR
+            and (s.rel >= stall * s.last_rel or it >= self.max_iter)
         )
         if phi_ok and (
             s.rel <= self.rtol
