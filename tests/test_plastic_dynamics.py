@@ -7,12 +7,15 @@ centre, 2 mm elsewhere (4,962 DOF); E 70 GPa, nu 0.33, rho 2700. The sphere: the
 rigid sphere_r10_cap.msh at 250 kg/m^3 (1.03 g, so that the impact is short: ~9 us). With
 Y = 2.35 GPa the Hertz contact radius at first yield (p0 = 1.65 Y, theory.hertz_yield) is
 a = 0.77 mm, 2.6 elements of the fine zone: an elastic run of this mesh at that speed peaks at
-a von Mises stress 3.8 % above Hertz's subsurface maximum (its depth 0.48 a, the mesh's
-0.48 a: docs/notes/2026-11-27-plastic-dynamics.md). Since the stresses of a Hertz impact grow
+a von Mises stress 3.8 % above Hertz's subsurface maximum, 0.48 a deep (Hertz: 0.49 a;
+docs/notes/2026-11-27-plastic-dynamics.md). Since the stresses of a Hertz impact grow
 as v^(2/5), the mesh yields first at v_y 1.038^(-5/2) = 0.91 v_y: the check below onset runs at
 0.85 v_y (the peak 2.7 % below Y on this mesh), above onset at 1.05 v_y (5.8 % above it).
 
-Runs: four short impacts, about 25 s of one core in all with the numpy return mapping.
+Runs: five short impacts at 0.5 us steps (a 0.5 us step samples the peak approach to 0.4 %,
+the peak stress to 0.2 %), 30 s in all on the shared machine (load 5.7 on 2 cores), about
+half of it in PlasticBody.respond (numpy; its sparse tangent, unused by the modified Newton,
+is half of that).
 """
 
 from __future__ import annotations
@@ -115,12 +118,12 @@ def onset_runs(block_mesh):
 def test_below_onset_no_point_yields_and_the_run_is_the_elastic_one(onset_runs):
     """At 0.85 v_y the cells near the contact are returned (the screen took them at 0.5 Y)
     but none yields: the correction is exactly zero, and the histories are the elastic run's
-    to round-off. Not bit for bit: the returns allocate arrays, BLAS products of other
+    to round-off (measured: 255 cells returned). Not bit for bit: the returns allocate arrays, BLAS products of other
     alignments round differently (1e-17 m in q at the step the set forms), and from there the
     Newton iterations stop at other iterates within their tolerance: 1e-10 of the block's
     momentum scale, m v / m_node ~ 2e4 times a nodal momentum, so q may differ by ~1e-10 x
-    2e4 x v h ~ 1e-12 m (measured: 1.3e-12 m, 3e-8 of the largest q; contact force 1e-11
-    relative). Held to 1e-6 of the largest q and contact force."""
+    2e4 x v h ~ 1e-12 m (measured: 4.4e-8 of the largest q, 2.7e-10 of the contact force).
+    Held to 1e-6 of both."""
     _, el = onset_runs["elastic"]
     _, pl = onset_runs["below"]
     report = pl.plastic["block"]
@@ -133,11 +136,12 @@ def test_below_onset_no_point_yields_and_the_run_is_the_elastic_one(onset_runs):
 
 
 def test_above_onset_points_yield_below_the_surface(onset_runs, block_mesh):
-    """At 1.05 v_y points yield where Hertz puts the peak von Mises stress: 0.48 a below the
+    """At 1.05 v_y points yield where Hertz puts the peak von Mises stress: 0.49 a below the
     surface (Johnson 1985, sect. 6.2; theory.hertz_yield), a broad maximum (the stress is
     within 6 % of it from 0.3 a to 0.7 a on the axis). Every yielding point lies between
-    0.25 a and 0.75 a deep, their centroid (weighted by alpha) within 0.1 a of 0.48 a: the
-    mesh's points lie ~0.2 a apart in depth (measured: 0.33 a to 0.64 a, centroid 0.45 a)."""
+    0.25 a and 0.75 a deep, their centroid (weighted by alpha) within 0.1 a of 0.49 a: the
+    mesh's points lie ~0.2 a apart in depth (measured: 31 points, 0.33 a to 0.58 a, centroid
+    0.45 a)."""
     built, pl = onset_runs["above"]
     report = pl.plastic["block"]
     assert pl.steps_not_converged == 0 and pl.step_cuts == 0
@@ -166,14 +170,15 @@ def strike(block_mesh):
 def test_energy_closes_through_a_plastic_impact(strike):
     """kinetic + elastic + stored hardening + plastic dissipation (their sum: the plastic
     work sum sigma : d eps_p dx) - contact work + the theta scheme's dissipation = E(0) to
-    1e-3 of E(0): the return at the midpoints is backward Euler, so the plastic work of the
-    steps and the work of the force correction differ at O(h) (measured: 7e-6 of E(0), the
-    plastic work 1.4 % of it at 2 v_y). The ledger, whose plastic term is the correction's
-    work less the elastic energy's correction, closes as the elastic run's does: the block's
-    frame turns a little (the mesh is not symmetric), and with a rotating frame the balance
-    holds to the scheme's order, not to the Newton tolerance (integrate.energy_ledger;
-    measured 1.8e-5 of E(0) plastic, 1.9e-5 elastic at 2 v_y); held within 1.5 times the
-    elastic run's."""
+    1e-3 of E(0) (the issue's 0.1 %): the return at the midpoints is backward Euler, so the
+    plastic work of the returns and the work of the force correction differ at O(h) (measured
+    at 1.5 v_y: 1.7e-7 of E(0), the plastic work 0.43 % of it; at 2 v_y 7e-6 of E(0), 1.4 %;
+    the aluminium sphere-on-block of the lab note 4e-4, 43 %). The ledger, whose plastic term
+    is the correction's work less the elastic energy's correction, closes as the elastic
+    run's: the block's frame turns a little (the mesh is not symmetric), and with a rotating
+    frame the balance holds to the scheme's order, not to the Newton tolerance
+    (integrate.energy_ledger; measured 1.02e-5 of E(0) plastic, 1.04e-5 elastic); held within
+    1.5 times the elastic run's."""
     _, res = strike["plastic"]
     report = res.plastic["block"]
     led = res.energy_ledger
@@ -197,10 +202,11 @@ def test_plastic_rebound_is_slower_and_leaves_a_dent(strike, block_mesh):
     """The separation speed (ball minus block, along the impact) is lower than the elastic
     run's, by about the plastic work's share W_p / E_rel of the impact's relative kinetic
     energy (e^2 = 1 - W_p / E_rel, to first order; held within a factor 2: the block's
-    vibration takes energy from both runs, and the elastic stresses differ). The block's
+    vibration takes energy from both runs, and the elastic stresses differ; measured 1 - e^2
+    = 0.0084 against W_p / E_rel = 0.0076, e = 0.897 against 0.901 elastic). The block's
     residual field (its final plastic strain, unloaded: PlasticReport) is a dent: the contact
-    centre lies below the undeformed face (into the body, -z) by more than 1 % of the Hertz
-    approach."""
+    centre lies below the undeformed face (into the body, -z) by more than 0.5 % of the Hertz
+    approach (measured 1.05 um, 1.3 % of 83 um)."""
     v = strike["v"]
     speeds = {}
     for key in ("elastic", "plastic"):
@@ -217,4 +223,4 @@ def test_plastic_rebound_is_slower_and_leaves_a_dent(strike, block_mesh):
     assert 0.5 * share < loss < 2.0 * share, (loss, share)
     top = int(np.argmin(np.linalg.norm(built.info[1].mesh.nodes, axis=1)))
     dent = -report.residual_displacement[3 * top + 2]
-    assert dent > 0.01 * _hertz(block_mesh, v).delta_max_m, dent
+    assert dent > 0.005 * _hertz(block_mesh, v).delta_max_m, dent
