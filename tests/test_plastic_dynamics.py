@@ -48,9 +48,9 @@ def block_mesh(tmp_path_factory):
     )
 
 
-def _impact(mesh, v, plasticity=None, t_end=12e-6, dt=0.25e-6):
+def _impact(mesh, v, plasticity=None, t_end=12e-6, dt=0.25e-6, model=None):
     """The run of the sphere at v [m/s] onto the block (plasticity: the block's table), its
-    step and output dt [s]."""
+    step and output dt [s]; model: the block's model table (default full FE)."""
     material = {"name": "metal", "E_pa": E, "nu": NU, "rho_kg_m3": RHO}
     if plasticity is not None:
         material["plasticity"] = plasticity
@@ -81,7 +81,7 @@ def _impact(mesh, v, plasticity=None, t_end=12e-6, dt=0.25e-6):
                 "name": "block",
                 "material": material,
                 "mesh_file": str(mesh),
-                "model": {"kind": "full"},
+                "model": model or {"kind": "full"},
                 "placement": {"rotation": turned},
             },
         ],

@@ -43,10 +43,13 @@ STALL_RATIO = 0.9
 @dataclass(frozen=True)
 class PlasticPart:
     """A plastic body of a System: its index in System.bodies and its PlasticBody (mesh,
-    elastic material and J2Plasticity; the mesh the body's psi maps to)."""
+    elastic material and J2Plasticity; the mesh the body's psi maps to); allowed: per cell
+    block a bool mask of the cells that may yield (a reduced body: those whose nodes are all
+    retained, where psi is the identity), None: all (full FE)."""
 
     body: int
     model: PlasticBody
+    allowed: tuple | None = None
 
 
 @dataclass(frozen=True)
@@ -58,7 +61,8 @@ class PlasticReport:
     (stored, at the end) [J], residual_displacement (3n,) [m] (the body's static field of its
     final plastic strain: unloaded and at rest, in its frame, relative to its reference
     condition), n_set_cells (cells returned) and n_refused (steps taken again because a cell
-    outside the set reached yield)."""
+    outside the set reached yield); a reduced body's guard: n_outside_steps (steps at whose
+    midpoint a cell it may not return reached Y) and outside_cells (the most such cells)."""
 
     cell_equivalent_plastic_strain: np.ndarray
     cell_history: np.ndarray
@@ -68,6 +72,8 @@ class PlasticReport:
     residual_displacement: np.ndarray
     n_set_cells: int
     n_refused: int
+    n_outside_steps: int = 0
+    outside_cells: int = 0
 
     @property
     def peak_equivalent_plastic_strain(self) -> float:
@@ -82,12 +88,14 @@ class PlasticBodies:
         self.history: dict[int, StepHistory] = {}
         for part in getattr(system, "plastic", ()):
             body = self.bodies[part.body]
-            if not body.is_sparse or body.psi.shape[0] != part.model.n_dof:
+            if body.psi.shape[0] != part.model.n_dof:
                 raise InputError(
-                    f"body {body.name!r}: plasticity needs a full-FE body (psi of "
-                    f"{part.model.n_dof} rows, sparse), got a psi of shape {body.psi.shape}"
+                    f"body {body.name!r}: plasticity needs psi of {part.model.n_dof} rows "
+                    f"(the plastic mesh's DOFs), got a psi of shape {body.psi.shape}"
                 )
-            self.history[part.body] = StepHistory(part.model)
+            if not body.is_sparse:
+                _check_identity_rows(body, part)
+            self.history[part.body] = StepHistory(part.model, allowed=part.allowed)
         self._mid: dict[int, tuple[np.ndarray, np.ndarray | None]] = {}
 
     def __bool__(self) -> bool:
@@ -112,7 +120,7 @@ class PlasticBodies:
         psi = self.bodies[b].psi
         u = psi @ q_m
         c = self.history[b].correction(u)
-        c_q = None if c is None else psi.T @ c
+        c_q = None if c is None else _project(psi, c)
         self._mid[b] = (u, c_q)
         return c_q
 
@@ -170,10 +178,12 @@ class PlasticBodies:
             cells = hist.cell_equivalent_plastic_strain()
             history = np.array([row[b] for row in outputs]).reshape(len(outputs), len(cells))
             body = self.bodies[b]
-            c_q = body.psi.T @ hist.committed_correction()
+            c_q = _project(body.psi, hist.committed_correction())
             q_res = np.zeros(body.nq)
-            if np.any(c_q):
+            if np.any(c_q) and sp.issparse(body.k_hat):
                 q_res = spla.spsolve(sp.csc_matrix(body.k_hat), -c_q)
+            elif np.any(c_q):
+                q_res = np.linalg.solve(np.asarray(body.k_hat), -c_q)
             out[body.name] = PlasticReport(
                 cells,
                 history,
@@ -183,5 +193,37 @@ class PlasticBodies:
                 body.psi @ q_res,
                 hist.n_set_cells,
                 hist.n_refused,
+                hist.n_outside_steps,
+                hist.outside_cells,
             )
         return out
+
+
+def _project(psi, c: np.ndarray) -> np.ndarray:
+    """psi^T c (nq,) for a nodal force c (3n,): sparse psi as is; a dense (reduced) psi on the
+    rows where c is nonzero only (the returned cells' nodes)."""
+    if sp.issparse(psi):
+        return psi.T @ c
+    rows = np.flatnonzero(c)
+    return psi[rows].T @ c[rows]
+
+
+def _check_identity_rows(body, part: PlasticPart) -> None:
+    """InputError unless a reduced body's psi is the identity on the DOFs of the cells it may
+    return (their strain is then that of their coordinates, exactly: the plan's MVM form)."""
+    if part.allowed is None:
+        raise InputError(f"body {body.name!r}: a reduced plastic body needs its allowed cells")
+    nodes = np.unique(
+        np.concatenate(
+            [
+                bl.nodes[np.asarray(a, bool)].ravel()
+                for bl, a in zip(part.model.blocks, part.allowed)
+            ]
+        )
+    )
+    rows = np.asarray(body.psi)[(3 * nodes[:, None] + np.arange(3)).ravel()]
+    if not (np.all(np.count_nonzero(rows, axis=1) == 1) and np.all(rows.max(axis=1) == 1.0)):
+        raise InputError(
+            f"body {body.name!r}: its basis is not the identity on the nodes of the cells "
+            "allowed to yield (retained nodes)"
+        )

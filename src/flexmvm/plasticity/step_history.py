@@ -47,7 +47,9 @@ class StepHistory:
     sum over the accepted steps of sigma : d eps_p dx [J] (sigma of the step's return);
     ``n_refused``: steps refused because a cell outside the set reached Y."""
 
-    def __init__(self, body: PlasticBody, fraction: float = SCREEN_FRACTION):
+    def __init__(self, body: PlasticBody, fraction: float = SCREEN_FRACTION, allowed=None) -> None:
+        """allowed: per cell block a bool mask (n_cells,) of the cells that may be returned
+        (a reduced body: the cells whose nodes are all retained); None: every cell."""
         self.body = body
         self.fraction = fraction
         self.d_el = elastic_tangent(body.material)
@@ -59,6 +61,13 @@ class StepHistory:
         starts = np.cumsum([0] + [bl.n_points for bl in body.blocks])
         self._first = starts[:-1]
         self.in_set = [np.zeros(len(bl.nodes), bool) for bl in body.blocks]
+        self.allowed = (
+            [np.ones(len(bl.nodes), bool) for bl in body.blocks]
+            if allowed is None
+            else [np.asarray(a, bool) for a in allowed]
+        )
+        # cells outside ``allowed`` whose elastic stress reached Y: how many steps, the first
+        self.n_outside_steps, self.outside_cells = 0, 0
         self.state = body.virgin_state()
         self.plastic_work = 0.0
         self.n_refused = 0
@@ -103,20 +112,27 @@ class StepHistory:
 
     def check(self, u: np.ndarray) -> bool:
         """Screen the cells outside the set at the accepted midpoint displacement u (3n,) [m]:
-        those above fraction Y join the set. False (the step must be taken again) if one of
-        them is above Y."""
+        the allowed ones above fraction Y join the set; the others above Y are counted
+        (n_outside_steps, outside_cells: a reduced body's guard). False (the step must be
+        taken again) if a joining cell is above Y."""
         y = self.body.plastic.yield_pa
-        grew, missed = False, False
+        grew, missed, outside = False, False, 0
         for k in range(len(self.body.blocks)):
             out = np.flatnonzero(~self.in_set[k])
             if not out.size:
                 continue
             vm = self._von_mises(k, u, out).max(axis=1)
+            beyond = ~self.allowed[k][out]
+            outside += int(np.count_nonzero(beyond & (vm > y)))
+            vm, out = vm[~beyond], out[~beyond]
             join = vm >= self.fraction * y
             if join.any():
                 self.in_set[k][out[join]] = True
                 grew = True
                 missed |= bool((vm[join] > y).any())
+        if outside:  # the guard of a reduced body: its elastic rest would yield there
+            self.n_outside_steps += 1
+            self.outside_cells = max(self.outside_cells, outside)
         if grew:  # the trial keeps its own points: commit() takes it as returned
             self._rebuild()
         if missed:

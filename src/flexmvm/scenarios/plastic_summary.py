@@ -75,5 +75,21 @@ def plastic_summary(res, built) -> dict:
             "permanent_indentation_node": node,
             "cells_returned": rep.n_set_cells,
             "steps_retaken_for_the_plastic_set": rep.n_refused,
+            # a reduced body's guard: steps at whose midpoint cells that are not all
+            # retained reached Y (their elastic stress), and the most such cells
+            "steps_yield_outside_retained": rep.n_outside_steps,
+            "cells_yield_outside_retained": rep.outside_cells,
         }
     return {"plastic": out}
+
+
+def plastic_guard_warnings(summary: dict) -> list[str]:
+    """One line per reduced plastic body whose elastic rest reached yield (summary's
+    ``plastic``): the plastic zone left the retained region."""
+    return [
+        f"body {name!r}: {entry['cells_yield_outside_retained']} cells outside the retained "
+        f"region reached the yield stress in {entry['steps_yield_outside_retained']} steps "
+        "(elastic there, plastic in a full model): retain a larger region"
+        for name, entry in summary.get("plastic", {}).items()
+        if entry["steps_yield_outside_retained"]
+    ]

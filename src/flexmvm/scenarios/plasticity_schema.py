@@ -6,6 +6,7 @@ from __future__ import annotations
 
 from typing import Annotated
 
+import numpy as np
 from annotated_types import Ge
 
 from flexmvm.bodies.build import ModelKind
@@ -39,16 +40,21 @@ def plasticity_of(body) -> J2Plasticity | None:
 
 
 def refuse_dynamic(scenario) -> None:
-    """InputError (one line) if a plastic body of ``scenario`` is not full FE (the reduced
-    kinds carry the elastic stiffness only, so far) or has redistributed contact mass."""
+    """InputError (one line) if a plastic body of ``scenario`` is neither full FE nor of a
+    kind that retains nodes (MVM: plastic in its retained region; interface, modal and rigid
+    bodies carry the elastic stiffness only) or has redistributed contact mass."""
     plastic = [b for b in scenario.bodies if plasticity_of(b) is not None]
-    other = [b.name for b in plastic if b.model.kind is not ModelKind.FULL]
+    other = [
+        b.name
+        for b in plastic
+        if not (b.model.kind is ModelKind.FULL or b.model.kind.retains_nodes)
+    ]
     if other:
         raise InputError(
             f"{'body' if len(other) == 1 else 'bodies'} {', '.join(repr(n) for n in other)}: "
             'material.plasticity is supported by the dynamic run for model.kind = "full" '
-            "only (static solves: flexmvm.plasticity.solve_static); use the full model or "
-            "remove the plasticity table"
+            "and the MVM kinds only (static solves: flexmvm.plasticity.solve_static); use one "
+            "of them or remove the plasticity table"
         )
     names = {b.name for b in plastic}
     for k, c in enumerate(scenario.contacts):
@@ -65,6 +71,19 @@ def plastic_parts(scenario, infos) -> tuple[PlasticPart, ...]:
     parts = []
     for k, (cfg, info) in enumerate(zip(scenario.bodies, infos)):
         plastic = plasticity_of(cfg)
-        if plastic is not None:
-            parts.append(PlasticPart(k, PlasticBody.build(info.mesh, info.material, plastic)))
+        if plastic is None:
+            continue
+        model = PlasticBody.build(info.mesh, info.material, plastic)
+        allowed = None
+        if cfg.model.kind.retains_nodes:  # the cells whose nodes are all retained
+            kept = np.zeros(info.mesh.n_nodes, bool)
+            kept[info.covered_nodes] = True
+            allowed = tuple(kept[bl.nodes].all(axis=1) for bl in model.blocks)
+            if not any(a.any() for a in allowed):
+                raise InputError(
+                    f"bodies[{cfg.name}].model: no cell has all its nodes retained "
+                    f"({len(info.covered_nodes)} nodes kept), so none can yield: keep a region "
+                    "that holds whole cells around the contact"
+                )
+        parts.append(PlasticPart(k, model, allowed))
     return tuple(parts)

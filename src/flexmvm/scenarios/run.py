@@ -17,7 +17,7 @@ from flexmvm.scenarios.build import BuiltScenario, build_scenario
 from flexmvm.scenarios.energy_report import momentum_report, report_entries
 from flexmvm.scenarios.guard import contact_guard, energy_gain_warning, guard_warnings
 from flexmvm.scenarios.load import load_scenario
-from flexmvm.scenarios.plastic_summary import plastic_summary
+from flexmvm.scenarios.plastic_summary import plastic_guard_warnings, plastic_summary
 from flexmvm.scenarios.schema import Scenario
 from flexmvm.scenarios.setup import SetupCache
 
@@ -108,6 +108,8 @@ def run_scenario(
     summary = summarize(res, built)
     if warn:
         for line in guard_warnings(summary["reduced_contact_guard"]):
+            warnings.warn(line, ReducedBasisWarning, stacklevel=2)
+        for line in plastic_guard_warnings(summary):  # a reduced plastic body's zone
             warnings.warn(line, ReducedBasisWarning, stacklevel=2)
         line = energy_gain_warning(summary)
         if line is not None:
