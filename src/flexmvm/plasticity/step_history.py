@@ -66,7 +66,8 @@ class StepHistory:
             if allowed is None
             else [np.asarray(a, bool) for a in allowed]
         )
-        # cells outside ``allowed`` whose elastic stress reached Y: how many steps, the first
+        # cells outside ``allowed`` whose elastic stress reached Y: in how many screens (one
+        # or two per step), and the most at once
         self.n_outside_steps, self.outside_cells = 0, 0
         self.state = body.virgin_state()
         self.plastic_work = 0.0
@@ -106,7 +107,8 @@ class StepHistory:
 
     def _von_mises(self, k: int, u: np.ndarray, cells) -> np.ndarray:
         """Elastic von Mises stress (ne, nqp) [Pa] of cells ``cells`` of block k at u."""
-        strain = np.einsum("eqIk,ek->eqI", self._b[k][cells], u[self._ids[k][cells]])
+        # over the whole block, then the cells: no copy of the block's strain matrices
+        strain = np.einsum("eqIk,ek->eqI", self._b[k], u[self._ids[k]])[cells]
         s = deviator(strain @ self.d_el.T)
         return math.sqrt(1.5) * tensor_norm(s)
 
