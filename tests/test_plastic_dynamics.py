@@ -246,3 +246,28 @@ def test_plastic_rebound_is_slower_and_leaves_a_dent(strike, coarse_mesh):
     top = int(np.argmin(np.linalg.norm(built.info[1].mesh.nodes, axis=1)))
     dent = -report.residual_displacement[3 * top + 2]
     assert dent > 0.005 * _hertz(coarse_mesh, v).delta_max_m, dent
+
+
+def test_outputs_carry_the_plastic_strain(strike, tmp_path):
+    """summary.json's ``plastic`` entry and the ParaView files' cell field: the summary's
+    numbers are the run's (its plastic work, peak alpha, a dent > 0 along the inward normal
+    of the top face, which is -z here); the last file's cell field is the report's volume
+    average per cell, exactly (the VTU keeps float64)."""
+    import meshio
+
+    from flexmvm.results.writers import write_paraview_series
+    from flexmvm.scenarios.run import summarize
+
+    built, res = strike["plastic"]
+    report = res.plastic["block"]
+    entry = summarize(res, built)["plastic"]["block"]
+    assert entry["plastic_work_J"] == report.plastic_work_j > 0.0
+    assert entry["peak_equivalent_plastic_strain"] == report.peak_equivalent_plastic_strain
+    assert entry["permanent_indentation_m"] > 0.0
+    assert entry["steps_yield_outside_retained"] == 0
+    n = len(res.t)
+    write_paraview_series(
+        tmp_path, res, built.system.bodies, [i.material for i in built.info], n - 1
+    )
+    cells = meshio.read(tmp_path / f"block_{n - 1:06d}.vtu").cell_data["equivalent_plastic_strain"]
+    assert np.array_equal(np.concatenate(cells), report.cell_equivalent_plastic_strain)
