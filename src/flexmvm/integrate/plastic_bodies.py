@@ -1,5 +1,5 @@
-"""Elastic-plastic full-FE bodies in the Moreau-Jean step (docs/plasticity.md, "The dynamic
-step").
+"""Elastic-plastic bodies in the Moreau-Jean step: full FE, and MVM bodies in the cells whose
+nodes are all retained (docs/plasticity.md, "The dynamic step").
 
 The internal force of a plastic body at the step's midpoint q_m is the return mapping at
 eps(u_m), u_m = psi q_m, from the last accepted history (the flow rule integrated by backward
@@ -31,9 +31,9 @@ from flexmvm.errors import InputError, SolverError
 from flexmvm.plasticity.body import PlasticBody
 from flexmvm.plasticity.step_history import StepHistory
 
-#: The modified Newton iteration on the elastic W contracts by 0.3 to 0.9 per iterate while
+#: The modified Newton iteration on the elastic W contracts by 0.3 to 0.6 per iterate while
 #: points yield (the elastic tangent is stiffer than the plastic one; measured on the sphere
-#: impacts of tests/test_plastic_dynamics.py and sphere_block.toml): within that it is still
+#: impacts of tests/test_plastic_dynamics.py and sphere_block.toml): within 0.9 it is still
 #: converging, not on the round-off floor where moreau_jean accepts a residual that no longer
 #: halves. A step whose returns yield is on its floor only when an iterate gains less than
 #: this factor.
