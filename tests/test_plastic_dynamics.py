@@ -68,9 +68,10 @@ def coarse_mesh(tmp_path_factory):
     return _block(tmp_path_factory.mktemp("plastic_block_coarse"), 0.5e-3, 1.0e-3)
 
 
-def _impact(mesh, v, plasticity=None, t_end=12e-6, dt=0.25e-6, model=None):
+def _impact(mesh, v, plasticity=None, t_end=12e-6, dt=0.25e-6, model=None, run=True):
     """The run of the sphere at v [m/s] onto the block (plasticity: the block's table), its
-    step and output dt [s]; model: the block's model table (default full FE)."""
+    step and output dt [s]; model: the block's model table (default full FE). run False: the
+    scenario's dict, not built."""
     material = {"name": "metal", "E_pa": E, "nu": NU, "rho_kg_m3": RHO}
     if plasticity is not None:
         material["plasticity"] = plasticity
@@ -107,6 +108,8 @@ def _impact(mesh, v, plasticity=None, t_end=12e-6, dt=0.25e-6, model=None):
         ],
         "contacts": [{"slave": "block.top", "master": "ball.front", "law": "position"}],
     }
+    if not run:
+        return data
     built = build_scenario(scenario_from_dict(data))
     return built, simulate(built.system, built.states, built.grid)
 
@@ -271,3 +274,29 @@ def test_outputs_carry_the_plastic_strain(strike, tmp_path):
     )
     cells = meshio.read(tmp_path / f"block_{n - 1:06d}.vtu").cell_data["equivalent_plastic_strain"]
     assert np.array_equal(np.concatenate(cells), report.cell_equivalent_plastic_strain)
+
+
+@pytest.mark.filterwarnings("ignore::flexmvm.scenarios.cost.ReducedCostWarning")
+def test_mvm_plastic_block_yields_in_its_whole_retained_cells_only(block_mesh):
+    """The block MVM (the nodes within 0.6 mm of the contact kept, 4 modes): its PlasticPart
+    allows the cells whose nodes are all retained, where psi is the identity (PlasticBodies
+    checks it); a region that holds no whole cell (0.05 mm) is refused in one line. Builds
+    only (454 DOF: more than this small block's full FE costs, hence the warning ignored):
+    about 5 s."""
+    from flexmvm.errors import InputError
+    from flexmvm.integrate.plastic_bodies import PlasticBodies
+
+    region = {"ball": {"centre_m": [0, 0, 0], "radius_m": 0.6e-3}}
+    model = {"kind": "mvm", "region": region, "modes": 4}
+    data = _impact(block_mesh, 1.0, {"yield_pa": Y}, model=model, run=False)
+    built = build_scenario(scenario_from_dict(data))
+    (part,) = built.system.plastic
+    kept = set(built.info[1].covered_nodes.tolist())
+    cells = [bl.nodes[a] for bl, a in zip(part.model.blocks, part.allowed)]
+    assert sum(len(c) for c in cells) > 0
+    assert all(set(c.ravel().tolist()) <= kept for c in cells)
+    assert PlasticBodies(built.system)
+    region["ball"]["radius_m"] = 0.05e-3
+    with pytest.raises(InputError, match="no cell has all its nodes retained") as info:
+        build_scenario(scenario_from_dict(data))
+    assert "\n" not in str(info.value)

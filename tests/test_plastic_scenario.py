@@ -109,33 +109,3 @@ def test_full_fe_plastic_body_is_built_as_a_plastic_part():
     data["contacts"][0]["redistribute_mass"] = True
     with pytest.raises(InputError, match=r"contacts\[0\]: redistribute_mass cannot be used"):
         build_scenario(scenario_from_dict(data, source=str(path), base_dir=SCENARIOS))
-
-
-def test_mvm_plastic_body_yields_in_its_whole_retained_cells_only():
-    """The MVM block of sphere_block.toml (the nodes within 0.5 mm of the contact kept, 20
-    modes) plastic: the PlasticPart allows the cells whose nodes are all retained (there psi
-    is the identity: checked by PlasticBodies); a region holding no whole cell is refused in
-    one line."""
-    from flexmvm.integrate.plastic_bodies import PlasticBodies
-
-    path = SCENARIOS / "sphere_block.toml"
-    data = tomllib.loads(path.read_text())
-    block = next(b for b in data["bodies"] if b["name"] == "block")
-    block["material"] = {
-        "name": "al",
-        "E_pa": 72.71e9,
-        "nu": 0.33,
-        "rho_kg_m3": 2700.0,
-        "plasticity": {"yield_pa": 2.76e8},
-    }
-    block["model"]["kind"] = "mvm"
-    built = build_scenario(scenario_from_dict(data, source=str(path), base_dir=SCENARIOS))
-    (part,) = built.system.plastic
-    kept = set(built.info[1].covered_nodes.tolist())
-    allowed = [bl.nodes[a] for bl, a in zip(part.model.blocks, part.allowed)]
-    assert sum(len(c) for c in allowed) > 0
-    assert all(set(c.ravel().tolist()) <= kept for c in allowed)
-    assert PlasticBodies(built.system)  # psi is the identity on the allowed cells' DOFs
-    block["model"]["region"]["ball"]["radius_m"] = 0.05e-3
-    with pytest.raises(InputError, match="no cell has all its nodes retained"):
-        build_scenario(scenario_from_dict(data, source=str(path), base_dir=SCENARIOS))
