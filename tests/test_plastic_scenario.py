@@ -1,6 +1,7 @@
 """The ``plasticity`` table of an inline material: read and validated (one ScenarioError line
 per bad value, naming the key), absent from the dumps of elastic materials (cache and study
-keys unchanged), and refused in one line by a dynamic run. Runs in under a second."""
+keys unchanged), refused in one line by a dynamic run for a reduced body, and built as a
+PlasticPart of the System for a full-FE one. Runs in about 3 s."""
 
 from __future__ import annotations
 
@@ -74,14 +75,37 @@ def test_bad_plasticity_is_one_line_naming_the_key(table, where, says):
     assert f"bodies[1].material.{where}" in msg and says in msg, msg
 
 
-def test_dynamic_run_refuses_plastic_body_in_one_line():
-    sc = scenario_from_dict(
-        _with_b2(
-            "{ E_pa = 72.71e9, nu = 0.33, rho_kg_m3 = 2700.0, plasticity = { yield_pa = 2.76e8 } }"
-        )
+def test_dynamic_run_refuses_plastic_modal_body_in_one_line():
+    data = _with_b2(
+        "{ E_pa = 72.71e9, nu = 0.33, rho_kg_m3 = 2700.0, plasticity = { yield_pa = 2.76e8 } }"
     )
+    b2 = next(b for b in data["bodies"] if b["name"] == "b2")
+    b2["model"] = {"kind": "modal", "modes": 4}
     with pytest.raises(InputError) as info:
-        build_scenario(sc)
+        build_scenario(scenario_from_dict(data))
     msg = str(info.value)
     assert "\n" not in msg
-    assert "'b2'" in msg and "not supported by the dynamic run yet" in msg
+    assert "'b2'" in msg and 'model.kind = "full" and the MVM kinds only' in msg, msg
+
+
+def test_full_fe_plastic_body_is_built_as_a_plastic_part():
+    """The sphere-on-block scenario's block (full FE) plastic: the System carries its
+    PlasticPart on the body's own mesh; with mass redistribution at its contact it is refused
+    (the plastic force has no part in the massless nodes' equilibrium)."""
+    path = SCENARIOS / "sphere_block.toml"
+    data = tomllib.loads(path.read_text())
+    block = next(b for b in data["bodies"] if b["name"] == "block")
+    block["material"] = {
+        "name": "al",
+        "E_pa": 72.71e9,
+        "nu": 0.33,
+        "rho_kg_m3": 2700.0,
+        "plasticity": {"yield_pa": 2.76e8},
+    }
+    built = build_scenario(scenario_from_dict(data, source=str(path), base_dir=SCENARIOS))
+    (part,) = built.system.plastic
+    assert part.body == 1 and part.model.plastic == J2Plasticity(2.76e8)
+    assert part.model.n_dof == built.system.bodies[1].psi.shape[0]
+    data["contacts"][0]["redistribute_mass"] = True
+    with pytest.raises(InputError, match=r"contacts\[0\]: redistribute_mass cannot be used"):
+        build_scenario(scenario_from_dict(data, source=str(path), base_dir=SCENARIOS))

@@ -201,6 +201,11 @@ class _Tally:
             failure=failure,
             momentum_shift=np.array(self.shifts),
             energy_ledger=self.ledger.history(len(rec.rows)) if self.ledger else None,
+            plastic=(
+                self.ledger.plastic.reports([r["plastic"] for r in rec.rows])
+                if self.ledger and self.ledger.plastic
+                else None
+            ),
         )
 
 
@@ -212,13 +217,17 @@ def _simulate(
     integ = make_integrator(system, grid)
     dt = grid.dt_s
     rec = OutputRecorder(system, probes, n_ticks // out_ticks + 2, integ.n_joint_rows)
+    plastic = getattr(integ, "plastic", None) or None  # integrate.plastic_bodies
+    rec.plastic = plastic
     states = [s.copy() for s in states]
     pen = _Penetrations(system)
     pen.start(states, t0, check_overlap)
     rec.record(t0, states, 0.0, np.zeros(integ.n_joint_rows))
     bar = _progress(progress, n_ticks)
     tally = _Tally(system, integ.n_joint_rows, pen, grid.dt_s)
-    tally.ledger = EnergyLedger(system, integ.carried, getattr(integ, "carried_state", None))
+    tally.ledger = EnergyLedger(
+        system, integ.carried, getattr(integ, "carried_state", None), plastic
+    )
     tally.ledger.record(states)
     wall0 = time.perf_counter()
     h_min = grid.dt_s / (1 << MAX_STEP_CUTS)
@@ -287,7 +296,7 @@ def _advance(
     iterates) is taken as two halves instead, recursively down to h_min = dt_s /
     2^MAX_STEP_CUTS, as implicit codes cut their step; the next step is back at the grid's
     size; a failure at h_min raises SolverError. A step that stops on the round-off floor
-    (below moreau_jean.ROUNDOFF_FLOOR, no longer decreasing) is accepted, and the run counts
+    (below newton_iterate.ROUNDOFF_FLOOR, no longer decreasing) is accepted, and the run counts
     it in steps_not_converged and warns: cutting it would cost up to 2^MAX_STEP_CUTS steps
     for a residual that is round-off. cuts = [number of steps cut, smallest step taken [s]],
     updated."""

@@ -16,7 +16,11 @@ v_m = theta v+ + (1 - theta) v- and x_m the step's midpoint (integrate.moreau_je
   counted as the work of an applied force: its stiffness s(t) K_G changes with the spin, so
   1/2 s q^T K_G q is not a stored energy of the body (the strain energy is 1/2 q^T k_hat q);
 - the scheme's numerical dissipation at theta > 1/2:
-  D += (theta - 1/2) (dv^T M dv + dq^T k_hat dq), dq = q(t + h) - q(t).
+  D += (theta - 1/2) (dv^T M dv + dq^T k_hat dq), dq = q(t + h) - q(t);
+- plastic bodies (integrate.plastic_bodies): P = sum over the steps of the work psi^T c(q_m) . dq
+  of their force correction, less (elastic energy - 1/2 q^T k_hat q) at the output, so that E
+  holds their elastic energy: P is their plastic work (dissipation and stored hardening) to
+  the scheme's order, and the balance closes with it as without plasticity.
 
 The last follows from the step's equations (Acary 2016, "Energy conservation and dissipation
 properties of time-integration methods for nonsmooth elastodynamics with contact", ZAMM 96(5),
@@ -25,7 +29,7 @@ dv, so dT = v_m^T M dv - (theta - 1/2) dv^T M dv = v_m^T (h F + Phi^T lambda) - 
 dv^T M dv; with q_m = q + theta dq, dU = 1/2 (q+ + q-)^T K dq = q_m^T K dq - (theta - 1/2)
 dq^T K dq, and -q_m^T K dq is the elastic force's work h (-K q_m) . q_dot_m. Hence
 
-    E(t) - E(0) - W_loads - W_joints - W_contact + D_damping + D_numerical = residual
+    E(t) - E(0) - W_loads - W_joints - W_contact + D_damping + D_numerical (+ P) = residual
 
 with E = kinetic + strain + gravity potential (integrate.recorder.OutputRecorder), which closes to the Newton
 tolerance for bodies whose mass matrix is constant over the step (frames that do not rotate)
@@ -74,6 +78,7 @@ class EnergyLedgerHistory:
     damping: np.ndarray
     numerical: np.ndarray
     stiffening: np.ndarray | None = None  # work of the geometric stiffening forces
+    plastic: np.ndarray | None = None  # plastic work of the plastic bodies (module doc)
 
     def residual(self, total_energy: np.ndarray) -> np.ndarray:
         """E(t) - E(0) - works + dissipations (n_out,) [J] (module doc)."""
@@ -81,7 +86,10 @@ class EnergyLedgerHistory:
         works = self.loads.sum(axis=1) + self.joints.sum(axis=1) + self.contact
         if self.stiffening is not None:
             works = works + self.stiffening
-        return E - E[0] - works + self.damping + self.numerical
+        dissipated = self.damping + self.numerical
+        if self.plastic is not None:
+            dissipated = dissipated + self.plastic
+        return E - E[0] - works + dissipated
 
 
 @dataclass
@@ -96,6 +104,8 @@ class EnergyLedger:
     # the integrator's carried state (integrate.carried.CarriedState), whose k_hat q and
     # M_qq q_dot of a step's end give the dissipation's products for free; None: computed
     fresh: object = None
+    # the integrator's plastic bodies (integrate.plastic_bodies.PlasticBodies); None: none
+    plastic: object = None
     w_loads: np.ndarray = field(init=False)
     d_loads: np.ndarray = field(init=False)
     w_joints: np.ndarray = field(init=False)
@@ -107,7 +117,7 @@ class EnergyLedger:
         self.w_loads = np.zeros(len(self.system.loads))
         self.d_loads = np.zeros(len(self.system.loads))
         self.w_joints = np.zeros(len(self.system.joints))
-        self.sums = np.zeros(4)
+        self.sums = np.zeros(5)  # ... and the plastic bodies' correction work
         self.rows = []
         self._ends: dict = {}  # body -> (q, v, k_hat q, M_qq q_dot) of the last step's end
 
@@ -142,6 +152,7 @@ class EnergyLedger:
                 self.sums[3] -= h * float(f @ vms[b][6:])
         if theta != 0.5:
             self.sums[2] += (theta - 0.5) * self._increment_norms(start, end)
+        self.sums[4] += getattr(result, "plastic_work", 0.0)
 
     def _increment_norms(self, start, end) -> float:
         """sum over bodies of dv^T M dv + dq^T k_hat dq, M at the step's end (module doc):
@@ -185,9 +196,12 @@ class EnergyLedger:
             load.energy(bodies, states) if hasattr(load, "energy") else 0.0
             for load in self.system.loads
         ]
+        sums = self.sums.copy()
+        if self.plastic is not None:
+            sums[4] -= self.plastic.strain_energy_correction(states)
         self.rows.append(
             (self.w_loads.copy(), self.d_loads.copy(), np.array(stored), self.w_joints.copy())
-            + tuple(self.sums)
+            + tuple(sums)
         )
 
     def history(self, n_out: int) -> EnergyLedgerHistory:
@@ -211,6 +225,7 @@ class EnergyLedger:
             col(5),
             col(6),
             col(7) if any(b.stiffening is not None for b in self.system.bodies) else None,
+            col(8) if self.plastic is not None else None,
         )
 
 

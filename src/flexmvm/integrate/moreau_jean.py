@@ -65,12 +65,12 @@ from flexmvm.integrate.massless import MasslessCoordinates, check_contact_law, e
 from flexmvm.integrate.momentum_balance import balance_translation, balanced_residuals
 from flexmvm.integrate.newton_iterate import (
     NewtonIterate,
-    at_roundoff,
     joint_rows,
     relative_residual,
     roundoff_momenta,
 )
-from flexmvm.integrate.relaxation import ACTIVATE_RATIO, AitkenRelaxation, relaxed_iterate
+from flexmvm.integrate.plastic_bodies import PlasticBodies
+from flexmvm.integrate.relaxation import AitkenRelaxation, relaxed_iterate
 from flexmvm.integrate.row_products import flat_product, merge_contacts
 from flexmvm.integrate.stall_report import stall_report
 from flexmvm.integrate.state import BodyState
@@ -83,9 +83,6 @@ from flexmvm.loads.applied import midpoint_forces
 __all__ = ["MoreauJeanIntegrator", "StepResult"]
 
 SLOW_ITERATIONS = 6  # from this iterate on (or when the residual grows) W is refreshed
-ROUNDOFF_FLOOR = 1e-7  # a residual below this that stops decreasing is round-off (large bases)
-TRANSLATION_RTOL = 1e-13  # ...but the frame's translational rows (sums: no such floor) must
-# converge to this, so linear momentum drifts < 1e-9 over an impact
 
 
 class MoreauJeanIntegrator:
@@ -128,6 +125,10 @@ class MoreauJeanIntegrator:
         # coordinates without mass (redistributed contact nodes): equilibrium at step ends
         self.massless = [MasslessCoordinates.of(b) for b in bodies]
         check_contact_law(system, self.massless)
+        # elastic-plastic bodies: their history beside the states (integrate.plastic_bodies)
+        self.plastic = PlasticBodies(system)
+        if any(self.massless[b] is not None for b in self.plastic.history):
+            raise SolverError("plastic bodies cannot have massless (redistributed) contact nodes")
         # bodies whose k_hat dq_dot comes from W_qq dq_dot (full FE, undamped, not stiffened)
         plain = {b for b in self.threads.sparse if bodies[b].c_hat is None}
         self.images = WImages({b for b in plain if bodies[b].stiffening is None})
@@ -181,6 +182,9 @@ class MoreauJeanIntegrator:
         dv = vp - st.v
         if body.nq:
             Lq_m, Lqd_m, Kq_m = self.carried_state.midpoint(b, st, vp, th, h)
+            if b in self.plastic:  # the return at the midpoint (integrate.plastic_bodies)
+                c_q = self.plastic.midpoint_force(b, mid.q)
+                Kq_m = Kq_m if c_q is None else Kq_m + c_q
             # M is linear: M v_m = M v- + th M dv, and M_qq v- is carried with the state
             mqq_dv = self.carried_state.mass_increment(b)
             mqq_vm = self.carried_state.at(b, st).Mqd + th * mqq_dv
@@ -257,7 +261,14 @@ class MoreauJeanIntegrator:
             out = nonrotating.nonrotating_step(
                 self.system, self.solvers, th, self.rtol, self.loads, t, states, h, crows
             )
+            if (
+                out is not None
+                and self.plastic
+                and not self.plastic.elastic_step(states, out[0], th)
+            ):
+                out = None  # a plastic body yields: the Newton step with its return
             if out is not None:
+                self.plastic.commit(states, out[0])
                 self.n_nonrotating_steps += 1
                 new_states, lam_c, res_t, lcp_res = out
                 self._equilibrate_massless(t, h, th, states, new_states, [(crows.rows, lam_c)])
@@ -338,31 +349,13 @@ class MoreauJeanIntegrator:
         )
 
     def _accepted(self, s: NewtonIterate, it, h, R, jacobian, crows, phi, scales) -> bool:
-        """Convergence test of iterate it > 0: the residual with the last impulses within
-        rtol and the joints closed, or a residual on the round-off floor (below
-        ROUNDOFF_FLOOR, no longer decreasing, translational rows within TRANSLATION_RTOL or
-        max_iter reached: accepted, and counted as not converged in StepResult, unless every
-        body's residual is below the round-off of its positions, newton_iterate.at_roundoff:
-        converged)."""
+        """Convergence test of iterate it > 0 (NewtonIterate.converged_at) on the residual
+        with the last impulses."""
         s.rel, s.rel_translation, s.translation_sum, s.residuals = relative_residual(
             self.system.bodies, R, jacobian, crows.rows, s.lam, self.n_joint_rows, scales
         )
-        phi_ok = not (phi.size and np.abs(phi).max() > 1e-12)
-        stalled = it > 2 and (s.rel >= 0.5 * s.last_rel or it >= self.max_iter)
-        floor = stalled and s.rel < ROUNDOFF_FLOOR
-        s.at_roundoff = stalled and at_roundoff(s.residuals, self.roundoff_kgm, h)
-        if phi_ok and (
-            s.rel <= self.rtol
-            or s.at_roundoff
-            or (floor and (s.rel_translation <= TRANSLATION_RTOL or it >= self.max_iter))
-        ):
-            return True
-        # a residual over the tolerance only in its translational rows is not accepted either,
-        # though their balance (integrate.momentum_balance) would bring it within: accepting
-        # it raised the momentum error after the seed case's separation fourfold
-        s.stalled = it >= 2 and s.rel > ACTIVATE_RATIO * s.last_rel
-        s.last_rel = s.rel
-        return False
+        stall = self.plastic.stall_ratio(0.5)  # yielding returns converge slower (plastic_bodies)
+        return s.converged_at(it, h, phi, self.rtol, self.max_iter, stall, self.roundoff_kgm)
 
     def _refresh_when_slow(self, s: NewtonIterate, it, res_norm, mids, h, crows) -> bool:
         """W's coupling refreshed at the midpoint configuration when the iteration is slow
@@ -428,6 +421,7 @@ class MoreauJeanIntegrator:
         """The accepted iterate as the step's result: translational rows balanced (no
         joints), end states with v+, carried contractions advanced, massless coordinates
         to equilibrium."""
+        self.plastic.check()  # before anything moves on: a refused step raises
         n_j = self.n_joint_rows
         lam, v_plus = s.lam, s.v_plus
         rel, res_t = s.rel, s.translation_sum
@@ -449,6 +443,7 @@ class MoreauJeanIntegrator:
         for st, vp in zip(new_states, v_plus):
             st.v = vp
         self.carried_state.advance(states, new_states, h)
+        plastic_work = self.plastic.commit(states, new_states)
         self._equilibrate_massless(
             t,
             h,
@@ -470,6 +465,7 @@ class MoreauJeanIntegrator:
             translation_residual=res_t,
             lcp_residual=s.lcp_max,
             momentum_shift=shift,
+            plastic_work=plastic_work,
         )
 
     def _equilibrate_massless(self, t, h, th, states, new_states, held) -> None:

@@ -11,7 +11,12 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flexmvm.constraints.rows import Rows, stack
+from flexmvm.integrate.relaxation import ACTIVATE_RATIO
 from flexmvm.integrate.row_products import body_impulse
+
+ROUNDOFF_FLOOR = 1e-7  # a residual below this that stops decreasing is round-off (large bases)
+TRANSLATION_RTOL = 1e-13  # ...but the frame's translational rows (sums: no such floor) must
+# converge to this, so linear momentum drifts < 1e-9 over an impact
 
 
 @dataclass
@@ -36,6 +41,31 @@ class NewtonIterate:
     rel_translation: float = np.inf  # the same of the translational rows alone
     translation_sum: np.ndarray = field(default_factory=lambda: np.zeros(3))  # [N s]
     residuals: list = field(default_factory=list)  # per body, constraint impulses included
+
+    def converged_at(self, it, h, phi, rtol, max_iter, stall, roundoff_kgm) -> bool:
+        """Convergence test of iterate it > 0, after relative_residual filled rel,
+        rel_translation and residuals: the residual within rtol and the joints closed (phi
+        [m] within 1e-12), or a residual on the round-off floor (below ROUNDOFF_FLOOR, not
+        gaining a factor ``stall`` per iterate, translational rows within TRANSLATION_RTOL or
+        max_iter reached: accepted, and counted as not converged in StepResult, unless every
+        body's residual is below the round-off of its positions, at_roundoff: converged).
+        Not accepted: marks ``stalled`` for the relaxation and keeps rel as last_rel."""
+        phi_ok = not (phi.size and np.abs(phi).max() > 1e-12)
+        stalled = it > 2 and (self.rel >= stall * self.last_rel or it >= max_iter)
+        floor = stalled and self.rel < ROUNDOFF_FLOOR
+        self.at_roundoff = stalled and at_roundoff(self.residuals, roundoff_kgm, h)
+        if phi_ok and (
+            self.rel <= rtol
+            or self.at_roundoff
+            or (floor and (self.rel_translation <= TRANSLATION_RTOL or it >= max_iter))
+        ):
+            return True
+        # a residual over the tolerance only in its translational rows is not accepted either,
+        # though their balance (integrate.momentum_balance) would bring it within: accepting
+        # it raised the momentum error after the seed case's separation fourfold
+        self.stalled = it >= 2 and self.rel > ACTIVATE_RATIO * self.last_rel
+        self.last_rel = self.rel
+        return False
 
 
 def joint_rows(system, t, h, mids, ends):

@@ -18,6 +18,9 @@ class OutputRecorder:
         self.rows: list[dict] = []
         self.n_joint_rows = n_joint_rows
         self.shape = (nb, npb)
+        # the integrator's plastic bodies (integrate.plastic_bodies): their elastic energy is
+        # 1/2 q^T k_hat q plus a correction; None: none
+        self.plastic = None
 
     def record(self, t, states, force, jforce, carried=None, products=None):
         """carried(b, state) -> (L(q), L(q_dot)): the integrator's carried contractions;
@@ -38,6 +41,9 @@ class OutputRecorder:
             pb.append(body.linear_momentum(st.A, st.q, st.v, terms))
             p += pb[-1]
             h += body.angular_momentum(st.r, st.A, st.q, st.v, terms)
+        if self.plastic is not None:
+            strain += self.plastic.strain_energy_correction(states)
+            rec["plastic"] = self.plastic.cell_fields()
         rec.update(kin=kin, strain=strain, pot=pot, p=p, h=h, pb=np.array(pb))
         rec["r"] = np.array([st.r for st in states])
         rec["A"] = np.array([st.A for st in states])

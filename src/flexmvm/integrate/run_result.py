@@ -161,6 +161,8 @@ class RunResult:
     drive_torque: dict[str, np.ndarray] = field(default_factory=dict)
     # cumulative works and dissipations at the outputs (integrate.energy_ledger)
     energy_ledger: EnergyLedgerHistory | None = None
+    # per plastic body name: integrate.plastic_bodies.PlasticReport (None: no plastic body)
+    plastic: dict | None = None
 
     @property
     def total_energy(self) -> np.ndarray:

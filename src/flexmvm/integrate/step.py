@@ -33,6 +33,8 @@ class StepResult:
     # solution [N s] (integrate.momentum_balance): zero when not taken
     momentum_shift: np.ndarray | None = None
     lcp_residual: float = 0.0  # largest complementarity residual of the step's LCP solves
+    # work [J] of the plastic bodies' force correction psi^T c(q_m) . dq (plastic_bodies)
+    plastic_work: float = 0.0
 
 
 class Integrator(Protocol):

@@ -26,3 +26,5 @@ class System:
     gravity: np.ndarray = field(default_factory=lambda: np.zeros(3))
     # applied loads (flexmvm.loads: forces, torques, springs), each with forces(bodies, states, t)
     loads: tuple = ()
+    # elastic-plastic full-FE bodies (integrate.plastic_bodies.PlasticPart); () : all elastic
+    plastic: tuple = ()

@@ -120,18 +120,27 @@ class VtuSeries:
         ).encode()
         self._tail = b"</Piece>\n</UnstructuredGrid>\n</VTKFile>\n"
 
-    def write(self, path: str | os.PathLike[str], point_data: Mapping[str, np.ndarray]) -> None:
-        """Write one file: the grid and point_data {name: (n,) or (n, k) array}."""
+    def write(
+        self,
+        path: str | os.PathLike[str],
+        point_data: Mapping[str, np.ndarray],
+        cell_data: Mapping[str, np.ndarray] | None = None,
+    ) -> None:
+        """Write one file: the grid, point_data {name: (n,) or (n, k) array} and cell_data
+        {name: (n_cells,) or (n_cells, k) array, cells in the order given}."""
+        body = self._section("PointData", "point", point_data, self.n_points)
+        body += self._section("CellData", "cell", cell_data or {}, self.n_cells)
+        write_bytes_atomic(path, self._head + body + self._tail)
+
+    def _section(self, tag: str, kind: str, data_by_name: Mapping, rows: int) -> bytes:
         parts = []
-        for name, data in point_data.items():
+        for name, data in data_by_name.items():
             data = np.asarray(data)
-            if data.ndim not in (1, 2) or data.shape[0] != self.n_points:
+            if data.ndim not in (1, 2) or data.shape[0] != rows:
                 raise InputError(
-                    f"VTU point data {name!r}: expected {self.n_points} rows, got "
-                    f"shape {data.shape}"
+                    f"VTU {kind} data {name!r}: expected {rows} rows, got shape {data.shape}"
                 )
             if any(c in name for c in '<>&"'):
-                raise InputError(f'VTU point data name {name!r}: no <, >, & or " allowed')
+                raise InputError(f'VTU {kind} data name {name!r}: no <, >, & or " allowed')
             parts.append(_data_array(name, data, self.level))
-        body = ("<PointData>\n" + "".join(parts) + "</PointData>\n").encode() if parts else b""
-        write_bytes_atomic(path, self._head + body + self._tail)
+        return (f"<{tag}>\n" + "".join(parts) + f"</{tag}>\n").encode() if parts else b""

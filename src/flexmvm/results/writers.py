@@ -173,6 +173,8 @@ def _write_ledger(g: h5py.Group, led) -> None:
     _dataset(g, "numerical", led.numerical, "J", "the scheme's numerical dissipation")
     if led.stiffening is not None:
         _dataset(g, "stiffening", led.stiffening, "J", "work of the geometric stiffening force")
+    if led.plastic is not None:
+        _dataset(g, "plastic", led.plastic, "J", "plastic work of the plastic bodies")
 
 
 def _write_mesh(g: h5py.Group, body: FlexibleBody) -> None:
@@ -299,7 +301,9 @@ def write_paraview_series(
 
     Points are the undeformed body at the initial frame, r0 + A0 X (output 0); point data:
     ``displacement`` (n, 3) global [m] (Warp By Vector gives the deformed body),
-    ``velocity`` (n, 3) global [m/s] and ``von_mises`` (n,) [Pa] (results/fields.py). The
+    ``velocity`` (n, 3) global [m/s] and ``von_mises`` (n,) [Pa] (results/fields.py: the
+    elastic stress of the displacement, plastic strain not subtracted); cell data of a plastic
+    body: ``equivalent_plastic_strain`` (n_cells,) [-] (integrate.plastic_bodies). The
     elastic part of the velocity uses the run's q_dot. every=None writes at most
     MAX_PARAVIEW_STEPS steps. `bodies` and `materials` follow run.body_names. Each file is
     written atomically, the .pvd last. Returns out_dir (created if missing). Raises
@@ -360,6 +364,7 @@ def _submit_body_series(pool, out, name, run, b, body, material, q, q_dot, idx):
         reference_positions(body, run.frame_r[0, b], run.frame_A[0, b]),
         [(c.cell_type.value, c.connectivity) for c in body.mesh.cells],
     )
+    plastic = (run.plastic or {}).get(body.name)  # integrate.plastic_bodies.PlasticReport
     entries, writes = [], []
     for k, i in enumerate(idx):
         fl = nodal_fields(
@@ -384,6 +389,9 @@ def _submit_body_series(pool, out, name, run, b, body, material, q, q_dot, idx):
             "velocity": fl.velocity,
             "von_mises": fl.von_mises,
         }
-        writes.append(pool.submit(series.write, out / fname, fields))
+        cells = None
+        if plastic is not None:  # volume average per cell of its points' alpha
+            cells = {"equivalent_plastic_strain": plastic.cell_history[i]}
+        writes.append(pool.submit(series.write, out / fname, fields, cells))
         entries.append((float(run.t[i]), fname))
     return entries, writes

@@ -51,7 +51,7 @@ from flexmvm.scenarios.mesh_lookup import (
     nearest_node,
     retained_nodes,
 )
-from flexmvm.scenarios.plasticity_schema import refuse_dynamic
+from flexmvm.scenarios.plasticity_schema import plastic_parts, refuse_dynamic
 from flexmvm.scenarios.sag import quasi_static_sag
 from flexmvm.scenarios.setup import SetupCache, default_setup
 from flexmvm.scenarios.solver_choice import with_elimination_order
@@ -216,7 +216,12 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
     bodies = [with_elimination_order(b, setup) for b in bodies]
     loads = build_loads(sc, bodies, infos, index, states)  # [[loads]], [[springs]]
     system = System(
-        tuple(bodies), tuple(joints), contacts, np.asarray(sc.gravity_mps2, float), loads
+        tuple(bodies),
+        tuple(joints),
+        contacts,
+        np.asarray(sc.gravity_mps2, float),
+        loads,
+        plastic_parts(sc, infos),  # full-FE plastic bodies (integrate.plastic_bodies)
     )
     for k, cfg in enumerate(sc.bodies):  # joint lengths stay those of the undeformed placement
         if cfg.placement.sagged:

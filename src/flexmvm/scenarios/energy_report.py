@@ -78,6 +78,8 @@ def energy_ledger_summary(res, built) -> dict:
             "dissipation_numerical_J": float(led.numerical[-1]),
             # spinning bodies only (bodies.stiffening): the work of -s K_G q
             "work_stiffening_J": None if led.stiffening is None else float(led.stiffening[-1]),
+            # plastic bodies only (integrate.plastic_bodies): their plastic work
+            **({} if led.plastic is None else {"plastic_work_J": float(led.plastic[-1])}),
             "balance_residual_J": float(resid[-1]),
             "balance_residual_rel_max": float(np.abs(resid).max() / ref_j) if ref_j else None,
             "balance_reference": ref,

@@ -1,13 +1,18 @@
-"""The ``plasticity`` table of an inline material (J2, von Mises: flexmvm.plasticity) and the
-one-line refusal of a dynamic run whose bodies carry it (static solves only, for now)."""
+"""The ``plasticity`` table of an inline material (J2, von Mises: flexmvm.plasticity), the
+plastic parts of a built scenario (full-FE bodies: integrate.plastic_bodies) and the one-line
+refusal of the bodies the dynamic run cannot make plastic yet (reduced, modal, rigid)."""
 
 from __future__ import annotations
 
 from typing import Annotated
 
+import numpy as np
 from annotated_types import Ge
 
+from flexmvm.bodies.build import ModelKind
 from flexmvm.errors import InputError
+from flexmvm.integrate.plastic_bodies import PlasticPart
+from flexmvm.plasticity.body import PlasticBody
 from flexmvm.plasticity.material import J2Plasticity
 from flexmvm.scenarios.fields import Frozen, Num, Positive
 
@@ -35,14 +40,50 @@ def plasticity_of(body) -> J2Plasticity | None:
 
 
 def refuse_dynamic(scenario) -> None:
-    """InputError (one line) if a body of ``scenario`` is plastic: the time stepping carries
-    the elastic stiffness only; the static solver (flexmvm.plasticity.solve_static) is the one
-    that takes plasticity so far."""
-    plastic = [b.name for b in scenario.bodies if plasticity_of(b) is not None]
-    if plastic:
+    """InputError (one line) if a plastic body of ``scenario`` is neither full FE nor of a
+    kind that retains nodes (MVM: plastic in its retained region; interface, modal and rigid
+    bodies carry the elastic stiffness only) or has redistributed contact mass."""
+    plastic = [b for b in scenario.bodies if plasticity_of(b) is not None]
+    other = [
+        b.name
+        for b in plastic
+        if not (b.model.kind is ModelKind.FULL or b.model.kind.retains_nodes)
+    ]
+    if other:
         raise InputError(
-            f"{'body' if len(plastic) == 1 else 'bodies'} {', '.join(repr(n) for n in plastic)}: "
-            "material.plasticity is not "
-            "supported by the dynamic run yet (static solves only: flexmvm.plasticity."
-            "solve_static); remove the plasticity table to run the elastic model"
+            f"{'body' if len(other) == 1 else 'bodies'} {', '.join(repr(n) for n in other)}: "
+            'material.plasticity is supported by the dynamic run for model.kind = "full" '
+            "and the MVM kinds only (static solves: flexmvm.plasticity.solve_static); use one "
+            "of them or remove the plasticity table"
         )
+    names = {b.name for b in plastic}
+    for k, c in enumerate(scenario.contacts):
+        if c.redistribute_mass and names & {c.slave_body, c.master_body}:
+            raise InputError(
+                f"contacts[{k}]: redistribute_mass cannot be used with a plastic body "
+                f"({', '.join(sorted(names & {c.slave_body, c.master_body}))})"
+            )
+
+
+def plastic_parts(scenario, infos) -> tuple[PlasticPart, ...]:
+    """The PlasticPart of every plastic body of ``scenario`` (infos: the built BodyInfo of
+    each body, in order: its mesh and elastic material)."""
+    parts = []
+    for k, (cfg, info) in enumerate(zip(scenario.bodies, infos)):
+        plastic = plasticity_of(cfg)
+        if plastic is None:
+            continue
+        model = PlasticBody.build(info.mesh, info.material, plastic)
+        allowed = None
+        if cfg.model.kind.retains_nodes:  # the cells whose nodes are all retained
+            kept = np.zeros(info.mesh.n_nodes, bool)
+            kept[info.covered_nodes] = True
+            allowed = tuple(kept[bl.nodes].all(axis=1) for bl in model.blocks)
+            if not any(a.any() for a in allowed):
+                raise InputError(
+                    f"bodies[{cfg.name}].model: no cell has all its nodes retained "
+                    f"({len(info.covered_nodes)} nodes kept), so none can yield: keep a region "
+                    "that holds whole cells around the contact"
+                )
+        parts.append(PlasticPart(k, model, allowed))
+    return tuple(parts)

@@ -17,6 +17,7 @@ from flexmvm.scenarios.build import BuiltScenario, build_scenario
 from flexmvm.scenarios.energy_report import momentum_report, report_entries
 from flexmvm.scenarios.guard import contact_guard, energy_gain_warning, guard_warnings
 from flexmvm.scenarios.load import load_scenario
+from flexmvm.scenarios.plastic_summary import plastic_guard_warnings, plastic_summary
 from flexmvm.scenarios.schema import Scenario
 from flexmvm.scenarios.setup import SetupCache
 
@@ -107,6 +108,8 @@ def run_scenario(
     summary = summarize(res, built)
     if warn:
         for line in guard_warnings(summary["reduced_contact_guard"]):
+            warnings.warn(line, ReducedBasisWarning, stacklevel=2)
+        for line in plastic_guard_warnings(summary):  # a reduced plastic body's zone
             warnings.warn(line, ReducedBasisWarning, stacklevel=2)
         line = energy_gain_warning(summary)
         if line is not None:
@@ -203,6 +206,8 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         # surface nodes its basis holds stiff, when it first happened, a model covering them
         "reduced_contact_guard": contact_guard(res, built),
         **_friction_summary(res),
+        # plastic bodies: peak alpha, plastic work, permanent indentation (plastic_summary)
+        **plastic_summary(res, built),
         # strings, gravity and a contact: the pendulum release's own measures
         **({"pendulum": pendulum.event_summary(built, res)} if pendulum.is_pendulum(built) else {}),
     }

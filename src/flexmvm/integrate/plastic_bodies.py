@@ -1,0 +1,229 @@
+"""Elastic-plastic bodies in the Moreau-Jean step: full FE, and MVM bodies in the cells whose
+nodes are all retained (docs/plasticity.md, "The dynamic step").
+
+The internal force of a plastic body at the step's midpoint q_m is the return mapping at
+eps(u_m), u_m = psi q_m, from the last accepted history (the flow rule integrated by backward
+Euler on the grid of midpoints: plan item 1, docs/notes/2026-11-27-plastic-region-plan.md):
+
+    F_q = -(k_hat q_m + psi^T c(psi q_m))        c: plasticity/step_history.py
+
+so the carried k_hat q of the elastic step stays as it is and the correction is one return
+over the plastic cell set per iterate. The iteration matrix stays the elastic W (factored once
+per h): modified Newton, the residual exact. The accepted iterate's return becomes the next
+step's history; a refused or cut step never commits its return. Energy: the work of the
+correction, sum over the steps of psi^T c(q_m) . (q(t + h) - q(t)), less the difference between
+the elastic energy and 1/2 q^T k_hat q at the output (StepHistory.strain_energy_correction), is
+the plastic work (dissipation and stored hardening, to the scheme's order): the ledger's
+``plastic`` term, which closes the balance to the Newton tolerance (integrate.energy_ledger).
+
+The history lives here, beside the BodyState: a run without plastic bodies makes none of it.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+import scipy.sparse.linalg as spla
+
+from flexmvm.errors import InputError, SolverError
+from flexmvm.plasticity.body import PlasticBody
+from flexmvm.plasticity.step_history import StepHistory
+
+#: The modified Newton iteration on the elastic W contracts by 0.3 to 0.6 per iterate while
+#: points yield (the elastic tangent is stiffer than the plastic one; measured on the sphere
+#: impacts of tests/test_plastic_dynamics.py and sphere_block.toml): within 0.9 it is still
+#: converging, not on the round-off floor where moreau_jean accepts a residual that no longer
+#: halves. A step whose returns yield is on its floor only when an iterate gains less than
+#: this factor.
+STALL_RATIO = 0.9
+
+
+@dataclass(frozen=True)
+class PlasticPart:
+    """A plastic body of a System: its index in System.bodies and its PlasticBody (mesh,
+    elastic material and J2Plasticity; the mesh the body's psi maps to); allowed: per cell
+    block a bool mask of the cells that may yield (a reduced body: those whose nodes are all
+    retained, where psi is the identity), None: all (full FE)."""
+
+    body: int
+    model: PlasticBody
+    allowed: tuple | None = None
+
+
+@dataclass(frozen=True)
+class PlasticReport:
+    """What a run leaves in a plastic body: cell_equivalent_plastic_strain (n_cells,) [-]
+    (volume average per cell, mesh block order) at the end and cell_history (n_out, n_cells)
+    [-] at the outputs, point_equivalent_plastic_strain (n_points,)
+    [-], plastic_work_j (sum of sigma : d eps_p dx over the steps) [J], hardening_energy_j
+    (stored, at the end) [J], residual_displacement (3n,) [m] (the body's static field of its
+    final plastic strain: unloaded and at rest, in its frame, relative to its reference
+    condition), n_set_cells (cells returned) and n_refused (steps taken again because a cell
+    outside the set reached yield); a reduced body's guard: n_outside_steps (steps at whose
+    midpoint a cell it may not return reached Y) and outside_cells (the most such cells)."""
+
+    cell_equivalent_plastic_strain: np.ndarray
+    cell_history: np.ndarray
+    point_equivalent_plastic_strain: np.ndarray
+    plastic_work_j: float
+    hardening_energy_j: float
+    residual_displacement: np.ndarray
+    n_set_cells: int
+    n_refused: int
+    n_outside_steps: int = 0
+    outside_cells: int = 0
+
+    @property
+    def peak_equivalent_plastic_strain(self) -> float:
+        return float(self.point_equivalent_plastic_strain.max(initial=0.0))
+
+
+class PlasticBodies:
+    """The plastic bodies of a system through a run (module doc)."""
+
+    def __init__(self, system):
+        self.bodies = system.bodies
+        self.history: dict[int, StepHistory] = {}
+        for part in getattr(system, "plastic", ()):
+            body = self.bodies[part.body]
+            if body.psi.shape[0] != part.model.n_dof:
+                raise InputError(
+                    f"body {body.name!r}: plasticity needs psi of {part.model.n_dof} rows "
+                    f"(the plastic mesh's DOFs), got a psi of shape {body.psi.shape}"
+                )
+            if not body.is_sparse:
+                _check_identity_rows(body, part)
+            self.history[part.body] = StepHistory(part.model, allowed=part.allowed)
+        self._mid: dict[int, tuple[np.ndarray, np.ndarray | None]] = {}
+
+    def __bool__(self) -> bool:
+        return bool(self.history)
+
+    def __contains__(self, b: int) -> bool:
+        return b in self.history
+
+    @property
+    def yielding(self) -> bool:
+        """True if the last midpoint force of a body was not zero (its returns yield)."""
+        return any(c_q is not None for _, c_q in self._mid.values())
+
+    def stall_ratio(self, elastic: float) -> float:
+        """The factor of the round-off floor test: STALL_RATIO while the returns yield, else
+        ``elastic`` (the scheme's own)."""
+        return STALL_RATIO if self.yielding else elastic
+
+    def midpoint_force(self, b: int, q_m: np.ndarray) -> np.ndarray | None:
+        """psi^T c(psi q_m) (nq,) [N] of body b at the midpoint q_m, None where it is zero;
+        the return is the step's trial."""
+        psi = self.bodies[b].psi
+        u = psi @ q_m
+        c = self.history[b].correction(u)
+        c_q = None if c is None else _project(psi, c)
+        self._mid[b] = (u, c_q)
+        return c_q
+
+    def elastic_step(self, states, new_states, theta: float) -> bool:
+        """True if the step states -> new_states (the linear non-rotating step) leaves every
+        plastic body elastic at its midpoint q + theta (q+ - q): then it is the step of the
+        plastic scheme as well; False: the step must be taken by Newton."""
+        for b, hist in self.history.items():
+            q_m = states[b].q + theta * (new_states[b].q - states[b].q)
+            if not hist.check(self.bodies[b].psi @ q_m):
+                return False
+            if self.midpoint_force(b, q_m) is not None:
+                return False
+        return True
+
+    def check(self) -> None:
+        """Screen the accepted iterate's midpoints (StepHistory.check); SolverError (the
+        driver takes the step again in halves, the set enlarged) if a cell outside the set
+        had reached yield."""
+        for b, hist in self.history.items():
+            if not hist.check(self._mid[b][0]):
+                raise SolverError(
+                    f"body {self.bodies[b].name!r}: a cell outside the plastic set reached "
+                    "yield; the set grew and the step is taken again"
+                )
+
+    def commit(self, states, new_states) -> float:
+        """Commit the accepted returns; the work [J] of the correction over the step,
+        sum of psi^T c(q_m) . (q+ - q)."""
+        work = 0.0
+        for b, hist in self.history.items():
+            c_q = self._mid[b][1]
+            if c_q is not None:
+                work += float(c_q @ (new_states[b].q - states[b].q))
+            hist.commit()
+        self._mid.clear()
+        return work
+
+    def strain_energy_correction(self, states) -> float:
+        """Elastic energy minus 1/2 q^T k_hat q of the plastic bodies at states [J]."""
+        return sum(
+            hist.strain_energy_correction(self.bodies[b].psi @ states[b].q)
+            for b, hist in self.history.items()
+        )
+
+    def cell_fields(self) -> dict[int, np.ndarray]:
+        """Per plastic body: its cells' equivalent plastic strain (n_cells,) [-] now."""
+        return {b: hist.cell_equivalent_plastic_strain() for b, hist in self.history.items()}
+
+    def reports(self, outputs=()) -> dict[str, PlasticReport]:
+        """PlasticReport per plastic body name (one sparse factorization of k_hat each);
+        outputs: cell_fields() of every output, in order."""
+        out = {}
+        for b, hist in self.history.items():
+            cells = hist.cell_equivalent_plastic_strain()
+            history = np.array([row[b] for row in outputs]).reshape(len(outputs), len(cells))
+            body = self.bodies[b]
+            c_q = _project(body.psi, hist.committed_correction())
+            q_res = np.zeros(body.nq)
+            if np.any(c_q) and sp.issparse(body.k_hat):
+                q_res = spla.spsolve(sp.csc_matrix(body.k_hat), -c_q)
+            elif np.any(c_q):
+                q_res = np.linalg.solve(np.asarray(body.k_hat), -c_q)
+            out[body.name] = PlasticReport(
+                cells,
+                history,
+                hist.state.equivalent_plastic_strain.copy(),
+                hist.plastic_work,
+                hist.hardening_energy(),
+                body.psi @ q_res,
+                hist.n_set_cells,
+                hist.n_refused,
+                hist.n_outside_steps,
+                hist.outside_cells,
+            )
+        return out
+
+
+def _project(psi, c: np.ndarray) -> np.ndarray:
+    """psi^T c (nq,) for a nodal force c (3n,): sparse psi as is; a dense (reduced) psi on the
+    rows where c is nonzero only (the returned cells' nodes)."""
+    if sp.issparse(psi):
+        return psi.T @ c
+    rows = np.flatnonzero(c)
+    return psi[rows].T @ c[rows]
+
+
+def _check_identity_rows(body, part: PlasticPart) -> None:
+    """InputError unless a reduced body's psi is the identity on the DOFs of the cells it may
+    return (their strain is then that of their coordinates, exactly: the plan's MVM form)."""
+    if part.allowed is None:
+        raise InputError(f"body {body.name!r}: a reduced plastic body needs its allowed cells")
+    nodes = np.unique(
+        np.concatenate(
+            [
+                bl.nodes[np.asarray(a, bool)].ravel()
+                for bl, a in zip(part.model.blocks, part.allowed)
+            ]
+        )
+    )
+    rows = np.asarray(body.psi)[(3 * nodes[:, None] + np.arange(3)).ravel()]
+    if not (np.all(np.count_nonzero(rows, axis=1) == 1) and np.all(rows.max(axis=1) == 1.0)):
+        raise InputError(
+            f"body {body.name!r}: its basis is not the identity on the nodes of the cells "
+            "allowed to yield (retained nodes)"
+        )
