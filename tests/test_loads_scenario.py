@@ -160,15 +160,15 @@ def test_energy_gain_counts_inputs_and_catches_the_rest():
     no gain; 1 J more than they did is (relative to the largest input work when E(0) = 0)."""
     from types import SimpleNamespace
 
+    from flexmvm.integrate.energy_ledger import EnergyLedgerHistory
     from flexmvm.scenarios.run import energy_gain
 
     t = np.linspace(0.0, 1.0, 5)
-    works = SimpleNamespace(
-        contact=np.zeros(5),
-        loads=np.c_[4.0 * t],
-        joints=np.c_[6.0 * t],
-        stiffening=None,
-    )
+    zero = np.zeros(5)
+    works = EnergyLedgerHistory(
+        ["load"], ["joint"], np.c_[4.0 * t], np.c_[zero], np.c_[zero], np.c_[6.0 * t],
+        contact=zero, damping=zero, numerical=zero,
+    )  # fmt: skip
     fed = SimpleNamespace(total_energy=10.0 * t, energy_ledger=works)
     assert energy_gain(fed) == pytest.approx(0.0, abs=1e-15)
     extra = SimpleNamespace(total_energy=10.0 * t + np.r_[0, 0, 1.0, 0, 0], energy_ledger=works)

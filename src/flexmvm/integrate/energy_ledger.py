@@ -80,12 +80,16 @@ class EnergyLedgerHistory:
     stiffening: np.ndarray | None = None  # work of the geometric stiffening forces
     plastic: np.ndarray | None = None  # plastic work of the plastic bodies (module doc)
 
+    def inputs(self) -> np.ndarray:
+        """The work put in from outside the bodies' contact (n_out,) [J]: applied loads,
+        joints (drives, prescribed motions) and a spinning body's stiffening forces."""
+        works = self.loads.sum(axis=1) + self.joints.sum(axis=1)
+        return works if self.stiffening is None else works + self.stiffening
+
     def residual(self, total_energy: np.ndarray) -> np.ndarray:
         """E(t) - E(0) - works + dissipations (n_out,) [J] (module doc)."""
         E = np.asarray(total_energy)[: len(self.contact)]
-        works = self.loads.sum(axis=1) + self.joints.sum(axis=1) + self.contact
-        if self.stiffening is not None:
-            works = works + self.stiffening
+        works = self.inputs() + self.contact
         dissipated = self.damping + self.numerical
         if self.plastic is not None:
             dissipated = dissipated + self.plastic

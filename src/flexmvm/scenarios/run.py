@@ -242,10 +242,7 @@ def energy_gain(res: RunResult) -> float | None:
     led = res.energy_ledger
     inputs = np.zeros_like(E)
     if led is not None:
-        n = len(led.contact)
-        inputs[:n] = led.loads.sum(axis=1) + led.joints.sum(axis=1)
-        if led.stiffening is not None:
-            inputs[:n] += led.stiffening
+        inputs[: len(led.contact)] = led.inputs()
     ref = abs(float(E[0])) or float(np.abs(inputs).max())
     if ref == 0.0:
         return None
