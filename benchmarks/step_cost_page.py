@@ -67,7 +67,9 @@ def _full_rows(f: dict, n_solves: int) -> list[tuple[str, str, str]]:
             _pct(f["solve_share"]),
             (
                 f"{f['solves_per_step']:.2f} back-substitutions per step ({per_rod}), "
-                f"{_ms(f['solve_thread_s_per_step'])} of thread time"
+                f"{_ms(f['solve_thread_s_per_step'])} of thread time; besides, "
+                f"{f['other_solves_per_step']:.2f} small solves with the massless contact nodes' "
+                f"stiffness, {_ms(f['other_solve_thread_s_per_step'])}"
             ),
         ),
         (

@@ -76,6 +76,8 @@ RES = {
         "solves_per_step_by_body": {"b1": 1.09, "b2": 1.07},
         "solve_thread_s_per_step": 0.0302,
         "solve_share": 0.7134,
+        "other_solves_per_step": 4.0,
+        "other_solve_thread_s_per_step": 0.000213,
         "target_factor": _factor(25041, 12_600_000, 104.37, True),
         "striker_factor": _factor(25767, 13_000_000, 108.0, True),
         "back_substitution": {
@@ -119,8 +121,10 @@ def test_full_fe_rows():
     assert "| 28.1 ms | median of 80 steps;" in step
     share = _row(block, "of it, a back-substitution running")
     assert (
-        "| 71 % | 2.16 back-substitutions per step (b1 1.09, b2 1.07), 30.2 ms of thread time |"
-        in share
+        "| 71 % | 2.16 back-substitutions per step (b1 1.09, b2 1.07), 30.2 ms of thread" in share
+    )
+    assert "besides, 4.00 small solves with the massless contact nodes' stiffness, 0.213 ms |" in (
+        share
     )
     factor = _row(block, "the aluminium rod's factor L")
     assert "| 100.8 MB | 12.60 M entries of 8 bytes (104.4 MB with its index arrays)" in factor
