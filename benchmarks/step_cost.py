@@ -62,9 +62,9 @@ def _built(model: str, t_end: float, scenario: Path):
 
 
 def _run(built, clock: _KernelClock | None = None, marks: list | None = None):
-    """simulate ``built``: (end time of every accepted step [perf_counter s], the steps'
-    (h [s], contact active), the integrator); with a clock, its totals at the end of every
-    step go to ``marks``."""
+    """simulate ``built``: (the end of every accepted step as (wall, the calling thread's CPU
+    time, the process's CPU time) [s], the steps' (h [s], contact active), the integrator);
+    with a clock, its totals at the end of every step go to ``marks``."""
     from flexmvm.integrate.driver import moreau_jean, simulate
 
     made, stamps, steps = [], [], []
@@ -74,7 +74,7 @@ def _run(built, clock: _KernelClock | None = None, marks: list | None = None):
         return made[-1]
 
     def on_step(step) -> None:
-        stamps.append(time.perf_counter())
+        stamps.append((time.perf_counter(), time.thread_time(), time.process_time()))
         if clock is not None:
             marks.append(clock.snapshot())
         steps.append((step.h_s, bool(np.any(step.result.contact_impulses > 0.0))))
@@ -85,19 +85,22 @@ def _run(built, clock: _KernelClock | None = None, marks: list | None = None):
 
 def _window(stamps: list, steps: list) -> dict:
     """The steps after WARM_STEPS: their count, how many had contact, their sizes, the wall
-    from the end of step WARM_STEPS - 1 to the last, and the median step [s]."""
+    from the end of step WARM_STEPS - 1 to the last, the median and mean step [s], and the
+    mean CPU time per step of the calling thread and of the process (all threads) [s]."""
     if len(stamps) < WARM_STEPS + 10:
         raise InputError(f"step_cost: {len(stamps)} steps, need at least {WARM_STEPS + 10}")
-    walls = np.diff(stamps[WARM_STEPS - 1 :])
+    walls, thread_cpu, process_cpu = np.diff(np.array(stamps[WARM_STEPS - 1 :]), axis=0).T
     kept = steps[WARM_STEPS:]
     return {
         "n_steps": len(walls),
         "n_contact_steps": sum(c for _, c in kept),
         "dt_s": sorted({h for h, _ in kept}),
-        "t0": stamps[WARM_STEPS - 1],
-        "t1": stamps[-1],
+        "t0": stamps[WARM_STEPS - 1][0],
+        "t1": stamps[-1][0],
         "mean_step_s": float(walls.mean()),
         "median_step_s": float(np.median(walls)),
+        "mean_step_thread_cpu_s": float(thread_cpu.mean()),
+        "mean_step_process_cpu_s": float(process_cpu.mean()),
     }
 
 
@@ -136,14 +139,16 @@ def _union(intervals: list[tuple[float, float]], t0: float, t1: float) -> float:
     return total
 
 
-def _median_s(fn, n: int = N_SOLVES) -> float:
+def _median_s(fn, n: int = N_SOLVES, cpu: bool = False) -> float:
+    """The median wall of n calls of fn [s] (cpu: of the calling thread's CPU time)."""
+    clock = time.thread_time if cpu else time.perf_counter
     for _ in range(3):  # warm: pages of the factor, threads started
         fn()
     times = []
     for _ in range(n):
-        t0 = time.perf_counter()
+        t0 = clock()
         fn()
-        times.append(time.perf_counter() - t0)
+        times.append(clock() - t0)
     return float(np.median(times))
 
 
@@ -170,6 +175,7 @@ def _back_substitutions(target, striker) -> dict:
     try:
         target.pool = striker.pool = None
         one = _median_s(lambda: target.solve(bt))
+        one_cpu = _median_s(lambda: target.solve(bt), cpu=True)
         serial = _median_s(lambda: (target.solve(bt), striker.solve(bs)))
         with ThreadPoolExecutor(max_workers=1) as pool:
             both = _median_s(lambda: (pool.submit(striker.solve, bs), target.solve(bt))[0].result())
@@ -179,6 +185,7 @@ def _back_substitutions(target, striker) -> dict:
         target.pool, striker.pool = pools
     return {
         "one_thread_s": one,
+        "one_thread_cpu_s": one_cpu,
         "two_threads_s": two,
         "both_rods_serial_s": serial,
         "both_rods_parallel_s": both,
@@ -241,7 +248,8 @@ def measure_full(scenario: Path) -> dict:
 
 class _KernelClock:
     """A timer around every call of a compiled (numba) kernel from Python, any thread, while
-    active: totals [s] and calls per (kernel, on the calling thread or not).
+    active: totals (wall [s], calls, CPU time of the thread that ran it [s]) per (kernel, on
+    the calling thread or not).
     Calls from one kernel to another are compiled in and are not seen: they count in the
     caller's time."""
 
@@ -255,17 +263,18 @@ class _KernelClock:
         totals, main = self.totals, self.main
 
         def call(kernel, *args, **kwargs):
-            t0 = time.perf_counter()
+            t0, c0 = time.perf_counter(), time.thread_time()
             try:
                 return base(kernel, *args, **kwargs)
             finally:
-                dt = time.perf_counter() - t0
+                c1, t1 = time.thread_time(), time.perf_counter()
                 key = (kernel.py_func.__qualname__, threading.get_ident() == main)
                 acc = totals.get(key)
                 if acc is None:
-                    acc = totals[key] = [0.0, 0]
-                acc[0] += dt
+                    acc = totals[key] = [0.0, 0, 0.0]
+                acc[0] += t1 - t0
                 acc[1] += 1
+                acc[2] += c1 - c0
 
         self.cls.__call__ = call
         return self
@@ -348,8 +357,11 @@ def measure_mvm(scenario: Path) -> dict:
     w = _window(stamps, steps)
     first, last = marks[WARM_STEPS - 1], marks[-1]
     per_kernel: dict[str, dict] = {}
-    for key, (s, n) in last.items():
-        s0, n0 = first.get(key, (0.0, 0))
+    kernel_cpu = 0.0
+    for key, (s, n, c) in last.items():
+        s0, n0, c0 = first.get(key, (0.0, 0, 0.0))
+        if key[1]:
+            kernel_cpu += (c - c0) / w["n_steps"]
         if n > n0:
             name, on_main = key
             row = per_kernel.setdefault(
@@ -368,6 +380,7 @@ def measure_mvm(scenario: Path) -> dict:
         "dof": [6 + b.nq for b in built.system.bodies],
         "kernel_ms_calling_thread": total - other,
         "kernel_ms_other_threads": other,
+        "kernel_cpu_ms_calling_thread": 1e3 * kernel_cpu,
         "kernels_called": len(per_kernel),
         "timer_overhead_s_per_call": timer_overhead_s(),
         "kernel_calls_per_step": sum(r["calls_per_step"] for r in per_kernel.values()),
@@ -401,7 +414,10 @@ def _print(res: dict) -> None:
         ("  its etree halves on two threads [ms]", 1e3 * bs["two_threads_s"]),
         ("both rods' back-substitutions, one after the other [ms]", 1e3 * bs["both_rods_serial_s"]),
         ("  at once on two threads [ms]", 1e3 * bs["both_rods_parallel_s"]),
+        ("one back-substitution, one thread, CPU [ms]", 1e3 * bs["one_thread_cpu_s"]),
         ("all MVM: contact step, median [ms]", 1e3 * m["plain"]["median_step_s"]),
+        ("  calling thread's CPU per step [ms]", 1e3 * m["timed"]["mean_step_thread_cpu_s"]),
+        ("  of it in compiled kernels [ms]", m["kernel_cpu_ms_calling_thread"]),
         ("  with the kernel timers [ms]", 1e3 * m["timed"]["median_step_s"]),
         ("  in compiled kernels, calling thread [ms]", m["kernel_ms_calling_thread"]),
         ("  compiled kernels on the other thread [ms]", m["kernel_ms_other_threads"]),

@@ -60,7 +60,10 @@ def _full_rows(f: dict, n_solves: int) -> list[tuple[str, str, str]]:
         (
             f"full FE (coordinates {dof}): one contact step",
             _ms(f["median_step_s"]),
-            f"median of {f['n_steps']} steps; both rods' work on a thread each",
+            (
+                f"median of {f['n_steps']} steps; both rods' work on a thread each; "
+                f"{_ms(f['mean_step_process_cpu_s'])} of CPU time per step (both threads, mean)"
+            ),
         ),
         (
             "of it, a back-substitution running on either thread",
@@ -83,7 +86,10 @@ def _full_rows(f: dict, n_solves: int) -> list[tuple[str, str, str]]:
         (
             "one back-substitution with it, one thread",
             rate(bs["one_thread_s"]),
-            f"median of {n_solves}; GB/s: twice the factor over the time",
+            (
+                f"median of {n_solves}, {_ms(bs['one_thread_cpu_s'])} of CPU time; GB/s: twice "
+                "the factor over the time"
+            ),
         ),
         (
             "the same, its two elimination-tree halves on two threads",
@@ -104,6 +110,9 @@ def _mvm_rows(m: dict) -> list[tuple[str, str, str]]:
     step_ms = 1e3 * m["timed"]["median_step_s"]
     mean_ms = 1e3 * m["timed"]["mean_step_s"]
     kernel_ms = m["kernel_ms_calling_thread"]
+    # CPU time of the calling thread: what the split is when other jobs share the cores
+    cpu_ms = 1e3 * m["timed"]["mean_step_thread_cpu_s"]
+    kernel_cpu_ms = m["kernel_cpu_ms_calling_thread"]
     overhead_ms = 1e3 * m["timer_overhead_s_per_call"] * m["kernel_calls_per_step"]
     shown = list(m["kernels"].items())[:N_KERNELS_SHOWN]
     top = ", ".join(f"`{name}` {r['ms_per_step']:.2f} ms" for name, r in shown)
@@ -117,23 +126,27 @@ def _mvm_rows(m: dict) -> list[tuple[str, str, str]]:
             f"all MVM (coordinates {dof}): one contact step",
             _ms(m["plain"]["median_step_s"]),
             (
-                f"median of {m['plain']['n_steps']} steps; {step_ms:.3g} ms with a timer around "
-                "every compiled kernel call (the run the next three rows split)"
+                f"median of {m['plain']['n_steps']} steps, "
+                f"{_ms(m['plain']['mean_step_thread_cpu_s'])} of the calling thread's CPU time "
+                f"(mean); {step_ms:.3g} ms with a timer around every compiled kernel call (the "
+                "run the next three rows split)"
             ),
         ),
         (
             "of it, in compiled (numba) kernels on the calling thread",
             f"{kernel_ms:.3g} ms ({_pct(kernel_ms / mean_ms)})",
             (
-                f"{m['kernel_calls_per_step']:.0f} calls of {m['kernels_called']} kernels per "
-                f"step (mean over the steps); the longest: {top}"
+                f"CPU time: {kernel_cpu_ms:.3g} of the thread's {cpu_ms:.3g} ms "
+                f"({_pct(kernel_cpu_ms / cpu_ms)}); {m['kernel_calls_per_step']:.0f} calls of "
+                f"{m['kernels_called']} kernels per step (mean over the steps); the longest: {top}"
             ),
         ),
         (
             "the rest: the Python layer and the numpy/scipy/LAPACK calls it makes",
             f"{mean_ms - kernel_ms:.3g} ms ({_pct(1 - kernel_ms / mean_ms)})",
             (
-                "the step's mean wall minus the kernels' time; of it, the timers' own "
+                f"CPU time: {cpu_ms - kernel_cpu_ms:.3g} ms ({_pct(1 - kernel_cpu_ms / cpu_ms)}); "
+                "the step's mean wall minus the kernels'; of it, the timers' own "
                 f"{1e6 * m['timer_overhead_s_per_call']:.2g} us per call, "
                 f"{overhead_ms:.2g} ms per step"
             ),

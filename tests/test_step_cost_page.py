@@ -71,6 +71,7 @@ RES = {
         "dt_s": [5e-7],
         "median_step_s": 0.0281,
         "mean_step_s": 0.0290,
+        "mean_step_process_cpu_s": 0.0412,
         "dof": [25773, 25047],
         "solves_per_step": 2.16,
         "solves_per_step_by_body": {"b1": 1.09, "b2": 1.07},
@@ -82,17 +83,31 @@ RES = {
         "striker_factor": _factor(25767, 13_000_000, 108.0, True),
         "back_substitution": {
             "one_thread_s": 0.0090,
+            "one_thread_cpu_s": 0.0088,
             "two_threads_s": 0.0070,
             "both_rods_serial_s": 0.0185,
             "both_rods_parallel_s": 0.0101,
         },
     },
     "mvm": {
-        "plain": {"n_steps": 380, "dt_s": [5e-7], "median_step_s": 0.00305, "mean_step_s": 0.0031},
-        "timed": {"n_steps": 380, "dt_s": [5e-7], "median_step_s": 0.00312, "mean_step_s": 0.0032},
+        "plain": {
+            "n_steps": 380,
+            "dt_s": [5e-7],
+            "median_step_s": 0.00305,
+            "mean_step_s": 0.0031,
+            "mean_step_thread_cpu_s": 0.0029,
+        },
+        "timed": {
+            "n_steps": 380,
+            "dt_s": [5e-7],
+            "median_step_s": 0.00312,
+            "mean_step_s": 0.0032,
+            "mean_step_thread_cpu_s": 0.0030,
+        },
         "dof": [599, 118],
         "kernel_ms_calling_thread": 1.25,
         "kernel_ms_other_threads": 0.25,
+        "kernel_cpu_ms_calling_thread": 1.2,
         "kernels_called": 14,
         "kernel_calls_per_step": 31.4,
         "timer_overhead_s_per_call": 1.7e-6,
@@ -119,6 +134,7 @@ def test_full_fe_rows():
     block = page_writer.render_block(RES, COMMAND)
     step = _row(block, "full FE (coordinates 25,773 + 25,047): one contact step")
     assert "| 28.1 ms | median of 80 steps;" in step
+    assert "41.2 ms of CPU time per step (both threads, mean)" in step
     share = _row(block, "of it, a back-substitution running")
     assert (
         "| 71 % | 2.16 back-substitutions per step (b1 1.09, b2 1.07), 30.2 ms of thread" in share
@@ -129,20 +145,26 @@ def test_full_fe_rows():
     factor = _row(block, "the aluminium rod's factor L")
     assert "| 100.8 MB | 12.60 M entries of 8 bytes (104.4 MB with its index arrays)" in factor
     assert "25,041 rows" in factor
-    assert "| 9 ms (22.4 GB/s) | median of 30;" in _row(block, "one back-substitution")
+    assert "| 9 ms (22.4 GB/s) | median of 30, 8.8 ms of CPU time;" in _row(
+        block, "one back-substitution"
+    )
     halves = _row(block, "the same, its two elimination-tree halves")
     assert halves.endswith("| 7 ms (28.8 GB/s) |  |")
     assert "| 18.5 ms / 10.1 ms |" in _row(block, "both rods' back-substitutions")
 
 
 def test_all_mvm_rows():
-    """1.25 ms of kernels in a 3.2 ms mean step: 39 %, the rest 1.95 ms (61 %); the timers'
-    1.7 us x 31.4 calls = 0.053 ms per step."""
+    """1.25 ms of kernels in a 3.2 ms mean step: 39 %, the rest 1.95 ms (61 %); CPU time of
+    the calling thread 1.2 of 3.0 ms: 40 %, the rest 1.8 ms (60 %); the timers' 1.7 us x
+    31.4 calls = 0.053 ms per step."""
     block = page_writer.render_block(RES, COMMAND)
     step = _row(block, "all MVM (coordinates 599 + 118): one contact step")
-    assert "| 3.05 ms | median of 380 steps; 3.12 ms with a timer" in step
+    assert (
+        "| 3.05 ms | median of 380 steps, 2.9 ms of the calling thread's CPU time (mean);" in step
+    )
+    assert "3.12 ms with a timer" in step
     kernels = _row(block, "of it, in compiled (numba) kernels on the calling thread")
-    assert "| 1.25 ms (39 %) | 31 calls of 14 kernels per step" in kernels
+    assert "| 1.25 ms (39 %) | CPU time: 1.2 of the thread's 3 ms (40 %); 31 calls of 14" in kernels
     # the four longest by name, in the dict's order (step_cost.py sorts them)
     assert "`_contract_diagonal` 0.31 ms, `penetration_scan` 0.30 ms, `_contract_rest` 0.25 ms" in (
         kernels
@@ -150,7 +172,7 @@ def test_all_mvm_rows():
     assert "`momentum_terms` 0.20 ms |" in kernels
     assert "scan_nodes" not in kernels
     rest = _row(block, "the rest: the Python layer")
-    assert "| 1.95 ms (61 %) |" in rest
+    assert "| 1.95 ms (61 %) | CPU time: 1.8 ms (60 %);" in rest
     assert "the timers' own 1.7 us per call, 0.053 ms per step" in rest
     assert _row(block, "compiled kernels on the second thread").endswith(
         "| 0.25 ms | `_contract_rest` 0.25 ms |"
