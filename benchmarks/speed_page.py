@@ -93,8 +93,10 @@ def _sim_row(label: str, r: dict) -> tuple[str, str, str]:
     return (label, _s(r["wall_s"]), detail)
 
 
-def _header(res: dict, command: str) -> list[str]:
-    m = res["machine"]
+def machine_line(m: dict) -> str:
+    """What a generated block says of the machine, from machine_facts() with the run's
+    ``load_avg_end``: "<cpu>, <memory> GiB of memory; 1-min load average <start> at the
+    start, <end> at the end; Python <v>, numpy <v>, scipy <v>, numba <v>"."""
     parts = [m["cpu"]]
     if m.get("memory_gib") is not None:
         parts.append(f"{m['memory_gib']:.1f} GiB of memory")
@@ -103,17 +105,29 @@ def _header(res: dict, command: str) -> list[str]:
     if None not in loads:
         load = f"; 1-min load average {loads[0]:.1f} at the start, {loads[1]:.1f} at the end"
     v = m["versions"]
+    return (
+        f"{', '.join(parts)}{load}; Python {v['python']}, numpy {v['numpy']}, scipy "
+        f"{v['scipy']}, numba {v['numba']}"
+    )
+
+
+def wrap(text: str) -> list[str]:
+    """A generated paragraph's lines, wrapped as the hand-written pages are (a code span may
+    break: Markdown reads a space)."""
+    return textwrap.wrap(text, 100, break_long_words=False, break_on_hyphens=False)
+
+
+def _header(res: dict, command: str) -> list[str]:
+    m = res["machine"]
     text = (
-        f"Measured by `{command}` on {m['date_utc']}: {', '.join(parts)}{load}; Python "
-        f"{v['python']}, numpy {v['numpy']}, scipy {v['scipy']}, numba {v['numba']}. Every "
+        f"Measured by `{command}` on {m['date_utc']}: {machine_line(m)}. Every "
         "number below is from this one run; its record, with the code version, is "
         "`benchmarks/results/speed_<version>.json`."
     )
     if res["t_end_s"] < 2e-3:
         window = f"{res['t_end_s'] * 1e3:g} ms"
         text += f" `--quick`: {window} of simulation instead of 2 ms, a look, not the record."
-    # wrapped as the hand-written pages are (a code span may break: Markdown reads a space)
-    return textwrap.wrap(text, 100, break_long_words=False, break_on_hyphens=False)
+    return wrap(text)
 
 
 def _ratios(res: dict) -> list[str]:
@@ -195,26 +209,33 @@ def render_block(res: dict, command: str) -> str:
     return "\n".join(lines) + "\n"
 
 
-def replace_block(page: str, block: str) -> str:
-    """``page`` with the text from its BEGIN line to its END line replaced by ``block``.
-    Raises InputError unless the page has exactly one of each, BEGIN first."""
+def replace_block(page: str, block: str, begin: str = BEGIN, end: str = END) -> str:
+    """``page`` with the text from its ``begin`` line to its ``end`` line (default: this
+    block's markers) replaced by ``block``. Raises InputError unless the page has exactly one
+    of each, ``begin`` first."""
     lines = page.splitlines(keepends=True)
-    begins = [i for i, line in enumerate(lines) if line.strip() == BEGIN]
-    ends = [i for i, line in enumerate(lines) if line.strip() == END]
+    begins = [i for i, line in enumerate(lines) if line.strip() == begin]
+    ends = [i for i, line in enumerate(lines) if line.strip() == end]
     if len(begins) != 1 or len(ends) != 1 or begins[0] > ends[0]:
         raise InputError(
-            f"expected one line {BEGIN!r} and, after it, one line {END!r}; found "
+            f"expected one line {begin!r} and, after it, one line {end!r}; found "
             f"{len(begins)} and {len(ends)}"
         )
     return "".join(lines[: begins[0]]) + block + "".join(lines[ends[0] + 1 :])
 
 
-def write_page(path: Path, res: dict, command: str) -> None:
-    """Rewrite the generated block of ``path`` (docs/performance.md) from ``res``; the rest of
-    the page is kept byte for byte. Raises InputError as replace_block."""
+def write_block(path: Path, block: str, begin: str = BEGIN, end: str = END) -> None:
+    """Replace the marked block of the page ``path`` by ``block`` (replace_block); the rest
+    of the page is kept byte for byte. Raises InputError as replace_block, naming the page."""
     page = path.read_text(encoding="utf-8")
     try:
-        text = replace_block(page, render_block(res, command))
+        text = replace_block(page, block, begin, end)
     except InputError as exc:
         raise InputError(f"{path}: {exc}") from None
     write_text_atomic(path, text)
+
+
+def write_page(path: Path, res: dict, command: str) -> None:
+    """Rewrite the generated block of ``path`` (docs/performance.md) from ``res``; the rest of
+    the page is kept byte for byte. Raises InputError as replace_block."""
+    write_block(path, render_block(res, command))
