@@ -124,8 +124,8 @@ def _figure(out: Path, curves: dict, theory, body: str) -> None:
 
     fig, ax = plt.subplots(1, 2, figsize=(11, 4))
     styles = {"elastic": "C0-", "plastic": "C3-"}
-    for label, (t, f, probes) in curves.items():
-        st = styles.get(label, "k:")
+    for k, (label, (t, f, probes)) in enumerate(curves.items()):
+        st = styles.get(label, f"C{k + 2}:")
         ax[0].plot(1e3 * t, f, st, lw=1.2, label=label)
         if label in styles:
             for k, (name, v) in enumerate(probes.items()):
