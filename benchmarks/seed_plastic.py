@@ -2,7 +2,7 @@
 the MVM form of the struck rod against full FE plastic.
 
     python benchmarks/seed_plastic.py OUT [--scenario scenarios/rod_impact_short_plastic.toml]
-        [--t-end S] [--body b2] [--mvm 3-5:37,5-5:37] [--skip-elastic]
+        [--t-end S] [--body b2] [--mvm 5-5:37,3-5:37] [--skip-elastic] [--reuse OUT0]
 
 The scenario has both rods full FE and plastic (scenarios/rod_impact_plastic.toml,
 rod_impact_short_plastic.toml). Runs, one after another in this process:
@@ -10,9 +10,13 @@ rod_impact_short_plastic.toml). Runs, one after another in this process:
 - ``elastic``: the scenario with the plasticity tables removed (same E, nu, rho, mesh, contact
   law: the elastic seed model without mass redistribution, which plastic bodies refuse);
 - ``plastic``: the scenario as given;
-- ``mvm I-J:M`` for each of --mvm: BODY as MVM (layers I-J retained, M modes; plastic in its
-  whole retained cells; the rods' HEX27 cells span three node layers, so i >= 3: the elastic
-  seed model's 1-3 holds no whole cell and is refused), the other rod full FE plastic.
+- ``mvm I-J:M`` for each of --mvm: BODY as MVM (the seed's selection: I node layers from the
+  contact face, J laps from the axis retained; M modes; plastic in its whole retained cells;
+  the rods' HEX27 cells span three node layers, so I >= 3: the elastic seed model's 1-3 holds
+  no whole cell and is refused), the other rod full FE plastic.
+
+--reuse OUT0 takes the elastic and plastic runs of an earlier OUT0 (same scenario and end
+time: their rows from its JSON, their curves from its .npz files) and runs only the MVM forms.
 
 Each run: peak contact force, contact duration, impulse, the striker's velocity after the
 contact (v0 - J / m1: momentum, rigid-body part), the coefficient of restitution
@@ -21,8 +25,9 @@ plastic work, permanent indentation, peak equivalent plastic strain and the reta
 guard; every run against the elastic one and the MVM runs against the plastic one (force NCC
 over the contact window, peak / impulse / duration errors: scenarios.compare.compare_runs),
 and against the 1D wave-Hertz theory (elastic; `flexmvm theory`). Printed as a table; OUT gets
-seed_plastic.json (all numbers) and seed_plastic.png (the seed's fig. 5 layout: contact force,
-and the axial velocities of BODY's impact end and free end; elastic, plastic, theory).
+seed_plastic.json (all numbers), each run's curves (LABEL.npz) and seed_plastic.png (the seed's
+fig. 5 layout: contact force, and the axial velocities of BODY's impact end and free end;
+elastic, plastic, theory).
 """
 
 from __future__ import annotations
@@ -173,7 +178,7 @@ def main() -> None:
     ap.add_argument("--scenario", type=Path, default=DEFAULT)
     ap.add_argument("--t-end", type=float, default=None, help="end time [s]")
     ap.add_argument("--body", default="b2")
-    ap.add_argument("--mvm", default="3-5:37", help="MVM forms of BODY, I-J:M, comma separated")
+    ap.add_argument("--mvm", default="5-5:37", help="MVM forms of BODY, I-J:M, comma separated")
     ap.add_argument("--skip-elastic", action="store_true")
     ap.add_argument(
         "--reuse", type=Path, default=None, help="an earlier OUT: its elastic and plastic runs"
