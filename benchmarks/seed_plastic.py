@@ -1,0 +1,239 @@
+"""The seed case with yielding rods (issue 37): full FE plastic against full FE elastic, then
+the MVM form of the struck rod against full FE plastic.
+
+    python benchmarks/seed_plastic.py OUT [--scenario scenarios/rod_impact_short_plastic.toml]
+        [--t-end S] [--body b2] [--mvm 5-5:37,3-5:37] [--skip-elastic] [--reuse OUT0]
+
+The scenario has both rods full FE and plastic (scenarios/rod_impact_plastic.toml,
+rod_impact_short_plastic.toml). Runs, one after another in this process:
+
+- ``elastic``: the scenario with the plasticity tables removed (same E, nu, rho, mesh, contact
+  law: the elastic seed model without mass redistribution, which plastic bodies refuse);
+- ``plastic``: the scenario as given;
+- ``mvm I-J:M`` for each of --mvm: BODY as MVM (the seed's selection: I node layers from the
+  contact face, J laps from the axis retained; M modes; plastic in its whole retained cells;
+  the rods' HEX27 cells span three node layers, so I >= 3: the elastic seed model's 1-3 holds
+  no whole cell and is refused), the other rod full FE plastic.
+
+--reuse OUT0 takes the elastic and plastic runs of an earlier OUT0 (same scenario and end
+time: their rows from its JSON, their curves from its .npz files) and runs only the MVM forms.
+
+Each run: peak contact force, contact duration, impulse, the striker's velocity after the
+contact (v0 - J / m1: momentum, rigid-body part), the coefficient of restitution
+e = J / (m* v0) - 1 (m* = m1 m2 / (m1 + m2): the rods' centres of mass), per plastic body its
+plastic work, permanent indentation, peak equivalent plastic strain and the retained-region
+guard; every run against the elastic one and the MVM runs against the plastic one (force NCC
+over the contact window, peak / impulse / duration errors: scenarios.compare.compare_runs),
+and against the 1D wave-Hertz theory (elastic; `flexmvm theory`). Printed as a table; OUT gets
+seed_plastic.json (all numbers), each run's curves (LABEL.npz) and seed_plastic.png (the seed's
+fig. 5 layout: contact force, and the axial velocities of BODY's impact end and free end;
+elastic, plastic, theory).
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import time
+from pathlib import Path
+
+import numpy as np
+
+from flexmvm.errors import InputError, SimulationFailed
+from flexmvm.materials import Material
+from flexmvm.scenarios import ModelConfig, load_scenario
+from flexmvm.scenarios.compare import compare_runs
+from flexmvm.scenarios.run import run_scenario
+from flexmvm.theory.scenario import theory_histories
+
+ROOT = Path(__file__).resolve().parents[1]
+DEFAULT = ROOT / "scenarios" / "rod_impact_short_plastic.toml"
+
+
+def elastic_copy(sc):
+    """The scenario with every body's plasticity table removed (its E, nu, rho kept)."""
+    for b in sc.bodies:
+        m = b.material
+        if getattr(m, "plasticity", None) is not None:
+            sc = sc.with_material(b.name, Material(E=m.E_pa, nu=m.nu, rho=m.rho_kg_m3, name=m.name))
+    return sc
+
+
+def _impulse(run) -> float:
+    """Total normal contact impulse [N s] (sum of the steps' impulses)."""
+    return float(np.sum(run.steps.contact_impulse_Ns))
+
+
+def _row(label: str, run, sc, refs: dict) -> dict:
+    s = run.summary
+    masses = [b.inv.mass for b in run.built.system.bodies]  # [kg], b1 the striker
+    v0 = float(np.linalg.norm(sc.bodies[0].placement.velocity_mps))
+    j = _impulse(run)
+    m_star = masses[0] * masses[1] / (masses[0] + masses[1])
+    row = {
+        "run": label,
+        "status": s["status"],
+        "dof": s["dof"],
+        "peak_force_N": s["max_contact_force_N"],
+        "contact_intervals_s": s["contact_intervals_s"],
+        "impulse_Ns": j,
+        "striker_velocity_after_mps": v0 - j / masses[0],  # + along the impact direction
+        "restitution": j / (m_star * v0) - 1.0,
+        "energy_rel_error": s["energy_rel_error"],
+        "steps_not_converged": s["steps_not_converged"],
+        "step_cuts": s["step_cuts"],
+        "n_steps": s["n_steps"],
+        "wall_time_s": s["wall_time_s"],
+        "plastic": s.get("plastic", {}),
+    }
+    curves = run.result.curves()
+    for name, ref in refs.items():
+        row[f"vs_{name}"] = compare_runs(*ref, *curves)
+    return row
+
+
+def _duration_us(row: dict) -> float:
+    iv = row["contact_intervals_s"]
+    return 1e6 * (iv[-1][1] - iv[0][0]) if iv else float("nan")
+
+
+def _fmt(row: dict, body: str) -> str:
+    p = row["plastic"]
+    wp = sum(e.get("plastic_work_J", 0.0) for e in p.values())
+    alpha = " ".join(f"{e.get('peak_equivalent_plastic_strain', 0.0):.4f}" for e in p.values())
+    dent = p.get(body, {}).get("permanent_indentation_m", 0.0)
+    guard = p.get(body, {}).get("steps_yield_outside_retained", "-")
+    ncc = {k[3:]: v.get("ncc_force", float("nan")) for k, v in row.items() if k.startswith("vs_")}
+    nccs = " ".join(f"{k} {v:.5f}" for k, v in ncc.items())
+    return (
+        f"{row['run']:12s} {row['dof'].get(body, 0):6d} {row['peak_force_N']:8.1f} "
+        f"{_duration_us(row):7.1f} {1e3 * row['impulse_Ns']:8.4f} "
+        f"{row['striker_velocity_after_mps']:+8.4f} {row['restitution']:6.3f} "
+        f"{1e6 * wp:9.2f} {1e6 * dent:7.3f} {alpha:>15s} {guard!s:>5s} "
+        f"{row['wall_time_s']:7.1f}  {nccs}"
+    )
+
+
+HEAD = (
+    f"{'run':12s} {'DOF':>6s} {'F_max N':>8s} {'dur us':>7s} {'J mNs':>8s} {'v1 m/s':>8s} "
+    f"{'e':>6s} {'W_p uJ':>9s} {'dent um':>7s} {'alpha b1 b2':>15s} {'guard':>5s} "
+    f"{'wall s':>7s}  force NCC"
+)
+
+
+def _figure(out: Path, curves: dict, theory, body: str) -> None:
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(1, 2, figsize=(11, 4))
+    styles = {"elastic": "C0-", "plastic": "C3-"}
+    for k, (label, (t, f, probes)) in enumerate(curves.items()):
+        st = styles.get(label, f"C{k + 2}:")
+        ax[0].plot(1e3 * t, f, st, lw=1.2, label=label)
+        if label in styles:
+            for k, (name, v) in enumerate(probes.items()):
+                ax[1].plot(1e3 * t, v, st, lw=1.2 if k == 0 else 0.8, label=f"{label} {name}")
+    if theory is not None:
+        t, f, probes = theory
+        ax[0].plot(1e3 * t, f, "k--", lw=0.8, label="1D theory (elastic)")
+        for name, v in probes.items():
+            ax[1].plot(1e3 * t, v, "k--", lw=0.8, label=f"theory {name}")
+    ax[0].set(xlabel="t [ms]", ylabel="contact force [N]", title="contact force")
+    ax[1].set(xlabel="t [ms]", ylabel="axial velocity [m/s]", title=f"{body}: end velocities")
+    for a in ax:
+        a.legend(fontsize=7)
+        a.grid(alpha=0.3)
+    fig.tight_layout()
+    fig.savefig(out / "seed_plastic.png", dpi=130)
+
+
+def _save_curves(path: Path, curves) -> None:
+    t, f, probes = curves
+    np.savez(path, t=t, f=f, **{f"probe_{k}": v for k, v in probes.items()})
+
+
+def _load_curves(path: Path):
+    with np.load(path) as z:
+        probes = {k[6:]: z[k] for k in z.files if k.startswith("probe_")}
+        return z["t"], z["f"], probes
+
+
+def _cases(args, plastic, elastic, reused: set) -> list:
+    cases = [] if args.skip_elastic or "elastic" in reused else [("elastic", elastic)]
+    if "plastic" not in reused:
+        cases.append(("plastic", plastic))
+    ref_set = plastic.body(args.body).model.reference
+    for text in [m for m in args.mvm.split(",") if m.strip()]:
+        sel, modes = text.split(":")
+        cfg = ModelConfig(kind="mvm", selection=sel, modes=int(modes), reference=ref_set)
+        cases.append((f"mvm {text}", plastic.with_model(args.body, cfg)))
+    return cases
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("out", type=Path)
+    ap.add_argument("--scenario", type=Path, default=DEFAULT)
+    ap.add_argument("--t-end", type=float, default=None, help="end time [s]")
+    ap.add_argument("--body", default="b2")
+    ap.add_argument("--mvm", default="5-5:37", help="MVM forms of BODY, I-J:M, comma separated")
+    ap.add_argument("--skip-elastic", action="store_true")
+    ap.add_argument(
+        "--reuse", type=Path, default=None, help="an earlier OUT: its elastic and plastic runs"
+    )
+    args = ap.parse_args()
+    args.out.mkdir(parents=True, exist_ok=True)
+
+    plastic = load_scenario(args.scenario)
+    if args.t_end is not None:
+        plastic = plastic.with_time(t_end_s=args.t_end)
+    elastic = elastic_copy(plastic)
+    try:
+        theory = theory_histories(elastic)[:3]
+    except Exception as exc:  # noqa: BLE001 - report, go on without theory
+        print(f"no theory comparison: {exc}")
+        theory = None
+    refs = {} if theory is None else {"theory": theory}
+    rows, curves = [], {}
+    if args.reuse is not None:  # the same scenario and end time, run before
+        for row in json.loads((args.reuse / "seed_plastic.json").read_text())["rows"]:
+            if row["run"] in ("elastic", "plastic"):
+                rows.append(row)
+                curves[row["run"]] = refs[row["run"]] = _load_curves(
+                    args.reuse / f"{row['run']}.npz"
+                )
+    print(f"{args.scenario.name}: t_end {plastic.time.t_end_s:g} s, dt {plastic.time.dt_s:g} s")
+    print(HEAD, flush=True)
+    for row in rows:
+        print(_fmt(row, args.body), "(reused)", flush=True)
+    t0 = time.perf_counter()
+    for label, sc in _cases(args, plastic, elastic, set(curves)):
+        try:
+            run = run_scenario(sc, label=label)
+        except (InputError, SimulationFailed) as exc:  # e.g. a region holding no whole cell
+            print(f"{label:12s} not run: {exc}", flush=True)
+            rows.append({"run": label, "status": "refused or failed", "reason": str(exc)})
+            continue
+        row = _row(label, run, sc, refs)
+        rows.append(row)
+        curves[label] = run.result.curves()
+        _save_curves(args.out / f"{label.replace(' ', '_').replace(':', '_')}.npz", curves[label])
+        if label in ("elastic", "plastic"):
+            refs[label] = curves[label]
+        print(_fmt(row, args.body), flush=True)
+        out = {
+            "scenario": str(args.scenario),
+            "t_end_s": plastic.time.t_end_s,
+            "dt_s": plastic.time.dt_s,
+            "body": args.body,
+            "rows": rows,
+            "wall_time_total_s": time.perf_counter() - t0,
+        }
+        (args.out / "seed_plastic.json").write_text(json.dumps(out, indent=1))
+    _figure(args.out, curves, theory, args.body)
+
+
+if __name__ == "__main__":
+    main()
