@@ -347,6 +347,7 @@ def _arm_stop(arm: dict) -> str:
         ),
         met=_met(acc.met(arm, "arm_stop", stated)),
         full_loose=f["steps_not_converged"],
+        mvm_loose=m["steps_not_converged"],
     )
 
 
