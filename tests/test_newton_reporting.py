@@ -11,9 +11,10 @@ from __future__ import annotations
 import functools
 from pathlib import Path
 
+import numpy as np
 import pytest
 
-from flexmvm.integrate import driver
+from flexmvm.integrate import driver, moreau_jean
 from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
 from flexmvm.scenarios import load_scenario
 from flexmvm.scenarios.run import run_scenario
@@ -44,12 +45,20 @@ def test_converged_run_reports_its_residuals(model):
 
 def test_steps_stopped_on_the_floor_are_counted(monkeypatch, tmp_path):
     """With an unreachable tolerance (1e-18, below double round-off of the momentum sums) every
-    contact step stops on the round-off floor: each is counted, the worst residual is above the
+    contact step stops on the round-off floor. Each stops below the round-off of its positions
+    (eps m L / h per body, newton_iterate.at_roundoff), so each is converged; with that floor
+    taken away (zero) each is counted as not converged, the worst residual is above the
     tolerance, and `flexmvm run` prints a warning naming the count."""
     monkeypatch.setattr(
         driver, "MoreauJeanIntegrator", functools.partial(MoreauJeanIntegrator, rtol=1e-18)
     )
-    s = run_scenario(load_scenario(TINY).with_overrides(t_end_s=3e-6)).summary
+    tiny = load_scenario(TINY).with_overrides(t_end_s=3e-6)
+    s = run_scenario(tiny).summary
+    assert s["steps_not_converged"] == 0 and s["n_steps"] == 12
+    assert s["newton_residual_max"] > 1e-18
+
+    monkeypatch.setattr(moreau_jean, "roundoff_momenta", lambda bodies: np.zeros(len(bodies)))
+    s = run_scenario(tiny).summary
     assert s["steps_not_converged"] == s["n_steps"] == 12
     assert s["newton_residual_max"] > 1e-18
 
