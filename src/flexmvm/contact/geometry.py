@@ -20,7 +20,6 @@ from dataclasses import dataclass, field
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.spatial import cKDTree
 
 from flexmvm.errors import InputError, SolverError
 from flexmvm.mesh.mesh import FacetSet
@@ -116,6 +115,8 @@ class BroadPhase:
         self.surface = surface
         self.centroids = np.einsum("fa,fai->fi", w, corners)
         self.circumradius = np.linalg.norm(corners - self.centroids[:, None], axis=2).max(axis=1)
+        from scipy.spatial import cKDTree  # here: scipy.spatial is slow to import
+
         self._tree = cKDTree(self.centroids)
 
     def query(self, points_local: np.ndarray, radius: float) -> tuple[np.ndarray, np.ndarray]:
@@ -130,6 +131,8 @@ class BroadPhase:
         if len(p) == 0:
             return np.zeros(0, dtype=np.int64), np.zeros(0, dtype=np.int64)
         reach = radius + float(self.circumradius.max())
+        from scipy.spatial import cKDTree
+
         found = cKDTree(p).sparse_distance_matrix(self._tree, reach, output_type="ndarray")
         point = found["i"].astype(np.int64)
         facet = found["j"].astype(np.int64)

@@ -23,7 +23,6 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 import scipy.linalg as sla
-from scipy.optimize import nnls
 
 from flexmvm.errors import SolverError
 
@@ -286,6 +285,8 @@ def _active_set(D: np.ndarray, c: np.ndarray) -> tuple[np.ndarray, bool]:
 
 def _nnls(D: np.ndarray, c: np.ndarray) -> np.ndarray:
     """NNLS on the Cholesky factor of the regularised D (the fallback of active_set_qp)."""
+    from scipy.optimize import nnls  # here: the fallback is rare, scipy.optimize slow to import
+
     L, _ = regularised_cho(D, "contact")
     L = np.tril(L)
     rhs = -sla.solve_triangular(L, c, lower=True)

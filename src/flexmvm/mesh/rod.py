@@ -20,7 +20,6 @@ from enum import StrEnum
 from types import MappingProxyType
 
 import numpy as np
-from scipy.optimize import brentq
 
 from flexmvm.errors import InputError
 from flexmvm.mesh.mesh import CellBlock, CellType, FacetSet, Mesh
@@ -284,6 +283,8 @@ def graded_lengths(total: float, first: float, growth: float, max_len: float) ->
 
     def excess(g: float) -> float:
         return float(_capped_geometric(n, first, g, max_len).sum() - total)
+
+    from scipy.optimize import brentq  # here, not at the top: scipy.optimize is ~0.3 s to import
 
     ratio = growth if excess(growth) <= 0 else brentq(excess, 1.0, growth, xtol=1e-15)
     lengths = _capped_geometric(n, first, ratio, max_len)

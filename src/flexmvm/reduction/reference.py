@@ -12,7 +12,6 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from flexmvm.errors import InputError
 from flexmvm.mesh.mesh import Mesh
@@ -176,6 +175,8 @@ def far_reference(mesh: Mesh, contact_nodes: np.ndarray) -> ReferenceCondition:
     x = mesh.nodes
     ids = np.unique(np.asarray(contact_nodes, dtype=np.int64).ravel())
     if ids.size:
+        from scipy.spatial import cKDTree  # here: scipy.spatial is slow to import
+
         d = cKDTree(x[ids]).query(x)[0]
     else:
         d = np.linalg.norm(x - x.mean(axis=0), axis=1)

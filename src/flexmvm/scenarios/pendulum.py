@@ -9,7 +9,6 @@ from __future__ import annotations
 import math
 
 import numpy as np
-from scipy.spatial import cKDTree
 
 from flexmvm.constraints.joints import BodyPoint, DistanceJoint
 from flexmvm.contact.pairs import PointToSurfaceContact
@@ -75,6 +74,8 @@ def event_histories(built, res) -> dict:
             s, m = states[pair.slave], states[pair.master]
             xs = bodies[pair.slave].node_positions(pair.slave_nodes, s.r, s.A, s.q)
             xm = bodies[pair.master].node_positions(pair.master_nodes, m.r, m.A, m.q)
+            from scipy.spatial import cKDTree  # here: scipy.spatial is slow to import
+
             gap[k] = float(cKDTree(xm).query(xs)[0].min())
     return {
         "t_s": res.t,
