@@ -135,9 +135,8 @@ class MoreauJeanIntegrator:
         # the consistent tangent of yielding bodies (plastic_tangent); their W_qq is not
         # M_qq + (theta h)^2 k_hat then, so they take k_hat dq_dot by the product
         self.tangent = PlasticTangent(self.plastic, self.solvers)
-        self.images = WImages(
-            {b for b in plain if bodies[b].stiffening is None and b not in self.plastic}
-        )
+        tangent = set(self.plastic.history) if self.tangent.enabled else set()
+        self.images = WImages({b for b in plain - tangent if bodies[b].stiffening is None})
         self.carried_state = CarriedState(bodies, self.images, self.threads.contraction_pool)
         self.matrices = IterationMatrices(
             bodies, self.solvers, self.threads, self.carried_state, self.images
