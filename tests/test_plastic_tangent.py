@@ -1,6 +1,6 @@
 """The consistent tangent in the Newton step of a yielding body (integrate/plastic_tangent.py).
 
-- The Woodbury solve on the elastic factor equals a direct sparse solve of
+- The Woodbury solve on the elastic factor (and the refactored sparse form) equals a direct sparse solve of
   W_t = W_el + c P^T (K_t - K_el) P to round-off (relative 1e-9: the capacitance matrix of a
   yielding block is conditioned like W itself, ~1e4 here, times the 1e-16 of the factor's
   arithmetic leaves 1e-12; 1e-9 keeps three decades of margin), with P a psi that drops
@@ -13,11 +13,13 @@ from __future__ import annotations
 from types import SimpleNamespace
 
 import numpy as np
+import pytest
 import scipy.sparse as sp
 import scipy.sparse.linalg as spla
 from test_fe import box_hex
 
 from flexmvm.fe import assemble
+from flexmvm.integrate import plastic_tangent
 from flexmvm.integrate.plastic_tangent import tangent_solve
 from flexmvm.materials import Material
 from flexmvm.plasticity.body import PlasticBody
@@ -44,6 +46,9 @@ class _Solver:
     def elastic_solve(self, h):
         return self._solve
 
+    def factor_like_w(self, W):
+        return spla.splu(sp.csc_matrix(W)).solve
+
     def elastic_nodal_inverse(self, h, selector):
         """W_el^-1 psi^T N^T (BodySolver.nodal_inverse of the elastic W)."""
         return self._solve(np.asarray((selector @ self.body.psi).T.todense()))
@@ -65,7 +70,9 @@ def _yielding_block():
     return diff, asm.K, asm.M, mesh.n_dof
 
 
-def test_woodbury_solve_is_the_direct_solve_of_the_tangent_w():
+@pytest.mark.parametrize("form", ["woodbury", "refactor"])
+def test_woodbury_solve_is_the_direct_solve_of_the_tangent_w(form, monkeypatch):
+    monkeypatch.setattr(plastic_tangent, "SPARSE_FORM", form)
     diff, K, M, n = _yielding_block()
     touched = np.flatnonzero(np.diff(diff.indptr))
     assert 0 < touched.size < n  # the yielding cells' DOFs only

@@ -184,6 +184,16 @@ class BodySolver:
         """nodal_inverse of the elastic W at h (its cached nodal columns)."""
         return self._elastic(lambda: self.nodal_inverse(h, selector))
 
+    def factor_like_w(self, W: sp.spmatrix):
+        """The solve of a sparse SPD matrix of W_qq's pattern (a plastic tangent's W_t), on
+        W's symbolic analysis (numeric factorization only); call after W was factored."""
+        try:
+            return cholesky_ldl(W, self.pool, self._symbolic).solve
+        except SolverError as exc:
+            raise SolverError(
+                f"body {self.body.name!r}: the plastic tangent's iteration matrix ({exc})"
+            ) from None
+
     def _elastic(self, make):
         tangent, self._tangent = self._tangent, None
         try:

@@ -43,6 +43,11 @@ from flexmvm.integrate.dense_solve import cho_solve, lu_solve
 USE_TANGENT = False
 
 
+#: The form of a sparse (full-FE) body's W_t: "woodbury" on the elastic factor, or
+#: "refactor" (W_t factored on W's symbolic analysis)
+SPARSE_FORM = "woodbury"
+
+
 class PlasticTangent:
     """Installs and drops the tangent W_t of the plastic bodies of a run in their BodySolvers
     (module doc). ``enabled`` (default: USE_TANGENT) False: the elastic W always."""
@@ -97,6 +102,9 @@ def tangent_solve(solver, h: float, th2h2: float, diff: sp.csr_matrix):
                 "definite"
             ) from None
         return lambda rhs, cho=cho: cho_solve(cho, rhs)
+    if SPARSE_FORM == "refactor":  # W_t has W's pattern: a numeric factorization
+        psi = sp.csr_matrix(body.psi)
+        return solver.factor_like_w(solver.elastic_matrix(h) + th2h2 * (psi.T @ diff @ psi))
     # U = psi^T E_rows; Z = W_el^-1 U from the elastic factor's nodal columns (each DOF
     # solved once per step size in a run)
     n = len(rows)
