@@ -261,7 +261,7 @@ class MoreauJeanIntegrator:
         linear step of integrate.nonrotating, verified against the rotational rows; any other
         step, or one whose verification fails, the general modified-Newton step."""
         th = self.theta_rule.at(h)
-        self.tangent.start_step()  # every step starts from the elastic W
+        self.tangent.start_step(h)  # the W a step starts from (plastic_tangent)
         crows, parts = self._candidate_rows(states, h)
         if self.exploit_nonrotating and nonrotating.applies(self.system, states):
             out = nonrotating.nonrotating_step(
@@ -328,7 +328,7 @@ class MoreauJeanIntegrator:
             if it > 0 and self._accepted(s, it, h, R, jacobian, crows, phi, scales):
                 break
             refreshed = self._refresh_when_slow(s, it, res_norm, mids, h, crows)
-            if self.tangent.update(h, th):  # the yielding points changed: W_t (plastic_tangent)
+            if self.tangent.update(h, th, it, res_norm / s.last_norm if it > 1 else 0.0):
                 refreshed = self._contact_columns(s, h, crows) if it else True
             s.last_norm = res_norm
             if it == self.max_iter:

@@ -48,41 +48,79 @@ USE_TANGENT = False
 SPARSE_FORM = "woodbury"
 
 
+#: The update policy ("lazy", default; module doc) or "every" (made again whenever the
+#: yielding points change, each step from the elastic W: the first form, measured against)
+POLICY = "lazy"
+
+#: lazy: W_t is made again when the yielding points differ from those of the W in use by more
+#: than this fraction of their number (symmetric difference), ...
+SET_CHANGE = 0.25
+
+#: ... or when they differ at all and the last iterate contracted the residual poorly
+#: (||R_k|| / ||R_k-1|| above this)
+POOR_CONTRACTION = 0.5
+
+#: lazy: at most this many updates of a body's W_t within one step
+MAX_UPDATES_PER_STEP = 1
+
+
 class PlasticTangent:
     """Installs and drops the tangent W_t of the plastic bodies of a run in their BodySolvers
     (module doc). ``enabled`` (default: USE_TANGENT) False: the elastic W always."""
 
-    def __init__(self, plastic, solvers, enabled: bool | None = None):
+    def __init__(self, plastic, solvers, enabled: bool | None = None, policy: str | None = None):
         self.plastic, self.solvers = plastic, solvers
         self.enabled = (USE_TANGENT if enabled is None else enabled) and bool(plastic)
+        self.policy = POLICY if policy is None else policy
         self.n_updates = 0  # tangents installed or dropped
         self._points: dict[int, np.ndarray] = {}  # the yielding points of the W in use
+        self._h: dict[int, float] = {}  # the step size of the W_t in use
+        self._in_step: dict[int, int] = {}  # updates in this step
 
-    def start_step(self) -> None:
-        """A new step solves with the elastic W of every plastic body."""
-        if self.enabled:
-            for b in self.plastic.history:
+    def start_step(self, h: float) -> None:
+        """A new step: "every" solves with the elastic W of every plastic body; "lazy" keeps
+        the last step's W_t (at the same step size h; the elastic W at another)."""
+        if not self.enabled:
+            return
+        self._in_step.clear()
+        for b in self.plastic.history:
+            if self.policy == "every" or self._h.get(b) != h:
                 self.solvers[b].use_tangent(None, None)
-            self._points.clear()
+                self._points.pop(b, None)
+                self._h.pop(b, None)
 
-    def update(self, h: float, th: float) -> bool:
-        """After a residual of the Newton step (its returns made): the tangent of every
-        plastic body whose yielding points differ from those of the W in use installed (the
-        elastic W if none yields); True if a W changed."""
+    def update(self, h: float, th: float, it: int = 1, contraction: float = 0.0) -> bool:
+        """After the residual of iterate it (the returns made at it), with ||R_it|| /
+        ||R_it-1|| = contraction: the tangent of the plastic bodies whose yielding points call
+        for it (policy) installed, the elastic W if none yields; True if a W changed."""
         if not self.enabled:
             return False
         changed = False
         for b, hist in self.plastic.history.items():
             points = hist.yielding_points()
-            if np.array_equal(points, self._points.get(b, points[:0])):
+            if not self._due(b, points, it, contraction):
                 continue
-            self._points[b] = points
+            self._points[b], self._h[b] = points, h
+            self._in_step[b] = self._in_step.get(b, 0) + 1
             diff = hist.tangent_difference() if points.size else None
             solve = None if diff is None else tangent_solve(self.solvers[b], h, (th * h) ** 2, diff)
             self.solvers[b].use_tangent(h, solve)
             self.n_updates += 1
             changed = True
         return changed
+
+    def _due(self, b: int, points: np.ndarray, it: int, contraction: float) -> bool:
+        in_use = self._points.get(b, points[:0])
+        if self.policy == "every":
+            return not np.array_equal(points, in_use)
+        # lazy: not at the start guess (v+ = v-, whose returns overshoot into the contact at
+        # unloading), at most MAX_UPDATES_PER_STEP a step
+        if it == 0 or self._in_step.get(b, 0) >= MAX_UPDATES_PER_STEP:
+            return False
+        moved = np.setxor1d(points, in_use, assume_unique=True).size
+        if moved == 0:
+            return False
+        return moved > SET_CHANGE * max(in_use.size, 1) or contraction > POOR_CONTRACTION
 
 
 def tangent_solve(solver, h: float, th2h2: float, diff: sp.csr_matrix):
