@@ -92,3 +92,61 @@ def test_woodbury_solve_is_the_direct_solve_of_the_tangent_w(form, monkeypatch):
     x_d = tangent_solve(dense, 2e-6, C_TH2H2, diff)(np.ones((n, 2)))
     exact_d = np.linalg.solve(dense.w_el + C_TH2H2 * diff.toarray(), np.ones((n, 2)))
     assert np.abs(x_d - exact_d).max() <= 1e-9 * np.abs(exact_d).max()
+
+
+class _History:
+    """What PlasticTangent reads of a StepHistory: the yielding points of the last return."""
+
+    def __init__(self):
+        self.points = np.zeros(0, np.int64)
+
+    def yielding_points(self):
+        return self.points
+
+    def tangent_difference(self):
+        return "diff" if self.points.size else None
+
+
+class _Installs:
+    """What PlasticTangent calls on a BodySolver: the solves installed (None: elastic W)."""
+
+    def __init__(self):
+        self.installed = []
+
+    def use_tangent(self, h, solve):
+        self.installed.append(solve)
+
+
+def test_lazy_policy_keeps_w_t_and_makes_it_again_only_when_due(monkeypatch):
+    """The lazy update policy (plastic_tangent module doc), exact counts: not at the start
+    guess, on a yielding set moved by more than SET_CHANGE of its size, on a small move only
+    with a poor contraction, at most MAX_UPDATES_PER_STEP a step, W_t kept into the next step
+    at the same h and dropped at another. Bookkeeping only: milliseconds."""
+    monkeypatch.setattr(plastic_tangent, "tangent_solve", lambda solver, h, c, diff: ("W_t", h))
+    monkeypatch.setattr(plastic_tangent, "MAX_UPDATES_PER_STEP", 1)
+    hist, solver = _History(), _Installs()
+    tangent = plastic_tangent.PlasticTangent(
+        SimpleNamespace(history={0: hist}), {0: solver}, enabled=True, policy="lazy"
+    )
+    h, th = 1e-6, 0.5
+    tangent.start_step(h)
+    hist.points = np.arange(40)
+    assert not tangent.update(h, th, it=0)  # the start guess's returns: never
+    assert tangent.update(h, th, it=1)  # from none to 40 points
+    hist.points = np.arange(60)  # grown by half of 40: due, but this step had its update
+    assert not tangent.update(h, th, it=2, contraction=0.9)
+    tangent.start_step(h)  # the next step keeps W_t: nothing installed
+    assert solver.installed == [("W_t", h)]
+    hist.points = np.arange(45)  # 5 of W_t's 40 (< SET_CHANGE): not with a good contraction ...
+    assert not tangent.update(h, th, it=1, contraction=0.0)
+    assert tangent.update(h, th, it=2, contraction=0.6)  # ... but with a poor one
+    tangent.start_step(2 * h)  # another step size: the elastic W
+    assert solver.installed[-1] is None and tangent.n_updates == 2
+    # "every": each step from the elastic W, made again on any change, it 0 included
+    every = plastic_tangent.PlasticTangent(
+        SimpleNamespace(history={0: hist}), {0: _Installs()}, enabled=True, policy="every"
+    )
+    every.start_step(h)
+    assert every.update(h, th, it=0) and not every.update(h, th, it=1)
+    hist.points = np.arange(66)
+    assert every.update(h, th, it=2, contraction=0.0)

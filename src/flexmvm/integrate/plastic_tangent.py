@@ -84,7 +84,7 @@ class PlasticTangent:
             return
         self._in_step.clear()
         for b in self.plastic.history:
-            if self.policy == "every" or self._h.get(b) != h:
+            if self.policy == "every" or self._h.get(b, h) != h:
                 self.solvers[b].use_tangent(None, None)
                 self._points.pop(b, None)
                 self._h.pop(b, None)
