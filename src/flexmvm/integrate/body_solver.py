@@ -78,6 +78,8 @@ class BodySolver:
         self.n_coupling_updates = 0
         self.spin = 0.0  # s [rad^2/s^2] of the geometric stiffening in W (use_spin)
         self.n_spin_updates = 0
+        self._tangent = None  # (h, _Factor) of a plastic tangent's W (use_tangent)
+        self.n_tangent_updates = 0
 
     def use_spin(self, s: float, tol: float = SPIN_TOL) -> None:
         """Take W_qq = M_qq + (theta h)^2 (k_hat + s K_G) (bodies.stiffening) when the spin
@@ -100,6 +102,8 @@ class BodySolver:
         self.n_spin_updates += 1
 
     def _factor(self, h: float) -> _Factor:
+        if self._tangent is not None and self._tangent[0] == h:
+            return self._tangent[1]
         f = self._cache.get(h)
         if f is not None:
             if self._order[-1] != h:  # least recently used goes first
@@ -107,12 +111,7 @@ class BodySolver:
                 self._order.append(h)
             return f
         b = self.body
-        th = self.theta(h) if callable(self.theta) else self.theta
-        W = b.inv.M_qq + (th * th * h * h) * b.k_hat
-        if self.spin:  # geometric stiffening at the spin squared s of use_spin
-            W = W + (th * th * h * h * self.spin) * b.stiffening.K_G
-        if b.c_hat is not None:
-            W = W + (th * h) * b.c_hat
+        W = self.elastic_matrix(h)
         data = W.data if sp.issparse(W) else np.asarray(W)
         if not np.isfinite(data).all():
             raise SolverError(
@@ -147,15 +146,76 @@ class BodySolver:
                 ) from None
             solve = lambda rhs, cho=cho: cho_solve(cho, rhs)
         self.n_factorizations += 1
-        Zr = np.asarray(solve(np.ascontiguousarray(b.inv.S1.T)))
-        Zw = np.asarray(solve(np.ascontiguousarray(self._Mw0.T)))
-        S1 = b.inv.S1
-        f = _Factor(solve, Zr, Zw, S1 @ Zr, S1 @ Zw, self._Mw0 @ Zr, self._Mw0 @ Zw)
+        f = self._make_factor(solve, self._Mw0)
         self._cache[h] = f
         self._order.append(h)
         if len(self._order) > self._max:
             self._cache.pop(self._order.pop(0), None)
         return f
+
+    def elastic_matrix(self, h: float):
+        """W_qq = M_qq + theta h C + (theta h)^2 (k_hat + s K_G) at step size h (sparse or
+        dense as k_hat), without a plastic tangent."""
+        b = self.body
+        th = self.theta(h) if callable(self.theta) else self.theta
+        W = b.inv.M_qq + (th * th * h * h) * b.k_hat
+        if self.spin:  # geometric stiffening at the spin squared s of use_spin
+            W = W + (th * th * h * h * self.spin) * b.stiffening.K_G
+        if b.c_hat is not None:
+            W = W + (th * h) * b.c_hat
+        return W
+
+    def _make_factor(self, solve, M_wq: np.ndarray) -> _Factor:
+        """The factor record of a W_qq solve: its frame columns Z for the coupling M_wq."""
+        S1 = self.body.inv.S1
+        Zr = np.asarray(solve(np.ascontiguousarray(S1.T)))
+        Zw = np.asarray(solve(np.ascontiguousarray(M_wq.T)))
+        f = _Factor(solve, Zr, Zw, S1 @ Zr, S1 @ Zw, M_wq @ Zr, M_wq @ Zw)
+        if M_wq is not self._Mw0:
+            f.Mw_used = M_wq.copy()
+        return f
+
+    def elastic_solve(self, h: float):
+        """The W_qq^-1 of the elastic W at h (the cached factor; a pending refresh done)."""
+        self._flush()
+        return self._elastic(lambda: self._factor(h).solve)
+
+    def elastic_nodal_inverse(self, h: float, selector: sp.csr_matrix) -> np.ndarray:
+        """nodal_inverse of the elastic W at h (its cached nodal columns)."""
+        return self._elastic(lambda: self.nodal_inverse(h, selector))
+
+    def factor_like_w(self, W: sp.spmatrix):
+        """The solve of a sparse SPD matrix of W_qq's pattern (a plastic tangent's W_t), on
+        W's symbolic analysis (numeric factorization only); call after W was factored."""
+        try:
+            return cholesky_ldl(W, self.pool, self._symbolic).solve
+        except SolverError as exc:
+            raise SolverError(
+                f"body {self.body.name!r}: the plastic tangent's iteration matrix ({exc})"
+            ) from None
+
+    def _elastic(self, make):
+        tangent, self._tangent = self._tangent, None
+        try:
+            return make()
+        finally:
+            self._tangent = tangent
+
+    def use_tangent(self, h: float, solve) -> None:
+        """Solve with W_qq,t^-1 = ``solve`` at h (a plastic body's tangent W: integrate.
+        plastic_tangent) until the next use_tangent; None: the elastic W again. The frame
+        columns and the frame block (last prepare) are made for it."""
+        self._flush()
+        if solve is None:
+            if self._tangent is None:
+                return
+            self._tangent = None
+        else:
+            f_el = self._tangent[1] if self._tangent is not None else self._factor(h)
+            self._tangent = (h, self._make_factor(solve, self._mw(f_el)))
+            self.n_tangent_updates += 1
+        if self._frame_args is not None and self._frame_args[0] == h:
+            self.prepare(*self._frame_args)
 
     def refresh_coupling(self, h: float, M_wq: np.ndarray, tol: float, defer: bool = False) -> None:
         """Use M_wq (3, nq) at the current configuration in W if it moved by more than tol
@@ -222,8 +282,8 @@ class BodySolver:
             return
         f = self._factor(h)
         self._f = f
+        self._frame_args = (h, A, Mff)
         if self._pending is not None:  # the frame block waits for the deferred columns
-            self._frame_args = (h, A, Mff)
             return
         # M_fq~ Z with Z = [Zr A^T, Zw]:
         MZ = np.zeros((6, 6))

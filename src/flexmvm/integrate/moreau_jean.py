@@ -70,6 +70,7 @@ from flexmvm.integrate.newton_iterate import (
     roundoff_momenta,
 )
 from flexmvm.integrate.plastic_bodies import PlasticBodies
+from flexmvm.integrate.plastic_tangent import PlasticTangent
 from flexmvm.integrate.relaxation import AitkenRelaxation, relaxed_iterate
 from flexmvm.integrate.row_products import flat_product, merge_contacts
 from flexmvm.integrate.stall_report import stall_report
@@ -131,7 +132,11 @@ class MoreauJeanIntegrator:
             raise SolverError("plastic bodies cannot have massless (redistributed) contact nodes")
         # bodies whose k_hat dq_dot comes from W_qq dq_dot (full FE, undamped, not stiffened)
         plain = {b for b in self.threads.sparse if bodies[b].c_hat is None}
-        self.images = WImages({b for b in plain if bodies[b].stiffening is None})
+        # the consistent tangent of yielding bodies (plastic_tangent); their W_qq is not
+        # M_qq + (theta h)^2 k_hat then, so they take k_hat dq_dot by the product
+        self.tangent = PlasticTangent(self.plastic, self.solvers)
+        tangent = set(self.plastic.history) if self.tangent.enabled else set()
+        self.images = WImages({b for b in plain - tangent if bodies[b].stiffening is None})
         self.carried_state = CarriedState(bodies, self.images, self.threads.contraction_pool)
         self.matrices = IterationMatrices(
             bodies, self.solvers, self.threads, self.carried_state, self.images
@@ -256,6 +261,7 @@ class MoreauJeanIntegrator:
         linear step of integrate.nonrotating, verified against the rotational rows; any other
         step, or one whose verification fails, the general modified-Newton step."""
         th = self.theta_rule.at(h)
+        self.tangent.start_step(h)  # the W a step starts from (plastic_tangent)
         crows, parts = self._candidate_rows(states, h)
         if self.exploit_nonrotating and nonrotating.applies(self.system, states):
             out = nonrotating.nonrotating_step(
@@ -322,6 +328,8 @@ class MoreauJeanIntegrator:
             if it > 0 and self._accepted(s, it, h, R, jacobian, crows, phi, scales):
                 break
             refreshed = self._refresh_when_slow(s, it, res_norm, mids, h, crows)
+            if self.tangent.update(h, th, it, res_norm / s.last_norm if it > 1 else 0.0):
+                refreshed = self._contact_columns(s, h, crows) if it else True
             s.last_norm = res_norm
             if it == self.max_iter:
                 raise SolverError(
@@ -370,10 +378,11 @@ class MoreauJeanIntegrator:
             self._contact_columns(s, h, crows)
         return True
 
-    def _contact_columns(self, s: NewtonIterate, h, crows) -> None:
+    def _contact_columns(self, s: NewtonIterate, h, crows) -> bool:
         m_c = crows.rows.m
         s.contact_compliance = self.matrices.contact_compliance(crows, h) if m_c else {}
         s.contact_delassus = sum((c.D for c in s.contact_compliance.values()), np.zeros((m_c, m_c)))
+        return True
 
     def _impulses(self, s: NewtonIterate, it, h, th, crows, phi, jrows, jacobian) -> None:
         """v+ = v_free + W^-1 Phi^T lambda with the impulses lambda of the mixed LCP on

@@ -75,6 +75,7 @@ class StepHistory:
         self._sub: PlasticBody | None = None
         self._sub_points = np.zeros(0, np.int64)
         self._trial = None  # (response, its point ids, their dx) of the last return
+        self._k_el = None  # (the set's body, its elastic tangent): tangent_difference
 
     # ------------------------------------------------------------------ the plastic set
     @property
@@ -159,6 +160,27 @@ class StepHistory:
         self._trial = (resp, pts, self._sub.point_volumes())
         eps_p = resp.state.plastic_strain
         return self._force(eps_p) if eps_p.any() else None
+
+    def yielding_points(self) -> np.ndarray:
+        """Ids (body state order) of the points that yield in the last return."""
+        if self._trial is None:
+            return np.zeros(0, np.int64)
+        resp, pts, _ = self._trial
+        return pts[resp.yielding]
+
+    def tangent_difference(self):
+        """K_t - K_el (3n, 3n) csr [N/m] of the last return (Simo and Taylor 1985's consistent
+        tangent, PlasticBody.respond) over the set's cells, None when no point of it yields:
+        nonzero on the DOFs of the yielding cells only (the elastic points' element tangents
+        are D_el's, added in the same order as K_el's, so they cancel exactly)."""
+        if self._trial is None or not self._trial[0].yielding.any():
+            return None
+        if self._k_el is None or self._k_el[0] is not self._sub:
+            virgin = self._sub.virgin_state()
+            self._k_el = (self._sub, self._sub.respond(np.zeros(self.body.n_dof), virgin).tangent)
+        diff = self._trial[0].tangent - self._k_el[1]
+        diff.eliminate_zeros()
+        return diff
 
     def committed_correction(self) -> np.ndarray:
         """c (3n,) [N] of the committed plastic strain (independent of u: module doc)."""
