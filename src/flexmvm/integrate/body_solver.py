@@ -185,8 +185,9 @@ class BodySolver:
         return self._elastic(lambda: self.nodal_inverse(h, selector))
 
     def factor_like_w(self, W: sp.spmatrix):
-        """The solve of a sparse SPD matrix of W_qq's pattern (a plastic tangent's W_t), on
-        W's symbolic analysis (numeric factorization only); call after W was factored."""
+        """The solve of a sparse SPD matrix like W_qq (a plastic tangent's W_t): on W's
+        symbolic analysis where the patterns agree, else analysed anew; call after W was
+        factored."""
         try:
             return cholesky_ldl(W, self.pool, self._symbolic).solve
         except SolverError as exc:

@@ -49,7 +49,7 @@ USE_TANGENT = False
 
 
 #: The form of a sparse (full-FE) body's W_t: "woodbury" on the elastic factor, or
-#: "refactor" (W_t factored on W's symbolic analysis)
+#: "refactor" (W_t factored; on W's symbolic analysis only where the patterns agree)
 SPARSE_FORM = "woodbury"
 
 
