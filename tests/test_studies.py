@@ -75,6 +75,7 @@ def test_brute_force_writes_table_json_and_figures(brute):
     assert header == (
         "layers,laps,nodes,modes,dof,ncc_force,ncc_b2_impact_end,ncc_b2_free_end,"
         "peak_err,impulse_err,duration_err,guard_outside_fraction,energy_gain_rel_max,"
+        "plastic_cells_outside,"
         "wall_time_s"
     )
     rows = _table(out, drop=())

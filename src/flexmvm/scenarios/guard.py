@@ -154,17 +154,31 @@ def energy_gain_warning(summary: dict, threshold: float = ENERGY_GAIN_WARN) -> s
 
 
 #: The entries validity_fields adds to a study row (and its CSV columns), in column order.
-VALIDITY_KEYS = ("guard_outside_fraction", "energy_gain_rel_max")
+VALIDITY_KEYS = ("guard_outside_fraction", "energy_gain_rel_max", "plastic_cells_outside")
+
+
+def plastic_cells_outside(summary: dict, body: str) -> int | None:
+    """The most cells of the reduced plastic ``body`` outside its retained region that reached
+    the yield stress in one step (summary ``plastic.<body>.cells_yield_outside_retained``,
+    scenarios.plastic_summary); None: not a plastic body (0 for a full-FE one: it retains all)."""
+    entry = summary.get("plastic", {}).get(body)
+    if entry is None or "cells_yield_outside_retained" not in entry:
+        return None
+    return int(entry["cells_yield_outside_retained"])
 
 
 def validity_fields(summary: dict, body: str) -> dict:
     """A study row's validity entries (VALIDITY_KEYS) from a run's summary:
-    guard_outside_fraction (of ``body``) and energy_gain_rel_max (None: unknown, or a run with
-    applied loads)."""
+    guard_outside_fraction (of ``body``), energy_gain_rel_max (None: unknown, or a run with
+    applied loads) and plastic_cells_outside (of ``body``, None: not a reduced plastic body)."""
     return dict(
         zip(
             VALIDITY_KEYS,
-            (outside_fraction(summary, body), summary.get("energy_gain_rel_max")),
+            (
+                outside_fraction(summary, body),
+                summary.get("energy_gain_rel_max"),
+                plastic_cells_outside(summary, body),
+            ),
             strict=True,
         )
     )
@@ -172,12 +186,17 @@ def validity_fields(summary: dict, body: str) -> dict:
 
 def invalid_reason(row: dict) -> str | None:
     """Why a study row (validity_fields) is outside its model's validity, or None: contact
-    on nodes the basis holds stiff above WARN_FRACTION of the impulse, or an energy rise
-    above ENERGY_GAIN_WARN (chatter). Missing entries (rows stored before the checks
+    on nodes the basis holds stiff above WARN_FRACTION of the impulse, an energy rise
+    above ENERGY_GAIN_WARN (chatter), or a reduced plastic body whose cells outside the
+    retained region reached the yield stress (the plastic guard: its zone left the region,
+    where the linear rest cannot yield). Missing entries (rows stored before the checks
     existed) pass."""
     frac = row.get("guard_outside_fraction")
     if outside_validity(frac):
         return f"guard: {100 * frac:.0f} % of the contact impulse on nodes held stiff"
+    cells = row.get("plastic_cells_outside")
+    if cells is not None and int(cells) > 0:
+        return f"plastic guard: {int(cells)} cells outside the retained region reached yield"
     gain = row.get("energy_gain_rel_max")
     if gain is not None and gain > ENERGY_GAIN_WARN:
         return f"energy rose by {100 * gain:.2g} % (chatter)"
@@ -210,5 +229,6 @@ __all__ = [
     "invalid_reason",
     "outside_fraction",
     "outside_validity",
+    "plastic_cells_outside",
     "validity_fields",
 ]
