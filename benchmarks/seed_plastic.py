@@ -27,7 +27,8 @@ over the contact window, peak / impulse / duration errors: scenarios.compare.com
 and against the 1D wave-Hertz theory (elastic; `flexmvm theory`). Printed as a table; OUT gets
 seed_plastic.json (all numbers), each run's curves (LABEL.npz) and seed_plastic.png (the seed's
 fig. 5 layout: contact force, and the axial velocities of BODY's impact end and free end;
-elastic, plastic, theory).
+elastic, plastic, theory), all rewritten as each run finishes: a process stopped late keeps the
+runs it finished, and --reuse OUT takes up its elastic and plastic ones.
 """
 
 from __future__ import annotations
@@ -147,6 +148,7 @@ def _figure(out: Path, curves: dict, theory, body: str) -> None:
         a.grid(alpha=0.3)
     fig.tight_layout()
     fig.savefig(out / "seed_plastic.png", dpi=130)
+    plt.close(fig)
 
 
 def _save_curves(path: Path, curves) -> None:
@@ -232,7 +234,7 @@ def main() -> None:
             "wall_time_total_s": time.perf_counter() - t0,
         }
         (args.out / "seed_plastic.json").write_text(json.dumps(out, indent=1))
-    _figure(args.out, curves, theory, args.body)
+        _figure(args.out, curves, theory, args.body)  # after each run: a late stop keeps it
 
 
 if __name__ == "__main__":
