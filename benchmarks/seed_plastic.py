@@ -3,6 +3,7 @@ the MVM form of the struck rod against full FE plastic.
 
     python benchmarks/seed_plastic.py OUT [--scenario scenarios/rod_impact_short_plastic.toml]
         [--t-end S] [--body b2] [--mvm 5-5:37,3-5:37] [--skip-elastic] [--reuse OUT0]
+        [--progress]
 
 The scenario has both rods full FE and plastic (scenarios/rod_impact_plastic.toml,
 rod_impact_short_plastic.toml). Runs, one after another in this process:
@@ -182,6 +183,7 @@ def main() -> None:
     ap.add_argument("--body", default="b2")
     ap.add_argument("--mvm", default="5-5:37", help="MVM forms of BODY, I-J:M, comma separated")
     ap.add_argument("--skip-elastic", action="store_true")
+    ap.add_argument("--progress", action="store_true", help="a progress bar per run (stderr)")
     ap.add_argument(
         "--reuse", type=Path, default=None, help="an earlier OUT: its elastic and plastic runs"
     )
@@ -213,7 +215,7 @@ def main() -> None:
     t0 = time.perf_counter()
     for label, sc in _cases(args, plastic, elastic, set(curves)):
         try:
-            run = run_scenario(sc, label=label)
+            run = run_scenario(sc, label=label, progress=args.progress)
         except (InputError, SimulationFailed) as exc:  # e.g. a region holding no whole cell
             print(f"{label:12s} not run: {exc}", flush=True)
             rows.append({"run": label, "status": "refused or failed", "reason": str(exc)})
