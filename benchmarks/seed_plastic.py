@@ -3,6 +3,7 @@ the MVM form of the struck rod against full FE plastic.
 
     python benchmarks/seed_plastic.py OUT [--scenario scenarios/rod_impact_short_plastic.toml]
         [--t-end S] [--body b2] [--mvm 5-5:37,3-5:37] [--skip-elastic] [--reuse OUT0]
+        [--progress]
 
 The scenario has both rods full FE and plastic (scenarios/rod_impact_plastic.toml,
 rod_impact_short_plastic.toml). Runs, one after another in this process:
@@ -27,7 +28,8 @@ over the contact window, peak / impulse / duration errors: scenarios.compare.com
 and against the 1D wave-Hertz theory (elastic; `flexmvm theory`). Printed as a table; OUT gets
 seed_plastic.json (all numbers), each run's curves (LABEL.npz) and seed_plastic.png (the seed's
 fig. 5 layout: contact force, and the axial velocities of BODY's impact end and free end;
-elastic, plastic, theory).
+elastic, plastic, theory), all rewritten as each run finishes: a process stopped late keeps the
+runs it finished, and --reuse OUT takes up its elastic and plastic ones.
 """
 
 from __future__ import annotations
@@ -147,6 +149,7 @@ def _figure(out: Path, curves: dict, theory, body: str) -> None:
         a.grid(alpha=0.3)
     fig.tight_layout()
     fig.savefig(out / "seed_plastic.png", dpi=130)
+    plt.close(fig)
 
 
 def _save_curves(path: Path, curves) -> None:
@@ -180,6 +183,7 @@ def main() -> None:
     ap.add_argument("--body", default="b2")
     ap.add_argument("--mvm", default="5-5:37", help="MVM forms of BODY, I-J:M, comma separated")
     ap.add_argument("--skip-elastic", action="store_true")
+    ap.add_argument("--progress", action="store_true", help="a progress bar per run (stderr)")
     ap.add_argument(
         "--reuse", type=Path, default=None, help="an earlier OUT: its elastic and plastic runs"
     )
@@ -211,7 +215,7 @@ def main() -> None:
     t0 = time.perf_counter()
     for label, sc in _cases(args, plastic, elastic, set(curves)):
         try:
-            run = run_scenario(sc, label=label)
+            run = run_scenario(sc, label=label, progress=args.progress)
         except (InputError, SimulationFailed) as exc:  # e.g. a region holding no whole cell
             print(f"{label:12s} not run: {exc}", flush=True)
             rows.append({"run": label, "status": "refused or failed", "reason": str(exc)})
@@ -232,7 +236,7 @@ def main() -> None:
             "wall_time_total_s": time.perf_counter() - t0,
         }
         (args.out / "seed_plastic.json").write_text(json.dumps(out, indent=1))
-    _figure(args.out, curves, theory, args.body)
+        _figure(args.out, curves, theory, args.body)  # after each run: a late stop keeps it
 
 
 if __name__ == "__main__":
