@@ -20,7 +20,12 @@ from __future__ import annotations
 from itertools import pairwise
 
 import numpy as np
+import pytest
 from _short_case import short_run
+
+# A convergence study (three step sizes): in `pytest -m validation`, not the default run; the
+# stored validation's step_convergence rows check the same case at dt and dt/2.
+pytestmark = pytest.mark.validation
 
 
 def _below(f: np.ndarray, dt_s: float, cut_hz: float | None) -> np.ndarray:

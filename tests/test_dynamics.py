@@ -11,6 +11,7 @@ from __future__ import annotations
 import functools
 
 import numpy as np
+import pytest
 import scipy.sparse as sp
 from scipy.special import ellipk
 
@@ -192,6 +193,7 @@ def test_bifilar_pendulum_swings_without_rotation_and_reaches_sqrt_2gh():
     assert res.max_joint_drift < 1e-12  # position-level joints: the strings keep their length
 
 
+@pytest.mark.validation  # long: in `pytest -m validation`, not the default run
 def test_time_step_convergence_is_second_order():
     """Tumbling, vibrating flexible body: node velocities at t = 0.1 ms against a reference
     with h = 1/64 us fall like h^2 (fitted order within [1.8, 2.3]).

@@ -212,6 +212,7 @@ def test_cli_search_with_patches_reports_both_kinds(brute, tmp_path):
 
 # ----------------------------------------------------------------------------------------------
 # the a-priori estimate's interface rule (studies/estimate.py)
+@pytest.mark.validation  # long: in `pytest -m validation`, not the default run
 def test_estimate_interface_on_the_seed_case():
     """The seed case at the docs/studies.md window (0.8 ms): one patch at the theory's Hertz
     radius (0.461 mm) and the modes the Hertz load excites below f_max = 3 / T_c (4.64 kHz).

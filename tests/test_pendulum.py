@@ -157,6 +157,7 @@ def _runs():
     return own, seed
 
 
+@pytest.mark.validation  # long: in `pytest -m validation`, not the default run
 def test_short_pendulum_event_steps_big_in_the_swing_and_dt_at_contact():
     """The step-size policy: steps of 2^k dt up to dt_max far from contact, coming down level
     by level on the approach, dt through the contact, growing again after it. Measured: 1,330
@@ -175,6 +176,7 @@ def test_short_pendulum_event_steps_big_in_the_swing_and_dt_at_contact():
     np.testing.assert_allclose(np.diff(res.t[inside]), 2e-6, rtol=1e-9)
 
 
+@pytest.mark.validation  # long: in `pytest -m validation`, not the default run
 def test_short_pendulum_impact_matches_the_seed_case():
     """Impact speed sqrt(2 g h) at the bottom (here: the arc start's speed plus its fall),
     and the impact phase against rod_impact.toml (the same MVM models, scheme, dt, output step),
@@ -201,6 +203,7 @@ def test_short_pendulum_impact_matches_the_seed_case():
     assert c["ncc_b2_free_end"] >= 0.995 and c["ncc_b2_impact_end"] >= 0.9
 
 
+@pytest.mark.validation  # long: in `pytest -m validation`, not the default run
 def test_sagged_rods_hang_still_until_the_impact():
     """Both rods start in their quasi-static sag (placement.sagged): b2 hangs still and b1
     swings without bending vibration. Measured before the contact: b2's end nodes |v| <= 5.5e-6
@@ -229,6 +232,7 @@ def test_sag_needs_a_frame_that_does_not_turn():
     )
 
 
+@pytest.mark.validation  # long: in `pytest -m validation`, not the default run
 def test_short_pendulum_after_separation_and_strings():
     """After the separation each rod swings on as a rigid pendulum: its x-momentum at the end
     against p_sep cos(w tau) - m w x_sep sin(w tau) (w = sqrt(g / l)); at the separation
@@ -271,6 +275,7 @@ def _contact_block(res, s) -> np.ndarray:
     return (t >= start - 1e-12) & (t <= end + 1e-12)
 
 
+@pytest.mark.validation  # long: in `pytest -m validation`, not the default run
 def test_short_pendulum_impact_with_gravity_and_strings():
     """Contact with gravity and joints together, on the short event (b1 MVM 3-5 + 80, b2 MVM
     1-3 + 37, four strings, contact step 0.5 us): over the 0.66 ms contact the strings barely

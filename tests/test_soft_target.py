@@ -22,6 +22,9 @@ from flexmvm.scenarios.compare import compare_runs
 from flexmvm.scenarios.run import EnergyGainWarning, run_scenario
 from flexmvm.studies.grid import mvm_scenario, study_scenario
 
+# Long (two 0.7 ms MVM runs): in `pytest -m validation`, not the default run.
+pytestmark = pytest.mark.validation
+
 PA6 = Path(__file__).resolve().parents[1] / "scenarios" / "rod_impact_pa6.toml"
 
 
