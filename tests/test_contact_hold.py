@@ -140,6 +140,7 @@ def test_gap_offsets():
         assert offsets[0] == pytest.approx(expected, abs=1e-22)
 
 
+@pytest.mark.validation  # long: in `pytest -m validation`, not the default run
 def test_both_rods_craig_bampton_conserve_energy_at_the_midpoint_rule():
     """The seed case with both rods Craig-Bampton (b1 3-5 + 40, b2 1-3 + 37) at theta = 1/2,
     position law, contact nodes' mass redistributed, h = 0.25 us, to 0.45 ms (the contact

@@ -146,6 +146,7 @@ def test_massless_nodes_in_equilibrium_at_step_ends():
             assert np.abs(r).max() <= 1e-9 * abs(ml.K_s).max() * np.abs(q).max()
 
 
+@pytest.mark.validation  # long: in `pytest -m validation`, not the default run
 def test_redistribution_stable_at_the_midpoint_rule():
     """The hemispherical short seed case, both rods full FE, theta = 1/2, position law, contact
     nodes' mass redistributed, h = 0.5 us, 0.2 ms (the contact lasts to ~185 us): before the

@@ -92,6 +92,7 @@ def _copy(src: Path, dst: Path, cases: bool) -> Path:
     return dst
 
 
+@pytest.mark.validation  # long: in `pytest -m validation`, not the default run
 def test_brute_force_table_is_monotone_in_the_modes(brute):
     """The search's assumption on this grid: within a family the NCC does not drop with the
     modes (checked, not assumed, so that the comparison below tests the search), to 1e-7: a
@@ -108,6 +109,7 @@ def test_brute_force_table_is_monotone_in_the_modes(brute):
         assert all(b >= a - 1e-7 for a, b in itertools.pairwise(nccs)), nccs
 
 
+@pytest.mark.validation  # long: in `pytest -m validation`, not the default run
 def test_search_over_both_kinds_makes_fewer_runs_for_the_same_answer(brute, tmp_path):
     src, rows = brute
     # a target that only the two-patch set reaches below the node models' DOF
@@ -132,6 +134,7 @@ def test_search_over_both_kinds_makes_fewer_runs_for_the_same_answer(brute, tmp_
     assert (s["grid_size"], s["interface"]["grid_size"]) == (4, 9)
 
 
+@pytest.mark.validation  # long: in `pytest -m validation`, not the default run
 @pytest.mark.parametrize(
     "text",
     [
@@ -161,6 +164,7 @@ def test_search_replays_the_brute_force_answer_for_several_targets(brute, tmp_pa
     assert kind_entry["exact"] and kind_entry["dof"] == exp[3]
 
 
+@pytest.mark.validation  # long: in `pytest -m validation`, not the default run
 def test_cli_search_with_patches_reports_both_kinds(brute, tmp_path):
     """`flexmvm select --search --patches` on the stored cases: the winner over both kinds and
     the node kind reported as not searched past it."""

@@ -119,6 +119,7 @@ def _momentum_error(theta: float, dt: float) -> tuple[float, tuple]:
     ), res.contact_intervals
 
 
+@pytest.mark.validation  # long: in `pytest -m validation`, not the default run
 def test_momentum_through_impact_and_separation():
     """The translational rows of every accepted step balance to round-off (their sum is
     RunResult.momentum_residual), but the momentum reported at the step ends,
