@@ -361,8 +361,11 @@ def main() -> None:
     with tempfile.TemporaryDirectory() as tmp_name:
         tmp = Path(tmp_name)
         cache = {"FLEXMVM_CACHE_DIR": str(tmp / "cache")}
-        # the first process on a new source tree compiles the numba kernels (cache=True keeps
-        # them): pay it here, on the tiny case, and report it apart
+        # every child process's numba cache in an empty directory of this run: the first
+        # process compiles every kernel (cache=True keeps them), whatever the source tree's
+        # own __pycache__ holds from earlier runs; pay it here, on the tiny case, and report
+        # it apart
+        os.environ["NUMBA_CACHE_DIR"] = str(tmp / "numba")
         first = _sim("mvm", 5e-6, cache, TINY)
         second = _sim("mvm", 5e-6, cache, TINY)
         _warm(cache)

@@ -109,3 +109,23 @@ def test_full_fe_plastic_body_is_built_as_a_plastic_part():
     data["contacts"][0]["redistribute_mass"] = True
     with pytest.raises(InputError, match=r"contacts\[0\]: redistribute_mass cannot be used"):
         build_scenario(scenario_from_dict(data, source=str(path), base_dir=SCENARIOS))
+
+
+def test_plastic_model_keys_are_read_and_left_out_of_dumps_at_defaults():
+    """``model.plastic_tangent`` and ``model.plastic_outside`` reach the body's PlasticPart;
+    at their defaults a dump is as before the keys existed (cache and study keys hash it); a
+    bad value is one line naming the key."""
+    data = _with_b2(
+        "{ E_pa = 72.71e9, nu = 0.33, rho_kg_m3 = 2700.0, plasticity = { yield_pa = 2.76e8 } }"
+    )
+    b2 = next(b for b in data["bodies"] if b["name"] == "b2")
+    plain = scenario_from_dict(data).model_dump(mode="json")["bodies"][1]["model"]
+    assert not {"plastic_tangent", "plastic_outside"} & set(plain)
+    b2["model"] |= {"plastic_tangent": True, "plastic_outside": "stop"}
+    model = scenario_from_dict(data).body("b2").model
+    assert model.plastic_tangent is True and model.plastic_outside == "stop"
+    b2["model"]["plastic_outside"] = "halt"
+    with pytest.raises(ScenarioError) as info:
+        scenario_from_dict(data, source="s.toml")
+    msg = str(info.value)
+    assert "\n" not in msg and "bodies[1].model.plastic_outside" in msg, msg

@@ -232,6 +232,13 @@ def _simulate(
     wall0 = time.perf_counter()
     h_min = grid.dt_s / (1 << MAX_STEP_CUTS)
     tick, level, last_out = 0, 0, 0
+
+    def fail(message: str, cause: Exception | None = None):
+        """The run stops here: SimulationFailed with what it computed up to now."""
+        if bar is not None:
+            bar.close()
+        raise SimulationFailed(message, tally.result(rec, integ, wall0, message)) from cause
+
     while tick < n_ticks:
         to_out = out_ticks - tick % out_ticks
         level = (
@@ -251,16 +258,11 @@ def _simulate(
                 f"at t = {t:.6g} s (step {tally.n_steps + 1}, h = {h:.3g} s, cut down "
                 f"to {h_min:.3g} s): {exc}"
             )
-            if bar is not None:
-                bar.close()
-            raise SimulationFailed(message, tally.result(rec, integ, wall0, message)) from exc
-        for t_s, h_s, res in parts:
-            start, states = states, res.states
-            tally.add(t_s, h_s, res)
-            step = AcceptedStep(t_s, h_s, start, res, step_theta(integ, h_s))
-            tally.ledger.add(step)
-            if on_step is not None:
-                on_step(step)
+            fail(message, exc)
+        states = _accept(parts, states, tally, integ, on_step)
+        stop = plastic.outside_stop() if plastic is not None else None
+        if stop is not None:  # a reduced plastic body's zone left its region (plastic_outside)
+            fail(f"at t = {t + h:.6g} s (step {tally.n_steps}): {stop}")
         tick += span
         fine = fine_ticks is not None and level == 0 and tick % fine_ticks == 0
         if tick % out_ticks == 0 or tick >= n_ticks or fine:
@@ -278,7 +280,7 @@ def _simulate(
                 _check_finite(rec.rows[-1], system, t0 + tick * dt)
             except SolverError as exc:
                 rec.rows.pop()
-                raise SimulationFailed(str(exc), tally.result(rec, integ, wall0, str(exc))) from exc
+                fail(str(exc), exc)
             tally.output()
             tally.ledger.record(states)
             if bar is not None:
@@ -286,6 +288,19 @@ def _simulate(
     if bar is not None:
         bar.close()
     return tally.result(rec, integ, wall0)
+
+
+def _accept(parts, states, tally, integ, on_step):
+    """The states after the accepted steps [(start, size, StepResult)] of one advance from
+    ``states``, each added to the tally and its energy ledger and passed to on_step."""
+    for t_s, h_s, res in parts:
+        start, states = states, res.states
+        tally.add(t_s, h_s, res)
+        step = AcceptedStep(t_s, h_s, start, res, step_theta(integ, h_s))
+        tally.ledger.add(step)
+        if on_step is not None:
+            on_step(step)
+    return states
 
 
 def _advance(

@@ -135,7 +135,7 @@ class MoreauJeanIntegrator:
         # the consistent tangent of yielding bodies (plastic_tangent); their W_qq is not
         # M_qq + (theta h)^2 k_hat then, so they take k_hat dq_dot by the product
         self.tangent = PlasticTangent(self.plastic, self.solvers)
-        tangent = set(self.plastic.history) if self.tangent.enabled else set()
+        tangent = self.tangent.bodies
         self.images = WImages({b for b in plain - tangent if bodies[b].stiffening is None})
         self.carried_state = CarriedState(bodies, self.images, self.threads.contraction_pool)
         self.matrices = IterationMatrices(

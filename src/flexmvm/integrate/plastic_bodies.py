@@ -45,11 +45,16 @@ class PlasticPart:
     """A plastic body of a System: its index in System.bodies and its PlasticBody (mesh,
     elastic material and J2Plasticity; the mesh the body's psi maps to); allowed: per cell
     block a bool mask of the cells that may yield (a reduced body: those whose nodes are all
-    retained, where psi is the identity), None: all (full FE)."""
+    retained, where psi is the identity), None: all (full FE); tangent: its Newton iteration
+    matrix while it yields is the consistent tangent W_t (integrate.plastic_tangent), else the
+    elastic W; stop_outside: a reduced body whose cells outside the allowed ones reach yield
+    stops the run (PlasticBodies.outside_stop), else the run counts them and goes on."""
 
     body: int
     model: PlasticBody
     allowed: tuple | None = None
+    tangent: bool = False
+    stop_outside: bool = False
 
 
 @dataclass(frozen=True)
@@ -96,6 +101,7 @@ class PlasticBodies:
             if not body.is_sparse:
                 _check_identity_rows(body, part)
             self.history[part.body] = StepHistory(part.model, allowed=part.allowed)
+        self.parts = {part.body: part for part in getattr(system, "plastic", ())}
         self._mid: dict[int, tuple[np.ndarray, np.ndarray | None]] = {}
 
     def __bool__(self) -> bool:
@@ -146,6 +152,18 @@ class PlasticBodies:
                     f"body {self.bodies[b].name!r}: a cell outside the plastic set reached "
                     "yield; the set grew and the step is taken again"
                 )
+
+    def outside_stop(self) -> str | None:
+        """The reason to stop the run (one line) if a body whose part has stop_outside had
+        cells outside its allowed ones at yield in an accepted step, else None."""
+        for b, hist in self.history.items():
+            if self.parts[b].stop_outside and hist.n_outside_steps:
+                return (
+                    f"body {self.bodies[b].name!r}: {hist.outside_cells} cells outside the "
+                    "retained region reached the yield stress (model.plastic_outside = "
+                    '"stop"): retain a larger region'
+                )
+        return None
 
     def commit(self, states, new_states) -> float:
         """Commit the accepted returns; the work [J] of the correction over the step,

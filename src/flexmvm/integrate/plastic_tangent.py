@@ -41,13 +41,6 @@ import scipy.sparse as sp
 from flexmvm.errors import SolverError
 from flexmvm.integrate.dense_solve import cho_solve, lu_solve
 
-#: True: yielding steps iterate on W_t. Off by default: on the aluminium sphere-on-block run
-#: the lazy policy halves the Newton iterations (1,836 -> 903) but costs 45 % more CPU (one
-#: W_t factorization and its contact columns almost every yielding step), the first form
-#: more still (docs/notes/2026-11-27-plastic-tangent.md)
-USE_TANGENT = False
-
-
 #: The form of a sparse (full-FE) body's W_t: "woodbury" on the elastic factor, or
 #: "refactor" (W_t factored; on W's symbolic analysis only where the patterns agree)
 SPARSE_FORM = "woodbury"
@@ -71,11 +64,21 @@ MAX_UPDATES_PER_STEP = 1
 
 class PlasticTangent:
     """Installs and drops the tangent W_t of the plastic bodies of a run in their BodySolvers
-    (module doc). ``enabled`` (default: USE_TANGENT) False: the elastic W always."""
+    (module doc): of the bodies whose PlasticPart asks for it (scenario key
+    ``model.plastic_tangent``, off by default: on the aluminium sphere-on-block run the lazy
+    policy halves the Newton iterations, 1,836 -> 903, but costs 45 % more CPU, one W_t
+    factorization and its contact columns almost every yielding step; docs/notes/
+    2026-11-27-plastic-tangent.md), or of every plastic body (``enabled`` True) or none
+    (False)."""
 
     def __init__(self, plastic, solvers, enabled: bool | None = None, policy: str | None = None):
         self.plastic, self.solvers = plastic, solvers
-        self.enabled = (USE_TANGENT if enabled is None else enabled) and bool(plastic)
+        if enabled is None:
+            parts = getattr(plastic, "parts", {})
+            self.bodies = {b for b in plastic.history if parts[b].tangent}
+        else:
+            self.bodies = set(plastic.history) if enabled else set()
+        self.enabled = bool(self.bodies)
         self.policy = POLICY if policy is None else policy
         self.n_updates = 0  # tangents installed or dropped
         self._points: dict[int, np.ndarray] = {}  # the yielding points of the W in use
@@ -88,7 +91,7 @@ class PlasticTangent:
         if not self.enabled:
             return
         self._in_step.clear()
-        for b in self.plastic.history:
+        for b in self.bodies:
             if self.policy == "every" or self._h.get(b, h) != h:
                 self.solvers[b].use_tangent(None, None)
                 self._points.pop(b, None)
@@ -101,7 +104,8 @@ class PlasticTangent:
         if not self.enabled:
             return False
         changed = False
-        for b, hist in self.plastic.history.items():
+        for b in self.bodies:
+            hist = self.plastic.history[b]
             points = hist.yielding_points()
             if not self._due(b, points, it, contraction):
                 continue

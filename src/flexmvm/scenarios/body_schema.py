@@ -45,7 +45,12 @@ from flexmvm.scenarios.fields import (
     check_rod_set,
 )
 from flexmvm.scenarios.initial_motion import RigidMotionConfig
-from flexmvm.scenarios.plasticity_schema import PlasticitySpec
+from flexmvm.scenarios.plasticity_schema import (
+    PlasticitySpec,
+    PlasticOutside,
+    PlasticOutsideKey,
+    PlasticTangentKey,
+)
 from flexmvm.scenarios.problems import problem
 from flexmvm.scenarios.stiffening_schema import StiffeningKey
 
@@ -212,6 +217,13 @@ class ModelConfig(Frozen):
     # full-FE body's sparse ones (scenarios.cost; refused by default)
     allow_costly: bool = False
     geometric_stiffening: StiffeningKey = None  # stiffening_schema.py; a rigid kind ignores it
+    # a plastic body (material.plasticity): its Newton matrix while it yields, the elastic W
+    # (False) or the consistent tangent W_t (True; integrate/plastic_tangent.py), and what a
+    # reduced body does when cells outside its retained region reach yield: "warn" (the run
+    # goes on, elastic there, and says so) or "stop" (the run fails there, keeping what it
+    # computed); an elastic body ignores both
+    plastic_tangent: PlasticTangentKey = False
+    plastic_outside: PlasticOutsideKey = PlasticOutside.WARN
 
     @field_validator("selection")
     @classmethod

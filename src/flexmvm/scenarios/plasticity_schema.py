@@ -4,10 +4,12 @@ refusal of the bodies the dynamic run cannot make plastic yet (reduced, modal, r
 
 from __future__ import annotations
 
+from enum import StrEnum
 from typing import Annotated
 
 import numpy as np
 from annotated_types import Ge
+from pydantic import Field
 
 from flexmvm.bodies.build import ModelKind
 from flexmvm.errors import InputError
@@ -17,6 +19,22 @@ from flexmvm.plasticity.material import J2Plasticity
 from flexmvm.scenarios.fields import Frozen, Num, Positive
 
 NonNegative = Annotated[Num, Ge(0.0)]
+
+
+class PlasticOutside(StrEnum):
+    """A reduced plastic body whose cells outside its retained region reach yield
+    (``plastic_outside``): the run says so and goes on, or fails there."""
+
+    WARN = "warn"
+    STOP = "stop"
+
+
+# [bodies.model] keys of a plastic body, left out of a dump at their defaults: the dumps (and the
+# cache and study keys that hash them) are those of before the keys existed
+PlasticTangentKey = Annotated[bool, Field(exclude_if=lambda value: value is False)]
+PlasticOutsideKey = Annotated[
+    PlasticOutside, Field(exclude_if=lambda value: value is PlasticOutside.WARN)
+]
 
 
 class PlasticitySpec(Frozen):
@@ -85,5 +103,6 @@ def plastic_parts(scenario, infos) -> tuple[PlasticPart, ...]:
                     f"({len(info.covered_nodes)} nodes kept), so none can yield: keep a region "
                     "that holds whole cells around the contact"
                 )
-        parts.append(PlasticPart(k, model, allowed))
+        stop = cfg.model.plastic_outside is PlasticOutside.STOP
+        parts.append(PlasticPart(k, model, allowed, cfg.model.plastic_tangent, stop))
     return tuple(parts)
