@@ -6,18 +6,17 @@ reproduced here).
 
 Sources and what was read of each:
 
-- R. L. Jackson, I. Green, "A finite element study of elasto-plastic hemispherical contact
-  against a rigid flat", J. Tribol. 127 (2005) 343-354, and H. Ghaednia, M. R. W. Brake,
-  M. Berryhill, R. L. Jackson, "Strain hardening from elastic-perfectly plastic to perfectly
-  elastic flattening single asperity contact", J. Tribol. 141 (2019) 031402: the equations
-  below, numbered as in Ghaednia et al., as read in the open implementation of Porter and
-  Brake (github.com/tmd-lab: microslip-rough-contact, GHAEDNIA_ET_AL_FLATTENING.m;
-  tmdsimpy, roughcontact/_asperity_functions.py); the papers themselves were not at hand.
-  With the tangent modulus E_t = 0 (elastic-perfectly plastic) their eqs. 25-26 give
-  a = a_p and eq. 30 gives F = F_p.
+- H. Ghaednia, M. R. W. Brake, M. Berryhill, R. L. Jackson, "Strain hardening from
+  elastic-perfectly plastic to perfectly elastic flattening single asperity contact",
+  J. Tribol. (2019): the equations below, numbered as in that paper, as read in the open
+  implementation of Porter and Brake (github.com/tmd-lab: microslip-rough-contact,
+  GHAEDNIA_ET_AL_FLATTENING.m; tmdsimpy, roughcontact/_asperity_functions.py); the paper
+  itself was not at hand. With the tangent modulus E_t = 0 (elastic-perfectly plastic) its
+  eqs. 25-26 give a = a_p and eq. 30 gives F = F_p, which is Jackson and Green's (2005)
+  fit to their FE results for a sphere flattened by a rigid flat (that paper not read here).
 - M. R. W. Brake, "An analytical elastic plastic contact model with strain hardening and
-  frictional effects for normal and oblique impacts", Int. J. Solids Struct. 62 (2015)
-  104-123: the unloading, as read in the same implementation (tmdsimpy).
+  frictional effects for normal and oblique impacts", Int. J. Solids Struct. (2015): the
+  unloading, as read in the same implementation (tmdsimpy).
 - R. L. Jackson, I. Green, D. B. Marghitu, "Predicting the coefficient of restitution of
   impacting elastic-perfectly plastic spheres", Nonlinear Dyn. 60 (2010) 217-229: only its
   abstract was read (FE static sphere results with the kinetic energy balance give e; a
