@@ -3,6 +3,10 @@ against Thornton's model (C. Thornton, J. Appl. Mech. 64 (1997) 383-386; theory.
 docs/plasticity.md "Restitution against Thornton (1997)").
 
     python benchmarks/plastic_restitution.py OUT [--speeds 1,2,5,10,30,100] [--quick]
+    python benchmarks/plastic_restitution.py OUT --from-csv STUDY.csv
+
+--from-csv runs nothing: it reads a stored study (the CSV and the JSON beside it), adds the
+published-law columns below to its rows and redraws the figure; the FE numbers are kept.
 
 Speeds are v / v_y, v_y = theory.thornton.yield_velocity (p_y = 1.61 Y, m* the reduced mass
 of sphere and block). Each speed runs twice, one after the other: the block elastic (the
@@ -25,6 +29,11 @@ contact radius at first yield a_y = 0.20 mm, at 100 v_y 8.6 a_y = 1.7 mm). The s
 committed rigid R 10 mm sphere at 1000 kg/m^3 (4.1 g). --quick: the tests' coarse
 10 x 10 x 5 mm block (0.5 mm within 1 mm), Y 2.35 GPa, 250 kg/m^3, speeds 1,2,3,5
 (its contact radius reaches 3 elements and 0.3 of the half-width at 5 v_y).
+
+Beside Thornton, the FE-fitted sphere-flat law of Jackson and Green (2005) in the form of
+Ghaednia et al. (2019) (theory.restitution_fits), at the block's E*, nu, Y and the study's
+m*: its e with Brake's (2015) unloading and with Thornton's rule on its contact radius, its
+peak force over Thornton's F_y, its residual interference, and the FE e over each law's.
 
 Writes OUT/plastic_restitution.json and .csv (one row per speed), OUT/restitution.png, and
 prints the table. Runs take tens of seconds each on the shared 2-core machine.
@@ -56,6 +65,12 @@ from flexmvm.scenarios.load import scenario_from_dict
 from flexmvm.scenarios.plastic_summary import plastic_summary
 from flexmvm.theory import thornton
 from flexmvm.theory.hertz import hertz_impact
+from flexmvm.theory.restitution_fits import (
+    FlatteningLaw,
+    Unloading,
+    flattening_restitution,
+    peak_interference,
+)
 
 SPHERE = SPHERE_BLOCK.parent / "meshes" / "sphere_r10_cap.msh"
 R = 0.010  # sphere radius [m]
@@ -227,20 +242,45 @@ def compare(row: dict, sc: dict, m_star: float, y_pa: float) -> dict:
     return row
 
 
+def fitted_columns(row: dict, meta: dict) -> dict:
+    """The FE-fitted law's values beside the measured ones (module doc), at the block's
+    E*, nu, Y (meta["yield_pa"]) and the study's m* and Thornton v_y (meta)."""
+    law = FlatteningLaw.make(R, E_STAR, meta["yield_pa"], NU)
+    m_star, v = meta["m_star_kg"], row["v_over_vy"] * meta["thornton"]["v_y"]
+    d_m = peak_interference(law, 0.5 * m_star * v * v)
+    row["e_jg_brake"] = flattening_restitution(law, m_star, v, Unloading.BRAKE)
+    row["e_jg_hertz"] = flattening_restitution(law, m_star, v, Unloading.HERTZ_AT_CONTACT_RADIUS)
+    row["force_ratio_jg"] = law.force(d_m) / meta["thornton"]["F_y"]
+    row["dent_jg_brake_m"] = max(law.unloading(d_m)[0], 0.0)
+    row["dent_jg_hertz_m"] = max(law.unloading_at_contact_radius(d_m)[0], 0.0)
+    row["e_pl_over_thornton"] = row["e_pl"] / row["e_thornton"]
+    row["e_pl_over_jg_brake"] = row["e_pl"] / row["e_jg_brake"]
+    row["e_pl_over_jg_hertz"] = row["e_pl"] / row["e_jg_hertz"]
+    return row
+
+
 COLUMNS = [
     ("v/vy", "v_over_vy", "{:.0f}"),
     ("v m/s", "v_mps", "{:.2f}"),
     ("e_el", "e_el", "{:.3f}"),
     ("e_pl", "e_pl", "{:.3f}"),
     ("e_Th", "e_thornton", "{:.3f}"),
+    ("e_JG,B", "e_jg_brake", "{:.3f}"),
+    ("e_JG,H", "e_jg_hertz", "{:.3f}"),
+    ("FE/Th", "e_pl_over_thornton", "{:.3f}"),
+    ("FE/JG,B", "e_pl_over_jg_brake", "{:.3f}"),
+    ("FE/JG,H", "e_pl_over_jg_hertz", "{:.3f}"),
     ("e_pl/e_el", "e_ratio", "{:.3f}"),
     ("dloss", "loss_pl_minus_el", "{:.3f}"),
     ("1-e_Th^2", "loss_thornton", "{:.3f}"),
     ("Wp/Erel", "plastic_work_fraction", "{:.3f}"),
     ("F/Fy", "force_ratio_pl", "{:.2f}"),
     ("F/Fy Th", "force_ratio_thornton", "{:.2f}"),
+    ("F/Fy JG", "force_ratio_jg", "{:.2f}"),
     ("dent um", "dent_m", "{:.3g}"),
     ("dent Th", "dent_thornton_m", "{:.3g}"),
+    ("dent JG,B", "dent_jg_brake_m", "{:.3g}"),
+    ("dent JG,H", "dent_jg_hertz_m", "{:.3g}"),
     ("vy_mesh/vy", "vy_mesh_ratio", "{:.3f}"),
     ("wall s", "wall_pl_s", "{:.0f}"),
 ]
@@ -256,7 +296,7 @@ def print_table(rows: list[dict]) -> None:
         print("  ".join(cells))
 
 
-def figure(rows: list[dict], path: Path) -> None:
+def figure(rows: list[dict], meta: dict, path: Path) -> None:
     import matplotlib
 
     matplotlib.use("Agg")
@@ -266,6 +306,18 @@ def figure(rows: list[dict], path: Path) -> None:
     fine = np.geomspace(1.0, max(100.0, s.max()), 200)
     fig, ax = plt.subplots(figsize=(6.0, 4.2))
     ax.semilogx(fine, thornton.restitution(fine), "k-", label="Thornton (1997)")
+    law = FlatteningLaw.make(R, E_STAR, meta["yield_pa"], NU)
+    v = fine * meta["thornton"]["v_y"]
+    for unloading, style, name in (
+        (Unloading.BRAKE, "k--", "Jackson-Green FE-fitted law, Brake unloading"),
+        (
+            Unloading.HERTZ_AT_CONTACT_RADIUS,
+            "k:",
+            "Jackson-Green FE-fitted law, Thornton unloading",
+        ),
+    ):
+        e_fit = flattening_restitution(law, meta["m_star_kg"], v, unloading)
+        ax.semilogx(fine, e_fit, style, label=name)
     ax.semilogx(s, [r["e_el"] for r in rows], "s--", color="0.5", label="FE elastic (baseline)")
     ax.semilogx(s, [r["e_pl"] for r in rows], "o-", color="C3", label="FE plastic")
     ax.semilogx(s, [r["e_ratio"] for r in rows], "^-", color="C0", label="FE e_pl / e_el")
@@ -273,34 +325,23 @@ def figure(rows: list[dict], path: Path) -> None:
     ax.set_ylabel("coefficient of restitution e")
     ax.set_ylim(0.0, 1.05)
     ax.grid(True, which="both", alpha=0.3)
-    ax.legend()
+    ax.legend(fontsize=8, loc="lower left")
     fig.tight_layout()
     fig.savefig(path, dpi=120)
     plt.close(fig)
 
 
-def main(argv=None) -> None:
-    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    ap.add_argument("out", type=Path)
-    ap.add_argument("--speeds", default=None, help="v / v_y, comma separated")
-    ap.add_argument("--quick", action="store_true", help="the tests' coarse block")
-    args = ap.parse_args(argv)
+def run_study(args) -> tuple[list[dict], dict]:
+    """Runs the study at args.speeds (module doc): its rows and meta."""
     setup = SETUPS["quick" if args.quick else "study"]
     default = "1,2,3,5" if args.quick else "1,2,5,10,30,100"
     speeds = [float(x) for x in (args.speeds or default).split(",")]
-    args.out.mkdir(parents=True, exist_ok=True)
     mesh = make_block(args.out, setup)
     y_pa, rho_ball = setup[2], setup[3]
     m_ball = rho_ball * mesh_volume(read_mesh(SPHERE))
     m_block = RHO * mesh_volume(read_mesh(mesh))
     m_star = m_ball * m_block / (m_ball + m_block)
     sc = thornton_scales(y_pa, m_star)
-    rows = []
-    for s in speeds:  # one after the other: the machine is shared
-        row = compare(run_pair(mesh, s, sc, m_star, y_pa, rho_ball), sc, m_star, y_pa)
-        row["vy_mesh_ratio"] = row["v_y_mesh_mps"] / sc["v_y"]
-        rows.append(row)
-        print(json.dumps(row), flush=True)
     meta = {
         "setup": "quick" if args.quick else "study",
         "block_m": setup[0],
@@ -313,6 +354,47 @@ def main(argv=None) -> None:
         "thornton": sc,
         "machine": f"{platform.node()} {platform.processor() or platform.machine()}",
     }
+    rows = []
+    for s in speeds:  # one after the other: the machine is shared
+        row = compare(run_pair(mesh, s, sc, m_star, y_pa, rho_ball), sc, m_star, y_pa)
+        row["vy_mesh_ratio"] = row["v_y_mesh_mps"] / sc["v_y"]
+        rows.append(fitted_columns(row, meta))
+        print(json.dumps(row), flush=True)
+    return rows, meta
+
+
+def _cell(text: str):
+    """A stored CSV cell as the JSON type it was written from (bool, int or float)."""
+    if text in ("True", "False"):
+        return text == "True"
+    try:
+        return int(text)
+    except ValueError:
+        return float(text)
+
+
+def from_csv(path: Path) -> tuple[list[dict], dict]:
+    """A stored study's rows (path, .csv) and meta (the .json beside it), with the
+    published-law columns added; nothing is rerun. SystemExit with one line if either
+    file is missing."""
+    meta_path = path.with_suffix(".json")
+    if not path.is_file() or not meta_path.is_file():
+        raise SystemExit(f"--from-csv: expected {path} and {meta_path}, not found")
+    meta = json.loads(meta_path.read_text())["meta"]
+    with open(path, newline="") as f:
+        rows = [{k: _cell(v) for k, v in r.items()} for r in csv.DictReader(f)]
+    return [fitted_columns(r, meta) for r in rows], meta
+
+
+def main(argv=None) -> None:
+    ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
+    ap.add_argument("out", type=Path)
+    ap.add_argument("--speeds", default=None, help="v / v_y, comma separated")
+    ap.add_argument("--quick", action="store_true", help="the tests' coarse block")
+    ap.add_argument("--from-csv", type=Path, default=None, help="a stored study: rerun nothing")
+    args = ap.parse_args(argv)
+    args.out.mkdir(parents=True, exist_ok=True)
+    rows, meta = from_csv(args.from_csv) if args.from_csv else run_study(args)
     (args.out / "plastic_restitution.json").write_text(
         json.dumps({"meta": meta, "rows": rows}, indent=1)
     )
@@ -320,7 +402,7 @@ def main(argv=None) -> None:
         w = csv.DictWriter(f, fieldnames=list(rows[0]))
         w.writeheader()
         w.writerows(rows)
-    figure(rows, args.out / "restitution.png")
+    figure(rows, meta, args.out / "restitution.png")
     print(json.dumps(meta))
     print_table(rows)
 

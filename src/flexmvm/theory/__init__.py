@@ -2,7 +2,8 @@
 (St Venant flat-end impact, wave + Hertz contact; wave.py), Hertz's impact scales (hertz.py),
 a sphere striking a free Timoshenko beam through a Hertz spring (timoshenko.py,
 beam_impact.py, sphere_beam.py), the onset of yield under a Hertz contact (hertz_yield.py) and
-Thornton's restitution of an elastic-perfectly plastic sphere (thornton.py)."""
+Thornton's restitution of an elastic-perfectly plastic sphere (thornton.py), and the
+restitution from Jackson and Green's FE-fitted sphere-flat law (restitution_fits.py)."""
 
 from flexmvm.theory.wave import (
     ContactLaw,
