@@ -66,3 +66,28 @@ def test_search_does_not_accept_a_plastic_zone_outside_the_region():
     )
     assert winner == Candidate((5, 5), 37, 898)
     assert len(scores) == 2  # neither closes the other: 3-5 fails, 5-5 is needed
+
+
+def test_study_row_carries_the_plastic_zone():
+    """A study row of a plastic body (studies.reference.scored_row) carries the run's plastic
+    work, dent and plastic cell count (summary ``plastic.<body>``), exactly: the MVM-vs-full
+    table of a plastic region study reads them from its cases (docs/plasticity.md, "Sphere on
+    block: the region for the plastic zone"); an elastic body's row has none. A half-sine
+    pulse against itself: NCC 1 to round-off (1e-12)."""
+    from types import SimpleNamespace
+
+    import numpy as np
+
+    from flexmvm.studies.reference import scored_row
+
+    t = np.linspace(0.0, 1e-4, 201)
+    f = np.where(t < 8e-5, np.sin(np.pi * t / 8e-5), 0.0) * 500.0
+    summary = _plastic_summary(0) | {"wall_time_s": 1.0}
+    summary["plastic"]["b2"] |= {"permanent_indentation_m": 8.3e-6, "plastic_cells": 242}
+    run = SimpleNamespace(result=SimpleNamespace(curves=lambda: (t, f, {})), summary=summary)
+    row = scored_row({}, run, "b2", t, f, {})
+    assert abs(row["ncc_force"] - 1.0) < 1e-12
+    assert row["plastic_work_J"] == 1.175e-4
+    assert row["permanent_indentation_m"] == 8.3e-6 and row["plastic_cells"] == 242
+    elastic = scored_row({}, run, "b1", t, f, {})
+    assert "plastic_work_J" not in elastic and "plastic_cells" not in elastic

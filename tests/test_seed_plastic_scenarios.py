@@ -2,7 +2,8 @@
 rod_impact_short_plastic.toml, docs/plasticity.md "The seed case with yielding rods"): each is
 its elastic seed scenario with the handbook yield strengths added and nothing else changed but
 what plasticity requires (both rods full FE, no contact mass redistribution), and the whole
-cells of the struck rod's selections are the ones the page's MVM table counts. Builds no
+cells of the struck rod's selections are the ones the page's MVM table counts; the same for
+sphere_block_plastic.toml against sphere_block.toml. Builds no
 system: about 3 s of CPU (rod meshes; 9 s of wall time at load 9 on 2 cores)."""
 
 from __future__ import annotations
@@ -57,3 +58,29 @@ def test_whole_cells_of_the_struck_rods_selections(length_m):
         kept[rod.selection(layers, laps)] = True
         counts[f"{layers}-{laps}"] = int(kept[block.connectivity].all(axis=1).sum())
     assert counts == {"1-3": 0, "2-5": 0, "3-5": 12, "3-7": 20, "5-5": 24}
+
+
+def test_plastic_block_scenario_is_sphere_block_with_yield_added():
+    """scenarios/sphere_block_plastic.toml (docs/plasticity.md "Sphere on block: the region
+    for the plastic zone") is sphere_block.toml with 6061-T6's yield (header: 276 MPa, H_iso 1 %
+    of E as the full-FE run of the plastic dynamics note), 130 us, and its MVM form the select
+    study's answer: the nodes within 1.1 mm of (0, 0, -0.2) mm, 713 nodes holding 309 whole
+    tet10 cells (exact integers of the page's table). Builds no system: ~1 s (one mesh read)."""
+    from flexmvm.mesh.io import read_mesh
+    from flexmvm.scenarios.mesh_lookup import retained_nodes
+
+    p = load_scenario(SCENARIOS / "sphere_block_plastic.toml")
+    e = load_scenario(SCENARIOS / "sphere_block.toml")
+    assert p.time.t_end_s == 0.13e-3 and p.time.dt_s == e.time.dt_s
+    assert p.probes == e.probes and p.contacts == e.contacts and p.body("ball") == e.body("ball")
+    bp, be = p.body("block"), e.body("block")
+    assert bp.mesh_file == be.mesh_file and bp.placement == be.placement
+    preset, m = PRESETS[be.material], bp.material
+    assert (m.E_pa, m.nu, m.rho_kg_m3) == (preset.E, preset.nu, preset.rho)
+    assert (m.plasticity.yield_pa, m.plasticity.hardening_pa) == (276.0e6, 0.69e9)
+    assert bp.model.kind.value == "full" and bp.model.modes == 10
+    mesh = read_mesh(bp.mesh_file)
+    kept = np.zeros(mesh.n_nodes, bool)
+    kept[retained_nodes(bp.model, mesh, None, "block")] = True
+    (cells,) = mesh.cells
+    assert (int(kept.sum()), int(kept[cells.connectivity].all(axis=1).sum())) == (713, 309)

@@ -382,3 +382,39 @@ def test_region_command_prints_the_region(scenario_file, capsys):
     with pytest.raises(SystemExit) as exc:
         run(["region", str(scenario_file), "--body", "ball", "--factor", "-1"])
     assert exc.value.code == 2 and "factor" in capsys.readouterr().err
+
+
+def test_region_case_keeps_the_scenarios_allow_costly(scenario_file, monkeypatch):
+    """A region study on a scenario whose body sets allow_costly (a plastic zone that needs a
+    region dearer than full FE, scenarios/sphere_block_plastic.toml) builds its cases with it:
+    before, run_region_case made the case's model without it and every case was refused by
+    the cost check that RegionGrid had passed. The refusal threshold is set to 0 bytes so
+    that this 960-DOF beam's top face (costlier than full FE, module doc of the node-set test)
+    is refused as a large body's would be; the run stops right after the build (no time
+    step): 8 s at load 5, most of it the first build of the beam."""
+    from flexmvm.scenarios import cost, run
+    from flexmvm.scenarios.build import build_scenario
+    from flexmvm.studies import regions
+    from flexmvm.studies.regions import RegionFamily, RegionGrid, run_region_case
+
+    class Built(Exception):
+        pass
+
+    def build_only(sc, warn=True, setup=None):
+        build_scenario(sc, setup=setup)
+        raise Built
+
+    monkeypatch.setattr(cost, "REFUSE_ABOVE_BYTES", 0.0)
+    monkeypatch.setattr(run, "run_scenario", build_only)
+    monkeypatch.setattr(regions, "case_reference", lambda case, reference: (None, None, None))
+    data = _scenario(scenario_file).model_dump(mode="json")
+    data["bodies"][1]["model"]["allow_costly"] = True
+    sc = fm.scenario_from_dict(data)
+    grid = RegionGrid(sc, "beam", [RegionFamily(node_set="top")], [5])
+    (case,) = grid.cases(sc, None)
+    with pytest.raises(Built):
+        run_region_case(case)
+    data["bodies"][1]["model"]["allow_costly"] = False
+    sc = fm.scenario_from_dict(data)
+    with pytest.raises(InputError, match="would cost more than full FE"):
+        RegionGrid(sc, "beam", [RegionFamily(node_set="top")], [5])

@@ -133,12 +133,19 @@ def case_reference(case, reference=None):
 def scored_row(row: dict, run, body: str, t_ref, f_ref, probes_ref) -> dict:
     """A study case's row completed by its run against the reference histories: the
     comparison's numbers (scenarios.compare.compare_runs), its first error as "failed", the
-    validity fields of ``body`` (scenarios.guard) and the run's wall time."""
+    validity fields of ``body`` (scenarios.guard), a plastic ``body``'s plastic work [J],
+    permanent indentation [m] and plastic cells (summary.json ``plastic``) and the run's wall
+    time."""
     cmp = compare_runs(t_ref, f_ref, probes_ref, *run.result.curves())
     row.update({k: v for k, v in cmp.items() if isinstance(v, float)})
     errors = [v for k, v in cmp.items() if k.endswith("_error")]
     if errors:
         row["failed"] = errors[0]
     row.update(validity_fields(run.summary, body))
+    plastic = run.summary.get("plastic", {}).get(body)
+    if plastic is not None:  # a plastic body: what its zone did, beside the guard's count
+        row["plastic_work_J"] = float(plastic["plastic_work_J"])
+        row["permanent_indentation_m"] = plastic["permanent_indentation_m"]  # None: no contact
+        row["plastic_cells"] = int(plastic["plastic_cells"])
     row["wall_time_s"] = float(run.summary["wall_time_s"])
     return row

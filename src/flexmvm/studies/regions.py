@@ -252,6 +252,8 @@ def run_region_case(case: Case, reference: str | Path | None = None) -> dict:
         reference=sc.body(body).model.reference,
         kind=ModelKind(p.get("kind", "mvm")),
     )
+    # the scenario's consent to a costly region (checked by RegionGrid) holds for its runs
+    model = model.model_copy(update={"allow_costly": sc.body(body).model.allow_costly})
     setup = default_setup().with_mode_floor(int(p.get("modes_max", m)))
     try:
         run = run_scenario(sc.with_model(body, model), warn=False, setup=setup)
