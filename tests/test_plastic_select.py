@@ -91,3 +91,24 @@ def test_study_row_carries_the_plastic_zone():
     assert row["permanent_indentation_m"] == 8.3e-6 and row["plastic_cells"] == 242
     elastic = scored_row({}, run, "b1", t, f, {})
     assert "plastic_work_J" not in elastic and "plastic_cells" not in elastic
+
+
+def test_rod_candidates_keep_the_scenarios_allow_costly():
+    """A layers-laps candidate (studies.grid.mvm_scenario) keeps the studied body's
+    ``model.allow_costly``: on the 1 m seed rods a region that holds the plastic zone (5-7 +
+    37: 1,378 DOF, ~395 MB dense against ~215 MB for full FE) is refused without it, so a
+    study of a scenario that consents to it would have refused every such candidate.
+    Scenario objects only: well under 1 s."""
+    import tomllib
+    from pathlib import Path
+
+    from flexmvm.scenarios import scenario_from_dict
+    from flexmvm.studies.grid import mvm_scenario
+
+    path = Path(__file__).resolve().parents[1] / "scenarios" / "rod_impact_short_plastic.toml"
+    data = tomllib.loads(path.read_text())
+    for consent in (True, False):
+        data["bodies"][1]["model"]["allow_costly"] = consent
+        sc = scenario_from_dict(data, source=str(path))
+        model = mvm_scenario(sc, "b2", 5, 7, 37).body("b2").model
+        assert (model.selection, model.modes, model.allow_costly) == ("5-7", 37, consent)

@@ -220,9 +220,11 @@ def mvm_scenario(
     sc: Scenario, body: str, layers: int, laps: int, modes: int, kind: ModelKind = ModelKind.MVM
 ) -> Scenario:
     """``sc`` with ``body`` as the ``kind`` model (default Craig-Bampton) of selection
-    layers-laps + modes."""
-    ref = sc.body(body).model.reference
-    return sc.with_model(body, mvm((layers, laps), modes, reference=ref, kind=kind))
+    layers-laps + modes, keeping the scenario's consent to a reduced body that costs more
+    than its full-FE one (``model.allow_costly``)."""
+    given = sc.body(body).model
+    model = mvm((layers, laps), modes, reference=given.reference, kind=kind)
+    return sc.with_model(body, model.model_copy(update={"allow_costly": given.allow_costly}))
 
 
 def reference_scenario(sc: Scenario, body: str) -> Scenario:
