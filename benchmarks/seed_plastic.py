@@ -167,10 +167,16 @@ def _cases(args, plastic, elastic, reused: set) -> list:
     cases = [] if args.skip_elastic or "elastic" in reused else [("elastic", elastic)]
     if "plastic" not in reused:
         cases.append(("plastic", plastic))
-    ref_set = plastic.body(args.body).model.reference
+    given = plastic.body(args.body).model  # its reference condition and allow_costly
     for text in [m for m in args.mvm.split(",") if m.strip()]:
         sel, modes = text.split(":")
-        cfg = ModelConfig(kind="mvm", selection=sel, modes=int(modes), reference=ref_set)
+        cfg = ModelConfig(
+            kind="mvm",
+            selection=sel,
+            modes=int(modes),
+            reference=given.reference,
+            allow_costly=given.allow_costly,
+        )
         cases.append((f"mvm {text}", plastic.with_model(args.body, cfg)))
     return cases
 
