@@ -45,6 +45,7 @@ from pathlib import Path
 import numpy as np
 
 from flexmvm.integrate.driver import simulate
+from flexmvm.integrate.theta import theta_for_damping_time
 from flexmvm.mesh.gmsh_session import Refinement
 from flexmvm.mesh.io import read_mesh
 from flexmvm.mesh.parts import block, sphere
@@ -62,6 +63,7 @@ SPHERE = SPHERE_BLOCK.parent / "meshes" / "sphere_r10_cap.msh"
 R = 0.010  # sphere radius [m]
 E, NU, RHO, RHO_BALL, Y = 70e9, 0.33, 2700.0, 250.0, 2.35e9
 E_STAR = E / (1.0 - NU**2)  # rigid sphere: the block's plane-strain modulus [Pa]
+HF_DAMPING_TIME_S = 12.5e-6  # theta(h) as tests/test_plastic_dynamics.py
 TURNED = {"axis": [0, 1, 0], "angle_deg": 90.0}  # the block's top face normal along +x
 
 
@@ -88,6 +90,9 @@ CASES = {
     "h20_cap": Case(0.2e-3, 1.2e-3, cap=(0.05e-3, 1.5e-3)),
     "h14": Case(0.14e-3, 1.0e-3),  # 5.5 per a
     "h14_cap": Case(0.14e-3, 1.0e-3, cap=(0.05e-3, 1.5e-3)),
+    "h20_big": Case(0.2e-3, 1.2e-3, lx_m=20e-3, lz_m=10e-3),
+    "h14_big": Case(0.14e-3, 1.0e-3, lx_m=20e-3, lz_m=10e-3),
+    "h20_dt": Case(0.2e-3, 1.2e-3, dt_s=0.25e-6),
     "h10": Case(0.10e-3, 0.9e-3),  # 7.7 per a
 }
 
@@ -119,7 +124,7 @@ def scenario(mesh: Path, ball: Path, v: float, y_pa, t_end: float, dt: float) ->
     if y_pa is not None:
         material["plasticity"] = {"yield_pa": y_pa}
     time_table = {"t_end_s": t_end, "dt_s": dt, "dt_max_s": dt, "output_dt_s": dt}
-    time_table["hf_damping_time_s"] = 12.5e-6  # as tests/test_plastic_dynamics.py
+    time_table["hf_damping_time_s"] = HF_DAMPING_TIME_S
     return {
         "name": "yield_onset",
         "gravity_mps2": [0.0, 0.0, 0.0],
@@ -159,19 +164,24 @@ def yield_speed(mesh: Path, ball: Path) -> float:
     return (yield_onset(Y, E_STAR, R, NU).delta_m / hertz_at(mesh, ball, 1.0).delta_max_m) ** 1.25
 
 
-def peak_stress(built, res) -> tuple[float, np.ndarray]:
+def peak_stress(built, res, theta: float) -> tuple[float, float, np.ndarray]:
     """Largest elastic von Mises stress [Pa] at the block's integration points over the
-    outputs within 3 of the peak force, and that point's undeformed position (3,) [m]."""
+    outputs within 3 of the peak force, at the step ends and at the step midpoints
+    q_m = q + theta (q+ - q) (where a plastic run returns: plastic_bodies), and the
+    midpoint peak's undeformed position (3,) [m]."""
     info, body = built.info[1], built.system.bodies[1]
     elastic = PlasticBody.build(info.mesh, info.material, J2Plasticity(1e30))
     state = elastic.virgin_state()
+    q = res.q[1]
     k0 = int(np.argmax(res.contact_force))
-    worst, where = 0.0, -1
-    for k in range(max(k0 - 3, 0), min(k0 + 4, len(res.t))):
-        vm = von_mises(elastic.respond(body.psi @ res.q[1][k], state).stress)
-        if vm.max() > worst:
-            worst, where = float(vm.max()), int(np.argmax(vm))
-    return worst, elastic.point_coordinates()[where]
+    ends, mids, where = 0.0, 0.0, -1
+    for k in range(max(k0 - 3, 1), min(k0 + 4, len(res.t))):
+        ends = max(ends, float(von_mises(elastic.respond(body.psi @ q[k], state).stress).max()))
+        q_m = q[k - 1] + theta * (q[k] - q[k - 1])
+        vm = von_mises(elastic.respond(body.psi @ q_m, state).stress)
+        if vm.max() > mids:
+            mids, where = float(vm.max()), int(np.argmax(vm))
+    return ends, mids, elastic.point_coordinates()[where]
 
 
 def elastic_row(out: Path, name: str, case: Case) -> dict:
@@ -185,7 +195,8 @@ def elastic_row(out: Path, name: str, case: Case) -> dict:
     )
     res = simulate(built.system, built.states, built.grid)
     cpu_run = time.process_time() - t0
-    sigma, point = peak_stress(built, res)
+    theta = theta_for_damping_time(case.dt_s, HF_DAMPING_TIME_S)
+    ends, sigma, point = peak_stress(built, res, theta)
     force = float(res.contact_force.max())
     ratio = sigma / Y  # Hertz's maximum at v_y is Y
     field = sigma / (Y * (force / hz.force_max_n) ** (1.0 / 3.0))
@@ -196,6 +207,8 @@ def elastic_row(out: Path, name: str, case: Case) -> dict:
         "n_dof_block": built.system.bodies[1].psi.shape[0],
         "v_y_mps": v_y,
         "force_ratio": force / hz.force_max_n,
+        "sigma_ratio_step_ends": ends / Y,
+        "v_y_mesh_ratio_step_ends": (ends / Y) ** -2.5,
         "sigma_ratio": ratio,
         "sigma_ratio_at_fe_force": field,
         "peak_depth_over_a": float(-point[2] / onset.radius_m),
@@ -238,6 +251,7 @@ COLUMNS = [
     ("a/h", "elements_per_a", "{:.2f}"),
     ("DOF", "n_dof_block", "{}"),
     ("F/F_H", "force_ratio", "{:.4f}"),
+    ("ends s/s_H", "sigma_ratio_step_ends", "{:.4f}"),
     ("s/s_H", "sigma_ratio", "{:.4f}"),
     ("s/s_H(F)", "sigma_ratio_at_fe_force", "{:.4f}"),
     ("z/a", "peak_depth_over_a", "{:.2f}"),
