@@ -13,12 +13,12 @@ taken where a plastic run returns: at the step midpoints q + theta (q+ - q)
 block at 0.5 us steps) and are not what yields.
 
 What the tests' 10 x 10 x 5 mm block lacked (benchmarks/yield_onset.py; lab note
-docs/notes/2026-11-27-yield-onset.md): on it sigma_max / Y = 1.033, 0.979, 0.968 at 2.6, 3.9,
-5.5 elements per a (onset 0.92, 1.06, 1.08 v_y): the mesh converges to a field 3 % below
-Hertz's maximum. At the FE's own peak force the 0.2 mm field is 0.983 of Hertz's on that
-block and 1.001 on this one: the small free block (6.5 a thick, lighter than... its own
-vibration) lowers the peak subsurface stress by 2 %; the 0.5 us step lowers the peak force by
-1.2 % (0.4 % of stress) against 0.25 us; a sphere cap with 0.05 mm facets moves it by 0.4 %.
+docs/notes/2026-11-27-yield-onset.md): on it the midpoint sigma_max / Y = 1.033, 0.979, 0.968
+at 2.6, 3.9, 5.5 elements per a (onset 0.92, 1.06, 1.08 v_y): the mesh converges to a field
+~3 % below Hertz's maximum. At the FE's own peak force the 0.2 mm field is 0.983 of Hertz's on
+that block and 1.001 on this one: the small free block (6.5 a thick, 1.35 g) lowers the peak
+subsurface stress by ~2 %; the 0.5 us step lowers the peak force by 1.2 % (0.5 % of the
+stress) against 0.25 us; a sphere cap with 0.05 mm facets moves the peak by 0.4 %.
 
 Validation tier (`pytest -m validation`): three runs, about 2 minutes of CPU.
 """
