@@ -70,7 +70,8 @@ TURNED = {"axis": [0, 1, 0], "angle_deg": 90.0}  # the block's top face normal a
 @dataclass(frozen=True)
 class Case:
     """One elastic run: block fine size and radius [m], block size lx = ly, lz [m], the cap
-    (None: the committed sphere; else (facet size, radius) [m] at the pole), step dt [s]."""
+    (None: the committed sphere; else (facet size, radius) [m] at the pole), step dt [s], and
+    the contact pairing (default: the block's top nodes slaves on the sphere's facets)."""
 
     fine_m: float
     radius_m: float
@@ -78,6 +79,7 @@ class Case:
     lz_m: float = 5e-3
     cap: tuple[float, float] | None = None
     dt_s: float = 0.5e-6
+    sphere_slave: bool = False  # the sphere's cap nodes as slaves on the block's top faces
 
 
 CASES = {
@@ -91,6 +93,8 @@ CASES = {
     "h14": Case(0.14e-3, 1.0e-3),  # 5.5 per a
     "h14_cap": Case(0.14e-3, 1.0e-3, cap=(0.05e-3, 1.5e-3)),
     "h20_big": Case(0.2e-3, 1.2e-3, lx_m=20e-3, lz_m=10e-3),
+    "h20_big_cap": Case(0.2e-3, 1.2e-3, lx_m=20e-3, lz_m=10e-3, cap=(0.05e-3, 1.5e-3)),
+    "h20_big_swap": Case(0.2e-3, 1.2e-3, lx_m=20e-3, lz_m=10e-3, sphere_slave=True),
     "h14_big": Case(0.14e-3, 1.0e-3, lx_m=20e-3, lz_m=10e-3),
     "h20_dt": Case(0.2e-3, 1.2e-3, dt_s=0.25e-6),
     "h10": Case(0.10e-3, 0.9e-3),  # 7.7 per a
@@ -153,6 +157,13 @@ def scenario(mesh: Path, ball: Path, v: float, y_pa, t_end: float, dt: float) ->
     }
 
 
+def paired(data: dict, case: Case) -> dict:
+    """The scenario with the case's contact pairing."""
+    if case.sphere_slave:
+        data["contacts"] = [{"slave": "ball.front", "master": "block.top", "law": "position"}]
+    return data
+
+
 def hertz_at(mesh: Path, ball: Path, v: float):
     m_ball = RHO_BALL * mesh_volume(read_mesh(ball))
     return hertz_impact(R, v, E_STAR, m_ball, RHO * mesh_volume(read_mesh(mesh)))
@@ -191,7 +202,9 @@ def elastic_row(out: Path, name: str, case: Case) -> dict:
     onset = yield_onset(Y, E_STAR, R, NU)
     t0 = time.process_time()
     built = build_scenario(
-        scenario_from_dict(scenario(mesh, ball, v_y, None, 0.6 * hz.duration_s, case.dt_s))
+        scenario_from_dict(
+            paired(scenario(mesh, ball, v_y, None, 0.6 * hz.duration_s, case.dt_s), case)
+        )
     )
     res = simulate(built.system, built.states, built.grid)
     cpu_run = time.process_time() - t0
@@ -225,7 +238,7 @@ def plastic_row(out: Path, name: str, case: Case, s: float) -> dict:
     v_y = yield_speed(mesh, ball)
     t_end = 0.6 * hertz_at(mesh, ball, v_y).duration_s
     t0 = time.process_time()
-    data = scenario(mesh, ball, s * v_y, Y, t_end, case.dt_s)
+    data = paired(scenario(mesh, ball, s * v_y, Y, t_end, case.dt_s), case)
     res = simulate(*_built(data))
     report = res.plastic["block"]
     alpha = report.point_equivalent_plastic_strain
