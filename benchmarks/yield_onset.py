@@ -24,7 +24,8 @@ and measures:
 Cases (CASES below): the block's fine-zone element size h (elements per contact radius a/h,
 a = 0.77 mm) and its radius; the sphere's cap (the committed sphere_r10_cap.msh, 0.1 mm
 facets within 0.6 mm of its pole, or a cap written here with gmsh: facet size within a
-radius); the step; the block's size (a thicker and wider block, for the finite free block).
+radius); the step; the block's size (a thicker and wider block, for the finite free block);
+the contact pairing (the block's top nodes slaves on the sphere's facets, or the reverse).
 
 --plastic CASE:s1,s2 runs that case's mesh plastic (elastic-perfectly plastic, Y) at s v_y
 and reports whether any point yields, the number of yielding points and the peak
@@ -95,6 +96,7 @@ CASES = {
     "h20_big": Case(0.2e-3, 1.2e-3, lx_m=20e-3, lz_m=10e-3),
     "h20_big_cap": Case(0.2e-3, 1.2e-3, lx_m=20e-3, lz_m=10e-3, cap=(0.05e-3, 1.5e-3)),
     "h20_big_swap": Case(0.2e-3, 1.2e-3, lx_m=20e-3, lz_m=10e-3, sphere_slave=True),
+    "h20_big_dt": Case(0.2e-3, 1.2e-3, lx_m=20e-3, lz_m=10e-3, dt_s=0.25e-6),
     "h14_big": Case(0.14e-3, 1.0e-3, lx_m=20e-3, lz_m=10e-3),
     "h20_dt": Case(0.2e-3, 1.2e-3, dt_s=0.25e-6),
     "h10": Case(0.10e-3, 0.9e-3),  # 7.7 per a
