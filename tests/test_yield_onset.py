@@ -53,18 +53,20 @@ def big_block(tmp_path_factory):
     return block(path, 20e-3, 20e-3, 10e-3, 2e-3, order=2, refine=refine)
 
 
-def _midpoint_peak_von_mises(built, res) -> float:
+def _midpoint_peak_von_mises(built, res) -> tuple[float, np.ndarray]:
     """Largest elastic von Mises stress [Pa] at the block's integration points at the step
-    midpoints within 3 steps of the peak force."""
+    midpoints within 3 steps of the peak force, and that point's undeformed position [m]."""
     info, body = built.info[1], built.system.bodies[1]
     elastic = PlasticBody.build(info.mesh, info.material, J2Plasticity(1e30))
     state, q = elastic.virgin_state(), res.q[1]
     k0 = int(np.argmax(res.contact_force))
-    worst = 0.0
+    worst, where = 0.0, 0
     for k in range(max(k0 - 3, 1), min(k0 + 4, len(res.t))):
         u = body.psi @ (q[k - 1] + THETA * (q[k] - q[k - 1]))
-        worst = max(worst, float(von_mises(elastic.respond(u, state).stress).max()))
-    return worst
+        vm = von_mises(elastic.respond(u, state).stress)
+        if vm.max() > worst:
+            worst, where = float(vm.max()), int(np.argmax(vm))
+    return worst, elastic.point_coordinates()[where]
 
 
 @pytest.mark.validation  # long: in `pytest -m validation`, not the default run
@@ -72,15 +74,19 @@ def test_peak_stress_at_hertz_yield_speed_is_hertz_maximum(big_block):
     """Elastic run at Hertz's v_y: sigma_max / Y within 2 % of 1, which is the issue's 5 %
     in speed (1.0207^(-5/2) = 0.95; measured 0.994, onset at 1.015 v_y), the peak 0.3 a to
     0.7 a deep (Hertz: 0.49 a, a broad maximum; measured 0.55 a). The peak force within 3 %
-    of Hertz's (measured 0.979: the 0.5 us step's theta damps it, 0.999 at 0.25 us on the
-    small block)."""
+    of Hertz's: measured 0.979, 0.986 at 0.25 us steps (the rest: the block's vibration and
+    its compliance beyond the Hertz zone, which the half-space lacks), so 3 % holds those
+    two with a 1 % margin."""
     v_y = _yield_speed(big_block)
     hz = _hertz(big_block, v_y)
     built, res = _impact(big_block, v_y, None, 0.6 * hz.duration_s, DT_S)
     assert res.steps_not_converged == 0
     assert abs(res.contact_force.max() / hz.force_max_n - 1.0) < 0.03
-    ratio = _midpoint_peak_von_mises(built, res) / Y
+    peak, point = _midpoint_peak_von_mises(built, res)
+    ratio = peak / Y
     assert abs(ratio - 1.0) < 0.0207, ratio
+    depth = -point[2] / yield_onset(Y, E_STAR, R, NU).radius_m
+    assert 0.3 < depth < 0.7, depth
     assert abs(ratio**-2.5 - 1.0) < 0.05, ratio**-2.5
 
 
