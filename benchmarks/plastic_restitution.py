@@ -91,14 +91,25 @@ def make_block(out: Path, setup) -> Path:
     return block(out / f"block_{fine * 1e6:.0f}um.msh", lx, ly, lz, coarse, order=2, refine=refine)
 
 
-def scenario(mesh: Path, v: float, y_pa: float | None, rho_ball: float, t_end: float, dt: float):
-    """The sphere at v [m/s] onto the free block (elastic if y_pa is None), as a dict."""
+def scenario(
+    mesh: Path,
+    v: float,
+    y_pa: float | None,
+    rho_ball: float,
+    t_end: float,
+    dt: float,
+    ball: Path = SPHERE,
+    name: str = "plastic_restitution",
+) -> dict:
+    """The rigid sphere (mesh ``ball``, density rho_ball) at v [m/s] onto the free block
+    ``mesh`` (elastic if y_pa is None, else perfectly plastic, Thornton's material), as a
+    scenario dict; benchmarks/yield_onset.py builds its runs with it too."""
     material = {"name": "metal", "E_pa": E, "nu": NU, "rho_kg_m3": RHO}
     if y_pa is not None:
         material["plasticity"] = {"yield_pa": y_pa}  # no hardening: Thornton's material
-    ball = {"name": "s", "E_pa": 210e9, "nu": 0.3, "rho_kg_m3": rho_ball}
+    ball_material = {"name": "s", "E_pa": 210e9, "nu": 0.3, "rho_kg_m3": rho_ball}
     return {
-        "name": "plastic_restitution",
+        "name": name,
         "gravity_mps2": [0.0, 0.0, 0.0],
         "time": {
             "t_end_s": t_end,
@@ -110,10 +121,14 @@ def scenario(mesh: Path, v: float, y_pa: float | None, rho_ball: float, t_end: f
         "bodies": [
             {
                 "name": "ball",
-                "material": ball,
-                "mesh_file": str(SPHERE),
+                "material": ball_material,
+                "mesh_file": str(ball),
                 "model": {"kind": "rigid"},
-                "placement": {"position_m": [R, 0, 0], "rotation": TURNED},
+                "placement": {
+                    "position_m": [R, 0, 0],
+                    "rotation": TURNED,
+                    "velocity_mps": [-v, 0, 0],
+                },
             },
             {
                 "name": "block",
@@ -193,7 +208,6 @@ def run_pair(mesh: Path, s: float, sc: dict, m_star: float, y_pa: float, rho_bal
     row = {"v_over_vy": s, "v_mps": v, "dt_s": dt, "t_end_s": t_end}
     for key, y in (("el", None), ("pl", y_pa)):
         data = scenario(mesh, v, y, rho_ball, t_end, dt)
-        data["bodies"][0]["placement"]["velocity_mps"] = [-v, 0, 0]
         t0 = time.perf_counter()
         built = build_scenario(scenario_from_dict(data))
         res = simulate(built.system, built.states, built.grid)

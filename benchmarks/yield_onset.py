@@ -44,6 +44,7 @@ from dataclasses import asdict, dataclass
 from pathlib import Path
 
 import numpy as np
+from plastic_restitution import scenario as restitution_scenario
 
 from flexmvm.integrate.driver import simulate
 from flexmvm.integrate.theta import theta_for_damping_time
@@ -65,7 +66,6 @@ R = 0.010  # sphere radius [m]
 E, NU, RHO, RHO_BALL, Y = 70e9, 0.33, 2700.0, 250.0, 2.35e9
 E_STAR = E / (1.0 - NU**2)  # rigid sphere: the block's plane-strain modulus [Pa]
 HF_DAMPING_TIME_S = 12.5e-6  # theta(h) as tests/test_plastic_dynamics.py
-TURNED = {"axis": [0, 1, 0], "angle_deg": 90.0}  # the block's top face normal along +x
 
 
 @dataclass(frozen=True)
@@ -125,38 +125,9 @@ def cap_mesh(out: Path, case: Case) -> Path:
 
 
 def scenario(mesh: Path, ball: Path, v: float, y_pa, t_end: float, dt: float) -> dict:
-    """The sphere at v [m/s] onto the free block (elastic if y_pa is None), as a dict."""
-    material = {"name": "metal", "E_pa": E, "nu": NU, "rho_kg_m3": RHO}
-    if y_pa is not None:
-        material["plasticity"] = {"yield_pa": y_pa}
-    time_table = {"t_end_s": t_end, "dt_s": dt, "dt_max_s": dt, "output_dt_s": dt}
-    time_table["hf_damping_time_s"] = HF_DAMPING_TIME_S
-    return {
-        "name": "yield_onset",
-        "gravity_mps2": [0.0, 0.0, 0.0],
-        "time": time_table,
-        "bodies": [
-            {
-                "name": "ball",
-                "material": {"name": "s", "E_pa": 210e9, "nu": 0.3, "rho_kg_m3": RHO_BALL},
-                "mesh_file": str(ball),
-                "model": {"kind": "rigid"},
-                "placement": {
-                    "position_m": [R, 0, 0],
-                    "rotation": TURNED,
-                    "velocity_mps": [-v, 0, 0],
-                },
-            },
-            {
-                "name": "block",
-                "material": material,
-                "mesh_file": str(mesh),
-                "model": {"kind": "full"},
-                "placement": {"rotation": TURNED},
-            },
-        ],
-        "contacts": [{"slave": "block.top", "master": "ball.front", "law": "position"}],
-    }
+    """The sphere at v [m/s] onto the free block (elastic if y_pa is None), as a dict: the
+    restitution study's scenario (plastic_restitution.scenario) with this study's ball."""
+    return restitution_scenario(mesh, v, y_pa, RHO_BALL, t_end, dt, ball, "yield_onset")
 
 
 def paired(data: dict, case: Case) -> dict:
