@@ -142,7 +142,7 @@ def _contact_impulses(
         sel = rows.nodal.get(b)
         if sel is not None and body.nq:
             comps[b] = solver.translation_compliance(h, bf, sel)
-            phi_q_v = sel @ (body.psi @ v[6:]) if body.is_sparse else bq @ v[6:]
+            phi_q_v = (sel @ body.psi) @ v[6:] if body.is_sparse else bq @ v[6:]
         else:
             phi = np.hstack([bf[:, :3], bq])
             comps[b] = DenseCompliance(phi, solver.solve_translation(phi.T))

@@ -30,7 +30,9 @@ def body_impulse(rows: Rows, b: int, body, lam: np.ndarray) -> np.ndarray:
         )
         elastic = nt_lam[body.nodal.dof]
     else:
-        elastic = np.asarray(body.psi.T @ (sel.tocsr().T @ lam)).ravel()
+        # (N psi)^T lam: the rows of psi at the selected DOFs only (a ring basis's psi holds
+        # dense exterior rows that N never touches)
+        elastic = np.asarray((sel.tocsr() @ body.psi).T @ lam).ravel()
     return np.concatenate([bf.T @ lam, elastic])
 
 

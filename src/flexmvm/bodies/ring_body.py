@@ -1,0 +1,205 @@
+"""The floating-frame body of a ring basis (reduction/ring.py): sparse where the FE model is.
+
+With q = [u_R, s, eta] and psi = [I on the region's DOFs; B on the exterior rows of the corner
+columns c] (reduction.ring.RingColumns), every inertia invariant of bodies/invariants.py splits
+into the region's nodal part, as sparse as M_s, and a dense block on c:
+
+    G2[a][b] = Sel_a^T M_RR Sel_b + E_c D_ab E_c^T,
+    D_ab     = Q_a^T M_EE Q_b + R_a (M_Gamma,E Q_b) + (R_b (M_Gamma,E Q_a))^T
+
+(Q_a (n_E, n_c): the a-components of B at the exterior nodes; R_a puts ring node g's row at
+corner position 3 g + a; M_s's blocks R-E couple only ring nodes to E). Likewise
+k_hat = K_RR + E_c (B^T K_EE B + R(K_Gamma,E B) + R(..)^T) E_c^T. Built with dense products on
+n_c columns only: setup costs ~9 n_E n_c^2 flops, against the dense Craig-Bampton body's
+~9 n nq^2, and nothing of size nq^2 is dense. A step's contraction L(x) (3, 3, nq) is one
+product with the stacked sparse part and one packed pass over the six distinct dense corner
+blocks (bodies.contraction).
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+
+from flexmvm.bodies.body import PACKED_MIN_NQ, FlexibleBody
+from flexmvm.bodies.build import BodyParts
+from flexmvm.bodies.contraction import G2Contraction
+from flexmvm.bodies.damping import Damping, reduced_damping
+from flexmvm.bodies.invariants import InertiaInvariants
+from flexmvm.fe.assembly import FEModel
+from flexmvm.reduction.ring import RingColumns
+
+
+def _exterior_components(fe: FEModel, nodes: np.ndarray, cols: RingColumns):
+    """(E nodes (n_E,), [Q_0, Q_1, Q_2] (n_E, n_c) each): the rows of B of each exterior
+    node's x, y, z DOF, zero where that DOF is a reference DOF (no row)."""
+    ext = np.setdiff1d(np.arange(fe.mesh.n_nodes), nodes)
+    Q = []
+    for a in range(3):
+        dof = 3 * ext + a
+        at = np.minimum(np.searchsorted(cols.interior, dof), cols.interior.size - 1)
+        has = cols.interior[at] == dof
+        Qa = np.zeros((ext.size, cols.corner.size))
+        Qa[has] = cols.B[at[has]]
+        Q.append(Qa)
+    return ext, Q
+
+
+def _nodal_block(M_RR: sp.coo_matrix, a: int, b: int, nq: int) -> sp.coo_matrix:
+    """Sel_a^T M_RR Sel_b (nq, nq): entry (3 i + a, 3 j + b) = M_RR[i, j]."""
+    return sp.coo_matrix((M_RR.data, (3 * M_RR.row + a, 3 * M_RR.col + b)), shape=(nq, nq))
+
+
+def _corner_block(D: np.ndarray, corner: np.ndarray, nq: int) -> sp.coo_matrix:
+    """E_c D E_c^T (nq, nq) as coo."""
+    n_c = corner.size
+    rows = np.repeat(corner, n_c)
+    cols = np.tile(corner, n_c)
+    return sp.coo_matrix((D.ravel(), (rows, cols)), shape=(nq, nq))
+
+
+def _ring_rows(X: np.ndarray, a: int, n_c: int) -> np.ndarray:
+    """R_a X: ring node g's row of X (n_Gamma, n_c) at corner position 3 g + a."""
+    out = np.zeros((n_c, X.shape[1]))
+    out[a : 3 * X.shape[0] : 3] = X
+    return out
+
+
+def ring_parts(fe: FEModel, nodes: np.ndarray, cols: RingColumns, nq: int) -> BodyParts:
+    """Inertia invariants and k_hat of the ring basis of ``fe`` with retained ``nodes``
+    (module doc): G2 blocks, M_qq and k_hat csr (nq, nq), the rest dense as
+    bodies.invariants.inertia_invariants gives them (to round-off)."""
+    X = np.asarray(fe.mesh.nodes, dtype=float)
+    Ms = sp.csr_matrix(fe.M_scalar)
+    msum = np.asarray(Ms.sum(axis=1)).ravel()
+    MsX = Ms @ X
+    G0 = X.T @ MsX
+    G0 = 0.5 * (G0 + G0.T)
+    S0 = msum @ X
+    ext, Q = _exterior_components(fe, nodes, cols)
+    ring_nodes = nodes[cols.ring]
+    M_RR = sp.coo_matrix(Ms[nodes][:, nodes])
+    M_GE = sp.csr_matrix(Ms[ring_nodes][:, ext])
+    M_EE = sp.csr_matrix(Ms[ext][:, ext])
+    n_c, corner = cols.corner.size, cols.corner
+    MQ = [np.asarray(M_EE @ Q[b]) for b in range(3)]
+    GQ = [np.asarray(M_GE @ Q[b]) for b in range(3)]  # (n_Gamma, n_c)
+    G2: list[list] = [[None] * 3 for _ in range(3)]
+    for a in range(3):
+        for b in range(a, 3):
+            D = Q[a].T @ MQ[b] + _ring_rows(GQ[b], a, n_c) + _ring_rows(GQ[a], b, n_c).T
+            block = sp.csr_matrix(_nodal_block(M_RR, a, b, nq) + _corner_block(D, corner, nq))
+            G2[a][b] = block
+            if b > a:
+                G2[b][a] = sp.csr_matrix(block.T)
+    S1 = np.zeros((3, nq))
+    G1x = np.zeros((3, 3, nq))
+    j = np.arange(nodes.size)
+    for a in range(3):
+        S1[a, 3 * j + a] = msum[nodes]
+        S1[a, corner] += msum[ext] @ Q[a]
+        for b in range(3):
+            G1x[a, b, 3 * j + b] = MsX[nodes, a]
+            G1x[a, b, corner] += MsX[ext, a] @ Q[b]
+    G1 = tuple(tuple(G1x[a, b].copy() for b in range(3)) for a in range(3))
+    M_qq = G2[0][0] + G2[1][1] + G2[2][2]
+    M_qq = sp.csr_matrix(0.5 * (M_qq + M_qq.T))
+    inv = InertiaInvariants(float(msum.sum()), S0, S1, G0, G1, tuple(tuple(r) for r in G2), M_qq)
+    return BodyParts(inv, ring_stiffness(fe, nodes, cols, nq))
+
+
+def ring_stiffness(fe: FEModel, nodes: np.ndarray, cols: RingColumns, nq: int) -> sp.csr_matrix:
+    """k_hat = psi^T K psi (nq, nq) csr of the ring basis (module doc), symmetrized."""
+    b = (3 * nodes[:, None] + np.arange(3)).ravel()
+    K = sp.csr_matrix(fe.K)
+    K_bb = sp.coo_matrix(K[b][:, b])
+    n_g = cols.n_ring_dofs
+    ring_dofs = b[cols.corner[:n_g]]
+    rows_i = K[cols.interior]
+    C = cols.B.T @ np.asarray(rows_i[:, cols.interior] @ cols.B)
+    T = np.asarray(K[ring_dofs][:, cols.interior] @ cols.B)  # (3 n_Gamma, n_c)
+    C[:n_g] += T
+    C[:, :n_g] += T.T
+    k_hat = sp.coo_matrix((K_bb.data, (K_bb.row, K_bb.col)), shape=(nq, nq))
+    k_hat = sp.csr_matrix(k_hat + _corner_block(C, cols.corner, nq))
+    return sp.csr_matrix(0.5 * (k_hat + k_hat.T))
+
+
+@dataclass(frozen=True)
+class RingBody(FlexibleBody):
+    """A FlexibleBody of a ring basis: psi, G2, M_qq and k_hat sparse with a dense corner on
+    the coordinates ``corner`` (n_c,); contractions split accordingly (module doc)."""
+
+    corner: np.ndarray | None = None
+
+    @functools.cached_property
+    def _split_g2(self) -> tuple[sp.csr_matrix, G2Contraction]:
+        """(the nine blocks L[a, b] = G2[b][a] without their corner entries, stacked (9 nq,
+        nq) csr; the packed dense corner blocks)."""
+        nq, c = self.nq, self.corner
+        in_corner = np.zeros(nq, dtype=bool)
+        in_corner[c] = True
+        G2 = self.inv.G2
+        rest = []
+        for a in range(3):
+            for b in range(3):
+                g = sp.coo_matrix(G2[b][a])
+                keep = ~(in_corner[g.row] & in_corner[g.col])
+                rest.append(
+                    sp.coo_matrix((g.data[keep], (g.row[keep], g.col[keep])), shape=(nq, nq))
+                )
+        stack = sp.csr_matrix(sp.vstack(rest))
+        D = [[np.asarray(G2[a][b][c][:, c].toarray()) for b in range(3)] for a in range(3)]
+        return stack, G2Contraction(D)
+
+    @functools.cached_property
+    def _g2_packed(self):
+        return None
+
+    @property
+    def contracts_in_halves(self) -> bool:
+        # the corner's packed pass splits in two as a dense body's does, from the same size
+        return self.corner.size >= PACKED_MIN_NQ
+
+    def contractions(self, x: np.ndarray, pool=None) -> np.ndarray:
+        """L(x)[a, b] = G2[b][a] x (3, 3, nq): the sparse part by one product, the corner by
+        the packed pass (two threads with a pool)."""
+        stack, corner = self._split_g2
+        x = np.ascontiguousarray(x, dtype=float)
+        L = np.asarray(stack @ x).reshape(3, 3, self.nq)
+        L[:, :, self.corner] += corner(x[self.corner], pool if self.contracts_in_halves else None)
+        return L
+
+
+def ring_body_from_parts(
+    name: str,
+    mesh,
+    basis,
+    parts: BodyParts,
+    corner: np.ndarray,
+    *,
+    damping: Damping | None = None,
+) -> RingBody:
+    """The RingBody of mesh (nodes X (n, 3) [m]) and ring basis psi (3n, nq) csr with its
+    parts (ring_parts) and corner coordinates; damping as bodies.build.body_from_parts."""
+    psi = sp.csr_matrix(basis.psi)
+    if psi.shape != (3 * mesh.n_nodes, parts.inv.nq):
+        raise ValueError(
+            f"body {name}: basis {psi.shape} does not match its parts "
+            f"({3 * mesh.n_nodes}, {parts.inv.nq})"
+        )
+    c_hat = reduced_damping(damping, parts.inv.M_qq, parts.k_hat, basis, name)
+    return RingBody(
+        name,
+        np.asarray(mesh.nodes, float),
+        psi,
+        parts.inv,
+        parts.k_hat,
+        mesh,
+        c_hat,
+        "mvm-sparse",
+        corner=np.asarray(corner, dtype=np.int64),
+    )

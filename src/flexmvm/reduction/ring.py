@@ -1,0 +1,146 @@
+"""Craig-Bampton with the ring as its only boundary: the basis of a reduced body that stays
+sparse where its FE model is (DESIGN.md, "A reduced body that pays").
+
+Split the nodes into the retained region R (kept nodal), its ring Gamma (the region's nodes
+that share an element with the rest) and the exterior E (the free DOFs of the other nodes).
+The exterior couples to the region only through the ring (K_E,R\\Gamma = 0), so the
+Craig-Bampton basis of R (Craig and Bampton 1968) is
+
+    u_R = q_R,      u_E = Phi_E,Gamma q_Gamma + S_E s + Phi_E eta,
+    Phi_E,Gamma = -K_EE^-1 K_E,Gamma   (static constraint modes: one per RING DOF)
+
+with the fixed-interface modes Phi_E of E and, for massless retained nodes, their static
+columns S_E (reduction/basis.py, MasslessStatics). The constraint mode of a region DOF off the
+ring is exactly zero on E, so this is the CRAIG_BAMPTON basis of reduction/basis.py column by
+column (same coordinates q = [u_R, s, eta], same span): only its storage differs. Psi is kept
+as a csr matrix whose dense part is the E rows of the corner columns, c = [the ring's DOFs,
+s, eta] (n_c = 3 n_Gamma + n_s + n_eta): it grows with the region's surface, not its volume.
+One solve with K_EE's factor gives every constraint mode (3 n_Gamma right-hand sides, not
+3 n_R), and the same factor is the shift-invert operator of the modes.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
+from threadpoolctl import threadpool_limits
+
+from flexmvm.fe.assembly import FEModel
+from flexmvm.fe.modes import solver_pool, spd_solver
+from flexmvm.reduction.basis import (
+    MasslessStatics,
+    _fixed_interface_modes,
+    _massless,
+    _node_dofs,
+    _static_columns,
+    massless_patterns,
+)
+from flexmvm.reduction.reference import ReferenceCondition
+
+
+@dataclass(frozen=True)
+class RingColumns:
+    """The dense part of a ring basis: psi[interior][:, corner] = B.
+
+    interior: (n_i,) the exterior's free DOFs (sorted); corner: (n_c,) the coordinates whose
+    columns reach into E: the ring nodes' DOF columns (node-major, in retained-node order),
+    then the static and modal columns; B: (n_i, n_c) their exterior rows [m per unit q];
+    ring: (n_Gamma,) positions of the ring nodes in the retained-node order.
+    """
+
+    interior: np.ndarray
+    corner: np.ndarray
+    B: np.ndarray
+    ring: np.ndarray
+
+    @property
+    def n_ring_dofs(self) -> int:
+        return 3 * self.ring.size
+
+
+def ring_positions(fe: FEModel, interior: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Positions (in the retained order) of the retained nodes that share an element with an
+    exterior DOF: those whose DOFs have a structural entry in K[interior, b]."""
+    k_ib = sp.csc_matrix(fe.K[interior][:, b])
+    touched = np.flatnonzero(np.diff(k_ib.indptr))
+    return np.unique(touched // 3)
+
+
+def ring_columns(
+    fe: FEModel,
+    reference: ReferenceCondition,
+    nodes: np.ndarray,
+    n_modes: int,
+    statics_kind: MasslessStatics = MasslessStatics.PATCH,
+) -> tuple[RingColumns, int, np.ndarray]:
+    """The corner columns of the ring basis of retained ``nodes`` (validated ids) with
+    ``n_modes`` fixed-interface modes: (RingColumns, number of static columns of the massless
+    nodes, mode frequencies [Hz]). K_EE is factored once (fe.modes.spd_solver)."""
+    b = _node_dofs(nodes)
+    interior = np.setdiff1d(reference.free_dofs(fe.n_dof), b)
+    ring = ring_positions(fe, interior, b)
+    ring_cols = _node_dofs(ring)  # q columns 3 pos + d of the ring nodes
+    k_rows = fe.K[interior]
+    k_ii = k_rows[:, interior]
+    # one BLAS thread, as reduction.basis.build_basis: the many-right-hand-side solve calls
+    # BLAS once per supernode, ~10x slower threaded when other jobs share the cores
+    with threadpool_limits(limits=1, user_api="blas"), solver_pool() as pool:
+        solve = spd_solver(k_ii, pool)
+        statics = -np.asarray(solve(k_rows[:, b[ring_cols]].toarray()))
+        modes, freqs = _fixed_interface_modes(fe, interior, k_ii, solve, n_modes)
+    massless = np.flatnonzero(_massless(fe, nodes))
+    split = _node_dofs(massless)
+    on_ring = np.isin(split, ring_cols)
+    at = np.searchsorted(ring_cols, split[on_ring])
+    fields = np.zeros((interior.size, split.size))
+    fields[:, on_ring] = statics[:, at]
+    if statics_kind is MasslessStatics.PATCH and massless.size:
+        fields = fields @ massless_patterns(fe.mesh.nodes[nodes[massless]])
+    extra = _static_columns(fe, interior, fields)
+    statics[:, at] = 0.0  # a massless node's column: its unit vector alone
+    nb = b.size
+    n_s = extra.shape[1]
+    corner = np.concatenate([ring_cols, nb + np.arange(n_s + n_modes)]).astype(np.int64)
+    B = np.empty((interior.size, corner.size))
+    B[:, : ring_cols.size] = statics
+    B[:, ring_cols.size : ring_cols.size + n_s] = extra
+    B[:, ring_cols.size + n_s :] = modes
+    return RingColumns(interior, corner, B, ring), n_s, freqs
+
+
+def ring_psi(n_dof: int, nodes: np.ndarray, cols: RingColumns, nq: int) -> sp.csr_matrix:
+    """The basis (n_dof, nq) as csr: a 1.0 at (3 k_j + d, 3 j + d) for retained node k_j, the
+    rows of B at the exterior DOFs (their nonzero entries), nothing at the reference DOFs."""
+    b = _node_dofs(nodes)
+    Bc = sp.csr_matrix(cols.B)
+    counts = np.zeros(n_dof, dtype=np.int64)
+    counts[b] = 1
+    counts[cols.interior] = np.diff(Bc.indptr)
+    indptr = np.concatenate([[0], np.cumsum(counts)])
+    indices = np.empty(indptr[-1], dtype=np.int64)
+    data = np.empty(indptr[-1])
+    indices[indptr[b]] = np.arange(b.size)
+    data[indptr[b]] = 1.0
+    # the exterior rows, in one scatter: row r's entries go to indptr[r]..indptr[r + 1]
+    starts = np.repeat(indptr[cols.interior] - Bc.indptr[:-1], np.diff(Bc.indptr))
+    slots = starts + np.arange(Bc.nnz)
+    indices[slots] = cols.corner[Bc.indices]
+    data[slots] = Bc.data
+    return sp.csr_matrix((data, indices, indptr), shape=(n_dof, nq))
+
+
+def split_ring_psi(
+    fe: FEModel, reference: ReferenceCondition, psi: sp.spmatrix, nodes: np.ndarray
+) -> RingColumns:
+    """RingColumns of a ring basis psi (ring_psi's output) of ``fe`` with retained ``nodes``
+    and the reference condition it was built on: the ring from K's pattern (as ring_columns,
+    massless ring nodes included: their columns are unit vectors but K couples them to E),
+    the exterior rows of the corner columns read from psi."""
+    b = _node_dofs(nodes)
+    interior = np.setdiff1d(reference.free_dofs(fe.n_dof), b)
+    ring = ring_positions(fe, interior, b)
+    corner = np.concatenate([_node_dofs(ring), np.arange(b.size, psi.shape[1])]).astype(np.int64)
+    B = np.asarray(sp.csr_matrix(psi)[interior][:, corner].toarray())
+    return RingColumns(interior, corner, B, ring)
