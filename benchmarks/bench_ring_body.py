@@ -85,7 +85,10 @@ def _run(kind: str, radius_m: float, modes: int, t_end: float) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "case.json"
         cmd = [sys.executable, __file__, "--child", kind, str(radius_m), str(modes), str(t_end)]
-        proc = subprocess.run([*cmd, str(out)], capture_output=True, text=True, check=False)
+        env = dict(os.environ, FLEXMVM_NO_CACHE="1")  # set-up measured cold, every case
+        proc = subprocess.run(
+            [*cmd, str(out)], capture_output=True, text=True, check=False, env=env
+        )
         if proc.returncode != 0:
             tail = (proc.stderr.strip().splitlines() or ["?"])[-1]
             return {"kind": kind, "radius_mm": radius_m * 1e3, "error": tail}

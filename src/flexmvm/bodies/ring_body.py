@@ -159,6 +159,13 @@ class RingBody(FlexibleBody):
     def _g2_packed(self):
         return None
 
+    @functools.cached_property
+    def _rotational_coupling(self) -> tuple[np.ndarray, None]:
+        """M_wq(0) (3, nq) and no dense stack: M_wq(q) comes from contractions(q)."""
+        G1 = self.inv.G1
+        Mw0 = np.array([G1[a][b] - G1[b][a] for a, b in ((1, 2), (2, 0), (0, 1))])
+        return Mw0.reshape(3, self.nq), None
+
     @property
     def contracts_in_halves(self) -> bool:
         # the corner's packed pass splits in two as a dense body's does, from the same size
