@@ -34,6 +34,8 @@ _API = {
     "interface": "flexmvm.scenarios.model_constructors",
     "rigid": "flexmvm.scenarios.model_constructors",
     "ModelKind": "flexmvm.bodies.build",
+    "KindSpec": "flexmvm.reduction.kinds",
+    "register_kind": "flexmvm.reduction.kinds",
     "Material": "flexmvm.materials",
     "rayleigh_from_ratios": "flexmvm.bodies.damping",
     # mechanisms: the tables of joints, drives, supports, loads, springs, damping, motion
@@ -74,6 +76,7 @@ _API = {
 __all__ = [
     "FlexmvmError",
     "InputError",
+    "KindSpec",
     "Material",
     "ModelConfig",
     "ModelKind",
@@ -103,6 +106,7 @@ __all__ = [
     "mvm",
     "prescribed_path",
     "rayleigh_from_ratios",
+    "register_kind",
     "rigid",
     "rigid_motion",
     "run",

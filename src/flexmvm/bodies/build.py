@@ -2,13 +2,13 @@
 
 The expensive, configuration-independent part of a body is its BodyParts (inertia invariants
 and k_hat): body_parts computes them, body_from_parts wraps them into a body without
-recomputing, so a cache (flexmvm.setup_cache.cached_body) can hold them.
+recomputing, so a cache (flexmvm.setup_cache.cached_body) can hold them. ModelKind (the model
+kinds, reduction/kinds/) is imported here for its former importers.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
-from enum import StrEnum
 
 import numpy as np
 import scipy.sparse as sp
@@ -16,45 +16,7 @@ import scipy.sparse as sp
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.bodies.damping import Damping, reduced_damping
 from flexmvm.bodies.invariants import InertiaInvariants, inertia_invariants, leading_columns
-from flexmvm.reduction.basis import BasisKind
-
-
-class ModelKind(StrEnum):
-    """How a body's deformation is represented (DESIGN.md, Bodies); values: the scenario
-    file's ``model.kind`` and ``flexmvm run --model``."""
-
-    FULL = "full"  # all nodal DOFs (reference solution)
-    MVM = "mvm"  # Craig-Bampton: retained nodes + fixed-interface modes (default MVM)
-    MVM_SEED = "mvm-seed"  # seed eq. (4): modes on region I, nodal DOFs on region II
-    MVM_SEED_FIXED = "mvm-seed-fixed"  # seed eq. (4) with region-I modes of region II held
-    MODAL = "modal"  # first N modes of the reference-supported body
-    INTERFACE = "interface"  # Hertz contact-patch Ritz vectors + modes by participation
-    RIGID = "rigid"  # no elastic coordinates
-
-    @property
-    def basis(self) -> BasisKind | None:
-        """The reduction basis of this model (None: rigid, no elastic coordinates)."""
-        return _BASIS.get(self)
-
-    @property
-    def retains_nodes(self) -> bool:
-        """Keeps a node selection (region II) beside its modes: the two MVM kinds."""
-        return self in (ModelKind.MVM, ModelKind.MVM_SEED, ModelKind.MVM_SEED_FIXED)
-
-    @property
-    def uses_modes(self) -> bool:
-        """Has a mode count (>= 1): the MVM kinds and the modal model."""
-        return self.retains_nodes or self is ModelKind.MODAL
-
-
-_BASIS = {
-    ModelKind.FULL: BasisKind.FULL,
-    ModelKind.MVM: BasisKind.CRAIG_BAMPTON,
-    ModelKind.MVM_SEED: BasisKind.SEED_BLOCK,
-    ModelKind.MVM_SEED_FIXED: BasisKind.SEED_FIXED,
-    ModelKind.MODAL: BasisKind.MODAL,
-    ModelKind.INTERFACE: BasisKind.INTERFACE,
-}
+from flexmvm.reduction.kinds import ModelKind
 
 
 @dataclass(frozen=True)
@@ -146,3 +108,14 @@ def rigid_body_from_fe(name: str, fe) -> FlexibleBody:
         mesh=fe.mesh,
         label="rigid",
     )
+
+
+__all__ = [
+    "BodyParts",
+    "ModelKind",
+    "body_from_fe",
+    "body_from_parts",
+    "body_parts",
+    "reduced_stiffness",
+    "rigid_body_from_fe",
+]

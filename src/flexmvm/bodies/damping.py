@@ -39,7 +39,8 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from flexmvm.errors import InputError
-from flexmvm.reduction.basis import Basis, BasisKind
+from flexmvm.reduction.basis import Basis
+from flexmvm.reduction.kinds import kind_spec
 
 
 @dataclass(frozen=True)
@@ -120,14 +121,13 @@ def modal_columns(basis: Basis) -> np.ndarray:
     """Column ids of a basis's modal coordinates (module doc); InputError for a basis with
     none (full FE, or a reduced basis without modes)."""
     kind, n = basis.kind, basis.n_modes
-    if kind is BasisKind.FULL or not n:
+    spec = kind_spec(kind)
+    if not spec.reads_modes or not n:
         raise InputError(
             f"modal damping ratios need modes; a {kind.value} basis with {n} modes has none "
             "(give Rayleigh alpha_per_s, beta_s instead)"
         )
-    if kind in (BasisKind.SEED_BLOCK, BasisKind.SEED_FIXED):
-        return np.arange(n)
-    return np.arange(basis.nq - n, basis.nq)
+    return spec.modal_columns(basis)
 
 
 def _dense_block(A, cols: np.ndarray) -> np.ndarray:

@@ -39,8 +39,7 @@ rigid-body motion. The reduced matrices are m_hat = Psi^T M Psi, k_hat = Psi^T K
 
 from __future__ import annotations
 
-from dataclasses import dataclass
-from enum import Enum
+import dataclasses
 
 import numpy as np
 import scipy.sparse as sp
@@ -48,79 +47,12 @@ from threadpoolctl import threadpool_limits
 
 from flexmvm.errors import InputError
 from flexmvm.fe.assembly import FEModel
-from flexmvm.fe.modes import (
-    constrained_modes,
-    shift_invert_modes,
-    solver_pool,
-    spd_solver,
-    to_hz,
-)
-from flexmvm.reduction.interface import InterfaceSources, InterfaceSpec, interface_columns
+from flexmvm.reduction.interface import InterfaceSources, InterfaceSpec
+from flexmvm.reduction.kinds import Basis, BasisRequest, ModelKind, kind_spec
+from flexmvm.reduction.kinds.mvm import massless_patterns
+from flexmvm.reduction.kinds.registry import BasisKind
+from flexmvm.reduction.kinds.spec import MasslessStatics
 from flexmvm.reduction.reference import ReferenceCondition
-
-
-class BasisKind(Enum):
-    """Which reduction basis; values are the names used in scenarios and studies."""
-
-    FULL = "full"  # reference FE model: every free nodal DOF
-    CRAIG_BAMPTON = "mvm"  # default MVM: retained nodes + fixed-interface modes
-    SEED_BLOCK = "mvm-seed"  # seed eq. (4): whole-body modes on region I, nodes on II
-    SEED_FIXED = "mvm-seed-fixed"  # seed eq. (4): region-I modes with region II held, nodes on II
-    MODAL = "modal"  # first N modes of the reference-supported body
-    INTERFACE = "interface"  # contact-patch Ritz vectors + modes by participation
-
-
-class MasslessStatics(Enum):
-    """The static columns of the massless retained nodes of a Craig-Bampton basis."""
-
-    ALL = "all"  # every massless DOF's interior static field: span contains Craig-Bampton's
-    PATCH = "patch"  # the static fields of massless_patterns: a few columns per body
-
-
-@dataclass(frozen=True)
-class Basis:
-    """A reduction basis of one body.
-
-    psi: (3n, nq) ndarray (csr for FULL); u = psi @ q [m]; reference DOF rows are zero.
-    retained_nodes: (nb,) region-II node ids, in column order (FULL: every node not in the
-    reference condition; MODAL: empty). n_modes: number of modal columns.
-    mode_freqs_hz: (n_modes,) frequencies [Hz] of the modes in the modal columns.
-    """
-
-    kind: BasisKind
-    psi: np.ndarray | sp.csr_matrix
-    retained_nodes: np.ndarray
-    n_modes: int
-    reference: ReferenceCondition
-    mode_freqs_hz: np.ndarray
-
-    @property
-    def nq(self) -> int:
-        """Number of generalised elastic coordinates."""
-        return int(self.psi.shape[1])
-
-    @property
-    def n_static(self) -> int:
-        """Static columns of the massless retained nodes (CRAIG_BAMPTON: between the retained
-        nodes' columns and the modal ones; 0 for the other kinds)."""
-        if self.kind is not BasisKind.CRAIG_BAMPTON:
-            return 0
-        return self.nq - 3 * self.retained_nodes.size - self.n_modes
-
-    def retained_columns(self) -> np.ndarray:
-        """Columns of psi holding the x, y, z displacement of each retained node, (nb, 3).
-
-        For FULL, a reference node's clamped components have no column and do not appear
-        (such nodes are not retained). CRAIG_BAMPTON: 0..3nb-1; SEED_BLOCK and
-        SEED_FIXED: after the modes.
-        """
-        nb = len(self.retained_nodes)
-        if self.kind is BasisKind.FULL:
-            free = self.reference.free_dofs(self.psi.shape[0])
-            dofs = 3 * self.retained_nodes[:, None] + np.arange(3)
-            return np.searchsorted(free, dofs)
-        first = self.n_modes if self.kind in (BasisKind.SEED_BLOCK, BasisKind.SEED_FIXED) else 0
-        return first + np.arange(3 * nb).reshape(nb, 3)
 
 
 def _retained(fe: FEModel, reference: ReferenceCondition, nodes) -> np.ndarray:
@@ -146,198 +78,9 @@ def _retained(fe: FEModel, reference: ReferenceCondition, nodes) -> np.ndarray:
     return ids
 
 
-def _node_dofs(nodes: np.ndarray) -> np.ndarray:
-    """DOF ids 3k + d, node-major in the given node order, (3 len(nodes),)."""
-    return (3 * nodes[:, None] + np.arange(3)).ravel()
-
-
-def _full(fe: FEModel, reference: ReferenceCondition) -> Basis:
-    free = reference.free_dofs(fe.n_dof)
-    psi = sp.csr_matrix(
-        (np.ones(free.size), (free, np.arange(free.size))), shape=(fe.n_dof, free.size)
-    )
-    nodes = np.setdiff1d(np.arange(fe.mesh.n_nodes), reference.nodes)
-    return Basis(BasisKind.FULL, psi, nodes, 0, reference, np.zeros(0))
-
-
-def _craig_bampton(
-    fe: FEModel,
-    reference: ReferenceCondition,
-    nodes: np.ndarray,
-    n_modes: int,
-    statics_kind: MasslessStatics = MasslessStatics.PATCH,
-) -> Basis:
-    """Craig-Bampton (1968): constraint modes -K_ii^-1 K_ib and fixed-interface modes; the
-    constraint modes of massless retained nodes split (module doc, ``statics_kind``).
-
-    b = the retained nodes' DOFs, i = the other DOFs not in the reference condition.
-    K_ii is factored once (fe.modes.spd_solver) and that factor serves the constraint modes
-    (all columns in one solve) and, as OPinv of the shift-invert eigen solve about
-    sigma = 0, the fixed-interface modes.
-    """
-    b = _node_dofs(nodes)
-    interior = np.setdiff1d(reference.free_dofs(fe.n_dof), b)
-    k_rows = fe.K[interior]
-    k_ii, k_ib = k_rows[:, interior], k_rows[:, b]
-    with solver_pool() as pool:
-        solve = spd_solver(k_ii, pool)
-        statics = -solve(k_ib.toarray())
-        modes, freqs = _fixed_interface_modes(fe, interior, k_ii, solve, n_modes)
-    massless = np.flatnonzero(_massless(fe, nodes))
-    split = _node_dofs(massless)  # columns of massless nodes
-    fields = statics[:, split]
-    if statics_kind is MasslessStatics.PATCH and massless.size:
-        fields = fields @ massless_patterns(fe.mesh.nodes[nodes[massless]])
-    extra = _static_columns(fe, interior, fields)
-    statics[:, split] = 0.0
-    psi = np.zeros((fe.n_dof, b.size + extra.shape[1] + n_modes))
-    psi[b, np.arange(b.size)] = 1.0
-    psi[interior, : b.size] = statics
-    psi[interior, b.size : b.size + extra.shape[1]] = extra
-    psi[interior, b.size + extra.shape[1] :] = modes
-    return Basis(BasisKind.CRAIG_BAMPTON, psi, nodes, n_modes, reference, freqs)
-
-
-def _massless(fe: FEModel, nodes: np.ndarray) -> np.ndarray:
-    """(len(nodes),) bool: the nodes whose rows of the scalar mass matrix are zero."""
-    m = sp.csr_matrix(fe.M_scalar)
-    return np.asarray(abs(m).sum(axis=1)).ravel()[nodes] == 0.0
-
-
-#: massless_patterns: axisymmetric normal displacements rho^0, rho^2, rho^4, rho^6 (a Hertz
-#: patch and its growth), radial rho and rho^3 (Poisson's expansion of the face).
-PATCH_NORMAL_POWERS = (0, 2, 4, 6)
-PATCH_RADIAL_POWERS = (1, 3)
-
-
-def massless_patterns(X: np.ndarray) -> np.ndarray:
-    """(3 n, 11) smooth displacement patterns of the n nodes X (n, 3) (DOFs node-major, as
-    _node_dofs): about their centroid, with n the principal axis of least spread (the normal
-    of a face or cap) and t1, t2 the others, rho the in-plane distance over its largest value
-    and phi its angle: along n, rho^k for k in PATCH_NORMAL_POWERS and the tilts rho cos phi,
-    rho sin phi; in the plane, rho^k e_rho for k in PATCH_RADIAL_POWERS, the slides t1, t2 and
-    the twist rho e_phi. A contact patch on the nodes, axial (the seed case) or oblique,
-    deforms them along these; their interior static fields span the massless nodes' static
-    columns in MasslessStatics.PATCH. Patterns that vanish on the nodes (one node: all but the
-    normal and the slides) give columns of no mass, dropped by _static_columns."""
-    X = np.asarray(X, dtype=float)
-    d = X - X.mean(axis=0)
-    _, vecs = np.linalg.eigh(d.T @ d)
-    n, t1, t2 = vecs[:, 0], vecs[:, 1], vecs[:, 2]
-    s1, s2 = d @ t1, d @ t2
-    rho = np.hypot(s1, s2)
-    top = rho.max()
-    rho, c, s = (
-        (rho / top, s1 / top, s2 / top)
-        if top > 0
-        else (rho, np.zeros_like(rho), np.zeros_like(rho))
-    )
-    e_rho = np.outer(c, t1) + np.outer(s, t2)  # rho e_rho
-    e_phi = np.outer(-s, t1) + np.outer(c, t2)  # rho e_phi
-    fields = [np.outer(rho**k, n) for k in PATCH_NORMAL_POWERS]
-    fields += [np.outer(c, n), np.outer(s, n)]
-    fields += [e_rho * rho[:, None] ** (k - 1) for k in PATCH_RADIAL_POWERS]
-    fields += [np.tile(t1, (len(X), 1)), np.tile(t2, (len(X), 1)), e_phi]
-    return np.column_stack([f.ravel() for f in fields])
-
-
-def _static_columns(fe: FEModel, interior: np.ndarray, fields: np.ndarray) -> np.ndarray:
-    """An M-orthonormal basis (interior rows) of the span of ``fields``, the interior static
-    fields of the massless retained nodes; directions of relative mass below 1e-12 of the
-    largest are dropped (a node whose neighbours are all retained has a zero field)."""
-    if not fields.shape[1]:
-        return fields
-    gram = fields.T @ (fe.M[interior][:, interior] @ fields)
-    w, v = np.linalg.eigh(0.5 * (gram + gram.T))
-    keep = w > 1e-12 * max(w.max(), 0.0)
-    return fields @ (v[:, keep] / np.sqrt(w[keep]))
-
-
-def _fixed_interface_modes(
-    fe: FEModel, interior: np.ndarray, k_ii, solve, n_modes: int
-) -> tuple[np.ndarray, np.ndarray]:
-    """First n_modes modes of the interior DOFs with all others held: (phi (len(interior),
-    n_modes) M-normalised, frequencies (n_modes,) [Hz]); shift-invert about 0 with `solve`,
-    the factor of k_ii. n_modes = 0 gives empty arrays."""
-    if not n_modes:
-        return np.zeros((interior.size, 0)), np.zeros(0)
-    m_ii = fe.M[interior][:, interior]
-    lam, phi = shift_invert_modes(m_ii, k_ii, n_modes, 0.0, solve=solve)
-    return phi, to_hz(lam)
-
-
-def _seed_block(
-    fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray, n_modes: int
-) -> Basis:
-    """Seed eq. (4): T = diag(Psi_I, I_II).
-
-    Choice made here: Psi_I = the first n_modes modes of the whole body supported by the
-    reference condition, with their region-II rows set to zero (restricted to region I);
-    region-II DOFs keep their nodal coordinates. Columns: the modes, then the retained
-    nodes' x, y, z.
-    """
-    b = _node_dofs(nodes)
-    psi = np.zeros((fe.n_dof, n_modes + b.size))
-    freqs = np.zeros(0)
-    if n_modes:
-        freqs, phi = constrained_modes(fe.M, fe.K, reference.fixed_dofs, n_modes)
-        phi[b] = 0.0
-        psi[:, :n_modes] = phi
-    psi[b, n_modes + np.arange(b.size)] = 1.0
-    return Basis(BasisKind.SEED_BLOCK, psi, nodes, n_modes, reference, freqs)
-
-
-def _seed_fixed(
-    fe: FEModel, reference: ReferenceCondition, nodes: np.ndarray, n_modes: int
-) -> Basis:
-    """Seed eq. (4), T = diag(Psi_I, I_II), the other reading: Psi_I = the first n_modes
-    modes of region I with the region-II DOFs (and the reference DOFs) held, i.e. the
-    fixed-interface modes of Craig-Bampton without its static constraint modes. A region-II
-    node moving alone leaves its region-I neighbours in place (the modes vanish at it).
-    Columns: the modes, then the retained nodes' x, y, z (as SEED_BLOCK).
-    """
-    b = _node_dofs(nodes)
-    interior = np.setdiff1d(reference.free_dofs(fe.n_dof), b)
-    psi = np.zeros((fe.n_dof, n_modes + b.size))
-    freqs = np.zeros(0)
-    if n_modes:
-        k_ii = fe.K[interior][:, interior]
-        with solver_pool() as pool:
-            psi[interior, :n_modes], freqs = _fixed_interface_modes(
-                fe, interior, k_ii, spd_solver(k_ii, pool), n_modes
-            )
-    psi[b, n_modes + np.arange(b.size)] = 1.0
-    return Basis(BasisKind.SEED_FIXED, psi, nodes, n_modes, reference, freqs)
-
-
-def _modal(fe: FEModel, reference: ReferenceCondition, n_modes: int) -> Basis:
-    freqs, phi = constrained_modes(fe.M, fe.K, reference.fixed_dofs, n_modes)
-    return Basis(BasisKind.MODAL, phi, np.zeros(0, dtype=np.int64), n_modes, reference, freqs)
-
-
-def _interface(
-    fe: FEModel,
-    reference: ReferenceCondition,
-    spec: InterfaceSpec | None,
-    n_modes: int,
-    sources: InterfaceSources | None,
-) -> Basis:
-    if not isinstance(spec, InterfaceSpec):
-        raise InputError(f"an interface basis needs an InterfaceSpec, got {spec!r}")
-    cols = interface_columns(fe, reference, spec, n_modes, sources)
-    return Basis(
-        BasisKind.INTERFACE,
-        cols.psi,
-        np.zeros(0, dtype=np.int64),
-        n_modes,
-        reference,
-        cols.mode_freqs_hz,
-    )
-
-
 def build_basis(
     fe: FEModel,
-    kind: BasisKind,
+    kind: ModelKind,
     reference: ReferenceCondition,
     retained_nodes=(),
     n_modes: int = 0,
@@ -345,7 +88,8 @@ def build_basis(
     sources: InterfaceSources | None = None,
     massless_statics: MasslessStatics = MasslessStatics.PATCH,
 ) -> Basis:
-    """Build the basis ``kind`` of body ``fe`` (see the module table).
+    """Build the basis ``kind`` of body ``fe`` (see the module table): the kind's own builder
+    (reduction/kinds/, kind_spec(kind).build_basis).
 
     retained_nodes: region-II node ids (CRAIG_BAMPTON, SEED_BLOCK, SEED_FIXED: at least one;
     FULL, MODAL and INTERFACE: none); n_modes: modal columns (MODAL: >= 1; FULL: 0);
@@ -363,34 +107,24 @@ def build_basis(
     if reference.fixed_dofs.max() >= fe.n_dof:
         raise InputError(f"reference DOFs {reference.fixed_dofs.tolist()} exceed {fe.n_dof} DOFs")
     nodes = _retained(fe, reference, retained_nodes)
-    if kind in (BasisKind.FULL, BasisKind.MODAL, BasisKind.INTERFACE) and nodes.size:
+    spec = kind_spec(kind)
+    if not spec.retains_nodes and nodes.size:
         raise InputError(f"a {kind.value} basis takes no retained nodes, got {nodes.size}")
-    if (
-        kind in (BasisKind.CRAIG_BAMPTON, BasisKind.SEED_BLOCK, BasisKind.SEED_FIXED)
-        and not nodes.size
-    ):
+    if spec.retains_nodes and not nodes.size:
         raise InputError(f"a {kind.value} basis needs at least one retained node, got none")
-    if kind is BasisKind.FULL:
-        if n_modes:
-            raise InputError(f"a full basis takes no modes, got n_modes={n_modes}")
-        return _full(fe, reference)
-    if kind is BasisKind.MODAL and n_modes < 1:
-        raise InputError("a modal basis needs n_modes >= 1, got 0")
-    # One BLAS thread: SuperLU's many-right-hand-side solve calls BLAS once per supernode;
-    # threaded OpenBLAS there is no faster on idle cores and ~10x slower when other jobs share
-    # them (docs/notes/2026-11-27-comment-measurements.md).
-    with threadpool_limits(limits=1, user_api="blas"):
-        if kind is BasisKind.MODAL:
-            return _modal(fe, reference, int(n_modes))
-        if kind is BasisKind.INTERFACE:
-            return _interface(fe, reference, interface, int(n_modes), sources)
-        if kind is BasisKind.CRAIG_BAMPTON:
-            return _craig_bampton(
-                fe, reference, nodes, int(n_modes), MasslessStatics(massless_statics)
-            )
-        if kind is BasisKind.SEED_FIXED:
-            return _seed_fixed(fe, reference, nodes, int(n_modes))
-        return _seed_block(fe, reference, nodes, int(n_modes))
+    request = BasisRequest(
+        fe, reference, nodes, int(n_modes), interface, sources, MasslessStatics(massless_statics)
+    )
+    if spec.nodal:  # a sparse selection of DOFs: no BLAS
+        basis = spec.build_basis(request)
+    else:
+        # One BLAS thread: SuperLU's many-right-hand-side solve calls BLAS once per
+        # supernode; threaded OpenBLAS there is no faster on idle cores and ~10x slower when
+        # other jobs share them (docs/notes/2026-11-27-comment-measurements.md).
+        with threadpool_limits(limits=1, user_api="blas"):
+            basis = spec.build_basis(request)
+    # a kind that reuses another's builder (a registered variant) names its own bases
+    return basis if basis.kind is kind else dataclasses.replace(basis, kind=kind)
 
 
 def reduced_matrices(
@@ -414,4 +148,11 @@ def reduced_matrices(
     return 0.5 * (m + m.T), 0.5 * (k + k.T)
 
 
-__all__ = ["Basis", "BasisKind", "build_basis", "reduced_matrices"]
+__all__ = [
+    "Basis",
+    "BasisKind",
+    "MasslessStatics",
+    "build_basis",
+    "massless_patterns",
+    "reduced_matrices",
+]

@@ -242,11 +242,11 @@ class ModelConfig(Frozen):
             raise problem(f"kind {kind!r} needs selection = 'i-j' or a region", "selection")
         if self.kind.uses_modes and self.modes < 1:
             raise problem(f"must be >= 1 for kind {kind!r}, got {self.modes}", "modes")
-        if self.kind is ModelKind.INTERFACE:
+        if self.kind.spec.uses_patches:
             radii = self.patch_radii_m
             if self.modes + len(radii) < 1:
                 raise problem(
-                    "kind 'interface' needs modes >= 1 or at least one patch radius",
+                    f"kind {kind!r} needs modes >= 1 or at least one patch radius",
                     "patch_radii_m",
                 )
             if len(set(radii)) != len(radii):
@@ -268,10 +268,10 @@ class ModelConfig(Frozen):
     @property
     def label(self) -> str:
         """Short description: 'full', 'rigid', 'modal 20', 'mvm 1-3 + 25', 'mvm-seed 1-1 + 37'."""
-        if self.kind is ModelKind.INTERFACE:
+        if self.kind.spec.uses_patches:
             radii = ", ".join(f"{1e3 * a:g}" for a in self.patch_radii_m)
             patch = f" patch [{radii}] mm" if radii else ""
-            return f"interface{patch} + {self.modes} {ModeChoice(self.mode_choice).value}"
+            return f"{self.kind.value}{patch} + {self.modes} {ModeChoice(self.mode_choice).value}"
         if not self.kind.uses_modes:
             return self.kind.value
         if not self.kind.retains_nodes:
@@ -414,14 +414,14 @@ class BodyConfig(Frozen):
             if region is not None and region.node_set is not None:
                 check_rod_set(region.node_set, ROD_NODE_SETS, "model.region.node_set")
             check_rod_set(self.model.reference, ROD_NODE_SETS, "model.reference")
-            if self.model.kind is ModelKind.INTERFACE:
+            if self.model.kind.spec.uses_patches:
                 check_rod_set(self.model.patch_surface, ROD_FACET_SETS, "model.patch_surface")
         kind = self.model.kind
-        if self.damping is not None and kind is ModelKind.RIGID:
+        if self.damping is not None and not kind.spec.has_basis:
             raise problem("a rigid body has no elastic coordinates to damp", "damping")
-        if self.damping is not None and self.damping.is_modal and kind is ModelKind.FULL:
+        if self.damping is not None and self.damping.is_modal and not kind.spec.reads_modes:
             raise problem(
-                "modal ratios need a reduced body (kind full has no modes): give "
+                f"modal ratios need a reduced body (kind {kind.value} has no modes): give "
                 "alpha_per_s/beta_s or rayleigh_ratios",
                 "damping.modal_ratios",
             )

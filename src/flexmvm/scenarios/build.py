@@ -33,6 +33,7 @@ from flexmvm.materials import Material
 from flexmvm.mesh.mesh import Mesh
 from flexmvm.mesh.rod import RodMesh
 from flexmvm.reduction.interface import Patch, contact_patch, patch_nodes
+from flexmvm.reduction.kinds import kind_spec
 from flexmvm.scenarios.body_reference import reference_label
 from flexmvm.scenarios.cache_keys import ContactMass, mesh_key
 from flexmvm.scenarios.cost import check_cost, reduced_cost
@@ -112,47 +113,53 @@ def build_body(
     rod = setup.rod_mesh(key) if cfg.rod is not None else None
     mesh = setup.mesh(key)
     kind = cfg.model.kind
-    if kind.basis is None:
+    spec = kind_spec(kind)
+    if not spec.has_basis:
         body = rigid_body_from_fe(cfg.name, setup.fe_model(key, material))
         return body, BodyInfo(cfg.name, kind, mesh, material, 6, 0, 0, rod)
     retained: tuple = ()
-    if kind.retains_nodes:
+    if spec.retains_nodes:
         retained = tuple(int(i) for i in retained_nodes(cfg.model, mesh, rod, f"{where}.model"))
     ref_set = clamp_label(cfg, mesh, supports, retained) or reference_label(
         cfg.model.reference, mesh, surfaces, f"{where}.model.reference"
     )
-    modes = cfg.model.modes if kind.uses_modes or kind is ModelKind.INTERFACE else 0
-    interface = cfg.model.interface_spec() if kind is ModelKind.INTERFACE else None
-    if (
-        massless is not None
-        and massless.size
-        and kind.basis is not None
-        and (kind is ModelKind.FULL or kind.retains_nodes)
-    ):
-        nodes = massless if kind is ModelKind.FULL else np.intersect1d(massless, retained)
+    modes = cfg.model.modes if spec.reads_modes else 0
+    interface = cfg.model.interface_spec() if spec.uses_patches else None
+    if massless is not None and massless.size and (spec.nodal or spec.retains_nodes):
+        nodes = massless if spec.nodal else np.intersect1d(massless, retained)
         if nodes.size:
             key = ContactMass(key, tuple(int(i) for i in nodes))
-    if kind.retains_nodes:
+    columns = spec.cost_columns(len(retained), modes)
+    if columns is not None:
         fe = setup.fe_model(mesh_key(cfg), material)
-        cost = reduced_cost(cfg.name, mesh.n_nodes, 3 * len(retained) + modes, fe.K.nnz)
+        cost = reduced_cost(cfg.name, mesh.n_nodes, columns, fe.K.nnz)
         check_cost(cost, cfg.model.allow_costly, f"{where}.model")
-    args = (key, material, kind.basis, retained, modes, ref_set, interface)
-    body = body_from_parts(
-        cfg.name, mesh, setup.basis(*args), setup.body_parts(*args), damping=cfg.damping_obj()
-    )
+    args = (key, material, kind, retained, modes, ref_set, interface)
+    body = _kind_body(spec, cfg, setup, mesh, args)
     if cfg.model.geometric_stiffening is not None:  # bodies.stiffening
         fe = setup.fe_model(mesh_key(cfg), material)
-        spec, at = cfg.model.geometric_stiffening, f"{where}.model.geometric_stiffening"
-        body = stiffened(body, spec, fe, setup.basis(*args), at)
-    n_ret = len(retained) if kind.retains_nodes else (mesh.n_nodes if kind is ModelKind.FULL else 0)
+        spec_g, at = cfg.model.geometric_stiffening, f"{where}.model.geometric_stiffening"
+        body = stiffened(body, spec_g, fe, setup.basis(*args), at)
+    n_ret = len(retained) if spec.retains_nodes else (mesh.n_nodes if spec.nodal else 0)
     covered, patch = None, None
-    if kind.retains_nodes:
+    if spec.retains_nodes:
         covered = np.array(retained, dtype=np.int64)
     elif interface is not None:
         patch = contact_patch(mesh, interface.surface, interface.centre_m)
         covered = patch_nodes(mesh, interface.surface, patch, max(interface.radii_m, default=0.0))
     return body, BodyInfo(
         cfg.name, kind, mesh, material, body.nv, n_ret, modes, rod, covered, patch
+    )
+
+
+def _kind_body(spec, cfg, setup: SetupCache, mesh: Mesh, args: tuple) -> FlexibleBody:
+    """The body of ``cfg`` on its basis (setup.basis(*args)): the kind's own body_builder
+    (name, fe, basis, damping) when it has one, else body_from_parts on the cached parts."""
+    if spec.body_builder is not None:
+        fe = setup.fe_model(mesh_key(cfg), args[1])
+        return spec.body_builder(cfg.name, fe, setup.basis(*args), damping=cfg.damping_obj())
+    return body_from_parts(
+        cfg.name, mesh, setup.basis(*args), setup.body_parts(*args), damping=cfg.damping_obj()
     )
 
 

@@ -27,7 +27,6 @@ from pathlib import Path
 
 import numpy as np
 
-from flexmvm.bodies.build import ModelKind
 from flexmvm.errors import InputError
 from flexmvm.mesh.io import read_mesh
 from flexmvm.mesh.parts import HERTZ_BLOCK_FINE_M, hertz_block_part
@@ -54,7 +53,7 @@ def hertz_reference(sc: Scenario, sphere: str = "ball", target: str = "block") -
     ball, block = sc.body(sphere), sc.body(target)
     ball_mesh, block_mesh = read_mesh(ball.mesh_file), read_mesh(block.mesh_file)
     mat_ball, mat_block = ball.material_obj(), block.material_obj()
-    if ball.model.kind is ModelKind.RIGID:
+    if not ball.model.kind.spec.has_basis:
         e_star = mat_block.E / (1.0 - mat_block.nu**2)
     else:
         e_star = effective_modulus(mat_ball.E, mat_ball.nu, mat_block.E, mat_block.nu)

@@ -144,11 +144,7 @@ def run_main_job(
     sc = sc.with_overrides(model=model, t_end_s=t_end, dt_s=dt)
     want_ref = sc.compare.full_reference if reference is None else reference
     want_theory = sc.compare.theory if theory is None else theory
-    needs_ref = (
-        want_ref
-        and model is None
-        and any(b.model.kind not in (ModelKind.FULL, ModelKind.RIGID) for b in sc.bodies)
-    )
+    needs_ref = want_ref and model is None and any(b.model.kind.reduced for b in sc.bodies)
     ref_sc = sc.with_kind(ModelKind.FULL) if needs_ref else None
     own_label = ModelKind(model).value if model is not None else "scenario"
     stopped = None
@@ -306,7 +302,7 @@ def _runs_one_after_other(out_dir, sc, ref_sc, own_label, fields, progress, want
 
 def _label(summary: dict) -> str:
     kinds = {ModelKind(k) for k in summary["model"].values()}
-    if kinds <= {ModelKind.FULL, ModelKind.RIGID}:
+    if not any(k.reduced for k in kinds):
         return "FE"
     if any(k.retains_nodes for k in kinds):
         return "MVM"

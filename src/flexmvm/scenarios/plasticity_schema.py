@@ -11,7 +11,6 @@ import numpy as np
 from annotated_types import Ge
 from pydantic import Field
 
-from flexmvm.bodies.build import ModelKind
 from flexmvm.errors import InputError
 from flexmvm.integrate.plastic_bodies import PlasticPart
 from flexmvm.plasticity.body import PlasticBody
@@ -62,11 +61,7 @@ def refuse_dynamic(scenario) -> None:
     kind that retains nodes (MVM: plastic in its retained region; interface, modal and rigid
     bodies carry the elastic stiffness only) or has redistributed contact mass."""
     plastic = [b for b in scenario.bodies if plasticity_of(b) is not None]
-    other = [
-        b.name
-        for b in plastic
-        if not (b.model.kind is ModelKind.FULL or b.model.kind.retains_nodes)
-    ]
+    other = [b.name for b in plastic if not (b.model.kind.spec.nodal or b.model.kind.retains_nodes)]
     if other:
         raise InputError(
             f"{'body' if len(other) == 1 else 'bodies'} {', '.join(repr(n) for n in other)}: "

@@ -294,7 +294,7 @@ class Scenario(Frozen):
         """A copy with every body (rigid ones kept, unless ``keep_rigid`` is False) modelled
         by ``model``."""
         names = [
-            b.name for b in self.bodies if not (keep_rigid and b.model.kind is ModelKind.RIGID)
+            b.name for b in self.bodies if not (keep_rigid and not b.model.kind.spec.has_basis)
         ]
         return self._replace_bodies(
             f"every body as {model.label}", {n: {"model": model} for n in names}
@@ -319,7 +319,7 @@ class Scenario(Frozen):
                 )
             }
             for k, b in enumerate(self.bodies)
-            if b.model.kind is not ModelKind.RIGID
+            if b.model.kind.spec.has_basis
         }
         return self._replace_bodies(what, change)
 

@@ -44,6 +44,7 @@ from flexmvm.reduction.interface import (
     participation_pool,
     relieved_statics,
 )
+from flexmvm.reduction.kinds import kind_spec
 from flexmvm.reduction.rod_reference import rod_reference
 from flexmvm.scenarios.body_reference import support
 from flexmvm.scenarios.cache_keys import (
@@ -310,7 +311,7 @@ class SetupCache:
         ``modes``, reference label; under a mode floor above ``modes`` a Craig-Bampton basis
         is cut from the floor's."""
         floor = self.mode_floor
-        if kind is not BasisKind.CRAIG_BAMPTON or modes >= floor:
+        if not kind_spec(kind).cuts_modes or modes >= floor:
             return self.caches.basis(key, material, kind, retained, modes, ref_set, interface)
         big = self.caches.basis(key, material, kind, retained, floor, ref_set)
         nb = 3 * len(big.retained_nodes) + big.n_static
@@ -334,7 +335,7 @@ class SetupCache:
         """Invariants and k_hat of the body whose basis is self.basis(same arguments); under a
         mode floor cut from the floor's parts, as the basis is cut."""
         floor = self.mode_floor
-        if kind is not BasisKind.CRAIG_BAMPTON or modes >= floor:
+        if not kind_spec(kind).cuts_modes or modes >= floor:
             return self.caches.body_parts(key, material, kind, retained, modes, ref_set, interface)
         big = self.caches.body_parts(key, material, kind, retained, floor, ref_set)
         n_static = self.caches.basis(key, material, kind, retained, floor, ref_set).n_static

@@ -10,6 +10,7 @@ from enum import StrEnum
 
 from flexmvm.bodies.build import ModelKind
 from flexmvm.constraints.joints import JointType
+from flexmvm.reduction.kinds import KINDS
 from flexmvm.scenarios.fields import ROD_NODE_SETS, Frozen, Name, SetName, check_rod_set
 from flexmvm.scenarios.problems import problem
 
@@ -20,16 +21,11 @@ class SupportType(StrEnum):
     CLAMP = "clamp"  # every DOF of a node set held and the frame fixed (a cantilever's root)
 
 
-#: model kinds that can be clamped: those whose basis is built under a reference condition
-#: (the interface kind's free-free mode pool has no clamped form; a rigid body clamped is a
-#: ground joint)
-CLAMPABLE = (
-    ModelKind.FULL,
-    ModelKind.MVM,
-    ModelKind.MVM_SEED,
-    ModelKind.MVM_SEED_FIXED,
-    ModelKind.MODAL,
-)
+def clampable() -> tuple[ModelKind, ...]:
+    """The model kinds that can be clamped (ModelKindSpec.clampable): those whose basis is
+    built under a reference condition (the interface kind's free-free mode pool has no
+    clamped form; a rigid body clamped is a ground joint)."""
+    return tuple(k for k, spec in KINDS.items() if spec.clampable)
 
 
 class SupportConfig(Frozen):
@@ -62,10 +58,10 @@ def check_supports(supports: Sequence[SupportConfig], bodies: Mapping, joints: S
         body = bodies[s.body]
         if body.rod is not None:
             check_rod_set(s.node_set, ROD_NODE_SETS, f"{key}.node_set")
-        if body.model.kind not in CLAMPABLE:
+        if not body.model.kind.spec.clampable:
             raise problem(
                 f"body {s.body!r} of kind {body.model.kind.value!r} cannot be clamped; "
-                f"expected one of {', '.join(k.value for k in CLAMPABLE)}",
+                f"expected one of {', '.join(k.value for k in clampable())}",
                 f"{key}.body",
             )
     for i, j in enumerate(joints):
@@ -89,4 +85,4 @@ def without_empty(data, key: str):
     return data
 
 
-__all__ = ["CLAMPABLE", "SupportConfig", "SupportType", "check_supports", "without_empty"]
+__all__ = ["SupportConfig", "SupportType", "check_supports", "clampable", "without_empty"]

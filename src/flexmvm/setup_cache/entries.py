@@ -18,6 +18,7 @@ from flexmvm.fe.assembly import FEModel
 from flexmvm.materials import Material
 from flexmvm.mesh.mesh import Mesh
 from flexmvm.reduction.basis import Basis, BasisKind
+from flexmvm.reduction.kinds import kind_spec
 from flexmvm.reduction.reference import ReferenceCondition
 from flexmvm.setup_cache.store import (
     BODY_SOURCES,
@@ -175,7 +176,7 @@ def _basis_from(
 ) -> Basis:
     psi = csr_from(arrays, "psi") if "psi_shape" in arrays else arrays["psi"]
     nodes, freqs = arrays["retained_nodes"], arrays["mode_freqs_hz"]
-    if kind is not BasisKind.FULL and not np.array_equal(nodes, retained):
+    if not kind_spec(kind).nodal and not np.array_equal(nodes, retained):
         raise ValueError("stored retained nodes differ")
     if freqs.shape != (n_modes,) or psi.ndim != 2:
         raise ValueError("stored basis is malformed")
@@ -366,7 +367,7 @@ def cached_body(
     columns. Only dense parts are stored: a full-FE body (sparse parts, ~0.3 s to compute, as
     long as reading them back) and source None are built, not cached.
     """
-    if source is None or kind is BasisKind.FULL:
+    if source is None or kind_spec(kind).nodal:  # sparse parts: not kept
         return build()
     key = body_key(source, material, kind, reference_set, reference, retained, n_modes, extra=extra)
     hit = decoded(key, lambda arrays: _parts_from(arrays, nq))

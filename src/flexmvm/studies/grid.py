@@ -9,8 +9,10 @@ from pathlib import Path
 
 from flexmvm.errors import InputError
 from flexmvm.integrate import DEFAULT_THETA
+from flexmvm.reduction.kinds import KINDS, kind_spec
 from flexmvm.results.atomic import file_sha256
 from flexmvm.scenarios import ModelConfig, ModelKind, Scenario, full, mvm, scenario_from_dict
+from flexmvm.scenarios.problems import validate_part
 from flexmvm.studies.runner import Case
 
 
@@ -168,17 +170,20 @@ def study_kind(kind: ModelKind | str) -> ModelKind:
 
 
 def parse_model(text: str) -> ModelConfig | None:
-    """'scenario' -> None (keep); 'full'; 'mvm:I-J:M' (Craig-Bampton, selection I-J, M modes).
-    The reference condition is the rod default (end_b). InputError (one line) otherwise."""
+    """'scenario' -> None (keep); else 'kind:args', read by the kind's study hook
+    (ModelKindSpec.study_fields): 'full'; 'mvm:I-J:M' (Craig-Bampton, selection I-J, M modes;
+    the other kinds that retain nodes likewise). The reference condition is the rod default
+    (end_b). InputError (one line) otherwise."""
     t = text.strip().lower()
     if t == "scenario":
         return None
-    if t == ModelKind.FULL.value:
-        return full()
-    bits = t.split(":")
-    if len(bits) == 3 and bits[0] == ModelKind.MVM.value and bits[2].isdigit():
+    name, *args = t.split(":")
+    fields = None
+    if name in {k.value for k in KINDS}:
+        fields = kind_spec(name).study_fields(tuple(args))
+    if fields is not None:
         try:
-            return mvm(bits[1], int(bits[2]))
+            return validate_part(ModelConfig, dict(fields), f"model {text!r}")
         except InputError:
             pass
     raise InputError(
@@ -205,9 +210,7 @@ def study_scenario(
     models = {}
     if other is not None:
         models = {
-            b.name: other
-            for b in sc.bodies
-            if b.name != body and b.model.kind is not ModelKind.RIGID
+            b.name: other for b in sc.bodies if b.name != body and b.model.kind.spec.has_basis
         }
     for name, cfg in models.items():
         sc = sc.with_model(name, cfg)

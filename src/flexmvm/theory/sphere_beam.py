@@ -32,7 +32,6 @@ from pathlib import Path
 
 import numpy as np
 
-from flexmvm.bodies.build import ModelKind
 from flexmvm.errors import InputError
 from flexmvm.theory.beam_impact import SphereOnBeam
 from flexmvm.theory.hertz import effective_modulus
@@ -235,7 +234,7 @@ def sphere_beam_case(
     apply."""
     c = _contact(sc, body)
     s_cfg, s_mesh, s_centre, radius, b_cfg, b_mesh = _bodies(sc, c)
-    if b_cfg.model.kind is ModelKind.RIGID:
+    if not b_cfg.model.kind.spec.has_basis:
         raise InputError(f"theory: the beam {b_cfg.name!r} is rigid; expected a flexible beam")
     lo, hi, axis = _beam_frame(b_cfg, b_mesh)
     pb = b_cfg.placement
@@ -249,7 +248,7 @@ def sphere_beam_case(
     mb, ms = b_cfg.material_obj(), s_cfg.material_obj()
     e_star = (
         mb.E / (1.0 - mb.nu**2)
-        if s_cfg.model.kind is ModelKind.RIGID
+        if not s_cfg.model.kind.spec.has_basis
         else effective_modulus(ms.E, ms.nu, mb.E, mb.nu)
     )
     beam = TimoshenkoBeam(
