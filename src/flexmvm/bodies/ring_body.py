@@ -1,7 +1,8 @@
-"""The floating-frame body of a ring basis (reduction/ring.py): sparse where the FE model is.
+"""The floating-frame body of kind mvm-sparse's ring basis (reduction/kinds/mvm_sparse.py):
+sparse where the FE model is.
 
 With q = [u_R, s, eta] and psi = [I on the region's DOFs; B on the exterior rows of the corner
-columns c] (reduction.ring.RingColumns), every inertia invariant of bodies/invariants.py splits
+columns c] (RingColumns), every inertia invariant of bodies/invariants.py splits
 into the region's nodal part, as sparse as M_s, and a dense block on c:
 
     G2[a][b] = Sel_a^T M_RR Sel_b + E_c D_ab E_c^T,
@@ -18,6 +19,7 @@ blocks (bodies.contraction).
 
 from __future__ import annotations
 
+import dataclasses
 import functools
 from dataclasses import dataclass
 
@@ -30,7 +32,8 @@ from flexmvm.bodies.contraction import G2Contraction
 from flexmvm.bodies.damping import Damping, reduced_damping
 from flexmvm.bodies.invariants import InertiaInvariants
 from flexmvm.fe.assembly import FEModel
-from flexmvm.reduction.ring import RingColumns
+from flexmvm.reduction.kinds import KINDS, ModelKind
+from flexmvm.reduction.kinds.mvm_sparse import RingColumns, split_ring_psi
 
 
 def _exterior_components(fe: FEModel, nodes: np.ndarray, cols: RingColumns):
@@ -210,3 +213,18 @@ def ring_body_from_parts(
         "mvm-sparse",
         corner=np.asarray(corner, dtype=np.int64),
     )
+
+
+def ring_body(name: str, fe: FEModel, basis, *, damping: Damping | None = None) -> RingBody:
+    """The body of a ring basis of ``fe`` (kind mvm-sparse's body_builder): its corner read
+    back from psi (split_ring_psi), its parts (ring_parts), the body."""
+    nodes = np.asarray(basis.retained_nodes, dtype=np.int64)
+    cols = split_ring_psi(fe, basis.reference, basis.psi, nodes)
+    parts = ring_parts(fe, nodes, cols, basis.nq)
+    return ring_body_from_parts(name, fe.mesh, basis, parts, cols.corner, damping=damping)
+
+
+# kind mvm-sparse is registered by the reduction stage, which cannot name this stage's body:
+# its builder is attached here, on the first import of any module of bodies/ (bodies/__init__)
+_KIND = ModelKind("mvm-sparse")
+KINDS[_KIND] = dataclasses.replace(KINDS[_KIND], body_builder=ring_body)

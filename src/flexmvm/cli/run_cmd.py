@@ -8,7 +8,7 @@ import click
 
 # the values of flexmvm.bodies.build.ModelKind, spelled out so that `--help` does not import
 # the numerical stages (tests/test_cli.py checks they agree)
-MODELS = ["full", "mvm", "mvm-seed", "mvm-seed-fixed", "modal", "interface", "rigid"]
+MODELS = ["full", "mvm", "mvm-seed", "mvm-seed-fixed", "modal", "interface", "rigid", "mvm-sparse"]
 
 
 @click.command("run")

@@ -72,7 +72,7 @@ def parse_point(text: str, name: str) -> list[float]:
 )
 @click.option(
     "--kind",
-    type=click.Choice(["mvm", "mvm-seed", "mvm-seed-fixed"]),
+    type=click.Choice(["mvm", "mvm-sparse", "mvm-seed", "mvm-seed-fixed"]),
     default="mvm",
     show_default=True,
     help="Model of the candidates: Craig-Bampton (mvm) or the seed's eq. (4) readings.",

@@ -5,7 +5,16 @@ A new kind is one new module here holding its spec object ``SPEC`` (a KindSpec s
 name, properties, basis builder and hooks) and one line below registering it; nothing else
 names it (docs/architecture.md, "Where a change goes")."""
 
-from flexmvm.reduction.kinds import full, interface, modal, mvm, mvm_seed, mvm_seed_fixed, rigid
+from flexmvm.reduction.kinds import (
+    full,
+    interface,
+    modal,
+    mvm,
+    mvm_seed,
+    mvm_seed_fixed,
+    mvm_sparse,
+    rigid,
+)
 from flexmvm.reduction.kinds.registry import (
     KINDS,
     ModelKind,
@@ -17,6 +26,7 @@ from flexmvm.reduction.kinds.spec import Basis, BasisRequest, KindSpec, ModelKin
 
 register_kind(full.SPEC)
 register_kind(mvm.SPEC)
+register_kind(mvm_sparse.SPEC)
 register_kind(mvm_seed.SPEC)
 register_kind(mvm_seed_fixed.SPEC)
 register_kind(modal.SPEC)

@@ -74,12 +74,12 @@ def craig_bampton(
         solve = spd_solver(k_ii, pool)
         statics = -solve(k_ib.toarray())
         modes, freqs = fixed_interface_modes(fe, interior, k_ii, solve, n_modes)
-    massless = np.flatnonzero(_massless(fe, nodes))
+    massless = np.flatnonzero(massless_mask(fe, nodes))
     split = node_dofs(massless)  # columns of massless nodes
     fields = statics[:, split]
     if statics_kind is MasslessStatics.PATCH and massless.size:
         fields = fields @ massless_patterns(fe.mesh.nodes[nodes[massless]])
-    extra = _static_columns(fe, interior, fields)
+    extra = static_columns(fe, interior, fields)
     statics[:, split] = 0.0
     psi = np.zeros((fe.n_dof, b.size + extra.shape[1] + n_modes))
     psi[b, np.arange(b.size)] = 1.0
@@ -89,7 +89,7 @@ def craig_bampton(
     return Basis(ModelKind.MVM, psi, nodes, n_modes, reference, freqs)
 
 
-def _massless(fe: FEModel, nodes: np.ndarray) -> np.ndarray:
+def massless_mask(fe: FEModel, nodes: np.ndarray) -> np.ndarray:
     """(len(nodes),) bool: the nodes whose rows of the scalar mass matrix are zero."""
     m = sp.csr_matrix(fe.M_scalar)
     return np.asarray(abs(m).sum(axis=1)).ravel()[nodes] == 0.0
@@ -110,7 +110,7 @@ def massless_patterns(X: np.ndarray) -> np.ndarray:
     the twist rho e_phi. A contact patch on the nodes, axial (the seed case) or oblique,
     deforms them along these; their interior static fields span the massless nodes' static
     columns in MasslessStatics.PATCH. Patterns that vanish on the nodes (one node: all but the
-    normal and the slides) give columns of no mass, dropped by _static_columns."""
+    normal and the slides) give columns of no mass, dropped by static_columns."""
     X = np.asarray(X, dtype=float)
     d = X - X.mean(axis=0)
     _, vecs = np.linalg.eigh(d.T @ d)
@@ -132,7 +132,7 @@ def massless_patterns(X: np.ndarray) -> np.ndarray:
     return np.column_stack([f.ravel() for f in fields])
 
 
-def _static_columns(fe: FEModel, interior: np.ndarray, fields: np.ndarray) -> np.ndarray:
+def static_columns(fe: FEModel, interior: np.ndarray, fields: np.ndarray) -> np.ndarray:
     """An M-orthonormal basis (interior rows) of the span of ``fields``, the interior static
     fields of the massless retained nodes; directions of relative mass below 1e-12 of the
     largest are dropped (a node whose neighbours are all retained has a zero field)."""

@@ -1,5 +1,6 @@
-"""Craig-Bampton with the ring as its only boundary: the basis of a reduced body that stays
-sparse where its FE model is (DESIGN.md, "A reduced body that pays").
+"""The sparse reduced body (kind ``mvm-sparse``): Craig-Bampton with the region's ring as its
+only boundary, a reduced body that stays sparse where its FE model is (DESIGN.md, "A reduced
+body that pays"); its body is built by bodies/ring_body.py.
 
 Split the nodes into the retained region R (kept nodal), its ring Gamma (the region's nodes
 that share an element with the rest) and the exterior E (the free DOFs of the other nodes).
@@ -10,8 +11,8 @@ Craig-Bampton basis of R (Craig and Bampton 1968) is
     Phi_E,Gamma = -K_EE^-1 K_E,Gamma   (static constraint modes: one per RING DOF)
 
 with the fixed-interface modes Phi_E of E and, for massless retained nodes, their static
-columns S_E (reduction/basis.py, MasslessStatics). The constraint mode of a region DOF off the
-ring is exactly zero on E, so this is the CRAIG_BAMPTON basis of reduction/basis.py column by
+columns S_E (MasslessStatics). The constraint mode of a region DOF off the
+ring is exactly zero on E, so this is kind mvm's basis (reduction/kinds/mvm.py) column by
 column (same coordinates q = [u_R, s, eta], same span): only its storage differs. Psi is kept
 as a csr matrix whose dense part is the E rows of the corner columns, c = [the ring's DOFs,
 s, eta] (n_c = 3 n_Gamma + n_s + n_eta): it grows with the region's surface, not its volume.
@@ -29,15 +30,61 @@ from threadpoolctl import threadpool_limits
 
 from flexmvm.fe.assembly import FEModel
 from flexmvm.fe.modes import solver_pool, spd_solver
-from flexmvm.reduction.basis import (
-    MasslessStatics,
-    _fixed_interface_modes,
-    _massless,
-    _node_dofs,
-    _static_columns,
+from flexmvm.reduction.kinds.mvm import (
+    fixed_interface_modes,
+    massless_mask,
     massless_patterns,
+    node_dofs,
+    static_columns,
 )
+from flexmvm.reduction.kinds.registry import ModelKind
+from flexmvm.reduction.kinds.spec import Basis, BasisRequest, MasslessStatics, NodesAndModes
 from flexmvm.reduction.reference import ReferenceCondition
+
+
+@dataclass(frozen=True)
+class RingCraigBampton(NodesAndModes):
+    """Columns as kind mvm (the retained nodes' x, y, z, the massless nodes' static columns,
+    the modes), psi csr. Its body: bodies/ring_body.py attaches the builder (body_builder) when
+    the bodies stage is imported; without it the generic sparse path would build a correct,
+    slower body."""
+
+    name: str = "mvm-sparse"
+
+    def build_basis(self, request: BasisRequest) -> Basis:
+        return ring_basis(
+            request.fe,
+            request.reference,
+            request.nodes,
+            request.n_modes,
+            MasslessStatics(request.massless_statics),
+        )
+
+    def n_static(self, basis: Basis) -> int:
+        return basis.nq - 3 * basis.retained_nodes.size - basis.n_modes
+
+    def cost_columns(self, n_retained: int, n_modes: int) -> int | None:
+        # not costed by the dense estimate (scenarios/cost.py: 8 nq^2 + 3 n nq numbers): its
+        # dense part is the corner, which the region's node count does not give
+        return None
+
+
+SPEC = RingCraigBampton()
+
+
+def ring_basis(
+    fe: FEModel,
+    reference: ReferenceCondition,
+    nodes: np.ndarray,
+    n_modes: int,
+    statics_kind: MasslessStatics = MasslessStatics.PATCH,
+) -> Basis:
+    """The ring basis of retained ``nodes`` (validated ids) with ``n_modes`` fixed-interface
+    modes: psi (n_dof, 3 nb + n_static + n_modes) csr (ring_psi)."""
+    cols, n_s, freqs = ring_columns(fe, reference, nodes, n_modes, statics_kind)
+    nq = 3 * nodes.size + n_s + n_modes
+    psi = ring_psi(fe.n_dof, nodes, cols, nq)
+    return Basis(ModelKind("mvm-sparse"), psi, nodes, n_modes, reference, freqs)
 
 
 @dataclass(frozen=True)
@@ -78,10 +125,10 @@ def ring_columns(
     """The corner columns of the ring basis of retained ``nodes`` (validated ids) with
     ``n_modes`` fixed-interface modes: (RingColumns, number of static columns of the massless
     nodes, mode frequencies [Hz]). K_EE is factored once (fe.modes.spd_solver)."""
-    b = _node_dofs(nodes)
+    b = node_dofs(nodes)
     interior = np.setdiff1d(reference.free_dofs(fe.n_dof), b)
     ring = ring_positions(fe, interior, b)
-    ring_cols = _node_dofs(ring)  # q columns 3 pos + d of the ring nodes
+    ring_cols = node_dofs(ring)  # q columns 3 pos + d of the ring nodes
     k_rows = fe.K[interior]
     k_ii = k_rows[:, interior]
     # one BLAS thread, as reduction.basis.build_basis: the many-right-hand-side solve calls
@@ -89,16 +136,16 @@ def ring_columns(
     with threadpool_limits(limits=1, user_api="blas"), solver_pool() as pool:
         solve = spd_solver(k_ii, pool)
         statics = -np.asarray(solve(k_rows[:, b[ring_cols]].toarray()))
-        modes, freqs = _fixed_interface_modes(fe, interior, k_ii, solve, n_modes)
-    massless = np.flatnonzero(_massless(fe, nodes))
-    split = _node_dofs(massless)
+        modes, freqs = fixed_interface_modes(fe, interior, k_ii, solve, n_modes)
+    massless = np.flatnonzero(massless_mask(fe, nodes))
+    split = node_dofs(massless)
     on_ring = np.isin(split, ring_cols)
     at = np.searchsorted(ring_cols, split[on_ring])
     fields = np.zeros((interior.size, split.size))
     fields[:, on_ring] = statics[:, at]
     if statics_kind is MasslessStatics.PATCH and massless.size:
         fields = fields @ massless_patterns(fe.mesh.nodes[nodes[massless]])
-    extra = _static_columns(fe, interior, fields)
+    extra = static_columns(fe, interior, fields)
     statics[:, at] = 0.0  # a massless node's column: its unit vector alone
     nb = b.size
     n_s = extra.shape[1]
@@ -113,7 +160,7 @@ def ring_columns(
 def ring_psi(n_dof: int, nodes: np.ndarray, cols: RingColumns, nq: int) -> sp.csr_matrix:
     """The basis (n_dof, nq) as csr: a 1.0 at (3 k_j + d, 3 j + d) for retained node k_j, the
     rows of B at the exterior DOFs (their nonzero entries), nothing at the reference DOFs."""
-    b = _node_dofs(nodes)
+    b = node_dofs(nodes)
     Bc = sp.csr_matrix(cols.B)
     counts = np.zeros(n_dof, dtype=np.int64)
     counts[b] = 1
@@ -138,9 +185,9 @@ def split_ring_psi(
     and the reference condition it was built on: the ring from K's pattern (as ring_columns,
     massless ring nodes included: their columns are unit vectors but K couples them to E),
     the exterior rows of the corner columns read from psi."""
-    b = _node_dofs(nodes)
+    b = node_dofs(nodes)
     interior = np.setdiff1d(reference.free_dofs(fe.n_dof), b)
     ring = ring_positions(fe, interior, b)
-    corner = np.concatenate([_node_dofs(ring), np.arange(b.size, psi.shape[1])]).astype(np.int64)
+    corner = np.concatenate([node_dofs(ring), np.arange(b.size, psi.shape[1])]).astype(np.int64)
     B = np.asarray(sp.csr_matrix(psi)[interior][:, corner].toarray())
     return RingColumns(interior, corner, B, ring)
