@@ -83,8 +83,8 @@ def _member(name: str, value: str) -> ModelKind:
 
 def register_kind(spec: ModelKindSpec) -> ModelKind:
     """Register ``spec`` under its name (``spec.name``, the scenario file's ``model.kind``)
-    and return its ModelKind, made for a name not in ModelKind yet (member name: the name in
-    upper case, '-' as '_'). InputError for a name already registered."""
+    and return its ModelKind, made for a name not in ModelKind yet (its member name: the
+    name in upper case, dashes as underscores). InputError for a name already registered."""
     name = spec.name
     if not isinstance(name, str) or not name or name != name.strip().lower():
         raise InputError(f"model kind name {name!r}; expected a lower-case string")
