@@ -171,7 +171,9 @@ def test_duplicated_cell_in_another_order_refused(tmp_path):
     pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
     path = tmp_path / "two.vtu"
     meshio.write(path, meshio.Mesh(pts, [("tetra", np.array([[0, 1, 2, 3], [1, 2, 0, 3]]))]))
-    with pytest.raises(MeshError, match="elements 1 and 2 have the same nodes in a different order"):
+    with pytest.raises(
+        MeshError, match="elements 1 and 2 have the same nodes in a different order"
+    ):
         read_mesh(path)
 
 
