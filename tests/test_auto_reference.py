@@ -73,11 +73,11 @@ def test_reference_defaults_by_geometry(tmp_path):
 
 def test_unknown_contact_surface_of_auto_reference_is_one_line():
     """An automatic reference needs its body's contact surfaces: a contact on a surface the
-    mesh lacks is one InputError line naming the body's key and the known surfaces."""
+    mesh lacks is one InputError line naming the contact's key and the known surfaces."""
     sc = scenario_from_dict(_beam_scenario("nowhere"), source="s", base_dir=SCENARIOS)
     with pytest.raises(
         InputError,
-        match=r"bodies\[beam\]\.model\.reference: unknown surface "
+        match=r"contacts\[0\]\.slave = 'beam\.nowhere': body 'beam': unknown surface "
         r"'nowhere'; known: .*mid_top",
     ) as info:
         build_scenario(sc)

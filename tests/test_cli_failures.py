@@ -163,7 +163,7 @@ def test_duplicated_mesh_cell(tmp_path):
     scenario = _bad_connectivity_scenario(tmp_path, duplicate=True)
     before = sorted(x.name for x in tmp_path.iterdir())
     p = _flexmvm("run", scenario, "--out", tmp_path / "out", *RUN_FAST)
-    _one_line(p.stderr, 2, p.returncode, "bad.vtu", "hexahedron27 cell 3 is written 2 times")
+    _one_line(p.stderr, 2, p.returncode, "bad.vtu", "hexahedron27 element 4 is written 2 times")
     assert sorted(x.name for x in tmp_path.iterdir()) == before
 
 

@@ -132,7 +132,7 @@ def test_unused_nodes_dropped_and_inverted_cell_rejected(tmp_path):
     assert mesh.cells[0].connectivity.tolist() == [[0, 1, 2, 3]]
     assert mesh.node_set("apex").tolist() == [3]
     meshio.write(path, meshio.Mesh(pts[1:], [("tetra", np.array([[0, 2, 1, 3]]))]))
-    with pytest.raises(MeshError, match="tetra cell 0 is inverted"):
+    with pytest.raises(MeshError, match="tetra element 1 .*is inverted"):
         read_mesh(path)
 
 
@@ -156,8 +156,8 @@ def test_duplicated_cell_refused(tmp_path):
     meshio.write(path, meshio.Mesh(mesh.nodes, [("hexahedron27", np.vstack([conn, conn[3:4]]))]))
     with pytest.raises(
         MeshError,
-        match=r"target.vtu.*hexahedron27 cell 3 is written 2 times "
-        r"\(also cell \d+; no physical group\)",
+        match=r"target.vtu.*hexahedron27 element 4 is written 2 times "
+        r"\(also element \d+; no physical group;",
     ) as info:
         read_mesh(path)
     assert "\n" not in str(info.value)
@@ -171,7 +171,9 @@ def test_duplicated_cell_in_another_order_refused(tmp_path):
     pts = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
     path = tmp_path / "two.vtu"
     meshio.write(path, meshio.Mesh(pts, [("tetra", np.array([[0, 1, 2, 3], [1, 2, 0, 3]]))]))
-    with pytest.raises(MeshError, match="cells 0 and 1 have the same nodes in a different order"):
+    with pytest.raises(
+        MeshError, match="elements 1 and 2 have the same nodes in a different order"
+    ):
         read_mesh(path)
 
 
@@ -183,7 +185,7 @@ def test_folded_cells_refused(tmp_path):
     )
     path = tmp_path / "fold.vtu"
     meshio.write(path, meshio.Mesh(pts[:5], [("tetra", np.array([[0, 1, 2, 3], [0, 1, 2, 4]]))]))
-    with pytest.raises(MeshError, match="cells 0 and 1 .* lie on the same side"):
+    with pytest.raises(MeshError, match="cells 1 and 2 .* lie on the same side"):
         read_mesh(path)
     meshio.write(
         path, meshio.Mesh(pts[[0, 1, 2, 3, 5]], [("tetra", np.array([[0, 1, 2, 3], [0, 2, 1, 4]]))])
@@ -378,7 +380,7 @@ def test_copies_in_two_physical_volumes_kept_once(tmp_path, tags, kept):
     meshio.write(path, m, file_format="gmsh22", binary=False)
     if not kept:
         with pytest.raises(
-            MeshError, match="tetra cell 0 is written 2 times .*both in physical group 1"
+            MeshError, match="tetra element 1 is written 2 times .*both in physical group 1"
         ):
             read_mesh(path)
         return

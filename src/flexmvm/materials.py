@@ -7,13 +7,22 @@ from dataclasses import dataclass
 
 from flexmvm.errors import InputError
 
+#: Largest Poisson ratio accepted. flexmvm's elements (tet4, tet10, hex8, wedge6, hex27) are
+#: displacement-based, with no mixed u-p formulation: as nu -> 0.5 the bulk modulus grows
+#: without bound against the shear modulus (K/G = 2(1 + nu) / (3(1 - 2 nu)): 8.3 at 0.4,
+#: 49.7 at 0.49, 5000 at 0.4999) and the elements lock volumetrically, linear tet4 worst
+#: (issue 48: nu = 0.4999 changed a tet4 block's contact force by 58 %). 0.49 keeps the
+#: plastic thick-cylinder check's value (tests/test_plastic_cylinder.py, hex27).
+MAX_NU = 0.49
+
 
 @dataclass(frozen=True)
 class Material:
     """Isotropic linear-elastic material.
 
     E: Young's modulus [Pa], nu: Poisson ratio [-], rho: density [kg/m^3].
-    Raises InputError unless E > 0, rho > 0 and -1 < nu < 0.5.
+    Raises InputError unless E > 0, rho > 0 and -1 < nu <= MAX_NU = 0.49 (a Poisson ratio
+    in (0.49, 0.5) is physical but locks the displacement-based elements: see MAX_NU).
     """
 
     E: float
@@ -23,7 +32,7 @@ class Material:
 
     def __post_init__(self) -> None:
         for key, val in (("E", self.E), ("nu", self.nu), ("rho", self.rho)):
-            if not isinstance(val, (int, float)) or not math.isfinite(val):
+            if isinstance(val, bool) or not isinstance(val, (int, float)) or not math.isfinite(val):
                 raise InputError(
                     f"material {self.name!r}: {key} must be a finite number, got {val!r}"
                 )
@@ -38,6 +47,13 @@ class Material:
         if not -1.0 < self.nu < 0.5:
             raise InputError(
                 f"material {self.name!r}: Poisson ratio nu must be in (-1, 0.5), got {self.nu!r}"
+            )
+        if self.nu > MAX_NU:
+            ratio = 2 * (1 + self.nu) / (3 * (1 - 2 * self.nu))
+            raise InputError(
+                f"material {self.name!r}: Poisson ratio nu = {self.nu!r} is nearly "
+                f"incompressible (bulk/shear modulus {ratio:.0f}); expected nu <= {MAX_NU}: the "
+                f"displacement-based elements lock (tet4 worst), so the forces would be wrong"
             )
 
     @property

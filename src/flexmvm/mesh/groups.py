@@ -112,6 +112,21 @@ def group_nodes(m: meshio.Mesh, group: Group, corners: int | None = None) -> np.
     return np.unique(np.concatenate(parts)) if parts else np.zeros(0, dtype=np.int64)
 
 
+#: How error messages number a file's elements and nodes (file_cell_numbers; node k of
+#: meshio's points is node k + 1): meshio keeps neither gmsh's element tags nor its node
+#: tags, and gmsh numbers both 1, 2, ... in file order unless renumbering was turned off.
+FILE_NUMBERING = "numbered as in the file: 1-based, in file order over all its elements/nodes"
+
+
+def file_cell_numbers(m: meshio.Mesh) -> list[np.ndarray]:
+    """Per meshio block, the file number of each cell: 1-based running index over all the
+    file's cells (surface and line elements included), in block order, which is the file's
+    order for gmsh MSH 2 and 4 (meshio keeps its element blocks in order)."""
+    sizes = [len(b.data) for b in m.cells]
+    start = np.concatenate([[1], 1 + np.cumsum(sizes)[:-1]]).astype(np.int64)
+    return [s + np.arange(n, dtype=np.int64) for s, n in zip(start, sizes)]
+
+
 def point_sets(m: meshio.Mesh) -> dict[str, np.ndarray]:
     """meshio point_sets (Abaqus NSET and the like): name -> node ids (file numbering)."""
     return {
@@ -121,4 +136,12 @@ def point_sets(m: meshio.Mesh) -> dict[str, np.ndarray]:
     }
 
 
-__all__ = ["Group", "cell_dim", "group_nodes", "point_sets", "read_groups"]
+__all__ = [
+    "FILE_NUMBERING",
+    "Group",
+    "cell_dim",
+    "file_cell_numbers",
+    "group_nodes",
+    "point_sets",
+    "read_groups",
+]

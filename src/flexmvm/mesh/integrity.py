@@ -84,23 +84,36 @@ def duplicate_cells(blocks: list[CellBlock]) -> list[tuple[CellType, np.ndarray]
     return out
 
 
-def check_faces(nodes: np.ndarray, blocks: list[CellBlock], where: str) -> np.ndarray:
+def check_faces(
+    nodes: np.ndarray,
+    blocks: list[CellBlock],
+    where: str,
+    numbers: tuple[np.ndarray, np.ndarray, str] | None = None,
+) -> np.ndarray:
     """MeshError (one line, prefixed by ``where``) unless every face is met once (skin) or
     twice by cells on opposite sides (outward normals with a negative dot product).
 
     Call after the quality check (positive Jacobians: outward face order is outward) and after
-    duplicates are refused or dropped. Returns the boundary faces (B, 4), outward, -1 padded.
+    duplicates are refused or dropped. ``numbers``: (cell numbers (C,) by running cell index,
+    node numbers (n,), how they are numbered) to name cells and nodes as a file does; without
+    it, running ids over the blocks and node ids. Returns the boundary faces (B, 4), outward,
+    -1 padded.
     """
     keys, faces, _, cell = face_table(nodes, blocks)
+    if numbers is None:
+        cell_no, node_no = np.arange(cell.max() + 1), np.arange(len(nodes))
+        how = "running ids over the blocks"
+    else:
+        cell_no, node_no, how = numbers
     _, inv, counts = np.unique(keys, axis=0, return_inverse=True, return_counts=True)
     inv = inv.ravel()
     if np.any(counts > 2):
         g = int(np.flatnonzero(counts > 2)[0])
-        owners = cell[inv == g].tolist()
+        owners = cell_no[cell[inv == g]].tolist()
+        key = keys[inv == g][0]
         raise MeshError(
-            f"{where}: face {keys[inv == g][0][keys[inv == g][0] >= 0].tolist()} "
-            f"belongs to {int(counts[g])} cells (running ids {owners}); expected at "
-            f"most 2 (overlapping or non-manifold cells)"
+            f"{where}: face {node_no[key[key >= 0]].tolist()} belongs to {int(counts[g])} "
+            f"cells ({owners}; {how}); expected at most 2 (overlapping or non-manifold cells)"
         )
     order = np.argsort(inv, kind="stable")
     pairs = order[np.repeat(counts == 2, counts)].reshape(-1, 2)  # faces sorted by key
@@ -108,9 +121,9 @@ def check_faces(nodes: np.ndarray, blocks: list[CellBlock], where: str) -> np.nd
         n = _normals(nodes, faces[pairs.ravel()]).reshape(-1, 2, 3)
         bad = np.flatnonzero(np.einsum("ij,ij->i", n[:, 0], n[:, 1]) >= 0)
         if bad.size:
-            a, b = cell[pairs[bad[0]]]
+            a, b = cell_no[cell[pairs[bad[0]]]]
             raise MeshError(
-                f"{where}: cells {int(a)} and {int(b)} (running ids over the blocks) "
+                f"{where}: cells {int(a)} and {int(b)} ({how}) "
                 f"lie on the same side of their shared face; expected neighbours on "
                 f"opposite sides ({bad.size} such face(s): folded or overlapping "
                 f"cells)"

@@ -19,10 +19,18 @@ import meshio
 import numpy as np
 
 from flexmvm.errors import InputError, MeshError
-from flexmvm.mesh.groups import Group, cell_dim, group_nodes, point_sets, read_groups
-from flexmvm.mesh.integrity import check_faces, duplicate_cells, face_table, skin
+from flexmvm.mesh.connectivity import joined_cells
+from flexmvm.mesh.groups import (
+    FILE_NUMBERING,
+    Group,
+    cell_dim,
+    file_cell_numbers,
+    group_nodes,
+    point_sets,
+    read_groups,
+)
+from flexmvm.mesh.integrity import duplicate_cells, face_table, skin
 from flexmvm.mesh.mesh import CellBlock, CellType, FacetSet, Mesh
-from flexmvm.mesh.quality import check_quality
 from flexmvm.mesh.subfacets import QuadraticFaces
 
 # The mode a plain open() gives a new file (0o666 minus the umask, read once at import).
@@ -57,13 +65,15 @@ def _read(path: Path) -> meshio.Mesh:
         raise MeshError(f"cannot read mesh file {str(path)!r}: {detail}") from exc
 
 
-def _volume_blocks(m: meshio.Mesh, where: str) -> list[tuple[CellBlock, np.ndarray]]:
+def _volume_blocks(m: meshio.Mesh, where: str) -> list[tuple[CellBlock, np.ndarray, np.ndarray]]:
     """Volume cells grouped by type (meshio may split a type over several blocks), each with
-    the gmsh physical tag of every cell (-1 where the file gives none)."""
+    the gmsh physical tag of every cell (-1 where the file gives none) and its element number
+    in the file (numbering.file_cell_numbers: 1-based over all the file's elements)."""
     tags = m.cell_data.get("gmsh:physical")
     if tags is not None and len(tags) != len(m.cells):  # meshio leaves untagged blocks out
         tags = None
-    by_type: dict[CellType, list[tuple[np.ndarray, np.ndarray]]] = {}
+    numbers = file_cell_numbers(m)
+    by_type: dict[CellType, list[tuple[np.ndarray, np.ndarray, np.ndarray]]] = {}
     for k, block in enumerate(m.cells):
         if block.type in _VOLUME_TYPES:
             data = np.asarray(block.data)
@@ -72,7 +82,7 @@ def _volume_blocks(m: meshio.Mesh, where: str) -> list[tuple[CellBlock, np.ndarr
                 if tags is not None
                 else np.full(len(data), -1, dtype=np.int64)
             )
-            by_type.setdefault(_VOLUME_TYPES[block.type], []).append((data, tag))
+            by_type.setdefault(_VOLUME_TYPES[block.type], []).append((data, tag, numbers[k]))
         elif cell_dim(block.type) == 3:
             raise MeshError(
                 f"{where} has unsupported cell type {block.type!r}; expected "
@@ -83,15 +93,19 @@ def _volume_blocks(m: meshio.Mesh, where: str) -> list[tuple[CellBlock, np.ndarr
         raise MeshError(f"{where} has no volume cells (found: {found})")
     return [
         (
-            CellBlock(ct, np.concatenate([d for d, _ in parts])),
-            np.concatenate([t for _, t in parts]),
+            CellBlock(ct, np.concatenate([d for d, _, _ in parts])),
+            np.concatenate([t for _, t, _ in parts]),
+            np.concatenate([n for _, _, n in parts]),
         )
         for ct, parts in by_type.items()
     ]
 
 
-def _drop_group_copies(blocks: list[tuple[CellBlock, np.ndarray]], where: str) -> list[CellBlock]:
-    """The cells with every element once.
+def _drop_group_copies(
+    blocks: list[tuple[CellBlock, np.ndarray, np.ndarray]], where: str
+) -> tuple[list[CellBlock], np.ndarray]:
+    """The cells with every element once, and the file number of each kept cell (running
+    order over the blocks).
 
     gmsh's MSH 2 format writes an element once per physical volume it belongs to, so a mesh
     whose volume groups overlap holds copies of one element, each with another physical tag:
@@ -99,33 +113,35 @@ def _drop_group_copies(blocks: list[tuple[CellBlock, np.ndarray]], where: str) -
     Any other repetition of a node set is refused: copies with no physical tag or the same tag
     (a mesh written twice, a merge gone wrong) would double the cell's stiffness and mass, and
     copies whose node order differs (another orientation or midside numbering) leave no way to
-    tell which one is meant. MeshError (one line) names both cells.
+    tell which one is meant. MeshError (one line) names both elements and their nodes as the
+    file numbers them (groups.FILE_NUMBERING).
     """
-    out = []
-    for block, tags in blocks:
+    out, numbers = [], []
+    for block, tags, number in blocks:
         keep = np.ones(len(block.connectivity), dtype=bool)
         for cell_type, ids in duplicate_cells([block]):
             conn, t = block.connectivity[ids], tags[ids]
-            a, b = int(ids[0]), int(ids[1])
+            a, b = int(number[ids[0]]), int(number[ids[1]])
             same_order = bool(np.all(conn == conn[0]))
             if not same_order:
                 raise MeshError(
-                    f"{where}: {cell_type.value} cells {a} and {b} have the same nodes in a "
-                    f"different order ({conn[0].tolist()} vs {conn[1].tolist()}); expected each "
-                    f"element once"
+                    f"{where}: {cell_type.value} elements {a} and {b} have the same nodes in a "
+                    f"different order ({(conn[0] + 1).tolist()} vs {(conn[1] + 1).tolist()}; "
+                    f"{FILE_NUMBERING}); expected each element once"
                 )
             if np.any(t < 0) or len(np.unique(t)) != len(t):
                 why = (
                     "no physical group" if np.any(t < 0) else f"both in physical group {int(t[0])}"
                 )
                 raise MeshError(
-                    f"{where}: {cell_type.value} cell {a} is written {len(ids)} times (also cell "
-                    f"{b}; {why}); expected each element once (a repeated cell doubles its "
-                    f"stiffness and mass)"
+                    f"{where}: {cell_type.value} element {a} is written {len(ids)} times (also "
+                    f"element {b}; {why}; {FILE_NUMBERING}); expected each element once (a "
+                    f"repeated cell doubles its stiffness and mass)"
                 )
             keep[ids[1:]] = False
         out.append(CellBlock(block.cell_type, block.connectivity[keep]))
-    return out
+        numbers.append(number[keep])
+    return out, np.concatenate(numbers)
 
 
 def _orient_outward(
@@ -230,7 +246,12 @@ def _renumbered(
     return nodes, [CellBlock(b.cell_type, new_id[b.connectivity]) for b in blocks], new_id
 
 
-def read_mesh(path: str | os.PathLike, node_sets: Mapping[str, np.ndarray] | None = None) -> Mesh:
+def read_mesh(
+    path: str | os.PathLike,
+    node_sets: Mapping[str, np.ndarray] | None = None,
+    *,
+    merge_nodes: bool = False,
+) -> Mesh:
     """Read a volume mesh with meshio and check it: quality, duplicates, faces, skin.
 
     Volume cells: tetra, tetra10, hexahedron, hexahedron27, wedge. Named groups (gmsh physical
@@ -249,20 +270,28 @@ def read_mesh(path: str | os.PathLike, node_sets: Mapping[str, np.ndarray] | Non
     (_drop_group_copies: kept once when the copies belong to different gmsh physical volumes,
     refused otherwise), an inverted or degenerate cell (quality.check_quality: an inconsistently
     oriented cell is refused, not repaired: which nodes to swap is a guess), a face shared by
-    more than two cells or by two cells on the same side of it (integrity.check_faces). Nodes
-    used by no volume cell are dropped, the rest renumbered in order, and a MeshWarning says
-    how many.
+    more than two cells or by two cells on the same side of it (integrity.check_faces), a mesh
+    that is not one joined body (mesh/connectivity.py: coincident nodes not merged, parts that
+    share no node, skin facets lying on each other). Elements and nodes are named as the file
+    numbers them (groups.FILE_NUMBERING). Nodes used by no volume cell are dropped, the rest
+    renumbered in order, and a MeshWarning says how many. ``merge_nodes``: merge coincident
+    nodes instead of refusing them (cells renumbered, sets kept; a MeshWarning gives the count).
     """
     path = Path(path)
     where = f"mesh file {str(path)!r}"
     m = _read(path)
-    blocks = _drop_group_copies(_volume_blocks(m, where), where)
+    blocks, cell_no = _drop_group_copies(_volume_blocks(m, where), where)
     nodes, blocks, new_id = _renumbered(m, blocks, where)
-    try:
-        check_quality(Mesh(nodes=nodes, cells=tuple(blocks)))
-    except MeshError as exc:
-        raise MeshError(f"{where}: {exc}") from None
-    boundary = check_faces(nodes, blocks, where)
+    nodes, blocks, new_id, boundary, merged = joined_cells(
+        nodes, blocks, new_id, cell_no, where, merge_nodes
+    )
+    if merged:
+        warnings.warn(
+            f"{where}: {merged} coincident node pairs merged (merge_nodes); "
+            f"{len(nodes)} nodes remain",
+            MeshWarning,
+            stacklevel=2,
+        )
     keys, faces, _, _ = face_table(nodes, blocks)
     quadratic = QuadraticFaces(blocks)
     sets, facet_sets = _named_sets(m, new_id, (keys, faces), quadratic, where)

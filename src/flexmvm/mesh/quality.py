@@ -170,15 +170,16 @@ def _check_points(cell_type: CellType) -> np.ndarray:
     return np.vstack([ref, ref.mean(axis=0, keepdims=True), quadrature(cell_type)[0]])
 
 
-def check_quality(mesh: Mesh) -> None:
+def check_quality(mesh: Mesh, cell_name: Callable[[int, int], str] | None = None) -> None:
     """Raise MeshError for the first inverted or degenerate cell of the mesh.
 
     The Jacobian determinant of the isoparametric map is evaluated at the corner nodes, the
     centroid and the quadrature points of every cell. A cell fails if det <= 0 (inverted) or
     det < 1e-12 * size**3 (degenerate), size [m] = largest bounding-box extent of its nodes.
-    Raises MeshError naming the cell type, the cell index within its block and the defect.
+    Raises MeshError naming the cell type, the cell index within its block (or
+    ``cell_name(block index, cell index)``, e.g. the file's element number) and the defect.
     """
-    for block in mesh.cells:
+    for k, block in enumerate(mesh.cells):
         conn = block.connectivity
         if len(conn) == 0:
             continue
@@ -192,8 +193,9 @@ def check_quality(mesh: Mesh) -> None:
             c = int(bad_cells[0])
             p = int(np.argmin(rel[c]))
             what = "inverted" if rel[c, p] < -DEGENERATE_RELATIVE_DET else "degenerate"
+            name = f"{block.cell_type.value} cell {c}" if cell_name is None else cell_name(k, c)
             raise MeshError(
-                f"{block.cell_type.value} cell {c} is {what}: Jacobian determinant "
+                f"{name} is {what}: Jacobian determinant "
                 f"{det[c, p]:.3e} (relative {rel[c, p]:.1e}, expected > {DEGENERATE_RELATIVE_DET:g}) "
                 f"at parametric point {tuple(np.round(pts[p], 3).tolist())}; "
                 f"{len(bad_cells)} bad cell(s) in the block"

@@ -345,6 +345,8 @@ class BodyConfig(Frozen):
     material: MaterialRef
     rod: RodConfig | None = None
     mesh_file: Path | None = None
+    # merge the mesh file's coincident nodes (mesh/connectivity.py) instead of refusing them
+    merge_nodes: bool = False
     model: ModelConfig = ModelConfig()
     placement: Placement = Placement()
     # structural damping (damping_schema.py); None: undamped
@@ -352,10 +354,13 @@ class BodyConfig(Frozen):
 
     @model_serializer(mode="wrap")
     def _dump(self, handler):
-        # an undamped body dumps as before the key existed (study keys hash these dumps)
+        # an undamped body dumps as before the key existed (study keys hash these dumps);
+        # so does one whose mesh nodes are not merged
         data = handler(self)
         if isinstance(data, dict) and data.get("damping") is None:
             data.pop("damping", None)
+        if isinstance(data, dict) and data.get("merge_nodes") is False:
+            data.pop("merge_nodes", None)
         return data
 
     @field_validator("material")
@@ -404,6 +409,8 @@ class BodyConfig(Frozen):
     def _check(self) -> BodyConfig:
         if (self.rod is None) == (self.mesh_file is None):
             raise problem("needs exactly one of [bodies.rod] or mesh_file", "rod")
+        if self.merge_nodes and self.mesh_file is None:
+            raise problem("merge_nodes applies to a mesh_file body's mesh", "merge_nodes")
         if self.rod is None and self.model.selection is not None:
             raise problem(
                 "the i-j selection needs a [bodies.rod] body; use region for a mesh_file",

@@ -47,6 +47,7 @@ from flexmvm.scenarios.initial_motion import check_joint_velocities, with_rigid_
 from flexmvm.scenarios.load_build import build_loads
 from flexmvm.scenarios.mesh_lookup import (
     body_point,
+    check_contact_surfaces,
     contact_nodes,
     contact_surfaces,
     nearest_node,
@@ -192,6 +193,7 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
     setup = default_setup() if setup is None else setup
     bodies, infos, states = [], [], []
     for cfg in sc.bodies:
+        check_contact_surfaces(sc, cfg.name, setup.mesh(mesh_key(cfg)))
         massless = None
         if any(c.redistribute_mass for c in sc.contacts):
             massless = contact_nodes(sc, cfg.name, setup.mesh(mesh_key(cfg)))

@@ -13,25 +13,36 @@ from flexmvm.reduction.interface import InterfaceSpec
 
 
 @dataclass(frozen=True)
+class MergedFile:
+    """The mesh key of a mesh file read with its coincident nodes merged (a body's
+    ``merge_nodes = true``; mesh/connectivity.py): another mesh than the file read as it is."""
+
+    path: str
+
+
+@dataclass(frozen=True)
 class ContactMass:
     """The mesh key (a RodSpec or a mesh file path) of a body whose contact nodes ``nodes``
     carry no mass (fe/mass_redistribution.py): a key of its own for every cache."""
 
-    key: RodSpec | str
+    key: RodSpec | str | MergedFile
     nodes: tuple[int, ...]
 
 
 #: What names a body's mesh in every cache: its rod spec, its mesh file path, or either with
 #: massless contact nodes.
-MeshKey = RodSpec | str | ContactMass
+MeshKey = RodSpec | str | MergedFile | ContactMass
 
 
-def mesh_key(cfg) -> RodSpec | str:
-    """The mesh key of a scenario's body ``cfg``: its rod spec, else its mesh file path."""
-    return cfg.rod.spec() if cfg.rod is not None else str(cfg.mesh_file)
+def mesh_key(cfg) -> RodSpec | str | MergedFile:
+    """The mesh key of a scenario's body ``cfg``: its rod spec, else its mesh file path (a
+    MergedFile when its nodes are merged)."""
+    if cfg.rod is not None:
+        return cfg.rod.spec()
+    return MergedFile(str(cfg.mesh_file)) if cfg.merge_nodes else str(cfg.mesh_file)
 
 
-def plain_key(key: MeshKey) -> RodSpec | str:
+def plain_key(key: MeshKey) -> RodSpec | str | MergedFile:
     """The mesh key without its massless contact nodes (same mesh, same reference)."""
     return key.key if isinstance(key, ContactMass) else key
 
@@ -44,6 +55,9 @@ def mesh_source(key: MeshKey) -> dict | None:
         return None if inner is None else inner | {"massless_nodes": list(key.nodes)}
     if isinstance(key, RodSpec):
         return setup_cache.rod_source(key)
+    if isinstance(key, MergedFile):
+        inner = setup_cache.file_source(key.path)
+        return None if inner is None else inner | {"merge_nodes": True}
     return setup_cache.file_source(key)
 
 

@@ -62,6 +62,25 @@ def contact_nodes(sc, body: str, mesh: Mesh) -> np.ndarray:
     return np.unique(np.concatenate(ids)) if ids else np.zeros(0, np.int64)
 
 
+def check_contact_surfaces(sc, body: str, mesh: Mesh) -> None:
+    """InputError (one line) naming the contact key (``contacts[k].slave = 'body.surface'``)
+    when a surface of ``body`` a contact names is unknown to its mesh or empty (a group with
+    no facet): checked before the body is built, whose automatic reference would otherwise
+    meet it first and be blamed (issue 48)."""
+    for k, c in enumerate(sc.contacts):
+        for role, who, surface in (
+            ("slave", c.slave_body, c.slave_surface),
+            ("master", c.master_body, c.master_surface),
+        ):
+            if who == body:
+                try:
+                    mesh.facet_set(surface)
+                except MeshError as exc:
+                    raise InputError(
+                        f"contacts[{k}].{role} = {getattr(c, role)!r}: body {body!r}: {exc}"
+                    ) from None
+
+
 def contact_surfaces(sc, body: str) -> tuple[str, ...]:
     """The facet sets of ``body`` named in the scenario's contacts, as slave or master."""
     names = [

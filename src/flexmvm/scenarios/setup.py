@@ -49,6 +49,7 @@ from flexmvm.reduction.rod_reference import rod_reference
 from flexmvm.scenarios.body_reference import support
 from flexmvm.scenarios.cache_keys import (
     ContactMass,
+    MergedFile,
     MeshKey,
     interface_inputs,
     mesh_key,
@@ -113,6 +114,8 @@ class ProcessCaches:
         """The mesh of a rod spec (generated) or of a mesh file path."""
         if isinstance(key, ContactMass):
             return self.mesh(key.key)
+        if isinstance(key, MergedFile):
+            return read_mesh(key.path, merge_nodes=True)
         return self.rod_mesh(key).mesh if isinstance(key, RodSpec) else read_mesh(key)
 
     def _fe_model(self, key: MeshKey, material: Material) -> FEModel:
