@@ -88,12 +88,12 @@ def ring_parts(fe: FEModel, nodes: np.ndarray, cols: RingColumns, nq: int) -> Bo
     M_GE = sp.csr_matrix(Ms[ring_nodes][:, ext])
     M_EE = sp.csr_matrix(Ms[ext][:, ext])
     n_c, corner = cols.corner.size, cols.corner
-    MQ = [np.asarray(M_EE @ Q[b]) for b in range(3)]
     GQ = [np.asarray(M_GE @ Q[b]) for b in range(3)]  # (n_Gamma, n_c)
     G2: list[list] = [[None] * 3 for _ in range(3)]
-    for a in range(3):
-        for b in range(a, 3):
-            D = Q[a].T @ MQ[b] + _ring_rows(GQ[b], a, n_c) + _ring_rows(GQ[a], b, n_c).T
+    for b in range(3):
+        MQ = np.asarray(M_EE @ Q[b])  # one at a time: the set-up's memory is B's thrice
+        for a in range(b + 1):
+            D = Q[a].T @ MQ + _ring_rows(GQ[b], a, n_c) + _ring_rows(GQ[a], b, n_c).T
             block = sp.csr_matrix(_nodal_block(M_RR, a, b, nq) + _corner_block(D, corner, nq))
             G2[a][b] = block
             if b > a:
