@@ -416,5 +416,5 @@ def test_region_case_keeps_the_scenarios_allow_costly(scenario_file, monkeypatch
         run_region_case(case)
     data["bodies"][1]["model"]["allow_costly"] = False
     sc = fm.scenario_from_dict(data)
-    with pytest.raises(InputError, match="would cost more than full FE"):
+    with pytest.raises(InputError, match="would not fit"):
         RegionGrid(sc, "beam", [RegionFamily(node_set="top")], [5])

@@ -7,12 +7,16 @@ The full-FE body holds sparse M and K and the L D L^T factor of M + h^2/4 K, abo
 FILL_PER_NNZ times the nonzeros of K. A retained region of a few thousand nodes (a wide
 ball on a fine tet10 mesh) makes the reduced body cost many times the full one: a 2 mm ball
 on a 28,000-DOF block kept 3,090 nodes, 9,289 coordinates, 18.6 GB against 1.2 GB for full
-FE. Such a body is refused unless ``model.allow_costly`` is set; the right size of a region
-is a few Hertz contact radii (DESIGN.md, "Sizing a reduced region").
+FE. Such a body is built with a ReducedCostWarning that says so (kind ``mvm-sparse`` keeps a
+large region sparse: its dense part is the region's ring, not its volume, docs/concepts.md),
+and refused only when it would not fit: more than REFUSE_SHARE of the machine's memory,
+unless ``model.allow_costly`` is set. The right size of a region is a few Hertz contact radii
+(DESIGN.md, "Sizing a reduced region").
 """
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 
 from flexmvm.errors import InputError
@@ -63,10 +67,22 @@ def reduced_cost(name: str, n_nodes: int, nq: int, k_nnz: int) -> BodyCost:
     return BodyCost(name, 6 + nq, dense, 6 + 3 * n_nodes - 6, full)
 
 
-#: Below this much memory [bytes] a reduced body that costs more than its full-FE body is
-#: built with a ReducedCostWarning instead of refused: on a small mesh (a few thousand DOF)
-#: nothing is at stake but the warning's point, that full FE is as cheap.
-REFUSE_ABOVE_BYTES = 256e6
+#: The share of the machine's physical memory above which a reduced body is refused (it
+#: would not fit beside the run's other arrays); below it a body that costs more than its
+#: full-FE body is built with a ReducedCostWarning.
+REFUSE_SHARE = 0.5
+
+
+def _physical_bytes() -> float:
+    """The machine's physical memory [bytes] (os.sysconf; 16 GB where it cannot be read)."""
+    try:
+        return float(os.sysconf("SC_PAGE_SIZE") * os.sysconf("SC_PHYS_PAGES"))
+    except (ValueError, OSError, AttributeError):
+        return 16e9
+
+
+#: Above this much memory [bytes] a reduced body is refused unless model.allow_costly is set.
+REFUSE_ABOVE_BYTES = REFUSE_SHARE * _physical_bytes()
 
 
 class ReducedCostWarning(UserWarning):
@@ -74,22 +90,25 @@ class ReducedCostWarning(UserWarning):
 
 
 def check_cost(cost: BodyCost, allow: bool, where: str) -> None:
-    """InputError (one line) when the reduced body would cost more memory than its full-FE
-    body, above REFUSE_ABOVE_BYTES, and ``allow`` (model.allow_costly) is not set; below, a
-    ReducedCostWarning."""
-    if cost.bytes > cost.full_bytes and not allow and cost.bytes <= REFUSE_ABOVE_BYTES:
+    """InputError (one line) when the reduced body would take more than REFUSE_ABOVE_BYTES
+    (REFUSE_SHARE of the machine's memory) and ``allow`` (model.allow_costly) is not set; a
+    ReducedCostWarning when it costs more than its full-FE body."""
+    if allow or cost.bytes <= cost.full_bytes:
+        return
+    if cost.bytes <= REFUSE_ABOVE_BYTES:
         import warnings
 
         warnings.warn(
-            f"{where}: the reduced model costs more than full FE ({cost.line()})",
+            f"{where}: the reduced model costs more than full FE ({cost.line()}); kind "
+            "'mvm-sparse' keeps a large region sparse, kind 'full' is as cheap",
             ReducedCostWarning,
             stacklevel=3,
         )
         return
-    if cost.bytes > cost.full_bytes and not allow:
-        raise InputError(
-            f"{where}: the reduced model would cost more than full FE ({cost.dof} DOF, "
-            f"~{_mb(cost.bytes)} of dense matrices, against {cost.full_dof} DOF and "
-            f"~{_mb(cost.full_bytes)} for kind 'full'); expected a smaller region (a few Hertz "
-            "contact radii), kind 'full', or allow_costly = true"
-        )
+    raise InputError(
+        f"{where}: the reduced model would not fit ({cost.dof} DOF, ~{_mb(cost.bytes)} of "
+        f"dense matrices, more than {REFUSE_SHARE:.0%} of this machine's "
+        f"{_mb(REFUSE_ABOVE_BYTES / REFUSE_SHARE)}; full FE {cost.full_dof} DOF, "
+        f"~{_mb(cost.full_bytes)}); expected a smaller region (a few Hertz contact radii), "
+        "kind 'mvm-sparse' or 'full', or allow_costly = true"
+    )

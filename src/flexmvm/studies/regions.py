@@ -169,8 +169,10 @@ class RegionGrid:
                 n = len(retained_nodes(model, fe.mesh, None, where))
             except MeshError as exc:  # an unknown or empty node set: one line naming it
                 raise InputError(f"{where}: {exc}") from None
-            cost = reduced_cost(body, fe.mesh.n_nodes, 3 * n + self.modes[-1], fe.K.nnz)
-            check_cost(cost, cfg.model.allow_costly, where)
+            columns = self.kind.spec.cost_columns(n, self.modes[-1])
+            if columns is not None:  # None: a kind the dense estimate does not cost
+                cost = reduced_cost(body, fe.mesh.n_nodes, columns, fe.K.nnz)
+                check_cost(cost, cfg.model.allow_costly, where)
             self.nodes[fam.key] = n
 
     def cases(self, sc: Scenario, reference: str | Path | None) -> list[Case]:
