@@ -241,11 +241,14 @@ def _simulate(
 
     while tick < n_ticks:
         to_out = out_ticks - tick % out_ticks
-        level = (
-            0
-            if tally.calm == 0 and tally.n_steps
-            else _choose_level(system, states, level, tally.calm, k_max, dt)
-        )
+        try:  # a geometric failure (a degenerate deformed facet) stops the run here too
+            level = (
+                0
+                if tally.calm == 0 and tally.n_steps
+                else _choose_level(system, states, level, tally.calm, k_max, dt)
+            )
+        except SolverError as exc:
+            fail(f"at t = {t0 + tick * dt:.6g} s (before step {tally.n_steps + 1}): {exc}", exc)
         span = 1 << level
         while span > to_out or tick + span > n_ticks and span > 1:
             span >>= 1
@@ -259,7 +262,10 @@ def _simulate(
                 f"to {h_min:.3g} s): {exc}"
             )
             fail(message, exc)
-        states = _accept(parts, states, tally, integ, on_step)
+        try:
+            states = _accept(parts, states, tally, integ, on_step)
+        except SolverError as exc:  # measuring the accepted step (a degenerate facet)
+            fail(f"at t = {t + h:.6g} s (step {tally.n_steps}): {exc}", exc)
         stop = plastic.outside_stop() if plastic is not None else None
         if stop is not None:  # a reduced plastic body's zone left its region (plastic_outside)
             fail(f"at t = {t + h:.6g} s (step {tally.n_steps}): {stop}")
