@@ -81,6 +81,36 @@ def test_two_writers_of_one_folder_the_second_is_refused(tmp_path):
     assert sorted(p.name for p in tmp_path.iterdir()) == ["out"]
 
 
+def test_a_run_in_another_process_holds_the_folder(tmp_path):
+    """Another process writing DIR (a real second process, holding the lock) makes this one
+    refuse, naming its pid; a lock left by a killed process whose pid was reused (here: this
+    test's parent, recorded with another start time) is taken over."""
+    import sys
+
+    out = tmp_path / "out"
+    script = (
+        "import sys, time\n"
+        "from flexmvm.results.outdir import staged_dir\n"
+        f"with staged_dir({str(out)!r}, {CMD!r}) as tmp:\n"
+        "    print('in', flush=True)\n"
+        "    sys.stdin.readline()\n"
+    )
+    other = subprocess.Popen(
+        [sys.executable, "-c", script], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True
+    )
+    try:
+        assert other.stdout.readline() == "in\n"
+        with pytest.raises(InputError, match=rf"being written by .*pid {other.pid}\b"):
+            _write_output(out, {"a.txt": "second\n"})
+    finally:
+        other.communicate("\n", timeout=60)
+    assert other.returncode == 0 and not (out / "a.txt").exists()
+    lock = tmp_path / ".out.flexmvm-lock"
+    lock.write_text(json.dumps({"command": CMD, "pid": os.getppid(), "start": "1"}))
+    _write_output(out, {"a.txt": "third\n"})
+    assert (out / "a.txt").read_text() == "third\n" and not lock.exists()
+
+
 def test_a_stale_partial_whose_pid_was_reused_is_removed(tmp_path):
     """A staging folder of a killed run whose pid now belongs to another live process (here:
     this test's parent, with another start time) is stale and removed; one of a process that
