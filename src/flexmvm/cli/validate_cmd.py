@@ -43,11 +43,16 @@ def command(out_dir: Path | None, md: Path | None, cases: tuple[str, ...], recom
     numpy/scipy/numba versions, the whole resolved scenario) matches; the full set takes
     about 12 minutes of two cores when nothing is stored."""
     from flexmvm.validation.paths import default_outputs
+    from flexmvm.validation.report import claim_report_md
     from flexmvm.validation.suite import run_validation
 
+    what = None
     if out_dir is None:
         out_dir, default_md = default_outputs()
         md = default_md if md is None else md
     elif md is None:
         md = out_dir.parent / f"{out_dir.name}.md"
+        what = f"--out {out_dir}: its report page {md}"
+    if not cases:  # the page is written only with every case: refused before the runs
+        claim_report_md(md, what)
     run_validation(out_dir, md, recompute, list(cases) or None, echo=click.echo)

@@ -143,6 +143,7 @@ class PointToSurfaceContact:
         self.search_radius = float(search_radius_m)
         self.gap_tol = float(gap_tol_m)
         self.name = name
+        self._who = f"{name} (body {bodies[slave].name!r} on {bodies[master].name!r})"
         self._bonds: dict[int, tuple[np.ndarray, np.ndarray]] = {}
         self._setup(bodies)
         if slave_surface is not None and slave_surface.connectivity.max() >= n_s:
@@ -216,7 +217,7 @@ class PointToSurfaceContact:
             self._out,
         )
         if status:
-            raise SolverError(_failure(status, facet))
+            raise SolverError(f"{self._who}: " + _failure(status, facet))
         return n
 
     def min_gap_ahead(self, bodies, states, horizon_s: float) -> float:
@@ -236,7 +237,7 @@ class PointToSurfaceContact:
         out = []
         for status, facet, pen in self._measure.measure(states, deep, floors):
             if status:
-                raise SolverError(f"{self.name}: " + _failure(status, facet))
+                raise SolverError(f"{self._who}: " + _failure(status, facet))
             out.append(pen)
         return out
 

@@ -241,11 +241,11 @@ def _simulate(
 
     while tick < n_ticks:
         to_out = out_ticks - tick % out_ticks
-        level = (
-            0
-            if tally.calm == 0 and tally.n_steps
-            else _choose_level(system, states, level, tally.calm, k_max, dt)
-        )
+        if tally.calm == 0 and tally.n_steps:
+            level = 0
+        else:  # a degenerate deformed facet met looking ahead stops the run here (_or_fail)
+            args = (system, states, level, tally.calm, k_max, dt)
+            level = _or_fail(fail, tally, t0 + tick * dt, _choose_level, *args)
         span = 1 << level
         while span > to_out or tick + span > n_ticks and span > 1:
             span >>= 1
@@ -259,7 +259,7 @@ def _simulate(
                 f"to {h_min:.3g} s): {exc}"
             )
             fail(message, exc)
-        states = _accept(parts, states, tally, integ, on_step)
+        states = _or_fail(fail, tally, t + h, _accept, parts, states, tally, integ, on_step)
         stop = plastic.outside_stop() if plastic is not None else None
         if stop is not None:  # a reduced plastic body's zone left its region (plastic_outside)
             fail(f"at t = {t + h:.6g} s (step {tally.n_steps}): {stop}")
@@ -288,6 +288,16 @@ def _simulate(
     if bar is not None:
         bar.close()
     return tally.result(rec, integ, wall0)
+
+
+def _or_fail(fail, tally, t_s: float, fn, *args):
+    """fn(*args); a SolverError in it (a degenerate deformed facet met choosing the step level
+    or measuring an accepted step) stops the run through ``fail`` at t_s [s] and the last
+    accepted step, keeping what was computed, as a step that does not converge does."""
+    try:
+        return fn(*args)
+    except SolverError as exc:
+        fail(f"at t = {t_s:.6g} s (step {tally.n_steps}): {exc}", exc)
 
 
 def _accept(parts, states, tally, integ, on_step):

@@ -26,6 +26,7 @@ __all__ = [
     "atomic_path",
     "canonical_json",
     "file_sha256",
+    "nulled_nonfinite",
     "write_bytes_atomic",
     "write_json_atomic",
     "write_text_atomic",
@@ -133,6 +134,29 @@ def _first_nonfinite(obj: Any, where: str) -> str | None:
             if found is not None:
                 return found
     return None
+
+
+def nulled_nonfinite(obj: Any, where: str = "") -> tuple[Any, list[str]]:
+    """A copy of a JSON-like tree with every NaN/inf float (numpy arrays included) replaced by
+    None, and the locations (``a.b[3]``) replaced, in order. A result that must be kept (a
+    failed run's summary) is written this way rather than refused: JSON has no NaN/inf."""
+    found: list[str] = []
+
+    def walk(x: Any, at: str) -> Any:
+        if isinstance(x, (float, np.floating)):
+            if math.isfinite(x):
+                return x
+            found.append(at or "top level")
+            return None
+        if isinstance(x, np.ndarray):
+            return walk(x.tolist(), at) if x.dtype.kind in "fc" else x
+        if isinstance(x, Mapping):
+            return {k: walk(v, f"{at}.{k}" if at else str(k)) for k, v in x.items()}
+        if isinstance(x, (list, tuple)):
+            return [walk(v, f"{at}[{i}]") for i, v in enumerate(x)]
+        return x
+
+    return walk(obj, where), found
 
 
 def canonical_json(obj: Any, indent: int | None = None) -> str:

@@ -4,12 +4,15 @@
 that cannot be a directory (a file on the way, no permission) into an InputError naming the
 option and the path.
 
-:func:`staged_dir` gives a command a temporary sibling ``DIR.partial-<pid>`` to write into; only
-when the command has written everything is it renamed to ``DIR``. A failure (or Ctrl-C, or
-SIGTERM through the CLI) removes the temporary directory and leaves ``DIR`` as it was. A
-process killed outright (SIGKILL) cannot clean up: its ``DIR.partial-<pid>`` carries the
-marker :data:`PARTIAL_MARKER` with its pid, and the next command writing to ``DIR`` removes it
-once that pid is gone (and says so).
+:func:`staged_dir` gives a command a staging directory ``DIR.partial-<pid>`` beside ``DIR`` to
+write into (inside ``DIR``, ``DIR/.flexmvm-partial-<pid>``, when ``DIR`` is a mount point that
+cannot be renamed); only when the command has written everything do its files become ``DIR``
+(results/outswap.py). A failure (or Ctrl-C, or SIGTERM through the CLI) removes the staging
+directory and leaves ``DIR`` as it was. One process at a time writes ``DIR``: a second is
+refused naming the first one's pid (results/outlock.py). A process killed outright (SIGKILL)
+cannot clean up: its staging directory carries the marker :data:`PARTIAL_MARKER` with its
+pid and start time, and the next command writing to ``DIR`` removes it once that process is
+gone (and says so), a reused pid not mistaken for it.
 
 Nothing a user wrote is ever deleted. Every directory written through staged_dir ends with a
 manifest, :data:`MARKER`: the command and the SHA-256 of every file it wrote. An existing
@@ -17,6 +20,9 @@ manifest, :data:`MARKER`: the command and the SHA-256 of every file it wrote. An
 and every file in it is a file of that manifest with its content unchanged; a file the
 manifest does not list (a user's ``NOTES.txt``), a changed file, or a directory without a
 manifest (whatever it holds, ``summary.json`` included) is refused in one line, naming it.
+The check is made again just before the swap: a file a user wrote into ``DIR`` during the run
+is kept (the new output then kept beside it, both named). A symbolic link is recorded with its
+target, so every manifest entry is checked.
 
 :func:`claim_study_dir` is the same rule for the directory of a resumable study, which is
 written into in place: it must be new, empty, or an earlier study of the same command
@@ -35,6 +41,8 @@ from collections.abc import Iterable, Iterator
 from pathlib import Path
 
 from flexmvm.errors import InputError
+from flexmvm.results.outlock import LOCK_NAME, hold_lock, holder_alive
+from flexmvm.results.outswap import INSIDE_PREFIX, swap_in
 
 #: Manifest in every directory written by a command: the command and its files' SHA-256.
 MARKER = ".flexmvm-output"
@@ -112,15 +120,25 @@ def _files(root: Path) -> list[str]:
             for d in os.listdir(dirpath)
             if (Path(dirpath) / d).is_symlink() and (Path(dirpath) / d).is_dir()
         ]
-    return sorted(f for f in out if f not in (MARKER, PARTIAL_MARKER))
+    return sorted(
+        f
+        for f in out
+        if f not in (MARKER, PARTIAL_MARKER, LOCK_NAME) and not f.startswith(INSIDE_PREFIX)
+    )
+
+
+def _entry(p: Path) -> str:
+    """A file's manifest entry: its SHA-256, or ``link:<target>`` for a symbolic link (so a
+    hand-edited entry, such as a bare "link", matches nothing flexmvm wrote)."""
+    if p.is_symlink():
+        return "link:" + os.readlink(p)
+    return _sha256(p) if p.is_file() else "?"
 
 
 def manifest_of(root: Path, command: str) -> dict:
-    """The manifest of the files under ``root``: {"command", "version", "files": {rel: sha256}}."""
-    files = {}
-    for rel in _files(root):
-        p = root / rel
-        files[rel] = _sha256(p) if p.is_file() and not p.is_symlink() else "link"
+    """The manifest of the files under ``root``: {"command", "version", "files": {rel: entry}}
+    (an entry is the file's SHA-256 or ``link:<target>``)."""
+    files = {rel: _entry(root / rel) for rel in _files(root)}
     return {"flexmvm_output": _MANIFEST_VERSION, "command": command, "files": files}
 
 
@@ -144,7 +162,11 @@ def _refusal(path: Path, command: str) -> str | None:
     if not path.is_dir():
         return None
     try:
-        entries = list(path.iterdir())
+        entries = [  # this run's own lock and staging inside a mount point left out
+            e
+            for e in path.iterdir()
+            if e.name != LOCK_NAME and not e.name.startswith(INSIDE_PREFIX)
+        ]
     except OSError as exc:
         return f"cannot be read ({_reason(exc)})"
     if not entries:
@@ -163,7 +185,7 @@ def _refusal(path: Path, command: str) -> str | None:
     for rel in _files(path):
         if rel not in listed:
             foreign.append(rel)
-        elif listed[rel] != "link" and _sha256(path / rel) != listed[rel]:
+        elif _entry(path / rel) != listed[rel]:
             changed.append(rel)
     if foreign:
         return f"holds files {command} did not write ({_names(foreign)})"
@@ -172,31 +194,22 @@ def _refusal(path: Path, command: str) -> str | None:
     return None
 
 
-def _pid_alive(pid: int) -> bool:
-    try:
-        os.kill(pid, 0)
-    except ProcessLookupError:
-        return False
-    except PermissionError:
-        return True
-    except OSError:
-        return True
-    return True
-
-
 def remove_stale_partials(final: Path, echo=None) -> list[Path]:
-    """Remove the ``final.partial-<pid>`` directories of processes that are gone.
+    """Remove the ``final.partial-<pid>`` directories (and ``final/.flexmvm-partial-<pid>``
+    inside a mount point) of processes that are gone.
 
     Only a directory that carries :data:`PARTIAL_MARKER` with that pid is removed (one
-    staged_dir made it); one whose process still runs is left alone. Returns the removed
-    paths; ``echo`` (a print-like callable) is told of each.
+    staged_dir made it); one whose process still runs (same pid and same start time, so a
+    reused pid is not mistaken for it) is left alone. Returns the removed paths; ``echo`` (a
+    print-like callable) is told of each.
     """
     removed = []
     parent = final.absolute().parent
     if not parent.is_dir():
         return removed
-    prefix = f"{final.name}.partial-"
-    for d in parent.iterdir():
+    beside = [(d, f"{final.name}.partial-") for d in parent.iterdir()]
+    inside = [(d, INSIDE_PREFIX) for d in final.iterdir()] if final.is_dir() else []
+    for d, prefix in beside + inside:
         if not d.name.startswith(prefix) or not d.is_dir() or d.is_symlink():
             continue
         try:
@@ -208,7 +221,7 @@ def remove_stale_partials(final: Path, echo=None) -> list[Path]:
             not isinstance(info, dict)
             or info.get("pid") != pid
             or pid == os.getpid()
-            or _pid_alive(pid)
+            or holder_alive(info)
         ):
             continue
         shutil.rmtree(d, ignore_errors=True)
@@ -225,29 +238,29 @@ def remove_stale_partials(final: Path, echo=None) -> list[Path]:
 def staged_dir(
     path: str | os.PathLike[str], command: str, option: str = "--out", echo=None
 ) -> Iterator[Path]:
-    """Yield an empty temporary directory beside ``path``; on success it becomes ``path``.
+    """Yield an empty staging directory; on success its files become ``path``.
 
     ``command`` (e.g. ``"flexmvm run"``) and the SHA-256 of every file written go to the
     manifest :data:`MARKER`; an existing ``path`` is replaced only if it is empty or an
-    unchanged earlier output of the same command (module doc). On an exception inside the
-    block the temporary directory is removed and ``path`` is untouched. Stale staging
-    directories of dead processes beside ``path`` are removed first (reported to ``echo``).
+    unchanged earlier output of the same command (module doc), checked before the block runs
+    and again just before the swap. The staging directory sits beside ``path`` and is renamed
+    onto it, or inside ``path`` when ``path`` is a mount point (a tmpfs, a container volume),
+    whose files are then moved (results/outswap.py). One process at a time writes ``path``
+    (results/outlock.py). On an exception inside the block the staging directory is removed
+    and ``path`` is untouched. Stale staging directories of dead processes are removed first
+    (reported to ``echo``).
 
     Raises:
-        InputError: ``path`` cannot be created, exists as a file, or is a directory that is
-            neither empty nor an unchanged earlier output of ``command`` (checked before the
-            block runs).
+        InputError: ``path`` cannot be created, exists as a file, is a directory that is
+            neither empty nor an unchanged earlier output of ``command``, or is being written
+            by another live process; also, after the block, when a file not written by
+            ``command`` appeared in ``path`` during the run: ``path`` is then left as it is and
+            the new output kept beside it, both named.
     """
     final = Path(path)
     if final.is_symlink():  # --out pointing elsewhere (a scratch disk): keep the link
         final = final.resolve()
-    check_creatable(final, option)
-    why = _refusal(final, command) if final.exists() else None
-    if why is not None:
-        raise InputError(
-            f"{option} {final}: {why}; expected a new or empty directory, or an "
-            f"unchanged earlier output of {command} (which is replaced)"
-        )
+    _refuse(final, command, option)
     cwd = Path.cwd().resolve()
     if final.exists() and (cwd == final.resolve() or final.resolve() in cwd.parents):
         raise InputError(
@@ -256,30 +269,55 @@ def staged_dir(
     parent = final.absolute().parent
     created = [d for d in (parent, *parent.parents) if not d.exists()]
     make_out_dir(parent, option)
-    remove_stale_partials(final, echo)
-    tmp = final.with_name(f"{final.name}.partial-{os.getpid()}")
+    inside = final.is_dir() and os.path.ismount(final)
+    lock = final / LOCK_NAME if inside else parent / f".{final.name}{LOCK_NAME}"
+    try:
+        with hold_lock(lock, final, command, option) as me:
+            _refuse(final, command, option)  # another run may have written it meanwhile
+            remove_stale_partials(final, echo)
+            tmp = _staging(final, inside, me, option)
+            try:
+                yield tmp
+                (tmp / PARTIAL_MARKER).unlink()
+                (tmp / MARKER).write_text(
+                    json.dumps(manifest_of(tmp, command), indent=1) + "\n", encoding="utf-8"
+                )
+                swap_in(tmp, final, lambda d: _refusal(d, command), option)
+            except BaseException:
+                shutil.rmtree(tmp, ignore_errors=True)
+                raise
+    except BaseException:
+        _remove_empty(created)
+        raise
+
+
+def _refuse(final: Path, command: str, option: str) -> None:
+    why = _refusal(final, command) if final.exists() else None
+    if why is not None:
+        raise InputError(
+            f"{option} {final}: {why}; expected a new or empty directory, or an "
+            f"unchanged earlier output of {command} (which is replaced)"
+        )
+
+
+def _staging(final: Path, inside: bool, me: dict, option: str) -> Path:
+    """The empty staging directory of this process (beside ``final``, or inside it), carrying
+    :data:`PARTIAL_MARKER` with this process's pid, start time and token."""
+    pid = me["pid"]
+    tmp = (
+        final / f"{INSIDE_PREFIX}{pid}"
+        if inside
+        else final.with_name(f"{final.name}.partial-{pid}")
+    )
     if tmp.exists():
         shutil.rmtree(tmp, ignore_errors=True)
     try:
         tmp.mkdir()
-        (tmp / PARTIAL_MARKER).write_text(
-            json.dumps({"command": command, "pid": os.getpid()}) + "\n", encoding="utf-8"
-        )
+        (tmp / PARTIAL_MARKER).write_text(json.dumps(me) + "\n", encoding="utf-8")
     except OSError as exc:
         shutil.rmtree(tmp, ignore_errors=True)
-        _remove_empty(created)
         raise InputError(f"{option} {final}: cannot create {tmp} ({_reason(exc)})") from None
-    try:
-        yield tmp
-        (tmp / PARTIAL_MARKER).unlink()
-        (tmp / MARKER).write_text(
-            json.dumps(manifest_of(tmp, command), indent=1) + "\n", encoding="utf-8"
-        )
-        _swap_in(tmp, final)
-    except BaseException:
-        shutil.rmtree(tmp, ignore_errors=True)
-        _remove_empty(created)
-        raise
+    return tmp
 
 
 def claim_study_dir(
@@ -332,20 +370,3 @@ def _remove_empty(dirs: list[Path]) -> None:
     for d in dirs:
         with contextlib.suppress(OSError):
             d.rmdir()
-
-
-def _swap_in(tmp: Path, final: Path) -> None:
-    """Rename tmp to final; an existing final is moved aside first and removed after."""
-    if not final.exists():
-        os.replace(tmp, final)
-        return
-    old = final.with_name(f"{final.name}.old-{os.getpid()}")
-    if old.exists():
-        shutil.rmtree(old, ignore_errors=True)
-    os.replace(final, old)
-    try:
-        os.replace(tmp, final)
-    except BaseException:
-        os.replace(old, final)
-        raise
-    shutil.rmtree(old, ignore_errors=True)

@@ -8,6 +8,7 @@ from collections.abc import Iterator
 from pathlib import Path
 
 from flexmvm.errors import OutputError
+from flexmvm.results.atomic import nulled_nonfinite
 from flexmvm.results.writers import (
     write_history_csv,
     write_paraview_series,
@@ -38,6 +39,22 @@ def writing(path: Path) -> Iterator[None]:
         raise OutputError(f"cannot write {path}: {reason}") from exc
 
 
+#: summary.json key listing the fields that were NaN/inf (written as null).
+NON_FINITE_KEY = "non_finite_fields"
+
+
+def write_summary(path: Path, summary) -> list[str]:
+    """summary.json at ``path``: NaN/inf values written as null and listed under
+    :data:`NON_FINITE_KEY` (JSON has no NaN/inf; a failed run's summary must still be
+    written), OutputError naming the file if it cannot be written. Returns that list."""
+    clean, bad = nulled_nonfinite(dict(summary))
+    if bad:
+        clean[NON_FINITE_KEY] = bad
+    with writing(path):
+        write_summary_json(path, clean)
+    return bad
+
+
 def write_run(out_dir: Path, srun, fields: bool = True) -> dict[str, Path]:
     """Write one ScenarioRun into out_dir (created); returns the paths written. OutputError
     (one line naming the file) when a file cannot be written (a full disk, ...)."""
@@ -54,8 +71,7 @@ def write_run(out_dir: Path, srun, fields: bool = True) -> dict[str, Path]:
     }
     with writing(paths["history"]):
         write_history_csv(paths["history"], res, probe_axis=0)
-    with writing(paths["summary"]):
-        write_summary_json(paths["summary"], srun.summary)
+    write_summary(paths["summary"], srun.summary)
     if fields:
         with writing(paths["results"]):
             write_results_h5(paths["results"], res, bodies)

@@ -8,7 +8,10 @@ Everything is written into a temporary sibling ``DIR.partial-<pid>`` that become
 only when the job has finished (flexmvm.results.outdir.staged_dir). A run that stops before
 its end time (a step that does not converge at the smallest step) keeps what it computed:
 its history, fields and summary (``status = "failed"``, the reason in ``failure``) become
-``DIR`` and the job exits non-zero. Any other failure leaves ``DIR`` as it was.
+``DIR`` and the job exits non-zero. A full-FE reference that fails does not hide the
+scenario's own run: that run is waited for and written (its summary's ``failures`` names the
+reference and why), then the job exits non-zero naming the reference; when both fail, the
+error names both. Any other failure leaves ``DIR`` as it was.
 
 Nothing is dropped quietly: a comparison that cannot be made (a
 theory that does not apply to the scenario, a probe or force that cannot be compared) is
@@ -34,8 +37,7 @@ from flexmvm.errors import (
 )
 from flexmvm.processes import die_with_parent
 from flexmvm.results.outdir import staged_dir
-from flexmvm.results.output import write_run, writing
-from flexmvm.results.writers import write_summary_json
+from flexmvm.results.output import write_run, write_summary, writing
 from flexmvm.scenarios import pendulum
 from flexmvm.scenarios.compare import compare_runs
 from flexmvm.scenarios.guard import guard_warnings
@@ -64,11 +66,13 @@ def _comparison_failures(name: str, comparison: dict) -> list[dict]:
     ]
 
 
-def _labelled(label: str, exc: BaseException) -> BaseException:
-    """A FlexmvmError of the same class naming the run that failed; others unchanged."""
+def _labelled(label: str, exc: BaseException, ref_exc: BaseException | None = None):
+    """A FlexmvmError of the same class naming the run that failed (and the full-FE
+    reference's failure too, ``ref_exc``, when both failed); others unchanged."""
     if isinstance(exc, FlexmvmError):
+        also = f"; the {_REF_WHAT} failed too: {ref_exc}" if ref_exc is not None else ""
         try:
-            new = type(exc)(f"{label}: {exc}")
+            new = type(exc)(f"{label}: {exc}{also}")
         except Exception:  # noqa: BLE001 - a subclass with another signature: keep it
             return exc
         new.__cause__ = exc
@@ -147,16 +151,21 @@ def run_main_job(
     needs_ref = want_ref and model is None and any(b.model.kind.reduced for b in sc.bodies)
     ref_sc = sc.with_kind(ModelKind.FULL) if needs_ref else None
     own_label = ModelKind(model).value if model is not None else "scenario"
-    stopped = None
+    stopped = ref_exc = None
     with staged_dir(out_dir, "flexmvm run", echo=echo) as tmp:
         try:
-            summary = _run_into(
+            summary, ref_exc = _run_into(
                 tmp, sc, ref_sc, own_label, fields, progress, echo, jobs, want_theory
             )
         except RunStopped as exc:  # what was computed is kept: DIR gets it, marked failed
             stopped = exc
     if stopped is not None:
         raise SolverError(f"{stopped}; in {out_dir}") from stopped
+    if ref_exc is not None:  # the scenario's own run, compared with the theory, is written
+        raise SolverError(
+            f"{_REF_WHAT}: {_one_line(ref_exc)}; the {own_label} run is written in {out_dir} "
+            "(summary.json failures names the reference)"
+        ) from ref_exc
     for line in guard_warnings(summary.get("reduced_contact_guard") or {}):
         echo(f"warning: {line}")
     line = energy_gain_warning(summary)
@@ -199,6 +208,12 @@ def _stop_workers(pool: ProcessPoolExecutor) -> None:
 _REF_WHAT = "full-FE reference"  # the reference run, as failures name it
 
 
+def _one_line(exc: BaseException) -> str:
+    """An exception as the CLI would show it: a FlexmvmError's message, else its type too."""
+    text = " ".join(str(exc).split())
+    return text if isinstance(exc, FlexmvmError) else f"{type(exc).__name__}: {text}"
+
+
 def _run_into(
     out_dir: Path,
     sc,
@@ -210,13 +225,17 @@ def _run_into(
     jobs: int,
     want_theory: bool = True,
 ) -> dict:
-    """The job proper, writing into out_dir (the staging directory)."""
+    """The job proper, writing into out_dir (the staging directory). Returns (summary, the
+    full-FE reference's exception or None): a failed reference is listed in the summary's
+    failures and does not stop the scenario's own run from being written."""
     failures: list[dict] = []
     runs = (out_dir, sc, ref_sc, own_label, fields, progress, want_theory, failures)
     if ref_sc is not None and jobs > 1:
-        own, ref, theory = _runs_side_by_side(*runs)
+        own, ref, theory, ref_exc = _runs_side_by_side(*runs)
     else:
-        own, ref, theory = _runs_one_after_other(*runs)
+        own, ref, theory, ref_exc = _runs_one_after_other(*runs)
+    if ref_exc is not None:
+        failures.append({"item": "reference_full", "reason": f"failed: {_one_line(ref_exc)}"})
     own_summary, own_curves, n_own, wall_own = own
     echo(f"{own_label}: {n_own} steps in {wall_own:.1f} s")
     summary = dict(own_summary)
@@ -234,8 +253,9 @@ def _run_into(
         summary["speedup_vs_full"] = wall_ref / max(wall_own, 1e-12)
         curves = {"FE": ref_curves, **curves}
     summary["failures"] = failures
-    with writing(out_dir / "summary.json"):
-        write_summary_json(out_dir / "summary.json", summary)
+    bad = write_summary(out_dir / "summary.json", summary)
+    if bad:
+        echo(f"warning: non-finite values written as null in summary.json: {', '.join(bad)}")
     th = (theory[0], theory[1], theory[2]) if theory is not None else None
     from flexmvm.plots.figures import plot_run  # matplotlib: 2 s of import, only here
 
@@ -246,13 +266,15 @@ def _run_into(
             theory=th,
             title=f"{sc.name}: contact force and axial velocities",
         )
-    return summary
+    return summary, ref_exc
 
 
 def _runs_side_by_side(out_dir, sc, ref_sc, own_label, fields, progress, want_theory, failures):
     """The run of sc and the full-FE reference ref_sc in two worker processes, the theory
-    (into failures, if want_theory) meanwhile. Returns (own, ref, theory); the first run that
-    fails stops the other and is raised, labelled."""
+    (into failures, if want_theory) meanwhile. Returns (own, ref or None, theory, the
+    reference's exception or None): a failed reference does not stop the scenario's own run,
+    which is waited for; a failed own run stops the reference and is raised, labelled (naming
+    the reference's failure too if it failed first)."""
     ctx = multiprocessing.get_context("spawn")
     with (
         ProcessPoolExecutor(
@@ -267,37 +289,34 @@ def _runs_side_by_side(out_dir, sc, ref_sc, own_label, fields, progress, want_th
         import flexmvm.plots.figures  # noqa: F401
 
         wait([own_future, ref_future], return_when=FIRST_EXCEPTION)
-        failed = [
-            (f, what)
-            for f, what in ((own_future, f"{own_label} run"), (ref_future, _REF_WHAT))
-            if f.done() and f.exception() is not None
-        ]
-        if failed:
-            if not (own_future.done() and ref_future.done()):
-                _stop_workers(pool)  # the job has failed: do not wait for the other run
-            future, what = failed[0]
-            raise _labelled(what, future.exception()) from future.exception()
-        return own_future.result(), ref_future.result(), theory
+        ref_exc = ref_future.exception() if ref_future.done() else None
+        if not (own_future.done() and own_future.exception() is not None):
+            wait([own_future])  # the reference failed or both are done: the own run ends
+        own_exc = own_future.exception()
+        if own_exc is not None:
+            if not ref_future.done():
+                _stop_workers(pool)  # the job has failed: do not wait for the reference
+            raise _labelled(f"{own_label} run", own_exc, ref_exc) from own_exc
+        ref = None if ref_exc is not None else ref_future.result()
+        return own_future.result(), ref, theory, ref_exc
 
 
 def _runs_one_after_other(out_dir, sc, ref_sc, own_label, fields, progress, want_theory, failures):
     """The run of sc, then the full-FE reference ref_sc (if any), then the theory (into
-    failures, if want_theory), in this process. Returns (own, ref or None, theory or None);
-    a run that fails is raised, labelled."""
+    failures, if want_theory), in this process. Returns (own, ref or None, theory or None,
+    the reference's exception or None); a failed own run is raised, labelled."""
     try:
         own = _run_and_write(sc, own_label, out_dir, fields, progress)
     except Exception as exc:
         raise _labelled(f"{own_label} run", exc) from exc
+    ref = ref_exc = None
     try:
-        ref = (
-            _run_and_write(ref_sc, "full", out_dir / "full", fields, progress)
-            if ref_sc is not None
-            else None
-        )
-    except Exception as exc:
-        raise _labelled(_REF_WHAT, exc) from exc
+        if ref_sc is not None:
+            ref = _run_and_write(ref_sc, "full", out_dir / "full", fields, progress)
+    except Exception as exc:  # noqa: BLE001 - listed in failures, raised after the write
+        ref_exc = exc
     theory = _theory(sc, failures) if want_theory else None
-    return own, ref, theory
+    return own, ref, theory, ref_exc
 
 
 def _label(summary: dict) -> str:

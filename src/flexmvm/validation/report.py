@@ -12,6 +12,7 @@ from string import Template
 
 import numpy as np
 
+from flexmvm.errors import InputError
 from flexmvm.results.atomic import write_text_atomic
 from flexmvm.validation import acceptance as acc
 from flexmvm.validation.cases import DT, SHORT_FINE_MESH, T_SEED
@@ -375,9 +376,40 @@ def render(report: dict) -> str:
     return "\n\n".join(sections) + "\n" + cases
 
 
-def write_report_md(path: Path, report: dict) -> None:
-    """docs/validation.md (or ``path``) from the report dict (validation.json)."""
+def _generated_opening() -> str:
+    """The text every report page opens with (the header template up to its first field)."""
+    text = _template("header").template
+    return text[: text.index("$")]
+
+
+def claim_report_md(path: Path, what: str | None = None) -> None:
+    """InputError unless ``path`` may receive the report page: it does not exist, is empty, or
+    is a page flexmvm validate wrote (it opens with the generated header), the way ``run``
+    claims its folder. ``what`` names the path in the message (default ``--md <path>``)."""
+    path = Path(path)
+    what = what or f"--md {path}"
+    if not path.exists():
+        return
+    if not path.is_file():
+        raise InputError(f"{what}: exists and is not a file; expected a report page file")
+    try:
+        with open(path, encoding="utf-8", errors="replace") as f:
+            head = f.read(4096)
+    except OSError as exc:
+        raise InputError(f"{what}: cannot be read ({exc.strerror or exc})") from None
+    if head and not head.startswith(_generated_opening()):
+        raise InputError(
+            f"{what}: holds a file flexmvm validate did not write (it does not open with the "
+            "generated header); expected a new or empty file, or an earlier report page "
+            "(which is replaced): move it or give --md another path"
+        )
+
+
+def write_report_md(path: Path, report: dict, what: str | None = None) -> None:
+    """docs/validation.md (or ``path``) from the report dict (validation.json), after
+    claim_report_md (a user's file that appeared during the run is not overwritten)."""
+    claim_report_md(path, what)
     write_text_atomic(path, render(report))
 
 
-__all__ = ["SECTIONS", "render", "write_report_md"]
+__all__ = ["SECTIONS", "claim_report_md", "render", "write_report_md"]
