@@ -40,6 +40,7 @@ from flexmvm.scenarios import pendulum
 from flexmvm.scenarios.compare import compare_runs
 from flexmvm.scenarios.guard import guard_warnings
 from flexmvm.scenarios.load import load_scenario
+from flexmvm.scenarios.plastic_summary import plastic_guard_warnings
 from flexmvm.scenarios.run import energy_gain_warning, run_scenario
 from flexmvm.scenarios.schema import Scenario
 
@@ -162,6 +163,8 @@ def run_main_job(
     if stopped is not None:
         raise SolverError(f"{stopped}; in {out_dir}") from stopped
     for line in guard_warnings(summary.get("reduced_contact_guard") or {}):
+        echo(f"warning: {line}")
+    for line in plastic_guard_warnings(summary):  # a reduced plastic body's zone left its region
         echo(f"warning: {line}")
     line = energy_gain_warning(summary)
     if line is not None:
