@@ -435,7 +435,7 @@ def test_elimination_order_round_trip(cache):
     """An elimination order is kept under the sparsity pattern alone: the same pattern with
     other values is a hit; a stored "no order" (None) is a hit too; an entry that is not a
     permutation of the right size is rebuilt. (A 10 x 200 grid: a strip, as a rod is.)"""
-    from flexmvm.fe.ordering import dissection_order
+    from flexmvm.fe.solvers.ordering import dissection_order
 
     def lap(n):
         return sp.diags([-np.ones(n - 1), 2.0 * np.ones(n), -np.ones(n - 1)], [-1, 0, 1])
