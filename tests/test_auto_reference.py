@@ -87,15 +87,24 @@ def test_unknown_contact_surface_of_auto_reference_is_one_line():
 @pytest.mark.parametrize(("name", "model"), [("sphere_block", "full"), ("sphere_beam", "mvm")])
 def test_sphere_scenarios_start(name, model):
     """The shipped sphere scenarios build and run their first 10 us (20 steps): the contact
-    closes (force > 0), linear momentum of the free pair is conserved through the impact to
-    1e-6 (the summary's momentum_rel_error: round-off plus the solver tolerances) and no node
-    penetrates more than 1 um (the velocity law pushes back 0.2 of a penetration per step)."""
+    closes (force > 0), linear momentum of the free pair, as the steps converged, is
+    conserved through the impact to 1e-7 (momentum_rel_error_converged: measured 8.3e-11 on
+    the block, 1.8e-8 on the MVM beam, whose solves' residuals account for 3.5e-13 of it:
+    the rest is not the Newton tolerance's) and no node
+    penetrates more than 1 um (the velocity law pushes back 0.2 of a penetration per step).
+    The MVM beam (471 DOF, ~52 MB of dense matrices) costs more than its full FE (~34 MB):
+    its build warns so (ReducedCostWarning), asserted here."""
+    from flexmvm.scenarios.cost import ReducedCostWarning
     from flexmvm.scenarios.run import run_scenario
 
     sc = load_scenario(SCENARIOS / f"{name}.toml").with_overrides(model=model, t_end_s=10e-6)
-    run = run_scenario(sc, warn=False)
+    if model == "mvm":
+        with pytest.warns(ReducedCostWarning, match=r"bodies\[beam\]\.model"):
+            run = run_scenario(sc, warn=False)
+    else:
+        run = run_scenario(sc, warn=False)
     assert run.contact_force.max() > 0
-    assert run.summary["momentum_rel_error"] < 1e-6
+    assert run.summary["momentum_rel_error_converged"] < 1e-7
     assert run.summary["max_penetration_m"] < 1e-6
 
 

@@ -10,12 +10,15 @@ from __future__ import annotations
 import functools
 from pathlib import Path
 
+import numpy as np
+
 from flexmvm.materials import ALUMINIUM, BRASS
 from flexmvm.scenarios import load_scenario, scenario_from_dict
 from flexmvm.scenarios.run import run_scenario
 from flexmvm.theory.wave import Rod1D, st_venant_force
 
 CASE = Path(__file__).parent / "data" / "short_flat_impact.toml"
+EPS = float(np.finfo(float).eps)  # machine round-off: n steps lose at most ~n EPS of |p|
 L, R, V0 = 0.05, 0.005, 0.21
 
 
@@ -36,16 +39,18 @@ def _F0() -> float:
 
 
 def test_invariants_momentum_no_tension_no_penetration():
-    """Free bodies: total linear momentum is conserved to 1e-9 relative through the impact
-    (the translational equations are linear; the impulses act in equal and opposite pairs),
-    and so is the momentum summed from the solves' translational residuals. Every LCP met its
+    """Free bodies: total linear momentum, as the steps converged (before the balance of
+    their translational rows), is conserved to round-off through the impact, 160 steps x eps
+    (the translational equations are linear; the impulses act in equal and opposite pairs;
+    measured 7.6e-16), and so is the momentum summed from the solves' translational
+    residuals (5.5e-16). Every LCP met its
     complementarity tolerance (a tensile impulse or one on an opening gap would show as a
     residual ~1, LCP_RTOL = 1e-8), and every step converged. Penetration is bounded by the
     Moreau-Jean estimate h v0 (1 - theta) = 2.4e-8 m; we allow 10 % over it."""
     r = _run()
     s = r.summary
-    assert s["momentum_rel_error"] < 1e-9
-    assert s["momentum_residual_rel"] < 1e-9
+    assert s["momentum_rel_error_converged"] < 160 * EPS  # the run's 160 steps x round-off
+    assert s["momentum_residual_rel"] < 160 * EPS
     assert s["lcp_residual_max"] <= 1e-8
     assert s["steps_not_converged"] == 0
     assert s["max_penetration_m"] < 1.1 * 0.25e-6 * V0 * (1 - 0.55)
@@ -106,14 +111,15 @@ def test_energy_ledger_closes_through_the_impact():
 def test_bonded_contact_holds_the_pair_together_and_conserves_momentum():
     """Seed eq. (7), bonded: once a pair carries a compressive impulse all three components of
     x_S - x_C are held (equality rows) until its normal impulse would turn tensile. Checked on the
-    short flat impact: momentum to 1e-9, bonds formed (the contact lasts at least as long as the
+    short flat impact: momentum as converged to round-off, 160 steps x eps (measured 1.3e-15),
+    bonds formed (the contact lasts at least as long as the
     frictionless one), penetration within the same Moreau-Jean bound."""
     sc = load_scenario(CASE)
     data = sc.model_dump(mode="json")
     data["contacts"][0]["kind"] = "bonded"
     r = run_scenario(scenario_from_dict(data))
     s = r.summary
-    assert s["momentum_rel_error"] < 1e-9
+    assert s["momentum_rel_error_converged"] < 160 * EPS
     assert s["max_penetration_m"] < 1.1 * 0.25e-6 * V0 * (1 - 0.55)
     free = _run().summary["contact_intervals_s"][0][1]
     assert s["contact_intervals_s"] and s["contact_intervals_s"][-1][1] >= free - 1e-12

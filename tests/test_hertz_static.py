@@ -44,7 +44,7 @@ from __future__ import annotations
 import numpy as np
 
 from flexmvm.fe.assembly import assemble
-from flexmvm.fe.cholesky import ldl_factor
+from flexmvm.fe.solvers.cholesky import ldl_factor
 from flexmvm.integrate.lcp import solve_checked
 from flexmvm.materials import ALUMINIUM
 from flexmvm.mesh.rod import RodSpec, rod_mesh

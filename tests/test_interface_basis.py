@@ -225,7 +225,9 @@ def test_contact_on_the_interface_basis_is_frictionless_and_non_tensile(short_ru
     # the normal's size would show as O(1)
     p = run.result.body_momentum[:, 1]
     assert np.abs(p[:, 1:]).max() <= 2e-3 * np.abs(p[:, 0]).max()
-    assert s["momentum_rel_error"] < 1e-8
+    # momentum as the steps converged (before their translational balance): measured 4.3e-10
+    # over 120 steps at rtol 1e-10 each, 1.9e-10 of it the solves' residuals summed
+    assert s["momentum_rel_error_converged"] < 2e-9
     # both directions, every surface node: 0.79 um here, against 1.24 um for b2 full FE and
     # 1.21 um for MVM 1-3 + 7 on the same run (velocity-level rows, faceted hemisphere)
     assert s["max_penetration_m"] < 1e-6

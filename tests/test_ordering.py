@@ -10,10 +10,11 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse import csgraph
 
-from flexmvm.fe.cholesky import SymbolicFactor, cholesky_ldl
-from flexmvm.fe.ldl import etree_halves
 from flexmvm.fe.modes import superlu_spd
-from flexmvm.fe.ordering import dissection_order, iteration_pattern
+from flexmvm.fe.solvers.cholesky import cholesky_ldl
+from flexmvm.fe.solvers.ldl import etree_halves
+from flexmvm.fe.solvers.ordering import dissection_order, iteration_pattern
+from flexmvm.fe.solvers.symbolic import SymbolicFactor
 
 
 def _lap(n):

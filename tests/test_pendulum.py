@@ -237,8 +237,8 @@ def test_short_pendulum_after_separation_and_strings():
     """After the separation each rod swings on as a rigid pendulum: its x-momentum at the end
     against p_sep cos(w tau) - m w x_sep sin(w tau) (w = sqrt(g / l)); at the separation
     against the seed case's momenta after its contact (no gravity, no strings). Measured:
-    1.7e-6 and -1.2e-6 (rigid pendulum, b1, b2), 3.5e-5 and -5.8e-5 (seed case). Required 1e-4 and
-    1e-3 (the strings' pull over the 0.66 ms contact, m g x / l dt ~ 1e-6 kg m/s, and the rods'
+    -2.6e-6 and -5.6e-6 (rigid pendulum, b1, b2), 3.7e-5 and -1.25e-4 (seed case). Required 3e-5
+    and 1e-3 (the strings' pull over the 0.66 ms contact, m g x / l dt ~ 1e-6 kg m/s, and the rods'
     vibration, whose momentum is in the centre-of-mass momentum). b2 hangs still until the
     impact: |p_x| < 1e-8 kg m/s (measured 3.7e-10; 3.7e-9 started undeformed, whose bending
     vibration turns the sections under the attachment points, 0.01 m above the axis, and so
@@ -248,7 +248,7 @@ def test_short_pendulum_after_separation_and_strings():
     own, seed = _runs()
     m = momenta_after_separation(own.built, own.result, seed.result)
     for name in ("b1", "b2"):
-        assert abs(m[name]["p_end_rel_err_x"]) < 1e-4, m[name]
+        assert abs(m[name]["p_end_rel_err_x"]) < 3e-5, m[name]
         assert abs(m[name]["p_sep_rel_err_x_vs_seed_case"]) < 1e-3, m[name]
     res, s = own.result, own.summary
     before = res.t < s["contact_intervals_s"][0][0]

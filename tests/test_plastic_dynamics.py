@@ -197,7 +197,7 @@ def strike(coarse_mesh):
 def test_energy_closes_through_a_plastic_impact(strike):
     """kinetic + elastic + stored hardening + plastic dissipation (their sum: the plastic
     work sum sigma : d eps_p dx) - contact work + the theta scheme's dissipation = E(0) to
-    1e-3 of E(0) (the issue's 0.1 %): the return at the midpoints is backward Euler, so the
+    5e-5 of E(0) (the issue's bound is 0.1 %): the return at the midpoints is backward Euler, so the
     plastic work of the returns and the work of the force correction differ at O(h) (measured
     at 1.5 v_y: 7.6e-6 of E(0), the plastic work 0.45 % of it; on the fine block 1.7e-7; at
     2 v_y 7e-6 of E(0), 1.4 %; the aluminium sphere-on-block of the lab note 4e-4, 43 %).
@@ -220,7 +220,7 @@ def test_energy_closes_through_a_plastic_impact(strike):
         - led.contact[-1]
         + led.numerical[-1]
     )
-    assert abs(closed - e0) < 1e-3 * e0, (closed - e0) / e0
+    assert abs(closed - e0) < 5e-5 * e0, (closed - e0) / e0
     _, el = strike["elastic"]
     worst = np.abs(led.residual(res.total_energy)).max()
     assert worst < 1.5 * np.abs(el.energy_ledger.residual(el.total_energy)).max() + 1e-9 * e0

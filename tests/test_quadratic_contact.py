@@ -34,7 +34,7 @@ import numpy as np
 import pytest
 
 from flexmvm.fe.assembly import assemble
-from flexmvm.fe.cholesky import ldl_factor
+from flexmvm.fe.solvers.cholesky import ldl_factor
 from flexmvm.integrate.lcp import solve_checked
 from flexmvm.materials import ALUMINIUM
 from flexmvm.mesh import read_mesh

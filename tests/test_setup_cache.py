@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import os
+import re
 import subprocess
 import sys
 
@@ -155,12 +156,19 @@ def test_code_version_and_file_source(tmp_path):
     assert setup_cache.file_source(tmp_path / "missing.msh") is None
 
 
+def _evicted(entry, why: str) -> str:
+    """The pattern of the one line (errors.StaleDataWarning) that says ``entry`` was
+    evicted and rebuilt for the reason ``why`` (a regular expression)."""
+    return rf"setup cache {re.escape(entry.name)}: {why}: evicted and rebuilt"
+
+
 @pytest.mark.parametrize("damage", [b"not a zip file", b"PK\x03\x04 truncated", b""])
 def test_corrupt_entry_is_rebuilt(rod, fe, cache, damage):
     fresh, _ = _cb(fe, rod)
     (entry,) = cache.glob("basis-*.npz")
     entry.write_bytes(damage)
-    rebuilt, builder = _cb(fe, rod)
+    with pytest.warns(StaleDataWarning, match=_evicted(entry, r"unreadable \(\w+\)")):
+        rebuilt, builder = _cb(fe, rod)
     assert builder.calls == 1 and np.array_equal(rebuilt.psi, fresh.psi)
     hit, again = _cb(fe, rod)
     assert again.calls == 0 and np.array_equal(hit.psi, fresh.psi)
@@ -170,7 +178,8 @@ def test_malformed_entry_is_rebuilt(rod, fe, cache):
     fresh, _ = _cb(fe, rod)
     (entry,) = cache.glob("basis-*.npz")
     np.savez(entry, psi=np.zeros(3))
-    rebuilt, builder = _cb(fe, rod)
+    with pytest.warns(StaleDataWarning, match=_evicted(entry, r"no checksum .*")):
+        rebuilt, builder = _cb(fe, rod)
     assert builder.calls == 1 and np.array_equal(rebuilt.psi, fresh.psi)
 
 
@@ -343,12 +352,14 @@ def test_corrupt_or_malformed_body_entry_is_rebuilt(rod, fe, cache, damage):
     fresh, _ = _cached_parts(basis, rod, fe)
     (entry,) = cache.glob("body-*.npz")
     entry.write_bytes(damage)
-    rebuilt, builder = _cached_parts(basis, rod, fe)
+    with pytest.warns(StaleDataWarning, match=_evicted(entry, r"unreadable \(\w+\)")):
+        rebuilt, builder = _cached_parts(basis, rod, fe)
     assert builder.calls == 1
     _assert_same_parts(rebuilt, fresh)
     arrays = dict(np.load(entry))
     np.savez(entry, **{**arrays, "G2": arrays["G2"][:, :, :1]})
-    rebuilt, builder = _cached_parts(basis, rod, fe)
+    with pytest.warns(StaleDataWarning, match=_evicted(entry, ".*")):
+        rebuilt, builder = _cached_parts(basis, rod, fe)
     assert builder.calls == 1
     _assert_same_parts(rebuilt, fresh)
 
@@ -435,7 +446,7 @@ def test_elimination_order_round_trip(cache):
     """An elimination order is kept under the sparsity pattern alone: the same pattern with
     other values is a hit; a stored "no order" (None) is a hit too; an entry that is not a
     permutation of the right size is rebuilt. (A 10 x 200 grid: a strip, as a rod is.)"""
-    from flexmvm.fe.ordering import dissection_order
+    from flexmvm.fe.solvers.ordering import dissection_order
 
     def lap(n):
         return sp.diags([-np.ones(n - 1), 2.0 * np.ones(n), -np.ones(n - 1)], [-1, 0, 1])
@@ -449,7 +460,8 @@ def test_elimination_order_round_trip(cache):
     assert builder.calls == 1 and np.array_equal(again, first)
     (entry,) = cache.glob("order-*.npz")
     np.savez(entry, order=first[:-1])
-    rebuilt = setup_cache.cached_elimination_order(grid, builder)
+    with pytest.warns(StaleDataWarning, match=_evicted(entry, ".*")):
+        rebuilt = setup_cache.cached_elimination_order(grid, builder)
     assert builder.calls == 2 and np.array_equal(rebuilt, first)
     none = Counter(lambda a: None)
     small = sp.eye(5, format="csr")

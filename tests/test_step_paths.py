@@ -197,7 +197,7 @@ def test_one_full_fe_body_splits_its_solves_without_changing_the_history(monkeyp
     arithmetic is the same on one thread, so the history is the same bit for bit. The tiny
     rod is below SPLIT_MIN_N; the threshold is lowered so that the split really happens
     (checked)."""
-    from flexmvm.fe import ldl
+    from flexmvm.fe.solvers import ldl
 
     monkeypatch.setattr(ldl, "SPLIT_MIN_N", 0)
     seen = []

@@ -88,7 +88,11 @@ def test_stored_case_reused_only_under_its_key(tmp_path, monkeypatch):
     assert re.fullmatch(r"[0-9a-f]{12}(-dirty)?|unknown", meta["commit"])
     again = validation.run_case(tmp_path, "c", sc, progress=False)
     assert len(calls) == 1 and (again.force == first.force).all()
-    validation.run_case(tmp_path, "c", _tiny(theta=0.6), progress=False)  # same folder
+    with pytest.warns(  # same folder
+        StaleDataWarning,
+        match=r"validation case c: run under another resolved scenario: recomputed",
+    ):
+        validation.run_case(tmp_path, "c", _tiny(theta=0.6), progress=False)
     assert len(calls) == 2
     monkeypatch.setattr(provenance, "run_code_version", lambda: "f" * 16)
     with pytest.warns(
@@ -99,7 +103,10 @@ def test_stored_case_reused_only_under_its_key(tmp_path, monkeypatch):
         validation.run_case(tmp_path, "c", _tiny(theta=0.6), progress=False)
     assert len(calls) == 3
     (tmp_path / "c" / "key.json").write_text("{not json")
-    validation.run_case(tmp_path, "c", _tiny(theta=0.6), progress=False)
+    with pytest.warns(
+        StaleDataWarning, match=r"validation case c: key.json unreadable: recomputed"
+    ):
+        validation.run_case(tmp_path, "c", _tiny(theta=0.6), progress=False)
     assert len(calls) == 4
     validation.run_case(tmp_path, "c", _tiny(theta=0.6), progress=False, recompute=True)
     assert len(calls) == 5

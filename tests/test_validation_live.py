@@ -38,6 +38,7 @@ from flexmvm.scenarios.run import run_scenario
 from flexmvm.studies.grid import seed_scheme
 from flexmvm.theory.scenario import theory_histories
 from flexmvm.theory.wave import ContactLaw, Rod1D, two_rod_impact
+from flexmvm.validation import acceptance
 
 ROOT = Path(__file__).resolve().parents[1]
 V0, L, R = 0.21, 0.1, 0.01
@@ -121,9 +122,11 @@ def _ncc_below(a: np.ndarray, b: np.ndarray, cut_hz: float, dt_s: float) -> floa
 
 def _check_sane(run, e_min: float = 0.99) -> None:
     """What every free two-body impact must satisfy, whatever the body models:
-    - total linear momentum conserved to 1e-9 relative (the translational equations are linear
-      and the impulses act in equal and opposite pairs; the solver converges the frame's
-      translational rows to 1e-13, TRANSLATION_RTOL);
+    - total linear momentum, as the steps converged (before the balance of their
+      translational rows, which makes momentum_rel_error round-off by construction), within
+      the validation table's bound (acceptance.MOMENTUM_CONVERGED_BOUND, 5e-9: the Newton
+      rtol 1e-10 a step; measured 1.8e-10 to 6.9e-10 over 340-414 steps, 2.0e-9 with the
+      rigid striker);
     - contact force never tensile, positive during the impact, released before t_end;
     - energy: the end value at most the initial and never above it by more than 1e-9 of it
       (the scenario's scheme, the position law at theta = 1/2 + dt_s / (4 tau), adds none: a
@@ -143,7 +146,7 @@ def _check_sane(run, e_min: float = 0.99) -> None:
     - rebound direction: after the impact both move in +x and the target faster than the
       striker (m1 = 0.255 kg > m2 = 0.085 kg: the striker follows, slower)."""
     s, res = run.summary, run.result
-    assert s["momentum_rel_error"] < 1e-9
+    assert s["momentum_rel_error_converged"] < acceptance.MOMENTUM_CONVERGED_BOUND
     assert s["max_contact_force_N"] > 0.0
     # every LCP met its complementarity tolerance (a tensile impulse reads ~1) and every step
     # converged to the Newton tolerance
@@ -203,22 +206,23 @@ def test_short_mvm_matches_its_full_fe():
     nodes are massless, so their constraint modes split into the 75 nodal unit vectors and the
     static fields of 11 smooth patterns, reduction/basis.py MasslessStatics.PATCH) against its
     full FE on
-    the short case: force NCC >= 0.999 (the issue's target; measured 1 - 3.7e-7), peak,
+    the short case: force NCC >= 1 - 5e-6 (the issue's target 0.999; measured 1 - 6.2e-7:
+    the MVM reproduces its full FE's force to the step's error, NCC(h/2 vs h) 1 - 2e-7), peak,
     impulse and contact duration within 0.5 % (measured -0.033 %, -2e-4 %, +0.08 %: the
     step-halving change is 0.015-0.025 %, so 0.5 % is still far below the 1-3 % mesh error),
-    b2 free-end velocity NCC >= 0.995 whole and >= 0.999 below 50 kHz (measured 0.99948 and
-    0.99995; on the damped scheme 0.99996 and 0.99999; at theta = 1/2, where nothing damps the
+    b2 free-end velocity NCC >= 0.995 whole and >= 1 - 3e-4 below 50 kHz (measured 0.99955
+    and 1 - 4.5e-5; on the damped scheme 0.99996 and 0.99999; at theta = 1/2, where nothing damps the
     content the 37-mode basis and the full mesh carry differently above 50 kHz, 0.99801 and
     0.99985)."""
     full, mvm = _short("full"), _short("mvm")
     assert mvm.summary["dof"]["b2"] == 3 * 25 + 11 + 37 + 6
     c = compare_runs(*full.result.curves(), *mvm.result.curves())
-    assert c["ncc_force"] >= 0.999
+    assert c["ncc_force"] >= 1 - 5e-6
     for key in ("peak_err", "impulse_err", "duration_err"):
         assert abs(c[key]) < 0.005, (key, c[key])
     assert c["ncc_b2_free_end"] >= 0.995
     v_full, v_mvm = (run.result.curves()[2]["b2_free_end"] for run in (full, mvm))
-    assert _ncc_below(v_full, v_mvm, 50e3, 2e-6) >= 0.999
+    assert _ncc_below(v_full, v_mvm, 50e3, 2e-6) >= 1 - 3e-4
     _penetration_ok(mvm.summary)
     _check_sane(mvm)
 
@@ -355,8 +359,10 @@ def test_two_rigid_bodies_impact_conserves_momentum_and_loses_energy():
     scheme gives it e = (1 - theta) / theta: test_two_rigid_bodies_rebound_with_the_schemes_restitution):
     one impulse at t = 0 brings the contact point to rest (Newton e = 0),
     the exact outcome is the plastic impact, v = m1 v0 / (m1 + m2), losing m2 / (m1 + m2) =
-    25.0 % of the energy. What must hold whatever the stabilisation: momentum to 1e-9, the
-    impulse between plastic and elastic, the energy loss within 1 % of the plastic one
+    25.0 % of the energy. What must hold whatever the stabilisation: momentum as converged
+    to 2e-10 (measured 3.0e-11 over 500 steps), the impulse between plastic and elastic (the
+    point-mass formula of _restitution reads it -9.7e-4 below the plastic one: the impulse
+    also turns the rods, as on the scheme's own rebound; bound -2e-3), the energy loss within 1 % of the plastic one
     (measured 24.95 %: the impulse turns the rods, test_two_rigid_bodies_impact_is_plastic),
     one impact: the first step carries the impulse, and what the bodies then exchange while
     they stay touching (their contact points at rest relative to each other, the rods
@@ -364,7 +370,7 @@ def test_two_rigid_bodies_impact_conserves_momentum_and_loses_energy():
     run = _short("rigid-both-damped")
     s = run.summary
     m1, m2 = _masses(run)
-    assert s["momentum_rel_error"] < 1e-9 and s["lcp_residual_max"] <= 1e-8
+    assert s["momentum_rel_error_converged"] < 2e-10 and s["lcp_residual_max"] <= 1e-8
     assert -2e-3 <= _restitution(run) <= 1.0
     assert abs(-s["energy_rel_error"] - m2 / (m1 + m2)) < 0.01
     steps = run.result.steps
@@ -381,14 +387,14 @@ def test_two_rigid_bodies_impact_is_plastic():
     (Moreau-Jean's position update); the penetration recovery (contact/pairs.py beta = 0.2)
     is capped by the pair's closing speed, 0 from then on, so it does not turn that
     penetration into a separation velocity beta (1 - theta) v0 (measured before the cap:
-    e = 0.089, separation 0.0186 m/s). Required |e| < 1e-3 (the round-off of the energies and
-    of the impulse allows far less: measured 2.9e-7); the penetration held at that of the
+    e = 0.089, separation 0.0186 m/s). Required |e| < 2e-6 (measured 2.9e-7, 6e-8 m/s of
+    the 0.21 m/s closing speed; the issue's bound is 1e-3); the penetration held at that of the
     closing step, h (1 - theta) v0, within 2 % for b2's constrained nodes (4.7e-8 m
     measured), while b1's apex node, not constrained, sits inside b2's flat facets as the rods
     turn (1.06e-7 m measured after 250 us, within PEN_MAX)."""
     run = _short("rigid-both-damped")
     e = _newton_restitution(run)
-    assert abs(e) < 1e-3, e
+    assert abs(e) < 2e-6, e
     by = run.summary["max_penetration_by_direction_m"]
     assert by["b2 nodes into b1"] <= 1.02 * 0.5e-6 * (1 - 0.55) * V0, by
     assert run.summary["max_penetration_m"] < PEN_MAX, by
@@ -401,8 +407,8 @@ def test_two_rigid_bodies_rebound_with_the_schemes_restitution():
     theta = 0.9608 at theta = 0.51 (1 at theta = 1/2; rigid bodies have no contact nodes to
     make massless, and the scheme's restitution is all a rigid impact gets). Exact outcome:
     v1 = (m1 - e m2) v0 / (m1 + m2), v2 = (1 + e) m1 v0 / (m1 + m2), the energy lost
-    (1 - e^2) m2 / (m1 + m2) of the start (the relative motion's share). Required: momentum to
-    1e-9; the restitution from the impulse within 5e-3 of (1 - theta) / theta (measured 0.9589
+    (1 - e^2) m2 / (m1 + m2) of the start (the relative motion's share). Required: momentum as
+    converged to 2e-10 (measured 2.1e-11 over 137 steps); the restitution from the impulse within 5e-3 of (1 - theta) / theta (measured 0.9589
     against 0.9608: the apex pair's normal is that of a facet of the faceted cap, tilted by
     about a facet over the cap radius, so the impulse also turns the rods and the point-mass
     formula of _restitution reads it 0.2 % short, as at theta = 1/2: 0.9981); the energy lost
@@ -411,7 +417,7 @@ def test_two_rigid_bodies_rebound_with_the_schemes_restitution():
     run = _short("rigid-both")
     s = run.summary
     theta = run.built.grid.theta
-    assert s["momentum_rel_error"] < 1e-9 and s["lcp_residual_max"] <= 1e-8
+    assert s["momentum_rel_error_converged"] < 2e-10 and s["lcp_residual_max"] <= 1e-8
     e = _restitution(run)
     assert abs(e - (1 - theta) / theta) < 5e-3
     m1, m2 = _masses(run)

@@ -58,7 +58,7 @@ def test_bounds_and_failures():
         {
             "plateau_err": 0.05,
             "jump_err": 0.0,
-            "momentum_rel_error": 0.0,
+            "momentum_rel_error_converged": 0.0,
             "lcp_residual_max": 0.0,
             "steps_not_converged": 0,
         },

@@ -176,7 +176,7 @@ def _closest(
 @numba.njit(cache=True)
 def _finish(i, g, best, xs, vs, xm, vm, conn, n_quads, out):
     """Row i of out (ns, 11): weights (4), xi (2), normal (3), gap [m], normal velocity u_N
-    [m/s]. A projection outside its facet is clamped as pairs._clamp does: local coordinates
+    [m/s]. A projection outside its facet is clamped as reference.clamp does: local coordinates
     clamped to the facet, weights and gap recomputed there, the normal kept."""
     e, h = best[REC_XI], best[REC_XI + 1]
     w = out[i, 0:4]

@@ -21,8 +21,9 @@ import scipy.sparse as sp
 
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.errors import SolverError
-from flexmvm.fe.cholesky import SymbolicFactor, cholesky_ldl
-from flexmvm.fe.ordering import elimination_order
+from flexmvm.fe.solvers.cholesky import cholesky_ldl
+from flexmvm.fe.solvers.ordering import elimination_order
+from flexmvm.fe.solvers.symbolic import SymbolicFactor
 from flexmvm.integrate.compliance import NodalColumns, NodalCompliance, nodal_compliance
 from flexmvm.integrate.dense_solve import cho_solve, lu_solve
 

@@ -38,7 +38,7 @@ import scipy.sparse as sp
 
 from flexmvm.constraints.contact import ContactLaw
 from flexmvm.errors import SolverError
-from flexmvm.fe.cholesky import ldl_factor
+from flexmvm.fe.solvers.cholesky import ldl_factor
 from flexmvm.integrate.lcp import regularised_cho
 from flexmvm.loads.applied import applied_forces
 

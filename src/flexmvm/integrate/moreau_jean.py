@@ -434,9 +434,8 @@ class MoreauJeanIntegrator:
         n_j = self.n_joint_rows
         lam, v_plus = s.lam, s.v_plus
         rel, res_t = s.rel, s.translation_sum
-        shift = np.zeros(3)
+        converged_t, shift = res_t, np.zeros(3)  # the solves' translational rows, unbalanced
         if not n_j:
-            converged_t = res_t
             rel, res_t = balance_translation(
                 balanced_residuals(self.system.bodies, s.residuals, scales, mids),
                 ends,
@@ -471,7 +470,7 @@ class MoreauJeanIntegrator:
             drift,
             converged=rel <= self.rtol or s.at_roundoff,
             residual=rel,
-            translation_residual=res_t,
+            translation_residual=converged_t,
             lcp_residual=s.lcp_max,
             momentum_shift=shift,
             plastic_work=plastic_work,

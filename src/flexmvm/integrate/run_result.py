@@ -145,10 +145,10 @@ class RunResult:
     # time it carried one [s]] over the run (the reduced-basis guard, scenarios/guard.py)
     contact_row_impulses: dict = field(default_factory=dict)
     momentum_residual: np.ndarray = field(default_factory=lambda: np.zeros(3))
-    # sum over all steps of the translational momentum residuals of all bodies [N s]: the
-    # linear-momentum change the scheme's solves left unbalanced (a free system's error)
+    # sum over all steps of the translational momentum residuals of all bodies as the solves
+    # left them, before their balance [N s]: a free system's momentum error without it
     # (n_out, 3) the linear momentum the steps' translational balance
-    # (MoreauJeanIntegrator._balance_translation) added up to each output time [N s]:
+    # (integrate.momentum_balance.balance_translation) added up to each output time [N s]:
     # momentum - momentum_shift is the momentum of the steps as converged, before the balance
     momentum_shift: np.ndarray | None = None
     wall_time_s: float = 0.0

@@ -28,7 +28,7 @@ class StepResult:
     converged: bool = True  # False: stopped on the round-off floor above rtol
     residual: float = 0.0  # largest momentum residual at exit, relative to the body's scale
     translation_residual: np.ndarray | None = None  # (3,) sum over bodies of the exit
-    # residual's translational rows [N s]
+    # residual's translational rows as the solves left them, before their balance [N s]
     # (3,) the linear momentum the balance of the translational rows added to the step's
     # solution [N s] (integrate.momentum_balance): zero when not taken
     momentum_shift: np.ndarray | None = None

@@ -42,6 +42,7 @@ from flexmvm.scenarios import pendulum
 from flexmvm.scenarios.compare import compare_runs
 from flexmvm.scenarios.guard import guard_warnings
 from flexmvm.scenarios.load import load_scenario
+from flexmvm.scenarios.plastic_summary import plastic_guard_warnings
 from flexmvm.scenarios.run import energy_gain_warning, run_scenario
 from flexmvm.scenarios.schema import Scenario
 
@@ -167,6 +168,8 @@ def run_main_job(
             "(summary.json failures names the reference)"
         ) from ref_exc
     for line in guard_warnings(summary.get("reduced_contact_guard") or {}):
+        echo(f"warning: {line}")
+    for line in plastic_guard_warnings(summary):  # a reduced plastic body's zone left its region
         echo(f"warning: {line}")
     line = energy_gain_warning(summary)
     if line is not None:

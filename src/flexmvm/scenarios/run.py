@@ -68,10 +68,11 @@ class ScenarioRun:
 MOMENTUM_ERROR_NOTE = (
     "momentum_rel_error: max over the outputs of |p(t) - p(0)| / |p(0)| of the run as "
     "returned, whose steps' translational rows are balanced after convergence (a shift of "
-    "each frame velocity, MoreauJeanIntegrator._balance_translation): round-off by "
+    "each frame velocity, integrate.momentum_balance.balance_translation): round-off by "
     "construction, not evidence of convergence. momentum_rel_error_converged: the same of "
     "the momentum the steps converged to, before that shift (p(t) minus the shifts so far): "
-    "what the Newton tolerance left, it grows when the tolerance is loosened."
+    "what the Newton tolerance left, it grows when the tolerance is loosened. "
+    "momentum_residual_rel: the steps' translational residuals summed, before that shift."
 )
 
 
@@ -197,8 +198,8 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         "smallest_step_s": float(res.smallest_step_s),
         "newton_residual_max": float(res.newton_residual_max),
         "lcp_residual_max": float(res.lcp_residual_max),
-        # the momentum the solves left unbalanced, relative to the initial momentum: what
-        # momentum_rel_error can be at most, from the residuals themselves (free systems)
+        # the momentum the solves left unbalanced (their translational residuals summed,
+        # before the balance), relative to the initial momentum (free systems)
         "momentum_residual_rel": (
             float(np.linalg.norm(res.momentum_residual) / scale) if free else None
         ),

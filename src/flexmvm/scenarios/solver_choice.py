@@ -9,8 +9,8 @@ import numpy as np
 import scipy.sparse as sp
 
 from flexmvm.bodies.body import FlexibleBody
-from flexmvm.fe import ldl
-from flexmvm.fe.ordering import elimination_order, iteration_pattern
+from flexmvm.fe.solvers import ldl
+from flexmvm.fe.solvers.ordering import elimination_order, iteration_pattern
 from flexmvm.scenarios.setup import SetupCache
 
 
