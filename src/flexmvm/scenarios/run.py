@@ -13,6 +13,7 @@ from flexmvm.errors import SimulationFailed
 from flexmvm.integrate.driver import simulate
 from flexmvm.integrate.run_result import ProbeHistory, RunResult, StepHistory
 from flexmvm.scenarios import pendulum
+from flexmvm.scenarios.blowup import blowup_failure
 from flexmvm.scenarios.build import BuiltScenario, build_scenario
 from flexmvm.scenarios.energy_report import momentum_report, report_entries
 from flexmvm.scenarios.guard import contact_guard, energy_gain_warning, guard_warnings
@@ -96,7 +97,8 @@ def run_scenario(
     guard fires (summary reduced_contact_guard).
 
     Raises SimulationFailed when the run stops before its end time (a step that did not
-    converge at the smallest step): its ``partial`` is the ScenarioRun up to the failure,
+    converge at the smallest step), or when it blew up (scenarios.blowup: a contact gone
+    through a surface, energy put in): its ``partial`` is the ScenarioRun up to the failure,
     whose summary has ``status = "failed"`` and the reason in ``failure``."""
     built = build_scenario(sc, setup)
     try:
@@ -107,6 +109,10 @@ def run_scenario(
         partial = ScenarioRun(label, built, exc.partial, summarize(exc.partial, built))
         raise SimulationFailed(str(exc), partial) from exc
     summary = summarize(res, built)
+    blown = blowup_failure(summary, built)  # a run that blew up fails (scenarios.blowup)
+    if blown is not None:
+        failed = {**summary, "status": "failed", "failure": blown}
+        raise SimulationFailed(blown, ScenarioRun(label, built, res, failed))
     if warn:
         for line in guard_warnings(summary["reduced_contact_guard"]):
             warnings.warn(line, ReducedBasisWarning, stacklevel=2)
