@@ -259,3 +259,20 @@ def test_ctrl_c_on_select_is_one_line_and_130(tmp_path):
     while any(_alive(k) for k in kids) and time.monotonic() < deadline:
         time.sleep(0.1)
     assert not [k for k in kids if _alive(k)]
+
+
+def test_ctrl_c_before_the_cases_is_one_line_and_130(tmp_path, capsys, monkeypatch):
+    """Ctrl-C during the full-FE reference (no case yet): one line and 130 (was click's
+    blank line, then the run command's message about output directories)."""
+    from flexmvm.studies import selection
+
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(selection, "reference_history", interrupted)
+    out = tmp_path / "study"
+    code, _, err = _in_process(["select", TINY, *SELECT_FAST, "--serial", "--out", out], capsys)
+    assert (
+        code == 130
+        and err == f"flexmvm: interrupted before the cases ran; rerun to resume in {out}\n"
+    ), err

@@ -13,6 +13,7 @@ from pathlib import Path
 import click
 
 from flexmvm.errors import FlexmvmError, InputError, OutputError, StudyInterrupted
+from flexmvm.processes import Terminated
 
 #: OSErrors of a storage that takes no more data: full, over quota, read-only.
 NO_ROOM = frozenset({errno.ENOSPC, errno.EDQUOT, errno.EROFS})
@@ -76,12 +77,20 @@ def _written(filename, out_dir: Path) -> Path:
 def study_output(out_dir: Path) -> Iterator[None]:
     """A study command's last guard for its writes: an OSError of a full, over-quota or
     read-only storage (NO_ROOM) that no writer named becomes an OutputError of one line
-    naming the file (exit status 2, not 1 with the raw OSError); a Ctrl-C during the cases
-    (StudyInterrupted) its one line and exit status 130; other errors pass."""
+    naming the file (exit status 2, not 1 with the raw OSError); a Ctrl-C its one line (during
+    the cases: StudyInterrupted's, how many are stored) and exit status 130; SIGTERM and
+    other errors pass."""
     try:
         yield
-    except StudyInterrupted as exc:  # before click, which prints a blank line and aborts
-        click.echo(f"flexmvm: {exc}", err=True)
+    except KeyboardInterrupt as exc:  # here, not in click: it prints a blank line, aborts
+        if isinstance(exc, Terminated):
+            raise
+        line = (
+            str(exc)
+            if isinstance(exc, StudyInterrupted)
+            else f"interrupted before the cases ran; rerun to resume in {out_dir}"
+        )
+        click.echo(f"flexmvm: {line}", err=True)
         sys.exit(130)  # not click's Exit: main(standalone_mode=False) returns its code
     except FlexmvmError:
         raise
