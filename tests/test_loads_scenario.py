@@ -127,7 +127,7 @@ def test_empty_tables_are_left_out_of_dumps():
 @pytest.mark.parametrize(
     ("path", "value", "expected"),
     [
-        (("loads", 0, "times_s"), [0.0, 0.0], "loads[0].torque_nm: times must be strictly"),
+        (("loads", 0, "times_s"), [0.0, 0.0], "loads[0].times_s: times must increase strictly"),
         (("loads", 0, "torque_nm"), [0.0, 5.0, 1.0], "values must have shape (2,)"),
         (("loads", 1, "force_n"), [1.0, 2.0], "loads[1].force_n: must be 3 numbers"),
         (("loads", 0, "joint"), 3, "loads[0].joint: no joints[3] (1 joint(s))"),

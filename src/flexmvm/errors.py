@@ -68,3 +68,8 @@ def notes_as_lines() -> None:
 
 class OutputError(FlexmvmError, OSError):
     """A result file could not be written (disk full, no permission): names the file."""
+
+
+class StudyInterrupted(KeyboardInterrupt):
+    """A study stopped by Ctrl-C: the message is its one line (how many cases are stored and
+    where, and that a rerun resumes); the CLI prints it and exits with status 130."""

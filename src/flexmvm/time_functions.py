@@ -94,12 +94,17 @@ class Table(TimeFunction):
         if a.shape[0] < 2:
             raise InputError(f"{what}: expected at least 2 rows, got {a.shape[0]}")
         if not np.all(np.isfinite(a)):
-            raise InputError(f"{what}: every entry must be finite")
+            i, j = (int(k) for k in np.argwhere(~np.isfinite(a))[0])
+            col = "its time" if j == 0 else f"value {j}"
+            raise InputError(
+                f"{what}: every entry must be finite, got {a[i, j].item()!r} in row {i} ({col})"
+            )
         steps = np.diff(a[:, 0])
         if not np.all(steps > 0):
             i = int(np.argmax(steps <= 0))
             raise InputError(
-                f"{what}: times must increase strictly, got t = {float(a[i, 0])!r} then {float(a[i + 1, 0])!r}"
+                f"{what}: times must increase strictly, got t = {_as_written(rows, i, a)!r} "
+                f"then {_as_written(rows, i + 1, a)!r}"
             )
         return cls(a[:, 0].copy(), a[:, 1].copy() if width == 1 else a[:, 1:].copy())
 
@@ -147,6 +152,16 @@ class Table(TimeFunction):
     @staticmethod
     def _out(x):
         return np.array(x, float) if np.ndim(x) else float(x)
+
+
+def _as_written(rows, i: int, a: np.ndarray):
+    """Row i's time as the user wrote it (an int stays an int; numpy scalars become Python
+    numbers, never a numpy repr such as np.float64(5e-06))."""
+    try:
+        t = rows[i][0]
+    except (TypeError, IndexError, KeyError):
+        return float(a[i, 0])
+    return t.item() if isinstance(t, np.generic) else t
 
 
 def _col(dt: np.ndarray, values: np.ndarray) -> np.ndarray:

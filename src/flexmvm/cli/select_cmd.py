@@ -8,7 +8,7 @@ from pathlib import Path
 
 import click
 
-from flexmvm.cli.study_options import check_workers, study_run_options
+from flexmvm.cli.study_options import check_workers, study_output, study_run_options
 from flexmvm.errors import InputError
 
 _DOTS = re.compile(r"^\s*(\d+)\s*\.\.\s*(\d+)\s*$")
@@ -177,27 +177,28 @@ def command(
     patch_sets = parse_patches(patches) if patches is not None else None
     if_modes = parse_range(interface_modes, "interface-modes")
     tgt = Target.parse(target)
-    check_workers(workers)
-    run_selection_study(
-        scenario,
-        body,
-        out_dir,
-        *grid,
-        target=tgt,
-        search=search,
-        scheduler=scheduler,
-        n_workers=workers,
-        progress=progress,
-        t_end_s=t_end,
-        dt_s=dt,
-        other=other,
-        serial=serial,
-        echo=click.echo,
-        kind=kind,
-        patches=patch_sets,
-        interface_modes=if_modes,
-        regions=regions,
-        centre_m=centre_m,
-        patch_surface=patch_surface,
-    )
+    check_workers(workers, scheduler)
+    with study_output(out_dir):
+        run_selection_study(
+            scenario,
+            body,
+            out_dir,
+            *grid,
+            target=tgt,
+            search=search,
+            scheduler=scheduler,
+            n_workers=workers,
+            progress=progress,
+            t_end_s=t_end,
+            dt_s=dt,
+            other=other,
+            serial=serial,
+            echo=click.echo,
+            kind=kind,
+            patches=patch_sets,
+            interface_modes=if_modes,
+            regions=regions,
+            centre_m=centre_m,
+            patch_surface=patch_surface,
+        )
     click.echo(f"wrote {out_dir}")

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import click
 
-from flexmvm.cli.study_options import check_workers, study_run_options
+from flexmvm.cli.study_options import check_workers, study_output, study_run_options
 from flexmvm.scenarios import ModelKind
 
 
@@ -65,23 +65,24 @@ def materials(
     from flexmvm.cli.select_cmd import parse_range
     from flexmvm.studies.materials import parse_selections, run_materials_study
 
-    check_workers(workers)
+    check_workers(workers, scheduler)
     names = [m.strip() for m in materials.split(",") if m.strip()]
-    run_materials_study(
-        scenario,
-        out_dir,
-        body=body,
-        materials=names,
-        selections=parse_selections(selections),
-        modes=parse_range(modes, "modes"),
-        scheduler=scheduler,
-        n_workers=workers,
-        progress=progress,
-        t_end_s=t_end,
-        dt_s=dt,
-        other=other,
-        serial=serial,
-        echo=click.echo,
-        kind=kind,
-    )
+    with study_output(out_dir):
+        run_materials_study(
+            scenario,
+            out_dir,
+            body=body,
+            materials=names,
+            selections=parse_selections(selections),
+            modes=parse_range(modes, "modes"),
+            scheduler=scheduler,
+            n_workers=workers,
+            progress=progress,
+            t_end_s=t_end,
+            dt_s=dt,
+            other=other,
+            serial=serial,
+            echo=click.echo,
+            kind=kind,
+        )
     click.echo(f"wrote {out_dir}")

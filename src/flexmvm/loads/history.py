@@ -54,7 +54,8 @@ class TimeHistory:
         if np.any(np.diff(t) <= 0.0):
             k = int(np.flatnonzero(np.diff(t) <= 0.0)[0])
             raise InputError(
-                f"{what}: times must be strictly increasing, got {t[k]!r} then {t[k + 1]!r} s"
+                f"{what}: times must be strictly increasing, got {float(t[k])!r} then "
+                f"{float(t[k + 1])!r} s"
             )
         return cls(t, v)
 

@@ -55,7 +55,9 @@ def _need_allow(obj, need: set[str], allowed: set[str], fields: tuple[str, ...],
 
 def history_of(value: Any, times_s: Any, width: int, key: str) -> TimeHistory:
     """The TimeHistory of a constant ``value`` or, with ``times_s``, a table of values (one
-    per time); a problem() naming ``key`` otherwise."""
+    per time); a problem() naming ``key`` otherwise, ``times_s`` when the times are wrong."""
+    if times_s is not None:
+        _check_times(times_s)
     try:
         if times_s is None:
             ok = (width == 1 and _number(value)) or (
@@ -68,15 +70,33 @@ def history_of(value: Any, times_s: Any, width: int, key: str) -> TimeHistory:
                 shape = "a number" if width == 1 else "3 numbers [x, y, z]"
                 raise InputError(f"must be {shape} (or a table with times_s), got {value!r}")
             return TimeHistory.constant(value, -math.inf, key)
-        if not (isinstance(times_s, (list, tuple)) and all(map(_number, times_s))):
-            raise InputError(f"times_s must be a list of numbers [s], got {times_s!r}")
         rows = value if isinstance(value, (list, tuple)) else [value]
         flat = [x for r in rows for x in (r if isinstance(r, (list, tuple)) else [r])]
         if not all(map(_number, flat)):
             raise InputError(f"must hold numbers only, got {value!r}")
+        bad = next((x for x in flat if not math.isfinite(x)), None)
+        if bad is not None:
+            raise InputError(f"expected finite values, got {bad!r} in {value!r}")
         return TimeHistory.table(times_s, value, width, "table")
     except (InputError, ValueError) as exc:
         raise problem(str(exc).removeprefix(f"{key}: ").removeprefix("table: "), key) from None
+
+
+def _check_times(times_s: Any) -> None:
+    """A problem() naming ``times_s`` unless it is a list of finite numbers increasing
+    strictly; the offending entries shown as written (a Python float, not a numpy repr)."""
+    if not (isinstance(times_s, (list, tuple)) and times_s and all(map(_number, times_s))):
+        raise problem(f"expected a list of numbers [s], got {times_s!r}", "times_s")
+    for i, t in enumerate(times_s):
+        if not math.isfinite(t):
+            raise problem(f"expected finite times [s], got {t!r} at index {i}", "times_s")
+    for i in range(len(times_s) - 1):
+        if not times_s[i + 1] > times_s[i]:
+            raise problem(
+                f"times must increase strictly, got {times_s[i]!r} then {times_s[i + 1]!r} s "
+                f"(indices {i}, {i + 1})",
+                "times_s",
+            )
 
 
 def _number(x: Any) -> bool:

@@ -60,7 +60,7 @@ from flexmvm.scenarios.fields import (
     Positive,
     check_rod_set,
 )
-from flexmvm.scenarios.initial_motion import check_motion_names
+from flexmvm.scenarios.initial_motion import check_impact_speeds, check_motion_names
 from flexmvm.scenarios.joint_schema import JointConfig
 from flexmvm.scenarios.load_schema import (
     LoadConfig,
@@ -238,6 +238,7 @@ class Scenario(Frozen):
             if j.type is JointType.DISTANCE and j.length_m is None:
                 _check_string_length(j, bodies, f"joints[{i}]")
         check_motion_names(self.joints, self.bodies)
+        check_impact_speeds(self.contacts, self.bodies)
         check_supports(self.supports, bodies, self.joints)
         check_load_references(self.loads, self.springs, self.joints, bodies, _known_body)
         for i, p in enumerate(self.probes):

@@ -20,6 +20,7 @@ from typing import Any
 from flexmvm.errors import InputError, announce_recompute
 from flexmvm.results.atomic import canonical_json, file_sha256, write_json_atomic
 from flexmvm.results.history import history_problem, history_record, read_history, write_history
+from flexmvm.results.output import writing
 from flexmvm.scenarios import Scenario
 from flexmvm.scenarios.compare import compare_runs
 from flexmvm.scenarios.guard import validity_fields
@@ -92,16 +93,18 @@ def reference_history(
     ref = reference_scenario(sc, body)
     run = run_scenario(ref, label="full", progress=progress)
     t, f, probes = run.result.curves()
-    write_history(hist, t, f, probes)
-    write_json_atomic(
-        meta,
-        {
-            "identity": {"body": body, "scenario": sc.model_dump(mode="json")},
-            "provenance": stamp(ref),
-            "history": history_record(hist),
-            "summary": run.summary,
-        },
-    )
+    with writing(hist):  # a full disk: OutputError naming the file
+        write_history(hist, t, f, probes)
+    with writing(meta):
+        write_json_atomic(
+            meta,
+            {
+                "identity": {"body": body, "scenario": sc.model_dump(mode="json")},
+                "provenance": stamp(ref),
+                "history": history_record(hist),
+                "summary": run.summary,
+            },
+        )
     return hist, True
 
 

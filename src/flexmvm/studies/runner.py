@@ -28,8 +28,16 @@ from typing import Any
 
 from tqdm import tqdm
 
-from flexmvm.errors import InputError, SolverError, announce_recompute, notes_as_lines
+from flexmvm.errors import (
+    InputError,
+    SolverError,
+    StudyInterrupted,
+    announce_recompute,
+    notes_as_lines,
+)
+from flexmvm.processes import Terminated
 from flexmvm.results.atomic import canonical_json, write_json_atomic, write_text_atomic
+from flexmvm.results.output import writing
 from flexmvm.studies.case_store import (
     CASES_DIR,
     Case,
@@ -41,6 +49,7 @@ from flexmvm.studies.case_store import (
     load_stored,
     result_sha256,
 )
+from flexmvm.studies.dask_client import PRELOAD, check_scheduler, close_quietly, connect
 from flexmvm.studies.main_guard import main_guard_advice, unguarded_main_script
 from flexmvm.threads import ENV_THREADS
 
@@ -49,6 +58,7 @@ __all__ = [
     "Params",
     "case_path",
     "check_cluster_options",
+    "check_study_cluster",
     "cluster_slots",
     "collect",
     "error_path",
@@ -110,17 +120,20 @@ class _Recorder:
         except InputError as exc:
             self.failure(case, exc, "")
             return
-        write_json_atomic(case_path(self.out_dir, case.key), json.loads(text))
+        path = case_path(self.out_dir, case.key)
+        with writing(path):  # a full disk: OutputError naming the file (stops the study)
+            write_json_atomic(path, json.loads(text))
         error_path(self.out_dir, case.key).unlink(missing_ok=True)
         self.results[case.key] = json.loads(text)["result"]
         self.bar.update(1)
 
     def failure(self, case: Case, exc: BaseException, tb_text: str) -> None:
         line = _one_line(exc)
-        write_text_atomic(
-            error_path(self.out_dir, case.key),
-            f"case {case.key} failed: {line}\nparams: {case.params}\n\n{tb_text}",
-        )
+        path = error_path(self.out_dir, case.key)
+        with writing(path):
+            write_text_atomic(
+                path, f"case {case.key} failed: {line}\nparams: {case.params}\n\n{tb_text}"
+            )
         self.failed.append((case.key, line))
         self.bar.update(1)
 
@@ -166,8 +179,9 @@ def local_cluster(n_workers: int):
     """A LocalCluster of n_workers single-threaded processes that hands each worker one case
     at a time (worker-saturation 1.0: with the default 1.1 a one-thread worker is sent two
     cases, and with long cases one worker can sit idle while another holds two), no
-    dashboard; the workers' thread pools as worker_env. InputError, before any process is
-    started, when the main script has no main guard (unguarded_main_script)."""
+    dashboard; the workers' thread pools as worker_env, SIGINT ignored in them (the driver
+    handles a Ctrl-C and closes the cluster: studies/dask_client.py). InputError, before
+    any process is started, when the main script has no main guard (unguarded_main_script)."""
     script = unguarded_main_script()
     if script is not None:
         raise InputError(
@@ -190,6 +204,7 @@ def local_cluster(n_workers: int):
             processes=True,
             dashboard_address=None,
             env=worker_env(n_workers),
+            preload=[PRELOAD],
         )
 
 
@@ -202,6 +217,13 @@ def check_cluster_options(scheduler: str | None, n_workers: int | None, serial: 
         raise InputError("--workers applies to a local cluster; expected no --scheduler with it")
     if n_workers is not None and n_workers < 1:
         raise InputError(f"workers: expected a positive integer, got {n_workers}")
+
+
+def check_study_cluster(scheduler: str | None, n_workers: int | None, serial: bool) -> None:
+    """What a study checks before its full-FE reference: :func:`check_cluster_options`, and
+    a ``scheduler`` that answers within seconds (dask_client.check_scheduler)."""
+    check_cluster_options(scheduler, n_workers, serial)
+    check_scheduler(scheduler)
 
 
 @contextlib.contextmanager
@@ -218,21 +240,10 @@ def study_cluster(
     cluster = local_cluster(_local_workers(n_workers))
     try:
         yield cluster.scheduler_address
-    finally:
-        cluster.close()
-
-
-def _connect(scheduler: str):
-    """A distributed Client of the running scheduler at ``scheduler``; InputError if none."""
-    from distributed import Client
-
-    try:
-        return Client(scheduler, set_as_default=False)
-    except OSError as exc:
-        raise InputError(
-            f"cannot connect to Dask scheduler {scheduler!r} ({_one_line(exc)}); "
-            "expected the address of a running scheduler, e.g. tcp://host:8786"
-        ) from None
+    except BaseException:  # a stop (error, Ctrl-C): the cluster closed without Dask's lines
+        close_quietly(cluster.close)
+        raise
+    cluster.close()
 
 
 def cluster_slots(scheduler: str | None, n_workers: int | None, serial: bool) -> int:
@@ -245,7 +256,7 @@ def cluster_slots(scheduler: str | None, n_workers: int | None, serial: bool) ->
         return 1
     if scheduler is None:
         return _local_workers(n_workers)
-    client = _connect(scheduler)
+    client = connect(scheduler)
     try:
         return max(1, sum(client.nthreads().values()))
     finally:
@@ -259,7 +270,7 @@ def _run_dask(
     scheduler: str | None,
     n_workers: int | None,
 ) -> None:
-    from distributed import Client, as_completed
+    from distributed import Client
 
     _check_picklable(fn)
     cluster = None
@@ -271,31 +282,40 @@ def _run_dask(
             cluster.close()
             raise
     else:
-        client = _connect(scheduler)
+        client = connect(scheduler)
     try:
         client.run(notes_as_lines)  # a recomputed setup-cache entry: one line on the worker
-        run_id = uuid.uuid4().hex[:12]
-        by_key = {}
-        futures = []
-        for case in pending:
-            fut = client.submit(fn, case, key=f"flexmvm-case-{case.key}-{run_id}", pure=False)
-            by_key[fut.key] = case
-            futures.append(fut)
-        for fut in as_completed(futures, loop=client.loop):
-            case = by_key[fut.key]
-            if fut.status == "error":
-                exc = fut.exception()
-                tb = fut.traceback()
-                rec.failure(case, exc, "".join(traceback.format_exception(type(exc), exc, tb)))
-            elif fut.status == "cancelled":
-                rec.failure(case, SolverError("cancelled by the Dask scheduler"), "")
-            else:
-                rec.success(case, fut.result())
-            fut.release()
-    finally:
-        client.close()
-        if cluster is not None:
-            cluster.close()
+        _gather(pending, fn, rec, client)
+    except BaseException:  # a stop (full disk, Ctrl-C): closed without Dask's lines
+        close_quietly(client.close, None if cluster is None else cluster.close)
+        raise
+    client.close()
+    if cluster is not None:
+        cluster.close()
+
+
+def _gather(pending: Sequence[Case], fn: Callable[[Case], Any], rec: _Recorder, client) -> None:
+    """Submit ``pending`` to ``client`` and record each outcome as it comes."""
+    from distributed import as_completed
+
+    run_id = uuid.uuid4().hex[:12]
+    by_key = {}
+    futures = []
+    for case in pending:
+        fut = client.submit(fn, case, key=f"flexmvm-case-{case.key}-{run_id}", pure=False)
+        by_key[fut.key] = case
+        futures.append(fut)
+    for fut in as_completed(futures, loop=client.loop):
+        case = by_key[fut.key]
+        if fut.status == "error":
+            exc = fut.exception()
+            tb = fut.traceback()
+            rec.failure(case, exc, "".join(traceback.format_exception(type(exc), exc, tb)))
+        elif fut.status == "cancelled":
+            rec.failure(case, SolverError("cancelled by the Dask scheduler"), "")
+        else:
+            rec.success(case, fut.result())
+        fut.release()
 
 
 def run_cases(
@@ -359,6 +379,9 @@ def run_cases(
     Raises:
         InputError: duplicate keys, conflicting options, an unpicklable ``fn``, or a stored
             case file with other params under the same key (refuses to mix studies).
+        OutputError: a case file cannot be written (a full disk): one line naming it.
+        StudyInterrupted: Ctrl-C (a KeyboardInterrupt): one line, how many cases are
+            stored and where; the cluster is closed first, quietly.
         SolverError: after all successful cases are stored, if any case failed and
             ``failures`` is None (one line: how many, the first failure, where the error
             files are).
@@ -411,7 +434,8 @@ def _run_pending(
     n_workers: int | None,
 ) -> None:
     """The dispatch step: ``pending`` in this process (``serial``) or on Dask, each outcome
-    recorded by ``rec`` as it comes, under a progress bar over all ``cases``."""
+    recorded by ``rec`` as it comes, under a progress bar over all ``cases``. A Ctrl-C
+    becomes StudyInterrupted (cases stored, where); the cluster is closed first, quietly."""
     with tqdm(
         total=len(cases),
         initial=len(rec.results),
@@ -422,10 +446,18 @@ def _run_pending(
         dynamic_ncols=True,
     ) as bar:
         rec.bar = bar
-        if pending and serial:
-            _run_serial(pending, fn, rec)
-        elif pending:
-            _run_dask(pending, fn, rec, scheduler, n_workers)
+        try:
+            if pending and serial:
+                _run_serial(pending, fn, rec)
+            elif pending:
+                _run_dask(pending, fn, rec, scheduler, n_workers)
+        except KeyboardInterrupt as exc:  # Ctrl-C: one line, how many cases are kept
+            if isinstance(exc, (Terminated, StudyInterrupted)):
+                raise
+            raise StudyInterrupted(
+                f"interrupted; {len(rec.results)} of {len(cases)} cases stored in "
+                f"{rec.out_dir / CASES_DIR}, rerun to resume"
+            ) from None
 
 
 def _outcome(

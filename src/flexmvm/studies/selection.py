@@ -96,7 +96,7 @@ from flexmvm.studies.regions import (
     run_region_case,
 )
 from flexmvm.studies.report import echo_summary
-from flexmvm.studies.runner import Case, check_cluster_options, cluster_slots, study_cluster
+from flexmvm.studies.runner import Case, check_study_cluster, cluster_slots, study_cluster
 from flexmvm.studies.search import Candidate, brute_force, smallest_passing
 from flexmvm.studies.selection_candidates import candidate_cases, study_grid
 from flexmvm.studies.selection_files import write_selection_files
@@ -269,7 +269,7 @@ def select_models(
     kind = study_kind(kind)
     grid = study_grid(sc, body, layers, laps, modes, kind, regions, centre_m)
     where = patch_place(sc, body, patch_surface, grid.centre) if patches else {}
-    check_cluster_options(scheduler, n_workers, serial)
+    check_study_cluster(scheduler, n_workers, serial)  # before the reference
     claim_study_dir(out, "flexmvm select", own=STUDY_FILES)
     announce, echo = (announce_recompute, _silent) if echo is None else (echo, echo)
     hist, ref_made = _reference(sc, body, out, progress, announce, echo)

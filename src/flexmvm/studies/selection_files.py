@@ -7,6 +7,7 @@ from pathlib import Path
 
 from flexmvm.metrics.ncc import Target
 from flexmvm.results.atomic import write_json_atomic
+from flexmvm.results.output import writing
 from flexmvm.studies.interface import write_interface_csv
 from flexmvm.studies.regions import front_points, write_region_csv
 from flexmvm.studies.report import write_ncc_csv
@@ -29,30 +30,39 @@ def write_selection_files(
     from flexmvm.plots.study_figures import plot_ncc_dof_fronts, plot_ncc_map, plot_ncc_modes
 
     if by_region:
-        write_region_csv(out / "ncc.csv", study.rows, study.probes)
+        with writing(out / "ncc.csv"):  # a full disk: OutputError naming the file
+            write_region_csv(out / "ncc.csv", study.rows, study.probes)
         pts = front_points(study.rows)
     else:
-        write_ncc_csv(out / "ncc.csv", study.rows, study.probes)
+        with writing(out / "ncc.csv"):
+            write_ncc_csv(out / "ncc.csv", study.rows, study.probes)
         pts = {
             f"node selections ({kind_name(study.summary)})": [
                 (r["dof"], r["ncc_force"]) for r in study.rows if "ncc_force" in r
             ]
         }
-    write_json_atomic(out / "selection.json", study.summary)
+    with writing(out / "selection.json"):
+        write_json_atomic(out / "selection.json", study.summary)
     if study.rows and not by_region:  # none when --search closed every node selection
-        plot_ncc_map(
-            out / "fig7_ncc_map.png", study.rows, title=f"{name}: NCC of the contact force"
-        )
-        plot_ncc_modes(out / "fig8_ncc_modes.png", study.rows, title=f"{name}: NCC against modes")
+        with writing(out / "fig7_ncc_map.png"):
+            plot_ncc_map(
+                out / "fig7_ncc_map.png", study.rows, title=f"{name}: NCC of the contact force"
+            )
+        with writing(out / "fig8_ncc_modes.png"):
+            plot_ncc_modes(
+                out / "fig8_ncc_modes.png", study.rows, title=f"{name}: NCC against modes"
+            )
     if study.interface_rows:
-        write_interface_csv(out / "ncc_interface.csv", study.interface_rows, study.probes)
+        with writing(out / "ncc_interface.csv"):
+            write_interface_csv(out / "ncc_interface.csv", study.interface_rows, study.probes)
         pts["interface"] = [
             (r["dof"], r["ncc_force"]) for r in study.interface_rows if "ncc_force" in r
         ]
     if (study.interface_rows or by_region) and any(pts.values()):
-        plot_ncc_dof_fronts(
-            out / "fig_front_ncc_dof.png",
-            pts,
-            target=target.ncc_min,
-            title=f"{name}: force NCC against DOF of {body}",
-        )
+        with writing(out / "fig_front_ncc_dof.png"):
+            plot_ncc_dof_fronts(
+                out / "fig_front_ncc_dof.png",
+                pts,
+                target=target.ncc_min,
+                title=f"{name}: force NCC against DOF of {body}",
+            )
