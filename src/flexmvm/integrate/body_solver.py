@@ -12,6 +12,8 @@ translation with constant M_wq, approximate otherwise; the residual is always ex
 
 from __future__ import annotations
 
+import logging
+import time
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -35,6 +37,9 @@ MAX_CACHED = 10
 # W is refactored when the spin squared of a stiffened body moved by this fraction of
 # (its value in W + the body's spin_crit): BodySolver.use_spin
 SPIN_TOL = 0.1
+
+#: The factorizations as they happen, with the set-up's stages (scenarios.setup.SETUP_LOG)
+SETUP_LOG = logging.getLogger("flexmvm.setup")
 
 
 @dataclass
@@ -112,6 +117,7 @@ class BodySolver:
                 self._order.append(h)
             return f
         b = self.body
+        t0 = time.perf_counter()
         W = self.elastic_matrix(h)
         data = W.data if sp.issparse(W) else np.asarray(W)
         if not np.isfinite(data).all():
@@ -147,6 +153,13 @@ class BodySolver:
                 ) from None
             solve = lambda rhs, cho=cho: cho_solve(cho, rhs)
         self.n_factorizations += 1
+        SETUP_LOG.info(
+            "body %r: iteration matrix factored at h = %.3g s (%d coordinates): %.1f s",
+            b.name,
+            h,
+            b.nq,
+            time.perf_counter() - t0,
+        )
         f = self._make_factor(solve, self._Mw0)
         self._cache[h] = f
         self._order.append(h)

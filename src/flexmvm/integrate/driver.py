@@ -22,6 +22,7 @@ from threadpoolctl import threadpool_limits
 from flexmvm.errors import InputError, SimulationFailed, SolverError
 from flexmvm.integrate.energy_ledger import EnergyLedger, step_theta
 from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
+from flexmvm.integrate.progress import StepProgress
 from flexmvm.integrate.recorder import OutputRecorder
 from flexmvm.integrate.run_result import FrictionSummary, RunResult, StepHistory, TimeGrid
 from flexmvm.integrate.state import BodyState
@@ -223,7 +224,7 @@ def _simulate(
     pen = _Penetrations(system)
     pen.start(states, t0, check_overlap)
     rec.record(t0, states, 0.0, np.zeros(integ.n_joint_rows))
-    bar = _progress(progress, n_ticks)
+    bar = StepProgress(progress, n_ticks, dt)
     tally = _Tally(system, integ.n_joint_rows, pen, grid.dt_s)
     tally.ledger = EnergyLedger(
         system, integ.carried, getattr(integ, "carried_state", None), plastic
@@ -235,8 +236,7 @@ def _simulate(
 
     def fail(message: str, cause: Exception | None = None):
         """The run stops here: SimulationFailed with what it computed up to now."""
-        if bar is not None:
-            bar.close()
+        bar.close()
         raise SimulationFailed(message, tally.result(rec, integ, wall0, message)) from cause
 
     while tick < n_ticks:
@@ -283,10 +283,8 @@ def _simulate(
                 fail(str(exc), exc)
             tally.output()
             tally.ledger.record(states)
-            if bar is not None:
-                bar.update(min(tick, n_ticks) - bar.n)
-    if bar is not None:
-        bar.close()
+            bar.update(min(tick, n_ticks), tally.n_steps)
+    bar.close()
     return tally.result(rec, integ, wall0)
 
 
@@ -457,11 +455,3 @@ def _track_intervals(intervals, in_contact, t0, t1):
             intervals[-1][1] = t1
         else:
             intervals.append([t0, t1])
-
-
-def _progress(enabled: bool, total: int):
-    if not enabled:
-        return None
-    from tqdm import tqdm
-
-    return tqdm(total=total, unit="dt", desc="simulating", leave=False, mininterval=0.5)

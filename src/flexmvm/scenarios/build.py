@@ -55,7 +55,7 @@ from flexmvm.scenarios.mesh_lookup import (
 )
 from flexmvm.scenarios.plasticity_schema import plastic_parts, refuse_dynamic
 from flexmvm.scenarios.sag import quasi_static_sag
-from flexmvm.scenarios.setup import SetupCache, default_setup
+from flexmvm.scenarios.setup import SetupCache, default_setup, timed
 from flexmvm.scenarios.solver_choice import with_elimination_order
 from flexmvm.scenarios.stiffening_schema import stiffened
 from flexmvm.scenarios.supports import clamp_label, support_joints
@@ -158,7 +158,11 @@ def _kind_body(spec, cfg, setup: SetupCache, mesh: Mesh, args: tuple) -> Flexibl
     (name, fe, basis, damping) when it has one, else body_from_parts on the cached parts."""
     if spec.body_builder is not None:
         fe = setup.fe_model(mesh_key(cfg), args[1])
-        return spec.body_builder(cfg.name, fe, setup.basis(*args), damping=cfg.damping_obj())
+        basis = setup.basis(*args)
+        return timed(
+            f"body {cfg.name!r}: its {spec.name} body built ({basis.nq} coordinates)",
+            lambda: spec.body_builder(cfg.name, fe, basis, damping=cfg.damping_obj()),
+        )
     return body_from_parts(
         cfg.name, mesh, setup.basis(*args), setup.body_parts(*args), damping=cfg.damping_obj()
     )

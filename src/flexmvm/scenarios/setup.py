@@ -20,7 +20,10 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+import logging
+import time
 from collections.abc import Callable, Mapping
+from pathlib import Path
 
 import numpy as np
 import scipy.sparse as sp
@@ -59,6 +62,19 @@ from flexmvm.scenarios.cache_keys import (
 
 #: The per-process caches by what they hold, with their default bounds (entries).
 CACHE_SIZES = {"meshes": 8, "fe_models": 8, "bases": 64, "body_parts": 16}
+
+
+#: The set-up's stages as they happen (mesh read, FE assembly, basis, invariants: the ones
+#: built, not those read from the disk cache), at INFO; `flexmvm run` prints them
+SETUP_LOG = logging.getLogger("flexmvm.setup")
+
+
+def timed(what: str, make):
+    """make() with its wall time logged on SETUP_LOG as "what: N s"."""
+    t0 = time.perf_counter()
+    out = make()
+    SETUP_LOG.info("%s: %.1f s", what, time.perf_counter() - t0)
+    return out
 
 
 def checked_sizes(sizes: Mapping[str, int]) -> dict[str, int]:
@@ -115,8 +131,12 @@ class ProcessCaches:
         if isinstance(key, ContactMass):
             return self.mesh(key.key)
         if isinstance(key, MergedFile):
-            return read_mesh(key.path, merge_nodes=True)
-        return self.rod_mesh(key).mesh if isinstance(key, RodSpec) else read_mesh(key)
+            return timed(
+                f"mesh {key.path.name} read", lambda: read_mesh(key.path, merge_nodes=True)
+            )
+        if isinstance(key, RodSpec):
+            return self.rod_mesh(key).mesh
+        return timed(f"mesh {Path(key).name} read", lambda: read_mesh(key))
 
     def _fe_model(self, key: MeshKey, material: Material) -> FEModel:
         """The FE model (M, K) of mesh key ``key`` in ``material``: the disk cache, else
@@ -128,7 +148,14 @@ class ProcessCaches:
             return dataclasses.replace(
                 fe, M_scalar=m_scalar, M=sp.csr_matrix(sp.kron(m_scalar, sp.identity(3)))
             )
-        return setup_cache.cached_fe(mesh_source(key), self.mesh(key), material, assemble)
+
+        def build(mesh: Mesh, material: Material) -> FEModel:
+            return timed(
+                f"FE model assembled ({3 * mesh.n_nodes:,} DOF, {material.name})",
+                lambda: assemble(mesh, material),
+            )
+
+        return setup_cache.cached_fe(mesh_source(key), self.mesh(key), material, build)
 
     def reference_condition(self, key: MeshKey, mesh: Mesh, ref_set: str):
         """A rod's default (end_b) reference is rod_reference; otherwise the support of
@@ -160,14 +187,17 @@ class ProcessCaches:
                 if interface is not None
                 else None
             )
-            return build_basis(
-                fe,
-                kind,
-                ref,
-                retained_nodes=nodes,
-                n_modes=modes,
-                interface=interface,
-                sources=sources,
+            return timed(
+                f"basis {kind.value} built ({nodes.size} retained nodes, {modes} modes)",
+                lambda: build_basis(
+                    fe,
+                    kind,
+                    ref,
+                    retained_nodes=nodes,
+                    n_modes=modes,
+                    interface=interface,
+                    sources=sources,
+                ),
             )
 
         return setup_cache.cached_basis(
@@ -204,7 +234,10 @@ class ProcessCaches:
             np.array(retained, dtype=np.int64),
             modes,
             basis.psi.shape[1],
-            lambda: body_parts(self.fe_model(key, material), basis),
+            lambda: timed(
+                f"inertia invariants of the {kind.value} body ({basis.nq} coordinates)",
+                lambda: body_parts(self.fe_model(key, material), basis),
+            ),
             extra=interface_inputs(interface),
         )
 
