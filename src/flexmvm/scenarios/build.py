@@ -216,7 +216,7 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
         _contact(c, k, bodies, infos, index, grid.theta_rule()) for k, c in enumerate(sc.contacts)
     )
     groups = [_joint(j, k, bodies, infos, index, states) for k, j in enumerate(sc.joints)]
-    supported = [support_joints([s], index, states) for s in sc.supports]
+    supported = support_joints(sc.supports, index, states)
     joints = [joint for group in (*groups, *supported) for joint in group]
     states = with_rigid_motions(sc, bodies, states, groups)
     probes = [_probe(p, f"probes[{k}]", infos, index) for k, p in enumerate(sc.probes)]
