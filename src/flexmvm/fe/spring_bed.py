@@ -109,6 +109,15 @@ def spring_bed_stiffness(
     return sp.csr_matrix(0.5 * (kb + kb.T))
 
 
+def beds_stiffness(mesh: Mesh, beds) -> sp.csr_matrix:
+    """The summed K_bed of ``beds``, each (facet set name of ``mesh``, stiffness [N/m^3],
+    direction: a BedDirection value). MeshError for an unknown facet set."""
+    total = sp.csr_matrix((mesh.n_dof, mesh.n_dof))
+    for surface, k, direction in beds:
+        total = total + spring_bed_stiffness(mesh, mesh.facet_set(surface), k, direction)
+    return sp.csr_matrix(total)
+
+
 def with_spring_bed(fe: FEModel, k_bed: sp.spmatrix) -> FEModel:
     """The FE model with the bed's stiffness added, K + K_bed (M unchanged)."""
     if k_bed.shape != fe.K.shape:
@@ -116,4 +125,4 @@ def with_spring_bed(fe: FEModel, k_bed: sp.spmatrix) -> FEModel:
     return dataclasses.replace(fe, K=sp.csr_matrix(fe.K + k_bed))
 
 
-__all__ = ["BedDirection", "spring_bed_stiffness", "with_spring_bed"]
+__all__ = ["BedDirection", "beds_stiffness", "spring_bed_stiffness", "with_spring_bed"]

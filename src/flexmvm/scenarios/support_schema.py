@@ -1,8 +1,9 @@
 """The scenario's ``[[supports]]`` table (pydantic v2): a body clamped on node sets, or held
 on them in chosen directions (pinned, roller, symmetry plane, ``fixed`` axes) (reduction.clamp:
 its frame fixed at its placement, the held nodal coordinates removed), and the checks of the
-supports against the bodies and joints (called by schema.Scenario). Several supports of one
-body are merged (a DOF held by two is held once). The builder's side is scenarios/supports.py;
+supports against the bodies and joints (called by schema.Scenario); and spring beds on facet
+sets (fe/spring_bed.py: their stiffness added to K). Several supports of one body are merged
+(a DOF held by two is held once). The builder's side is scenarios/supports.py;
 docs/scenario_format.md lists the keys."""
 
 from __future__ import annotations
@@ -14,8 +15,18 @@ from pydantic import model_serializer, model_validator
 
 from flexmvm.bodies.build import ModelKind
 from flexmvm.constraints.joints import JointType
+from flexmvm.fe.spring_bed import BedDirection
 from flexmvm.reduction.kinds import KINDS
-from flexmvm.scenarios.fields import ROD_NODE_SETS, Frozen, Name, SetName, check_rod_set
+from flexmvm.scenarios.fields import (
+    ROD_FACET_SETS,
+    ROD_NODE_SETS,
+    Frozen,
+    Name,
+    Positive,
+    SetName,
+    check_rod_set,
+)
+from flexmvm.scenarios.plasticity_schema import plasticity_of
 from flexmvm.scenarios.problems import problem
 
 
@@ -29,6 +40,9 @@ class SupportType(StrEnum):
     ROLLER = "roller"  # one direction held (``direction``), the nodes slide in the others
     SYMMETRY = "symmetry"  # a symmetry plane: the plane's ``normal`` held, in-plane free
     FIXED = "fixed"  # the chosen directions ``fixed`` held (["x", "z"])
+    # springs on a facet set ``surface``: ``stiffness_n_per_m3`` [N/m^3] along ``direction``
+    # (an axis or the facet normal), their stiffness added to K (a Winkler foundation, a pad)
+    SPRING_BED = "spring_bed"
 
 
 class Axis(StrEnum):
@@ -53,6 +67,7 @@ _TYPE_KEY = {
     SupportType.ROLLER: "direction",
     SupportType.SYMMETRY: "normal",
     SupportType.FIXED: "fixed",
+    SupportType.SPRING_BED: "direction",
 }
 
 
@@ -66,12 +81,16 @@ def clampable() -> tuple[ModelKind, ...]:
 class SupportConfig(Frozen):
     """A support of ``body`` on its node set ``node_set`` (or a list of sets): clamp and
     pinned hold every direction, roller its ``direction``, symmetry its ``normal``, fixed the
-    list ``fixed``; directions are body axes, or global ones with ``frame = "global"``."""
+    list ``fixed``; a spring bed springs of ``stiffness_n_per_m3`` on its facet set
+    ``surface`` along ``direction``; directions are body axes, or global ones with
+    ``frame = "global"``."""
 
     type: SupportType
     body: Name
-    node_set: SetName | tuple[SetName, ...]
-    direction: Axis | None = None
+    node_set: SetName | tuple[SetName, ...] | None = None
+    surface: SetName | None = None
+    stiffness_n_per_m3: Positive | None = None
+    direction: BedDirection | None = None
     normal: Axis | None = None
     fixed: tuple[Axis, ...] | None = None
     frame: AxisFrame = AxisFrame.BODY
@@ -92,7 +111,11 @@ class SupportConfig(Frozen):
                     key,
                 )
             if not given and key == need:
-                raise problem(f"a {self.type.value} support needs {key!r} (x, y or z)", key)
+                axes = "x, y, z or normal" if key == "direction" and self.surface else "x, y or z"
+                raise problem(f"a {self.type.value} support needs {key!r} ({axes})", key)
+        self._check_targets()
+        if self.type is SupportType.ROLLER and self.direction is BedDirection.NORMAL:
+            raise problem("a roller's direction must be x, y or z, got 'normal'", "direction")
         if self.fixed is not None and (not self.fixed or len(set(self.fixed)) < len(self.fixed)):
             raise problem(
                 f"expected distinct directions among x, y, z, got {[a.value for a in self.fixed]}",
@@ -104,16 +127,24 @@ class SupportConfig(Frozen):
                 'expected frame = "body" for a moving frame',
                 "frame",
             )
-        names = self.node_sets
-        if not names or len(set(names)) < len(names):
-            raise problem(f"expected distinct node set names, got {list(names)}", "node_set")
         return self
+
+    def _check_targets(self) -> None:
+        """A spring bed takes a surface and a stiffness, every other support node sets."""
+        bed = self.type is SupportType.SPRING_BED
+        for key, wanted in (("surface", bed), ("stiffness_n_per_m3", bed), ("node_set", not bed)):
+            if (getattr(self, key) is not None) != wanted:
+                verb = "needs" if wanted else "takes no"
+                raise problem(f"a {self.type.value} support {verb} {key!r}", key)
+        names = self.node_sets
+        if not bed and (not names or len(set(names)) < len(names)):
+            raise problem(f"expected distinct node set names, got {list(names)}", "node_set")
 
     @model_serializer(mode="wrap")
     def _dump(self, handler):  # a clamp dumps as before these keys existed (study keys)
         data = handler(self)
         if isinstance(data, dict):
-            for key in ("direction", "normal", "fixed"):
+            for key in ("direction", "normal", "fixed", "surface", "stiffness_n_per_m3"):
                 if data.get(key) is None:
                     data.pop(key, None)
             if data.get("frame") == AxisFrame.BODY.value:
@@ -122,17 +153,21 @@ class SupportConfig(Frozen):
 
     @property
     def node_sets(self) -> tuple[str, ...]:
-        """The names of the supported node sets."""
+        """The names of the supported node sets (none for a spring bed)."""
+        if self.node_set is None:
+            return ()
         return (self.node_set,) if isinstance(self.node_set, str) else tuple(self.node_set)
 
     @property
     def axes(self) -> tuple[Axis, ...]:
-        """The directions held (in ``frame``)."""
+        """The node sets' held directions (in ``frame``); none for a spring bed."""
+        if self.type is SupportType.SPRING_BED:
+            return ()
         key = _TYPE_KEY.get(self.type)
         if key is None:
             return _ALL
         value = getattr(self, key)
-        return tuple(value) if isinstance(value, tuple) else (value,)
+        return tuple(Axis(v.value) for v in (value if isinstance(value, tuple) else (value,)))
 
 
 def check_supports(supports: Sequence[SupportConfig], bodies: Mapping, joints: Sequence) -> None:
@@ -157,6 +192,14 @@ def check_supports(supports: Sequence[SupportConfig], bodies: Mapping, joints: S
         if body.rod is not None:
             for name in s.node_sets:
                 check_rod_set(name, ROD_NODE_SETS, f"{key}.node_set")
+            if s.surface is not None:
+                check_rod_set(s.surface, ROD_FACET_SETS, f"{key}.surface")
+        if s.type is SupportType.SPRING_BED and plasticity_of(body) is not None:
+            raise problem(
+                f"body {s.body!r} is plastic; a spring bed is on elastic bodies only "
+                "(the plastic internal force has no bed)",
+                f"{key}.type",
+            )
         if not body.model.kind.spec.clampable:
             raise problem(
                 f"body {s.body!r} of kind {body.model.kind.value!r} cannot be clamped; "
