@@ -163,7 +163,8 @@ def clamp_label(cfg, mesh: Mesh, supports, retained=()) -> str | None:
     sets, beds, ids, single = _merged_sets(cfg, supports)
     if not ids:
         return None
-    key = f"supports[{ids[0]}].node_set"
+    first = supports[ids[0]]
+    key = f"supports[{ids[0]}].{'surface' if first.type is SupportType.SPRING_BED else 'node_set'}"
     if single:
         label = f"{_CLAMP_OPEN}{next(iter(sets))}{_CLAMP_CLOSE}"
     else:
