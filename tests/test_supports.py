@@ -101,13 +101,18 @@ def test_dump_without_supports_or_damping_is_unchanged():
 @pytest.mark.parametrize(
     "supports, joints, model, message",
     [
-        ((CLAMP, CLAMP), (), {"kind": "full"}, "supports[1].body: body 'beam' is clamped twice"),
+        (
+            (CLAMP, {**CLAMP, "ground_frame": False}),
+            (),
+            {"kind": "full"},
+            "supports[1].ground_frame: ground_frame = false on body 'beam'",
+        ),
         (({**CLAMP, "node_set": "tip"},), (), {"kind": "full"}, "rods have no set 'tip'"),
         (({**CLAMP, "body": "arm"},), (), {"kind": "full"}, "unknown body 'arm'"),
         ((CLAMP,), ({"type": "ground", "body": "beam"},), {"kind": "full"}, "remove the ground"),
         ((CLAMP,), (), {"kind": "rigid"}, "of kind 'rigid' cannot be clamped"),
     ],
-    ids=["twice", "no-such-set", "no-such-body", "and-ground", "rigid"],
+    ids=["frame-twice", "no-such-set", "no-such-body", "and-ground", "rigid"],
 )
 def test_bad_supports_give_one_line_errors(supports, joints, model, message):
     """Each mistake is one ScenarioError line naming the key."""

@@ -104,7 +104,7 @@ def build_basis(
         raise InputError(f"basis kind must be a BasisKind, got {kind!r}")
     if isinstance(n_modes, bool) or not isinstance(n_modes, (int, np.integer)) or n_modes < 0:
         raise InputError(f"n_modes must be an integer >= 0, got {n_modes!r}")
-    if reference.fixed_dofs.max() >= fe.n_dof:
+    if reference.fixed_dofs.size and reference.fixed_dofs.max() >= fe.n_dof:
         raise InputError(f"reference DOFs {reference.fixed_dofs.tolist()} exceed {fe.n_dof} DOFs")
     nodes = _retained(fe, reference, retained_nodes)
     spec = kind_spec(kind)

@@ -58,7 +58,7 @@ from flexmvm.scenarios.sag import quasi_static_sag
 from flexmvm.scenarios.setup import SetupCache, default_setup, timed
 from flexmvm.scenarios.solver_choice import with_elimination_order
 from flexmvm.scenarios.stiffening_schema import stiffened
-from flexmvm.scenarios.supports import clamp_label, support_joints
+from flexmvm.scenarios.supports import bedded_key, clamp_label, support_joints
 
 DEFAULT_SEARCH_RADIUS_M = 2e-4  # broad-phase margin beyond the distance closed in one step
 
@@ -113,6 +113,7 @@ def build_body(
     key = mesh_key(cfg)
     rod = setup.rod_mesh(key) if cfg.rod is not None else None
     mesh = setup.mesh(key)
+    key = fe_key = bedded_key(key, cfg, supports)  # K with the body's spring beds
     kind = cfg.model.kind
     spec = kind_spec(kind)
     if not spec.has_basis:
@@ -132,13 +133,13 @@ def build_body(
             key = ContactMass(key, tuple(int(i) for i in nodes))
     columns = spec.cost_columns(len(retained), modes)
     if columns is not None:
-        fe = setup.fe_model(mesh_key(cfg), material)
+        fe = setup.fe_model(fe_key, material)
         cost = reduced_cost(cfg.name, mesh.n_nodes, columns, fe.K.nnz)
         check_cost(cost, cfg.model.allow_costly, f"{where}.model")
     args = (key, material, kind, retained, modes, ref_set, interface)
-    body = _kind_body(spec, cfg, setup, mesh, args)
+    body = _kind_body(spec, cfg, setup, mesh, args, fe_key)
     if cfg.model.geometric_stiffening is not None:  # bodies.stiffening
-        fe = setup.fe_model(mesh_key(cfg), material)
+        fe = setup.fe_model(fe_key, material)
         spec_g, at = cfg.model.geometric_stiffening, f"{where}.model.geometric_stiffening"
         body = stiffened(body, spec_g, fe, setup.basis(*args), at)
     n_ret = len(retained) if spec.retains_nodes else (mesh.n_nodes if spec.nodal else 0)
@@ -153,11 +154,12 @@ def build_body(
     )
 
 
-def _kind_body(spec, cfg, setup: SetupCache, mesh: Mesh, args: tuple) -> FlexibleBody:
+def _kind_body(spec, cfg, setup: SetupCache, mesh: Mesh, args: tuple, fe_key) -> FlexibleBody:
     """The body of ``cfg`` on its basis (setup.basis(*args)): the kind's own body_builder
-    (name, fe, basis, damping) when it has one, else body_from_parts on the cached parts."""
+    (name, fe of ``fe_key``, basis, damping) when it has one, else body_from_parts on the
+    cached parts."""
     if spec.body_builder is not None:
-        fe = setup.fe_model(mesh_key(cfg), args[1])
+        fe = setup.fe_model(fe_key, args[1])
         basis = setup.basis(*args)
         return timed(
             f"body {cfg.name!r}: its {spec.name} body built ({basis.nq} coordinates)",
@@ -220,7 +222,7 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
         _contact(c, k, bodies, infos, index, grid.theta_rule()) for k, c in enumerate(sc.contacts)
     )
     groups = [_joint(j, k, bodies, infos, index, states) for k, j in enumerate(sc.joints)]
-    supported = [support_joints([s], index, states) for s in sc.supports]
+    supported = support_joints(sc.supports, index, states)
     joints = [joint for group in (*groups, *supported) for joint in group]
     states = with_rigid_motions(sc, bodies, states, groups)
     probes = [_probe(p, f"probes[{k}]", infos, index) for k, p in enumerate(sc.probes)]

@@ -29,9 +29,19 @@ class ContactMass:
     nodes: tuple[int, ...]
 
 
-#: What names a body's mesh in every cache: its rod spec, its mesh file path, or either with
-#: massless contact nodes.
-MeshKey = RodSpec | str | MergedFile | ContactMass
+@dataclass(frozen=True)
+class SpringBeds:
+    """The mesh key of a body on spring beds (fe/spring_bed.py; a ``[[supports]]`` spring_bed):
+    its K has the beds' stiffness added, so every cache gets a key of its own. beds: (facet
+    set, stiffness [N/m^3], direction: a body axis or "normal"), sorted."""
+
+    key: RodSpec | str | MergedFile
+    beds: tuple[tuple[str, float, str], ...]
+
+
+#: What names a body's mesh in every cache: its rod spec, its mesh file path, either on spring
+#: beds, or any of these with massless contact nodes.
+MeshKey = RodSpec | str | MergedFile | SpringBeds | ContactMass
 
 
 def mesh_key(cfg) -> RodSpec | str | MergedFile:
@@ -43,8 +53,10 @@ def mesh_key(cfg) -> RodSpec | str | MergedFile:
 
 
 def plain_key(key: MeshKey) -> RodSpec | str | MergedFile:
-    """The mesh key without its massless contact nodes (same mesh, same reference)."""
-    return key.key if isinstance(key, ContactMass) else key
+    """The mesh key without its massless contact nodes and spring beds (same mesh)."""
+    while isinstance(key, (ContactMass, SpringBeds)):
+        key = key.key
+    return key
 
 
 def mesh_source(key: MeshKey) -> dict | None:
@@ -53,6 +65,9 @@ def mesh_source(key: MeshKey) -> dict | None:
     if isinstance(key, ContactMass):
         inner = mesh_source(key.key)
         return None if inner is None else inner | {"massless_nodes": list(key.nodes)}
+    if isinstance(key, SpringBeds):
+        inner = mesh_source(key.key)
+        return None if inner is None else inner | {"spring_beds": [list(b) for b in key.beds]}
     if isinstance(key, RodSpec):
         return setup_cache.rod_source(key)
     if isinstance(key, MergedFile):

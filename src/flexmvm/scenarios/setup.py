@@ -34,6 +34,7 @@ from flexmvm.errors import InputError
 from flexmvm.fe.assembly import FEModel, assemble
 from flexmvm.fe.mass_redistribution import redistribute_mass
 from flexmvm.fe.modes import free_modes
+from flexmvm.fe.spring_bed import beds_stiffness, with_spring_bed
 from flexmvm.materials import Material
 from flexmvm.mesh.io import read_mesh
 from flexmvm.mesh.mesh import Mesh
@@ -54,6 +55,7 @@ from flexmvm.scenarios.cache_keys import (
     ContactMass,
     MergedFile,
     MeshKey,
+    SpringBeds,
     interface_inputs,
     mesh_key,
     mesh_source,
@@ -128,7 +130,7 @@ class ProcessCaches:
 
     def _mesh(self, key: MeshKey) -> Mesh:
         """The mesh of a rod spec (generated) or of a mesh file path."""
-        if isinstance(key, ContactMass):
+        if isinstance(key, (ContactMass, SpringBeds)):
             return self.mesh(key.key)
         if isinstance(key, MergedFile):
             return timed(
@@ -148,6 +150,9 @@ class ProcessCaches:
             return dataclasses.replace(
                 fe, M_scalar=m_scalar, M=sp.csr_matrix(sp.kron(m_scalar, sp.identity(3)))
             )
+        if isinstance(key, SpringBeds):  # K + the beds' stiffness (scenarios/supports.py)
+            fe = self.fe_model(key.key, material)
+            return with_spring_bed(fe, beds_stiffness(fe.mesh, key.beds))
 
         def build(mesh: Mesh, material: Material) -> FEModel:
             return timed(
