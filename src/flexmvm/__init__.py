@@ -54,6 +54,7 @@ _API = {
     "RunComparison": "flexmvm.scenarios.compare",
     "theory_histories": "flexmvm.theory.scenario",
     "write_run": "flexmvm.results.output",
+    "read_run": "flexmvm.scenarios.written_run",
     "Target": "flexmvm.metrics.ncc",
     # studies
     "select": "flexmvm.studies.api",
@@ -103,6 +104,7 @@ __all__ = [
     "mvm",
     "prescribed_path",
     "rayleigh_from_ratios",
+    "read_run",
     "rigid",
     "rigid_motion",
     "run",
