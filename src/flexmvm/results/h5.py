@@ -113,7 +113,11 @@ def _write_mesh(g: h5py.Group, body: FlexibleBody) -> None:
 
 
 #: HDF5 filter of the field datasets (q, q_dot): byte shuffle + gzip level 1, one chunk per
-#: output row (a frame reads alone). Measured on the seed case's fields (see docs/notes).
+#: output row (a frame reads alone). Measured on the seed striker's q and q_dot (25,767 DOF,
+#: 101 rows, t <= 0.2 ms): float64 41.8 MB raw, gzip 1 37.0 MB (2.0 s), shuffle + gzip 1
+#: 36.3 MB (1.7 s), shuffle + gzip 4 36.0 MB (1.8 s), shuffle + lzf 37.9 MB (0.8 s); float32
+#: 20.9 / 17.2 / 17.1 (0.6 s) / 16.8 (0.9 s) / 18.1 MB (0.4 s): the digits below round-off
+#: do not compress, float32 halves them; gzip 1 is within 2 % of gzip 4 at 3/4 of its time.
 H5_FIELD_FILTER = {"compression": "gzip", "compression_opts": 1, "shuffle": True}
 
 
