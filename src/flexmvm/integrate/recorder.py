@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from flexmvm.constraints.drives import drive_torques
-from flexmvm.integrate.run_result import FieldPrecision, RunResult
+from flexmvm.integrate.run_result import FieldPrecision, RunResult, TimeGrid
 from flexmvm.integrate.system import System
 
 
@@ -25,12 +25,13 @@ class OutputRecorder:
         probes,
         n_out_max: int,
         n_joint_rows: int,
-        field_dt_s: float | None = None,
-        field_precision: FieldPrecision = FieldPrecision.FLOAT64,
+        grid: TimeGrid | None = None,
     ):
+        """grid: the run's TimeGrid, for its field output rate and precision (None: fields
+        at every output, float64)."""
         self.system, self.probes = system, list(probes)
-        self.field_dt_s = field_dt_s
-        self.field_precision = field_precision
+        self.field_dt_s = None if grid is None else grid.field_output_dt_s
+        self.field_precision = FieldPrecision.FLOAT64 if grid is None else grid.field_precision
         self._t0: float | None = None  # the time of row 0 [s]
         self._next_k = 0  # the next field time is t0 + _next_k field_dt_s
         self._last_is_field = True

@@ -26,6 +26,10 @@ class FieldPrecision(Enum):
     FLOAT64 = "float64"
 
 
+#: The names of the global velocity components a probe's curve can take (RunResult.curves).
+PROBE_AXES = ("x", "y", "z")
+
+
 @dataclass(frozen=True)
 class TimeGrid:
     """t_end_s, dt_s (smallest step), dt_max_s (largest), output_dt_s; all [s]; theta of the
@@ -243,14 +247,19 @@ class RunResult:
         b = self.body_index(body)
         return self.q[b], self.q_dot[b]
 
-    def curves(self, axis: int = 0) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
-        """(t, contact force, {probe: velocity component ``axis`` (0 = global x)}): the curves
-        that comparisons, history files and figures use."""
-        return (
-            self.t,
-            self.contact_force,
-            {n: self.probe_v[:, i, axis] for i, n in enumerate(self.probe_names)},
-        )
+    def curves(self, axis: int | str = 0) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        """(t, contact force, {probe: velocity component ``axis``}): 0, 1, 2 (or "x", "y",
+        "z") a global component, "norm" the speed; the curves that comparisons, history files
+        and figures use. InputError for another axis."""
+        if isinstance(axis, str) and axis in PROBE_AXES:
+            axis = PROBE_AXES.index(axis)
+        if axis == "norm":
+            v = np.linalg.norm(self.probe_v, axis=2)
+        elif not isinstance(axis, bool) and axis in (0, 1, 2):
+            v = self.probe_v[:, :, axis]
+        else:
+            raise InputError(f"axis: expected 0, 1, 2, 'x', 'y', 'z' or 'norm', got {axis!r}")
+        return self.t, self.contact_force, {n: v[:, i] for i, n in enumerate(self.probe_names)}
 
 
 @dataclass(frozen=True)

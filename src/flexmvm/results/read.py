@@ -137,9 +137,10 @@ class WrittenRun:
         """Position and velocity history of probe ``name`` (global, [m], [m/s])."""
         return self._need_h5("probe positions").probe(name)
 
-    def curves(self, axis: int = 0) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
-        """(t, contact force, {probe: velocity component ``axis``}) as a run gives them."""
-        if self.result is None and axis == 0:
+    def curves(self, axis: int | str = 0) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        """(t, contact force, {probe: velocity component ``axis``}) as a run gives them
+        (RunResult.curves: 0, 1, 2, "x", "y", "z" or "norm"; without results.h5 x only)."""
+        if self.result is None and axis in (0, "x"):
             return self._curves
         return self._need_h5("velocity components but x").curves(axis)
 

@@ -29,7 +29,7 @@ from flexmvm.results.fields import (
     reference_positions,
 )
 from flexmvm.results.h5 import write_results_h5
-from flexmvm.results.history import write_history
+from flexmvm.results.history import write_history_columns
 from flexmvm.results.run_checks import (
     bodies_by_name,
     check_every,
@@ -54,20 +54,31 @@ MAX_PARAVIEW_STEPS = 100
 _AXES = "xyz"
 
 
-def write_history_csv(path: str | os.PathLike[str], run: RunResult, probe_axis: int = 0) -> None:
-    """CSV of the histories: ``t_s,contact_force_N,<probe>_v<axis>_mps,...``, one row per output.
-
-    Column <probe>_v<axis>_mps is component `probe_axis` (0 = x, the rods' axial direction) of
-    the probe's global velocity [m/s]. Floats are written with repr (they read back bit for
-    bit). Raises InputError for a probe_axis outside 0..2, a probe name unusable as a header or
-    RunResult arrays of inconsistent shapes.
+def write_history_csv(
+    path: str | os.PathLike[str], run: RunResult, probe_axis: int | None = 0
+) -> None:
+    """CSV of the histories, one row per output: ``t_s,contact_force_N`` and per probe its
+    global velocity [m/s]: probe_axis 0, 1 or 2 the one column ``<probe>_v<x|y|z>_mps`` (0 = x,
+    the rods' axial direction); None every component and the norm,
+    ``<probe>_vx_mps,<probe>_vy_mps,<probe>_vz_mps,<probe>_v_mps`` (an impact along y or z
+    has its curves there). Floats are written with repr (they read back bit for bit). Raises
+    InputError for another probe_axis, a probe name unusable as a header or RunResult arrays
+    of inconsistent shapes.
     """
-    if isinstance(probe_axis, bool) or probe_axis not in (0, 1, 2):
-        raise InputError(f"probe_axis: expected 0, 1 or 2 (x, y, z), got {probe_axis!r}")
+    if probe_axis is not None and (isinstance(probe_axis, bool) or probe_axis not in (0, 1, 2)):
+        raise InputError(
+            f"probe_axis: expected 0, 1, 2 (x, y, z) or None (all), got {probe_axis!r}"
+        )
     check_run(run)
-    t, force, curves = run.curves(probe_axis)
-    probes = {safe_name("probe", p): np.asarray(v, dtype=float) for p, v in curves.items()}
-    write_history(path, t, force, probes, axis=_AXES[probe_axis])
+    names = [safe_name("probe", p) for p in run.probe_names]
+    v = np.asarray(run.probe_v, dtype=float)
+    columns = {}
+    for i, name in enumerate(names):
+        for k in (0, 1, 2) if probe_axis is None else (probe_axis,):
+            columns[f"{name}_v{_AXES[k]}_mps"] = v[:, i, k]
+        if probe_axis is None:
+            columns[f"{name}_v_mps"] = np.linalg.norm(v[:, i], axis=1)
+    write_history_columns(path, run.t, run.contact_force, columns)
 
 
 def write_summary_json(path: str | os.PathLike[str], summary: Mapping[str, Any]) -> None:
