@@ -177,12 +177,13 @@ def write_results_h5(
     [kg m^2/s]} (n_out, 3): the histories, at every output. Per body, the fields
     /bodies/<name>/{time_index, r (k, 3), A (k, 3, 3), frame_velocity (k, 6), q (k, nq),
     q_dot (k, nq)} at the field outputs (rows time_index of /time; results.field_rows:
-    fields_every=None: the run's field rows, or about 100 of a run that kept every output;
-    an integer: every fields_every-th field row), q and q_dot chunked by row and compressed
-    (H5_FIELD_FILTER) in the run's field precision (RunResult.field_precision); /bodies/<name>/mesh/{nodes (n, 3),
-    cells_<meshio type> (n_cells, npc)}; /bodies/<name>/frame/{r, A, velocity} the frame at
-    every output. Root attributes: run counters, body_names and probe_names (JSON, in the
-    run's order), field_precision, scenario (the resolved scenario's JSON, when known). `bodies` must be the
+    fields_every=None: the run's field rows, or about DEFAULT_FIELD_FRAMES (32) of a run that
+    kept every output; an integer: every fields_every-th field row), q and q_dot chunked by
+    row and compressed (H5_FIELD_FILTER) in the run's field precision
+    (RunResult.field_precision); /bodies/<name>/mesh/{nodes (n, 3), cells_<meshio type>
+    (n_cells, npc)}; /bodies/<name>/frame/{r, A, velocity} the frame at every output. Root
+    attributes: run counters, body_names and probe_names (JSON, in the run's order),
+    field_precision, scenario (the resolved scenario's JSON, when known). `bodies` must be the
     run's bodies in order. Raises InputError on inconsistent inputs.
     """
     if fields_every is not None:

@@ -48,7 +48,8 @@ __all__ = [
     "write_summary_json",
 ]
 
-#: Default cap on the number of time steps of a ParaView series.
+#: The cap default_every strides to (kept for callers; the series' own default is
+#: results.field_rows.DEFAULT_FIELD_FRAMES).
 MAX_PARAVIEW_STEPS = 100
 
 _AXES = "xyz"
@@ -129,8 +130,8 @@ def write_paraview_series(
     every: int | None = None,
 ) -> Path:
     """ParaView time series: ``<out_dir>/<body>_<i:06d>.vtu`` at the field outputs i
-    (results.field_rows: every=None: the run's field rows, or about 100 of a run that kept
-    every output; an integer: every `every`-th field row) and one collection
+    (results.field_rows: every=None: the run's field rows, or about DEFAULT_FIELD_FRAMES (32)
+    of a run that kept every output; an integer: every `every`-th field row) and one collection
     ``<out_dir>/<body>.pvd`` per body listing them with their times [s].
 
     Points are the undeformed body at the initial frame, r0 + A0 X (output 0); point data:
@@ -139,9 +140,10 @@ def write_paraview_series(
     elastic stress of the displacement, plastic strain not subtracted); cell data of a plastic
     body: ``equivalent_plastic_strain`` (n_cells,) [-] (integrate.plastic_bodies). The
     elastic part of the velocity uses the run's q_dot. Point data are written in the run's
-    field precision (RunResult.field_precision; points too: float32 resolves 0.1 um at 1 m). `bodies` and `materials` follow run.body_names. Each file is
-    written atomically, the .pvd last. Returns out_dir (created if missing). Raises
-    InputError on inconsistent inputs or a body without a mesh.
+    field precision (RunResult.field_precision; points too: float32 resolves 0.1 um at 1 m).
+    `bodies` and `materials` follow run.body_names. Each file is written atomically, the .pvd
+    last. Returns out_dir (created if missing). Raises InputError on inconsistent inputs or a
+    body without a mesh.
     """
     check_run(run)
     bodies = bodies_by_name(run, bodies)
