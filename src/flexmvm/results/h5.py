@@ -183,7 +183,7 @@ def write_results_h5(
     (RunResult.field_precision); /bodies/<name>/mesh/{nodes (n, 3), cells_<meshio type>
     (n_cells, npc)}; /bodies/<name>/frame/{r, A, velocity} the frame at every output. Root
     attributes: run counters, body_names and probe_names (JSON, in the run's order),
-    field_precision, scenario (the resolved scenario's JSON, when known). `bodies` must be the
+    field_precision; /scenario the resolved scenario's JSON (when known). `bodies` must be the
     run's bodies in order. Raises InputError on inconsistent inputs.
     """
     if fields_every is not None:
@@ -200,8 +200,8 @@ def write_results_h5(
         f.attrs["body_names"] = json.dumps(list(run.body_names))
         f.attrs["probe_names"] = json.dumps(list(run.probe_names))
         f.attrs["field_precision"] = run.field_precision.value
-        if run.scenario is not None:
-            f.attrs["scenario"] = json.dumps(run.scenario)
+        if run.scenario is not None:  # a dataset: an attribute holds at most 64 kB
+            f.create_dataset("scenario", data=json.dumps(run.scenario))
         _write_histories(f, run)
         group = f.create_group("bodies")
         for b, body in enumerate(bodies):

@@ -94,7 +94,7 @@ def _histories(f: h5py.File) -> RunResult:
         drive_torque={k: d[()] for k, d in f["drive_torque"].items()},
         field_index=np.zeros(0, dtype=int),
         field_precision=FieldPrecision(precision),
-        scenario=_json_attr(f, "scenario"),
+        scenario=json.loads(f["scenario"][()]) if "scenario" in f else None,
     )
 
 
