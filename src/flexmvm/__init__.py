@@ -56,6 +56,7 @@ _API = {
     "RunComparison": "flexmvm.scenarios.compare",
     "theory_histories": "flexmvm.theory.scenario",
     "write_run": "flexmvm.results.output",
+    "read_run": "flexmvm.scenarios.written_run",
     "Target": "flexmvm.metrics.ncc",
     # studies
     "select": "flexmvm.studies.api",
@@ -106,6 +107,7 @@ __all__ = [
     "mvm",
     "prescribed_path",
     "rayleigh_from_ratios",
+    "read_run",
     "register_kind",
     "rigid",
     "rigid_motion",

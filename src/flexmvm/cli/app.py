@@ -53,6 +53,7 @@ def _register() -> None:
         "study_cmd",
         "cache_cmd",
         "validate_cmd",
+        "compare_cmd",
     ):
         try:
             module = __import__(f"flexmvm.cli.{name}", fromlist=["command"])

@@ -217,7 +217,7 @@ def _simulate(
     fine_ticks = grid.contact_output_ticks()
     integ = make_integrator(system, grid)
     dt = grid.dt_s
-    rec = OutputRecorder(system, probes, n_ticks // out_ticks + 2, integ.n_joint_rows)
+    rec = OutputRecorder(system, probes, n_ticks // out_ticks + 2, integ.n_joint_rows, grid)
     plastic = getattr(integ, "plastic", None) or None  # integrate.plastic_bodies
     rec.plastic = plastic
     states = [s.copy() for s in states]

@@ -1,19 +1,40 @@
 """What a run keeps at its output times: energies (kinetic, strain, gravity potential), linear
 and angular momentum, frame states, elastic coordinates and rates, probes, contact and joint
-forces (integrate.driver records one row per output; RunResult is made from the rows)."""
+forces (integrate.driver records one row per output; RunResult is made from the rows).
+
+Fields (q and q_dot, per body: what displacements and stresses are made of) are the bulk of a
+run's memory: 25,767 DOF at 1,001 outputs are 413 MB. With a field output rate
+(TimeGrid.field_output_dt_s) a row keeps them only if it is a field row: the first output at
+or after each multiple of field_dt_s from the start, and the last output (a row keeps them
+until the next one is recorded, so the driver's finiteness check and the end of a run see
+them)."""
 
 from __future__ import annotations
 
 import numpy as np
 
 from flexmvm.constraints.drives import drive_torques
-from flexmvm.integrate.run_result import RunResult
+from flexmvm.integrate.run_result import FieldPrecision, RunResult, TimeGrid
 from flexmvm.integrate.system import System
 
 
 class OutputRecorder:
-    def __init__(self, system: System, probes, n_out_max: int, n_joint_rows: int):
+    def __init__(
+        self,
+        system: System,
+        probes,
+        n_out_max: int,
+        n_joint_rows: int,
+        grid: TimeGrid | None = None,
+    ):
+        """grid: the run's TimeGrid, for its field output rate and precision (None: fields
+        at every output, float64)."""
         self.system, self.probes = system, list(probes)
+        self.field_dt_s = None if grid is None else grid.field_output_dt_s
+        self.field_precision = FieldPrecision.FLOAT64 if grid is None else grid.field_precision
+        self._t0: float | None = None  # the time of row 0 [s]
+        self._next_k = 0  # the next field time is t0 + _next_k field_dt_s
+        self._last_is_field = True
         nb, npb = len(system.bodies), len(self.probes)
         self.rows: list[dict] = []
         self.n_joint_rows = n_joint_rows
@@ -57,11 +78,29 @@ class OutputRecorder:
             px.append(body.node_positions(node, st.r, st.A, st.q)[0])
             pv.append(body.node_velocities(node, st.A, st.q, st.v)[0])
         rec["px"], rec["pv"] = np.array(px).reshape(-1, 3), np.array(pv).reshape(-1, 3)
+        self._keep_fields(rec)
         self.rows.append(rec)
+
+    def _keep_fields(self, rec: dict) -> None:
+        """Drop q and q_dot of the previous row unless it is a field row; mark this one."""
+        dt = self.field_dt_s
+        if dt is None:
+            return
+        t = float(rec["t"])
+        if self.rows and not self._last_is_field:
+            self.rows[-1]["q"] = self.rows[-1]["qd"] = None
+        if self._t0 is None:
+            self._t0 = t
+        # field time k: t0 + k dt, reached to round-off (outputs fall on whole ticks)
+        k = int(np.floor((t - self._t0) / dt * (1 + 1e-9) + 1e-9))
+        self._last_is_field = k >= self._next_k
+        self._next_k = max(self._next_k, k + 1)
 
     def result(self, **extra) -> RunResult:
         R = self.rows
         nb = self.shape[0]
+        kept = [k for k, r in enumerate(R) if r["q"] is not None]
+        F = [R[k] for k in kept]
         jforce = np.array([r["jforce"] for r in R]).reshape(len(R), self.n_joint_rows)
         return RunResult(
             t=np.array([r["t"] for r in R]),
@@ -79,9 +118,11 @@ class OutputRecorder:
             potential=np.array([r["pot"] for r in R]),
             momentum=np.array([r["p"] for r in R]),
             angular_momentum=np.array([r["h"] for r in R]),
-            q=[np.array([r["q"][b] for r in R]) for b in range(nb)],
-            q_dot=[np.array([r["qd"][b] for r in R]) for b in range(nb)],
+            q=[np.array([r["q"][b] for r in F]) for b in range(nb)],
+            q_dot=[np.array([r["qd"][b] for r in F]) for b in range(nb)],
             frame_A=np.array([r["A"] for r in R]),
             body_momentum=np.array([r["pb"] for r in R]),
+            field_index=None if self.field_dt_s is None else np.array(kept, dtype=int),
+            field_precision=self.field_precision,
             **extra,
         )

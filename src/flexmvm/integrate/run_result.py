@@ -7,6 +7,7 @@ states; RunResult is its output, kept in memory (writers in flexmvm.results turn
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from enum import Enum
 
 import numpy as np
 
@@ -14,6 +15,19 @@ from flexmvm.errors import InputError
 from flexmvm.integrate import DEFAULT_THETA
 from flexmvm.integrate.energy_ledger import EnergyLedgerHistory
 from flexmvm.integrate.theta import ThetaRule
+
+
+class FieldPrecision(Enum):
+    """The precision a run's fields (q, q_dot; the ParaView series' point data) are written
+    in (flexmvm.results.writers); histories are always float64. float32 keeps 7 digits: a
+    1 um displacement to 1e-13 m, at half the bytes of float64."""
+
+    FLOAT32 = "float32"
+    FLOAT64 = "float64"
+
+
+#: The names of the global velocity components a probe's curve can take (RunResult.curves).
+PROBE_AXES = ("x", "y", "z")
 
 
 @dataclass(frozen=True)
@@ -33,6 +47,12 @@ class TimeGrid:
     # the output_dt_s grid: a long approach recorded coarsely, the impact finely. None: off.
     output_contact_dt_s: float | None = None
     hf_damping_time_s: float | None = None
+    # the elastic coordinates q, q_dot (the fields: displacements, stresses) kept at the first
+    # output at or after every multiple of field_output_dt_s [s] and at the last output; the
+    # histories stay at every output. None: q at every output.
+    field_output_dt_s: float | None = None
+    # the precision the fields are written in (RunResult.field_precision)
+    field_precision: FieldPrecision = FieldPrecision.FLOAT64
 
     def theta_rule(self) -> ThetaRule:
         """theta of each step size (integrate.theta)."""
@@ -64,6 +84,9 @@ class TimeGrid:
             raise InputError(
                 f"time: output_dt_s = {out!r} must be a whole multiple of dt_s = {dt!r}"
             )
+        fdt = self.field_output_dt_s
+        if fdt is not None and not fdt > 0:
+            raise InputError(f"time: field_output_dt_s must be > 0 [s], got {fdt!r}")
         dt_max = self.dt_max_s or dt
         k_max = int(np.floor(np.log2(dt_max / dt) + 1e-9)) if dt_max >= dt else 0
         return int(np.ceil(self.t_end_s / dt - 1e-9)), n_out, max(k_max, 0)
@@ -122,9 +145,9 @@ class RunResult:
     potential: np.ndarray
     momentum: np.ndarray  # (n_out, 3) total linear momentum [kg m/s]
     angular_momentum: np.ndarray  # (n_out, 3) about the origin [kg m^2/s]
-    q: list[np.ndarray]  # per body: (n_out, nq) elastic coordinates
+    q: list[np.ndarray]  # per body: (n_fields, nq) elastic coordinates at the rows field_index
     frame_A: np.ndarray  # (n_out, n_bodies, 3, 3)
-    q_dot: list[np.ndarray] = field(default_factory=list)  # per body: (n_out, nq) their rates
+    q_dot: list[np.ndarray] = field(default_factory=list)  # per body: (n_fields, nq) their rates
     steps: StepHistory | None = None  # every step: its end time, size and contact impulse
     # (n_out, n_bodies, 3) linear momentum of each body [kg m/s] (None: not recorded)
     body_momentum: np.ndarray | None = None
@@ -163,6 +186,27 @@ class RunResult:
     energy_ledger: EnergyLedgerHistory | None = None
     # per plastic body name: integrate.plastic_bodies.PlasticReport (None: no plastic body)
     plastic: dict | None = None
+    # rows of t at which q and q_dot are kept (TimeGrid.field_output_dt_s); None: every row
+    field_index: np.ndarray | None = None
+    # the precision the writers write q, q_dot and the ParaView point data in (kept float64
+    # in memory)
+    field_precision: FieldPrecision = FieldPrecision.FLOAT64
+    # the resolved scenario's JSON form the run was made of (scenarios.run; written to
+    # results.h5, read back by flexmvm.results.read); None: not made from a scenario
+    scenario: dict | None = None
+
+    @property
+    def field_rows(self) -> np.ndarray:
+        """Rows of t at which q and q_dot are kept (every row unless the run was given a
+        field output rate, TimeGrid.field_output_dt_s)."""
+        if self.field_index is None:
+            return np.arange(len(self.t))
+        return np.asarray(self.field_index, dtype=int)
+
+    @property
+    def field_t(self) -> np.ndarray:
+        """The times [s] of the rows of q and q_dot (t[field_rows])."""
+        return self.t[self.field_rows]
 
     @property
     def total_energy(self) -> np.ndarray:
@@ -197,19 +241,25 @@ class RunResult:
             ) from None
 
     def elastic(self, body: str) -> tuple[np.ndarray, np.ndarray]:
-        """(q, q_dot) of body ``body`` at the output times, each (n_out, nq): its elastic
-        coordinates and their rates as the scheme integrated them (not differenced)."""
+        """(q, q_dot) of body ``body`` at the field times field_t (every output time unless
+        the run was given a field output rate), each (n_fields, nq): its elastic coordinates
+        and their rates as the scheme integrated them (not differenced)."""
         b = self.body_index(body)
         return self.q[b], self.q_dot[b]
 
-    def curves(self, axis: int = 0) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
-        """(t, contact force, {probe: velocity component ``axis`` (0 = global x)}): the curves
-        that comparisons, history files and figures use."""
-        return (
-            self.t,
-            self.contact_force,
-            {n: self.probe_v[:, i, axis] for i, n in enumerate(self.probe_names)},
-        )
+    def curves(self, axis: int | str = 0) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+        """(t, contact force, {probe: velocity component ``axis``}): 0, 1, 2 (or "x", "y",
+        "z") a global component, "norm" the speed; the curves that comparisons, history files
+        and figures use. InputError for another axis."""
+        if isinstance(axis, str) and axis in PROBE_AXES:
+            axis = PROBE_AXES.index(axis)
+        if axis == "norm":
+            v = np.linalg.norm(self.probe_v, axis=2)
+        elif not isinstance(axis, bool) and axis in (0, 1, 2):
+            v = self.probe_v[:, :, axis]
+        else:
+            raise InputError(f"axis: expected 0, 1, 2, 'x', 'y', 'z' or 'norm', got {axis!r}")
+        return self.t, self.contact_force, {n: v[:, i] for i, n in enumerate(self.probe_names)}
 
 
 @dataclass(frozen=True)

@@ -20,10 +20,18 @@ from flexmvm.results.atomic import file_sha256, write_text_atomic
 def write_history(path: Path, t, force, probe_v: dict[str, np.ndarray], axis: str = "x") -> Path:
     """Write the history CSV atomically: t_s,contact_force_N,<probe>_v<axis>_mps,... with
     floats in repr form (they read back bit for bit)."""
+    columns = {f"{name}_v{axis}_mps": v for name, v in probe_v.items()}
+    return write_history_columns(path, t, force, columns)
+
+
+def write_history_columns(path: Path, t, force, columns: dict[str, np.ndarray]) -> Path:
+    """Write the history CSV atomically: t_s,contact_force_N and the named columns (their
+    headers as given, e.g. <probe>_vz_mps), floats in repr form (they read back bit for bit).
+    read_history reads its <probe>_vx_mps columns."""
     cols = [np.asarray(t, float), np.asarray(force, float)] + [
-        np.asarray(v, float) for v in probe_v.values()
+        np.asarray(v, float) for v in columns.values()
     ]
-    header = ["t_s", "contact_force_N"] + [f"{name}_v{axis}_mps" for name in probe_v]
+    header = ["t_s", "contact_force_N", *columns]
     buf = io.StringIO()
     buf.write(",".join(header) + "\n")
     for row in np.column_stack(cols):

@@ -217,6 +217,8 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
         t.theta,
         t.output_contact_dt_s,
         t.hf_damping_time_s,
+        field_output_dt_s=t.field_output_dt_s,
+        field_precision=t.field_precision,
     )
     contacts = tuple(
         _contact(c, k, bodies, infos, index, grid.theta_rule()) for k, c in enumerate(sc.contacts)

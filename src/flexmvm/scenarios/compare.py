@@ -63,21 +63,28 @@ class RunComparison:
         return out
 
 
-def _curves(run) -> tuple:
+def _curves(run, axis: int | str = 0) -> tuple:
     if isinstance(run, tuple) and len(run) == 3:
+        if axis not in (0, "x"):
+            raise InputError(
+                f"compare: a (t, force, {{probe: v}}) tuple holds one velocity component; "
+                f"expected axis 0 with it, got {axis!r}"
+            )
         return run
     if hasattr(run, "curves"):
-        return run.curves()
+        return run.curves(axis)
     raise InputError(
         f"compare: received {type(run).__name__}, expected a run (flexmvm.run), "
         "a RunResult or a (t, force, {probe: v}) tuple"
     )
 
 
-def compare(candidate, reference) -> RunComparison:
-    """``candidate`` against ``reference``: each a run (flexmvm.run), a RunResult or a
-    (t [s], force [N], {probe: axial velocity [m/s]}) tuple such as theory_histories gives."""
-    flat = compare_runs(*_curves(reference), *_curves(candidate))
+def compare(candidate, reference, axis: int | str = 0) -> RunComparison:
+    """``candidate`` against ``reference``: each a run (flexmvm.run, flexmvm.read_run), a
+    RunResult or a (t [s], force [N], {probe: axial velocity [m/s]}) tuple such as
+    theory_histories gives. The probes' NCCs compare their global velocity component ``axis``:
+    0, 1, 2 or "x", "y", "z", or "norm" (the speed); a tuple holds x only."""
+    flat = compare_runs(*_curves(reference, axis), *_curves(candidate, axis))
     probes = {
         k[4:]: v
         for k, v in flat.items()

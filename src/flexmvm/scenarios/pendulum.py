@@ -20,6 +20,11 @@ ONSET_FRACTION = 0.01  # the contact starts when the force reaches this fraction
 
 
 def _states_at(res, k: int, bodies) -> list[BodyState]:
+    if res.field_index is not None:  # q kept at the field outputs only (TimeGrid)
+        raise InputError(
+            "the pendulum's event histories need q at every output; expected no "
+            "[time] field_output_dt_s in its scenario"
+        )
     return [
         BodyState(res.frame_r[k, b], res.frame_A[k, b], res.q[b][k], np.zeros(body.nv))
         for b, body in enumerate(bodies)

@@ -106,8 +106,10 @@ def run_scenario(
     except SimulationFailed as exc:
         if not isinstance(exc.partial, RunResult):
             raise
+        exc.partial.scenario = sc.model_dump(mode="json")
         partial = ScenarioRun(label, built, exc.partial, summarize(exc.partial, built))
         raise SimulationFailed(str(exc), partial) from exc
+    res.scenario = sc.model_dump(mode="json")  # what results.h5 keeps (results.read)
     summary = summarize(res, built)
     blown = blowup_failure(summary, built)  # a run that blew up fails (scenarios.blowup)
     if blown is not None:

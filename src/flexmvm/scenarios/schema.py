@@ -42,6 +42,7 @@ from flexmvm.bodies.build import ModelKind
 from flexmvm.constraints.contact import ContactLaw
 from flexmvm.constraints.joints import JointType
 from flexmvm.integrate import DEFAULT_THETA
+from flexmvm.integrate.run_result import FieldPrecision
 from flexmvm.integrate.theta import theta_for_damping_time as damped_theta
 from flexmvm.materials import Material
 from flexmvm.scenarios.body_schema import (
@@ -127,6 +128,14 @@ class TimeConfig(Frozen):
     # the step, and theta - 1/2 = O(h) keeps the scheme second order (integrate.theta;
     # docs/contact_law.md, "theta = 1/2 + h / (4 tau)")
     hf_damping_time_s: Positive | None = None
+    # fields (q, q_dot: displacements, stresses) kept and written every field_output_dt_s [s]
+    # (the first output at or after each multiple, and the last), the histories every
+    # output_dt_s; None: q kept at every output, about 100 frames written
+    # (results.writers.default_field_rows)
+    field_output_dt_s: Positive | None = None
+    # the precision of the fields written (results.h5's q and q_dot, the ParaView series):
+    # float32 (7 digits, half the bytes) unless "float64" is asked for
+    field_precision: FieldPrecision = FieldPrecision.FLOAT32
 
     @model_validator(mode="before")
     @classmethod
@@ -147,6 +156,10 @@ class TimeConfig(Frozen):
             data.pop(
                 "hf_damping_time_s" if data.get("hf_damping_time_s") is None else "theta", None
             )
+            if data.get("field_output_dt_s") is None:  # as before these keys existed
+                data.pop("field_output_dt_s", None)
+            if data.get("field_precision") in (FieldPrecision.FLOAT32, "float32"):
+                data.pop("field_precision", None)
         return data
 
     @model_validator(mode="after")
@@ -163,6 +176,11 @@ class TimeConfig(Frozen):
             raise problem(
                 f"must be >= dt_s = {self.dt_s!r}, got {self.output_contact_dt_s!r}",
                 "output_contact_dt_s",
+            )
+        fdt = self.field_output_dt_s
+        if fdt is not None and fdt < self.output_dt_s:
+            raise problem(
+                f"must be >= output_dt_s = {self.output_dt_s!r}, got {fdt!r}", "field_output_dt_s"
             )
         if self.output_dt_s > self.t_end_s:
             raise problem(
@@ -333,6 +351,7 @@ class Scenario(Frozen):
         output_dt_s: float | None = None,
         theta: float | None = None,
         output_contact_dt_s: float | None = None,
+        field_output_dt_s: float | None = None,
     ) -> Scenario:
         """A copy with the given time settings replaced [s]. A ``dt_s`` above ``dt_max_s``
         (and no ``dt_max_s`` given) lifts ``dt_max_s`` to it."""
@@ -343,6 +362,7 @@ class Scenario(Frozen):
             "output_dt_s": output_dt_s,
             "theta": theta,
             "output_contact_dt_s": output_contact_dt_s,
+            "field_output_dt_s": field_output_dt_s,
         }
         given = {k: v for k, v in given.items() if v is not None}
         base = dict(self.time)
