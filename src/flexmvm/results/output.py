@@ -70,7 +70,7 @@ def write_run(out_dir: Path, srun, fields: bool = True) -> dict[str, Path]:
         "results": out_dir / "results.h5",
     }
     with writing(paths["history"]):
-        write_history_csv(paths["history"], res, probe_axis=0)
+        write_history_csv(paths["history"], res, probe_axis=None)
     write_summary(paths["summary"], srun.summary)
     if fields:
         with writing(paths["results"]):
