@@ -15,11 +15,11 @@ import click
 @click.option(
     "--axis",
     type=click.Choice(["x", "y", "z", "norm"]),
-    default="x",
-    show_default=True,
-    help="The probes' velocity compared: a global component or the speed.",
+    default=None,
+    help="The probes' velocity compared: a global component or the speed. Default: each "
+    "probe's own (the scenario's probe axis, x when not given).",
 )
-def command(run: Path, reference: Path, axis: str) -> None:
+def command(run: Path, reference: Path, axis: str | None) -> None:
     """RUN against REFERENCE, two folders written by `flexmvm run` (or fm.write_run; a
     full-FE reference is the run's full/ folder): NCC of the contact force over the contact
     window and over the whole window, relative errors (run - reference) / reference of its
@@ -30,7 +30,8 @@ def command(run: Path, reference: Path, axis: str) -> None:
     from flexmvm.scenarios.written_run import read_run
 
     c = compare(read_run(run), read_run(reference), axis)
-    click.echo(f"{run} vs {reference} (probe velocity {axis}):")
+    shown = axis or "as each probe's axis"
+    click.echo(f"{run} vs {reference} (probe velocity {shown}):")
     rows = [
         ("ncc_force", c.ncc_force, ".6f"),
         ("ncc_force_whole", c.ncc_force_whole, ".6f"),

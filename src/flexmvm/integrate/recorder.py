@@ -74,6 +74,11 @@ class OutputRecorder:
         px, pv = [], []
         for pr in self.probes:
             body, st = sysm.bodies[pr.body], states[pr.body]
+            if pr.nodes:  # a point inside an element: its nodes weighted by the shape functions
+                nodes, w = np.asarray(pr.nodes), np.asarray(pr.weights)
+                px.append(w @ body.node_positions(nodes, st.r, st.A, st.q))
+                pv.append(w @ body.node_velocities(nodes, st.A, st.q, st.v))
+                continue
             node = np.array([pr.node])
             px.append(body.node_positions(node, st.r, st.A, st.q)[0])
             pv.append(body.node_velocities(node, st.A, st.q, st.v)[0])
@@ -108,6 +113,7 @@ class OutputRecorder:
             frame_r=np.array([r["r"] for r in R]),
             frame_v=np.array([r["v"] for r in R]),
             probe_names=[p.name for p in self.probes],
+            probe_axes=[p.axis for p in self.probes],
             probe_x=np.array([r["px"] for r in R]),
             probe_v=np.array([r["pv"] for r in R]),
             contact_force=np.array([r["force"] for r in R]),

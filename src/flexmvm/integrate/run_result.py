@@ -94,11 +94,17 @@ class TimeGrid:
 
 @dataclass(frozen=True)
 class Probe:
-    """A named node of a body whose position and velocity are recorded."""
+    """A named point of a body whose position and velocity are recorded: its node, or with
+    ``nodes`` and ``weights`` the point interpolated in an element (x = sum_i w_i x_i, the
+    element's shape functions at the point, sum_i w_i = 1; ``node`` then the nearest of
+    them). axis: the velocity component its comparisons use (x, y, z or norm)."""
 
     name: str
     body: int
     node: int
+    axis: str = "x"
+    nodes: tuple[int, ...] = ()
+    weights: tuple[float, ...] = ()
 
 
 @dataclass(frozen=True)
@@ -159,6 +165,8 @@ class RunResult:
     max_penetration_by_direction_m: dict = field(default_factory=dict)
     max_joint_drift: float = 0.0  # largest joint violation |phi| after any step (position level)
     n_steps: int = 0
+    #: per probe, the velocity component its comparisons use (Probe.axis); empty: x for all
+    probe_axes: list[str] = field(default_factory=list)
     n_factorizations: int = 0
     n_nonrotating_steps: int = 0  # steps taken by the linear non-rotating step (nonrotating.py)
     steps_not_converged: int = 0  # steps that stopped above the Newton rtol (round-off floor)
@@ -247,10 +255,21 @@ class RunResult:
         b = self.body_index(body)
         return self.q[b], self.q_dot[b]
 
-    def curves(self, axis: int | str = 0) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
+    def curves(
+        self, axis: int | str | None = None
+    ) -> tuple[np.ndarray, np.ndarray, dict[str, np.ndarray]]:
         """(t, contact force, {probe: velocity component ``axis``}): 0, 1, 2 (or "x", "y",
-        "z") a global component, "norm" the speed; the curves that comparisons, history files
-        and figures use. InputError for another axis."""
+        "z") a global component, "norm" the speed, None each probe's own (probe_axes, the
+        scenario's probe ``axis``; x when not given); the curves that comparisons, history
+        files and figures use. InputError for another axis."""
+        if axis is None:
+            axes = self.probe_axes or ["x"] * len(self.probe_names)
+            if len(set(axes)) > 1:
+                curves = {}
+                for i, (n, a) in enumerate(zip(self.probe_names, axes, strict=True)):
+                    curves[n] = self.curves(a)[2][n]
+                return self.t, self.contact_force, curves
+            axis = axes[0] if axes else 0
         if isinstance(axis, str) and axis in PROBE_AXES:
             axis = PROBE_AXES.index(axis)
         if axis == "norm":

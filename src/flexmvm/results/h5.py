@@ -199,6 +199,7 @@ def write_results_h5(
         f.attrs["max_penetration_m"] = run.max_penetration_m
         f.attrs["body_names"] = json.dumps(list(run.body_names))
         f.attrs["probe_names"] = json.dumps(list(run.probe_names))
+        f.attrs["probe_axes"] = json.dumps(list(run.probe_axes))
         f.attrs["field_precision"] = run.field_precision.value
         if run.scenario is not None:  # a dataset: an attribute holds at most 64 kB
             f.create_dataset("scenario", data=json.dumps(run.scenario))

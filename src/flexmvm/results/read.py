@@ -74,6 +74,7 @@ def _histories(f: h5py.File) -> RunResult:
         frame_r=r,
         frame_v=v,
         probe_names=list(probes),
+        probe_axes=list(_json_attr(f, "probe_axes") or []),
         probe_x=px if px is not None else np.zeros((n, 0, 3)),
         probe_v=pv if pv is not None else np.zeros((n, 0, 3)),
         contact_force=f["contact_force"][()],

@@ -31,6 +31,7 @@ from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import System
 from flexmvm.materials import Material
 from flexmvm.mesh.mesh import Mesh
+from flexmvm.mesh.point_location import tet_weights
 from flexmvm.mesh.rod import RodMesh
 from flexmvm.reduction.interface import Patch, contact_patch, patch_nodes
 from flexmvm.reduction.kinds import kind_spec
@@ -287,9 +288,16 @@ def _probe(p, where, infos, index) -> Probe:
             ids = mesh.node_set(p.node_set)
         except MeshError as exc:
             raise InputError(f"{where}.node_set: {exc}") from None
-        return Probe(p.name, b, int(ids[0]))
+        return Probe(p.name, b, int(ids[0]), p.axis)
     tol = 0.05 * float(np.ptp(mesh.nodes, axis=0).min() or 1.0)
-    return Probe(p.name, b, nearest_node(mesh, p.point_m, f"{where}.point_m", tol))
+    d = np.linalg.norm(mesh.nodes - np.asarray(p.point_m, float), axis=1)
+    if d.min() > tol:  # no node near: the point interpolated in the tet that holds it
+        found = tet_weights(mesh, p.point_m)
+        if found is not None:
+            nodes, w = found
+            near = int(nodes[np.argmax(w)])
+            return Probe(p.name, b, near, p.axis, tuple(map(int, nodes)), tuple(map(float, w)))
+    return Probe(p.name, b, nearest_node(mesh, p.point_m, f"{where}.point_m", tol), p.axis)
 
 
 def _joint(j, k, bodies, infos, index, states):

@@ -63,9 +63,9 @@ class RunComparison:
         return out
 
 
-def _curves(run, axis: int | str = 0) -> tuple:
+def _curves(run, axis: int | str | None = None) -> tuple:
     if isinstance(run, tuple) and len(run) == 3:
-        if axis not in (0, "x"):
+        if axis not in (None, 0, "x"):
             raise InputError(
                 f"compare: a (t, force, {{probe: v}}) tuple holds one velocity component; "
                 f"expected axis 0 with it, got {axis!r}"
@@ -79,11 +79,12 @@ def _curves(run, axis: int | str = 0) -> tuple:
     )
 
 
-def compare(candidate, reference, axis: int | str = 0) -> RunComparison:
+def compare(candidate, reference, axis: int | str | None = None) -> RunComparison:
     """``candidate`` against ``reference``: each a run (flexmvm.run, flexmvm.read_run), a
     RunResult or a (t [s], force [N], {probe: axial velocity [m/s]}) tuple such as
     theory_histories gives. The probes' NCCs compare their global velocity component ``axis``:
-    0, 1, 2 or "x", "y", "z", or "norm" (the speed); a tuple holds x only."""
+    0, 1, 2 or "x", "y", "z", or "norm" (the speed); None (default) each probe's own, the
+    scenario's probe ``axis`` (x when not given); a tuple holds x only."""
     flat = compare_runs(*_curves(reference, axis), *_curves(candidate, axis))
     probes = {
         k[4:]: v

@@ -4,7 +4,7 @@ law and options, a probe's body point; scenarios/schema.py checks their cross-re
 
 from __future__ import annotations
 
-from typing import Annotated
+from typing import Annotated, Literal
 
 from annotated_types import Ge, Le
 from pydantic import (
@@ -95,10 +95,22 @@ class ContactConfig(Frozen):
 
 
 class ProbeConfig(Frozen):
+    """A probe: a node set's first node, or any point of the body (its node when one is
+    within reach, else interpolated in the element that holds it); ``axis`` the velocity
+    component its comparisons use (the history holds all three and the speed)."""
+
     name: Name
     body: Name
     node_set: SetName | None = None
     point_m: Vec3 | None = None
+    axis: Literal["x", "y", "z", "norm"] = "x"
+
+    @model_serializer(mode="wrap")
+    def _dump(self, handler):
+        data = handler(self)  # axis left out at its default: study and cache keys unchanged
+        if isinstance(data, dict) and data.get("axis") == "x":
+            data.pop("axis", None)
+        return data
 
     @model_validator(mode="after")
     def _check(self) -> ProbeConfig:
