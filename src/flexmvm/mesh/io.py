@@ -19,15 +19,25 @@ import meshio
 import numpy as np
 
 from flexmvm.errors import InputError, MeshError
+from flexmvm.mesh.abaqus import (
+    InpSets,
+    geometry_text,
+    read_cards,
+    read_inp_sets,
+    surface_rows,
+)
 from flexmvm.mesh.connectivity import joined_cells
 from flexmvm.mesh.groups import (
     FILE_NUMBERING,
+    NODE_SET_PREFIX,
     Group,
     cell_dim,
+    facet_union,
     file_cell_numbers,
+    file_node_sets,
     group_nodes,
-    point_sets,
     read_groups,
+    skin_within,
 )
 from flexmvm.mesh.integrity import duplicate_cells, face_table, skin
 from flexmvm.mesh.mesh import CellBlock, CellType, FacetSet, Mesh
@@ -38,25 +48,34 @@ _UMASK = os.umask(0)
 os.umask(_UMASK)
 _FILE_MODE = 0o666 & ~_UMASK
 
-NODE_SET_PREFIX = "node_set:"
-
 _VOLUME_TYPES = {ct.value: ct for ct in CellType}
 _SURFACE_CORNERS = {"triangle": 3, "triangle6": 3, "quad": 4, "quad8": 4, "quad9": 4}
 
 #: Name of the facet set and node set of the outer skin that read_mesh always adds.
 SKIN = "surface"
 
+#: meshio's Nastran suffixes, and what read_mesh says of such a file (a MeshWarning): meshio
+#: reads its GRID points and elements only (property ids are no names), so no set but the skin.
+NASTRAN_SUFFIXES = (".bdf", ".nas", ".fem")
+NASTRAN_NOTE = (
+    f"a Nastran file gives no named sets, only the skin {SKIN!r}; select nodes by a region "
+    "(box, ball, node_ids) or bring the mesh as .inp or .msh with its sets"
+)
+
 
 class MeshWarning(UserWarning):
     """A mesh file was read with a change the user should know of (nodes dropped)."""
 
 
-def _read(path: Path) -> meshio.Mesh:
+def _read(path: Path, inp_text: str | None = None) -> meshio.Mesh:
+    """meshio's reading of ``path`` (of ``inp_text``, an .inp's geometry, if given)."""
     if not path.is_file():
         raise MeshError(f"mesh file {str(path)!r} does not exist; expected a readable mesh file")
     log = io.StringIO()
     try:
         with contextlib.redirect_stdout(log), contextlib.redirect_stderr(log):
+            if inp_text is not None:
+                return meshio.read(io.StringIO(inp_text), file_format="abaqus")
             return meshio.read(path)
     except (Exception, SystemExit) as exc:  # meshio may even sys.exit() on a bad file
         text = log.getvalue() if isinstance(exc, SystemExit) else str(exc)
@@ -246,6 +265,49 @@ def _renumbered(
     return nodes, [CellBlock(b.cell_type, new_id[b.connectivity]) for b in blocks], new_id
 
 
+def _read_file(path: Path, where: str) -> tuple[meshio.Mesh, InpSets | None]:
+    """meshio's reading of ``path``; for an .inp its nodes and elements, with its sets and
+    surfaces read by mesh/abaqus.py (meshio's cell and point sets replaced by them). A
+    MeshWarning for a *SURFACE type skipped, and for a Nastran file (NASTRAN_NOTE)."""
+    inp = None
+    if path.suffix.lower() == ".inp" and path.is_file():
+        cards = read_cards(path, where)
+        m = _read(path, geometry_text(cards))
+        inp = read_inp_sets(cards, m, where)
+        m.cell_sets, m.point_sets = inp.cell_sets(m), dict(inp.node_sets)
+        for text in inp.skipped:
+            warnings.warn(f"{where}: {text}", MeshWarning, stacklevel=3)
+    else:
+        m = _read(path)
+    if path.suffix.lower() in NASTRAN_SUFFIXES:
+        warnings.warn(f"{where}: {NASTRAN_NOTE}", MeshWarning, stacklevel=3)
+    return m, inp
+
+
+def _add_file_sets(m, inp, skin_data, sets: dict, facet_sets: dict, where: str) -> None:
+    """Add to ``sets`` and ``facet_sets`` (in place) the file's node sets (file_node_sets:
+    point sets, VTU masks; a name already a set: the union) and its surfaces: an .inp's
+    *SURFACE cards (abaqus.surface_rows) and every file node set that covers skin faces
+    (groups.skin_within; a name already a surface keeps it). A set never shrinks: a name met
+    twice is the union of both. skin_data: (new_id, boundary (B, 4), QuadraticFaces)."""
+    new_id, boundary, quadratic = skin_data
+    file_sets = file_node_sets(m, new_id)
+    for name, ids in file_sets.items():
+        sets[name] = np.union1d(sets[name], ids) if name in sets else ids
+    rows = surface_rows(m, inp, new_id, boundary, where) if inp is not None else {}
+    n_nodes = int(new_id.max()) + 1
+    rows |= {
+        name: skin_within(boundary, sets[name], n_nodes)
+        for name in file_sets
+        if name not in facet_sets and name not in rows
+    }
+    for name, r in rows.items():
+        if name in facet_sets or len(r) or name not in file_sets:  # a *SURFACE, even empty
+            fs = quadratic.split(skin(boundary[r]))
+            facet_sets[name] = facet_union(facet_sets.get(name), fs)
+            sets[name] = np.union1d(sets.get(name, fs.nodes), fs.nodes)
+
+
 def read_mesh(
     path: str | os.PathLike,
     node_sets: Mapping[str, np.ndarray] | None = None,
@@ -259,8 +321,12 @@ def read_mesh(
     a facet set (oriented outward) and the node set of its nodes, a volume, line or point
     group the node set of its nodes; an element in two groups is in both; an empty group gives
     an empty set (Mesh.node_set/facet_set say "empty"). meshio point sets and point-data masks
-    ``node_set:<name>`` (see write_mesh) become node sets. node_sets: extra name -> node ids in
-    the file's numbering. The outer skin (faces of one cell) is always the facet set and node
+    ``node_set:<name>`` (see write_mesh) become node sets, and surfaces too where they cover
+    skin faces (the faces whose corners are all in the set). An Abaqus .inp's sets and
+    *SURFACE cards are read by mesh/abaqus.py (sets merged across repeated cards). A name met
+    twice is the union of both: a set read twice never shrinks. A Nastran file names no set
+    (a MeshWarning says so); VTU cell data are field values, not groups. node_sets: extra
+    name -> node ids in the file's numbering. The outer skin (faces of one cell) is always the facet set and node
     set ``surface``; a file group of that name must be that skin. The faces of quadratic cells
     (tetra10, hexahedron27) become linear sub-facets through all their nodes, mid-side nodes
     included (mesh/subfacets.py): 4 triangles per 6-node triangle, 4 quads per 9-node quad.
@@ -279,7 +345,7 @@ def read_mesh(
     """
     path = Path(path)
     where = f"mesh file {str(path)!r}"
-    m = _read(path)
+    m, inp = _read_file(path, where)
     blocks, cell_no = _drop_group_copies(_volume_blocks(m, where), where)
     nodes, blocks, new_id = _renumbered(m, blocks, where)
     nodes, blocks, new_id, boundary, merged = joined_cells(
@@ -302,11 +368,7 @@ def read_mesh(
             f"{SKIN!r} for the whole boundary only (rename the group)"
         )
     facet_sets[SKIN], sets[SKIN] = surface, surface.nodes
-    for name, ids in point_sets(m).items():
-        sets[name] = new_id[ids[(ids >= 0) & (ids < len(new_id))]]
-    for key, values in m.point_data.items():
-        if key.startswith(NODE_SET_PREFIX):
-            sets[key[len(NODE_SET_PREFIX) :]] = new_id[np.flatnonzero(np.asarray(values) != 0)]
+    _add_file_sets(m, inp, (new_id, boundary, quadratic), sets, facet_sets, where)
     for name, ids in (node_sets or {}).items():
         ids = np.asarray(ids, dtype=np.int64)
         if ids.size and (ids.min() < 0 or ids.max() >= len(m.points)):
