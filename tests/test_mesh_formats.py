@@ -139,6 +139,17 @@ def test_node_sets_and_surfaces(tmp_path):
     assert mesh.node_set("TOPS").tolist() == mesh.node_set("TOP_N").tolist()
 
 
+def test_nset_named_like_an_elset(tmp_path):
+    """An NSET and an ELSET of one name (separate name spaces in Abaqus, whose *BOUNDARY
+    reads the NSET): the node set is the NSET's nodes (the 25 on the bottom), not the 72
+    nodes of the side elements; both NSET cards of that name count (union of 5 + 20)."""
+    path = tmp_path / "block.inp"
+    _block_inp(path, ["*NSET, NSET=side, GENERATE", "1, 5", "*NSET, NSET=SIDE, GENERATE", "6, 25"])
+    mesh = read_mesh(path)
+    assert mesh.node_set("side").tolist() == mesh.node_set("bottom").tolist()
+    assert mesh.facet_set("side").n_facets == 16  # the NSET covers the bottom's 16 faces
+
+
 @pytest.mark.parametrize("etype", ["C3D4", "C3D10"])
 def test_tet_face_numbers(tmp_path, etype):
     """S1..S4 of one tetrahedron are its faces 1-2-3, 1-4-2, 2-4-3, 3-4-1 (Abaqus Analysis
@@ -196,6 +207,7 @@ def test_sets_and_node_cards_meshio_misreads(tmp_path):
     [
         (["*ELSET, ELSET=bad", "1, 99"], r"\*ELSET 'bad' names element 99, which no \*ELEMENT"),
         (["*NSET, NSET=bad", "TOPZ"], r"\*NSET 'bad' names 'TOPZ', which no earlier \*NSET"),
+        (["*SURFACE, NAME=bad", "EZ, S2"], r"\*SURFACE 'bad' names 'EZ', which no earlier \*ELSET"),
         (["*SURFACE, NAME=bad", "1, S7"], r"\*SURFACE 'bad': face S7 of a hexahedron .*S1..S6"),
         (["*SURFACE, NAME=bad", "1, S2"], r"\*SURFACE 'bad': 1 face\(s\) inside the body"),
         (["*NSET, NSET=bad, GENERATE", "1, x"], r"GENERATE: line .*first, last\[, step\]"),
@@ -242,14 +254,19 @@ def test_sphere_onto_a_surface_card(tmp_path):
     top's centre node at t = 0 and the contact force grows (> 1 N after 10 us: Hertz's
     half-space gives ~100 N at 5 um of approach; the coarse hex8 face is softer, but a force
     of zero would mean no contact). A surface or node set the file lacks: one-line InputError
-    listing the file's sets."""
+    naming the mesh file and listing its sets (a node set that covers no skin face said
+    to be one)."""
     path = tmp_path / "block.inp"
     _block_inp(path)
     res = fm.run(fm.scenario_from_dict(_scenario(path, "TOPS", "bottom")))
     assert res.summary["status"] == "completed"
     assert res.summary["max_contact_force_N"] > 1.0, res.summary
-    with pytest.raises(InputError, match=r"unknown surface 'TOPX'; known: .*TOPS") as err:
+    with pytest.raises(InputError, match=r"block.inp'\): unknown surface 'TOPX'; known: .*TOPS"):
         fm.run(fm.scenario_from_dict(_scenario(path, "TOPX", "bottom")))
+    one = tmp_path / "one.inp"
+    _block_inp(one, ["*NSET, NSET=one", "1"])
+    with pytest.raises(InputError, match=r"'one' is a node set covering no skin face") as err:
+        fm.run(fm.scenario_from_dict(_scenario(one, "one", "bottom")))
     assert "\n" not in str(err.value)
     with pytest.raises(
         InputError, match=r"supports\[0\].node_set: unknown node set 'BOTX'; known: .*bottom"

@@ -211,10 +211,11 @@ class _Reader:
         if card.params.get("ELSET"):
             self.add("ELSET", str(card.params["ELSET"]), start + np.arange(len(ints) // width))
 
-    def listed(self, kind: str, card: _Card, name: str) -> np.ndarray:
-        """The members a *NSET/*ELSET card lists: labels, GENERATE ranges, set names."""
+    def listed(self, kind: str, card: _Card, name: str, ctx: str = "") -> np.ndarray:
+        """The members a *NSET/*ELSET card (or a *SURFACE line) lists: labels, GENERATE
+        ranges, set names; ``ctx`` names the card in errors (default ``*kind 'name'``)."""
         labels, found = [], []
-        ctx = f"*{kind} {name!r}"
+        ctx = ctx or f"*{kind} {name!r}"
         for row in card.rows:
             if "GENERATE" in card.params:
                 try:
@@ -228,7 +229,7 @@ class _Reader:
             for f in row:
                 if f.lstrip("-").isdigit():
                     labels.append(np.array([int(f)]))
-                elif (ids := self.members(kind, f)) is not None:
+                elif (ids := self.members(kind, _unquote(f))) is not None:
                     found.append(ids)
                 else:
                     raise self.error(
@@ -268,7 +269,11 @@ class _Reader:
         kind = (card.params.get("TYPE") or "ELEMENT").upper()
         if kind == "NODE":
             for row in card.rows:
-                self.add("NODE", name, self.listed("NSET", _Card("NSET", {}, [row[:1]]), name))
+                self.add(
+                    "NODE",
+                    name,
+                    self.listed("NSET", _Card("NSET", {}, [row[:1]]), name, f"*SURFACE {name!r}"),
+                )
             self.add("NODE", name, np.zeros(0, dtype=np.int64))
             return
         if kind != "ELEMENT":
@@ -281,7 +286,7 @@ class _Reader:
         self.names.setdefault(("FACE", key), name)
         parts = self.faces.setdefault(key, [])
         for row in card.rows:
-            cells = self.listed("ELSET", _Card("ELSET", {}, [row[:1]]), name)
+            cells = self.listed("ELSET", _Card("ELSET", {}, [row[:1]]), name, f"*SURFACE {name!r}")
             face = -1
             if len(row) > 1:
                 label = row[1].upper()

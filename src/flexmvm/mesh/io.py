@@ -286,14 +286,15 @@ def _read_file(path: Path, where: str) -> tuple[meshio.Mesh, InpSets | None]:
 
 def _add_file_sets(m, inp, skin_data, sets: dict, facet_sets: dict, where: str) -> None:
     """Add to ``sets`` and ``facet_sets`` (in place) the file's node sets (file_node_sets:
-    point sets, VTU masks; a name already a set: the union) and its surfaces: an .inp's
-    *SURFACE cards (abaqus.surface_rows) and every file node set that covers skin faces
-    (groups.skin_within; a name already a surface keeps it). A set never shrinks: a name met
-    twice is the union of both. skin_data: (new_id, boundary (B, 4), QuadraticFaces)."""
+    point sets, VTU masks) and its surfaces: an .inp's *SURFACE cards (abaqus.surface_rows)
+    and every file node set that covers skin faces (groups.skin_within), unless a group of
+    that name is a surface already. A file node set is the node set of its name as it is (an
+    Abaqus NSET and ELSET of one name: the NSET's nodes, not the elements' nodes); a surface
+    of a name that is also a surface group adds its facets to the group's, and their nodes to
+    its node set. skin_data: (new_id, boundary (B, 4), QuadraticFaces)."""
     new_id, boundary, quadratic = skin_data
     file_sets = file_node_sets(m, new_id)
-    for name, ids in file_sets.items():
-        sets[name] = np.union1d(sets[name], ids) if name in sets else ids
+    sets.update(file_sets)
     rows = surface_rows(m, inp, new_id, boundary, where) if inp is not None else {}
     n_nodes = int(new_id.max()) + 1
     rows |= {
@@ -305,7 +306,8 @@ def _add_file_sets(m, inp, skin_data, sets: dict, facet_sets: dict, where: str) 
         if name in facet_sets or len(r) or name not in file_sets:  # a *SURFACE, even empty
             fs = quadratic.split(skin(boundary[r]))
             facet_sets[name] = facet_union(facet_sets.get(name), fs)
-            sets[name] = np.union1d(sets.get(name, fs.nodes), fs.nodes)
+            if name not in file_sets:
+                sets[name] = np.union1d(sets.get(name, fs.nodes), fs.nodes)
 
 
 def read_mesh(
@@ -323,9 +325,10 @@ def read_mesh(
     an empty set (Mesh.node_set/facet_set say "empty"). meshio point sets and point-data masks
     ``node_set:<name>`` (see write_mesh) become node sets, and surfaces too where they cover
     skin faces (the faces whose corners are all in the set). An Abaqus .inp's sets and
-    *SURFACE cards are read by mesh/abaqus.py (sets merged across repeated cards). A name met
-    twice is the union of both: a set read twice never shrinks. A Nastran file names no set
-    (a MeshWarning says so); VTU cell data are field values, not groups. node_sets: extra
+    *SURFACE cards are read by mesh/abaqus.py (a set on repeated cards is their union: a set
+    read twice never shrinks; an NSET is the node set of its name, an ELSET of the same name
+    gives its elements' nodes otherwise). A Nastran file names no set (a MeshWarning says so);
+    VTU cell data are field values, not groups. node_sets: extra
     name -> node ids in the file's numbering. The outer skin (faces of one cell) is always the facet set and node
     set ``surface``; a file group of that name must be that skin. The faces of quadratic cells
     (tetra10, hexahedron27) become linear sub-facets through all their nodes, mid-side nodes
