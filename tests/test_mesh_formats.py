@@ -93,6 +93,8 @@ def _block_inp(path, extra: list[str] = ()) -> None:
         "*SURFACE, NAME=BOT",
         "1, S1",
         "2, s1",
+        "*SURFACE, NAME=ALL",
+        "EALL",
         *extra,
     ]
     path.write_text("\n".join(lines) + "\n")
@@ -124,7 +126,8 @@ def test_node_sets_and_surfaces(tmp_path):
     ``TOPS`` (S2 of the 16 top elements) and the node-based ``TOPN`` are the 16 top facets,
     ``BOT`` (S1 of elements 1 and 2, face id in either case) 2 bottom facets; the node sets
     ``TOP_N`` and ``bottom`` are surfaces too (the skin facets of their nodes: 16 each); the
-    skin ``surface`` has 4 x 16 = 64 facets. Counts: exact."""
+    skin ``surface`` has 4 x 16 = 64 facets, as ``ALL`` (all elements named without a face:
+    their faces on the skin). Counts: exact."""
     path = tmp_path / "block.inp"
     _block_inp(path)
     mesh = read_mesh(path)
@@ -135,7 +138,7 @@ def test_node_sets_and_surfaces(tmp_path):
         assert mesh.facet_set(name).n_facets == n, name
         assert np.all(sign * _normals_z(mesh, name) > 0), name
     assert mesh.facet_set("bottom").n_facets == 16
-    assert mesh.facet_set("surface").n_facets == 64
+    assert mesh.facet_set("surface").n_facets == mesh.facet_set("ALL").n_facets == 64
     assert mesh.node_set("TOPS").tolist() == mesh.node_set("TOP_N").tolist()
 
 
@@ -154,7 +157,7 @@ def test_nset_named_like_an_elset(tmp_path):
 def test_tet_face_numbers(tmp_path, etype):
     """S1..S4 of one tetrahedron are its faces 1-2-3, 1-4-2, 2-4-3, 3-4-1 (Abaqus Analysis
     User's Guide 6.14, sect. 28.1.4); a C3D10 face also holds its three mid-side nodes
-    (subfacets: 4 triangles through 6 nodes)."""
+    (subfacets: 4 triangles through 6 nodes). The C3D10's element line is continued."""
     pts = [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1)]
     conn = [1, 2, 3, 4]
     if etype == "C3D10":
@@ -162,7 +165,10 @@ def test_tet_face_numbers(tmp_path, etype):
         pts += [tuple((np.add(pts[a], pts[b]) / 2).tolist()) for a, b in edges]
         conn += list(range(5, 11))
     lines = ["*NODE", *(f"{k + 1}, {x}, {y}, {z}" for k, (x, y, z) in enumerate(pts))]
-    lines += [f"*ELEMENT, TYPE={etype}", ", ".join(map(str, [1, *conn]))]
+    row = [str(v) for v in (1, *conn)]  # an element's line continued after 8 fields
+    lines += [f"*ELEMENT, TYPE={etype}", ", ".join(row[:8]) + ","] + [", ".join(row[8:])] * (
+        len(row) > 8
+    )
     for f in range(1, 5):
         lines += [f"*SURFACE, NAME=F{f}", f"1, S{f}"]
     path = tmp_path / "tet.inp"

@@ -159,6 +159,7 @@ class _Reader:
         self.sets: dict[tuple[str, str], list[np.ndarray]] = {}
         self.faces: dict[str, list[np.ndarray]] = {}
         self.skipped: list[str] = []
+        self.sorted: dict[tuple[int, int], tuple[np.ndarray, np.ndarray]] = {}
 
     def error(self, text: str) -> MeshError:
         return MeshError(f"{self.where}: {text}")
@@ -175,11 +176,14 @@ class _Reader:
 
     def index(self, labels: list[np.ndarray], wanted: np.ndarray, what: str, ctx: str):
         """Running indices of ``wanted`` labels; MeshError naming the first label not defined."""
-        all_labels = np.concatenate(labels) if labels else np.zeros(0, dtype=np.int64)
-        order = np.argsort(all_labels, kind="stable")
-        pos = np.searchsorted(all_labels[order], wanted)
-        pos = np.minimum(pos, max(len(all_labels) - 1, 0))
-        ok = all_labels[order][pos] == wanted if len(all_labels) else np.zeros(len(wanted), bool)
+        key = (id(labels), len(labels))
+        if key not in self.sorted:  # sorted once per *NODE/*ELEMENT card added
+            all_labels = np.concatenate(labels) if labels else np.zeros(0, dtype=np.int64)
+            order = np.argsort(all_labels, kind="stable")
+            self.sorted[key] = (all_labels[order], order)
+        ordered, order = self.sorted[key]
+        pos = np.minimum(np.searchsorted(ordered, wanted), max(len(ordered) - 1, 0))
+        ok = ordered[pos] == wanted if len(ordered) else np.zeros(len(wanted), dtype=bool)
         if not np.all(ok):
             bad = int(wanted[~ok][0])
             raise self.error(
@@ -333,7 +337,7 @@ def geometry_text(cards: list[_Card]) -> str:
     for c in cards:
         if c.keyword == "ELEMENT":
             lines.append(f"*ELEMENT, TYPE={c.params.get('TYPE')}")
-            lines += [", ".join(r) + ("," if r is not c.rows[-1] else "") for r in c.rows]
+            lines += [", ".join(r) for r in c.rows]  # meshio joins an element's lines
     return "\n".join(lines) + "\n"
 
 
