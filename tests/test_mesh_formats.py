@@ -287,6 +287,46 @@ def _meshio_block() -> meshio.Mesh:
     return meshio.Mesh(pts, [("hexahedron", np.array(list(elems.values())) - 1)])
 
 
+def _side_quads() -> list[np.ndarray]:
+    """Quads (node ids, 0-based) of the block's four side faces, one array per face (as gmsh
+    meshes one surface entity per face): 4 x 2 quads each."""
+    out = []
+    for fixed in ((0, None), (N, None), (None, 0), (None, N)):
+        quads = []
+        for a in range(N):
+            for k in range(2):
+                ij = [(a, k), (a + 1, k), (a + 1, k + 1), (a, k + 1)]
+                quads.append(
+                    [
+                        _label(*((fixed[0], t, z) if fixed[0] is not None else (t, fixed[1], z)))
+                        - 1
+                        for t, z in ij
+                    ]
+                )
+        out.append(np.array(quads))
+    return out
+
+
+def test_meshio_written_inp_keeps_every_block_of_a_set(tmp_path):
+    """The issue's own file: meshio writes a physical surface ``side`` of four gmsh entities
+    (four quad blocks) as four ``*ELSET, ELSET=side`` cards; read back, ``side`` is the 32
+    quads of all four faces (main kept the last card: 8), and its node set the 48 nodes
+    on the sides (16 around each of the 3 levels)."""
+    m = _meshio_block()
+    quads = _side_quads()
+    m.cells = [m.cells[0], *(meshio.CellBlock("quad", q) for q in quads)]
+    m.cell_sets = {"side": [np.zeros(0, dtype=int), *(np.arange(len(q)) for q in quads)]}
+    path = tmp_path / "meshio.inp"
+    meshio.write(path, m)
+    assert path.read_text().count("*ELSET, ELSET=side") == 4
+    mesh = read_mesh(path)
+    assert mesh.facet_set("side").n_facets == 32
+    x, y = mesh.nodes[:, 0], mesh.nodes[:, 1]
+    on_side = np.isclose(np.abs(x), 0.02) | np.isclose(np.abs(y), 0.02)
+    assert mesh.node_set("side").tolist() == np.flatnonzero(on_side).tolist()
+    assert len(mesh.node_set("side")) == 48
+
+
 def test_nastran_bdf_gives_the_skin_only(tmp_path):
     """meshio reads a .bdf's grid points and elements; the bulk data names no set (property
     ids are not names), so the mesh has the skin ``surface`` only: a one-line MeshWarning says
