@@ -189,6 +189,50 @@ def test_tet_face_numbers(tmp_path, etype):
         assert np.all(out > 0), f
 
 
+@pytest.mark.parametrize(
+    ("etype", "pts", "faces"),
+    [
+        (
+            "C3D6",
+            [(0, 0, 0), (1, 0, 0), (0, 1, 0), (0, 0, 1), (1, 0, 1), (0, 1, 1)],
+            {1: [1, 2, 3], 2: [4, 5, 6], 3: [1, 2, 4, 5], 4: [2, 3, 5, 6], 5: [1, 3, 4, 6]},
+        ),
+        (
+            "C3D8",
+            [
+                (0, 0, 0),
+                (1, 0, 0),
+                (1, 1, 0),
+                (0, 1, 0),
+                (0, 0, 1),
+                (1, 0, 1),
+                (1, 1, 1),
+                (0, 1, 1),
+            ],
+            {1: [1, 2, 3, 4], 2: [5, 6, 7, 8], 3: [1, 2, 5, 6], 4: [2, 3, 6, 7], 5: [3, 4, 7, 8]}
+            | {6: [1, 4, 5, 8]},
+        ),
+    ],
+)
+def test_wedge_and_hex_face_numbers(tmp_path, etype, pts, faces):
+    """S1..S5 of a C3D6 are its faces 1-2-3, 4-6-5, 1-4-5-2, 2-5-6-3, 3-6-4-1 and S1..S6 of a
+    C3D8 its faces 1-2-3-4, 5-8-7-6, 1-5-6-2, 2-6-7-3, 3-7-8-4, 4-8-5-1 (Abaqus Analysis
+    User's Guide 6.14, sect. 28.1.4), each one facet, oriented outward."""
+    lines = ["*NODE", *(f"{k + 1}, {x}, {y}, {z}" for k, (x, y, z) in enumerate(pts))]
+    lines += [f"*ELEMENT, TYPE={etype}", ", ".join(map(str, [1, *range(1, len(pts) + 1)]))]
+    for f in faces:
+        lines += [f"*SURFACE, NAME=F{f}", f"1, S{f}"]
+    path = tmp_path / "one.inp"
+    path.write_text("\n".join(lines) + "\n")
+    mesh = read_mesh(path)
+    centroid = np.mean(pts, axis=0)
+    for f, want in faces.items():
+        fs = mesh.facet_set(f"F{f}")
+        assert (fs.nodes + 1).tolist() == want and fs.n_facets == 1, f
+        x = mesh.nodes[fs.quads[0] if len(fs.quads) else fs.tris[0]]
+        assert np.cross(x[1] - x[0], x[2] - x[0]) @ (x.mean(axis=0) - centroid) > 0, f
+
+
 def test_sets_and_node_cards_meshio_misreads(tmp_path):
     """Two *NODE cards (meshio keeps the last only), a set naming other sets, GENERATE without
     its step and on two lines (meshio refuses both): read whole. A *SURFACE of another TYPE

@@ -1,10 +1,12 @@
 """The named sets and surfaces of an Abaqus .inp file, read from its text (meshio keeps too few).
 
 meshio reads an .inp's nodes and elements well, but its sets badly (issue 52): a second
-``*ELSET, ELSET=side`` card replaces the first (meshio's own .inp writer and gmsh write one card
-per block, so a clamp on ``side`` held one edge of a plate instead of four, silently), an
-``*NSET`` card naming other sets or holding several GENERATE lines is misread, and ``*SURFACE``
-cards are dropped. This module reads the keyword cards itself and hands read_mesh:
+``*ELSET, ELSET=side`` card replaces the first (meshio's own .inp writer writes one card per
+block, so a gmsh surface of four entities became one: a clamp on ``side`` held one edge of a
+plate instead of four, silently), a second *NODE card replaces the first, an ``*NSET`` naming
+other sets is read empty, GENERATE is refused unless on one line of three fields, and
+``*SURFACE`` cards are dropped. This module reads the keyword cards itself, hands meshio the
+nodes and elements alone (geometry_text), and gives read_mesh:
 
 - element sets (``*ELSET``, and ``ELSET=`` on an ``*ELEMENT`` card): the union of every card of
   that name; members are element labels, ranges (``GENERATE``: ``first, last[, step]`` per data
@@ -18,10 +20,11 @@ cards are dropped. This module reads the keyword cards itself and hands read_mes
   (read_mesh's).
 
 Keywords, parameters and names are case-insensitive, as Abaqus reads them: cards whose names
-differ only in case are one set, known by the first card's spelling. A keyword line ending in a
-comma continues on the next line; comment lines start with ``**``; ``*INCLUDE, INPUT=`` files are
-read where they stand. Parts and instances are not told apart (a file of one part, as meshio
-and gmsh write, is what is read).
+differ only in case are one set, known (in Mesh.node_set, Mesh.facet_set) by the first card's
+spelling. A keyword line ending in a comma continues on the next line; comment lines start
+with ``**``; ``*INCLUDE, INPUT=`` files are read where they stand. Parts and instances are not
+told apart: a file of one part instanced once (gmsh's, meshio's, Abaqus/CAE's for one part) is
+read as it is, an ``*INSTANCE``'s translation or rotation is not applied.
 
 Face numbers, Abaqus Analysis User's Guide (6.14), sect. 28.1.4 "Three-dimensional solid
 element library", *Element faces* (node numbers 1-based as there; meshio keeps Abaqus's node
