@@ -307,7 +307,7 @@ def test_sphere_onto_a_surface_card(tmp_path):
     node-based *SURFACE of the same facets gives the same run (force equal to 1e-12: the same
     facets, the same arithmetic). A surface or node set the file lacks: one-line InputError
     naming the mesh file and listing its sets (a node set that covers no skin face said to
-    be one)."""
+    be one, a name in another case than the file's pointed at)."""
     path = tmp_path / "block.inp"
     _block_inp(path)
     res = fm.run(fm.scenario_from_dict(_scenario(path, "TOPS", "bottom")))
@@ -319,6 +319,8 @@ def test_sphere_onto_a_surface_card(tmp_path):
     )
     with pytest.raises(InputError, match=r"block.inp'\): unknown surface 'TOPX'; known: .*TOPS"):
         fm.run(fm.scenario_from_dict(_scenario(path, "TOPX", "bottom")))
+    with pytest.raises(InputError, match=r"known: .*\(did you mean 'TOPS'\? names are matched"):
+        fm.run(fm.scenario_from_dict(_scenario(path, "tops", "bottom")))
     one = tmp_path / "one.inp"
     _block_inp(one, ["*NSET, NSET=one", "1"])
     with pytest.raises(InputError, match=r"'one' is a node set covering no skin face") as err:

@@ -90,12 +90,17 @@ def _mesh_file(sc, body: str) -> str:
 
 
 def _node_set_note(mesh: Mesh, name: str) -> str:
-    """Why a node set of that name is no surface (it covers no skin face), or empty."""
+    """Why a name is no surface of ``mesh``, where it can be told: a node set that covers no
+    skin face, or a surface spelled in another case (Abaqus names are case-insensitive in the
+    file; the scenario names them as the file spells them). Empty otherwise."""
     if name in mesh.node_sets and name not in mesh.facet_sets:
         return (
             f" ({name!r} is a node set covering no skin face: a surface needs faces whose "
             "corner nodes are all in it)"
         )
+    same = [k for k in mesh.facet_sets if k.lower() == name.lower() and k != name]
+    if same:
+        return f" (did you mean {same[0]!r}? names are matched as the mesh file spells them)"
     return ""
 
 
