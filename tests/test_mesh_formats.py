@@ -317,7 +317,9 @@ def test_sphere_onto_a_surface_card(tmp_path):
     assert by_nodes.summary["max_contact_force_N"] == pytest.approx(
         res.summary["max_contact_force_N"], rel=1e-12
     )
-    with pytest.raises(InputError, match=r"block.inp'\): unknown surface 'TOPX'; known: .*TOPS"):
+    with pytest.raises(
+        InputError, match=r"unknown surface 'TOPX'; known: .*TOPS.*; mesh file '.*block.inp'$"
+    ):
         fm.run(fm.scenario_from_dict(_scenario(path, "TOPX", "bottom")))
     with pytest.raises(InputError, match=r"known: .*\(did you mean 'TOPS'\? names are matched"):
         fm.run(fm.scenario_from_dict(_scenario(path, "tops", "bottom")))

@@ -78,15 +78,15 @@ def check_contact_surfaces(sc, body: str, mesh: Mesh) -> None:
                     mesh.facet_set(surface)
                 except MeshError as exc:
                     raise InputError(
-                        f"contacts[{k}].{role} = {getattr(c, role)!r}: body {body!r}"
-                        f"{_mesh_file(sc, body)}: {exc}{_node_set_note(mesh, surface)}"
+                        f"contacts[{k}].{role} = {getattr(c, role)!r}: body {body!r}: {exc}"
+                        f"{_node_set_note(mesh, surface)}{_mesh_file(sc, body)}"
                     ) from None
 
 
 def _mesh_file(sc, body: str) -> str:
-    """`` (mesh file 'path')`` for a body read from a file, else empty."""
+    """``; mesh file 'path'`` for a body read from a file, else empty."""
     path = next((b.mesh_file for b in sc.bodies if b.name == body), None)
-    return f" (mesh file {str(path)!r})" if path is not None else ""
+    return f"; mesh file {str(path)!r}" if path is not None else ""
 
 
 def _node_set_note(mesh: Mesh, name: str) -> str:
