@@ -177,7 +177,9 @@ class _Reader:
         parts = self.sets.get((kind, name.upper()))
         return None if parts is None else np.unique(np.concatenate(parts))
 
-    def index(self, labels: list[np.ndarray], wanted: np.ndarray, what: str, ctx: str):
+    def index(
+        self, labels: list[np.ndarray], wanted: np.ndarray, what: str, ctx: str
+    ) -> np.ndarray:
         """Running indices of ``wanted`` labels; MeshError naming the first label not defined."""
         key = (id(labels), len(labels))
         if key not in self.sorted:  # sorted once per *NODE/*ELEMENT card added
@@ -366,13 +368,15 @@ def read_inp_sets(cards: list[_Card], m: meshio.Mesh, where: str) -> InpSets:
     return r.result()
 
 
-def _face_corners(m: meshio.Mesh, faces: np.ndarray, name: str, where: str):
+def _face_corners(
+    m: meshio.Mesh, faces: np.ndarray, name: str, where: str
+) -> list[tuple[np.ndarray, np.ndarray]]:
     """Corner nodes (meshio point ids) of the faces (F, 2) (running cell index, face; -1 every
     face) of a surface, with whether each was named by its number: a list of ((n, 3|4), (n,))
     pairs, one per face shape. MeshError for a face number the element lacks or an element
     that is no volume cell."""
     start = np.cumsum([0] + [len(b.data) for b in m.cells])
-    out = []
+    out: list[tuple[np.ndarray, np.ndarray]] = []
     for k, block in enumerate(m.cells):
         sel = faces[(faces[:, 0] >= start[k]) & (faces[:, 0] < start[k + 1])]
         if not len(sel):

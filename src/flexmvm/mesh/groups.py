@@ -24,7 +24,9 @@ from dataclasses import dataclass
 import meshio
 import numpy as np
 
+from flexmvm.mesh.integrity import skin
 from flexmvm.mesh.mesh import FacetSet
+from flexmvm.mesh.subfacets import QuadraticFaces
 
 #: Point-data masks of this prefix are node sets (mesh/io.write_mesh writes them).
 NODE_SET_PREFIX = "node_set:"
@@ -200,10 +202,43 @@ def facet_union(a: FacetSet | None, b: FacetSet) -> FacetSet:
     return FacetSet(quads=out[0], tris=out[1])
 
 
+def add_file_sets(
+    m: meshio.Mesh,
+    surfaces: dict[str, np.ndarray],
+    skin_data: tuple[np.ndarray, np.ndarray, QuadraticFaces],
+    sets: dict[str, np.ndarray],
+    facet_sets: dict[str, FacetSet],
+) -> None:
+    """Add to ``sets`` and ``facet_sets`` (in place) the file's node sets (file_node_sets:
+    point sets, VTU masks) and its surfaces: ``surfaces`` (name -> rows of the skin faces, an
+    .inp's *SURFACE cards: abaqus.surface_rows) and every file node set that covers skin faces (groups.skin_within), unless a group of
+    that name is a surface already. A file node set is the node set of its name as it is (an
+    Abaqus NSET and ELSET of one name: the NSET's nodes, not the elements' nodes); a surface
+    of a name that is also a surface group adds its facets to the group's, and their nodes to
+    its node set. skin_data: (new_id, boundary (B, 4), QuadraticFaces)."""
+    new_id, boundary, quadratic = skin_data
+    file_sets = file_node_sets(m, new_id)
+    sets.update(file_sets)
+    rows = dict(surfaces)
+    n_nodes = int(new_id.max()) + 1
+    rows |= {
+        name: skin_within(boundary, sets[name], n_nodes)
+        for name in file_sets
+        if name not in facet_sets and name not in rows
+    }
+    for name, r in rows.items():
+        if name in facet_sets or len(r) or name not in file_sets:  # a *SURFACE, even empty
+            fs = quadratic.split(skin(boundary[r]))
+            facet_sets[name] = facet_union(facet_sets.get(name), fs)
+            if name not in file_sets:
+                sets[name] = np.union1d(sets.get(name, fs.nodes), fs.nodes)
+
+
 __all__ = [
     "FILE_NUMBERING",
     "NODE_SET_PREFIX",
     "Group",
+    "add_file_sets",
     "cell_dim",
     "facet_union",
     "file_cell_numbers",

@@ -31,13 +31,11 @@ from flexmvm.mesh.groups import (
     FILE_NUMBERING,
     NODE_SET_PREFIX,
     Group,
+    add_file_sets,
     cell_dim,
-    facet_union,
     file_cell_numbers,
-    file_node_sets,
     group_nodes,
     read_groups,
-    skin_within,
 )
 from flexmvm.mesh.integrity import duplicate_cells, face_table, skin
 from flexmvm.mesh.mesh import CellBlock, CellType, FacetSet, Mesh
@@ -284,32 +282,6 @@ def _read_file(path: Path, where: str) -> tuple[meshio.Mesh, InpSets | None]:
     return m, inp
 
 
-def _add_file_sets(m, inp, skin_data, sets: dict, facet_sets: dict, where: str) -> None:
-    """Add to ``sets`` and ``facet_sets`` (in place) the file's node sets (file_node_sets:
-    point sets, VTU masks) and its surfaces: an .inp's *SURFACE cards (abaqus.surface_rows)
-    and every file node set that covers skin faces (groups.skin_within), unless a group of
-    that name is a surface already. A file node set is the node set of its name as it is (an
-    Abaqus NSET and ELSET of one name: the NSET's nodes, not the elements' nodes); a surface
-    of a name that is also a surface group adds its facets to the group's, and their nodes to
-    its node set. skin_data: (new_id, boundary (B, 4), QuadraticFaces)."""
-    new_id, boundary, quadratic = skin_data
-    file_sets = file_node_sets(m, new_id)
-    sets.update(file_sets)
-    rows = surface_rows(m, inp, new_id, boundary, where) if inp is not None else {}
-    n_nodes = int(new_id.max()) + 1
-    rows |= {
-        name: skin_within(boundary, sets[name], n_nodes)
-        for name in file_sets
-        if name not in facet_sets and name not in rows
-    }
-    for name, r in rows.items():
-        if name in facet_sets or len(r) or name not in file_sets:  # a *SURFACE, even empty
-            fs = quadratic.split(skin(boundary[r]))
-            facet_sets[name] = facet_union(facet_sets.get(name), fs)
-            if name not in file_sets:
-                sets[name] = np.union1d(sets.get(name, fs.nodes), fs.nodes)
-
-
 def read_mesh(
     path: str | os.PathLike,
     node_sets: Mapping[str, np.ndarray] | None = None,
@@ -371,7 +343,8 @@ def read_mesh(
             f"{SKIN!r} for the whole boundary only (rename the group)"
         )
     facet_sets[SKIN], sets[SKIN] = surface, surface.nodes
-    _add_file_sets(m, inp, (new_id, boundary, quadratic), sets, facet_sets, where)
+    rows = surface_rows(m, inp, new_id, boundary, where) if inp is not None else {}
+    add_file_sets(m, rows, (new_id, boundary, quadratic), sets, facet_sets)
     for name, ids in (node_sets or {}).items():
         ids = np.asarray(ids, dtype=np.int64)
         if ids.size and (ids.min() < 0 or ids.max() >= len(m.points)):
