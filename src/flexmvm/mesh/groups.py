@@ -10,7 +10,9 @@ the first found is used:
 - ``gmsh:physical`` cell data with ``field_data`` names (gmsh MSH 2): one tag per cell; MSH 2
   writes an element once per physical group it is in, so each copy carries one of its tags.
 
-A name in ``field_data`` (gmsh's physical names) with no cell in the file is an empty group,
+Abaqus .inp files are read by flexmvm.mesh.abaqus, whose sets replace meshio's (merged across
+repeated cards). A node set of a file (``point_sets``, Abaqus *SURFACE TYPE=NODE, VTU masks) is
+also a surface where it covers skin faces (skin_within). A name in ``field_data`` (gmsh's physical names) with no cell in the file is an empty group,
 kept so that asking for it says "empty" rather than "unknown". ``point_sets`` (Abaqus NSET)
 are node sets as they are.
 """
@@ -21,6 +23,13 @@ from dataclasses import dataclass
 
 import meshio
 import numpy as np
+
+from flexmvm.mesh.integrity import skin
+from flexmvm.mesh.mesh import FacetSet
+from flexmvm.mesh.subfacets import QuadraticFaces
+
+#: Point-data masks of this prefix are node sets (mesh/io.write_mesh writes them).
+NODE_SET_PREFIX = "node_set:"
 
 _DIM_BY_PREFIX = (("vertex", 0), ("line", 1), ("triangle", 2), ("quad", 2), ("polygon", 2))
 
@@ -136,12 +145,107 @@ def point_sets(m: meshio.Mesh) -> dict[str, np.ndarray]:
     }
 
 
+def _row_keys(faces: np.ndarray) -> np.ndarray:
+    """Sorted corner ids of faces (n, 3|4) as (n, 4) rows, -1 padded (equal rows: same face)."""
+    k = np.full((len(faces), 4), -1, dtype=np.int64)
+    k[:, : faces.shape[1]] = faces
+    return np.sort(k, axis=1)
+
+
+def skin_rows(boundary: np.ndarray, faces: np.ndarray) -> np.ndarray:
+    """The row of the skin faces ``boundary`` (B, 4), -1 padded, that each face (n, 3|4) (corner
+    ids in any order) is; -1 for a face not on the skin."""
+    if not len(faces) or not len(boundary):
+        return np.full(len(faces), -1, dtype=np.int64)
+    keys = np.vstack([_row_keys(boundary), _row_keys(faces)])
+    _, inv = np.unique(keys, axis=0, return_inverse=True)
+    inv = inv.ravel()
+    owner = np.full(inv.max() + 1, -1, dtype=np.int64)
+    owner[inv[: len(boundary)]] = np.arange(len(boundary))
+    return owner[inv[len(boundary) :]]
+
+
+def skin_within(boundary: np.ndarray, ids: np.ndarray, n_nodes: int) -> np.ndarray:
+    """Rows of the skin faces ``boundary`` (B, 4), -1 padded, whose corners are all in the node
+    set ``ids``: a node set as a surface (a quadratic face counts by its corners)."""
+    inside = np.zeros(n_nodes + 1, dtype=bool)  # the last entry stands for the -1 padding
+    inside[np.asarray(ids, dtype=np.int64)] = True
+    inside[-1] = True
+    return np.flatnonzero(np.all(inside[boundary], axis=1))
+
+
+def file_node_sets(m: meshio.Mesh, new_id: np.ndarray) -> dict[str, np.ndarray]:
+    """The file's node sets in read_mesh's numbering: meshio point sets (Abaqus NSET) and the
+    point-data masks ``node_set:<name>`` write_mesh writes; a name in both is their union."""
+    out: dict[str, np.ndarray] = {}
+    masks = {
+        key[len(NODE_SET_PREFIX) :]: np.flatnonzero(np.asarray(values) != 0)
+        for key, values in m.point_data.items()
+        if key.startswith(NODE_SET_PREFIX)
+    }
+    for name, ids in [*point_sets(m).items(), *masks.items()]:
+        ids = new_id[ids[(ids >= 0) & (ids < len(new_id))]]
+        ids = ids[ids >= 0]
+        out[name] = np.union1d(out[name], ids) if name in out else np.unique(ids)
+    return out
+
+
+def facet_union(a: FacetSet | None, b: FacetSet) -> FacetSet:
+    """The facets of a and b, each once (a's orientation where both hold one)."""
+    if a is None:
+        return b
+    out = []
+    for x, y in ((a.quads, b.quads), (a.tris, b.tris)):
+        both = np.vstack([x, y])
+        _, first = np.unique(np.sort(both, axis=1), axis=0, return_index=True)
+        out.append(both[np.sort(first)])
+    return FacetSet(quads=out[0], tris=out[1])
+
+
+def add_file_sets(
+    m: meshio.Mesh,
+    surfaces: dict[str, np.ndarray],
+    skin_data: tuple[np.ndarray, np.ndarray, QuadraticFaces],
+    sets: dict[str, np.ndarray],
+    facet_sets: dict[str, FacetSet],
+) -> None:
+    """Add to ``sets`` and ``facet_sets`` (in place) the file's node sets (file_node_sets:
+    point sets, VTU masks) and its surfaces: ``surfaces`` (name -> rows of the skin faces, an
+    .inp's *SURFACE cards: abaqus.surface_rows) and every file node set that covers skin faces (groups.skin_within), unless a group of
+    that name is a surface already. A file node set is the node set of its name as it is (an
+    Abaqus NSET and ELSET of one name: the NSET's nodes, not the elements' nodes); a surface
+    of a name that is also a surface group adds its facets to the group's, and their nodes to
+    its node set. skin_data: (new_id, boundary (B, 4), QuadraticFaces)."""
+    new_id, boundary, quadratic = skin_data
+    file_sets = file_node_sets(m, new_id)
+    sets.update(file_sets)
+    rows = dict(surfaces)
+    n_nodes = int(new_id.max()) + 1
+    rows |= {
+        name: skin_within(boundary, sets[name], n_nodes)
+        for name in file_sets
+        if name not in facet_sets and name not in rows
+    }
+    for name, r in rows.items():
+        if name in facet_sets or len(r) or name not in file_sets:  # a *SURFACE, even empty
+            fs = quadratic.split(skin(boundary[r]))
+            facet_sets[name] = facet_union(facet_sets.get(name), fs)
+            if name not in file_sets:
+                sets[name] = np.union1d(sets.get(name, fs.nodes), fs.nodes)
+
+
 __all__ = [
     "FILE_NUMBERING",
+    "NODE_SET_PREFIX",
     "Group",
+    "add_file_sets",
     "cell_dim",
+    "facet_union",
     "file_cell_numbers",
+    "file_node_sets",
     "group_nodes",
     "point_sets",
     "read_groups",
+    "skin_rows",
+    "skin_within",
 ]

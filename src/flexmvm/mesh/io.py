@@ -19,14 +19,22 @@ import meshio
 import numpy as np
 
 from flexmvm.errors import InputError, MeshError
+from flexmvm.mesh.abaqus import (
+    InpSets,
+    geometry_text,
+    read_cards,
+    read_inp_sets,
+    surface_rows,
+)
 from flexmvm.mesh.connectivity import joined_cells
 from flexmvm.mesh.groups import (
     FILE_NUMBERING,
+    NODE_SET_PREFIX,
     Group,
+    add_file_sets,
     cell_dim,
     file_cell_numbers,
     group_nodes,
-    point_sets,
     read_groups,
 )
 from flexmvm.mesh.integrity import duplicate_cells, face_table, skin
@@ -38,25 +46,34 @@ _UMASK = os.umask(0)
 os.umask(_UMASK)
 _FILE_MODE = 0o666 & ~_UMASK
 
-NODE_SET_PREFIX = "node_set:"
-
 _VOLUME_TYPES = {ct.value: ct for ct in CellType}
 _SURFACE_CORNERS = {"triangle": 3, "triangle6": 3, "quad": 4, "quad8": 4, "quad9": 4}
 
 #: Name of the facet set and node set of the outer skin that read_mesh always adds.
 SKIN = "surface"
 
+#: meshio's Nastran suffixes, and what read_mesh says of such a file (a MeshWarning): meshio
+#: reads its GRID points and elements only (property ids are no names), so no set but the skin.
+NASTRAN_SUFFIXES = (".bdf", ".nas", ".fem")
+NASTRAN_NOTE = (
+    f"a Nastran file gives no named sets, only the skin {SKIN!r}; select nodes by a region "
+    "(box, ball, node_ids) or bring the mesh as .inp or .msh with its sets"
+)
+
 
 class MeshWarning(UserWarning):
     """A mesh file was read with a change the user should know of (nodes dropped)."""
 
 
-def _read(path: Path) -> meshio.Mesh:
+def _read(path: Path, inp_text: str | None = None) -> meshio.Mesh:
+    """meshio's reading of ``path`` (of ``inp_text``, an .inp's geometry, if given)."""
     if not path.is_file():
         raise MeshError(f"mesh file {str(path)!r} does not exist; expected a readable mesh file")
     log = io.StringIO()
     try:
         with contextlib.redirect_stdout(log), contextlib.redirect_stderr(log):
+            if inp_text is not None:
+                return meshio.read(io.StringIO(inp_text), file_format="abaqus")
             return meshio.read(path)
     except (Exception, SystemExit) as exc:  # meshio may even sys.exit() on a bad file
         text = log.getvalue() if isinstance(exc, SystemExit) else str(exc)
@@ -246,6 +263,25 @@ def _renumbered(
     return nodes, [CellBlock(b.cell_type, new_id[b.connectivity]) for b in blocks], new_id
 
 
+def _read_file(path: Path, where: str) -> tuple[meshio.Mesh, InpSets | None]:
+    """meshio's reading of ``path``; for an .inp its nodes and elements, with its sets and
+    surfaces read by mesh/abaqus.py (meshio's cell and point sets replaced by them). A
+    MeshWarning for a *SURFACE type skipped, and for a Nastran file (NASTRAN_NOTE)."""
+    inp = None
+    if path.suffix.lower() == ".inp" and path.is_file():
+        cards = read_cards(path, where)
+        m = _read(path, geometry_text(cards))
+        inp = read_inp_sets(cards, m, where)
+        m.cell_sets, m.point_sets = inp.cell_sets(m), dict(inp.node_sets)
+        for text in inp.skipped:
+            warnings.warn(f"{where}: {text}", MeshWarning, stacklevel=3)
+    else:
+        m = _read(path)
+    if path.suffix.lower() in NASTRAN_SUFFIXES:
+        warnings.warn(f"{where}: {NASTRAN_NOTE}", MeshWarning, stacklevel=3)
+    return m, inp
+
+
 def read_mesh(
     path: str | os.PathLike,
     node_sets: Mapping[str, np.ndarray] | None = None,
@@ -259,8 +295,13 @@ def read_mesh(
     a facet set (oriented outward) and the node set of its nodes, a volume, line or point
     group the node set of its nodes; an element in two groups is in both; an empty group gives
     an empty set (Mesh.node_set/facet_set say "empty"). meshio point sets and point-data masks
-    ``node_set:<name>`` (see write_mesh) become node sets. node_sets: extra name -> node ids in
-    the file's numbering. The outer skin (faces of one cell) is always the facet set and node
+    ``node_set:<name>`` (see write_mesh) become node sets, and surfaces too where they cover
+    skin faces (the faces whose corners are all in the set). An Abaqus .inp's sets and
+    *SURFACE cards are read by mesh/abaqus.py (a set on repeated cards is their union: a set
+    read twice never shrinks; an NSET is the node set of its name, an ELSET of the same name
+    gives its elements' nodes otherwise). A Nastran file names no set (a MeshWarning says so);
+    VTU cell data are field values, not groups. node_sets: extra
+    name -> node ids in the file's numbering. The outer skin (faces of one cell) is always the facet set and node
     set ``surface``; a file group of that name must be that skin. The faces of quadratic cells
     (tetra10, hexahedron27) become linear sub-facets through all their nodes, mid-side nodes
     included (mesh/subfacets.py): 4 triangles per 6-node triangle, 4 quads per 9-node quad.
@@ -279,7 +320,7 @@ def read_mesh(
     """
     path = Path(path)
     where = f"mesh file {str(path)!r}"
-    m = _read(path)
+    m, inp = _read_file(path, where)
     blocks, cell_no = _drop_group_copies(_volume_blocks(m, where), where)
     nodes, blocks, new_id = _renumbered(m, blocks, where)
     nodes, blocks, new_id, boundary, merged = joined_cells(
@@ -302,11 +343,8 @@ def read_mesh(
             f"{SKIN!r} for the whole boundary only (rename the group)"
         )
     facet_sets[SKIN], sets[SKIN] = surface, surface.nodes
-    for name, ids in point_sets(m).items():
-        sets[name] = new_id[ids[(ids >= 0) & (ids < len(new_id))]]
-    for key, values in m.point_data.items():
-        if key.startswith(NODE_SET_PREFIX):
-            sets[key[len(NODE_SET_PREFIX) :]] = new_id[np.flatnonzero(np.asarray(values) != 0)]
+    rows = surface_rows(m, inp, new_id, boundary, where) if inp is not None else {}
+    add_file_sets(m, rows, (new_id, boundary, quadratic), sets, facet_sets)
     for name, ids in (node_sets or {}).items():
         ids = np.asarray(ids, dtype=np.int64)
         if ids.size and (ids.min() < 0 or ids.max() >= len(m.points)):

@@ -64,9 +64,10 @@ def contact_nodes(sc, body: str, mesh: Mesh) -> np.ndarray:
 
 def check_contact_surfaces(sc, body: str, mesh: Mesh) -> None:
     """InputError (one line) naming the contact key (``contacts[k].slave = 'body.surface'``)
-    when a surface of ``body`` a contact names is unknown to its mesh or empty (a group with
-    no facet): checked before the body is built, whose automatic reference would otherwise
-    meet it first and be blamed (issue 48)."""
+    and the body's mesh file when a surface of ``body`` a contact names is unknown to its mesh
+    (the message lists the mesh's surfaces; a node set of that name that covers no skin face
+    is said to be one) or empty (a group with no facet): checked before the body is built,
+    whose automatic reference would otherwise meet it first and be blamed (issue 48)."""
     for k, c in enumerate(sc.contacts):
         for role, who, surface in (
             ("slave", c.slave_body, c.slave_surface),
@@ -78,7 +79,29 @@ def check_contact_surfaces(sc, body: str, mesh: Mesh) -> None:
                 except MeshError as exc:
                     raise InputError(
                         f"contacts[{k}].{role} = {getattr(c, role)!r}: body {body!r}: {exc}"
+                        f"{_node_set_note(mesh, surface)}{_mesh_file(sc, body)}"
                     ) from None
+
+
+def _mesh_file(sc, body: str) -> str:
+    """``; mesh file 'path'`` for a body read from a file, else empty."""
+    path = next((b.mesh_file for b in sc.bodies if b.name == body), None)
+    return f"; mesh file {str(path)!r}" if path is not None else ""
+
+
+def _node_set_note(mesh: Mesh, name: str) -> str:
+    """Why a name is no surface of ``mesh``, where it can be told: a node set that covers no
+    skin face, or a surface spelled in another case (Abaqus names are case-insensitive in the
+    file; the scenario names them as the file spells them). Empty otherwise."""
+    if name in mesh.node_sets and name not in mesh.facet_sets:
+        return (
+            f" ({name!r} is a node set covering no skin face: a surface needs faces whose "
+            "corner nodes are all in it)"
+        )
+    same = [k for k in mesh.facet_sets if k.lower() == name.lower() and k != name]
+    if same:
+        return f" (did you mean {same[0]!r}? names are matched as the mesh file spells them)"
+    return ""
 
 
 def contact_surfaces(sc, body: str) -> tuple[str, ...]:
