@@ -134,7 +134,7 @@ class ProcessCaches:
             return self.mesh(key.key)
         if isinstance(key, MergedFile):
             return timed(
-                f"mesh {key.path.name} read", lambda: read_mesh(key.path, merge_nodes=True)
+                f"mesh {Path(key.path).name} read", lambda: read_mesh(key.path, merge_nodes=True)
             )
         if isinstance(key, RodSpec):
             return self.rod_mesh(key).mesh
