@@ -266,6 +266,7 @@ def staged_dir(
         raise InputError(
             f"{option} {final}: is the current directory (or holds it); expected another directory"
         )
+    check_creatable(final, option)  # its own path named, not the parent's (a file as parent)
     parent = final.absolute().parent
     created = [d for d in (parent, *parent.parents) if not d.exists()]
     make_out_dir(parent, option)
