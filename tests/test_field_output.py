@@ -98,3 +98,20 @@ def test_field_keys_in_the_scenario(tmp_path):
     sc64 = fm.load_scenario(tmp_path / "s.toml")
     assert sc64.time.field_precision is FieldPrecision.FLOAT64
     assert sc64.model_dump(mode="json")["time"]["field_precision"] == "float64"
+
+
+def test_a_rigid_body_s_fields_are_written(tmp_path):
+    """A run with a rigid body (no elastic coordinates) and a field rate writes results.h5:
+    the rigid body's q is (k, 0) beside the block's (k, 11742). Before: 'cannot reshape array
+    of size 0 into shape (0)', the run's folder not written (the sphere on a plate, on
+    sphere_block.toml's ball)."""
+    path = Path(__file__).parents[1] / "scenarios" / "sphere_block.toml"
+    sc = fm.load_scenario(path).with_time(t_end_s=4e-6)
+    data = sc.model_dump(mode="json")
+    data["time"]["field_output_dt_s"] = 2e-6
+    run = fm.run(fm.scenario_from_dict(data, base_dir=path.parent))
+    fm.write_run(tmp_path, run)
+    with h5py.File(tmp_path / "results.h5") as f:
+        q_ball, q_block = f["bodies/ball/q"], f["bodies/block/q"]
+        assert q_ball.shape[1] == 0 and q_block.shape[1] == run.built.system.bodies[1].nq
+        assert q_ball.shape[0] == q_block.shape[0] >= 2

@@ -133,6 +133,13 @@ def _field_dataset(g: h5py.Group, name: str, data: np.ndarray, units: str, descr
     ds.attrs["description"] = description
 
 
+def _rows(q, nq: int, n_out: int) -> np.ndarray:
+    """A body's kept coordinates as (k, nq); a rigid body (nq = 0) gives (n_out, 0), whose
+    rows `pos` select as any other's (reshape(-1, 0) has no row count to infer)."""
+    q = np.asarray(q)
+    return np.zeros((n_out, 0)) if nq == 0 else q.reshape(-1, nq)
+
+
 def _write_body(g: h5py.Group, run: RunResult, b: int, body: FlexibleBody, rows, pos) -> None:
     """Body b's fields at the outputs `rows` (rows `pos` of run.q[b]) and its mesh."""
     g.attrs["nq"] = body.nq
@@ -148,12 +155,12 @@ def _write_body(g: h5py.Group, run: RunResult, b: int, body: FlexibleBody, rows,
         "[r_dot (global), omega (body frame)] (k, 6)",
     )
     dtype = field_dtype(run)
-    q = np.asarray(run.q[b]).reshape(-1, body.nq)[pos].astype(dtype)
+    q = _rows(run.q[b], body.nq, len(run.t))[pos].astype(dtype)
     _field_dataset(
         g, "q", q, "basis units", "elastic coordinates (k, nq); nodal displacement u = psi q [m]"
     )
     if len(run.q_dot) > b:
-        q_dot = np.asarray(run.q_dot[b]).reshape(-1, body.nq)[pos].astype(dtype)
+        q_dot = _rows(run.q_dot[b], body.nq, len(run.t))[pos].astype(dtype)
         _field_dataset(
             g, "q_dot", q_dot, "basis units / s", "rates of the elastic coordinates (k, nq)"
         )
