@@ -11,6 +11,7 @@ from typing import Protocol, runtime_checkable
 
 import numpy as np
 
+from flexmvm.constraints.contact_laws import ContactLaw
 from flexmvm.constraints.rows import Rows
 
 __all__ = ["ContactKind", "ContactLaw", "ContactProvider", "ContactRows", "FrictionRows"]
@@ -21,20 +22,6 @@ class ContactKind(StrEnum):
 
     FRICTIONLESS = "frictionless"  # normal gap >= 0 (default)
     BONDED = "bonded"  # seed eq. (7): all three relative components once closed
-
-
-class ContactLaw(StrEnum):
-    """The lower bound of a frictionless normal row (values: the scenario file's ``law``).
-
-    velocity (default): u_N+ >= min(beta max(0, -g) / h, max(0, -u_N-)) (Moreau's impact law,
-    restitution 0, with a Baumgarte-like recovery of a penetration capped by the pair's
-    closing speed u_N-, so that it adds no restitution); position: the gap at the end of the step
-    g + h (theta u_N+ + (1 - theta) u_N-) >= 0 (Signorini at t + h), i.e.
-    u_N+ >= -(g + h (1 - theta) u_N-) / (theta h), for massless contact nodes (mass
-    redistribution, Khenous, Laborde and Renard 2008)."""
-
-    VELOCITY = "velocity"
-    POSITION = "position"
 
 
 @dataclass(frozen=True)
@@ -92,9 +79,13 @@ class ContactRows:
 
 @runtime_checkable
 class ContactProvider(Protocol):
-    """Every method the time step and the time loop call on a contact definition."""
+    """Every attribute and method the time step, the time loop and a run's report ask of a
+    contact definition."""
 
     mu: float  # Coulomb friction coefficient of the contact (0: frictionless)
+    law: ContactLaw  # the normal rows' law (its spec: law.spec, constraints/contact_laws/)
+    slave: int  # the body of the slave nodes (index in System.bodies)
+    master: int  # the body of the master facets
 
     def candidate_rows(self, bodies, states, h: float) -> ContactRows:
         """Rows of the pairs that may close within the coming step of size h [s]."""

@@ -21,8 +21,9 @@ def pair_options(
 ) -> tuple[float, float, ContactLaw, float | Callable[[float], float] | None]:
     """(mu, beta, law, theta) of the contact ``name`` of kind ``kind``, checked: mu finite and
     >= 0 (none for bonded contact), beta in [0, 1] (the fraction of a penetration pushed back
-    per step), and for law = position the scheme's theta in [0.5, 1] (a number or a rule of
-    the step size), not with bonded contact. Raises InputError naming the contact."""
+    per step), and the law's own checks (ContactLawSpec.options_problem: the position law
+    takes the scheme's theta in [0.5, 1], a number or a rule of the step size, and no bonded
+    contact). Raises InputError naming the contact."""
     mu = float(friction_coefficient)
     if not (np.isfinite(mu) and mu >= 0.0):
         raise InputError(
@@ -36,15 +37,11 @@ def pair_options(
         )
     if not 0.0 <= beta <= 1.0:
         raise InputError(f"{name}: penetration recovery beta must be in [0, 1], got {beta!r}")
-    # law = position: theta must be the integrator's (the end gap is g + h v_m . n), a
-    # number or the integrator's theta of the step size h (integrate.theta.ThetaRule)
+    # the law's own checks (constraints/contact_laws: e.g. the position law's theta, a number
+    # or the integrator's theta of the step size h, integrate.theta.ThetaRule; not bonded)
     law = ContactLaw(law)
-    if law is ContactLaw.POSITION:
-        if theta is None or (not callable(theta) and not 0.5 <= theta <= 1.0):
-            raise InputError(
-                f"{name}: the position law needs the scheme's theta in [0.5, 1], got {theta!r}"
-            )
-        if kind is ContactKind.BONDED:
-            raise InputError(f"{name}: the position law is not for bonded contact")
+    problem = law.spec.options_problem(kind is ContactKind.BONDED, theta)
+    if problem is not None:
+        raise InputError(f"{name}: {problem}")
     theta = None if theta is None else (theta if callable(theta) else float(theta))
     return mu, float(beta), law, theta

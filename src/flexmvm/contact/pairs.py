@@ -7,21 +7,16 @@ within the step (g + h u_N <= gap_tol) become rows of Phi_c,
 
     Phi_c v = n . (x_dot_S - sum_P N^P x_dot_P)      (normal relative velocity u_N)
 
-with the Moreau condition u_N(v+) >= min(beta max(0, -g)/h, max(0, -u_N-)), lambda >= 0 (see
-integrate.moreau_jean): Moreau's impact law (restitution 0) with a penetration recovery capped
-by the pair's closing speed u_N- (the normal velocity at the start of the step; `_lower`), or,
-with law = "position", the gap at the end of the step held instead (Signorini at t + h):
-g + h (theta u_N+ + (1 - theta) u_N-) >= 0, i.e. u_N+ >= -(g + h (1 - theta) u_N-) / (theta h),
-with u_N- the pair's normal velocity at the start of the step (the law of mass-redistributed
-contact nodes: Khenous, Laborde and Renard 2008). Its rows are the pairs whose gap g is within
-gap_tol + POSITION_REACH h u_reach (u_reach: the largest slave plus master node speed
-component), whatever their u_N-: a massless node's end velocity flips sign from step to step
-and predicts nothing (on the runs of docs/contact_law.md this wider set changed no result
-against g + h u_N- <= gap_tol). An open gap gives a negative bound, which lets the node
-approach. An end gap g < 0 left by a step is closed within the next, which does work
-lambda |g| / h.
-Under the position law (frictionless) a pair that carried an impulse keeps, while it stays
-closed, the geometry of the step it closed in: its master facet, shape-function weights and
+with u_N(v+) >= lower, lambda >= 0 (see integrate.moreau_jean); the contact's law (a
+ContactLawSpec, constraints/contact_laws/, one module per law) says which pairs are rows
+(`row_window`) and their lower bound (`lower`), u_N- the pair's normal velocity at the start
+of the step: the velocity law's Moreau impact law (restitution 0) with a penetration recovery
+capped by the closing speed, or the position law's gap at the end of the step (Signorini at
+t + h: the law of mass-redistributed contact nodes). Under the position law an open gap gives a
+negative bound, which lets the node approach; an end gap g < 0 left by a step is closed within
+the next, which does work lambda |g| / h.
+Under a law that holds pairs (`holds_pairs`: the position law), frictionless, a pair that
+carried an impulse keeps, while it stays closed, the geometry of the step it closed in: its master facet, shape-function weights and
 normal (in the master's body frame), its gap taken as linear in the node positions,
 g = n . (x_S - sum_P N^P x^P). A closed pair is then a linear holonomic constraint, whose
 impulse does no work over a step of the midpoint rule (lambda n . dx = lambda dg = 0), as in
@@ -83,11 +78,8 @@ class _Active:
 #: position correction, capped by the closing speed so that it adds no restitution)
 PENETRATION_RECOVERY = 0.2
 
-#: law = "position": pairs are rows when g <= gap_tol + POSITION_REACH h u_reach
-POSITION_REACH = 2.0
-
-#: law = "position": a held pair's linear gap may differ from the exact closest-point gap by
-#: this many gap_tol before the pair is projected again (module doc)
+#: a law that holds pairs (position): a held pair's linear gap may differ from the exact
+#: closest-point gap by this many gap_tol before the pair is projected again (module doc)
 HOLD_DRIFT_MAX = 10.0
 
 
@@ -178,9 +170,9 @@ class PointToSurfaceContact:
         self._bonded = np.zeros(ns, dtype=np.bool_)
         self._mlocal = np.full(len(bodies[self.master].X), -1, dtype=np.int64)
         self._mlocal[self.master_nodes] = np.arange(len(self.master_nodes))
-        # closed pairs on the geometry they closed with (position law, frictionless: module
-        # doc): facet (-1: none held), weights, normal in the master frame, gap offset
-        self._holds = self.law is ContactLaw.POSITION and self.mu == 0.0
+        # closed pairs on the geometry they closed with (a law that holds pairs, frictionless:
+        # module doc): facet (-1: none held), weights, normal in the master frame, gap offset
+        self._holds = self.law.spec.holds_pairs and self.mu == 0.0
         self._held = np.full(ns, -1, dtype=np.int64)
         self._held_w = np.zeros((ns, 4))
         self._held_n = np.zeros((ns, 3))
@@ -264,11 +256,8 @@ class PointToSurfaceContact:
                 self.gap_tol,
                 HOLD_DRIFT_MAX * self.gap_tol,
             )
-        if self.law is ContactLaw.POSITION:
-            # g <= gap_tol + POSITION_REACH h u_reach, whatever u_N- (see the module doc)
-            hp, tol = 0.0, self.gap_tol + POSITION_REACH * h * speed
-        else:
-            hp, tol = h, self.gap_tol
+        # rows: g + hp u_N- <= tol (the law's window: constraints/contact_laws)
+        hp, tol = self.law.spec.row_window(h, self.gap_tol, speed)
         m_n, idx, slave_ids, facets, normal, gaps, u_n, s_pairs, m_pairs = active_pairs(
             self._facet,
             self._out,
@@ -304,21 +293,10 @@ class PointToSurfaceContact:
         return self._rows_with_bonds(bodies, states, h, eq, idx, m_nodes, m_w, normal, gaps, u_n)
 
     def _lower(self, gaps: np.ndarray, u_n: np.ndarray, h: float) -> np.ndarray:
-        """Lower bounds of u_N+ of normal rows with gaps g and start normal velocities u_N-.
-
-        Velocity law: min(beta max(0, -g) / h, max(0, -u_N-)), Moreau's impact law (u_N+ >= 0,
-        restitution 0) with a penetration recovery capped by the pair's closing speed: a pair
-        leaves a penetration no faster than it arrived, and one at rest relative to its master
-        (u_N- >= 0, the step after its impact) is held, not pushed out. Uncapped, the
-        recovery turned the impact's own penetration h (1 - theta) |u_N-| into a separation
-        velocity beta (1 - theta) |u_N-| the next step: restitution 0.09 between rigid bodies
-        at theta = 0.55 instead of 0, and energy fed into reduced contact faces (the PA6 chatter
-        of docs/studies.md). Position law: -(g + h (1 - theta) u_N-) / (theta h), the end gap
-        g + h (theta u_N+ + (1 - theta) u_N-) >= 0."""
-        if self.law is ContactLaw.POSITION:
-            th = self.theta(h) if callable(self.theta) else self.theta
-            return -(gaps + (h * (1.0 - th)) * u_n) / (th * h)
-        return np.minimum(self.beta * np.maximum(0.0, -gaps) / h, np.maximum(0.0, -u_n))
+        """Lower bounds of u_N+ of normal rows with gaps g and start normal velocities u_N-:
+        the law's (ContactLawSpec.lower; velocity: min(beta max(0, -g) / h, max(0, -u_N-)),
+        position: -(g + h (1 - theta) u_N-) / (theta h))."""
+        return self.law.spec.lower(gaps, u_n, h, self.beta, self.theta)
 
     def _friction_rows(self, states, slave_pairs, master_pairs, normal, lower, keys, gaps):
         """Rows [normal (m_n) | tangent 1 (m_n) | tangent 2 (m_n)] of the active pairs: the
@@ -377,7 +355,7 @@ class PointToSurfaceContact:
             rows.nodal[self.slave] = ssel
         if msel is not None:
             rows.nodal[self.master] = -msel
-        lower_n = self._lower(gaps, u_n, h)  # bonded contact: the velocity law
+        lower_n = self._lower(gaps, u_n, h)  # bonded contact: a law for it (velocity)
         keys = eq_keys + list(
             zip([self.name] * len(idx), self.slave_nodes[idx].tolist(), self._facet[idx].tolist())
         )

@@ -218,7 +218,7 @@ def _simulate(
     integ = make_integrator(system, grid)
     dt = grid.dt_s
     rec = OutputRecorder(system, probes, n_ticks // out_ticks + 2, integ.n_joint_rows, grid)
-    plastic = getattr(integ, "plastic", None) or None  # integrate.plastic_bodies
+    plastic = integ.plastic or None  # integrate.plastic_bodies (empty: none)
     rec.plastic = plastic
     states = [s.copy() for s in states]
     pen = _Penetrations(system)
@@ -226,9 +226,7 @@ def _simulate(
     rec.record(t0, states, 0.0, np.zeros(integ.n_joint_rows))
     bar = StepProgress(progress, n_ticks, dt)
     tally = _Tally(system, integ.n_joint_rows, pen, grid.dt_s)
-    tally.ledger = EnergyLedger(
-        system, integ.carried, getattr(integ, "carried_state", None), plastic
-    )
+    tally.ledger = EnergyLedger(system, integ.carried, integ.carried_state, plastic)
     tally.ledger.record(states)
     wall0 = time.perf_counter()
     h_min = grid.dt_s / (1 << MAX_STEP_CUTS)

@@ -36,23 +36,53 @@ tolerance for bodies whose mass matrix is constant over the step (frames that do
 and to the scheme's order otherwise (M(x) and the frame's rotation make the step's kinetic
 energy identity approximate: O(h^2) per unit time at theta = 1/2). dv^T M dv uses the mass
 matrix at the step's end (x_m differs by O(h): a relative change O(h) of a term already
-O(theta - 1/2)). An integrator without ``theta_rule`` is taken as theta = 1/2.
+O(theta - 1/2)). An integrator whose ``theta_rule`` is None is taken as theta = 1/2.
+
+What the ledger asks of a load is declared (Load; a spring's stored energy and dissipation:
+StoringLoad), and of an integrator by integrate.step.Integrator: nothing is probed for.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 
 from flexmvm.integrate.row_products import body_impulse, flat_product
 from flexmvm.loads.applied import midpoint_states, start_run
 
+if TYPE_CHECKING:
+    from flexmvm.integrate.step import Integrator
 
-def load_label(k: int, load) -> str:
+
+class Load(Protocol):
+    """What the ledger asks of every applied load (flexmvm.loads)."""
+
+    name: str  # the key of its work ("": loads[k] <Kind>)
+
+    def forces(self, bodies, states, t: float) -> dict[int, np.ndarray]:
+        """{body: generalized force (6 + nq,)} at states (with velocities) and time t [s]."""
+        ...
+
+
+@runtime_checkable
+class StoringLoad(Load, Protocol):
+    """A load that stores energy and dissipates some (a spring-damper: loads.spring,
+    loads.revolute): its stored energy is set against its elastic work."""
+
+    def energy(self, bodies, states) -> float:
+        """The energy stored [J] at states."""
+        ...
+
+    def dissipation_rate(self, bodies, states) -> float:
+        """The power its damper dissipates [W] at states (with velocities)."""
+        ...
+
+
+def load_label(k: int, load: Load) -> str:
     """'loads[k] <Kind>' or its name: the key of a load's work."""
-    name = getattr(load, "name", "")
-    return name if name else f"loads[{k}] {type(load).__name__}"
+    return load.name if load.name else f"loads[{k}] {type(load).__name__}"
 
 
 def joint_label(k: int, joint) -> str:
@@ -122,6 +152,8 @@ class EnergyLedger:
         self.d_loads = np.zeros(len(self.system.loads))
         self.w_joints = np.zeros(len(self.system.joints))
         self.sums = np.zeros(5)  # ... and the plastic bodies' correction work
+        # per load: stores energy (StoringLoad), asked once per run
+        self._storing = [isinstance(load, StoringLoad) for load in self.system.loads]
         self.rows = []
         self._ends: dict = {}  # body -> (q, v, k_hat q, M_qq q_dot) of the last step's end
 
@@ -137,7 +169,7 @@ class EnergyLedger:
         for k, load in enumerate(sysm.loads):
             for b, f in load.forces(bodies, mids, t_m).items():
                 self.w_loads[k] += h * float(f @ vms[b])
-            if hasattr(load, "dissipation_rate"):
+            if self._storing[k]:
                 self.d_loads[k] += h * load.dissipation_rate(bodies, mids)
         lam_j, offset = result.joint_impulses, 0
         for k, joint in enumerate(sysm.joints):
@@ -156,7 +188,7 @@ class EnergyLedger:
                 self.sums[3] -= h * float(f @ vms[b][6:])
         if theta != 0.5:
             self.sums[2] += (theta - 0.5) * self._increment_norms(start, end)
-        self.sums[4] += getattr(result, "plastic_work", 0.0)
+        self.sums[4] += result.plastic_work
 
     def _increment_norms(self, start, end) -> float:
         """sum over bodies of dv^T M dv + dq^T k_hat dq, M at the step's end (module doc):
@@ -197,8 +229,8 @@ class EnergyLedger:
         """The sums so far, and the springs' stored energy at states: one output."""
         bodies = self.system.bodies
         stored = [
-            load.energy(bodies, states) if hasattr(load, "energy") else 0.0
-            for load in self.system.loads
+            load.energy(bodies, states) if storing else 0.0
+            for load, storing in zip(self.system.loads, self._storing)
         ]
         sums = self.sums.copy()
         if self.plastic is not None:
@@ -233,9 +265,9 @@ class EnergyLedger:
         )
 
 
-def step_theta(integrator, h: float) -> float:
+def step_theta(integrator: Integrator, h: float) -> float:
     """theta of the integrator's step of size h [s] (its theta_rule; 1/2 without one)."""
-    rule = getattr(integrator, "theta_rule", None)
+    rule = integrator.theta_rule
     return 0.5 if rule is None else float(rule.at(h))
 
 

@@ -36,7 +36,6 @@ import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
 
-from flexmvm.constraints.contact import ContactLaw
 from flexmvm.errors import SolverError
 from flexmvm.fe.solvers.cholesky import ldl_factor
 from flexmvm.integrate.lcp import regularised_cho
@@ -131,16 +130,15 @@ def equilibrate(
 
 
 def check_contact_law(system, massless: list[MasslessCoordinates | None]) -> None:
-    """SolverError when a contact under the velocity law touches a body with massless
-    coordinates (massless: per body, MasslessCoordinates.of)."""
+    """SolverError when a contact under a law for contact nodes with mass (the velocity law:
+    ContactLawSpec.massless_nodes) touches a body with massless coordinates (massless: per
+    body, MasslessCoordinates.of)."""
     for provider in system.contacts:
-        sides = (getattr(provider, "slave", None), getattr(provider, "master", None))
-        if getattr(provider, "law", None) is ContactLaw.VELOCITY and any(
-            b is not None and massless[b] is not None for b in sides
-        ):
+        sides = (provider.slave, provider.master)
+        if not provider.law.spec.massless_nodes and any(massless[b] is not None for b in sides):
             raise SolverError(
                 "massless (mass-redistributed) contact nodes need the position "
-                "contact law: under the velocity law their velocities flip "
+                f"contact law: under the {provider.law} law their velocities flip "
                 "every step (docs/contact_law.md)"
             )
 

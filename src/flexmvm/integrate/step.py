@@ -6,12 +6,17 @@ passed to driver.simulate as a factory (driver.IntegratorFactory)."""
 from __future__ import annotations
 
 from dataclasses import dataclass
-from typing import Protocol
+from typing import TYPE_CHECKING, Protocol
 
 import numpy as np
 
 from flexmvm.constraints.contact import ContactRows
 from flexmvm.integrate.state import BodyState
+
+if TYPE_CHECKING:
+    from flexmvm.integrate.carried import CarriedState
+    from flexmvm.integrate.plastic_bodies import PlasticBodies
+    from flexmvm.integrate.theta import ThetaRule
 
 
 @dataclass
@@ -42,11 +47,20 @@ class Integrator(Protocol):
     flexmvm.errors.SolverError when it fails: the driver then cuts the step), its order of
     accuracy for smooth motion, the number of joint rows, and counters for the run's report.
     ``carried(b, state)`` and ``carried_products(b, state)`` give (L(q), L(q_dot)) and
-    (k_hat q, M_qq q_dot) of body b at a state, for the energies of an output."""
+    (k_hat q, M_qq q_dot) of body b at a state, for the energies of an output. The driver
+    and the energy ledger read the attributes below, each declared here (None where the
+    integrator has none), never probed for."""
 
     order: int
     n_joint_rows: int
     n_nonrotating_steps: int
+    # theta of each step size (the ledger's numerical dissipation); None: taken as 1/2
+    theta_rule: ThetaRule | None
+    # the elastic-plastic bodies' history (plastic_bodies); None or empty (false): none
+    plastic: PlasticBodies | None
+    # k_hat q and M_qq q_dot carried with the states it produced (carried.py); None: the
+    # ledger computes its products afresh
+    carried_state: CarriedState | None
 
     def step(self, t: float, states: list[BodyState], h: float) -> StepResult: ...
 

@@ -67,14 +67,13 @@ class ContactConfig(Frozen):
                 f"must be 0, got {self.friction_coefficient!r}",
                 "friction_coefficient",
             )
-        if self.law is ContactLaw.POSITION and self.kind is ContactKind.BONDED:
-            raise problem('law = "position" is for frictionless contact, not bonded', "law")
-        if self.law is ContactLaw.POSITION and self.penetration_recovery is not None:
-            raise problem(
-                "penetration_recovery is the velocity law's: the position law holds "
-                "the end-of-step gap itself",
-                "penetration_recovery",
-            )
+        # the law's own checks (constraints/contact_laws: the position law takes no bonded
+        # contact and no penetration_recovery)
+        refused = self.law.spec.scenario_problem(
+            self.kind is ContactKind.BONDED, self.penetration_recovery
+        )
+        if refused is not None:
+            raise problem(*refused)
         return self
 
     @property

@@ -8,7 +8,6 @@ from pathlib import Path
 
 import numpy as np
 
-from flexmvm.constraints.contact import ContactLaw
 from flexmvm.errors import SimulationFailed
 from flexmvm.integrate.driver import simulate
 from flexmvm.integrate.run_result import ProbeHistory, RunResult, StepHistory
@@ -186,11 +185,11 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         "energy_rel_error_max": e_err_max,
         # the largest rise of the total energy over its start beyond the inputs' work [-] (energy_gain)
         "energy_gain_rel_max": gain,
-        # every contact on the position law: the step adds no energy (theta = 1/2 conserves
-        # it, theta > 1/2 damps; scenarios.guard.CONSERVING_ENERGY_GAIN_WARN)
+        # every contact on a law whose step adds no energy (the position law: theta = 1/2
+        # conserves it, theta > 1/2 damps; scenarios.guard.CONSERVING_ENERGY_GAIN_WARN)
         "energy_conserving_scheme": bool(
             built.system.contacts
-            and all(getattr(c, "law", None) is ContactLaw.POSITION for c in built.system.contacts)
+            and all(c.law.spec.conserves_energy for c in built.system.contacts)
         ),
         "max_penetration_m": float(res.max_penetration_m),
         "max_penetration_at": res.max_penetration_at,

@@ -1,0 +1,97 @@
+"""The contact laws: the one ContactLaw enum and the registry LAWS of their specs.
+
+Each law is one object (a ContactLawSpec, contact_laws/spec.py) that holds everything about
+it: which pairs become rows and the rows' lower bound, its options and scenario checks, and
+what it allows (massless contact nodes, bonded contact, held pairs). Code that needs a
+property of a law asks ``law.spec`` (or ``law_spec(law)``) instead of comparing laws. The
+built-in laws are registered by constraints/contact_laws/__init__.py, one line each;
+``register_law(spec)`` adds another (a new member of ContactLaw is made for a new name).
+"""
+
+from __future__ import annotations
+
+from enum import StrEnum
+from typing import TYPE_CHECKING
+
+from flexmvm.errors import InputError
+
+if TYPE_CHECKING:
+    from flexmvm.constraints.contact_laws.spec import ContactLawSpec
+
+
+class ContactLaw(StrEnum):
+    """The lower bound of a frictionless normal row (values: the scenario file's ``law``);
+    each member's spec (``law.spec``, contact_laws/velocity.py, position.py) states it."""
+
+    VELOCITY = "velocity"  # Moreau's impact law with a capped penetration recovery (default)
+    POSITION = "position"  # the gap at the end of the step (massless contact nodes)
+
+    @property
+    def spec(self) -> ContactLawSpec:
+        """This law's registered spec (LAWS)."""
+        return LAWS[self]
+
+
+#: The registered laws, in registration order (built-in: constraints/contact_laws/__init__.py).
+LAWS: dict[ContactLaw, ContactLawSpec] = {}
+
+
+def _member(name: str, value: str) -> ContactLaw:
+    """A new ContactLaw member ``name`` = ``value`` (a law registered after the class was
+    made: the way Enum's own class creation adds one)."""
+    member = str.__new__(ContactLaw, value)
+    member._name_, member._value_ = name, value
+    member.__objclass__ = ContactLaw
+    member.__init__(value)
+    ContactLaw._member_names_.append(name)
+    ContactLaw._member_map_[name] = member
+    ContactLaw._value2member_map_[value] = member
+    type.__setattr__(ContactLaw, name, member)
+    return member
+
+
+def register_law(spec: ContactLawSpec) -> ContactLaw:
+    """Register ``spec`` under its name (``spec.name``, the scenario file's contact ``law``)
+    and return its ContactLaw, made for a name not in ContactLaw yet (member name: the name
+    in upper case, dashes as underscores). InputError for a name already registered."""
+    name = spec.name
+    if not isinstance(name, str) or not name or name != name.strip().lower():
+        raise InputError(f"contact law name {name!r}; expected a lower-case string")
+    law = ContactLaw._value2member_map_.get(name)
+    if law is not None and law in LAWS:
+        raise InputError(f"contact law {name!r} is registered already")
+    if law is None:
+        law = _member(name.upper().replace("-", "_"), name)
+    LAWS[law] = spec
+    return law
+
+
+def unregister_law(name: str) -> None:
+    """Remove a law registered by register_law that is not built in (a test's toy law): its
+    spec and its ContactLaw member."""
+    law = ContactLaw._value2member_map_.get(name)
+    if law is None or name in _BUILT_IN:
+        raise InputError(f"contact law {name!r}: not a registered added law")
+    LAWS.pop(law, None)
+    del ContactLaw._value2member_map_[name]
+    del ContactLaw._member_map_[law.name]
+    ContactLaw._member_names_.remove(law.name)
+    type.__delattr__(ContactLaw, law.name)
+
+
+_BUILT_IN = frozenset(law.value for law in ContactLaw)
+
+
+def law_spec(law: ContactLaw | str) -> ContactLawSpec:
+    """The spec of ``law`` (a ContactLaw or its name); InputError naming the laws for an
+    unknown one."""
+    spec = LAWS.get(ContactLaw._value2member_map_.get(law))  # type: ignore[arg-type]
+    if spec is None:
+        known = ", ".join(k.value for k in LAWS)
+        raise InputError(f"contact law {law!r}: expected one of {known}")
+    return spec
+
+
+def massless_laws() -> list[ContactLaw]:
+    """The registered laws that may carry massless (mass-redistributed) contact nodes."""
+    return [law for law, spec in LAWS.items() if spec.massless_nodes]
