@@ -22,7 +22,9 @@ scheme stays second order while what the step cannot resolve decays as exp(-t / 
 every h, never slower (docs/contact_law.md).
 
 Constraints (seed eq. 11, at impulse level):
-- joints: phi(x(t + h)) = 0 (position level: no drift), rows Phi_v at x_m;
+- joints: phi(x(t + h)) = 0 (position level: no drift), rows Phi_v at x_m; at theta > 1/2
+  v+ is then projected onto the rows' velocity level at x(t + h) (velocity_projection: no
+  ringing at the step's Nyquist frequency);
 - contacts (Moreau 1988, Jean 1999): for candidate pairs, u_N(v+) >= min(beta max(0, -g)/h,
   max(0, -u_N-)), lambda_N >= 0, complementary: an impact is an impulse with Newton
   restitution 0 at the contact node, persistent contact keeps u_N = 0, release happens when
@@ -78,6 +80,7 @@ from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.step import StepResult
 from flexmvm.integrate.system import ContactRows, System
 from flexmvm.integrate.theta import ThetaRule
+from flexmvm.integrate.velocity_projection import project_joint_velocities
 from flexmvm.integrate.w_images import WImages
 from flexmvm.loads.applied import midpoint_forces
 
@@ -451,6 +454,13 @@ class MoreauJeanIntegrator:
         for st, vp in zip(new_states, v_plus):
             st.v = vp
         self.carried_state.advance(states, new_states, h)
+        if n_j and th > 0.5:  # v+ onto the joints' velocity rows: no Nyquist ringing
+            # (velocity_projection; not at theta = 1/2, whose energy it would not keep); its
+            # impulses count as the joints' (a drive's torque includes them)
+            lam = lam.copy()
+            lam[:n_j] += project_joint_velocities(
+                self.system, self.matrices, self.carried_state, new_states, t + h, h
+            )
         plastic_work = self.plastic.commit(states, new_states)
         self._equilibrate_massless(
             t,
