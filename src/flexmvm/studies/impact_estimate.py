@@ -9,14 +9,19 @@ of the two bodies with what each body brings to it (its modulus, its mass, its i
   upper bound), or the velocity of a prescribed joint's point.
 - E*: 1/E* = (1 - nu^2)/E of the elastic bodies only: a rigid body (kind "rigid") does not
   deform, its E is infinite (Johnson, *Contact Mechanics*, 1985, eq. 4.22 with E2 -> inf).
-- The masses: a body held to the ground (a support other than a spring bed that fixes its
-  frame, or a joint to the ground other than a distance joint) does not recoil (infinite
-  mass); it takes the struck point's impedance instead, the infinite-plate value
-  8 sqrt(D rho h) of its thickness h through the contact point (theory/plate_impact.py,
-  Zener 1941): a clamped plate is not rigid, its bending waves carry energy away and lower the
-  force (4 mm clamped plate: 381 N rigid, 233 N Zener, 230 N full FE). A thick body's Z (~h^2)
-  is large and leaves Hertz's rigid target. A free body recoils with its whole mass (its
-  impedance is left out: the former estimate, measured on the free sphere-on-beam case).
+- The masses: a free body recoils with its whole mass; a body that turns about one undriven
+  revolute joint to the ground (a swung link) with J / l^2 (J its moment of inertia about
+  the axis, l the lever of the contact normal); a body held otherwise (a support other than a
+  spring bed that fixes its frame, a driven joint, another joint to the ground) does not
+  recoil (infinite mass).
+- The impedance: a thin body (a plate or a beam struck on its face: lateral extent >= THIN x
+  its thickness h through the contact point) answers, in series with Hertz, with the
+  infinite-plate point impedance 8 sqrt(D rho h) (theory/plate_impact.py, Zener 1941): its
+  bending waves carry energy away and lower the force. On a 100 x 100 x 4 mm clamped
+  aluminium plate struck by a rigid ball: 381 N without, 230.1 N with it, 230.0 N full FE;
+  on sphere_beam's free 200 x 10 x 10 mm beam 495 N without, 394 N with it, 297 N full FE (a
+  beam is more compliant than a plate of its height: an upper bound). A thick body (a block,
+  a sphere, a rod struck at its end) takes none: Hertz's half-space.
 """
 
 from __future__ import annotations
@@ -30,13 +35,23 @@ from flexmvm.scenarios import Scenario
 from flexmvm.theory.hertz import HertzImpact
 from flexmvm.theory.plate_impact import plate_impact, plate_impedance
 
-__all__ = ["body_thickness", "closing_speed", "expected_impact", "held", "is_rigid"]
+__all__ = [
+    "body_thickness",
+    "closing_speed",
+    "expected_impact",
+    "held",
+    "is_rigid",
+    "lateral_extent",
+]
 
 #: Samples of a drive's rate over the run (its largest is the striking rate).
 DRIVE_SAMPLES = 2001
 #: A node at depth d below the contact point counts for the thickness if it is within
 #: CONE x d (plus the facet size) of the normal line through the point.
 CONE = 0.3
+#: A body is thin at the contact (a plate or a beam struck on its face) if its lateral extent
+#: is at least THIN x its thickness there: it then answers with its point impedance.
+THIN = 3.0
 
 
 def is_rigid(cfg) -> bool:
@@ -108,7 +123,60 @@ def _motion(sc: Scenario, cfg, mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray
             return np.zeros(3), rate * axis, _pivot(cfg, j, mesh)
         if j.velocity_mps is not None:
             return np.asarray(j.velocity_mps, float), np.zeros(3), np.zeros(3)
+    for k, j in _motored(sc, cfg.name):
+        axis = np.asarray(j.axis, float) / np.linalg.norm(j.axis)
+        pivot = _pivot(cfg, j, mesh)
+        rate = _motor_rate(sc, k, _axis_inertia(cfg, pivot, axis))
+        return np.zeros(3), rate * axis, pivot
     return v, w, np.asarray(p.position_m, float)
+
+
+def _motored(sc: Scenario, body: str) -> list[tuple[int, object]]:
+    """(index, joint) of the undriven revolute joints of ``body`` to the ground that a motor
+    load turns."""
+    from flexmvm.constraints.joints import JointType
+    from flexmvm.scenarios.load_schema import LoadType
+
+    motors = {ld.joint for ld in sc.loads if ld.type is LoadType.MOTOR}
+    return [
+        (k, j)
+        for k, j in enumerate(sc.joints)
+        if k in motors
+        and j.body == body
+        and j.body2 is None
+        and j.type is JointType.REVOLUTE
+        and j.drive is None
+        and j.axis is not None
+    ]
+
+
+def _axis_inertia(cfg, pivot: np.ndarray, axis: np.ndarray) -> float:
+    """Moment of inertia [kg m^2] of body cfg at its placement about the unit ``axis``
+    through ``pivot``: sum of its nodes' lumped masses (rows of M) x their squared distance
+    from the axis."""
+    from flexmvm.scenarios.setup import default_setup
+    from flexmvm.studies.region import _placed
+
+    fe = default_setup().free_modes_source(cfg)[0]
+    rel = _placed(cfg, fe.mesh.nodes)[0] - pivot
+    perp = rel - np.outer(rel @ axis, axis)
+    m = np.asarray(fe.M_scalar.sum(axis=1)).ravel()
+    return float(m @ np.einsum("ij,ij->i", perp, perp))
+
+
+def _motor_rate(sc: Scenario, k: int, inertia: float) -> float:
+    """The largest |rate| [rad/s] over the run of a body turned about joint k by its motor
+    loads alone, from rest: |int_0^t torque dt| / J (the joint's friction-free swing)."""
+    from flexmvm.scenarios.load_schema import LoadType
+
+    t = np.linspace(0.0, sc.time.t_end_s, DRIVE_SAMPLES)
+    tau = sum(
+        np.array([float(ld.history().at(float(s))[0]) for s in t])
+        for ld in sc.loads
+        if ld.type is LoadType.MOTOR and ld.joint == k
+    )
+    impulse = np.concatenate([[0.0], np.cumsum(0.5 * (tau[1:] + tau[:-1]) * np.diff(t))])
+    return float(np.max(np.abs(impulse))) / inertia
 
 
 def closing_speed(sc, cfg, pcfg, mesh, pmesh, point, n, where: str) -> float:
@@ -139,10 +207,32 @@ def body_thickness(x: np.ndarray, point: np.ndarray, inward: np.ndarray, h: floa
     return float(depth[inside].max()) if inside.any() else h
 
 
-def _mass(sc: Scenario, cfg) -> float:
-    """The body's mass [kg], inf if held (module doc)."""
+def lateral_extent(x: np.ndarray, normal: np.ndarray) -> float:
+    """The largest extent [m] of the nodes ``x`` across the unit ``normal`` (the larger side
+    of their bounding box in two axes of the tangent plane)."""
+    t1 = np.cross(normal, [1.0, 0.0, 0.0] if abs(normal[0]) < 0.9 else [0.0, 1.0, 0.0])
+    t1 /= np.linalg.norm(t1)
+    t2 = np.cross(normal, t1)
+    return float(max(np.ptp(x @ t1), np.ptp(x @ t2)))
+
+
+def _mass(sc: Scenario, cfg, mesh, point: np.ndarray, n: np.ndarray) -> float:
+    """The body's mass [kg] at ``point`` along ``n`` (module doc): its whole mass if free;
+    J / ((point - p) x n . a)^2 if it turns about one undriven revolute joint to the ground
+    (pivot p, axis a, J its moment of inertia about it); inf if held otherwise."""
     from flexmvm.scenarios.setup import default_setup
 
+    ground = [j for j in sc.joints if j.body == cfg.name and j.body2 is None]
+    swing = [j for _, j in _motored(sc, cfg.name)] or [
+        j for j in ground if j.type.value == "revolute" and j.drive is None and j.axis
+    ]
+    supported = any(s.body == cfg.name for s in sc.supports)
+    if len(ground) == 1 and swing and not supported:
+        j = swing[0]
+        axis = np.asarray(j.axis, float) / np.linalg.norm(j.axis)
+        pivot = _pivot(cfg, j, mesh)
+        lever = float(np.cross(point - pivot, n) @ axis)
+        return math.inf if lever == 0.0 else _axis_inertia(cfg, pivot, axis) / lever**2
     if held(sc, cfg.name):
         return math.inf
     return float(default_setup().free_modes_source(cfg)[0].M_scalar.sum())
@@ -160,26 +250,33 @@ def e_star(cfg, pcfg, where: str) -> float:
     return 1.0 / inv
 
 
-def expected_impact(sc, cfg, pcfg, R: float, v: float, thickness, where: str):
-    """(the Hertz impact, the struck body's name or None, its thickness [m], its impedance
-    [N s/m]) of bodies cfg and pcfg at equivalent radius R [m] and closing speed v [m/s]
-    (module doc); ``thickness(name)`` gives a held body's thickness through the contact
-    point. InputError when both are held to the ground."""
-    m_body, m_partner = _mass(sc, cfg), _mass(sc, pcfg)
+def expected_impact(sc, cfg, pcfg, R: float, v: float, contact, geometry, where: str):
+    """(the Hertz impact, the names of the thin bodies whose impedance it took or None, the
+    first one's thickness [m], the impedance in series [N s/m]) of bodies cfg and pcfg at
+    equivalent radius R [m] and closing speed v [m/s] (module doc); ``contact`` = (point, n,
+    the two bodies' meshes), ``geometry(name)`` = (thickness through the contact point,
+    lateral extent) [m]. InputError when both are held to the ground."""
+    point, n, mesh, pmesh = contact
+    m_body, m_partner = _mass(sc, cfg, mesh, point, n), _mass(sc, pcfg, pmesh, point, n)
     if math.isinf(m_body) and math.isinf(m_partner):
         raise InputError(
             f"{where} are both held to the ground; the Hertz impact needs a moving mass"
         )
-    (ma, mb), target = (
-        ((m_partner, m_body), cfg) if math.isfinite(m_partner) else ((m_body, m_partner), pcfg)
-    )
+    ma, mb = (m_partner, m_body) if math.isfinite(m_partner) else (m_body, m_partner)
     E = e_star(cfg, pcfg, where)
-    if math.isfinite(mb) or is_rigid(target):
-        return _plain(R, v, E, ma, mb), None, math.nan, math.inf
-    h = thickness(target.name)
-    mat = target.material_obj()
-    Z = plate_impedance(mat.E, mat.nu, mat.rho, h)
-    return plate_impact(R, v, E, ma, mb, Z), target.name, h, Z
+    thin, first_h, compliance = [], math.nan, 0.0
+    for c in (cfg, pcfg):
+        if is_rigid(c):
+            continue
+        h, extent = geometry(c.name)
+        if extent < THIN * h:
+            continue
+        mat = c.material_obj()
+        compliance += 1.0 / plate_impedance(mat.E, mat.nu, mat.rho, h)
+        first_h = h if not thin else first_h
+        thin.append(c.name)
+    Z = math.inf if compliance == 0.0 else 1.0 / compliance
+    return plate_impact(R, v, E, ma, mb, Z), ", ".join(thin) or None, first_h, Z
 
 
 def _plain(R: float, v: float, E: float, ma: float, mb: float) -> HertzImpact:

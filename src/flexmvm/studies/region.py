@@ -26,10 +26,10 @@ Steps (all at the scenario's initial placements, in SI units):
    ``rigid_motion``, or the largest rate of a drive on the body's joint to the ground:
    studies/impact_estimate.py); none (bodies at rest or separating) needs ``speed_mps``.
 5. Hertz (theory/hertz.py, Johnson eq. 11.24) with E* of the elastic bodies (a rigid body's
-   modulus is infinite) and the bodies' masses; a body held to the ground (a support or a
-   joint to the ground) does not recoil and answers with its point impedance, the
-   infinite-plate 8 sqrt(D rho h) of its thickness there (Zener 1941, theory/plate_impact.py;
-   studies/impact_estimate.py) gives the contact radius a.
+   modulus is infinite) and the bodies' masses (a held body does not recoil, a swung link
+   recoils with J / l^2), in series with a thin body's point impedance, the infinite-plate
+   8 sqrt(D rho h) of its thickness there (Zener 1941, theory/plate_impact.py;
+   studies/impact_estimate.py), gives the contact radius a.
 6. The region: the ball of radius ``a + h`` about the contact point (body-local coordinates),
    h the largest diameter of the body's contact facets that the circle of radius a about the
    point touches (``facet_size_m``; the linear sub-facets of a quadratic mesh, whose nodes all
@@ -60,7 +60,12 @@ from flexmvm.errors import InputError, MeshError
 from flexmvm.scenarios import Scenario
 from flexmvm.scenarios.cost import BodyCost, reduced_cost
 from flexmvm.studies.contact_point import equivalent_radius, facet_size, first_contact
-from flexmvm.studies.impact_estimate import body_thickness, closing_speed, expected_impact
+from flexmvm.studies.impact_estimate import (
+    body_thickness,
+    closing_speed,
+    expected_impact,
+    lateral_extent,
+)
 from flexmvm.theory.hertz import HertzImpact
 
 __all__ = ["RegionEstimate", "estimate_region"]
@@ -93,8 +98,8 @@ class RegionEstimate:
     modes: int
     dof: int
     cost: BodyCost
-    #: the held body whose point impedance the impact took (None: a free or rigid target),
-    #: its thickness through the contact point [m] and its impedance [N s/m]
+    #: the thin bodies whose point impedance the impact took (None: none), the first one's
+    #: thickness through the contact point [m] and the impedance in series [N s/m]
     impedance_body: str | None = None
     thickness_m: float = math.nan
     impedance_nspm: float = math.inf
@@ -167,7 +172,7 @@ class RegionEstimate:
         held = (
             ""
             if self.impedance_body is None
-            else f" ({self.impedance_body} held: its point impedance 8 sqrt(D rho h) "
+            else f" ({self.impedance_body} thin: point impedance 8 sqrt(D rho h) "
             f"{self.impedance_nspm:.4g} N s/m at thickness {self.thickness_m * mm:.4g} mm, "
             "Zener 1941)"
         )
@@ -342,11 +347,13 @@ def estimate_region(
     if v is None:
         v = closing_speed(sc, cfg, pcfg, fe.mesh, pfe.mesh, point, n, who)
 
-    def thickness(name: str) -> float:
+    def geometry(name: str) -> tuple[float, float]:
         xs, inward, fset = (x, -n, fs) if name == body else (px, n, pfs)
-        return body_thickness(xs, point, inward, facet_size(xs, fset, point, 0.0))
+        h = body_thickness(xs, point, inward, facet_size(xs, fset, point, 0.0))
+        return h, lateral_extent(xs, n)
 
-    hertz, struck, t_m, Z = expected_impact(sc, cfg, pcfg, R, v, thickness, who)
+    contact_at = (point, n, fe.mesh, pfe.mesh)
+    hertz, struck, t_m, Z = expected_impact(sc, cfg, pcfg, R, v, contact_at, geometry, who)
     centre = np.round(A.T @ (point - r), 12) + 0.0  # placement round-off, no -0
     a = hertz.contact_radius_m
     h, radius, n_nodes = _ball(fe.mesh.nodes, fs, centre, a, factor)
