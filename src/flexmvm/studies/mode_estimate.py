@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["BANDWIDTH", "MAX_MODES", "ModeCount", "mode_count"]
+__all__ = ["BANDWIDTH", "MAX_MODES", "ModeCount", "estimated_modes", "mode_count"]
 
 #: f_max = BANDWIDTH / T_c (module doc).
 BANDWIDTH = 3.0
@@ -54,3 +54,18 @@ def mode_count(fe, free, duration_s: float) -> ModeCount:
     n = int(np.count_nonzero(f_hz < f_max))
     capped = n >= pool and f_hz[-1] < f_max
     return ModeCount(max(n, 1), f_max, bool(capped))
+
+
+def estimated_modes(cfg, modes: int | None, duration_s: float) -> tuple[int, str, float, bool]:
+    """(mode count, "given" | "model" | "criterion", f_max [Hz], capped) of the estimated
+    model: ``modes`` if given, else the body's model's (a kind that uses modes), else the
+    criterion of studies/mode_estimate.py at the contact duration ``duration_s`` [s]."""
+    from flexmvm.scenarios.setup import default_setup
+
+    if modes is not None:
+        return int(modes), "given", math.nan, False
+    if cfg.model.kind.uses_modes and cfg.model.modes:
+        return int(cfg.model.modes), "model", math.nan, False
+    fe, free = default_setup().free_modes_source(cfg)
+    c = mode_count(fe, free, duration_s)
+    return c.modes, "criterion", c.f_max_hz, c.capped

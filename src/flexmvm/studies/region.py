@@ -66,6 +66,7 @@ from flexmvm.studies.impact_estimate import (
     expected_impact,
     lateral_extent,
 )
+from flexmvm.studies.mode_estimate import estimated_modes
 from flexmvm.theory.hertz import HertzImpact
 
 __all__ = ["RegionEstimate", "estimate_region"]
@@ -357,7 +358,7 @@ def estimate_region(
     centre = np.round(A.T @ (point - r), 12) + 0.0  # placement round-off, no -0
     a = hertz.contact_radius_m
     h, radius, n_nodes = _ball(fe.mesh.nodes, fs, centre, a, factor)
-    m, source, f_max, capped = _modes(cfg, modes, hertz.duration_s)
+    m, source, f_max, capped = estimated_modes(cfg, modes, hertz.duration_s)
     cost = reduced_cost(body, fe.mesh.n_nodes, 3 * n_nodes + m, fe.K.nnz)
     return RegionEstimate(
         body,
@@ -387,19 +388,3 @@ def estimate_region(
         f_max,
         capped,
     )
-
-
-def _modes(cfg, modes: int | None, duration_s: float) -> tuple[int, str, float, bool]:
-    """(mode count, "given" | "model" | "criterion", f_max [Hz], capped) of the estimated
-    model: ``modes`` if given, else the body's model's (a kind that uses modes), else the
-    criterion of studies/mode_estimate.py at the contact duration ``duration_s`` [s]."""
-    from flexmvm.scenarios.setup import default_setup
-    from flexmvm.studies.mode_estimate import mode_count
-
-    if modes is not None:
-        return int(modes), "given", math.nan, False
-    if cfg.model.kind.uses_modes and cfg.model.modes:
-        return int(cfg.model.modes), "model", math.nan, False
-    fe, free = default_setup().free_modes_source(cfg)
-    c = mode_count(fe, free, duration_s)
-    return c.modes, "criterion", c.f_max_hz, c.capped
