@@ -31,13 +31,15 @@ import click
     "--speed",
     type=float,
     default=None,
-    help="Closing speed [m/s], instead of the placements' (needed when the bodies start at rest).",
+    help="Closing speed [m/s], instead of the placements' and drives' (needed when the "
+    "bodies start at rest without a drive).",
 )
 @click.option(
     "--modes",
     type=int,
     default=None,
-    help="Mode count of the costed model [default: the body's model's, else 30].",
+    help="Mode count of the costed model [default: the body's model's, else the free-free "
+    "modes below 3 / contact duration].",
 )
 @click.option(
     "--contact",

@@ -124,6 +124,13 @@ def parse_point(text: str, name: str) -> list[float]:
     "over both kinds: the largest model under the DOF bound first, then "
     "bisection) instead of running the whole grid.",
 )
+@click.option(
+    "--allow-costly",
+    "allow_costly",
+    is_flag=True,
+    help="Build the body's reduced candidates even when they cost more memory than its "
+    "full-FE model (sets the body's model.allow_costly; a large region of a fine mesh).",
+)
 @study_run_options
 @click.option(
     "--out",
@@ -148,6 +155,7 @@ def command(
     patch_surface,
     interface_modes,
     search,
+    allow_costly,
     scheduler,
     workers,
     serial,
@@ -178,9 +186,10 @@ def command(
     if_modes = parse_range(interface_modes, "interface-modes")
     tgt = Target.parse(target)
     check_workers(workers, scheduler)
+    studied = _allowing_costly(scenario, body) if allow_costly else scenario
     with study_output(out_dir):
         run_selection_study(
-            scenario,
+            studied,
             body,
             out_dir,
             *grid,
@@ -202,3 +211,13 @@ def command(
             patch_surface=patch_surface,
         )
     click.echo(f"wrote {out_dir}")
+
+
+def _allowing_costly(scenario: Path, body: str):
+    """The scenario of file ``scenario`` with body ``body``'s model.allow_costly set (the
+    study's candidates take it: studies/grid.py, studies/regions.py)."""
+    from flexmvm.scenarios import load_scenario
+
+    sc = load_scenario(scenario)
+    model = sc.body(body).model
+    return sc.with_model(body, model.model_copy(update={"allow_costly": True}))

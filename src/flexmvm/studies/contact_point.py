@@ -43,9 +43,10 @@ def _node_normals(x: np.ndarray, fs) -> np.ndarray:
     return np.divide(acc, norm[:, None], out=np.zeros_like(acc), where=norm[:, None] > 0)
 
 
-def _triangle_distance(p: np.ndarray, tri: np.ndarray) -> np.ndarray:
-    """Distances [m] from point ``p`` (3,) to the triangles ``tri`` (n, 3 corners, 3): to the
-    foot of ``p`` in the plane where it falls inside, else to the nearest edge."""
+def _triangle_closest(p: np.ndarray, tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(distances [m] from point ``p`` (3,) to the triangles ``tri`` (n, 3 corners, 3), the
+    nearest points (n, 3)): the foot of ``p`` in the plane where it falls inside, else the
+    nearest point of the nearest edge."""
     a, b, c = tri[:, 0], tri[:, 1], tri[:, 2]
     nrm = np.cross(b - a, c - a)
     nn = np.einsum("ij,ij->i", nrm, nrm)
@@ -55,11 +56,36 @@ def _triangle_distance(p: np.ndarray, tri: np.ndarray) -> np.ndarray:
     for u, v in ((a, b), (b, c), (c, a)):
         inside &= np.einsum("ij,ij->i", np.cross(v - u, foot - u), nrm) >= 0.0
     d = np.where(inside, np.linalg.norm(p - foot, axis=1), np.inf)
+    q = foot.copy()
     for u, v in ((a, b), (b, c), (c, a)):
         e = v - u
         t = np.clip(np.einsum("ij,ij->i", p - u, e) / np.einsum("ij,ij->i", e, e), 0.0, 1.0)
-        d = np.minimum(d, np.linalg.norm(p - (u + t[:, None] * e), axis=1))
-    return d
+        on_edge = u + t[:, None] * e
+        de = np.linalg.norm(p - on_edge, axis=1)
+        nearer = de < d
+        d = np.where(nearer, de, d)
+        q[nearer] = on_edge[nearer]
+    return d, q
+
+
+def _triangle_distance(p: np.ndarray, tri: np.ndarray) -> np.ndarray:
+    """Distances [m] from point ``p`` (3,) to the triangles ``tri`` (n, 3 corners, 3)."""
+    return _triangle_closest(p, tri)[0]
+
+
+def _surface_point(nodes: np.ndarray, fs, p: np.ndarray) -> np.ndarray:
+    """The point of the facets of ``fs`` (node positions ``nodes``) nearest ``p`` (3,)."""
+    best, where = np.inf, p
+    for f in (fs.tris, fs.quads):
+        if not len(f):
+            continue
+        xf = nodes[f]
+        for t in [(0, 1, 2)] if f.shape[1] == 3 else [(0, 1, 2), (0, 2, 3)]:
+            d, q = _triangle_closest(p, xf[:, list(t)])
+            k = int(np.argmin(d))
+            if d[k] < best:
+                best, where = float(d[k]), q[k]
+    return where
 
 
 def facet_size(nodes: np.ndarray, fs, point: np.ndarray, a: float) -> float:
@@ -112,7 +138,9 @@ def _curvature(points: np.ndarray, x0: np.ndarray, n: np.ndarray) -> tuple[np.nd
 def first_contact(x: np.ndarray, fs, px: np.ndarray, pfs) -> tuple[np.ndarray, np.ndarray]:
     """(expected first contact point (3,), the body's outward unit normal there (3,)), global,
     from the body's nodes ``x`` and surface ``fs`` and the partner's ``px``, ``pfs`` (studies.region
-    module doc, step 2)."""
+    module doc, step 2). The point is the point of the body's facets nearest the partner's
+    first node: on the body, also at an edge or a corner, where the projection onto the
+    tangent plane of a node's averaged normal left the body."""
     from scipy.spatial import cKDTree
 
     mine, theirs = fs.nodes, pfs.nodes
@@ -124,8 +152,7 @@ def first_contact(x: np.ndarray, fs, px: np.ndarray, pfs) -> tuple[np.ndarray, n
     mid = px[theirs[tied]].mean(axis=0)
     j = int(tied[np.argmin(np.linalg.norm(px[theirs[tied]] - mid, axis=1))])
     node, pnode = int(nearest[j]), int(theirs[j])
-    n = normals[node]
-    return px[pnode] - float((px[pnode] - x[node]) @ n) * n, n
+    return _surface_point(x, fs, px[pnode]), normals[node]
 
 
 def equivalent_radius(

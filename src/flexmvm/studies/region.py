@@ -8,10 +8,11 @@ Steps (all at the scenario's initial placements, in SI units):
    and the two facet sets.
 2. The expected first contact point: the partner's surface node of smallest normal gap to
    the body's surface (measured from its nearest body surface node along that node's outward
-   normal, the area-weighted mean of its facets' normals), projected onto the body's tangent
-   plane there (a sphere's pole above a flat face gives the point below it, not the nearest
-   face node); of tied nodes (flat on flat) the one nearest their middle. ``n`` is that
-   outward normal.
+   normal, the area-weighted mean of its facets' normals), moved to the nearest point of the
+   body's facets (a sphere's pole above a flat face gives the point below it, not the nearest
+   face node; at an edge or a corner the point stays on the body, where a projection onto
+   the averaged normal's plane left it); of tied nodes (flat on flat) the one nearest their
+   middle. ``n`` is that outward normal.
 3. The relative curvature: each surface's nodes nearest that point (NEIGHBOURS of them) are
    fitted by a height over the tangent plane, h = c0 + c1 u + c2 v - (k_uu u^2 + 2 k_uv u v
    + k_vv v^2) / 2 + higher terms (convex positive: the curvatures k); the two curvature
@@ -21,16 +22,20 @@ Steps (all at the scenario's initial placements, in SI units):
    same area). A sum without curvature (flat on flat, a cylinder's line contact, conforming
    surfaces) has no Hertz point contact: the estimate then needs ``radius_m``.
 4. The closing speed: the normal component of the relative velocity of the two bodies'
-   material points at the contact point (placements' velocity and angular velocity); none
-   (bodies at rest or separating) needs ``speed_mps``.
-5. Hertz (theory/hertz.py, Johnson eq. 11.24) with E* of the two materials and the bodies'
-   masses (a body on a joint to the ground other than a distance joint does not recoil:
-   infinite mass, which overestimates the force and the radius) gives the contact radius a.
+   material points at the contact point (placements' velocity and angular velocity, a
+   ``rigid_motion``, or the largest rate of a drive on the body's joint to the ground:
+   studies/impact_estimate.py); none (bodies at rest or separating) needs ``speed_mps``.
+5. Hertz (theory/hertz.py, Johnson eq. 11.24) with E* of the elastic bodies (a rigid body's
+   modulus is infinite) and the bodies' masses (a held body does not recoil, a swung link
+   recoils with J / l^2), in series with a thin body's point impedance, the infinite-plate
+   8 sqrt(D rho h) of its thickness there (Zener 1941, theory/plate_impact.py;
+   studies/impact_estimate.py), gives the contact radius a.
 6. The region: the ball of radius ``a + h`` about the contact point (body-local coordinates),
    h the largest diameter of the body's contact facets that the circle of radius a about the
    point touches (``facet_size_m``; the linear sub-facets of a quadratic mesh, whose nodes all
    carry contact), or ``factor x a`` if a factor is given; its nodes, its DOF 3 x nodes +
-   modes and its memory (scenarios/cost.py).
+   modes (the free-free modes below 3 / contact duration unless given:
+   studies/mode_estimate.py) and its memory (scenarios/cost.py).
 
 The rule a + h. The ball must hold every node of the facets the contact circle touches (a node
 outside the region moves only as the basis lets it: held stiff, the contact force comes out
@@ -55,12 +60,16 @@ from flexmvm.errors import InputError, MeshError
 from flexmvm.scenarios import Scenario
 from flexmvm.scenarios.cost import BodyCost, reduced_cost
 from flexmvm.studies.contact_point import equivalent_radius, facet_size, first_contact
-from flexmvm.theory.hertz import HertzImpact, effective_modulus, hertz_impact
+from flexmvm.studies.impact_estimate import (
+    body_thickness,
+    closing_speed,
+    expected_impact,
+    lateral_extent,
+)
+from flexmvm.studies.mode_estimate import estimated_modes
+from flexmvm.theory.hertz import HertzImpact
 
 __all__ = ["RegionEstimate", "estimate_region"]
-
-#: Mode count of the estimated model when the body's model gives none.
-DEFAULT_MODES = 30
 
 
 @dataclass(frozen=True)
@@ -90,6 +99,15 @@ class RegionEstimate:
     modes: int
     dof: int
     cost: BodyCost
+    #: the thin bodies whose point impedance the impact took (None: none), the first one's
+    #: thickness through the contact point [m] and the impedance in series [N s/m]
+    impedance_body: str | None = None
+    thickness_m: float = math.nan
+    impedance_nspm: float = math.inf
+    #: where the mode count comes from: "given", "model" or "criterion" (f_max_hz [Hz])
+    modes_from: str = "given"
+    f_max_hz: float = math.nan
+    modes_capped: bool = False
 
     @property
     def contact_radius_m(self) -> float:
@@ -125,6 +143,12 @@ class RegionEstimate:
             "radius_m": self.radius_m,
             "nodes": self.nodes,
             "modes": self.modes,
+            "modes_from": self.modes_from,
+            "modes_f_max_hz": None if math.isnan(self.f_max_hz) else self.f_max_hz,
+            "modes_capped": self.modes_capped,
+            "impedance_body": self.impedance_body,
+            "thickness_m": None if math.isnan(self.thickness_m) else self.thickness_m,
+            "impedance_nspm": None if math.isinf(self.impedance_nspm) else self.impedance_nspm,
             "dof": self.dof,
             "dof_total": self.cost.dof,
             "memory_MB": self.cost.bytes / 1e6,
@@ -146,6 +170,13 @@ class RegionEstimate:
             + " mm"
         )
         given = " (given)" if self.speed_given else ""
+        held = (
+            ""
+            if self.impedance_body is None
+            else f" ({self.impedance_body} thin: point impedance 8 sqrt(D rho h) "
+            f"{self.impedance_nspm:.4g} N s/m at thickness {self.thickness_m * mm:.4g} mm, "
+            "Zener 1941)"
+        )
         lines = [
             (
                 f"contacts[{self.contact}]: {self.body}.{self.surface} against {self.partner}; "
@@ -156,11 +187,11 @@ class RegionEstimate:
                 f"radius {self.curvature_radius_m * mm:.4g} mm ({rs}), E* "
                 f"{h.e_star_pa / 1e9:.4g} GPa, m* {h.m_star_kg:.4g} kg: peak "
                 f"{h.force_max_n:.4g} N, contact radius a {h.contact_radius_m * mm:.4g} mm, "
-                f"duration {h.duration_s * 1e6:.4g} us"
+                f"duration {h.duration_s * 1e6:.4g} us{held}"
             ),
             (
                 f"region: ball of {self._rule()} = {self.radius_m * mm:.4g} mm: {self.nodes} "
-                f"nodes, {self.dof} DOF with {self.modes} modes"
+                f"nodes, {self.dof} DOF with {self.modes} modes ({self._modes_line()})"
             ),
             self.cost.line(),
         ]
@@ -176,6 +207,15 @@ class RegionEstimate:
                 "mesh about the contact), or kind 'full'"
             )
         return lines
+
+    def _modes_line(self) -> str:
+        if self.modes_from != "criterion":
+            return self.modes_from
+        cap = ", capped" if self.modes_capped else ""
+        return (
+            f"the free-free modes below 3 / duration = {self.f_max_hz / 1e3:.4g} kHz{cap}: "
+            "studies/mode_estimate.py"
+        )
 
     def _rule(self) -> str:
         mm = 1e3
@@ -209,62 +249,11 @@ def _contact_of(sc: Scenario, body: str, contact: int | None) -> int:
     return contact
 
 
-def _held(sc: Scenario, body: str) -> bool:
-    """Whether ``body`` is on a joint to the ground that holds it (not a distance joint)."""
-    from flexmvm.constraints.joints import JointType
-
-    return any(
-        j.body == body and j.body2 is None and j.type is not JointType.DISTANCE for j in sc.joints
-    )
-
-
-def _mass(sc: Scenario, cfg) -> float:
-    """The body's mass [kg] (inf if held: module doc, step 5)."""
-    from flexmvm.scenarios.setup import default_setup
-
-    if _held(sc, cfg.name):
-        return math.inf
-    return float(default_setup().free_modes_source(cfg)[0].M_scalar.sum())
-
-
-def _point_velocity(cfg, x: np.ndarray) -> np.ndarray:
-    p = cfg.placement
-    return np.asarray(p.velocity_mps, float) + np.cross(
-        np.asarray(p.angular_velocity_radps, float), x - np.asarray(p.position_m, float)
-    )
-
-
 def _sides(c, body: str) -> tuple[str, str, str]:
     """(body's surface, partner body, partner's surface) of contact c, seen from ``body``."""
     if c.slave_body == body:
         return c.slave_surface, c.master_body, c.master_surface
     return c.master_surface, c.slave_body, c.slave_surface
-
-
-def _closing_speed(cfg, pcfg, point: np.ndarray, n: np.ndarray, where: str) -> float:
-    """Normal closing speed [m/s] of bodies cfg and pcfg at ``point`` (normal n out of cfg's
-    surface), from their placements; InputError when they do not close there."""
-    v = float((_point_velocity(cfg, point) - _point_velocity(pcfg, point)) @ n)
-    if not v > 0:
-        raise InputError(
-            f"{where} do not close at the expected contact point "
-            f"(normal relative speed {-v:.3g} m/s at their placements); give the closing "
-            "speed (speed_mps, --speed)"
-        )
-    return v
-
-
-def _hertz(sc: Scenario, cfg, pcfg, R: float, v: float, where: str) -> HertzImpact:
-    """The Hertz impact (module doc, step 5) of bodies cfg and pcfg at equivalent radius R [m]
-    and closing speed v [m/s]; InputError when both are held to the ground."""
-    m_body, m_partner = _mass(sc, cfg), _mass(sc, pcfg)
-    if math.isinf(m_body) and math.isinf(m_partner):
-        raise InputError(
-            f"{where} are both held to the ground; the Hertz impact needs a moving mass"
-        )
-    ma, mb = (m_partner, m_body) if math.isfinite(m_partner) else (m_body, m_partner)
-    mat, pmat = cfg.material_obj(), pcfg.material_obj()
-    return hertz_impact(R, v, effective_modulus(mat.E, mat.nu, pmat.E, pmat.nu), ma, mb)
 
 
 def _facet_sets(cfg, pcfg, surface: str, other_surface: str, where: str):
@@ -324,9 +313,11 @@ def estimate_region(
             a + h, h the size of the contact facets the contact circle touches (module doc).
         radius_m: the equivalent curvature radius R_e [m] of the two surfaces, instead of the
             fit (needed for flat-on-flat, line or conforming contacts).
-        speed_mps: the closing speed [m/s] instead of the placements' (needed when the
-            bodies start at rest, e.g. a drop under gravity or a driven joint).
-        modes: mode count of the costed model (default: the body's model's, else 30).
+        speed_mps: the closing speed [m/s] instead of the initial motions' (needed when the
+            bodies start at rest without a drive, e.g. a drop under gravity or a motor).
+        modes: mode count of the costed model (default: the body's model's if its kind uses
+            modes, else the free-free modes below 3 / contact duration:
+            studies/mode_estimate.py).
         contact: index of the contact in ``sc.contacts`` (default: the body's first).
 
     Raises:
@@ -353,13 +344,21 @@ def estimate_region(
     else:
         R, principal = radius_m, (radius_m, radius_m)
     v = speed_mps
+    who = f"{where}: {body} and {partner}"
     if v is None:
-        v = _closing_speed(cfg, pcfg, point, n, f"{where}: {body} and {partner}")
-    hertz = _hertz(sc, cfg, pcfg, R, v, f"{where}: {body} and {partner}")
+        v = closing_speed(sc, cfg, pcfg, fe.mesh, pfe.mesh, point, n, who)
+
+    def geometry(name: str) -> tuple[float, float]:
+        xs, inward, fset = (x, -n, fs) if name == body else (px, n, pfs)
+        h = body_thickness(xs, point, inward, facet_size(xs, fset, point, 0.0))
+        return h, lateral_extent(xs, n)
+
+    contact_at = (point, n, fe.mesh, pfe.mesh)
+    hertz, struck, t_m, Z = expected_impact(sc, cfg, pcfg, R, v, contact_at, geometry, who)
     centre = np.round(A.T @ (point - r), 12) + 0.0  # placement round-off, no -0
     a = hertz.contact_radius_m
     h, radius, n_nodes = _ball(fe.mesh.nodes, fs, centre, a, factor)
-    m = int(modes) if modes is not None else (cfg.model.modes or DEFAULT_MODES)
+    m, source, f_max, capped = estimated_modes(cfg, modes, hertz.duration_s)
     cost = reduced_cost(body, fe.mesh.n_nodes, 3 * n_nodes + m, fe.K.nnz)
     return RegionEstimate(
         body,
@@ -382,4 +381,10 @@ def estimate_region(
         m,
         3 * n_nodes + m,
         cost,
+        struck,
+        t_m,
+        Z,
+        source,
+        f_max,
+        capped,
     )

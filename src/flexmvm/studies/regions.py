@@ -131,7 +131,7 @@ def _centre(sc: Scenario, body: str, centre_m) -> tuple[float, float, float]:
     from flexmvm.studies.region import estimate_region
 
     # the expected contact point only: the closing speed and curvature are not needed
-    return estimate_region(sc, body, speed_mps=1.0, radius_m=1.0).centre_m
+    return estimate_region(sc, body, speed_mps=1.0, radius_m=1.0, modes=0).centre_m
 
 
 class RegionGrid:
