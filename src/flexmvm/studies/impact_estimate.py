@@ -78,13 +78,13 @@ def held(sc: Scenario, body: str) -> bool:
 def _pivot(cfg, j, mesh) -> np.ndarray:
     """Global position [m] at t = 0 of joint ``j``'s point on body ``cfg`` (its ``point_m``,
     its ``ground_m``, or the centroid of its node set)."""
-    from flexmvm.studies.region import _placed
+    from flexmvm.studies.region import placed_nodes
 
     if j.point_m is not None:
         return cfg.placement.to_global(j.point_m)
     if j.ground_m is not None:
         return np.asarray(j.ground_m, float)
-    return _placed(cfg, mesh.nodes[mesh.node_set(j.node_set)])[0].mean(axis=0)
+    return placed_nodes(cfg, mesh.nodes[mesh.node_set(j.node_set)])[0].mean(axis=0)
 
 
 def _drive_rate(j, t_end: float) -> float:
@@ -155,10 +155,10 @@ def _axis_inertia(cfg, pivot: np.ndarray, axis: np.ndarray) -> float:
     through ``pivot``: sum of its nodes' lumped masses (rows of M) x their squared distance
     from the axis."""
     from flexmvm.scenarios.setup import default_setup
-    from flexmvm.studies.region import _placed
+    from flexmvm.studies.region import placed_nodes
 
     fe = default_setup().free_modes_source(cfg)[0]
-    rel = _placed(cfg, fe.mesh.nodes)[0] - pivot
+    rel = placed_nodes(cfg, fe.mesh.nodes)[0] - pivot
     perp = rel - np.outer(rel @ axis, axis)
     m = np.asarray(fe.M_scalar.sum(axis=1)).ravel()
     return float(m @ np.einsum("ij,ij->i", perp, perp))

@@ -227,7 +227,7 @@ class RegionEstimate:
         )
 
 
-def _placed(cfg, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+def placed_nodes(cfg, nodes: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """(global node positions (n, 3), rotation A (3, 3), frame origin (3,)) at placement."""
     A = cfg.placement.rotation.matrix()
     r = np.asarray(cfg.placement.position_m, float)
@@ -295,6 +295,18 @@ def _checked_options(factor, radius_m, speed_mps, modes) -> tuple[float | None, 
     return radius_m, speed_mps
 
 
+def _floats(v) -> tuple:
+    return tuple(float(c) for c in v)
+
+
+def _curvature(radius_m, xs, xp, point, n, label) -> tuple[float, tuple[float, float]]:
+    """(R_e, principal radii): the fit of the two surfaces (equivalent_radius), or radius_m
+    when given."""
+    if radius_m is None:
+        return equivalent_radius(xs, xp, point, n, label)
+    return radius_m, (radius_m, radius_m)
+
+
 def estimate_region(
     sc: Scenario,
     body: str,
@@ -330,19 +342,11 @@ def estimate_region(
     surface, partner, other_surface = _sides(sc.contacts[k], body)
     cfg, pcfg = sc.body(body), sc.body(partner)
     fe, fs, pfe, pfs = _facet_sets(cfg, pcfg, surface, other_surface, where)
-    x, A, r = _placed(cfg, fe.mesh.nodes)
-    px = _placed(pcfg, pfe.mesh.nodes)[0]
+    x, A, r = placed_nodes(cfg, fe.mesh.nodes)
+    px = placed_nodes(pcfg, pfe.mesh.nodes)[0]
     point, n = first_contact(x, fs, px, pfs)
-    if radius_m is None:
-        R, principal = equivalent_radius(
-            x[fs.nodes],
-            px[pfs.nodes],
-            point,
-            n,
-            f"{where}: {body}.{surface} and {partner}.{other_surface}",
-        )
-    else:
-        R, principal = radius_m, (radius_m, radius_m)
+    label = f"{where}: {body}.{surface} and {partner}.{other_surface}"
+    R, principal = _curvature(radius_m, x[fs.nodes], px[pfs.nodes], point, n, label)
     v = speed_mps
     who = f"{where}: {body} and {partner}"
     if v is None:
@@ -360,31 +364,7 @@ def estimate_region(
     h, radius, n_nodes = _ball(fe.mesh.nodes, fs, centre, a, factor)
     m, source, f_max, capped = estimated_modes(cfg, modes, hertz.duration_s)
     cost = reduced_cost(body, fe.mesh.n_nodes, 3 * n_nodes + m, fe.K.nnz)
-    return RegionEstimate(
-        body,
-        k,
-        partner,
-        surface,
-        tuple(float(c) for c in centre),
-        tuple(float(c) for c in point),
-        tuple(float(c) for c in n),
-        v,
-        speed_mps is not None,
-        R,
-        tuple(float(r) for r in principal),
-        radius_m is not None,
-        hertz,
-        None if factor is None else float(factor),
-        h,
-        radius,
-        n_nodes,
-        m,
-        3 * n_nodes + m,
-        cost,
-        struck,
-        t_m,
-        Z,
-        source,
-        f_max,
-        capped,
-    )
+    at = (body, k, partner, surface, _floats(centre), _floats(point), _floats(n))
+    impact = (v, speed_mps is not None, R, _floats(principal), radius_m is not None, hertz)
+    size = (None if factor is None else float(factor), h, radius, n_nodes, m, 3 * n_nodes + m)
+    return RegionEstimate(*at, *impact, *size, cost, struck, t_m, Z, source, f_max, capped)
