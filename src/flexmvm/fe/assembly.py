@@ -15,7 +15,7 @@ scikit-fem's own ``asm(linear_elasticity)`` to round-off.
 DOF mapping (by topology, never by physical coordinates): the local DOFs of a skfem element
 (vertices, then one DOF per edge in ``refdom.edges`` order, per facet in ``refdom.facets``
 order, per interior) sit at reference-element points given by ``element.doflocs``; meshio /
-VTK local nodes sit at the reference points in ``_VTK_REF`` below. Matching these exact
+VTK local nodes sit at their cell type's ``reference_nodes`` (mesh/cells). Matching these exact
 reference points (values in {0, 1/2, 1}) gives a fixed local permutation per cell type.
 The skfem connectivity ``t`` is built from our corner nodes in that order; skfem keeps ``t``
 as given (``sort_t=False``, checked), so skfem's edge/facet/interior DOF of element e is our
@@ -37,55 +37,6 @@ from skfem.quadrature import get_quadrature, get_quadrature_line, get_quadrature
 from flexmvm.errors import MeshError
 from flexmvm.materials import Material
 from flexmvm.mesh.mesh import CellBlock, CellType, Mesh
-
-_HEX_CORNERS = [
-    [0, 0, 0],
-    [1, 0, 0],
-    [1, 1, 0],
-    [0, 1, 0],
-    [0, 0, 1],
-    [1, 0, 1],
-    [1, 1, 1],
-    [0, 1, 1],
-]
-_HEX27_REST = [
-    [0.5, 0, 0],
-    [1, 0.5, 0],
-    [0.5, 1, 0],
-    [0, 0.5, 0],
-    [0.5, 0, 1],
-    [1, 0.5, 1],
-    [0.5, 1, 1],
-    [0, 0.5, 1],
-    [0, 0, 0.5],
-    [1, 0, 0.5],
-    [1, 1, 0.5],
-    [0, 1, 0.5],
-    [0, 0.5, 0.5],
-    [1, 0.5, 0.5],
-    [0.5, 0, 0.5],
-    [0.5, 1, 0.5],
-    [0.5, 0.5, 0],
-    [0.5, 0.5, 1],
-    [0.5, 0.5, 0.5],
-]
-_TET_CORNERS = [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]]
-
-#: Reference coordinates of the meshio/VTK local nodes of each cell type (VTK cell
-#: implementation; meshio 'hexahedron27' faces: x=0, x=1, y=0, y=1, z=0, z=1, then centre).
-_VTK_REF: dict[CellType, np.ndarray] = {
-    CellType.HEX8: np.array(_HEX_CORNERS, dtype=float),
-    CellType.HEX27: np.array(_HEX_CORNERS + _HEX27_REST, dtype=float),
-    CellType.WEDGE6: np.array(
-        [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [0, 1, 1]], dtype=float
-    ),
-    CellType.TET4: np.array(_TET_CORNERS, dtype=float),
-    CellType.TET10: np.array(
-        _TET_CORNERS
-        + [[0.5, 0, 0], [0.5, 0.5, 0], [0, 0.5, 0], [0, 0, 0.5], [0.5, 0, 0.5], [0, 0.5, 0.5]],
-        dtype=float,
-    ),
-}
 
 
 @dataclass(frozen=True)
@@ -121,6 +72,7 @@ class _SkfemCell:
 #: Cells per chunk of element matrices (a HEX27 stiffness is 81 x 81 doubles = 52 kB).
 ELEMENT_CHUNK = 1024
 
+#: The fe stage's part of each cell type (its mesh/cells spec holds the rest), keyed by CellType.
 _SKFEM: dict[CellType, _SkfemCell] = {
     CellType.HEX8: _SkfemCell(skfem.MeshHex1, skfem.MeshHex1, skfem.ElementHex1, 3),
     CellType.HEX27: _SkfemCell(skfem.MeshHex1, skfem.MeshHex2, skfem.ElementHex2, 5),
@@ -161,7 +113,7 @@ def local_permutation(cell_type: CellType) -> np.ndarray:
     """
     elem = _SKFEM[cell_type].element()
     skl = np.asarray(elem.doflocs, dtype=float)
-    vtk = _VTK_REF[cell_type]
+    vtk = cell_type.spec.reference_nodes
     dist = np.abs(skl[:, None, :] - vtk[None, :, :]).sum(axis=2)
     perm = np.argmin(dist, axis=1)
     if (

@@ -49,23 +49,19 @@ import meshio
 import numpy as np
 
 from flexmvm.errors import MeshError
+from flexmvm.mesh.cells import CELLS, hex8
 from flexmvm.mesh.groups import skin_rows, skin_within
 
-#: Corner nodes (0-based) of the faces S1, S2, ... of each meshio volume type (module docstring).
-FACES: dict[str, tuple[tuple[int, ...], ...]] = {
-    "tetra": ((0, 1, 2), (0, 3, 1), (1, 3, 2), (2, 3, 0)),
-    "hexahedron": (
-        (0, 1, 2, 3),
-        (4, 7, 6, 5),
-        (0, 4, 5, 1),
-        (1, 5, 6, 2),
-        (2, 6, 7, 3),
-        (3, 7, 4, 0),
-    ),
-    "wedge": ((0, 1, 2), (3, 5, 4), (0, 3, 4, 1), (1, 4, 5, 2), (2, 5, 3, 0)),
-}
-FACES["tetra10"] = FACES["tetra"]
-FACES["hexahedron20"] = FACES["hexahedron"]
+#: Abaqus types read as no flexmvm cell type, by meshio name: their faces S1, S2, ... (C3D20:
+#: the corners of C3D8's; read_mesh refuses the volume type, a surface on it is read)
+_OTHER_FACES = {"hexahedron20": hex8.ABAQUS_FACES}
+
+
+def _faces() -> dict[str, tuple[tuple[int, ...], ...]]:
+    """Corner nodes (0-based) of the faces S1, S2, ... of each meshio volume type (module
+    docstring): each cell type's ``abaqus_faces`` (mesh/cells), then _OTHER_FACES."""
+    table = {s.name: s.abaqus_faces for s in CELLS.values() if s.abaqus_faces}
+    return table | _OTHER_FACES
 
 
 @dataclass(frozen=True)
@@ -381,11 +377,11 @@ def _face_corners(
         sel = faces[(faces[:, 0] >= start[k]) & (faces[:, 0] < start[k + 1])]
         if not len(sel):
             continue
-        table = FACES.get(block.type)
+        table = _faces().get(block.type)
         if table is None:
             raise MeshError(
                 f"{where}: *SURFACE {name!r} lies on {block.type} elements; expected faces of "
-                f"volume elements ({', '.join(FACES)})"
+                f"volume elements ({', '.join(_faces())})"
             )
         if np.any(sel[:, 1] >= len(table)):
             raise MeshError(
@@ -427,4 +423,4 @@ def surface_rows(
     return out
 
 
-__all__ = ["FACES", "InpSets", "geometry_text", "read_cards", "read_inp_sets", "surface_rows"]
+__all__ = ["InpSets", "geometry_text", "read_cards", "read_inp_sets", "surface_rows"]

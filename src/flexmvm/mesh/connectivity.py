@@ -30,23 +30,13 @@ from scipy.spatial import cKDTree
 from flexmvm.errors import MeshError
 from flexmvm.mesh.groups import FILE_NUMBERING
 from flexmvm.mesh.integrity import check_faces
-from flexmvm.mesh.mesh import CellBlock, CellType, Mesh
+from flexmvm.mesh.mesh import CellBlock, Mesh
 from flexmvm.mesh.quality import check_quality
 
 #: Nodes (or a facet centroid and a facet) closer than this fraction of the local smallest
 #: edge length are taken to coincide: far below any edge of a valid cell (a cell's own nodes
 #: are at least half its shortest edge apart), far above round-off of coordinates in a file.
 COINCIDENT_RELATIVE = 1e-6
-
-#: Corner edges of each volume type (node-local ids).
-EDGES: dict[CellType, list[tuple[int, int]]] = {
-    CellType.TET4: [(0, 1), (1, 2), (2, 0), (0, 3), (1, 3), (2, 3)],
-    CellType.HEX8: [(0, 1), (1, 2), (2, 3), (3, 0), (4, 5), (5, 6), (6, 7), (7, 4)]
-    + [(0, 4), (1, 5), (2, 6), (3, 7)],
-    CellType.WEDGE6: [(0, 1), (1, 2), (2, 0), (3, 4), (4, 5), (5, 3), (0, 3), (1, 4), (2, 5)],
-}
-EDGES[CellType.TET10] = EDGES[CellType.TET4]
-EDGES[CellType.HEX27] = EDGES[CellType.HEX8]
 
 
 @dataclass(frozen=True)
@@ -72,7 +62,7 @@ def node_sizes(nodes: np.ndarray, blocks: list[CellBlock]) -> np.ndarray:
         conn = block.connectivity
         if not len(conn):
             continue
-        a, b = np.array(EDGES[block.cell_type]).T
+        a, b = np.array(block.cell_type.spec.edges).T
         cell_h = np.linalg.norm(nodes[conn[:, a]] - nodes[conn[:, b]], axis=2).min(axis=1)
         np.minimum.at(h, conn, cell_h[:, None])
     return h

@@ -20,22 +20,6 @@ import numpy as np
 from flexmvm.errors import MeshError
 from flexmvm.mesh.mesh import CellBlock, CellType, FacetSet
 
-#: Corner faces of each volume type (node-local ids), oriented outward for a valid cell.
-FACES: dict[CellType, list[list[int]]] = {
-    CellType.TET4: [[0, 2, 1], [0, 1, 3], [1, 2, 3], [0, 3, 2]],
-    CellType.HEX8: [
-        [0, 3, 2, 1],
-        [4, 5, 6, 7],
-        [0, 1, 5, 4],
-        [1, 2, 6, 5],
-        [2, 3, 7, 6],
-        [0, 4, 7, 3],
-    ],
-    CellType.WEDGE6: [[0, 2, 1], [3, 4, 5], [0, 1, 4, 3], [1, 2, 5, 4], [0, 3, 5, 2]],
-}
-FACES[CellType.TET10] = FACES[CellType.TET4]
-FACES[CellType.HEX27] = FACES[CellType.HEX8]
-
 
 def face_table(
     nodes: np.ndarray, blocks: list[CellBlock]
@@ -51,7 +35,8 @@ def face_table(
     for block in blocks:
         conn = block.connectivity
         centroid = nodes[conn].mean(axis=1)
-        for face in FACES[block.cell_type]:
+        for face in block.cell_type.spec.faces:
+            face = list(face)
             f = np.full((len(conn), 4), -1, dtype=np.int64)
             f[:, : len(face)] = conn[:, face]
             faces.append(f)
@@ -137,4 +122,4 @@ def skin(boundary: np.ndarray) -> FacetSet:
     return FacetSet(quads=boundary[quad], tris=boundary[~quad, :3])
 
 
-__all__ = ["FACES", "check_faces", "duplicate_cells", "face_table", "skin"]
+__all__ = ["check_faces", "duplicate_cells", "face_table", "skin"]

@@ -9,28 +9,12 @@ from __future__ import annotations
 
 from collections.abc import Mapping
 from dataclasses import dataclass, field
-from enum import Enum
 from types import MappingProxyType
 
 import numpy as np
 
 from flexmvm.errors import MeshError
-
-
-class CellType(Enum):
-    """Volume cell types, named as meshio names them."""
-
-    HEX8 = "hexahedron"
-    WEDGE6 = "wedge"
-    TET4 = "tetra"
-    TET10 = "tetra10"
-    HEX27 = "hexahedron27"
-
-    @property
-    def n_nodes(self) -> int:
-        return {"hexahedron": 8, "wedge": 6, "tetra": 4, "tetra10": 10, "hexahedron27": 27}[
-            self.value
-        ]
+from flexmvm.mesh.cells import CellType
 
 
 @dataclass(frozen=True)

@@ -22,8 +22,6 @@ INSIDE_TOL = 1e-6
 #: Tets tried, nearest centroids first
 CANDIDATES = 32
 
-_TET10_EDGES = ((0, 1), (1, 2), (0, 2), (0, 3), (1, 3), (2, 3))
-
 
 def _barycentric(corners: np.ndarray, p: np.ndarray) -> np.ndarray:
     """(k, 4) barycentric coordinates of p in the k tets with corners (k, 4, 3)."""
@@ -39,10 +37,11 @@ def _barycentric(corners: np.ndarray, p: np.ndarray) -> np.ndarray:
 
 def _shape(cell_type: CellType, lam: np.ndarray) -> np.ndarray:
     """Shape function values at barycentric coordinates lam (4,), in the cell's node order."""
-    if cell_type is CellType.TET4:
+    mids = cell_type.spec.edge_nodes  # (corner, corner, mid-side node), in node order
+    if not mids:
         return lam.copy()
     corner = lam * (2.0 * lam - 1.0)
-    edge = [4.0 * lam[i] * lam[j] for i, j in _TET10_EDGES]
+    edge = [4.0 * lam[i] * lam[j] for i, j, _ in mids]
     return np.concatenate([corner, edge])
 
 
@@ -52,7 +51,7 @@ def tet_weights(mesh: Mesh, point) -> tuple[np.ndarray, np.ndarray] | None:
     p = np.asarray(point, dtype=float)
     best = None
     for block in mesh.cells:
-        if block.cell_type not in (CellType.TET4, CellType.TET10):
+        if block.cell_type.spec.n_corners != 4:  # not a tetrahedron
             continue
         conn = block.connectivity
         corners = mesh.nodes[conn[:, :4]]

@@ -23,39 +23,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from flexmvm.mesh.mesh import CellBlock, CellType, FacetSet
-
-#: Mid-edge nodes of the quadratic volume types: (corner, corner, mid-side node), local ids in
-#: meshio/VTK order (tetra10 nodes 4..9; hexahedron27 nodes 8..19, mesh/quality.HEX27_IJK).
-EDGE_NODES: dict[CellType, tuple[tuple[int, int, int], ...]] = {
-    CellType.TET10: ((0, 1, 4), (1, 2, 5), (2, 0, 6), (0, 3, 7), (1, 3, 8), (2, 3, 9)),
-    CellType.HEX27: (
-        (0, 1, 8),
-        (1, 2, 9),
-        (2, 3, 10),
-        (3, 0, 11),
-        (4, 5, 12),
-        (5, 6, 13),
-        (6, 7, 14),
-        (7, 4, 15),
-        (0, 4, 16),
-        (1, 5, 17),
-        (2, 6, 18),
-        (3, 7, 19),
-    ),
-}
-
-#: Face-centre nodes of hexahedron27: (the face's four corners, centre node), VTK order.
-FACE_NODES: dict[CellType, tuple[tuple[tuple[int, int, int, int], int], ...]] = {
-    CellType.HEX27: (
-        ((0, 3, 7, 4), 20),
-        ((1, 2, 6, 5), 21),
-        ((0, 1, 5, 4), 22),
-        ((3, 2, 6, 7), 23),
-        ((0, 1, 2, 3), 24),
-        ((4, 5, 6, 7), 25),
-    ),
-}
+from flexmvm.mesh.mesh import CellBlock, FacetSet
 
 
 class _Lookup:
@@ -82,10 +50,10 @@ class QuadraticFaces:
         edges, mids, faces, centres = [], [], [], []
         for block in blocks:
             conn = block.connectivity
-            for a, b, m in EDGE_NODES.get(block.cell_type, ()):
+            for a, b, m in block.cell_type.spec.edge_nodes:
                 edges.append(conn[:, [a, b]])
                 mids.append(conn[:, m])
-            for corners, c in FACE_NODES.get(block.cell_type, ()):
+            for corners, c in block.cell_type.spec.face_nodes:
                 faces.append(conn[:, list(corners)])
                 centres.append(conn[:, c])
         self.quadratic = bool(edges)
@@ -137,4 +105,4 @@ class QuadraticFaces:
         return FacetSet(quads=out_q, tris=out_t)
 
 
-__all__ = ["EDGE_NODES", "FACE_NODES", "QuadraticFaces"]
+__all__ = ["QuadraticFaces"]

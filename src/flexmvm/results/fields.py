@@ -26,8 +26,9 @@ import scipy.sparse as sp
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.errors import InputError, MeshError
 from flexmvm.materials import Material
-from flexmvm.mesh.mesh import CellType, Mesh
-from flexmvm.mesh.quality import HEX27_IJK, shape_gradients
+from flexmvm.mesh.cells import CELLS
+from flexmvm.mesh.mesh import Mesh
+from flexmvm.mesh.quality import shape_gradients
 
 __all__ = [
     "NodalFields",
@@ -46,23 +47,6 @@ __all__ = [
 
 #: Cells per vectorised chunk in the stress evaluation (bounds memory to a few tens of MB).
 _CHUNK = 4096
-
-_TET_CORNERS = np.array([[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1]], dtype=float)
-#: meshio/VTK tetra10 mid-edge node order (nodes 4..9).
-_TET10_EDGES = np.array([[0, 1], [1, 2], [2, 0], [0, 3], [1, 3], [2, 3]])
-_WEDGE_CORNERS = np.array(
-    [[0, 0, 0], [1, 0, 0], [0, 1, 0], [0, 0, 1], [1, 0, 1], [0, 1, 1]], dtype=float
-)
-
-#: Parametric coordinates of each cell type's nodes, in meshio node order (same reference cells
-#: as mesh/quality.py: [0, 1]^3 hexahedra, unit simplex, triangle x [0, 1] wedge).
-_NODE_POINTS: dict[CellType, np.ndarray] = {
-    CellType.HEX8: HEX27_IJK[:8] / 2.0,
-    CellType.HEX27: HEX27_IJK / 2.0,
-    CellType.TET4: _TET_CORNERS,
-    CellType.TET10: np.vstack([_TET_CORNERS, _TET_CORNERS[_TET10_EDGES].mean(axis=1)]),
-    CellType.WEDGE6: _WEDGE_CORNERS,
-}
 
 
 def _frame(r: np.ndarray, A: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -185,15 +169,16 @@ class StressOperator:
         rows, cols = [], []
         offset = 0
         for block in mesh.cells:
-            if block.cell_type not in _NODE_POINTS:
+            if block.cell_type not in CELLS:
                 raise InputError(
                     f"von Mises: cell type {block.cell_type.value!r} is not supported; expected "
-                    f"one of {', '.join(ct.value for ct in _NODE_POINTS)}"
+                    f"one of {', '.join(ct.value for ct in CELLS)}"
                 )
             conn = np.asarray(block.connectivity)
             if len(conn) == 0:
                 continue
-            grads = shape_gradients(block.cell_type, _NODE_POINTS[block.cell_type])  # (p, k, 3)
+            # (p, k, 3) at the cell type's nodes
+            grads = shape_gradients(block.cell_type, CELLS[block.cell_type].reference_nodes)
             p, k = grads.shape[0], grads.shape[1]
             Gt = np.empty((len(conn), p * 3, k))
             for lo in range(0, len(conn), _CHUNK):

@@ -26,6 +26,7 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 
 from flexmvm.errors import InputError
+from flexmvm.mesh.cells import CELLS, spec_named
 from flexmvm.results.atomic import write_bytes_atomic
 
 __all__ = ["GRID_ZLIB_LEVEL", "ZLIB_LEVEL", "VtuSeries"]
@@ -34,10 +35,6 @@ ZLIB_LEVEL = 1
 GRID_ZLIB_LEVEL = 9  # the points and cells, compressed once for all the files of a series
 _BLOCK = 32768  # bytes per compressed block (VTK's and meshio's default)
 
-# VTK cell type ids (vtkCellType.h) of flexmvm's cell types, named as meshio names them
-_VTK_TYPE = {"tetra": 10, "hexahedron": 12, "wedge": 13, "tetra10": 24, "hexahedron27": 29}
-# meshio -> VTK node order where they differ (meshio._vtk_common.meshio_to_vtk_order)
-_VTK_ORDER = {"wedge": np.array([0, 2, 1, 3, 5, 4])}
 _NUMPY_TO_VTK = {
     np.dtype(np.float64): "Float64",
     np.dtype(np.float32): "Float32",
@@ -102,9 +99,11 @@ class VtuSeries:
         conn, offsets, types = [], [], []
         end = 0
         for name, c in cells:
-            if name not in _VTK_TYPE:
+            spec = spec_named(name)  # VTK cell id and node order: the cell type's (mesh/cells)
+            if spec is None:
                 raise InputError(
-                    f"VTU: unsupported cell type {name!r}; expected one of {sorted(_VTK_TYPE)}"
+                    f"VTU: unsupported cell type {name!r}; "
+                    f"expected one of {sorted(ct.value for ct in CELLS)}"
                 )
             c = np.asarray(c, dtype=np.int64)
             if c.ndim != 2:
@@ -115,12 +114,12 @@ class VtuSeries:
                 raise InputError(
                     f"VTU {name} connectivity: node index outside 0...{self.n_points - 1}"
                 )
-            if name in _VTK_ORDER:
-                c = c[:, _VTK_ORDER[name]]
+            if spec.vtk_order is not None:
+                c = c[:, list(spec.vtk_order)]
             conn.append(c.ravel())
             offsets.append(end + c.shape[1] * np.arange(1, len(c) + 1, dtype=np.int64))
             end += c.size
-            types.append(np.full(len(c), _VTK_TYPE[name], dtype=np.uint8))
+            types.append(np.full(len(c), spec.vtk_id, dtype=np.uint8))
         self.n_cells = sum(len(t) for t in types)
         cat = lambda xs, dt: np.concatenate(xs) if xs else np.zeros(0, dt)
         byte_order = "LittleEndian" if sys.byteorder == "little" else "BigEndian"
