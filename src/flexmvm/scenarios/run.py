@@ -12,7 +12,7 @@ from flexmvm.constraints.contact import ContactLaw
 from flexmvm.errors import SimulationFailed
 from flexmvm.integrate.driver import simulate
 from flexmvm.integrate.run_result import ProbeHistory, RunResult, StepHistory
-from flexmvm.reduction.truncation import truncation_warnings
+from flexmvm.reduction.truncation import truncation_report, truncation_warnings
 from flexmvm.scenarios import pendulum
 from flexmvm.scenarios.blowup import blowup_failure
 from flexmvm.scenarios.build import BuiltScenario, build_scenario
@@ -217,8 +217,8 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         # per guarded (MVM or interface) body: the share of its contact impulse carried on
         # surface nodes its basis holds stiff, when it first happened, a model covering them
         "reduced_contact_guard": contact_guard(res, built),
-        # per Craig-Bampton body: its cut modes' share of the patch's flexibility (truncation)
-        "modal_truncation_guard": {i.name: i.truncation for i in built.info if i.truncation},
+        # per Craig-Bampton body: the time of the inertia its cut modes miss, against contact's
+        "modal_truncation_guard": truncation_report(built, res.steps),
         **_friction_summary(res),
         # plastic bodies: peak alpha, plastic work, permanent indentation (plastic_summary)
         **plastic_summary(res, built),
