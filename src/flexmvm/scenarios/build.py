@@ -35,6 +35,7 @@ from flexmvm.mesh.point_location import tet_weights
 from flexmvm.mesh.rod import RodMesh
 from flexmvm.reduction.interface import Patch, contact_patch, patch_nodes
 from flexmvm.reduction.kinds import kind_spec
+from flexmvm.reduction.truncation import modal_residual
 from flexmvm.scenarios.body_reference import reference_label
 from flexmvm.scenarios.cache_keys import ContactMass, mesh_key
 from flexmvm.scenarios.cost import check_cost, reduced_cost
@@ -61,6 +62,9 @@ from flexmvm.scenarios.solver_choice import with_elimination_order
 from flexmvm.scenarios.stiffening_schema import stiffened
 from flexmvm.scenarios.supports import bedded_key, clamp_label, support_joints
 
+#: the kinds whose modes are fixed-interface (Craig-Bampton) modes: the truncation guard's
+TRUNCATION_GUARDED = (ModelKind.MVM, ModelKind("mvm-sparse"))
+
 DEFAULT_SEARCH_RADIUS_M = 2e-4  # broad-phase margin beyond the distance closed in one step
 
 
@@ -82,6 +86,8 @@ class BodyInfo:
     # expected contact point.
     covered_nodes: np.ndarray | None = None
     patch: Patch | None = None
+    # the truncation guard (reduction/truncation.py): a Craig-Bampton body's modal residual
+    truncation: dict | None = None
 
 
 @dataclass
@@ -150,9 +156,18 @@ def build_body(
     elif interface is not None:
         patch = contact_patch(mesh, interface.surface, interface.centre_m)
         covered = patch_nodes(mesh, interface.surface, patch, max(interface.radii_m, default=0.0))
+    truncation = _truncation(setup, args, fe_key) if kind in TRUNCATION_GUARDED else None
     return body, BodyInfo(
-        cfg.name, kind, mesh, material, body.nv, n_ret, modes, rod, covered, patch
+        cfg.name, kind, mesh, material, body.nv, n_ret, modes, rod, covered, patch, truncation
     )
+
+
+def _truncation(setup: SetupCache, args: tuple, fe_key) -> dict | None:
+    """The truncation guard (reduction/truncation.modal_residual) of the Craig-Bampton basis
+    setup.basis(*args) on the FE model of ``fe_key``; None without retained nodes."""
+    if not args[3]:
+        return None
+    return modal_residual(setup.fe_model(fe_key, args[1]), setup.basis(*args))
 
 
 def _kind_body(spec, cfg, setup: SetupCache, mesh: Mesh, args: tuple, fe_key) -> FlexibleBody:

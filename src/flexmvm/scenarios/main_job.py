@@ -38,6 +38,7 @@ from flexmvm.errors import (
     notes_as_lines,
 )
 from flexmvm.processes import die_with_parent
+from flexmvm.reduction.truncation import truncation_warnings
 from flexmvm.results.outdir import staged_dir
 from flexmvm.results.output import write_run, write_summary, writing
 from flexmvm.scenarios import pendulum
@@ -194,6 +195,8 @@ def run_main_job(
     for line in guard_warnings(summary.get("reduced_contact_guard") or {}):
         echo(f"warning: {line}")
     for line in plastic_guard_warnings(summary):  # a reduced plastic body's zone left its region
+        echo(f"warning: {line}")
+    for line in truncation_warnings(summary.get("modal_truncation_guard") or {}):
         echo(f"warning: {line}")
     line = energy_gain_warning(summary)
     if line is not None:

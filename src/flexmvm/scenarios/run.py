@@ -11,6 +11,7 @@ import numpy as np
 from flexmvm.errors import SimulationFailed
 from flexmvm.integrate.driver import simulate
 from flexmvm.integrate.run_result import ProbeHistory, RunResult, StepHistory
+from flexmvm.reduction.truncation import truncation_report, truncation_warnings
 from flexmvm.scenarios import pendulum
 from flexmvm.scenarios.blowup import blowup_failure
 from flexmvm.scenarios.build import BuiltScenario, build_scenario
@@ -119,6 +120,8 @@ def run_scenario(
             warnings.warn(line, ReducedBasisWarning, stacklevel=2)
         for line in plastic_guard_warnings(summary):  # a reduced plastic body's zone
             warnings.warn(line, ReducedBasisWarning, stacklevel=2)
+        for line in truncation_warnings(summary.get("modal_truncation_guard") or {}):
+            warnings.warn(line, ReducedBasisWarning, stacklevel=2)
         line = energy_gain_warning(summary)
         if line is not None:
             warnings.warn(line, EnergyGainWarning, stacklevel=2)
@@ -213,6 +216,8 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         # per guarded (MVM or interface) body: the share of its contact impulse carried on
         # surface nodes its basis holds stiff, when it first happened, a model covering them
         "reduced_contact_guard": contact_guard(res, built),
+        # per Craig-Bampton body: the time of the inertia its cut modes miss, against contact's
+        "modal_truncation_guard": truncation_report(built, res.steps),
         **_friction_summary(res),
         # plastic bodies: peak alpha, plastic work, permanent indentation (plastic_summary)
         **plastic_summary(res, built),
