@@ -27,7 +27,8 @@ from pathlib import Path
 SCENARIO = Path(__file__).parents[1] / "scenarios" / "sphere_block.toml"
 
 
-def _cpu() -> str:
+def cpu_name() -> str:
+    """The machine's CPU model (lscpu), for the first line of a benchmark's output."""
     out = subprocess.run(["lscpu"], capture_output=True, text=True, check=False).stdout
     for line in out.splitlines():
         if line.startswith("Model name:"):
@@ -35,7 +36,8 @@ def _cpu() -> str:
     return "unknown CPU"
 
 
-def _commit() -> str:
+def commit_hash() -> str:
+    """The checkout's short commit hash."""
     out = subprocess.run(
         ["git", "rev-parse", "--short", "HEAD"], capture_output=True, text=True, check=False
     )
@@ -124,7 +126,9 @@ def main() -> None:
     ap.add_argument("--t-end", type=float, default=1e-4)
     ap.add_argument("--skip-dense-above-mm", type=float, default=1.5)
     args = ap.parse_args()
-    print(f"CPU: {_cpu()}; commit {_commit()}; {os.cpu_count()} cores; load {os.getloadavg()}")
+    print(
+        f"CPU: {cpu_name()}; commit {commit_hash()}; {os.cpu_count()} cores; load {os.getloadavg()}"
+    )
     full = _run("full", 0.0, 0, args.t_end)
     print(_line(full, None), flush=True)
     for r_mm in (float(x) for x in args.radii_mm.split(",")):

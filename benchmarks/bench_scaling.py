@@ -30,6 +30,8 @@ import tempfile
 import time
 from pathlib import Path
 
+from bench_ring_body import commit_hash, cpu_name  # the same machine line
+
 SCENARIO = """name = "plate_scaling"
 description = "rigid ball R 5 mm at 1 m/s onto a clamped 100 x 100 x 4 mm plate"
 gravity_mps2 = [0.0, 0.0, 0.0]
@@ -69,20 +71,6 @@ law = "position"
 """
 
 STREAM_BYTES_PER_S = 10e9  # a core's memory stream, order of magnitude (the step's floor)
-
-
-def _cpu() -> str:
-    out = subprocess.run(["lscpu"], capture_output=True, text=True, check=False).stdout
-    for line in out.splitlines():
-        if line.startswith("Model name:"):
-            return line.split(":", 1)[1].strip()
-    return "unknown CPU"
-
-
-def _commit() -> str:
-    cmd = ["git", "rev-parse", "--short", "HEAD"]
-    out = subprocess.run(cmd, capture_output=True, text=True, check=False)
-    return out.stdout.strip() or "unknown"
 
 
 def meshes(work: Path, far_mm: float) -> tuple[Path, Path]:
@@ -198,7 +186,9 @@ def main() -> None:
     args = ap.parse_args()
     work = Path(args.work or tempfile.mkdtemp(prefix="flexmvm-scaling-"))
     work.mkdir(parents=True, exist_ok=True)
-    print(f"CPU: {_cpu()}; commit {_commit()}; {os.cpu_count()} cores; load {os.getloadavg()}")
+    print(
+        f"CPU: {cpu_name()}; commit {commit_hash()}; {os.cpu_count()} cores; load {os.getloadavg()}"
+    )
     fars = [float(x) for x in args.far_mm.split(",")]
     radii = [float(x) * 1e-3 for x in args.radii_mm.split(",")]
     print("body size (full FE against mvm-sparse, first radius):", flush=True)

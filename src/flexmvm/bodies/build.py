@@ -61,12 +61,20 @@ def body_parts(fe, basis) -> BodyParts:
 
 
 def body_from_parts(
-    name: str, mesh, basis, parts: BodyParts, *, damping: Damping | None = None
+    name: str,
+    mesh,
+    basis,
+    parts: BodyParts,
+    *,
+    damping: Damping | None = None,
+    body_type: type[FlexibleBody] = FlexibleBody,
+    **fields,
 ) -> FlexibleBody:
     """The body of mesh (nodes X (n, 3) [m]) and basis psi (3n, nq) with precomputed parts.
 
     damping: Rayleigh (C = alpha M_qq + beta k_hat) or modal ratios (bodies.damping; off by
-    default).
+    default). body_type: a FlexibleBody subclass to make (e.g. bodies.ring_body.RingBody),
+    given its further ``fields``.
     """
     psi = sp.csr_matrix(basis.psi) if sp.issparse(basis.psi) else basis.psi
     if psi.shape != (3 * mesh.n_nodes, parts.inv.nq):
@@ -75,7 +83,7 @@ def body_from_parts(
             f"({3 * mesh.n_nodes}, {parts.inv.nq})"
         )
     c_hat = reduced_damping(damping, parts.inv.M_qq, parts.k_hat, basis, name)
-    return FlexibleBody(
+    return body_type(
         name,
         np.asarray(mesh.nodes, float),
         psi,
@@ -84,6 +92,7 @@ def body_from_parts(
         mesh,
         c_hat,
         getattr(basis.kind, "value", ""),
+        **fields,
     )
 
 

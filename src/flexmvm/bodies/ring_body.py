@@ -27,9 +27,9 @@ import numpy as np
 import scipy.sparse as sp
 
 from flexmvm.bodies.body import PACKED_MIN_NQ, FlexibleBody
-from flexmvm.bodies.build import BodyParts
+from flexmvm.bodies.build import BodyParts, body_from_parts
 from flexmvm.bodies.contraction import G2Contraction
-from flexmvm.bodies.damping import Damping, reduced_damping
+from flexmvm.bodies.damping import Damping
 from flexmvm.bodies.invariants import InertiaInvariants
 from flexmvm.fe.assembly import FEModel
 from flexmvm.reduction.kinds import KINDS, ModelKind
@@ -195,23 +195,9 @@ def ring_body_from_parts(
 ) -> RingBody:
     """The RingBody of mesh (nodes X (n, 3) [m]) and ring basis psi (3n, nq) csr with its
     parts (ring_parts) and corner coordinates; damping as bodies.build.body_from_parts."""
-    psi = sp.csr_matrix(basis.psi)
-    if psi.shape != (3 * mesh.n_nodes, parts.inv.nq):
-        raise ValueError(
-            f"body {name}: basis {psi.shape} does not match its parts "
-            f"({3 * mesh.n_nodes}, {parts.inv.nq})"
-        )
-    c_hat = reduced_damping(damping, parts.inv.M_qq, parts.k_hat, basis, name)
-    return RingBody(
-        name,
-        np.asarray(mesh.nodes, float),
-        psi,
-        parts.inv,
-        parts.k_hat,
-        mesh,
-        c_hat,
-        "mvm-sparse",
-        corner=np.asarray(corner, dtype=np.int64),
+    corner = np.asarray(corner, dtype=np.int64)
+    return body_from_parts(
+        name, mesh, basis, parts, damping=damping, body_type=RingBody, corner=corner
     )
 
 

@@ -32,6 +32,7 @@ from threadpoolctl import threadpool_limits
 from flexmvm.fe.assembly import FEModel
 from flexmvm.fe.modes import solver_pool, spd_solver
 from flexmvm.reduction.kinds.mvm import (
+    CraigBampton,
     fixed_interface_modes,
     massless_mask,
     massless_patterns,
@@ -39,18 +40,19 @@ from flexmvm.reduction.kinds.mvm import (
     static_columns,
 )
 from flexmvm.reduction.kinds.registry import ModelKind
-from flexmvm.reduction.kinds.spec import Basis, BasisRequest, MasslessStatics, NodesAndModes
+from flexmvm.reduction.kinds.spec import Basis, BasisRequest, MasslessStatics
 from flexmvm.reduction.reference import ReferenceCondition
 
 
 @dataclass(frozen=True)
-class RingCraigBampton(NodesAndModes):
-    """Columns as kind mvm (the retained nodes' x, y, z, the massless nodes' static columns,
-    the modes), psi csr. Its body: bodies/ring_body.py attaches the builder (body_builder) when
-    the bodies stage is imported; without it the generic sparse path would build a correct,
-    slower body."""
+class RingCraigBampton(CraigBampton):
+    """Kind mvm's columns and answers (n_static), psi csr; no leading-columns cut (its parts
+    are not the dense ones leading_columns cuts). Its body: bodies/ring_body.py attaches the
+    builder (body_builder) when the bodies stage is imported; without it the generic sparse
+    path would build a correct, slower body."""
 
     name: str = "mvm-sparse"
+    cuts_modes: bool = False
 
     def build_basis(self, request: BasisRequest) -> Basis:
         return ring_basis(
@@ -60,9 +62,6 @@ class RingCraigBampton(NodesAndModes):
             request.n_modes,
             MasslessStatics(request.massless_statics),
         )
-
-    def n_static(self, basis: Basis) -> int:
-        return basis.nq - 3 * basis.retained_nodes.size - basis.n_modes
 
     def cost_columns(self, n_retained: int, n_modes: int) -> int | None:
         # not costed by the dense estimate (scenarios/cost.py: 8 nq^2 + 3 n nq numbers): its
