@@ -1,0 +1,121 @@
+"""The moving load on a simply supported beam (issue 53, item 3, first check): Fryba's
+moving-force series (flexmvm.theory.moving_load) against its static limit and its closed form
+at the critical speed, the HEX27 beam's node sets (flexmvm.mesh.box27), and the shipped
+scenario (scenarios/moving_load.toml: a rigid slider pressed by 2 N, driven at 60 m/s = 0.65
+c_cr along an aluminium beam 1000 x 20 x 20 mm, full FE) against the series.
+
+The fine check (a finer mesh, a slow speed, step and mesh convergence, what separates the 3D
+beam from Euler-Bernoulli) is benchmarks/moving_load_check.py; its output is in
+docs/notes/2026-11-29-moving-load.md.
+"""
+
+from __future__ import annotations
+
+import math
+import tomllib
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+import flexmvm as fm
+from flexmvm.errors import InputError
+from flexmvm.mesh.box27 import hex27_box_beam
+from flexmvm.metrics.ncc import ncc
+from flexmvm.theory.moving_load import MovingForce, static_deflection
+
+SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
+E, RHO, B = 70.0e9, 2700.0, 0.02  # the scenario's beam: aluminium, 20 x 20 mm
+EI, MU = E * B**4 / 12.0, RHO * B * B
+
+
+def test_static_limit_is_the_static_deflection_under_the_load():
+    """c = 1e-4 c_cr: the deflection under the force, at five positions a = c t, against
+    P a b (L^2 - a^2 - b^2) / (6 E I L) to 3e-4 (measured 1.5e-4 at 200 modes: the free
+    vibration the entry leaves is of order alpha = 1e-4 of the static deflection)."""
+    ccr = MovingForce(1.0, EI, MU, 2.0, 1.0).critical_speed_mps
+    m = MovingForce(1.0, EI, MU, 2.0, 1e-4 * ccr)
+    t = m.crossing_time_s * np.array([0.1, 0.3, 0.5, 0.7, 0.9])
+    a = m.speed_mps * t
+    w = np.array([m.deflection(x, [s], n_modes=200)[0] for x, s in zip(a, t, strict=True)])
+    np.testing.assert_allclose(w, static_deflection(a, a, 1.0, 2.0, EI), rtol=3e-4)
+    assert static_deflection(0.5, 0.5, 1.0, 2.0, EI) == pytest.approx(m.midspan_static_m)
+
+
+def test_critical_speed_midspan_is_48_over_pi_cubed():
+    """alpha = 1: the mid-span deflection when the force leaves the span is 48 / pi^3 =
+    1.5481 of P L^3 / (48 E I) (module doc: mode 1 at resonance, every other mode zero there;
+    Fryba 1999, sec. 1.3, the critical speed); to 1e-6 (the series' round-off; measured 1e-9),
+    and 1e-7 above c_cr the same to 1e-6 (the resonant limit is continuous)."""
+    for factor in (1.0, 1.0 + 1e-7):
+        m = MovingForce(1.0, EI, MU, 2.0, 1.0)
+        m = MovingForce(1.0, EI, MU, 2.0, factor * m.critical_speed_mps)
+        w = m.deflection(0.5, [m.crossing_time_s])[0] / m.midspan_static_m
+        assert w == pytest.approx(48.0 / math.pi**3, rel=1e-6)
+
+
+def test_shear_adds_the_timoshenko_static_deflection():
+    """With shear (kappa G A given) the slow mid-span deflection is w0 + P L / (4 kappa G A)
+    to 1e-4 (the sine series of the shear term converges as 1/j^2: 400 modes), and its first
+    frequency lies below Euler-Bernoulli's by the Timoshenko beam's ~ (1 + E/(kappa G)) (pi
+    r / L)^2 / 2 (r the radius of gyration: 3.6e-4 here) to 10 %."""
+    G, kappa = E / 2.66, 10.0 * 1.33 / (12.0 + 11.0 * 0.33)
+    kw = {"kappa_G_pa": kappa * G, "area_m2": B * B, "rho_I_kg_m": RHO * B**4 / 12.0}
+    m = MovingForce(1.0, EI, MU, 2.0, 1e-5, **kw)
+    w = m.deflection(0.5, [0.5 * m.crossing_time_s], n_modes=400)[0]
+    shear = 2.0 * 1.0 / (4.0 * kappa * G * B * B)
+    assert w == pytest.approx(m.midspan_static_m + shear, rel=1e-4)
+    eb = MovingForce(1.0, EI, MU, 2.0, 1e-5).modes(1)[2][0]
+    drop = 1.0 - m.modes(1)[2][0] / eb
+    expected = 0.5 * (1.0 + E / (kappa * G)) * (math.pi * B / math.sqrt(12.0)) ** 2
+    assert drop == pytest.approx(expected, rel=0.1)
+
+
+def test_moving_force_input_errors():
+    """A non-positive speed, or shear half given: one InputError line."""
+    with pytest.raises(InputError, match="speed_mps: expected a finite number > 0"):
+        MovingForce(1.0, EI, MU, 2.0, 0.0)
+    with pytest.raises(InputError, match="give both kappa_G_pa and area_m2"):
+        MovingForce(1.0, EI, MU, 2.0, 1.0, kappa_G_pa=1e9)
+
+
+def test_box_beam_sets():
+    """The HEX27 beam's node sets where the supports and the probe need them; an odd cell
+    count along x (no mid-span node) is refused in one line."""
+    m = hex27_box_beam(1.0, 0.02, 0.02, (4, 1, 1))
+    x = m.nodes
+    assert np.allclose(x[m.node_set("mid_axis")], [[0.5, 0.0, -0.01]])
+    assert np.allclose(x[m.node_set("end_a_axis")][:, [0, 2]], [0.0, -0.01])
+    assert len(m.node_set("end_b")) == 9 and np.allclose(x[m.node_set("end_b"), 0], 1.0)
+    assert np.allclose(x[m.node_set("top"), 2], 0.0)
+    with pytest.raises(InputError, match="even count along x"):
+        hex27_box_beam(1.0, 0.02, 0.02, (3, 1, 1))
+
+
+def _scenario(**time) -> fm.Scenario:
+    with open(SCENARIOS / "moving_load.toml", "rb") as f:
+        d = tomllib.load(f)
+    for b in d["bodies"]:
+        b["mesh_file"] = str(SCENARIOS / b["mesh_file"])
+    d["time"].update(time)
+    return fm.scenario_from_dict(d)
+
+
+def test_shipped_scenario_against_fryba():
+    """The shipped scenario (60 m/s = 0.65 c_cr, 2 N, 333 steps of 50 us on the 2,187-DOF
+    HEX27 beam, full FE): the mid-span deflection (the axis node) against the series, peak
+    within 1 % (measured +0.09 %: the 3D beam against Euler-Bernoulli, +0.08 % statically,
+    docs/notes/2026-11-29-moving-load.md; the issue asks 2 %) and NCC >= 0.999 (measured
+    0.99997; the issue asks 0.99). The contact carries the force: its mean 2 N to 0.5 %
+    (measured 2.0002 N), no step unconverged, penetration below 1e-6 m (measured 3e-8 m).
+    Takes ~7 s of CPU (after numba's compile)."""
+    run = fm.run(_scenario())
+    assert run.summary["status"] == "completed" and run.summary["steps_not_converged"] == 0
+    z = run.probe("mid_axis").x[:, 2]
+    w = -(z - z[0])
+    m = MovingForce(1.0, EI, MU, 2.0, 60.0)
+    theory = m.deflection(0.5, run.t)
+    assert w.max() == pytest.approx(theory.max(), rel=1e-2)
+    assert ncc(run.t, theory, run.t, w) >= 0.999
+    assert run.contact_force[1:].mean() == pytest.approx(2.0, rel=5e-3)
+    assert run.summary["max_penetration_m"] <= 1e-6
