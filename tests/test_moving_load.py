@@ -92,30 +92,36 @@ def test_box_beam_sets():
         hex27_box_beam(1.0, 0.02, 0.02, (3, 1, 1))
 
 
-def _scenario(**time) -> fm.Scenario:
+def _scenario(speed_mps: float, dt_s: float) -> fm.Scenario:
+    """The shipped scenario with the slider driven at speed_mps [m/s] until x = 0.998 L."""
     with open(SCENARIOS / "moving_load.toml", "rb") as f:
         d = tomllib.load(f)
     for b in d["bodies"]:
         b["mesh_file"] = str(SCENARIOS / b["mesh_file"])
-    d["time"].update(time)
+    d["time"].update(t_end_s=0.998 / speed_mps, dt_s=dt_s, output_dt_s=dt_s)
+    d["bodies"][1]["placement"]["velocity_mps"] = [speed_mps, 0.0, 0.0]
+    d["joints"][0]["velocity_mps"] = [speed_mps, 0.0, 0.0]
     return fm.scenario_from_dict(d)
 
 
-def test_shipped_scenario_against_fryba():
-    """The shipped scenario (60 m/s = 0.65 c_cr, 2 N, 333 steps of 50 us on the 2,187-DOF
-    HEX27 beam, full FE): the mid-span deflection (the axis node) against the series, peak
-    within 1 % (measured +0.09 %: the 3D beam against Euler-Bernoulli, +0.08 % statically,
-    docs/notes/2026-11-29-moving-load.md; the issue asks 2 %) and NCC >= 0.999 (measured
-    0.99997; the issue asks 0.99). The contact carries the force: its mean 2 N to 0.5 %
-    (measured 2.0002 N), no step unconverged, penetration below 1e-6 m (measured 3e-8 m).
-    Takes ~7 s of CPU (after numba's compile)."""
-    run = fm.run(_scenario())
+@pytest.mark.parametrize(("speed", "dt"), [(60.0, 5e-5), (10.0, 2e-4)])
+def test_slider_on_the_beam_against_fryba(speed, dt):
+    """The shipped scenario (2 N on a rigid slider, the 2,187-DOF HEX27 beam, full FE) near
+    the critical speed (60 m/s = 0.65 c_cr, its own 333 steps of 50 us) and slow (10 m/s =
+    0.108 c_cr, 499 steps of 200 us): the mid-span deflection (the axis node) against the
+    series, peak within 0.5 % (measured +0.093 % and -0.048 %: the 3D beam is 0.08 % more
+    flexible than Euler-Bernoulli statically, its shear; the issue asks 2 %) and NCC >= 0.9995
+    (measured 0.99997 and 0.99993; the issue asks 0.99). The contact carries the force: its
+    mean is 2 N to 0.1 % (measured 2.0002 and 2.00000 N), no step unconverged, penetration
+    below 1e-6 m (measured 3e-8 m). Before: frictionless (pairs held on their first facet) the
+    beam never bent (3e-15 m); with the velocity law the slider sank 3e-5 m, peak -5.8 %.
+    Takes ~5 and ~9 s of CPU (after numba's compile)."""
+    run = fm.run(_scenario(speed, dt))
     assert run.summary["status"] == "completed" and run.summary["steps_not_converged"] == 0
     z = run.probe("mid_axis").x[:, 2]
     w = -(z - z[0])
-    m = MovingForce(1.0, EI, MU, 2.0, 60.0)
-    theory = m.deflection(0.5, run.t)
-    assert w.max() == pytest.approx(theory.max(), rel=1e-2)
-    assert ncc(run.t, theory, run.t, w) >= 0.999
-    assert run.contact_force[1:].mean() == pytest.approx(2.0, rel=5e-3)
+    theory = MovingForce(1.0, EI, MU, 2.0, speed).deflection(0.5, run.t)
+    assert w.max() == pytest.approx(theory.max(), rel=5e-3)
+    assert ncc(run.t, theory, run.t, w) >= 0.9995
+    assert run.contact_force[1:].mean() == pytest.approx(2.0, rel=1e-3)
     assert run.summary["max_penetration_m"] <= 1e-6

@@ -7,7 +7,8 @@ The beam spans x in [0, length], y in [-width/2, width/2], z in [-height, 0] (to
 z = 0, as mesh.parts.beam). Node sets (names as mesh.parts.beam where they mean the same):
 ``end_a`` (x = 0), ``end_b`` (x = length), ``top`` (z = 0), ``bottom`` (z = -height),
 ``end_a_axis`` and ``end_b_axis`` (the end faces' lines on the beam's axis height z =
--height/2, across y), ``mid_axis`` (the node at (length/2, 0, -height/2): an even cells_x and
+-height/2, across y), ``end_a_bottom`` and ``end_b_bottom`` (their bottom edges: line
+supports), ``mid_axis`` (the node at (length/2, 0, -height/2): an even cells_x and
 odd lattice counts across keep it a node). The skin ``surface`` is added by read_mesh.
 
 ``python -m flexmvm.mesh.box27 [DIR]`` writes the shipped moving-load beam
@@ -60,6 +61,8 @@ def hex27_box_beam(
         "bottom": np.flatnonzero(k == 0),
         "end_a_axis": np.flatnonzero((i == 0) & (k == mid_k)),
         "end_b_axis": np.flatnonzero((i == last_i) & (k == mid_k)),
+        "end_a_bottom": np.flatnonzero((i == 0) & (k == 0)),
+        "end_b_bottom": np.flatnonzero((i == last_i) & (k == 0)),
         "mid_axis": np.flatnonzero((i == last_i // 2) & (j == shape[1] // 2) & (k == mid_k)),
     }
     return Mesh(nodes, (CellBlock(CellType.HEX27, conn),), node_sets=sets)
