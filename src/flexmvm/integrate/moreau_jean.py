@@ -495,6 +495,6 @@ class MoreauJeanIntegrator:
         ):
             c = self.carried_state.of_state(b, new_states[b])
             if c is not None:
-                K_cols = self.massless[b].K_cols
-                c.Kq = c.Kq + K_cols @ dq
-                c.Kqd = c.Kqd + K_cols @ dv
+                ml = self.massless[b]
+                c.Kq = c.Kq + ml.k_times(dq)
+                c.Kqd = c.Kqd + ml.k_times(dv)
