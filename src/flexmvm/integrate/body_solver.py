@@ -27,7 +27,7 @@ from flexmvm.fe.solvers.cholesky import cholesky_ldl
 from flexmvm.fe.solvers.ordering import elimination_order
 from flexmvm.fe.solvers.symbolic import SymbolicFactor
 from flexmvm.integrate.compliance import NodalColumns, NodalCompliance, nodal_compliance
-from flexmvm.integrate.dense_solve import cho_solve, lu_solve
+from flexmvm.integrate.dense_solve import cho_factor, cho_solve, lu_factor, lu_solve
 
 # Factors kept per body, least recently used dropped first: the variable step takes dt_s 2^k
 # for k = 0..9 (pendulum_release.toml: 0.5 us to 256 us), and a swing that comes down to the
@@ -288,7 +288,7 @@ class BodySolver:
         if not self.body.nq:
             self._f = None
             try:
-                self._schur = sla.cho_factor(Mff)
+                self._schur = cho_factor(Mff)
             except np.linalg.LinAlgError:
                 raise SolverError(
                     f"body {self.body.name!r}: rigid-body mass matrix is singular "
@@ -321,7 +321,7 @@ class BodySolver:
             MZ[3:, 3:] += dw + dw.T
         S = Mff - MZ
         try:
-            self._schur = sla.lu_factor(S)
+            self._schur = lu_factor(S)
         except (np.linalg.LinAlgError, ValueError):
             raise SolverError(
                 f"body {self.body.name!r}: frame Schur complement is singular"
@@ -397,7 +397,7 @@ class BodySolver:
         self._f = f
         St = m * np.eye(3) - A @ f.S1Zr @ A.T
         try:
-            self._schur_t = sla.cho_factor(0.5 * (St + St.T))
+            self._schur_t = cho_factor(0.5 * (St + St.T))
         except np.linalg.LinAlgError:
             raise SolverError(
                 f"body {self.body.name!r}: translational Schur complement is not positive definite"

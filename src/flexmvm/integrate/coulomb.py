@@ -39,10 +39,10 @@ from __future__ import annotations
 
 import numba
 import numpy as np
-import scipy.linalg as sla
 
 from flexmvm.constraints.contact import ContactRows
 from flexmvm.errors import SolverError
+from flexmvm.integrate.dense_solve import cho_solve
 from flexmvm.integrate.lcp import eliminate_equalities, solve_checked
 
 # the sweeps stop at this natural residual (relative to the velocity scale): the frictionless
@@ -239,7 +239,7 @@ def solve_coulomb(
         out[e] = el.equalities(lu)
         # two refinement sweeps of the equalities with the true D (see lcp._refine)
         for _ in range(2):
-            out[e] -= sla.cho_solve(el.cho, D[e] @ out + c[e])
+            out[e] -= cho_solve(el.cho, D[e] @ out + c[e])
     return out, sweeps
 
 

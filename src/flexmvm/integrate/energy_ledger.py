@@ -49,6 +49,7 @@ from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 
+from flexmvm.bodies.rotation import cross3
 from flexmvm.integrate.row_products import body_impulse, flat_product
 from flexmvm.loads.applied import midpoint_states, start_run
 
@@ -211,7 +212,7 @@ class EnergyLedger:
                 S, J, M_wq, _ = body.inertia_terms(s1.q, Lq)
                 dw = dv[3:6]
                 total += float(dw @ (J @ dw)) + 2.0 * float(dw @ (M_wq @ dqd))
-                total += 2.0 * float(dv[:3] @ (s1.A @ np.cross(dw, S)))
+                total += 2.0 * float(dv[:3] @ (s1.A @ cross3(dw, S)))
         return total
 
     def _products(self, b, body, s0, s1, dq, dqd) -> tuple[np.ndarray, np.ndarray]:

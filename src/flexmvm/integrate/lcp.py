@@ -25,6 +25,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from flexmvm.errors import SolverError
+from flexmvm.integrate.dense_solve import cho_factor, cho_solve
 
 _REG = 1e-12
 # The regularisation above perturbs w by ~_REG D l, NNLS stops at its own round-off: both
@@ -38,7 +39,7 @@ def regularised_cho(D: np.ndarray, what: str):
     m = len(D)
     scale = max(float(np.trace(D)) / m, 1e-300)
     try:
-        return sla.cho_factor(D + _REG * scale * np.eye(m), lower=True)
+        return cho_factor(D + _REG * scale * np.eye(m), lower=True)
     except np.linalg.LinAlgError:
         raise SolverError(
             f"{what} constraint matrix is not positive definite (redundant or "
@@ -59,7 +60,7 @@ def solve_mixed_lcp(D: np.ndarray, c: np.ndarray, n_eq: int) -> np.ndarray:
         )
     D = 0.5 * (D + D.T)
     if n_eq == m:
-        return _refine(D, c, n_eq, -sla.cho_solve(regularised_cho(D, "joint"), c))
+        return _refine(D, c, n_eq, -cho_solve(regularised_cho(D, "joint"), c))
     if n_eq == 0:
         # an exact active-set solution leaves _refine nothing to remove (it is for the
         # regularised NNLS fallback and the eliminated equalities)
@@ -94,8 +95,8 @@ def eliminate_equalities(D: np.ndarray, c: np.ndarray, n_eq: int) -> Elimination
     if not n_eq:
         return Elimination(D, c, None, np.zeros((0, len(c))), np.zeros(0))
     cho_e = regularised_cho(D[e, e], "joint")
-    De_inv_Deu = sla.cho_solve(cho_e, D[e, u])
-    De_inv_ce = sla.cho_solve(cho_e, c[e])
+    De_inv_Deu = cho_solve(cho_e, D[e, u])
+    De_inv_ce = cho_solve(cho_e, c[e])
     return Elimination(
         D[u, u] - D[u, e] @ De_inv_Deu, c[u] - D[u, e] @ De_inv_ce, cho_e, De_inv_Deu, De_inv_ce
     )
@@ -116,7 +117,7 @@ def _refine(
     out = lam.copy()
     for _ in range(sweeps):
         trial = out.copy()
-        trial[S] -= sla.cho_solve(cho, D[S] @ out + c[S])
+        trial[S] -= cho_solve(cho, D[S] @ out + c[S])
         if np.any(trial[n_eq:] < 0.0):
             break
         out = trial

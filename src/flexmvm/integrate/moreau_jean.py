@@ -87,6 +87,8 @@ from flexmvm.loads.applied import midpoint_forces
 __all__ = ["MoreauJeanIntegrator", "StepResult"]
 
 SLOW_ITERATIONS = 6  # from this iterate on (or when the residual grows) W is refreshed
+# a rigid body's (empty) elastic arguments of momentum_terms: q-sized, (3, 3, 0), (3, 0)
+_NO_COORDINATES = (np.zeros(0), np.zeros((3, 3, 0)), np.zeros((3, 0)))
 
 
 class MoreauJeanIntegrator:
@@ -247,12 +249,15 @@ class MoreauJeanIntegrator:
             if body.stiffening is not None:  # the spin's prestress (bodies.stiffening)
                 F[6:] -= body.stiffening.force(vm[3:6], mid.q)
         else:
-            terms = body.inertia_terms(mid.q)
-            inertia = body.mass_times(mid.A, mid.q, dv, terms)
-            F = body.velocity_forces(mid.A, mid.q, vm, terms)
-            if np.any(g):
-                F += body.gravity_forces(mid.A, mid.q, g, terms[0])
-            momentum = body.mass_times(mid.A, mid.q, vm, terms)
+            # a rigid body: the same kernel with no elastic coordinates (one call instead of
+            # ~40 small numpy ones; the same terms as inertia_terms, mass_times, velocity_forces
+            # and gravity_forces to round-off: tests/test_compiled_step.py)
+            inertia, F, momentum = (np.empty(6) for _ in range(3))
+            inv, e = body.inv, _NO_COORDINATES
+            momentum_terms(
+                mid.A, e[0], dv, vm, e[1], e[1], e[0], e[0], e[0], inv.mass, inv.S0,
+                e[2], inv.G0, e[1], g, inertia, F, momentum,
+            )  # fmt: skip
         if applied is not None:
             F += applied
         scale = max(np.abs(inertia).max(), h * np.abs(F).max(), np.abs(momentum).max())
@@ -495,6 +500,6 @@ class MoreauJeanIntegrator:
         ):
             c = self.carried_state.of_state(b, new_states[b])
             if c is not None:
-                K_cols = self.massless[b].K_cols
-                c.Kq = c.Kq + K_cols @ dq
-                c.Kqd = c.Kqd + K_cols @ dv
+                ml = self.massless[b]
+                c.Kq = c.Kq + ml.k_times(dq)
+                c.Kqd = c.Kqd + ml.k_times(dv)
