@@ -202,12 +202,19 @@ def ring_body_from_parts(
 
 
 def ring_body(name: str, fe: FEModel, basis, *, damping: Damping | None = None) -> RingBody:
-    """The body of a ring basis of ``fe`` (kind mvm-sparse's body_builder): its corner read
-    back from psi (split_ring_psi), its parts (ring_parts), the body."""
+    """The body of a ring basis of ``fe`` (kind mvm-sparse's body_builder): its parts and
+    corner from the setup cache (setup_cache.ring_parts: warm, psi's exterior rows are not
+    read), else computed (ring_parts on the corner read back from psi, split_ring_psi)."""
+    from flexmvm.setup_cache.ring_parts import cached_ring_parts  # it imports this stage
+
     nodes = np.asarray(basis.retained_nodes, dtype=np.int64)
-    cols = split_ring_psi(fe, basis.reference, basis.psi, nodes)
-    parts = ring_parts(fe, nodes, cols, basis.nq)
-    return ring_body_from_parts(name, fe.mesh, basis, parts, cols.corner, damping=damping)
+
+    def build() -> tuple[BodyParts, np.ndarray]:
+        cols = split_ring_psi(fe, basis.reference, basis.psi, nodes)
+        return ring_parts(fe, nodes, cols, basis.nq), cols.corner
+
+    parts, corner = cached_ring_parts(fe, basis, build)
+    return ring_body_from_parts(name, fe.mesh, basis, parts, corner, damping=damping)
 
 
 # kind mvm-sparse is registered by the reduction stage, which cannot name this stage's body:

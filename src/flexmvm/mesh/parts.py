@@ -371,8 +371,10 @@ def write_scenario_meshes(directory: str | os.PathLike) -> list[Path]:
     """Mesh every part of SCENARIO_MESHES and mesh.link's into ``directory``; returns the paths
     written."""
     from flexmvm.mesh.link import SLIDER_CRANK_MESHES  # link imports this module
+    from flexmvm.mesh.plate_part import PLATE_MESHES  # plate_part imports this module too
 
-    return [make(Path(directory) / n) for n, make in SCENARIO_MESHES + SLIDER_CRANK_MESHES]
+    made = SCENARIO_MESHES + SLIDER_CRANK_MESHES + PLATE_MESHES
+    return [make(Path(directory) / n) for n, make in made]
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -61,6 +61,7 @@ from flexmvm.scenarios.setup import SetupCache, default_setup, timed
 from flexmvm.scenarios.solver_choice import with_elimination_order
 from flexmvm.scenarios.stiffening_schema import stiffened
 from flexmvm.scenarios.supports import bedded_key, clamp_label, support_joints
+from flexmvm.setup_cache.ring_parts import cached_guard
 
 #: the kinds whose modes are fixed-interface (Craig-Bampton) modes: the truncation guard's
 TRUNCATION_GUARDED = (ModelKind.MVM, ModelKind("mvm-sparse"))
@@ -167,7 +168,8 @@ def _truncation(setup: SetupCache, args: tuple, fe_key) -> dict | None:
     setup.basis(*args) on the FE model of ``fe_key``; None without retained nodes."""
     if not args[3]:
         return None
-    return modal_residual(setup.fe_model(fe_key, args[1]), setup.basis(*args))
+    fe, basis = setup.fe_model(fe_key, args[1]), setup.basis(*args)
+    return cached_guard(fe, basis, lambda: modal_residual(fe, basis))  # factors K_EE
 
 
 def _kind_body(spec, cfg, setup: SetupCache, mesh: Mesh, args: tuple, fe_key) -> FlexibleBody:

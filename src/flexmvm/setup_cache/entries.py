@@ -20,6 +20,7 @@ from flexmvm.mesh.mesh import Mesh
 from flexmvm.reduction.basis import Basis, BasisKind
 from flexmvm.reduction.kinds import kind_spec
 from flexmvm.reduction.reference import ReferenceCondition
+from flexmvm.setup_cache.mapped import decoded_mapped
 from flexmvm.setup_cache.store import (
     BODY_SOURCES,
     code_version,
@@ -30,6 +31,11 @@ from flexmvm.setup_cache.store import (
     material_inputs,
     save,
 )
+
+#: Kinds whose stored sparse basis is memory-mapped when read (setup_cache.mapped): the ring
+#: basis of kind mvm-sparse, whose exterior rows a run reads only at its contact surfaces and
+#: probes (a field output reads them all, at each output)
+MAPPED_KINDS = (BasisKind("mvm-sparse"),)
 
 
 def cached_elimination_order(
@@ -201,7 +207,14 @@ def cached_basis(
     key = basis_key(
         source, material, kind, reference_set, reference, retained, n_modes, extra=extra
     )
-    hit = decoded(key, lambda arrays: _basis_from(arrays, kind, reference, retained, n_modes))
+
+    def decode(arrays):
+        return _basis_from(arrays, kind, reference, retained, n_modes)
+
+    if kind in MAPPED_KINDS:  # its exterior rows stay on disk until a run reads them
+        hit = decoded_mapped(key, decode, ("psi_data", "psi_indices"))
+    else:
+        hit = decoded(key, decode)
     if hit is not None:
         return hit
     basis = build()

@@ -138,6 +138,7 @@ def ring_columns(
         statics = np.asarray(solve(k_rows[:, b[ring_cols]].toarray()))
         np.negative(statics, out=statics)
         modes, freqs = fixed_interface_modes(fe, interior, k_ii, solve, n_modes)
+    del solve, k_ii, k_rows  # K_EE's factor (GBs on a big part) freed before B is made
     massless = np.flatnonzero(massless_mask(fe, nodes))
     split = node_dofs(massless)
     on_ring = np.isin(split, ring_cols)

@@ -1,0 +1,221 @@
+"""The shipped big-part scenario (scenarios/plate_impact.toml, 263,691 DOF) in full FE and
+reduced (its own model, kind mvm-sparse), and a region of ~3,000 retained nodes on it.
+
+    python benchmarks/bench_big_part.py [--work DIR] [--skip-full] [--big-radius-mm 1.25]
+        [--t-end-us T]
+
+Every case is a process of its own, run one after the other (never two at once: full FE
+takes ~10 GB): full FE (FLEXMVM_NO_CACHE=1); the reduced model cold (an empty setup cache in
+--work: the basis built, factoring K_EE as full FE factors its W) and warm (the same cache:
+the run loads its parts); with --cases big-cold,big-warm the big region (--big-radius-mm:
+2,967 nodes, 944 on its ring, a corner of ~2,900 columns; its cold set-up holds the exterior
+rows of the corner twice, ~20 bytes an entry: ~15 GB beside K_EE's factor, more than this
+2-core, 23 GB machine has free beside other jobs: not measured here). Prints the CPU,
+the commit, per case the set-up and simulation wall and CPU times (time.process_time: every
+thread of the process), the peak RSS after the set-up and at the end, the resident set when
+the run starts, and against full FE the simulation ratio, the memory ratio, the force NCC and
+the peak's error. The setup log (SETUP_LOG lines: basis and body build times) of each case
+is printed under it. docs/notes/ quotes the runs, docs/performance.md the ratios.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import logging
+import os
+import resource
+import shutil
+import subprocess
+import sys
+import tempfile
+import threading
+import time
+from pathlib import Path
+
+from bench_ring_body import commit_hash, cpu_name  # the same machine line
+
+ROOT = Path(__file__).resolve().parent.parent
+SCENARIO = ROOT / "scenarios" / "plate_impact.toml"
+
+
+def _rss_now_mb() -> float:
+    """The process's resident set now [MB] (VmRSS)."""
+    for line in Path("/proc/self/status").read_text().splitlines():
+        if line.startswith("VmRSS:"):
+            return float(line.split()[1]) / 1024.0
+    return float("nan")
+
+
+def _peak_mb() -> float:
+    return resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
+
+
+class _StagePeak(logging.Filter):
+    """Adds to each setup-log line the largest resident set sampled since the line before."""
+
+    def __init__(self) -> None:
+        super().__init__()
+        self.peak = 0.0
+
+    def filter(self, record: logging.LogRecord) -> bool:
+        record.msg = f"{record.msg} (resident peak since the line before: {self.peak:,.0f} MB)"
+        self.peak = 0.0
+        return True
+
+
+def _sample_rss(every_s: float = 0.05) -> None:
+    """RSS sampling in a daemon thread: the set-up's stages' peaks (_StagePeak) on the root
+    log handler."""
+    stage = _StagePeak()
+    for handler in logging.getLogger().handlers:
+        handler.addFilter(stage)
+
+    def sample() -> None:
+        while True:
+            stage.peak = max(stage.peak, _rss_now_mb())
+            time.sleep(every_s)
+
+    threading.Thread(target=sample, daemon=True).start()
+
+
+def child(kind: str, radius_m: float, t_end: float, out: Path) -> None:
+    """One case: build, simulate, write its numbers as JSON to ``out``."""
+    import numpy as np
+
+    import flexmvm as fm
+    from flexmvm.integrate.driver import simulate
+    from flexmvm.scenarios.build import build_scenario
+
+    logging.basicConfig(level=logging.INFO, format="    %(message)s", stream=sys.stderr)
+    _sample_rss()
+    sc = fm.load_scenario(SCENARIO)
+    if t_end > 0:
+        sc = sc.with_time(t_end_s=t_end)
+    if kind == "full":
+        sc = sc.with_model("plate", fm.full())
+    elif radius_m > 0:
+        region = {"ball": {"centre_m": [0.0, 0.0, 0.0], "radius_m": radius_m}}
+        model = sc.body("plate").model.model_copy(update={"region": region})
+        sc = sc.with_model("plate", model.model_copy(update={"allow_costly": True}))
+    w0, c0 = time.perf_counter(), time.process_time()
+    built = build_scenario(sc)
+    w1, c1 = time.perf_counter(), time.process_time()
+    setup_peak, start_rss = _peak_mb(), _rss_now_mb()
+    res = simulate(built.system, built.states, built.grid, built.probes)
+    w2, c2 = time.perf_counter(), time.process_time()
+    body = built.system.bodies[1]
+    corner = getattr(body, "corner", None)
+    info = {
+        "kind": kind,
+        "radius_mm": radius_m * 1e3,
+        "dof": int(body.nv),
+        "retained": int(built.info[1].n_retained_nodes),
+        "corner": int(corner.size) if corner is not None else None,
+        "build_wall_s": w1 - w0,
+        "build_cpu_s": c1 - c0,
+        "sim_wall_s": w2 - w1,
+        "sim_cpu_s": c2 - c1,
+        "steps": int(res.n_steps),
+        "setup_peak_mb": setup_peak,
+        "start_rss_mb": start_rss,
+        "peak_rss_mb": _peak_mb(),
+        "t": np.asarray(res.t).tolist(),
+        "force": np.asarray(res.contact_force).tolist(),
+    }
+    out.write_text(json.dumps(info))
+
+
+def _run(kind: str, radius_m: float, t_end: float, env: dict, label: str) -> dict:
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "case.json"
+        cmd = [sys.executable, __file__, "--child", kind, str(radius_m), str(t_end), str(out)]
+        proc = subprocess.run(cmd, capture_output=True, text=True, check=False, env=env)
+        log = [ln for ln in proc.stderr.splitlines() if ln.startswith("    ")]
+        if proc.returncode != 0:
+            tail = (proc.stderr.strip().splitlines() or ["?"])[-1]
+            return {"label": label, "error": tail, "log": log}
+        return json.loads(out.read_text()) | {"label": label, "log": log}
+
+
+def _line(r: dict, ref: dict | None) -> str:
+    if "error" in r:
+        return f"{r['label']}: failed: {r['error']}"
+    import numpy as np
+
+    from flexmvm.metrics.ncc import ncc
+
+    peak = max(r["force"])
+    text = (
+        f"{r['label']}: {r['dof']:,} DOF ({r['retained']:,} retained nodes"
+        + (f", corner {r['corner']:,}" if r["corner"] is not None else "")
+        + f"); set-up {r['build_wall_s']:.1f} s wall {r['build_cpu_s']:.1f} s CPU, peak RSS"
+        f" {r['setup_peak_mb']:,.0f} MB; run starts at {r['start_rss_mb']:,.0f} MB;"
+        f" simulation {r['sim_wall_s']:.1f} s wall {r['sim_cpu_s']:.1f} s CPU ({r['steps']}"
+        f" steps, {1e3 * r['sim_cpu_s'] / max(r['steps'], 1):.1f} ms CPU a step); peak RSS"
+        f" {r['peak_rss_mb']:,.0f} MB; peak force {peak:.2f} N"
+    )
+    if ref is not None and "error" not in ref:
+        rho = ncc(np.array(ref["t"]), np.array(ref["force"]), np.array(r["t"]), r["force"])
+        err = peak / max(ref["force"]) - 1.0
+        text += (
+            f"\n    against full FE: simulation CPU {ref['sim_cpu_s'] / r['sim_cpu_s']:.1f} x,"
+            f" wall {ref['sim_wall_s'] / r['sim_wall_s']:.1f} x; peak RSS"
+            f" {r['peak_rss_mb'] / ref['peak_rss_mb']:.3f} of full FE's; force NCC {rho:.6f},"
+            f" peak {100 * err:+.3f} %"
+        )
+    return "\n".join([text, *r["log"]])
+
+
+def main() -> None:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--work", default=None, help="setup cache of the reduced cases")
+    ap.add_argument("--skip-full", action="store_true", help="use --work's stored full FE case")
+    ap.add_argument("--cases", default="cold,warm", help="of cold,warm,big-cold,big-warm")
+    ap.add_argument("--big-radius-mm", type=float, default=1.25)  # ~3,000 nodes
+    ap.add_argument("--t-end-us", type=float, default=0.0, help="0: the scenario's")
+    args = ap.parse_args()
+    work = Path(args.work or tempfile.mkdtemp(prefix="flexmvm-bigpart-"))
+    work.mkdir(parents=True, exist_ok=True)
+    print(
+        f"CPU: {cpu_name()}; commit {commit_hash()}; {os.cpu_count()} cores;"
+        f" load {os.getloadavg()}; setup cache {work}",
+        flush=True,
+    )
+    t_end = args.t_end_us * 1e-6
+    stored = work / "full.json"  # the full-FE case of an earlier call on this --work
+    if args.skip_full:
+        ref = json.loads(stored.read_text()) if stored.exists() else None
+        if ref is not None:
+            print("(stored) " + _line(ref, None), flush=True)
+    else:
+        env = dict(os.environ, FLEXMVM_NO_CACHE="1")
+        ref = _run("full", 0.0, t_end, env, "full FE")
+        stored.write_text(json.dumps(ref))
+        print(_line(ref, None), flush=True)
+    cases = [
+        ("reduced cold", 0.0, "cold"),
+        ("reduced warm", 0.0, "warm"),
+        (f"region {args.big_radius_mm:g} mm cold", args.big_radius_mm * 1e-3, "big"),
+        (f"region {args.big_radius_mm:g} mm warm", args.big_radius_mm * 1e-3, "big"),
+    ]
+    chosen = args.cases.split(",")
+    names = ("cold", "warm", "big-cold", "big-warm")
+    for name, (label, radius, cache) in zip(names, cases, strict=True):
+        if name not in chosen:
+            continue
+        if name.endswith("cold"):  # an empty setup cache
+            shutil.rmtree(work / cache, ignore_errors=True)
+        env = dict(os.environ, FLEXMVM_CACHE_DIR=str(work / cache))
+        env.pop("FLEXMVM_NO_CACHE", None)
+        if cache == "warm":
+            env["FLEXMVM_CACHE_DIR"] = str(work / "cold")
+        print(_line(_run("mvm-sparse", radius, t_end, env, label), ref), flush=True)
+
+
+if __name__ == "__main__":
+    if len(sys.argv) > 1 and sys.argv[1] == "--child":
+        kind, radius, t_end, out = sys.argv[2:6]
+        child(kind, float(radius), float(t_end), Path(out))
+    else:
+        main()
