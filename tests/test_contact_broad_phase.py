@@ -39,30 +39,50 @@ def _nodes(rng, m: int = 300):
     return np.column_stack([xy, z])
 
 
-def _scan(X, surf, xs, state=None):
-    """scan_nodes of xs against the cap (frame at rest), from the search state `state`
-    (default: none searched yet); returns (facet, out, projections made: a memo that keeps up
-    to 64 per node counts them, the state)."""
+def _scan_args(X, surf, xs, state=None, keep=64):
+    """The arguments of scan_nodes for xs against the cap (frame at rest), from the search
+    state `state` (default: none searched yet), with a memo that keeps up to `keep`
+    projections a node (64: it counts every projection of these scans)."""
     conn = np.asarray(surf.connectivity, dtype=np.int64)
     fs = facet_surface(X, surf, conn, BroadPhase(X, surf), REACH)
     n, nf = len(xs), surf.n_facets
     state = SearchState.empty(n, nf) if state is None else state
     memo = MemoArrays(
-        np.zeros((n, 64), np.int64),
+        np.zeros((n, keep), np.int64),
         np.zeros(n, np.int64),
-        np.zeros((n, 64, REC_LEN)),
+        np.zeros((n, keep, REC_LEN)),
         np.full(2, -1, np.int64),
         np.ones(1, np.int64),
         np.ones(1, np.int64),
     )
     facet, out = np.full(n, -1, np.int64), np.zeros((n, 11))
-    status, _, _ = scan_nodes(
-        xs, np.zeros_like(xs), X, np.zeros_like(X), np.zeros(3), np.eye(3), REACH, 0.0, fs,
-        state, memo, facet, out,
-    )  # fmt: skip
+    z3 = np.zeros(3)
+    return (
+        xs,
+        np.zeros_like(xs),
+        X,
+        np.zeros_like(X),
+        z3,
+        np.eye(3),
+        REACH,
+        0.0,
+        fs,
+        state,
+        memo,
+        facet,
+        out,
+    )
+
+
+def _scan(X, surf, xs, state=None):
+    """scan_nodes of xs against the cap (_scan_args); returns (facet, out, projections
+    made, the state)."""
+    args = _scan_args(X, surf, xs, state)
+    status, _, _ = scan_nodes(*args)
     assert status == 0
+    memo = args[10]
     assert memo.count.max() < 64  # every projection counted
-    return facet, out, int(memo.count.sum()), state
+    return args[11], args[12], int(memo.count.sum()), args[9]
 
 
 def _brute_force(X, surf, xs):
@@ -138,3 +158,23 @@ def test_slab_bound_never_exceeds_the_distance():
                 bound = _slab_bound(p, geo, plane, 0)
                 assert bound <= d + 2.0 * size / 400, (bound, d)
                 assert bound >= np.linalg.norm(p - c) - geo[0, 3] - 1e-12
+
+
+def test_nodes_outside_the_box_cost_the_box_test_only():
+    """20,000 nodes 1 m from the cap: a scan tests each against the facets' box and goes
+    on. Measured (this machine, minimum of 5 scans): 0.42 us a node when the box test was
+    made inside _search_node (its call), 0.01 us now; the limit 0.1 us a node leaves a
+    factor 10 for a loaded machine and still fails the former."""
+    import time
+
+    X, surf = _cap()
+    xs = _nodes(np.random.default_rng(3), 20_000) + np.array([0.0, 0.0, -1.0])
+    args = _scan_args(X, surf, xs, keep=1)
+    scan_nodes(*args)  # compiled
+    best = np.inf
+    for _ in range(5):
+        t0 = time.process_time()
+        scan_nodes(*args)
+        best = min(best, time.process_time() - t0)
+    assert (args[11] == -1).all()
+    assert best / len(xs) < 0.1e-6, best / len(xs)
