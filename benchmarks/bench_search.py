@@ -29,6 +29,7 @@ from flexmvm.contact.search_state import (
     MemoArrays,
     SearchState,
     facet_grid,
+    facet_planes,
 )
 
 
@@ -77,7 +78,8 @@ def scan_ms(xs, xm, conn, geo, one_cell: bool, reach: float = 2e-4) -> tuple[flo
         )
     else:
         grid = facet_grid(geo)
-    surface = FacetSurface(geo, conn, 0, *adj, box, rho, projection_params(), grid)
+    planes = facet_planes(xm[conn], 0, geo[:, :3])
+    surface = FacetSurface(geo, conn, 0, *adj, box, rho, projection_params(), grid, planes)
     times = {True: [], False: []}
     for rep in range(5):
         state = SearchState.empty(ns, nf, 256)

@@ -52,6 +52,7 @@ class FacetSurface(NamedTuple):
     rho: float  # extra radius of the cached candidate supersets [m]
     params: np.ndarray  # (7,) projection tolerances (projection.projection_params)
     grid: FacetGrid
+    plane: np.ndarray  # (nf, 4) unit normal and half-thickness [m] (facet_planes), body frame
 
 
 class SearchState(NamedTuple):
@@ -104,6 +105,7 @@ def facet_surface(
     box = np.vstack([Xs.min(axis=0), Xs.max(axis=0)]).astype(np.float64)
     geo = np.column_stack([broad.centroids, broad.circumradius])
     rho = max(search_radius, 0.5 * float(np.median(broad.circumradius)))
+    corners = np.asarray(X, dtype=np.float64)[surface.connectivity]
     return FacetSurface(
         geo,
         np.asarray(conn, dtype=np.int64),
@@ -113,7 +115,30 @@ def facet_surface(
         rho,
         projection_params(),
         facet_grid(geo),
+        facet_planes(corners, surface.n_quads, geo[:, :3]),
     )
+
+
+def facet_planes(corners: np.ndarray, n_quads: int, centroids: np.ndarray) -> np.ndarray:
+    """Per facet (nf, 4): a unit normal n (the cross product of the diagonals of a quad, of
+    two edges of a triangle) and the half-thickness t = max_a |n . (X_a - c)| [m] of its
+    corners X_a (corners (nf, 4, 3), undeformed, body frame; c the centroid) about the plane
+    through c. The facet (a bilinear quad or a triangle: inside the convex hull of its
+    corners) lies in the slab |n . (x - c)| <= t and in the ball |x - c| <= R (R its
+    circumradius): search._slab_bound's lower bound of a point's distance to it. A facet with
+    no normal (zero cross product) gets n = 0, t = 0 (the bound is then the ball's)."""
+    corners = np.asarray(corners, dtype=np.float64)
+    nf = len(corners)
+    quad = (np.arange(nf) < n_quads)[:, None]
+    a = np.where(quad, corners[:, 2] - corners[:, 0], corners[:, 1] - corners[:, 0])
+    b = np.where(quad, corners[:, 3] - corners[:, 1], corners[:, 2] - corners[:, 0])
+    n = np.cross(a, b)
+    norm = np.linalg.norm(n, axis=1)
+    ok = norm > 0.0
+    n[ok] /= norm[ok, None]
+    n[~ok] = 0.0
+    t = np.abs(np.einsum("fi,fai->fa", n, corners - centroids[:, None])).max(axis=1)
+    return np.ascontiguousarray(np.column_stack([n, t]).reshape(nf, 4))
 
 
 def facet_grid(geo: np.ndarray) -> FacetGrid:
