@@ -160,21 +160,14 @@ def test_slab_bound_never_exceeds_the_distance():
                 assert bound >= np.linalg.norm(p - c) - geo[0, 3] - 1e-12
 
 
-def test_nodes_outside_the_box_cost_the_box_test_only():
-    """20,000 nodes 1 m from the cap: a scan tests each against the facets' box and goes
-    on. Measured (this machine, minimum of 5 scans): 0.42 us a node when the box test was
-    made inside _search_node (its call), 0.01 us now; the limit 0.1 us a node leaves a
-    factor 10 for a loaded machine and still fails the former."""
-    import time
-
+def test_nodes_outside_the_box_get_no_facet():
+    """20,000 nodes 1 m from the cap: a scan tests each against the facets' box and goes on
+    (the box test made before the per-node search: 0.42 us a node before, 0.01 us after,
+    measured by benchmarks/bench_search.py, not asserted here: a test asserts no wall time).
+    Every one is left without a facet and the scan reports no pair."""
     X, surf = _cap()
     xs = _nodes(np.random.default_rng(3), 20_000) + np.array([0.0, 0.0, -1.0])
     args = _scan_args(X, surf, xs, keep=1)
-    scan_nodes(*args)  # compiled
-    best = np.inf
-    for _ in range(5):
-        t0 = time.process_time()
-        scan_nodes(*args)
-        best = min(best, time.process_time() - t0)
+    status, _, n_pairs = scan_nodes(*args)
+    assert status == 0 and n_pairs == 0
     assert (args[11] == -1).all()
-    assert best / len(xs) < 0.1e-6, best / len(xs)
