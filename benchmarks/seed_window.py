@@ -15,7 +15,7 @@ of the steps above the contact step dt_c for the comparison (integrate/theta.py)
 The contact phase runs at dt_c under every rule, so it is the same in all. Numbers:
 docs/notes/2026-11-29-seed-window.md.
 
-    PYTHONPATH=src python benchmarks/seed_window.py [--rule per-step] [--t-end 2e-3]
+    PYTHONPATH=src python benchmarks/seed_window.py [--rule per-step] [--t-end 2e-3] [--model full]
 """
 
 from __future__ import annotations
@@ -53,9 +53,12 @@ def _rule(name: str, dt_c: float):
     return at
 
 
-def measure(rule: str, t_end: float | None) -> dict:
-    """One run of the seed case under ``rule``: energy and the ledger by phase."""
+def measure(rule: str, t_end: float | None, model: str | None = None) -> dict:
+    """One run of the seed case under ``rule`` (every body's model ``model`` if given, e.g.
+    "full"): energy and the ledger by phase."""
     sc = load_scenario(ROOT / "scenarios" / "rod_impact.toml")
+    if model is not None:
+        sc = sc.with_kind(model)
     if t_end is not None:
         sc = sc.with_time(t_end_s=t_end)
     theta_module.ThetaRule.at = _rule(rule, sc.time.dt_s)
@@ -89,8 +92,9 @@ def main() -> None:
         "--rule", default="shipped", choices=("shipped", "per-step", "contact-theta", "midpoint")
     )
     ap.add_argument("--t-end", type=float, default=None, help="end time [s] (default: shipped)")
+    ap.add_argument("--model", default=None, help="every body's model kind, e.g. full")
     args = ap.parse_args()
-    print(json.dumps(measure(args.rule, args.t_end), indent=1))
+    print(json.dumps(measure(args.rule, args.t_end, args.model), indent=1))
 
 
 if __name__ == "__main__":
