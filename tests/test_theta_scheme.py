@@ -167,14 +167,17 @@ def test_theta_proportional_to_the_step_is_second_order():
 
 
 def test_theta_is_a_property_of_the_step():
-    """With a damping time tau (TimeGrid.hf_damping_time_s) every step of size h takes
-    theta(h) = 1/2 + h / (4 tau), not the value at dt_s: a run whose steps are all 4 dt_s (no
-    contact: the driver takes dt_max_s = 4 dt_s throughout) follows the theta map of
-    theta(4 dt_s) = 0.6 to 1e-9 of the amplitude (Newton rtol 1e-10 per step over 100 steps),
-    and is far (> 1e-3 of the amplitude) from the map of theta(dt_s) = 0.525 that a theta fixed
-    at dt_s would give. The rule is second order (test_theta_proportional_to_the_step_is_second
-    _order) and capped at 1 from h = 2 tau on, where -(1 - theta) / theta = 0 <= exp(-h / tau):
-    what the step cannot resolve never decays slower than exp(-t / tau). ~1 s."""
+    """With a damping time tau (TimeGrid.hf_damping_time_s) every step of size h takes its own
+    theta(h): 1/2 + h / (4 tau) up to the contact step dt_s (a rule without a contact step: at
+    every h), and 1/2 + dt_s^2 / (4 tau h) above it (integrate.theta: the free-flight steps
+    damp resolved motion as the contact step does, tests/test_shipped_window.py). A run whose
+    steps are all 4 dt_s (no contact: the driver takes dt_max_s = 4 dt_s throughout) follows
+    the theta map of theta(4 dt_s) = 0.50625 to 1e-9 of the amplitude (Newton rtol 1e-10 per
+    step over 100 steps), and is far (> 1e-3 of the amplitude) from the maps of theta(dt_s) =
+    0.525 and of 1/2 + 4 dt_s / (4 tau) = 0.6. The rule is second order
+    (test_theta_proportional_to_the_step_is_second_order) and capped at 1 from h = 2 tau on,
+    where -(1 - theta) / theta = 0 <= exp(-h / tau): what the contact step cannot resolve never
+    decays slower than exp(-t / tau). ~1 s."""
     tau = PERIOD / 20
     H = PERIOD / 50  # the step taken: theta(H) = 1/2 + (1/50) / (4/20)
     rule = ThetaRule(damping_time_s=tau)
@@ -186,8 +189,9 @@ def test_theta_is_a_property_of_the_step():
     v[6] = 1.0
     res = simulate(_oscillator(), [BodyState(np.zeros(3), np.eye(3), np.zeros(1), v)], grid)
     assert set(res.steps.h_s) == {H}
+    assert grid.theta_rule().at(H) == pytest.approx(0.50625, rel=1e-14)
     amp = 1.0 / OMEGA
-    for theta, close in ((rule.at(H), True), (rule.at(H / 4), False)):
+    for theta, close in ((0.50625, True), (rule.at(H / 4), False), (rule.at(H), False)):
         P, x, expect = _scheme_map(theta, H), np.array([0.0, 1.0]), [0.0]
         for _ in range(len(res.t) - 1):
             x = P @ x

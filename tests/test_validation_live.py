@@ -347,10 +347,16 @@ def test_rigid_striker_ring_after_separation():
     3-5 + 40). What rings is the top of the target's reduced spectrum (with 0.5-us outputs:
     330 kHz with 20 fixed-interface modes, 430 kHz with 37, with 60 the ring down to the full
     FE's level), which theta = 0.51 damps at a rate (theta - 1/2) omega^2 h / 2, ~2e4 / s,
-    where theta = 0.55 damps 5 x faster. Required: the scenario's scheme below 0.06 v0 (the
-    limit as measured, 25 % of room: it must not grow) and the damped one below 0.015 v0,
-    twice the full FE's (the ring is the reduced model's on this scheme, not the contact's)."""
-    assert _end_b_ring(_short("rigid-striker")) < 0.06 * V0
+    where theta = 0.55 damps 5 x faster. After the separation the steps are 2 us, which do
+    not resolve it: by the free-flight theta (integrate/theta.py) the ring is 0.035 v0 at
+    1/2 + h / (4 tau) = 0.54 (the rule of 2026-11-27..28), 0.048 at theta(dt_s) = 0.51 (before),
+    0.062 at 1/2 + dt_s^2 / (4 tau h) = 0.5025 (since 2026-11-29: the resolved waves no
+    longer damped 16 x faster than at dt_s, the seed window's energy -1.9e-4 for -1.7e-3;
+    what the 2 us step does not resolve decays at 1 / (200 us) instead of 1 / tau).
+    Required: the scenario's scheme below 0.075 v0 (the limit as measured, 20 % of room: it
+    must not grow) and the damped one below 0.015 v0, twice the full FE's (the ring is the
+    reduced model's on this scheme, not the contact's)."""
+    assert _end_b_ring(_short("rigid-striker")) < 0.075 * V0
     assert _end_b_ring(_short("rigid-striker-damped")) < 0.015 * V0
 
 

@@ -1,7 +1,7 @@
 """Moreau-Jean theta scheme (Jean 1999) with position-level joints: the implicit midpoint rule
 at theta = 1/2 (second order), first order for a fixed theta > 1/2 (DEFAULT_THETA, the only
-default of theta in the package), second order with theta(h) = 1/2 + h / (4 tau) computed for
-each step (integrate.theta).
+default of theta in the package), second order with theta(h) computed for each step from a
+damping time tau (integrate.theta: 1/2 + h / (4 tau) up to the contact step).
 
 For every body, with v- the velocity at t, v+ at t + h, v_m = theta v+ + (1 - theta) v- and the
 configuration x_m = x(t) (+) theta h v_m (Lie-group update of A):
@@ -16,10 +16,11 @@ part exactly. theta > 1/2 (Jean 1999) damps the components with omega h >> 1 (am
 (1 - theta)/theta at infinity) at a first-order cost (damping ratio ~ (theta - 1/2) omega h / 2
 for the resolved modes): it removes the step-to-step ringing of the contact nodes that makes
 Lagrange-multiplier contact chatter. With theta - 1/2 proportional to the step (a scenario's
-time.hf_damping_time_s tau: theta(h) = 1/2 + h / (4 tau) for every step size h the driver
-takes, capped at 1: integrate.theta) the local error (theta - 1/2) h^2 y'' is O(h^3), so the
-scheme stays second order while what the step cannot resolve decays as exp(-t / tau) at
-every h, never slower (docs/contact_law.md).
+time.hf_damping_time_s tau: theta(h) = 1/2 + h / (4 tau) up to the contact step dt_s, capped
+at 1, and 1/2 + dt_s^2 / (4 tau h) above it: integrate.theta) the local error
+(theta - 1/2) h^2 y'' is O(h^3), so the scheme stays second order while what the contact step
+cannot resolve decays as exp(-t / tau) and the free-flight steps damp resolved motion no more
+than the contact step (docs/contact_law.md).
 
 Constraints (seed eq. 11, at impulse level):
 - joints: phi(x(t + h)) = 0 (position level: no drift), rows Phi_v at x_m; at theta > 1/2

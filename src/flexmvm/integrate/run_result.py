@@ -34,8 +34,9 @@ PROBE_AXES = ("x", "y", "z")
 class TimeGrid:
     """t_end_s, dt_s (smallest step), dt_max_s (largest), output_dt_s; all [s]; theta of the
     Moreau-Jean scheme (1/2: implicit midpoint; default flexmvm.integrate.DEFAULT_THETA), or
-    with hf_damping_time_s tau [s] theta(h) = min(1, 1/2 + h / (4 tau)) for each step size h
-    the driver takes (integrate.theta; theta is then the value at dt_s, not used)."""
+    with hf_damping_time_s tau [s] theta(h) for each step size h the driver takes
+    (integrate.theta: min(1, 1/2 + h / (4 tau)) up to dt_s, 1/2 + dt_s^2 / (4 tau h) above it;
+    theta is then the value at dt_s, not used)."""
 
     t_end_s: float
     dt_s: float
@@ -58,7 +59,7 @@ class TimeGrid:
         """theta of each step size (integrate.theta)."""
         if self.hf_damping_time_s is None:
             return ThetaRule(self.theta)
-        return ThetaRule(self.theta, self.hf_damping_time_s)
+        return ThetaRule(self.theta, self.hf_damping_time_s, contact_step_s=self.dt_s)
 
     def contact_output_ticks(self) -> int | None:
         """Ticks between the contact-phase outputs (None: none); InputError if not a whole

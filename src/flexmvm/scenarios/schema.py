@@ -76,7 +76,7 @@ from flexmvm.scenarios.support_schema import SupportConfig, check_supports, with
 def theta_for_damping_time(dt_s: float, tau_s: float) -> float:
     """The Moreau-Jean theta whose step damps what it cannot resolve with time constant tau_s
     [s]: theta = 1/2 + dt_s / (4 tau_s) (integrate.theta, which applies it to every step size
-    the driver takes, capped at 1). Per step the amplification at omega h >> 1 is
+    up to dt_s, capped at 1, and 1/2 + dt_s^2 / (4 tau_s h) to the longer ones). Per step the amplification at omega h >> 1 is
     -(1 - theta) / theta = -exp(-dt_s / tau_s) (1 + O((dt_s / tau_s)^3)); for resolved
     motion the local error (theta - 1/2) h^2 y'' is O(h^3), so the scheme stays second
     order as dt_s -> 0 (a theta fixed above 1/2 is first order)."""
@@ -122,10 +122,11 @@ class TimeConfig(Frozen):
     theta: Annotated[float, Strict(), Ge(0.5), Le(1.0)] = DEFAULT_THETA
     # extra outputs this often while the step is dt_s (contact active or near); None: none
     output_contact_dt_s: Positive | None = None
-    # tau [s]: theta(h) = 1/2 + h / (4 tau) for each step size h the driver takes (dt_s up to
-    # dt_max_s; capped at 1), instead of a fixed theta; theta is then its value at dt_s
-    # (theta_for_damping_time): what the step cannot resolve decays as exp(-t / tau) whatever
-    # the step, and theta - 1/2 = O(h) keeps the scheme second order (integrate.theta;
+    # tau [s]: theta(h) = 1/2 + h / (4 tau) for each step size h up to dt_s (capped at 1) and
+    # 1/2 + dt_s^2 / (4 tau h) for the free-flight steps up to dt_max_s, instead of a fixed
+    # theta; theta is then its value at dt_s (theta_for_damping_time): what the contact step
+    # cannot resolve decays as exp(-t / tau), the free-flight steps damp resolved motion as
+    # dt_s does, and theta - 1/2 = O(h) keeps the scheme second order (integrate.theta;
     # docs/contact_law.md, "theta = 1/2 + h / (4 tau)")
     hf_damping_time_s: Positive | None = None
     # fields (q, q_dot: displacements, stresses) kept and written every field_output_dt_s [s]

@@ -58,7 +58,9 @@ def seed_scheme(sc: Scenario, body: str) -> Scenario:
     h / (4 tau) from hf_damping_time_s: 0.51 at their 0.5 us step) goes back to the velocity law
     without redistribution, and the scheme to a fixed theta = DEFAULT_THETA (0.55: the velocity
     law's contact nodes carry mass and ring at theta near 1/2). ``sc`` itself
-    when no contact redistributes ``body``'s mass."""
+    when no contact redistributes ``body``'s mass. The seed study's answer (1-3 + 25 for
+    force NCC >= 0.99) is the same on the scenario's own scheme: benchmarks/study_scheme.py,
+    docs/notes/2026-11-29-study-scheme.md."""
     touched = redistributing_contacts(sc, body)
     if not touched:
         return sc

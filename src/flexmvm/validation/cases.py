@@ -40,10 +40,11 @@ from flexmvm.validation.paths import scenario_path
 from flexmvm.validation.runs import Case, case_meta, conservation, run_case, truncate
 
 #: The seed runs' settings (docs/validation.md): contact step, seed window, flat window, step
-#: convergence window [s].
+#: convergence window [s]. The seed and flat windows are their scenario files' own (2 ms, 2 us
+#: free-flight steps after the contact): the figures the README's command prints.
 DT = 0.5e-6
-T_SEED = 1.0e-3
-T_FLAT = 0.5e-3
+T_SEED = 2.0e-3
+T_FLAT = 2.0e-3
 T_STEP = 2.0e-4
 #: The short case: its own file's t_end covers the contact (0..185 us) and the release.
 SHORT_FINE_MESH = {"first_element_m": 0.15e-3, "core_elements": 4}
@@ -63,15 +64,14 @@ def _plot(path: Path, runs: dict, theory, title: str) -> None:
 
 
 def flat_vs_st_venant(
-    out: Path, t_end: float = T_FLAT, dt: float | None = DT, recompute: bool = False
+    out: Path, t_end: float | None = None, dt: float | None = None, recompute: bool = False
 ) -> dict:
     """Flat-ended rods, full FE, against St Venant's plateau force v0 Z1 Z2 / (Z1 + Z2) and
-    the free end's jump at L / c2 (timed at half the 1D amplitude 2 F0 / Z2)."""
-    sc = (
-        load_scenario(scenario_path("rod_impact_flat.toml"))
-        .with_kind(ModelKind.FULL)
-        .with_time(t_end_s=t_end, dt_s=dt)
-    )
+    the free end's jump at L / c2 (timed at half the 1D amplitude 2 F0 / Z2); the scenario as
+    shipped (rod_impact_flat.toml, 2 ms) unless t_end or the contact step dt [s] are given."""
+    sc = load_scenario(scenario_path("rod_impact_flat.toml")).with_kind(ModelKind.FULL)
+    if t_end is not None or dt is not None:
+        sc = sc.with_time(t_end_s=t_end, dt_s=dt)
     c = run_case(out, "flat_full", sc, recompute)
     t, f, p = c.curves
     b1, b2 = sc.body("b1"), sc.body("b2")
@@ -95,17 +95,28 @@ def flat_vs_st_venant(
     }
 
 
+def seed_scenario(t_end: float | None = None, dt: float | None = None) -> Scenario:
+    """The seed case as users run it: rod_impact.toml as shipped (its 2 ms window, 0.5 us
+    contact step, 2 us free-flight step and damping time), or with t_end and the contact step
+    dt [s] overridden where given."""
+    sc = load_scenario(scenario_path("rod_impact.toml"))
+    if t_end is None and dt is None:
+        return sc
+    return sc.with_time(t_end_s=t_end, dt_s=dt)
+
+
 def seed_vs_theory(
     out: Path,
-    t_end: float = T_SEED,
-    dt: float | None = DT,
+    t_end: float | None = None,
+    dt: float | None = None,
     recompute: bool = False,
     with_1_1: bool = False,
     plot: bool = False,
 ) -> dict:
-    """The seed case: full FE and the scenario's MVM against the 1D wave-Hertz solution and
-    each other; with_1_1: the seed's own 1-1 + 37 model against full FE too."""
-    sc = load_scenario(scenario_path("rod_impact.toml")).with_time(t_end_s=t_end, dt_s=dt)
+    """The seed case (seed_scenario: as shipped unless t_end or dt are given): full FE and
+    the scenario's MVM against the 1D wave-Hertz solution and each other; with_1_1: the
+    seed's own 1-1 + 37 model against full FE too."""
+    sc = seed_scenario(t_end, dt)
     tt, ft, pt, _ = theory_histories(sc)
     full = run_case(out, "seed_full", sc.with_kind(ModelKind.FULL), recompute)
     mvm = run_case(out, "seed_mvm", sc, recompute)
@@ -118,6 +129,7 @@ def seed_vs_theory(
         "mvm": conservation(mvm.summary),
         "mvm_dof": mvm.summary["dof"],
         "mvm_model": f"{b2.selection} + {b2.modes} modes",
+        "t_end_s": sc.time.t_end_s,
         "cases": {"full": case_meta(full), "mvm": case_meta(mvm)},
     }
     runs = {"FE": full.curves, f"MVM {b2.selection} + {b2.modes}": mvm.curves}
@@ -148,12 +160,13 @@ def step_convergence(
 ) -> dict:
     """Full-FE seed force at h = dt and h/2 over [0, t_end]. The h run may be a longer one
     (``t_end_h``, e.g. the seed_full case: the same steps up to t_end), truncated to t_end."""
-    sc = load_scenario(scenario_path("rod_impact.toml")).with_kind(ModelKind.FULL)
+    sc = seed_scenario().with_kind(ModelKind.FULL)
     t_h = t_end if t_end_h is None else t_end_h
+    shipped = t_h == sc.time.t_end_s and dt == sc.time.dt_s  # the seed case's own full FE run
     a = run_case(
         out,
-        "seed_full" if t_h == T_SEED and dt == DT else f"seed_full_dt{dt:g}",
-        sc.with_time(t_end_s=t_h, dt_s=dt),
+        "seed_full" if shipped else f"seed_full_dt{dt:g}",
+        sc if shipped else sc.with_time(t_end_s=t_h, dt_s=dt),
         recompute,
     )
     b = run_case(
@@ -245,14 +258,13 @@ def pendulum_case(out: Path, recompute: bool = False) -> dict:
     """The seed's experiment, the whole event (pendulum_release.toml on its defaults:
     release, swing, impact, separation, 4.5 ms past it): impact speed against sqrt(2 g h) (h:
     b1's start height), the impact phase against the seed case with the same models and
-    scheme (the seed_mvm case: rod_impact.toml to 1 ms) aligned at first contact, the momenta
+    scheme (the seed_mvm case: rod_impact.toml as shipped) aligned at first contact, the momenta
     after the separation against the rigid pendulum, the strings' drift."""
     from flexmvm.scenarios.pendulum import impact_comparison
 
     sc = load_scenario(scenario_path("pendulum_release.toml"))
     c = run_case(out, "pendulum", sc, recompute)  # its summary's "pendulum": scenarios.run
-    seed = load_scenario(scenario_path("rod_impact.toml")).with_time(t_end_s=T_SEED, dt_s=DT)
-    ref = run_case(out, "seed_mvm", seed, recompute)
+    ref = run_case(out, "seed_mvm", seed_scenario(), recompute)
     ev = c.summary["pendulum"]
     g = float(np.linalg.norm(sc.gravity_mps2))
     h = float(sc.body("b1").placement.position_m[2])
@@ -293,11 +305,11 @@ def _hertz_block_mesh(out: Path, fine_m: float) -> Path:
 
 
 def hertz_block_case(out: Path, recompute: bool = False) -> dict:
-    """A rigid steel sphere (R 10 mm, 0.5 m/s) on a free aluminium block (sphere_block.toml)
-    against Hertz with the block's recoil (scenarios.hertz_block): peak force and duration of
-    the first contact, with the committed block (coarse) and one meshed finer at run time."""
+    """A rigid steel sphere (R 10 mm, 0.5 m/s) on a free aluminium block (sphere_block.toml
+    as shipped: 0.2 ms) against Hertz with the block's recoil (scenarios.hertz_block): peak
+    force and duration of the first contact, with the committed block (coarse) and one meshed
+    finer at run time."""
     from flexmvm.scenarios.hertz_block import (
-        T_END_S,
         hertz_comparison,
         hertz_reference,
         sphere_block_scenario,
@@ -307,7 +319,6 @@ def hertz_block_case(out: Path, recompute: bool = False) -> dict:
     for label, fine_m in HERTZ_BLOCK_SIZES_M.items():
         block = None if fine_m is None else _hertz_block_mesh(out, fine_m)
         sc = sphere_block_scenario(block, path=scenario_path("sphere_block.toml"))
-        sc = sc.with_time(t_end_s=T_END_S)
         c = run_case(out, f"hertz_block_{label}", sc, recompute)
         numbers[label] = {
             **conservation(c.summary),
@@ -403,6 +414,7 @@ __all__ = [
     "flat_vs_st_venant",
     "hertz_block_case",
     "pendulum_case",
+    "seed_scenario",
     "seed_vs_theory",
     "short_case",
     "short_scenario",
