@@ -11,7 +11,7 @@ built-in laws are registered by constraints/contact_laws/__init__.py, one line e
 from __future__ import annotations
 
 from enum import StrEnum
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any, cast
 
 from flexmvm.errors import InputError
 
@@ -39,7 +39,7 @@ LAWS: dict[ContactLaw, ContactLawSpec] = {}
 def _member(name: str, value: str) -> ContactLaw:
     """A new ContactLaw member ``name`` = ``value`` (a law registered after the class was
     made: the way Enum's own class creation adds one)."""
-    member = str.__new__(ContactLaw, value)
+    member: Any = str.__new__(ContactLaw, value)
     member._name_, member._value_ = name, value
     member.__objclass__ = ContactLaw
     member.__init__(value)
@@ -57,7 +57,7 @@ def register_law(spec: ContactLawSpec) -> ContactLaw:
     name = spec.name
     if not isinstance(name, str) or not name or name != name.strip().lower():
         raise InputError(f"contact law name {name!r}; expected a lower-case string")
-    law = ContactLaw._value2member_map_.get(name)
+    law = cast("ContactLaw | None", ContactLaw._value2member_map_.get(name))
     if law is not None and law in LAWS:
         raise InputError(f"contact law {name!r} is registered already")
     if law is None:
@@ -69,7 +69,7 @@ def register_law(spec: ContactLawSpec) -> ContactLaw:
 def unregister_law(name: str) -> None:
     """Remove a law registered by register_law that is not built in (a test's toy law): its
     spec and its ContactLaw member."""
-    law = ContactLaw._value2member_map_.get(name)
+    law = cast("ContactLaw | None", ContactLaw._value2member_map_.get(name))
     if law is None or name in _BUILT_IN:
         raise InputError(f"contact law {name!r}: not a registered added law")
     LAWS.pop(law, None)
@@ -85,7 +85,7 @@ _BUILT_IN = frozenset(law.value for law in ContactLaw)
 def law_spec(law: ContactLaw | str) -> ContactLawSpec:
     """The spec of ``law`` (a ContactLaw or its name); InputError naming the laws for an
     unknown one."""
-    spec = LAWS.get(ContactLaw._value2member_map_.get(law))  # type: ignore[arg-type]
+    spec = LAWS.get(cast(ContactLaw, ContactLaw._value2member_map_.get(law)))
     if spec is None:
         known = ", ".join(k.value for k in LAWS)
         raise InputError(f"contact law {law!r}: expected one of {known}")
