@@ -13,6 +13,7 @@ PACKAGE = Path(__file__).resolve().parents[1] / "src" / "flexmvm"
 # lowest first; a stage may import itself and anything earlier in this list
 STAGES = [
     "errors",
+    "enum_registry",
     "threads",
     "processes",
     "materials",

@@ -62,7 +62,7 @@ def notes_as_lines() -> None:
         else:
             previous(message, category, filename, lineno, file, line)
 
-    show.flexmvm_notes = True
+    show.flexmvm_notes = True  # type: ignore[attr-defined]  # marks the installed hook
     warnings.showwarning = show
 
 

@@ -11,6 +11,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import StrEnum
+from typing import TypeGuard
 
 import numpy as np
 
@@ -147,7 +148,7 @@ class NodeSetPoint:
 Anchor = BodyPoint | NodeSetPoint | np.ndarray
 
 
-def _on_body(a: Anchor) -> bool:
+def _on_body(a: Anchor) -> TypeGuard[BodyPoint | NodeSetPoint]:
     return isinstance(a, (BodyPoint, NodeSetPoint))
 
 

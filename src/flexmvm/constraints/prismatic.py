@@ -75,7 +75,7 @@ def prismatic_joint(
     e = np.eye(3)
     pairs = tuple((tuple(A.T @ e[i]), tuple(e[j])) for i, j in ((0, 1), (1, 2), (2, 0)))
     return [
-        LineLock(p1, tuple(float(v) for v in origin), (tuple(b), tuple(c))),
+        LineLock(p1, (float(origin[0]), float(origin[1]), float(origin[2])), (tuple(b), tuple(c))),
         OrientationLock(p1.body, None, pairs),
     ]
 

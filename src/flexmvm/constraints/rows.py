@@ -94,10 +94,11 @@ class Rows:
         """The nodal selector N (m, n_dofs) of body b (elastic part = N psi), or None."""
         sel = self.nodal.get(b)
         if sel is None and self._entries.get(b) is not None and b in self.blocks:
-            entries, n_dofs = self._entries[b]
-            rows = np.concatenate([np.full(len(d), r) for r, d, _ in entries] or [[]])
-            cols = np.concatenate([d for _, d, _ in entries] or [[]]).astype(np.int64)
-            vals = np.concatenate([v for _, _, v in entries] or [[]])
+            entries, n_dofs = self._entries[b]  # type: ignore[misc]  # checked above
+            empty = np.zeros(0)
+            rows = np.concatenate([np.full(len(d), r) for r, d, _ in entries] or [empty])
+            cols = np.concatenate([d for _, d, _ in entries] or [empty]).astype(np.int64)
+            vals = np.concatenate([v for _, _, v in entries] or [empty])
             sel = sp.csr_matrix((vals, (rows.astype(np.int64), cols)), shape=(self.m, n_dofs))
             sel.sum_duplicates()
             self.nodal[b] = sel
@@ -137,7 +138,7 @@ def stack(parts: list[Rows]) -> Rows:
     for b in out.blocks:
         sels = [p.nodal_selector(b) for p in parts if b in p.blocks]
         if all(s is not None for s in sels):
-            n = sels[0].shape[1]
+            n = sels[0].shape[1]  # type: ignore[union-attr]  # none is None
             blocks = [
                 p.nodal[b].tocsr() if b in p.blocks else sp.csr_matrix((p.m, n)) for p in parts
             ]

@@ -51,7 +51,7 @@ class _SkfemCell:
 
     linear_mesh: type
     mesh: type
-    element: type
+    element: type[skfem.Element]
     intorder: int
 
     def quadrature(self) -> tuple[np.ndarray, np.ndarray]:

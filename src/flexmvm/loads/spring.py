@@ -55,7 +55,7 @@ class PointSpring:
         nonnegative(self.stiffness_n_per_m, f"{what}: stiffness [N/m]")
         nonnegative(self.damping_n_s_per_m, f"{what}: damping [N s/m]")
         nonnegative(self.rest_length_m, f"{what}: rest length [m]")
-        if not self._p2_on_body and np.shape(self.p2) != (3,):
+        if not isinstance(self.p2, (BodyPoint, NodeSetPoint)) and np.shape(self.p2) != (3,):
             raise InputError(f"{what}: a ground point must be 3 numbers [m], got {self.p2!r}")
 
     @property
@@ -73,15 +73,19 @@ class PointSpring:
 
     def _geometry(self, bodies, states) -> tuple[float, np.ndarray, Rows]:
         """(length l [m], unit e (3,), the row J of l)."""
-        x2 = self.p2.position(bodies, states) if self._p2_on_body else np.asarray(self.p2, float)
+        p2 = self.p2
+        if isinstance(p2, (BodyPoint, NodeSetPoint)):
+            x2 = p2.position(bodies, states)
+        else:
+            x2 = np.asarray(p2, float)
         d = self.p1.position(bodies, states) - x2
         length = float(np.linalg.norm(d))
         # at zero length (possible with l0 = 0 only) the force k (l - l0) e vanishes with d
         e = d / length if length > 0.0 else np.zeros(3)
         rows = Rows(1)
         self.p1.add_row(rows, 0, e, 1.0, bodies, states)
-        if self._p2_on_body:
-            self.p2.add_row(rows, 0, e, -1.0, bodies, states)
+        if isinstance(p2, (BodyPoint, NodeSetPoint)):
+            p2.add_row(rows, 0, e, -1.0, bodies, states)
         return length, e, rows
 
     def length_rate(self, bodies, states) -> tuple[float, float]:

@@ -312,8 +312,9 @@ class _Reader:
             )
         out: dict[str, dict[str, np.ndarray]] = {"NSET": {}, "ELSET": {}, "NODE": {}}
         for (kind, key), name in self.names.items():
-            if kind in out:
-                out[kind][name] = self.members(kind, key)
+            members = self.members(kind, key) if kind in out else None
+            if members is not None:
+                out[kind][name] = members
         faces = {
             self.names[("FACE", key)]: np.unique(np.vstack(p), axis=0)
             if p

@@ -100,7 +100,7 @@ def component_sizes(n_nodes: int, blocks: list[CellBlock]) -> tuple[int, ...]:
     return tuple(int(k) for k in sorted(counts[counts > 0], reverse=True))
 
 
-def _triangles(boundary: np.ndarray) -> np.ndarray:
+def _triangles(boundary: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Boundary faces (B, 4), -1 padded, as triangles (T, 3) with the face index (T,)."""
     quad = boundary[:, 3] >= 0
     tris = [boundary[~quad, :3], boundary[quad][:, [0, 1, 2]], boundary[quad][:, [0, 2, 3]]]

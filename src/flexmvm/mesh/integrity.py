@@ -35,8 +35,8 @@ def face_table(
     for block in blocks:
         conn = block.connectivity
         centroid = nodes[conn].mean(axis=1)
-        for face in block.cell_type.spec.faces:
-            face = list(face)
+        for face_nodes in block.cell_type.spec.faces:
+            face = list(face_nodes)
             f = np.full((len(conn), 4), -1, dtype=np.int64)
             f[:, : len(face)] = conn[:, face]
             faces.append(f)

@@ -375,9 +375,10 @@ def rod_mesh(spec: RodSpec = RodSpec()) -> RodMesh:
         "end_b": _surface(sec.quads + last),
         "side": _surface(side_grid.reshape(-1, 3, 3)),
     }
-    surfaces["surface"] = tuple(
-        np.vstack([part[k] for part in surfaces.values()]) for k in range(2)
-    )  # the skin, as read_mesh names it
+    surfaces["surface"] = (  # the skin, as read_mesh names it
+        np.vstack([part[0] for part in surfaces.values()]),
+        np.vstack([part[1] for part in surfaces.values()]),
+    )
     outer = np.flatnonzero(sec.lap == sec.lap.max())
     node_sets = {
         "end_a": np.arange(m),

@@ -123,14 +123,14 @@ def contact_intervals(t: object, force: object, threshold: float) -> list[tuple[
         raise InputError(f"threshold: expected a finite force in N, got {threshold!r}")
     above = fa > threshold
     out: list[tuple[float, float]] = []
-    start = float(ta[0]) if above[0] else None
+    start: float | None = float(ta[0]) if above[0] else None
     for i in np.flatnonzero(above[1:] != above[:-1]):
         f0, f1 = fa[i], fa[i + 1]
         tc = float(ta[i] + (threshold - f0) / (f1 - f0) * (ta[i + 1] - ta[i]))
         if above[i + 1]:
             start = tc
-        else:
-            out.append((start, tc))
+        else:  # a fall follows a rise or the start: start is set
+            out.append((float(start), tc))  # type: ignore[arg-type]
             start = None
     if start is not None:
         out.append((start, float(ta[-1])))

@@ -35,7 +35,15 @@ from flexmvm.plasticity.material import J2Plasticity
 from flexmvm.plasticity.return_mapping import PointState, material_constants
 
 #: Strain row I (Voigt xx, yy, zz, xy, yz, zx) = sum over (component i, gradient j) pairs.
-_B_PAIRS = ((0, 0, 0), (1, 1, 1), (2, 2, 2), (3, 0, 1), (3, 1, 0), (4, 1, 2), (4, 2, 1))
+_B_PAIRS: tuple[tuple[int, int, int], ...] = (
+    (0, 0, 0),
+    (1, 1, 1),
+    (2, 2, 2),
+    (3, 0, 1),
+    (3, 1, 0),
+    (4, 1, 2),
+    (4, 2, 1),
+)
 _B_PAIRS += ((5, 2, 0), (5, 0, 2))
 
 

@@ -97,7 +97,7 @@ def indent_with_sphere(
     xy = body.mesh.nodes[face_nodes, :2]
     state, u = body.virgin_state(), np.zeros(body.n_dof)
     active = np.zeros(len(face_nodes), bool)
-    out = {"f": [], "c": [], "p": [], "u": [], "a": [], "s": []}
+    out: dict[str, list] = {"f": [], "c": [], "p": [], "u": [], "a": [], "s": []}
     for depth in np.asarray(depths_m, dtype=float):
         target = sphere_surface(xy, depth, radius_m, centre_xy, z_top_m) - z_top_m
         active |= u[3 * face_nodes + 2] > target

@@ -162,4 +162,5 @@ def _arrays(state: PointState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def _contiguous(state: PointState) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The state's arrays as float64 C-contiguous arrays (no copy when they are)."""
-    return tuple(np.ascontiguousarray(a, dtype=float) for a in _arrays(state))
+    eps_p, eq_p, back = (np.ascontiguousarray(a, dtype=float) for a in _arrays(state))
+    return eps_p, eq_p, back

@@ -117,7 +117,7 @@ def solve_static(
     state = body.virgin_state() if state is None else state
     u = np.zeros(body.n_dof) if u0 is None else np.array(u0, dtype=float)
     resp = body.respond(u, state)
-    scale = max(np.linalg.norm(resp.force), 1e-300)
+    scale = max(float(np.linalg.norm(resp.force)), 1e-300)
     out_u, out_r, out_a, out_res, out_s = [], [], [], [], []
     for k in range(loading.n_steps):
         f_ext = loading.force[k]
@@ -133,7 +133,7 @@ def solve_static(
             du[:] = 0.0
             resp = body.respond(u, state)
             r = resp.force - f_ext
-            scale = max(scale, np.linalg.norm(f_ext), np.linalg.norm(resp.force))
+            scale = max(scale, float(np.linalg.norm(f_ext)), float(np.linalg.norm(resp.force)))
             residuals.append(float(np.linalg.norm(r[free]) / scale))
             if not np.isfinite(residuals[-1]):
                 break

@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-from flexmvm.plasticity.body import PlasticBody, strain_matrices
+from flexmvm.plasticity.body import BodyResponse, PlasticBody, strain_matrices
 from flexmvm.plasticity.return_mapping import (
     PointState,
     deviator,
@@ -74,7 +74,8 @@ class StepHistory:
         self.n_refused = 0
         self._sub: PlasticBody | None = None
         self._sub_points = np.zeros(0, np.int64)
-        self._trial = None  # (response, its point ids, their dx) of the last return
+        # (response, its point ids, their dx) of the last return
+        self._trial: tuple[BodyResponse, np.ndarray, np.ndarray] | None = None
         self._k_el = None  # (the set's body, its elastic tangent): tangent_difference
 
     # ------------------------------------------------------------------ the plastic set
@@ -191,6 +192,7 @@ class StepHistory:
     def _force(self, eps_p: np.ndarray) -> np.ndarray:
         """-sum B^T D_el eps_p dx (3n,) [N] over the set's points with plastic strain eps_p
         (n_set_points, 6)."""
+        assert self._sub is not None  # called with a plastic set only
         force, start = np.zeros(self.body.n_dof), 0
         for bl in self._sub.blocks:
             ne, nqp = bl.dx.shape

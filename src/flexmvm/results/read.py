@@ -12,6 +12,7 @@ from __future__ import annotations
 import json
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import h5py
 import numpy as np
@@ -111,7 +112,7 @@ class WrittenRun:
         self.path, self.result, self.summary = path, result, summary
         self._curves = curves  # history.csv's (t, force, {probe: vx}) of a run without h5
         self.label = path.name
-        self.scenario = None  # the Scenario it ran (scenarios.written_run.read_run)
+        self.scenario: Any = None  # the Scenario it ran (scenarios.written_run.read_run)
 
     @property
     def t(self) -> np.ndarray:
@@ -152,6 +153,7 @@ class WrittenRun:
             g = f[f"bodies/{body}"]
             rows = g["time_index"][()]
             q_dot = g["q_dot"][()] if "q_dot" in g else None
+            assert self.result is not None  # _need_h5: a written run has its histories
             return FieldFrames(self.result.t[rows], rows, g["q"][()], q_dot)
 
     def elastic(self, body: str) -> tuple[np.ndarray, np.ndarray | None]:

@@ -59,6 +59,7 @@ class HistoryConfig(Frozen):
             return Constant(self.constant)
         if self.table is not None:
             return _table(self.table, 1, "table")
+        assert self.spin_up is not None  # exactly one of the three (the validator)
         return SpinUp(self.spin_up.final, self.spin_up.duration_s)
 
 
@@ -72,7 +73,10 @@ class DriveConfig(Frozen):
 
     @model_validator(mode="after")
     def _check(self) -> DriveConfig:
-        if _exactly_one(self, ("angle_rad", "angular_velocity_radps")) == "angle_rad":
+        if (
+            self.angle_rad is not None
+            and _exactly_one(self, ("angle_rad", "angular_velocity_radps")) == "angle_rad"
+        ):
             start = self.angle_rad.function().value(0.0)
             if start != 0.0:
                 raise problem(
@@ -84,6 +88,7 @@ class DriveConfig(Frozen):
         """The prescribed angle history [rad]."""
         if self.angle_rad is not None:
             return self.angle_rad.function()
+        assert self.angular_velocity_radps is not None  # exactly one (the validator)
         return Integral(self.angular_velocity_radps.function())
 
 

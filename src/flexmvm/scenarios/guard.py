@@ -192,7 +192,7 @@ def invalid_reason(row: dict) -> str | None:
     where the linear rest cannot yield). Missing entries (rows stored before the checks
     existed) pass."""
     frac = row.get("guard_outside_fraction")
-    if outside_validity(frac):
+    if frac is not None and outside_validity(frac):
         return f"guard: {100 * frac:.0f} % of the contact impulse on nodes held stiff"
     cells = row.get("plastic_cells_outside")
     if cells is not None and int(cells) > 0:

@@ -51,6 +51,8 @@ def hertz_reference(sc: Scenario, sphere: str = "ball", target: str = "block") -
         if name not in names:
             raise InputError(f"hertz_reference: no body {name!r}; expected one of {names}")
     ball, block = sc.body(sphere), sc.body(target)
+    if ball.mesh_file is None or block.mesh_file is None:
+        raise InputError(f"hertz_reference: bodies {sphere!r} and {target!r} need a mesh_file")
     ball_mesh, block_mesh = read_mesh(ball.mesh_file), read_mesh(block.mesh_file)
     mat_ball, mat_block = ball.material_obj(), block.material_obj()
     if not ball.model.kind.spec.has_basis:

@@ -7,7 +7,7 @@ import math
 
 import numpy as np
 
-from flexmvm.constraints.joints import NodeSetPoint
+from flexmvm.constraints.joints import BodyPoint, NodeSetPoint
 from flexmvm.errors import InputError, MeshError
 from flexmvm.loads import (
     BodyTorque,
@@ -42,7 +42,7 @@ def _axis(sc, k: int, index, states) -> RevoluteAxis:
 
 def build_loads(sc, bodies, infos, index, states) -> tuple:
     """The loads and springs of scenario sc, in that order (System.loads)."""
-    out = []
+    out: list = []  # PointForce, BodyTorque, MotorTorque, PointSpring, RotationalSpring
     for k, c in enumerate(sc.loads):
         where = f"loads[{k}]"
         name = c.name or f"{where} {c.type.value}"  # the key of its work in summary.json
@@ -67,10 +67,11 @@ def build_loads(sc, bodies, infos, index, states) -> tuple:
             continue
         b = index[c.body]
         p1 = _point(b, bodies, infos, c.point_m, c.node_set, where)
+        p2: BodyPoint | tuple[float, ...]
         if c.body2 is not None:
             b2 = index[c.body2]
-            p2 = body_point(b2, bodies[b2], infos[b2].mesh, c.point2_m, f"{where}.point2_m")
-            x2 = p2.position(bodies, states)
+            point2 = body_point(b2, bodies[b2], infos[b2].mesh, c.point2_m, f"{where}.point2_m")
+            p2, x2 = point2, point2.position(bodies, states)
         else:
             p2 = tuple(float(x) for x in c.ground_m)
             x2 = np.asarray(p2)

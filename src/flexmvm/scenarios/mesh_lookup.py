@@ -162,8 +162,8 @@ def body_point(index, body: FlexibleBody, mesh: Mesh, point, where) -> BodyPoint
     p = np.asarray(point, float)
     node = host_node(mesh, p, where)
     if body.nq == 0:
-        return BodyPoint(index, local=tuple(float(x) for x in p))
+        return BodyPoint(index, local=(float(p[0]), float(p[1]), float(p[2])))
     off = p - mesh.nodes[node]
     if not np.any(off):
         return BodyPoint(index, node=node)
-    return BodyPoint(index, node=node, offset_m=tuple(float(x) for x in off))
+    return BodyPoint(index, node=node, offset_m=(float(off[0]), float(off[1]), float(off[2])))

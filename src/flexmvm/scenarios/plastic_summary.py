@@ -29,7 +29,7 @@ def _loaded_node(res, system, b: int) -> int | None:
             facet = np.unique(c.surface.connectivity[int(key[2])])
             for node in facet:
                 impulse[int(node)] = impulse.get(int(node), 0.0) + x / len(facet)
-    return max(impulse, key=impulse.get) if impulse else None
+    return max(impulse, key=lambda node: impulse[node]) if impulse else None
 
 
 def inward_normal(mesh, node: int) -> np.ndarray | None:
@@ -62,7 +62,7 @@ def plastic_summary(res, built) -> dict:
         node = _loaded_node(res, built.system, b)
         normal = None if node is None else inward_normal(built.info[b].mesh, node)
         dent = None
-        if normal is not None:
+        if normal is not None and node is not None:
             dent = float(normal @ rep.residual_displacement[3 * node : 3 * node + 3])
         out[name] = {
             "peak_equivalent_plastic_strain": rep.peak_equivalent_plastic_strain,

@@ -140,7 +140,9 @@ def stamp_mismatch(stored: Any, current: Mapping[str, Any]) -> str | None:
         what.append(f"key format {stored.get('format')} (now {current['format']})")
     if stored.get("code") != current["code"]:
         what.append(f"code version {stored.get('code')} (now {current['code']})")
-    libs = stored.get("libraries") if isinstance(stored.get("libraries"), Mapping) else {}
+    libs = stored.get("libraries")
+    if not isinstance(libs, Mapping):
+        libs = {}
     what += [
         f"{name} {libs.get(name)} (now {v})"
         for name, v in current["libraries"].items()

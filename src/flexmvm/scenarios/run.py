@@ -122,9 +122,9 @@ def run_scenario(
             warnings.warn(line, ReducedBasisWarning, stacklevel=2)
         for line in truncation_warnings(summary.get("modal_truncation_guard") or {}):
             warnings.warn(line, ReducedBasisWarning, stacklevel=2)
-        line = energy_gain_warning(summary)
-        if line is not None:
-            warnings.warn(line, EnergyGainWarning, stacklevel=2)
+        gain = energy_gain_warning(summary)
+        if gain is not None:
+            warnings.warn(gain, EnergyGainWarning, stacklevel=2)
     return ScenarioRun(label, built, res, summary)
 
 
@@ -151,7 +151,7 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
     p0 = res.momentum[0]
     why_not, subsystems = momentum_report(res, built)
     free = why_not is None
-    scale = max(np.linalg.norm(p0), 1e-300)
+    scale = max(float(np.linalg.norm(p0)), 1e-300)
     mom_err = float(np.abs(res.momentum - p0).max() / scale) if free else None
     mom_err_converged = None
     if free and res.momentum_shift is not None and len(res.momentum_shift) == len(res.momentum):

@@ -90,6 +90,6 @@ def quasi_static_sag(
         dq = q - s.q
         delta = -np.linalg.pinv(Cf) @ (Cq @ dq) if m else np.zeros(6)
         w = delta[3:6]
-        A = s.A @ axis_angle(w, np.linalg.norm(w)) if np.any(w) else s.A
+        A = s.A @ axis_angle(w, float(np.linalg.norm(w))) if np.any(w) else s.A
         cur[b] = BodyState(s.r + delta[:3], A, q, s.v.copy())
     return cur[b]

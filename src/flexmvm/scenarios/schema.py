@@ -91,6 +91,7 @@ def _damped_theta(data: dict) -> Any:
         isinstance(x, (int, float)) and not isinstance(x, bool) and x > 0 for x in (tau, dt)
     ):
         return data.get("theta", DEFAULT_THETA)
+    assert dt is not None  # a positive number (above)
     theta = theta_for_damping_time(float(dt), float(tau))
     given = data.get("theta")
     if given is not None and not (
@@ -380,6 +381,7 @@ class Scenario(Frozen):
 
     def with_material(self, body: str, material: Material | str) -> Scenario:
         """A copy with body ``body`` made of ``material`` (a Material, or a preset name)."""
+        spec: MaterialSpec | str
         if isinstance(material, Material):
             spec = MaterialSpec(
                 E_pa=float(material.E),
@@ -389,7 +391,7 @@ class Scenario(Frozen):
             )
             label = material.name
         else:
-            spec = label = material
+            spec, label = material, material
         return self._replace_bodies(f"body {body} of {label}", {body: {"material": spec}})
 
     def with_rod(self, body: str, **fields: Any) -> Scenario:

@@ -39,7 +39,7 @@ from flexmvm.materials import Material
 from flexmvm.mesh.io import read_mesh
 from flexmvm.mesh.mesh import Mesh
 from flexmvm.mesh.rod import RodMesh, RodSpec, rod_mesh
-from flexmvm.reduction.basis import Basis, BasisKind, build_basis
+from flexmvm.reduction.basis import Basis, build_basis
 from flexmvm.reduction.interface import (
     FreeModes,
     InterfaceSources,
@@ -48,7 +48,7 @@ from flexmvm.reduction.interface import (
     participation_pool,
     relieved_statics,
 )
-from flexmvm.reduction.kinds import kind_spec
+from flexmvm.reduction.kinds import ModelKind, kind_spec
 from flexmvm.reduction.rod_reference import rod_reference
 from flexmvm.scenarios.body_reference import support
 from flexmvm.scenarios.cache_keys import (
@@ -175,7 +175,7 @@ class ProcessCaches:
         self,
         key: MeshKey,
         material: Material,
-        kind: BasisKind,
+        kind: ModelKind,
         retained: tuple,
         modes: int,
         ref_set: str,
@@ -221,7 +221,7 @@ class ProcessCaches:
         self,
         key: MeshKey,
         material: Material,
-        kind: BasisKind,
+        kind: ModelKind,
         retained: tuple,
         modes: int,
         ref_set: str,
@@ -342,7 +342,7 @@ class SetupCache:
         self,
         key: MeshKey,
         material: Material,
-        kind: BasisKind,
+        kind: ModelKind,
         retained: tuple,
         modes: int,
         ref_set: str,
@@ -367,7 +367,7 @@ class SetupCache:
         self,
         key: MeshKey,
         material: Material,
-        kind: BasisKind,
+        kind: ModelKind,
         retained: tuple,
         modes: int,
         ref_set: str,

@@ -17,8 +17,8 @@ from flexmvm.bodies.invariants import InertiaInvariants
 from flexmvm.fe.assembly import FEModel
 from flexmvm.materials import Material
 from flexmvm.mesh.mesh import Mesh
-from flexmvm.reduction.basis import Basis, BasisKind
-from flexmvm.reduction.kinds import kind_spec
+from flexmvm.reduction.basis import Basis
+from flexmvm.reduction.kinds import ModelKind, kind_spec
 from flexmvm.reduction.reference import ReferenceCondition
 from flexmvm.setup_cache.mapped import decoded_mapped
 from flexmvm.setup_cache.store import (
@@ -115,7 +115,7 @@ def cached_fe(
 def _basis_inputs(
     source: Mapping,
     material: Material,
-    kind: BasisKind,
+    kind: ModelKind,
     reference_set: str,
     reference: ReferenceCondition,
     retained: np.ndarray,
@@ -139,7 +139,7 @@ def _basis_inputs(
 def basis_key(
     source: Mapping,
     material: Material,
-    kind: BasisKind,
+    kind: ModelKind,
     reference_set: str,
     reference: ReferenceCondition,
     retained: np.ndarray,
@@ -158,7 +158,7 @@ def basis_key(
 def body_key(
     source: Mapping,
     material: Material,
-    kind: BasisKind,
+    kind: ModelKind,
     reference_set: str,
     reference: ReferenceCondition,
     retained: np.ndarray,
@@ -175,7 +175,7 @@ def body_key(
 
 def _basis_from(
     arrays: Mapping[str, np.ndarray],
-    kind: BasisKind,
+    kind: ModelKind,
     reference: ReferenceCondition,
     retained: np.ndarray,
     n_modes: int,
@@ -192,7 +192,7 @@ def _basis_from(
 def cached_basis(
     source: Mapping | None,
     material: Material,
-    kind: BasisKind,
+    kind: ModelKind,
     reference_set: str,
     reference: ReferenceCondition,
     retained: np.ndarray,
@@ -365,7 +365,7 @@ def _parts_from(arrays: Mapping[str, np.ndarray], nq: int) -> BodyParts:
 def cached_body(
     source: Mapping | None,
     material: Material,
-    kind: BasisKind,
+    kind: ModelKind,
     reference_set: str,
     reference: ReferenceCondition,
     retained: np.ndarray,

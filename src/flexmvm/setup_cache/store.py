@@ -184,7 +184,8 @@ def save(key: str, arrays: Mapping[str, np.ndarray]) -> None:
     try:
         directory.mkdir(parents=True, exist_ok=True)
         with atomic_path(directory / (key + SUFFIX)) as tmp, open(tmp, "wb") as f:
-            np.savez(f, **arrays, **{CHECKSUM: np.array(checksum(arrays))})
+            # the arrays' names are not savez's keywords (numpy's stubs cannot tell)
+            np.savez(f, **arrays, **{CHECKSUM: np.array(checksum(arrays))})  # type: ignore[arg-type]
     except (OSError, InputError, ValueError):  # a read-only or full disk must not stop a run
         return
 

@@ -171,7 +171,7 @@ def _version_change(stored: Any, current: Any) -> str | None:
         if canonical_json(a) == canonical_json(b):
             continue
         if name == "provenance" and isinstance(b, Mapping):
-            what.append(stamp_mismatch(a, b))
+            what.append(stamp_mismatch(a, b) or "another provenance")
         else:
             what.append(_VERSION_WORDS.get(name, f"another {name}"))
     return "; ".join(what)

@@ -93,15 +93,16 @@ def facet_size(nodes: np.ndarray, fs, point: np.ndarray, a: float) -> float:
     (largest node-to-node distance) of the facets of ``fs`` (node positions ``nodes``) that
     the ball of radius ``a`` about ``point`` meets; the facet nearest the point if none (a
     mesh coarser than a)."""
-    diam, dist = [], []
+    diams: list[np.ndarray] = []
+    dists: list[np.ndarray] = []
     for f in (fs.tris, fs.quads):
         if not len(f):
             continue
         xf = nodes[f]  # (n, k, 3)
-        diam.append(np.max(np.linalg.norm(xf[:, :, None] - xf[:, None, :], axis=3), axis=(1, 2)))
+        diams.append(np.max(np.linalg.norm(xf[:, :, None] - xf[:, None, :], axis=3), axis=(1, 2)))
         parts = [(0, 1, 2)] if f.shape[1] == 3 else [(0, 1, 2), (0, 2, 3)]
-        dist.append(np.min([_triangle_distance(point, xf[:, list(t)]) for t in parts], axis=0))
-    diam, dist = np.concatenate(diam), np.concatenate(dist)
+        dists.append(np.min([_triangle_distance(point, xf[:, list(t)]) for t in parts], axis=0))
+    diam, dist = np.concatenate(diams), np.concatenate(dists)
     touched = dist <= a
     return float(diam[touched].max() if touched.any() else diam[np.argmin(dist)])
 

@@ -64,6 +64,8 @@ def estimate_selection(
             laps = j
     sel = tuple(int(i) for i in rod.selection(1, laps))
     cfg = sc.body(body)
+    if cfg.rod is None:
+        raise InputError(f"body {body!r}: the modal estimate needs a rod body")
     grid = sorted(int(m) for m in modes)
     basis = default_setup().basis(
         cfg.rod.spec(),

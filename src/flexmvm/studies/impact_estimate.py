@@ -32,6 +32,7 @@ import numpy as np
 
 from flexmvm.errors import InputError
 from flexmvm.scenarios import Scenario
+from flexmvm.scenarios.joint_schema import JointConfig
 from flexmvm.theory.hertz import HertzImpact
 from flexmvm.theory.plate_impact import plate_impact, plate_impedance
 
@@ -118,20 +119,26 @@ def _motion(sc: Scenario, cfg, mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray
         if j.body != cfg.name or j.body2 is not None:
             continue
         if j.drive is not None and j.axis is not None:
-            axis = np.asarray(j.axis, float) / np.linalg.norm(j.axis)
+            axis = _unit(j.axis)
             rate = _drive_rate(j, sc.time.t_end_s)
             return np.zeros(3), rate * axis, _pivot(cfg, j, mesh)
         if j.velocity_mps is not None:
             return np.asarray(j.velocity_mps, float), np.zeros(3), np.zeros(3)
     for k, j in _motored(sc, cfg.name):
-        axis = np.asarray(j.axis, float) / np.linalg.norm(j.axis)
+        axis = _unit(j.axis)
         pivot = _pivot(cfg, j, mesh)
         rate = _motor_rate(sc, k, _axis_inertia(cfg, pivot, axis))
         return np.zeros(3), rate * axis, pivot
     return v, w, np.asarray(p.position_m, float)
 
 
-def _motored(sc: Scenario, body: str) -> list[tuple[int, object]]:
+def _unit(axis: tuple[float, float, float] | None) -> np.ndarray:
+    """The unit vector along a joint's axis (the callers take joints that have one)."""
+    a = np.asarray(axis, float)
+    return a / np.linalg.norm(a)
+
+
+def _motored(sc: Scenario, body: str) -> list[tuple[int, JointConfig]]:
     """(index, joint) of the undriven revolute joints of ``body`` to the ground that a motor
     load turns."""
     from flexmvm.constraints.joints import JointType
@@ -170,11 +177,10 @@ def _motor_rate(sc: Scenario, k: int, inertia: float) -> float:
     from flexmvm.scenarios.load_schema import LoadType
 
     t = np.linspace(0.0, sc.time.t_end_s, DRIVE_SAMPLES)
-    tau = sum(
-        np.array([float(ld.history().at(float(s))[0]) for s in t])
-        for ld in sc.loads
-        if ld.type is LoadType.MOTOR and ld.joint == k
-    )
+    tau = np.zeros_like(t)
+    for ld in sc.loads:
+        if ld.type is LoadType.MOTOR and ld.joint == k:
+            tau = tau + np.array([float(ld.history().at(float(s))[0]) for s in t])
     impulse = np.concatenate([[0.0], np.cumsum(0.5 * (tau[1:] + tau[:-1]) * np.diff(t))])
     return float(np.max(np.abs(impulse))) / inertia
 
@@ -229,7 +235,7 @@ def _mass(sc: Scenario, cfg, mesh, point: np.ndarray, n: np.ndarray) -> float:
     supported = any(s.body == cfg.name for s in sc.supports)
     if len(ground) == 1 and swing and not supported:
         j = swing[0]
-        axis = np.asarray(j.axis, float) / np.linalg.norm(j.axis)
+        axis = _unit(j.axis)
         pivot = _pivot(cfg, j, mesh)
         lever = float(np.cross(point - pivot, n) @ axis)
         return math.inf if lever == 0.0 else _axis_inertia(cfg, pivot, axis) / lever**2
@@ -264,7 +270,8 @@ def expected_impact(sc, cfg, pcfg, R: float, v: float, contact, geometry, where:
         )
     ma, mb = (m_partner, m_body) if math.isfinite(m_partner) else (m_body, m_partner)
     E = e_star(cfg, pcfg, where)
-    thin, first_h, compliance = [], math.nan, 0.0
+    thin: list[str] = []  # the bodies thin enough for the plate model
+    first_h, compliance = math.nan, 0.0
     for c in (cfg, pcfg):
         if is_rigid(c):
             continue

@@ -54,7 +54,7 @@ __all__ = [
 def parse_patches(text: str) -> list[tuple[float, ...]]:
     """'0.46;0.2,0.46,0.9' (radii in mm, sets separated by ';', '-' for none) -> patch-radius
     sets [m]. InputError (one line) on anything else."""
-    sets = []
+    sets: list[tuple[float, ...]] = []
     for part in text.split(";"):
         part = part.strip()
         if part == "-":

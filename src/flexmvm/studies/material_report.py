@@ -123,7 +123,8 @@ def _mean(values: list[float]) -> float | None:
 
 
 def _decreasing(means: list[float | None]) -> bool:
-    return all(v is not None for v in means) and all(a > b for a, b in itertools.pairwise(means))
+    known = [v for v in means if v is not None]
+    return len(known) == len(means) and all(a > b for a, b in itertools.pairwise(known))
 
 
 def _valid_models(rows: Sequence[dict], reason: Mapping[str, str | None]) -> set[tuple]:

@@ -205,7 +205,7 @@ def material_study(
         body=body,
         kind=kind,
         selections=selections,
-        modes=modes,
+        modes=list(modes),
         rod=rod,
     )
     return MaterialStudy(rows, result, material_columns([p.name for p in sc.probes]))

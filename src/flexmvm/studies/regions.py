@@ -20,7 +20,7 @@ a node family like an i-j selection (same search, same tie order).
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -82,8 +82,9 @@ class RegionFamily:
         )
         return f"{head}-m{int(modes)}"
 
-    def spec(self, centre_m: Sequence[float]) -> dict:
-        """The scenario's ``region`` table of this family."""
+    def spec(self, centre_m: Sequence[float]) -> Any:
+        """The scenario's ``region`` table of this family (a dict, validated into a
+        RegionSpec where a model is made of it)."""
         if self.radius_m is not None:
             return {
                 "ball": {"centre_m": [float(a) for a in centre_m], "radius_m": float(self.radius_m)}
@@ -124,10 +125,11 @@ def _centre(sc: Scenario, body: str, centre_m) -> tuple[float, float, float]:
         c = tuple(float(a) for a in centre_m)
         if len(c) != 3 or not all(math.isfinite(a) for a in c):
             raise InputError(f"centre_m {centre_m!r}: expected three finite coordinates [m]")
-        return c
+        return c[0], c[1], c[2]
     region = sc.body(body).model.region
     if region is not None and region.ball is not None:
-        return tuple(float(a) for a in region.ball.centre_m)
+        x, y, z = (float(a) for a in region.ball.centre_m)
+        return x, y, z
     from flexmvm.studies.region import estimate_region
 
     # the expected contact point only: the closing speed and curvature are not needed
@@ -218,7 +220,7 @@ def _family(region: dict) -> RegionFamily:
     return RegionFamily(node_set=str(region["node_set"]))
 
 
-def _row(p: dict) -> dict[str, Any]:
+def _row(p: Mapping[str, Any]) -> dict[str, Any]:
     fam = _family(p["region"])
     n, m = int(p["nodes"]), int(p["modes"])
     return {
@@ -292,12 +294,11 @@ def region_key(r: dict) -> str:
 
 def region_winner(best: Candidate | None, rows: dict[str, dict]) -> dict:
     """selection.json's winner fields of a region study (``rows`` by case key)."""
-    if best is None:
+    if best is None or best.region is None:
         return {"passed": False}
+    what, value = best.region
     fam = (
-        RegionFamily(radius_m=best.region[1])
-        if best.region[0] == "ball"
-        else RegionFamily(node_set=best.region[1])
+        RegionFamily(radius_m=float(value)) if what == "ball" else RegionFamily(node_set=str(value))
     )
     r = rows[fam.case_key(best.modes)]
     return {"passed": True} | {

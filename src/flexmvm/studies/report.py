@@ -3,6 +3,7 @@ target as text (studies/selection.py module doc: the files)."""
 
 from __future__ import annotations
 
+import os
 from collections.abc import Callable, Iterable, Sequence
 from pathlib import Path
 from typing import Any
@@ -38,7 +39,11 @@ def failure_list(keyed_rows: Iterable[tuple[str, dict]]) -> list[dict]:
 
 
 def echo_failures(
-    echo: Callable[[str], Any], failures: Sequence[dict], n_runs: int, where: str, shown: int = 5
+    echo: Callable[[str], Any],
+    failures: Sequence[dict],
+    n_runs: int,
+    where: str | os.PathLike,
+    shown: int = 5,
 ) -> None:
     """One console line per failed case (the first ``shown``), then where the rest are."""
     if not failures:
@@ -66,7 +71,7 @@ def write_ncc_csv(path: Path, rows: Iterable[dict], probes: Sequence[str]) -> li
 
 
 def winner_dict(best: Candidate | None, rows: dict[tuple, dict]) -> dict:
-    if best is None:
+    if best is None or best.selection is None:
         return {"passed": False}
     r = rows[(*best.selection, best.modes)]
     return {
@@ -112,9 +117,9 @@ def echo_summary(echo: Callable[[str], Any], result: dict, target: Target, where
     runs = f"{result['runs']} runs ({result['runs_made']} made, {result['runs_loaded']} loaded)"
     exact = result.get("exact", True)
     if result["passed"]:
-        where = result["region"] if "region" in result else f"{result['layers']}-{result['laps']}"
+        kept = result["region"] if "region" in result else f"{result['layers']}-{result['laps']}"
         model = (
-            f"{where} with {result['modes']} modes, "
+            f"{kept} with {result['modes']} modes, "
             f"{result['dof']} DOF ({result['nodes']} nodes), NCC {result['ncc_force']:.6f}"
         )
         echo(

@@ -152,7 +152,7 @@ class Candidate:
             object.__setattr__(self, "selection", sel)
         else:
             try:
-                radii = tuple(float(a) for a in self.patch_radii_m)
+                radii = tuple(float(a) for a in self.patch_radii_m or ())
             except (TypeError, ValueError):
                 radii = (-1.0,)
             if not all(math.isfinite(a) and a > 0 for a in radii) or len(set(radii)) != len(radii):
@@ -188,8 +188,11 @@ class Candidate:
             return f"selection {self.selection}"
         if self.region is not None:
             what, value = self.region
-            return f"region ball {value * 1e3:g} mm" if what == "ball" else f"region set {value}"
-        return "patch set (" + ", ".join(f"{a * 1e3:g}" for a in self.patch_radii_m) + ") mm"
+            if what == "ball":
+                return f"region ball {float(value) * 1e3:g} mm"
+            return f"region set {value}"
+        radii = self.patch_radii_m or ()
+        return "patch set (" + ", ".join(f"{a * 1e3:g}" for a in radii) + ") mm"
 
 
 def rank_key(candidate: Candidate, score: float) -> tuple:

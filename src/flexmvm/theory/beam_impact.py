@@ -257,7 +257,9 @@ def _integrate(model: _Model, imp: SphereOnBeam, grid: np.ndarray, rtol: float, 
         def gap_event(t, y):
             return y[n] - model.phi_c @ y[:n]
 
-        gap_event.terminal, gap_event.direction = True, (-1.0 if in_contact else 1.0)
+        # solve_ivp reads the event's options off the function object
+        gap_event.terminal = True  # type: ignore[attr-defined]
+        gap_event.direction = -1.0 if in_contact else 1.0  # type: ignore[attr-defined]
         sol = solve_ivp(
             model.rhs,
             (t0, t_end),

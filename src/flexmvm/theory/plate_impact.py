@@ -71,7 +71,8 @@ def plate_impact(
     def leaves(_t, y):
         return y[0]
 
-    leaves.terminal, leaves.direction = True, -1.0
+    # solve_ivp reads the event's options off the function object
+    leaves.terminal, leaves.direction = True, -1.0  # type: ignore[attr-defined]
     sol = solve_ivp(
         rhs, (0.0, 50.0), [0.0, 1.0], events=leaves, rtol=1e-9, atol=1e-12, dense_output=True
     )

@@ -162,7 +162,9 @@ class WaveSolution:
     law: ContactLaw
     params: WaveParams
 
-    def _fields(self, rod: Rod1D, v_out: np.ndarray, t: float) -> tuple[np.ndarray, np.ndarray]:
+    def _fields(
+        self, rod: Rod1D, v_out: np.ndarray, t: float
+    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
         """Left-/right-going particle velocities along the rod at time t, on a grid of the
         distance d from the near end: vL(d) = v_out(t - d/c), vR(d) = v_out(t - T + d/c)."""
         n_d = max(math.ceil(rod.length_m / (rod.c * self.params.dt)), 8) + 1

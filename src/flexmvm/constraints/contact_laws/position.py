@@ -40,6 +40,7 @@ class PositionLaw(LawSpec):
         """-(g + h (1 - theta) u_N-) / (theta h): the end gap g + h (theta u_N+ + (1 - theta)
         u_N-) >= 0, theta the scheme's of the step size h (a number or a rule)."""
         th = theta(h) if callable(theta) else theta
+        assert th is not None  # options_problem refused a missing theta
         return -(gaps + (h * (1.0 - th)) * u_n) / (th * h)
 
     def scenario_problem(

@@ -13,6 +13,7 @@ from __future__ import annotations
 from enum import StrEnum
 from typing import TYPE_CHECKING
 
+from flexmvm.enum_registry import add_member, member_of, remove_member
 from flexmvm.errors import InputError
 
 if TYPE_CHECKING:
@@ -36,20 +37,6 @@ class ContactLaw(StrEnum):
 LAWS: dict[ContactLaw, ContactLawSpec] = {}
 
 
-def _member(name: str, value: str) -> ContactLaw:
-    """A new ContactLaw member ``name`` = ``value`` (a law registered after the class was
-    made: the way Enum's own class creation adds one)."""
-    member = str.__new__(ContactLaw, value)
-    member._name_, member._value_ = name, value
-    member.__objclass__ = ContactLaw
-    member.__init__(value)
-    ContactLaw._member_names_.append(name)
-    ContactLaw._member_map_[name] = member
-    ContactLaw._value2member_map_[value] = member
-    type.__setattr__(ContactLaw, name, member)
-    return member
-
-
 def register_law(spec: ContactLawSpec) -> ContactLaw:
     """Register ``spec`` under its name (``spec.name``, the scenario file's contact ``law``)
     and return its ContactLaw, made for a name not in ContactLaw yet (member name: the name
@@ -57,11 +44,11 @@ def register_law(spec: ContactLawSpec) -> ContactLaw:
     name = spec.name
     if not isinstance(name, str) or not name or name != name.strip().lower():
         raise InputError(f"contact law name {name!r}; expected a lower-case string")
-    law = ContactLaw._value2member_map_.get(name)
+    law = member_of(ContactLaw, name)
     if law is not None and law in LAWS:
         raise InputError(f"contact law {name!r} is registered already")
     if law is None:
-        law = _member(name.upper().replace("-", "_"), name)
+        law = add_member(ContactLaw, name.upper().replace("-", "_"), name)
     LAWS[law] = spec
     return law
 
@@ -69,14 +56,11 @@ def register_law(spec: ContactLawSpec) -> ContactLaw:
 def unregister_law(name: str) -> None:
     """Remove a law registered by register_law that is not built in (a test's toy law): its
     spec and its ContactLaw member."""
-    law = ContactLaw._value2member_map_.get(name)
+    law = member_of(ContactLaw, name)
     if law is None or name in _BUILT_IN:
         raise InputError(f"contact law {name!r}: not a registered added law")
     LAWS.pop(law, None)
-    del ContactLaw._value2member_map_[name]
-    del ContactLaw._member_map_[law.name]
-    ContactLaw._member_names_.remove(law.name)
-    type.__delattr__(ContactLaw, law.name)
+    remove_member(ContactLaw, law)
 
 
 _BUILT_IN = frozenset(law.value for law in ContactLaw)
@@ -85,7 +69,7 @@ _BUILT_IN = frozenset(law.value for law in ContactLaw)
 def law_spec(law: ContactLaw | str) -> ContactLawSpec:
     """The spec of ``law`` (a ContactLaw or its name); InputError naming the laws for an
     unknown one."""
-    spec = LAWS.get(ContactLaw._value2member_map_.get(law))  # type: ignore[arg-type]
+    spec = LAWS.get(member_of(ContactLaw, law))  # type: ignore[arg-type]
     if spec is None:
         known = ", ".join(k.value for k in LAWS)
         raise InputError(f"contact law {law!r}: expected one of {known}")

@@ -18,12 +18,19 @@ class ContactLawSpec(Protocol):
     """Everything the program asks of a contact law (contact.pairs, contact.pair_options,
     the scenario schema, integrate.massless, the run's summary)."""
 
-    name: str  # the scenario file's contact ``law``
-    bonded: bool  # may constrain a bonded contact
-    needs_theta: bool  # reads the scheme's theta (pair_options checks it in [0.5, 1])
-    massless_nodes: bool  # may carry massless (mass-redistributed) contact nodes
-    conserves_energy: bool  # the step adds no energy (summary's energy_conserving_scheme)
-    holds_pairs: bool  # frictionless closed pairs keep the geometry they closed with
+    # read-only properties, so that a frozen dataclass satisfies them
+    @property
+    def name(self) -> str: ...  # the scenario file's contact ``law``
+    @property
+    def bonded(self) -> bool: ...  # may constrain a bonded contact
+    @property
+    def needs_theta(self) -> bool: ...  # reads theta (pair_options checks it in [0.5, 1])
+    @property
+    def massless_nodes(self) -> bool: ...  # may carry massless (redistributed) contact nodes
+    @property
+    def conserves_energy(self) -> bool: ...  # adds no energy (energy_conserving_scheme)
+    @property
+    def holds_pairs(self) -> bool: ...  # closed pairs keep the geometry they closed with
 
     def row_window(self, h: float, gap_tol: float, speed: float) -> tuple[float, float]:
         """(hp, tol): a pair becomes a row when g + hp u_N- <= tol (contact.pair_rows)."""

@@ -295,8 +295,8 @@ def etree_halves(starts, r_off, rows, min_gain: float):
     work = width * (width + 1) / 2.0 + width * below
     col_sn = np.repeat(np.arange(ns), width)
     parent = np.full(ns, -1, np.int64)
-    for s in np.flatnonzero(below):
-        parent[s] = col_sn[rows[r_off[s] : r_off[s + 1]].min()]
+    for sn in np.flatnonzero(below):
+        parent[sn] = col_sn[rows[r_off[sn] : r_off[sn + 1]].min()]
     subtree = work.copy()
     children: list[list[int]] = [[] for _ in range(ns)]
     for s in range(ns):  # parents come after their children
@@ -317,7 +317,7 @@ def etree_halves(starts, r_off, rows, min_gain: float):
     # frontier with the least work on the critical path, top + larger half
     frontier = [int(s) for s in np.flatnonzero(parent < 0)]
     top: list[int] = []
-    best = (np.inf, [], {})
+    best: tuple[float, list[int], dict[int, int]] = (np.inf, [], {})
     for _ in range(min(ns, 400)):
         loads, half = bins(frontier)
         path = total - sum(loads) + max(loads)

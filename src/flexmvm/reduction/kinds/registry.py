@@ -13,6 +13,7 @@ from __future__ import annotations
 from enum import StrEnum
 from typing import TYPE_CHECKING
 
+from flexmvm.enum_registry import add_member, member_of, remove_member
 from flexmvm.errors import InputError
 
 if TYPE_CHECKING:
@@ -67,20 +68,6 @@ class ModelKind(StrEnum):
 KINDS: dict[ModelKind, ModelKindSpec] = {}
 
 
-def _member(name: str, value: str) -> ModelKind:
-    """A new ModelKind member ``name`` = ``value`` (a kind registered after the class was made:
-    the way Enum's own class creation adds one, kept to one place)."""
-    member = str.__new__(ModelKind, value)
-    member._name_, member._value_ = name, value
-    member.__objclass__ = ModelKind
-    member.__init__(value)
-    ModelKind._member_names_.append(name)
-    ModelKind._member_map_[name] = member
-    ModelKind._value2member_map_[value] = member
-    type.__setattr__(ModelKind, name, member)
-    return member
-
-
 def register_kind(spec: ModelKindSpec) -> ModelKind:
     """Register ``spec`` under its name (``spec.name``, the scenario file's ``model.kind``)
     and return its ModelKind, made for a name not in ModelKind yet (its member name: the
@@ -88,11 +75,11 @@ def register_kind(spec: ModelKindSpec) -> ModelKind:
     name = spec.name
     if not isinstance(name, str) or not name or name != name.strip().lower():
         raise InputError(f"model kind name {name!r}; expected a lower-case string")
-    kind = ModelKind._value2member_map_.get(name)
+    kind = member_of(ModelKind, name)
     if kind is not None and kind in KINDS:
         raise InputError(f"model kind {name!r} is registered already")
     if kind is None:
-        kind = _member(name.upper().replace("-", "_"), name)
+        kind = add_member(ModelKind, name.upper().replace("-", "_"), name)
     KINDS[kind] = spec
     return kind
 
@@ -100,14 +87,11 @@ def register_kind(spec: ModelKindSpec) -> ModelKind:
 def unregister_kind(name: str) -> None:
     """Remove a kind registered by register_kind that is not built in (a test's toy kind):
     its spec and its ModelKind member."""
-    kind = ModelKind._value2member_map_.get(name)
+    kind = member_of(ModelKind, name)
     if kind is None or name in _BUILT_IN:
         raise InputError(f"model kind {name!r}: not a registered added kind")
     KINDS.pop(kind, None)
-    del ModelKind._value2member_map_[name]
-    del ModelKind._member_map_[kind.name]
-    ModelKind._member_names_.remove(kind.name)
-    type.__delattr__(ModelKind, kind.name)
+    remove_member(ModelKind, kind)
 
 
 _BUILT_IN = frozenset(k.value for k in ModelKind)
@@ -150,7 +134,7 @@ class BasisKind(metaclass=_KindsWithBasis):
 def kind_spec(kind: ModelKind | str) -> ModelKindSpec:
     """The spec of ``kind`` (a ModelKind or its name); InputError naming the kinds for an
     unknown one."""
-    spec = KINDS.get(ModelKind._value2member_map_.get(kind))  # type: ignore[arg-type]
+    spec = KINDS.get(member_of(ModelKind, kind))  # type: ignore[arg-type]
     if spec is None:
         known = ", ".join(k.value for k in KINDS)
         raise InputError(f"model kind {kind!r}: expected one of {known}")

@@ -91,16 +91,27 @@ class ModelKindSpec(Protocol):
     cost, None: not costed), study_fields (the model of a study's 'kind:args' text),
     body_builder (None: bodies.build.body_from_parts on the cached parts)."""
 
-    name: str
-    has_basis: bool
-    retains_nodes: bool
-    uses_modes: bool
-    reads_modes: bool
-    nodal: bool
-    uses_patches: bool
-    cuts_modes: bool
-    clampable: bool
-    body_builder: Callable[..., Any] | None
+    # read-only properties, so that a frozen dataclass satisfies them
+    @property
+    def name(self) -> str: ...
+    @property
+    def has_basis(self) -> bool: ...
+    @property
+    def retains_nodes(self) -> bool: ...
+    @property
+    def uses_modes(self) -> bool: ...
+    @property
+    def reads_modes(self) -> bool: ...
+    @property
+    def nodal(self) -> bool: ...
+    @property
+    def uses_patches(self) -> bool: ...
+    @property
+    def cuts_modes(self) -> bool: ...
+    @property
+    def clampable(self) -> bool: ...
+    @property
+    def body_builder(self) -> Callable[..., Any] | None: ...
 
     def build_basis(self, request: BasisRequest) -> Basis: ...
 
