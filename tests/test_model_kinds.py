@@ -92,7 +92,7 @@ def test_a_kind_may_build_its_body_itself():
     """A spec's body_builder replaces the default body of the cached parts."""
     calls = []
 
-    def builder(name, fe, basis, damping=None):
+    def builder(name, fe, basis, damping=None, parts_cache=None):
         calls.append((name, basis.kind.value, basis.nq))
         return body_from_fe(name, fe, basis, damping=damping)
 

@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import dataclasses
 import functools
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -155,7 +156,11 @@ class RingBody(FlexibleBody):
                     sp.coo_matrix((g.data[keep], (g.row[keep], g.col[keep])), shape=(nq, nq))
                 )
         stack = sp.csr_matrix(sp.vstack(rest))
-        D = [[np.asarray(G2[a][b][c][:, c].toarray()) for b in range(3)] for a in range(3)]
+        # the ring body's G2 blocks are sparse (csr)
+        D = [
+            [np.asarray(sp.csr_matrix(G2[a][b])[c][:, c].toarray()) for b in range(3)]
+            for a in range(3)
+        ]
         return stack, G2Contraction(D)
 
     @functools.cached_property
@@ -172,7 +177,7 @@ class RingBody(FlexibleBody):
     @property
     def contracts_in_halves(self) -> bool:
         # the corner's packed pass splits in two as a dense body's does, from the same size
-        return self.corner.size >= PACKED_MIN_NQ
+        return self.corner is not None and self.corner.size >= PACKED_MIN_NQ
 
     def contractions(self, x: np.ndarray, pool=None) -> np.ndarray:
         """L(x)[a, b] = G2[b][a] x (3, 3, nq): the sparse part by one product, the corner by
@@ -196,28 +201,34 @@ def ring_body_from_parts(
     """The RingBody of mesh (nodes X (n, 3) [m]) and ring basis psi (3n, nq) csr with its
     parts (ring_parts) and corner coordinates; damping as bodies.build.body_from_parts."""
     corner = np.asarray(corner, dtype=np.int64)
-    return body_from_parts(
+    return body_from_parts(  # type: ignore[return-value]  # body_type=RingBody
         name, mesh, basis, parts, damping=damping, body_type=RingBody, corner=corner
     )
 
 
-def ring_body(name: str, fe: FEModel, basis, *, damping: Damping | None = None) -> RingBody:
+def ring_body(
+    name: str,
+    fe: FEModel,
+    basis,
+    *,
+    damping: Damping | None = None,
+    parts_cache: Callable[..., tuple[BodyParts, np.ndarray]] | None = None,
+) -> RingBody:
     """The body of a ring basis of ``fe`` (kind mvm-sparse's body_builder): its parts and
-    corner from the setup cache (setup_cache.ring_parts: warm, psi's exterior rows are not
-    read), else computed (ring_parts on the corner read back from psi, split_ring_psi)."""
-    from flexmvm.setup_cache.ring_parts import cached_ring_parts  # it imports this stage
-
+    corner computed (ring_parts on the corner read back from psi, split_ring_psi), or through
+    ``parts_cache(fe, basis, build)`` (the scenarios stage passes the setup cache's
+    setup_cache.ring_parts.cached_ring_parts: warm, psi's exterior rows are not read)."""
     nodes = np.asarray(basis.retained_nodes, dtype=np.int64)
 
     def build() -> tuple[BodyParts, np.ndarray]:
         cols = split_ring_psi(fe, basis.reference, basis.psi, nodes)
         return ring_parts(fe, nodes, cols, basis.nq), cols.corner
 
-    parts, corner = cached_ring_parts(fe, basis, build)
+    parts, corner = build() if parts_cache is None else parts_cache(fe, basis, build)
     return ring_body_from_parts(name, fe.mesh, basis, parts, corner, damping=damping)
 
 
 # kind mvm-sparse is registered by the reduction stage, which cannot name this stage's body:
 # its builder is attached here, on the first import of any module of bodies/ (bodies/__init__)
 _KIND = ModelKind("mvm-sparse")
-KINDS[_KIND] = dataclasses.replace(KINDS[_KIND], body_builder=ring_body)
+KINDS[_KIND] = dataclasses.replace(KINDS[_KIND], body_builder=ring_body)  # type: ignore[type-var]  # a frozen dataclass

@@ -88,7 +88,7 @@ class MemoArrays(NamedTuple):
     two node sets (ContactNodes.version); see ProjectionMemo."""
 
     facets: np.ndarray  # (n, k) int64 facet of each kept projection
-    count: np.ndarray  # (n,) int64 projections kept per node
+    count: np.ndarray  # type: ignore[assignment]  # (n,) int64 projections kept per node (the name shadows tuple.count; the kernels read it)
     records: np.ndarray  # (n, k, REC_LEN) the projections (projection.REC_*)
     versions: np.ndarray  # (2,) int64 the versions they were made at
     node_version: np.ndarray  # (1,) int64, the nodes' ContactNodes.version

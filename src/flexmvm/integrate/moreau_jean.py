@@ -10,17 +10,12 @@ configuration x_m = x(t) (+) theta h v_m (Lie-group update of A):
     x(t + h) = x(t) (+) h v_m
 
 F = -k_hat q_m (- c_hat q_dot_m) (- s K_G q_m: a spinning body's geometric stiffening,
-bodies.stiffening) + gravity + quadratic-velocity terms. theta = 1/2 is the
-implicit midpoint rule: second order, symplectic, conserving the energy of the linear elastic
-part exactly. theta > 1/2 (Jean 1999) damps the components with omega h >> 1 (amplification
-(1 - theta)/theta at infinity) at a first-order cost (damping ratio ~ (theta - 1/2) omega h / 2
-for the resolved modes): it removes the step-to-step ringing of the contact nodes that makes
-Lagrange-multiplier contact chatter. With theta - 1/2 proportional to the step (a scenario's
-time.hf_damping_time_s tau: theta(h) = 1/2 + h / (4 tau) up to the contact step dt_s, capped
-at 1, and 1/2 + dt_s^2 / (4 tau h) above it: integrate.theta) the local error
-(theta - 1/2) h^2 y'' is O(h^3), so the scheme stays second order while what the contact step
-cannot resolve decays as exp(-t / tau) and the free-flight steps damp resolved motion no more
-than the contact step (docs/contact_law.md).
+bodies.stiffening) + gravity + quadratic-velocity terms. theta = 1/2: the implicit midpoint
+rule (second order, symplectic, the linear elastic energy conserved exactly); theta > 1/2
+(Jean 1999) damps omega h >> 1 (amplification (1 - theta)/theta at infinity), removing the
+step-to-step ringing of the contact nodes that makes Lagrange-multiplier contact chatter;
+theta(h) from a damping time keeps second order (the rule and its damping: integrate.theta,
+docs/contact_law.md).
 
 Constraints (seed eq. 11, at impulse level):
 - joints: phi(x(t + h)) = 0 (position level: no drift), rows Phi_v at x_m; at theta > 1/2
@@ -34,8 +29,7 @@ Constraints (seed eq. 11, at impulse level):
   a separation speed beta (1 - theta) |u_N-| the next step (two rigid rods: restitution
   beta (1 - theta) instead of 0).
 
-Penetration through a step (how deep a node arriving at speed goes, what a held pair keeps):
-docs/contact_law.md, "Penetration through a step".
+Penetration through a step: docs/contact_law.md, "Penetration through a step".
 
 Massless coordinates (contact nodes whose mass was redistributed, fe.mass_redistribution) are
 algebraic: after every step they are put in equilibrium at the step's end (integrate.massless),

@@ -26,7 +26,7 @@ import numpy as np
 from flexmvm.errors import InputError
 from flexmvm.mesh.io import write_mesh
 from flexmvm.mesh.mesh import CellBlock, CellType, Mesh
-from flexmvm.mesh.structured import _HEX27_OFFSETS
+from flexmvm.mesh.structured import HEX27_OFFSETS
 
 #: The shipped beam of scenarios/moving_load.toml: 1 m x 20 mm x 20 mm, 40 x 1 x 1 cells
 #: (file name, length, width, height [m], cells along x, y, z).
@@ -51,7 +51,7 @@ def hex27_box_beam(
     nodes -= [0.0, width_m / 2.0, height_m]
     cx, cy, cz = np.meshgrid(np.arange(nx), np.arange(ny), np.arange(nz), indexing="ij")
     base = 2 * np.column_stack([cx.ravel(), cy.ravel(), cz.ravel()])
-    conn = np.stack([ids[tuple((base + o).T)] for o in _HEX27_OFFSETS], axis=1)
+    conn = np.stack([ids[tuple((base + o).T)] for o in HEX27_OFFSETS], axis=1)
     i, j, k = ijk.T
     last_i, mid_k = shape[0] - 1, shape[2] // 2
     sets = {
@@ -85,8 +85,8 @@ def main(argv: list[str] | None = None) -> int:
     """``python -m flexmvm.mesh.box27 [DIR]``: write MOVING_LOAD_BEAM into DIR."""
     args = sys.argv[1:] if argv is None else argv
     directory = Path(args[0]) if args else Path("scenarios") / "meshes"
-    name, *dims, cells = MOVING_LOAD_BEAM
-    print(write_box_beam(directory / name, *dims, cells))
+    name, length_m, width_m, height_m, cells = MOVING_LOAD_BEAM
+    print(write_box_beam(directory / name, length_m, width_m, height_m, cells))
     return 0
 
 

@@ -23,7 +23,7 @@ from flexmvm.mesh.mesh import CellBlock, CellType, Mesh
 #: The meshio/VTK hexahedron27 local nodes on the doubled lattice (offsets 0, 1, 2 per axis):
 #: corners, the bottom, top and vertical edges' midpoints, the face centres x = 0, x = 1,
 #: y = 0, y = 1, z = 0, z = 1, the centre (the VTK cell's definition).
-_HEX27_OFFSETS = np.array(
+HEX27_OFFSETS = np.array(
     [
         [0, 0, 0], [2, 0, 0], [2, 2, 0], [0, 2, 0], [0, 0, 2], [2, 0, 2], [2, 2, 2], [0, 2, 2],
         [1, 0, 0], [2, 1, 0], [1, 2, 0], [0, 1, 0], [1, 0, 2], [2, 1, 2], [1, 2, 2], [0, 1, 2],
@@ -54,7 +54,7 @@ def hex27_beam(length_m: float, width_m: float, thickness_m: float, cells_x: int
     nodes = ijk / (np.array(shape) - 1.0) * [length_m, width_m, thickness_m]
     nodes -= [0.0, width_m / 2.0, thickness_m / 2.0]
     base = np.column_stack([2 * np.arange(cells_x), np.zeros(cells_x, int), np.zeros(cells_x, int)])
-    conn = np.stack([ids[tuple((base + o).T)] for o in _HEX27_OFFSETS], axis=1)
+    conn = np.stack([ids[tuple((base + o).T)] for o in HEX27_OFFSETS], axis=1)
     x = nodes[:, 0]
     sets = {
         "root": np.flatnonzero(ijk[:, 0] == 0),

@@ -61,7 +61,7 @@ from flexmvm.scenarios.setup import SetupCache, default_setup, timed
 from flexmvm.scenarios.solver_choice import with_elimination_order
 from flexmvm.scenarios.stiffening_schema import stiffened
 from flexmvm.scenarios.supports import bedded_key, clamp_label, support_joints
-from flexmvm.setup_cache.ring_parts import cached_guard
+from flexmvm.setup_cache.ring_parts import cached_guard, cached_ring_parts
 
 #: the kinds whose modes are fixed-interface (Craig-Bampton) modes: the truncation guard's
 TRUNCATION_GUARDED = (ModelKind.MVM, ModelKind("mvm-sparse"))
@@ -174,14 +174,16 @@ def _truncation(setup: SetupCache, args: tuple, fe_key) -> dict | None:
 
 def _kind_body(spec, cfg, setup: SetupCache, mesh: Mesh, args: tuple, fe_key) -> FlexibleBody:
     """The body of ``cfg`` on its basis (setup.basis(*args)): the kind's own body_builder
-    (name, fe of ``fe_key``, basis, damping) when it has one, else body_from_parts on the
-    cached parts."""
+    (name, fe of ``fe_key``, basis, damping, and the setup cache's entry for the parts it
+    builds, parts_cache) when it has one, else body_from_parts on the cached parts."""
     if spec.body_builder is not None:
         fe = setup.fe_model(fe_key, args[1])
         basis = setup.basis(*args)
         return timed(
             f"body {cfg.name!r}: its {spec.name} body built ({basis.nq} coordinates)",
-            lambda: spec.body_builder(cfg.name, fe, basis, damping=cfg.damping_obj()),
+            lambda: spec.body_builder(
+                cfg.name, fe, basis, damping=cfg.damping_obj(), parts_cache=cached_ring_parts
+            ),
         )
     return body_from_parts(
         cfg.name, mesh, setup.basis(*args), setup.body_parts(*args), damping=cfg.damping_obj()

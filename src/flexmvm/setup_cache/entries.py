@@ -35,7 +35,7 @@ from flexmvm.setup_cache.store import (
 #: Kinds whose stored sparse basis is memory-mapped when read (setup_cache.mapped): the ring
 #: basis of kind mvm-sparse, whose exterior rows a run reads only at its contact surfaces and
 #: probes (a field output reads them all, at each output)
-MAPPED_KINDS = (BasisKind("mvm-sparse"),)
+MAPPED_KINDS = (ModelKind("mvm-sparse"),)
 
 
 def cached_elimination_order(

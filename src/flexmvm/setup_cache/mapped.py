@@ -17,12 +17,12 @@ from pathlib import Path
 import numpy as np
 
 from flexmvm.setup_cache.store import (
-    _UNREADABLE,
     CHECKSUM,
     SUFFIX,
-    _evict,
+    UNREADABLE,
     cache_dir,
     enabled,
+    evict,
 )
 
 _BLOCK = 1 << 25  # bytes read at a time by the check (32 MB)
@@ -64,6 +64,7 @@ def _stream(a: np.ndarray, digest, finite: list[bool]) -> None:
             finite[0] = False
         return
     step = max(_BLOCK // a.itemsize, 1) * a.itemsize
+    assert a.filename is not None  # a memmap of a file (load_mapped)
     with open(a.filename, "rb") as f:
         f.seek(a.offset)
         left = a.nbytes
@@ -112,11 +113,11 @@ def load_mapped(key: str, mapped: Collection[str]) -> dict[str, np.ndarray] | No
         why = _problem(arrays)
     except (FileNotFoundError, NotADirectoryError):
         return None
-    except _UNREADABLE as exc:
-        _evict(path, f"unreadable ({type(exc).__name__})")
+    except UNREADABLE as exc:
+        evict(path, f"unreadable ({type(exc).__name__})")
         return None
     if why is not None:
-        _evict(path, why)
+        evict(path, why)
         return None
     arrays.pop(CHECKSUM)
     return arrays
@@ -131,6 +132,6 @@ def decoded_mapped(
         return None
     try:
         return decode(arrays)
-    except _UNREADABLE as exc:
-        _evict(cache_dir() / (key + SUFFIX), f"malformed ({exc})")
+    except UNREADABLE as exc:
+        evict(cache_dir() / (key + SUFFIX), f"malformed ({exc})")
         return None

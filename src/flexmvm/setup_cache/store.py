@@ -43,7 +43,7 @@ FORMAT = 2
 CHECKSUM = "__sha256__"
 
 #: What reading or decoding a corrupt, truncated or foreign entry raises (treated as a miss).
-_UNREADABLE = (OSError, EOFError, ValueError, KeyError, TypeError, IndexError, zipfile.BadZipFile)
+UNREADABLE = (OSError, EOFError, ValueError, KeyError, TypeError, IndexError, zipfile.BadZipFile)
 
 
 @dataclass(frozen=True)
@@ -144,7 +144,7 @@ def entry_problem(arrays: Mapping[str, np.ndarray]) -> str | None:
     return None
 
 
-def _evict(path: Path, why: str) -> None:
+def evict(path: Path, why: str) -> None:
     """Delete a failing entry and say so in one line."""
     try:
         path.unlink()
@@ -164,12 +164,12 @@ def load(key: str) -> dict[str, np.ndarray] | None:
             arrays = {name: z[name] for name in z.files}
     except (FileNotFoundError, NotADirectoryError):
         return None
-    except _UNREADABLE as exc:  # a corrupt or foreign file: evicted, rebuilt and overwritten
-        _evict(path, f"unreadable ({type(exc).__name__})")
+    except UNREADABLE as exc:  # a corrupt or foreign file: evicted, rebuilt and overwritten
+        evict(path, f"unreadable ({type(exc).__name__})")
         return None
     why = entry_problem(arrays)
     if why is not None:
-        _evict(path, why)
+        evict(path, why)
         return None
     arrays.pop(CHECKSUM)
     return arrays
@@ -221,8 +221,8 @@ def decoded(key: str, decode: Callable[[Mapping[str, np.ndarray]], object]):
         return None
     try:
         return decode(arrays)
-    except _UNREADABLE as exc:
-        _evict(cache_dir() / (key + SUFFIX), f"malformed ({exc})")
+    except UNREADABLE as exc:
+        evict(cache_dir() / (key + SUFFIX), f"malformed ({exc})")
         return None
 
 

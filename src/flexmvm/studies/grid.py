@@ -160,15 +160,15 @@ def study_kind(kind: ModelKind | str) -> ModelKind:
     """The model kind of a selection study's candidates: one that retains an i-j node
     selection beside its modes; InputError otherwise."""
     try:
-        kind = ModelKind(kind)
+        model_kind = ModelKind(kind)
     except ValueError:
-        kind = None
-    if kind is None or not kind.retains_nodes:
+        model_kind = None
+    if model_kind is None or not model_kind.retains_nodes:
         options = ", ".join(k.value for k in ModelKind if k.retains_nodes)
         raise InputError(
             f"kind: a selection study varies node selections; expected one of {options}"
         )
-    return kind
+    return model_kind
 
 
 def parse_model(text: str) -> ModelConfig | None:

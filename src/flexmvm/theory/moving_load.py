@@ -80,7 +80,7 @@ class MovingForce:
                 f"moving force: give both kappa_G_pa and area_m2 or neither, got "
                 f"{self.kappa_G_pa!r} and {self.area_m2!r}"
             )
-        if self.kappa_G_pa is not None:
+        if self.kappa_G_pa is not None and self.area_m2 is not None:  # both or neither
             positive("kappa_G_pa", self.kappa_G_pa)
             positive("area_m2", self.area_m2)
 
@@ -111,7 +111,7 @@ class MovingForce:
         j = 1..n (module doc)."""
         k = np.arange(1, n + 1) * math.pi / self.length_m
         flex = 1.0 / (self.EI_nm2 * k**4)
-        if self.kappa_G_pa is None:
+        if self.kappa_G_pa is None or self.area_m2 is None:
             return k, flex, k**2 * math.sqrt(self.EI_nm2 / self.mu_kg_m)
         gA = self.kappa_G_pa * self.area_m2
         flex = flex + 1.0 / (gA * k**2)

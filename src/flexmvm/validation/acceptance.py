@@ -70,7 +70,9 @@ class Criterion:
         return f"{self.section}: {'.'.join(self.path)} {self.bound.value} {self.threshold:g}"
 
 
-def _conservation(section: str, run: str, steps_not_converged: int = 0) -> list[Criterion]:
+def _conservation(
+    section: str, run: tuple[str, ...], steps_not_converged: int = 0
+) -> list[Criterion]:
     """What every run of a case must conserve: momentum, the LCPs solved, Newton converged."""
     return [
         Criterion(

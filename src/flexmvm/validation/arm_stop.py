@@ -17,6 +17,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flexmvm.errors import InputError
 from flexmvm.metrics.ncc import ncc
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario
 from flexmvm.scenarios.compare import compare_runs
@@ -85,7 +86,10 @@ def arm_stop_numbers(sc: Scenario, full: Case, mvm: Case, fig_dir: Path | None =
     t_drive = float(motor.times_s[-1])
     model = sc.body("arm").model
     runs = {"full": full, "mvm": mvm}
-    label = f"MVM ball {1e3 * model.region.ball.radius_m:g} mm + {model.modes} modes"
+    ball = model.region.ball if model.region is not None else None
+    if ball is None:
+        raise InputError("arm_stop.toml: the arm's model needs its ball region")
+    label = f"MVM ball {1e3 * ball.radius_m:g} mm + {model.modes} modes"
     if fig_dir is not None:
         _figures(fig_dir, full, mvm, label)
     return {

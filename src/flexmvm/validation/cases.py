@@ -29,6 +29,7 @@ from types import SimpleNamespace
 
 import numpy as np
 
+from flexmvm.errors import InputError
 from flexmvm.materials import ALUMINIUM, BRASS
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario
 from flexmvm.scenarios import mvm as mvm_model
@@ -74,9 +75,11 @@ def flat_vs_st_venant(
         sc = sc.with_time(t_end_s=t_end, dt_s=dt)
     c = run_case(out, "flat_full", sc, recompute)
     t, f, p = c.curves
-    b1, b2 = sc.body("b1"), sc.body("b2")
-    r1 = Rod1D.from_material(BRASS, b1.rod.length_m, b1.rod.radius_m)
-    r2 = Rod1D.from_material(ALUMINIUM, b2.rod.length_m, b2.rod.radius_m)
+    rod1, rod2 = sc.body("b1").rod, sc.body("b2").rod
+    if rod1 is None or rod2 is None:
+        raise InputError("rod_impact_flat.toml: bodies b1 and b2 must be rods")
+    r1 = Rod1D.from_material(BRASS, rod1.length_m, rod1.radius_m)
+    r2 = Rod1D.from_material(ALUMINIUM, rod2.length_m, rod2.radius_m)
     F0 = st_venant_force(r1, r2, 0.21)
     T2 = 2 * r2.length_m / r2.c
     mid = (t > 0.2 * T2) & (t < 0.8 * T2)

@@ -89,7 +89,9 @@ class ModelKindSpec(Protocol):
     replaces: scenarios/support_schema.py). Hooks: build_basis, n_static and retained_columns and modal_columns (the damping
     hook: where its modal coordinates are) of a basis, cost_columns (the dense columns to
     cost, None: not costed), study_fields (the model of a study's 'kind:args' text),
-    body_builder (None: bodies.build.body_from_parts on the cached parts)."""
+    body_builder (None: bodies.build.body_from_parts on the cached parts; else called as
+    body_builder(name, fe, basis, damping=..., parts_cache=...), parts_cache(fe, basis, build)
+    the setup cache's entry for what it builds: scenarios/build.py)."""
 
     # read-only properties, so that a frozen dataclass satisfies them
     @property
