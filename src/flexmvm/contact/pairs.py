@@ -82,6 +82,11 @@ PENETRATION_RECOVERY = 0.2
 #: closest-point gap by this many gap_tol before the pair is projected again (module doc)
 HOLD_DRIFT_MAX = 10.0
 
+#: a law that holds pairs: a held pair whose slave node has slid along the master by more than
+#: this fraction of the held facet (or onto another facet) takes the scan's geometry, with the
+#: offset that keeps its gap (module doc; contact.held_pairs.hold_pairs)
+HOLD_SLIDE_MAX = 0.1
+
 
 class PointToSurfaceContact:
     """Contact of slave nodes (body `slave`) with master facets (body `master`).
@@ -255,6 +260,7 @@ class PointToSurfaceContact:
                 self._conn,
                 self.gap_tol,
                 HOLD_DRIFT_MAX * self.gap_tol,
+                HOLD_SLIDE_MAX,
             )
         # rows: g + hp u_N- <= tol (the law's window: constraints/contact_laws)
         hp, tol = self.law.spec.row_window(h, self.gap_tol, speed)
