@@ -31,7 +31,22 @@ def _normal_offset(w, n, g, conn, xs_i, vs_i, xm, vm):
 
 @numba.njit(cache=True)
 def hold_pairs(
-    held, held_w, held_n, held_off, held_d, facet, out, xs, vs, xm, vm, A_m, conn, tol, d_max
+    held,
+    held_w,
+    held_n,
+    held_off,
+    held_d,
+    facet,
+    out,
+    xs,
+    vs,
+    xm,
+    vm,
+    A_m,
+    conn,
+    tol,
+    d_max,
+    slide_max=np.inf,
 ):
     """Closed pairs on the geometry they closed with (pairs.PointToSurfaceContact, position
     law). held[i] >= 0: slave node i keeps master facet held[i], its weights held_w[i] (4,),
@@ -41,11 +56,17 @@ def hold_pairs(
     scan's row i of out (weights, normal, gap, u_N; xi kept) and facet[i].
 
     d = g - g_scan is what the linear gap differs from the scan's exact one; held_d[i] is d
-    when the geometry was taken. When d has moved by more than tol [m] since (sliding along a
-    curved master, facets turning), the pair takes the scan's geometry with the offset that
+    when the geometry was taken. The pair takes the scan's geometry with the offset that
     keeps g where it is (no jump of the gap, so no work and no impulse: held_d[i] = d), while
-    |d| <= d_max; beyond, or when the scan found no facet, held[i] = -1 and the scan's row
-    stays (the pair is projected again). Returns (taken anew, released)."""
+    |d| <= d_max, when the contact has moved: d has moved by more than tol [m] since the
+    geometry was taken (sliding along a curved master, facets turning), or the slave node has
+    slid along the master (a flat face never moves d): the scan's closest facet is not the
+    held one, or its projection on the held facet has moved by more than slide_max of the
+    facet, measured as half the L1 distance of the weights, sum_P |w_P - w_held_P| / 2 (on a
+    quad the move in xi or eta over the facet's parametric width 2, exactly for a move along
+    one of them; on a triangle the barycentric distance). Beyond d_max, or when the scan found
+    no facet, held[i] = -1 and the scan's row stays (the pair is projected again). Returns
+    (taken anew, released)."""
     anew = released = 0
     for i in range(len(held)):
         g = held[i]
@@ -61,7 +82,10 @@ def hold_pairs(
             held[i] = -1
             released += 1
             continue
-        if abs(d - held_d[i]) > tol:
+        slid = 0.0
+        for b in range(4):
+            slid += abs(out[i, b] - held_w[i, b])
+        if facet[i] != g or 0.5 * slid > slide_max or abs(d - held_d[i]) > tol:
             # the scan's geometry, offset so that the gap stays gap
             g = facet[i]
             for k in range(3):

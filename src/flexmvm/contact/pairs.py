@@ -26,10 +26,13 @@ instead, the contact force of a closed pair turns with the facets' step-scale mo
 work on it: with both rods Craig-Bampton at theta = 1/2 that work grew the alternation of the
 contact region by x 2 in energy per 20 us (docs/contact_law.md). The exact closest-point gap
 is still computed: when the linear one has drifted from it by more than gap_tol since the
-geometry was taken (sliding along a curved master, facets turning), the pair takes the
-projection's facet, weights and normal with the offset that keeps its gap (no jump: no
-impulse, no work), and it goes back to the projection outright when it opens (no impulse) or
-when the two gaps are more than HOLD_DRIFT_MAX gap_tol apart.
+geometry was taken (sliding along a curved master, facets turning), or when its node has
+slid (the scan's closest facet is another one, or its projection has moved more than
+HOLD_SLIDE_MAX of the held facet: a node sliding along a flat face never moves the gaps
+apart, and the load must follow it), the pair takes the projection's facet, weights and
+normal with the offset that keeps its gap (no jump: no impulse, no work), and it goes back to
+the projection outright when it opens (no impulse) or when the two gaps are more than
+HOLD_DRIFT_MAX gap_tol apart.
 Bonded contact (seed eq. 7, all three components) locks a pair once it has carried a
 compressive impulse: three equality rows x_S - x_C = 0 at the frozen shape functions, until
 the normal component of its impulse would turn tensile.
@@ -81,6 +84,11 @@ PENETRATION_RECOVERY = 0.2
 #: a law that holds pairs (position): a held pair's linear gap may differ from the exact
 #: closest-point gap by this many gap_tol before the pair is projected again (module doc)
 HOLD_DRIFT_MAX = 10.0
+
+#: a law that holds pairs: a held pair whose slave node has slid along the master by more than
+#: this fraction of the held facet (or onto another facet) takes the scan's geometry, with the
+#: offset that keeps its gap (module doc; contact.held_pairs.hold_pairs)
+HOLD_SLIDE_MAX = 0.1
 
 
 class PointToSurfaceContact:
@@ -255,6 +263,7 @@ class PointToSurfaceContact:
                 self._conn,
                 self.gap_tol,
                 HOLD_DRIFT_MAX * self.gap_tol,
+                HOLD_SLIDE_MAX,
             )
         # rows: g + hp u_N- <= tol (the law's window: constraints/contact_laws)
         hp, tol = self.law.spec.row_window(h, self.gap_tol, speed)
