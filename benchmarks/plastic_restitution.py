@@ -6,7 +6,10 @@ docs/plasticity.md "Restitution against Thornton (1997)").
     python benchmarks/plastic_restitution.py OUT --from-csv STUDY.csv
 
 --from-csv runs nothing: it reads a stored study (the CSV and the JSON beside it), adds the
-published-law columns below to its rows and redraws the figure; the FE numbers are kept.
+published-law columns below to its rows and redraws the figure; the FE numbers are kept. It
+refuses, in one line, a study whose provenance stamp (the JSON's meta "provenance":
+scenarios.provenance.script_stamp of this script, its setup and speeds: code, libraries
+with scikit-fem and gmsh, this script's SHA-256) is not the one this code would write.
 
 Speeds are v / v_y, v_y = theory.thornton.yield_velocity (p_y = 1.61 Y, m* the reduced mass
 of sphere and block). Each speed runs twice, one after the other: the block elastic (the
@@ -63,6 +66,7 @@ from flexmvm.scenarios.build import build_scenario
 from flexmvm.scenarios.hertz_block import SPHERE_BLOCK
 from flexmvm.scenarios.load import scenario_from_dict
 from flexmvm.scenarios.plastic_summary import plastic_summary
+from flexmvm.scenarios.provenance import script_stamp, script_stamp_mismatch
 from flexmvm.theory import thornton
 from flexmvm.theory.hertz import hertz_impact
 from flexmvm.theory.restitution_fits import (
@@ -345,9 +349,14 @@ def figure(rows: list[dict], meta: dict, path: Path) -> None:
     plt.close(fig)
 
 
+def setup_name(args) -> str:
+    """The setup of SETUPS the arguments ask for."""
+    return "quick" if args.quick else "study"
+
+
 def run_study(args) -> tuple[list[dict], dict]:
     """Runs the study at args.speeds (module doc): its rows and meta."""
-    setup = SETUPS["quick" if args.quick else "study"]
+    setup = SETUPS[setup_name(args)]
     default = "1,2,3,5" if args.quick else "1,2,5,10,30,100"
     speeds = [float(x) for x in (args.speeds or default).split(",")]
     mesh = make_block(args.out, setup)
@@ -367,6 +376,7 @@ def run_study(args) -> tuple[list[dict], dict]:
         "n_dof_block": 3 * read_mesh(mesh).nodes.shape[0],
         "thornton": sc,
         "machine": f"{platform.node()} {platform.processor() or platform.machine()}",
+        "provenance": script_stamp(Path(__file__), {"setup": setup_name(args), "speeds": speeds}),
     }
     rows = []
     for s in speeds:  # one after the other: the machine is shared
@@ -390,11 +400,14 @@ def _cell(text: str):
 def from_csv(path: Path) -> tuple[list[dict], dict]:
     """A stored study's rows (path, .csv) and meta (the .json beside it), with the
     published-law columns added; nothing is rerun. SystemExit with one line if either
-    file is missing."""
+    file is missing or the study's stamp is not this code's (module doc)."""
     meta_path = path.with_suffix(".json")
     if not path.is_file() or not meta_path.is_file():
         raise SystemExit(f"--from-csv: expected {path} and {meta_path}, not found")
     meta = json.loads(meta_path.read_text())["meta"]
+    why = script_stamp_mismatch(meta.get("provenance"), Path(__file__))
+    if why is not None:
+        raise SystemExit(f"--from-csv: {meta_path} was {why}: rerun the study")
     with open(path, newline="") as f:
         rows = [{k: _cell(v) for k, v in r.items()} for r in csv.DictReader(f)]
     return [fitted_columns(r, meta) for r in rows], meta

@@ -16,8 +16,13 @@ rod_impact_short_plastic.toml). Runs, one after another in this process:
   the rods' HEX27 cells span three node layers, so I >= 3: the elastic seed model's 1-3 holds
   no whole cell and is refused), the other rod full FE plastic.
 
---reuse OUT0 takes the elastic and plastic runs of an earlier OUT0 (same scenario and end
-time: their rows from its JSON, their curves from its .npz files) and runs only the MVM forms.
+--reuse OUT0 takes the elastic and plastic runs of an earlier OUT0 (their rows from its JSON,
+their curves from its .npz files) and runs only the MVM forms; it refuses, in one line, a row
+whose provenance stamp (scenarios.provenance.stamp: code, libraries, resolved scenario, mesh
+files) is not the stamp of the run it stands for here.
+
+``--mvm model`` is BODY with the scenario's own model table as kind mvm (its region and modes:
+scenarios/sphere_block_plastic.toml's MVM form).
 
 Each run: peak contact force, contact duration, impulse, the striker's velocity after the
 contact (v0 - J / m1: momentum, rigid-body part), the coefficient of restitution
@@ -45,6 +50,7 @@ from flexmvm.errors import InputError, SimulationFailed
 from flexmvm.materials import Material
 from flexmvm.scenarios import ModelConfig, load_scenario
 from flexmvm.scenarios.compare import compare_runs
+from flexmvm.scenarios.provenance import stamp, stamp_mismatch
 from flexmvm.scenarios.run import run_scenario
 from flexmvm.theory.scenario import theory_histories
 
@@ -87,11 +93,25 @@ def _row(label: str, run, sc, refs: dict) -> dict:
         "n_steps": s["n_steps"],
         "wall_time_s": s["wall_time_s"],
         "plastic": s.get("plastic", {}),
+        "provenance": stamp(sc),
     }
     curves = run.result.curves()
     for name, ref in refs.items():
         row[f"vs_{name}"] = compare_runs(*ref, *curves)
     return row
+
+
+def reused_rows(record: Path, scenarios: dict) -> list[dict]:
+    """The rows of a stored seed_plastic.json named in ``scenarios`` ({run label: the scenario
+    it stands for now}), each checked against that scenario's provenance stamp; SystemExit with
+    one line naming the run and what differs (scenarios.provenance.stamp_mismatch) if any
+    row is not the same run."""
+    rows = [r for r in json.loads(record.read_text())["rows"] if r["run"] in scenarios]
+    for row in rows:
+        why = stamp_mismatch(row.get("provenance"), stamp(scenarios[row["run"]]))
+        if why is not None:
+            raise SystemExit(f"--reuse {record}: its {row['run']} run was {why}: rerun it")
+    return rows
 
 
 def _duration_us(row: dict) -> float:
@@ -169,6 +189,10 @@ def _cases(args, plastic, elastic, reused: set) -> list:
         cases.append(("plastic", plastic))
     given = plastic.body(args.body).model  # its reference condition and allow_costly
     for text in [m for m in args.mvm.split(",") if m.strip()]:
+        if text.strip() == "model":  # the scenario's own MVM form
+            cfg = ModelConfig(**{**given.model_dump(), "kind": "mvm"})
+            cases.append(("mvm model", plastic.with_model(args.body, cfg)))
+            continue
         sel, modes = text.split(":")
         cfg = ModelConfig(
             kind="mvm",
@@ -207,13 +231,11 @@ def main() -> None:
         theory = None
     refs = {} if theory is None else {"theory": theory}
     rows, curves = [], {}
-    if args.reuse is not None:  # the same scenario and end time, run before
-        for row in json.loads((args.reuse / "seed_plastic.json").read_text())["rows"]:
-            if row["run"] in ("elastic", "plastic"):
-                rows.append(row)
-                curves[row["run"]] = refs[row["run"]] = _load_curves(
-                    args.reuse / f"{row['run']}.npz"
-                )
+    if args.reuse is not None:  # the same runs, stored with their stamps
+        runs = {"elastic": elastic, "plastic": plastic}
+        for row in reused_rows(args.reuse / "seed_plastic.json", runs):
+            rows.append(row)
+            curves[row["run"]] = refs[row["run"]] = _load_curves(args.reuse / f"{row['run']}.npz")
     print(f"{args.scenario.name}: t_end {plastic.time.t_end_s:g} s, dt {plastic.time.dt_s:g} s")
     print(HEAD, flush=True)
     for row in rows:

@@ -32,7 +32,11 @@ and reports whether any point yields, the number of yielding points and the peak
 equivalent plastic strain.
 
 Writes OUT/yield_onset.json (one row per run) and prints the table; each run's CPU time
-(process time) is in its row. One run after another: the machine is shared.
+(process time) is in its row. One run after another: the machine is shared. Each row keeps its
+provenance stamp (scenarios.provenance.script_stamp of this script and plastic_restitution.py,
+its case and speed: code, libraries with scikit-fem and gmsh); rows are appended to an
+existing record only if every row in it is stamped by this code (else one line and exit:
+rows of two code versions are not one table).
 """
 
 from __future__ import annotations
@@ -58,9 +62,12 @@ from flexmvm.plasticity.return_mapping import von_mises
 from flexmvm.scenarios.build import build_scenario
 from flexmvm.scenarios.hertz_block import SPHERE_BLOCK
 from flexmvm.scenarios.load import scenario_from_dict
+from flexmvm.scenarios.provenance import script_stamp, script_stamp_mismatch
 from flexmvm.theory.hertz import hertz_impact
 from flexmvm.theory.hertz_yield import yield_onset
 
+#: The scripts a row's numbers depend on (its provenance stamp).
+SCRIPTS = (Path(__file__), Path(__file__).with_name("plastic_restitution.py"))
 SPHERE = SPHERE_BLOCK.parent / "meshes" / "sphere_r10_cap.msh"
 R = 0.010  # sphere radius [m]
 E, NU, RHO, RHO_BALL, Y = 70e9, 0.33, 2700.0, 250.0, 2.35e9
@@ -247,6 +254,25 @@ COLUMNS = [
 ]
 
 
+def row_stamp(name: str, v_over_vy: float | None) -> dict:
+    """A row's provenance stamp: SCRIPTS, the case's settings and the plastic run's speed
+    (None: the elastic run)."""
+    return script_stamp(SCRIPTS, {"case": name, **asdict(CASES[name]), "v_over_vy": v_over_vy})
+
+
+def stamped_rows(record: Path) -> list[dict]:
+    """The rows of an existing record, [] if there is none; SystemExit with one line if a
+    row is not stamped by this code (module doc)."""
+    rows = json.loads(record.read_text()) if record.exists() else []
+    for k, row in enumerate(rows):
+        why = script_stamp_mismatch(row.get("provenance"), SCRIPTS)
+        if why is not None:
+            raise SystemExit(
+                f"{record}: row {k} ({row.get('case')}) was {why}: write to another OUT"
+            )
+    return rows
+
+
 def main(argv=None) -> None:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("out", type=Path)
@@ -255,16 +281,18 @@ def main(argv=None) -> None:
     args = ap.parse_args(argv)
     args.out.mkdir(parents=True, exist_ok=True)
     record = args.out / "yield_onset.json"
-    rows = json.loads(record.read_text()) if record.exists() else []
+    rows = stamped_rows(record)
     names = [] if args.plastic else args.cases.split(",")
     for name in names:
         rows.append(elastic_row(args.out, name, CASES[name]))
+        rows[-1]["provenance"] = row_stamp(name, None)
         print(json.dumps(rows[-1]), flush=True)
         record.write_text(json.dumps(rows, indent=1))
     if args.plastic:
         name, speeds = args.plastic.split(":")
         for s in speeds.split(","):
             rows.append(plastic_row(args.out, name, CASES[name], float(s)))
+            rows[-1]["provenance"] = row_stamp(name, float(s))
             print(json.dumps(rows[-1]), flush=True)
             record.write_text(json.dumps(rows, indent=1))
     print("  ".join(f"{h:>10}" for h, _, _ in COLUMNS))

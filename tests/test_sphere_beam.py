@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 import flexmvm as fm
-from flexmvm.metrics.ncc import ncc
+from flexmvm.metrics.ncc import compare_force
 
 pytest.importorskip("gmsh")
 
@@ -112,12 +112,15 @@ def test_full_fe_beam_converges_through_the_impact(runs):
 
 
 def test_mvm_beam_against_full_fe(runs):
-    """Force history NCC >= 0.995 and peak within 3 % (the issue's acceptance for the beam's
-    showcase), with a reduced beam of at most 600 DOF."""
+    """Force history NCC over the contact windows (metrics.ncc.compare_force: from the first
+    contact to the last, not the free flight's zeros) >= 0.996 and peak within 3 % (the
+    issue's acceptance for the beam's showcase), with a reduced beam of at most 600 DOF.
+    Measured: 1 - NCC 4.4e-4 over the two contacts (45.5-106 us, 164.5-183 us; 3.7e-4 over the
+    whole 200 us), so the bound is 9 x it; peak +0.21 %."""
     full, mvm = runs
     assert mvm.summary["dof"]["beam"] <= 600
     assert mvm.summary["steps_not_converged"] == 0
-    assert ncc(full.t, full.contact_force, mvm.t, mvm.contact_force) >= 0.995
+    assert compare_force(full.t, full.contact_force, mvm.t, mvm.contact_force).ncc >= 0.996
     peak_f, peak_m = full.contact_force.max(), mvm.contact_force.max()
     assert abs(peak_m - peak_f) <= 0.03 * peak_f
     np.testing.assert_allclose(mvm.t, full.t)

@@ -53,12 +53,14 @@ def test_key_changes_with_every_setting_and_the_code(monkeypatch):
 
 
 def test_key_holds_the_library_versions(monkeypatch):
-    """numpy, scipy and numba versions are in the key: another version of one is another
-    key (a new kernel can change a history's last bits)."""
+    """numpy, scipy, numba, scikit-fem and gmsh versions are in the key: another version of
+    one is another key (a new kernel can change a history's last bits; scikit-fem assembles
+    the matrices, gmsh writes the parts' meshes)."""
     sc = _tiny()
     base = validation.case_key(sc)
-    assert set(validation.case_inputs(sc)["libraries"]) == {"numpy", "scipy", "numba"}
-    for lib in ("numpy", "scipy", "numba"):
+    libraries = {"numpy", "scipy", "numba", "scikit-fem", "gmsh"}
+    assert set(validation.case_inputs(sc)["libraries"]) == libraries
+    for lib in sorted(libraries):
         real = provenance.library_versions()
         monkeypatch.setattr(
             provenance, "library_versions", lambda real=real, lib=lib: real | {lib: "0.0"}

@@ -5,19 +5,23 @@ A run's numbers depend on the package source, the numerical libraries, the resol
 (every body, mesh parameter, model, contact, joint, probe and time setting) and the content of
 its mesh files. :func:`run_inputs` collects them, :func:`run_key` hashes them (SHA-256 of the
 canonical JSON, 32 hex digits) and :func:`stamp` is the compact record a stored result keeps
-beside its key, so that :func:`stamp_mismatch` can say *which* of them changed.
+beside its key, so that :func:`stamp_mismatch` can say *which* of them changed. A record made by
+a script that builds its own scenarios (a benchmark study) keeps :func:`script_stamp` instead:
+the same code and libraries, the script's SHA-256 and its settings in place of the scenario;
+:func:`script_stamp_mismatch` checks it.
 
 The package source is :func:`run_code_version`: a hash of every source file of flexmvm but
 the validation package (flexmvm/validation/), whose edits change no run. The libraries are
-numpy, scipy and numba (LIBRARIES): a new BLAS kernel or a new compiled kernel can change the
-last bits of a history.
+numpy, scipy and numba (LIBRARIES: a new BLAS kernel or a new compiled kernel can change the
+last bits of a history), scikit-fem (it assembles the mass and stiffness matrices) and gmsh
+(it writes the meshes of the parts made at run time: flexmvm.mesh.parts).
 """
 
 from __future__ import annotations
 
 import hashlib
 import importlib.metadata
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -33,6 +37,8 @@ __all__ = [
     "run_code_version",
     "run_inputs",
     "run_key",
+    "script_stamp",
+    "script_stamp_mismatch",
     "stamp",
     "stamp_mismatch",
 ]
@@ -40,10 +46,13 @@ __all__ = [
 #: Format of a key; bump when what goes into it changes (every stored result goes stale).
 #: 3: a mesh file enters by its name and content, not its absolute path (a fresh clone or
 #: another checkout reuses what this one stored).
-FORMAT = 3
+#: 4: scikit-fem and gmsh among the libraries.
+FORMAT = 4
 
-#: The libraries whose versions are part of the key.
-LIBRARIES = ("numpy", "scipy", "numba")
+#: The libraries (distribution names) whose versions are part of the key: the linear algebra,
+#: the compiled kernels, the matrices' assembly (scikit-fem) and the meshes made at run time
+#: (gmsh).
+LIBRARIES = ("numpy", "scipy", "numba", "scikit-fem", "gmsh")
 
 #: Package files whose edits change no run (the validation package: cases, report, command).
 _NOT_RUN_CODE = ("validation", "__pycache__")
@@ -153,3 +162,41 @@ def stamp_mismatch(stored: Any, current: Mapping[str, Any]) -> str | None:
     if stored.get("mesh_files") != current["mesh_files"]:
         what.append("other mesh files")
     return "run under " + ", ".join(what or ["another key"])
+
+
+def script_stamp(scripts: Path | Sequence[Path], settings: Mapping[str, Any]) -> dict[str, Any]:
+    """The stamp of a record made by a script (a benchmark that builds its scenarios from
+    ``settings``, JSON-able; ``scripts``: it and the scripts it imports): :func:`stamp`'s
+    fields, the scenario's hash taken over the scripts' names and SHA-256 and the settings
+    (kept verbatim under "settings"); meshes the scripts make are covered by the scripts,
+    gmsh's version and the settings."""
+    paths = [Path(scripts)] if isinstance(scripts, (str, Path)) else [Path(p) for p in scripts]
+    inputs = {
+        "format": FORMAT,
+        "code": run_code_version(),
+        "libraries": library_versions(),
+        "scenario": {
+            "scripts": {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in paths},
+            "settings": dict(settings),
+        },
+        "mesh_files": {},
+    }
+    return {
+        "key": _hash(inputs),
+        "format": inputs["format"],
+        "code": inputs["code"],
+        "libraries": inputs["libraries"],
+        "scenario_sha256": _hash(inputs["scenario"], 16),
+        "mesh_files": {},
+        "scripts": sorted(p.name for p in paths),
+        "settings": inputs["scenario"]["settings"],
+    }
+
+
+def script_stamp_mismatch(stored: Any, scripts: Path | Sequence[Path]) -> str | None:
+    """None if ``stored`` is the :func:`script_stamp` that ``scripts`` give its own stored
+    settings now; else what differs, in words (:func:`stamp_mismatch`; "another resolved
+    scenario" there means edited scripts)."""
+    if not isinstance(stored, Mapping) or not isinstance(stored.get("settings"), Mapping):
+        return stamp_mismatch(None, {})
+    return stamp_mismatch(stored, script_stamp(scripts, stored["settings"]))

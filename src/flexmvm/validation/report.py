@@ -206,6 +206,8 @@ def _flat(flat: dict) -> str:
         plateau_mean=f"{flat['plateau_mean_N']:.2f}",
         F0=f"{flat['F0_N']:.2f}",
         plateau_err=_p(flat["plateau_err"], 3),
+        peak=f"{flat['max_contact_force_N']:.2f}",
+        peak_err=_p(flat["max_contact_force_N"] / flat["F0_N"] - 1.0, 1),
         jump=f"{1e6 * flat['free_end_jump_s']:.1f}",
         L_over_c=f"{1e6 * flat['L_over_c_s']:.1f}",
         jump_err=_p(flat["jump_err"]),
