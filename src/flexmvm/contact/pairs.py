@@ -123,7 +123,8 @@ class PointToSurfaceContact:
         self.mu, self.beta, self.law, self.theta = pair_options(
             name, kind, friction_coefficient, beta, law, theta
         )
-        self._last = (None, 0)  # the last candidate rows' pairs and bond-row count
+        # the last candidate rows' pairs and bond-row count
+        self._last: tuple[tuple | None, int] = (None, 0)
         self._bond_normal: dict = {}  # bonded slave node -> the normal it was locked with
         self.slave, self.master = slave, master
         self.slave_nodes = np.unique(np.asarray(slave_nodes, dtype=np.int64))
@@ -186,7 +187,8 @@ class PointToSurfaceContact:
         self._held_n = np.zeros((ns, 3))
         self._held_off = np.zeros(ns)
         self._held_d = np.zeros(ns)
-        self._row_geometry = None  # the last candidate rows': (idx, facets, w, normal, off, A_m)
+        # the last candidate rows': (idx, facets, w, normal, off, A_m)
+        self._row_geometry: tuple | None = None
 
     # -- geometry -----------------------------------------------------------------------------
     def _kinematics(self, states) -> float:
@@ -331,13 +333,14 @@ class PointToSurfaceContact:
             rows, np.concatenate([lower, np.zeros(2 * m_n)]), keys, gaps, 0, weight, friction
         )
 
-    def _fill_rows(self, rows: Rows, states, slave_pairs, master_pairs, dirs) -> None:
+    def _fill_rows(self, rows: Rows, states, slave_pairs: tuple, master_pairs: tuple, dirs) -> None:
         """Rows of both bodies, compiled (slave +, master -), with their nodal selectors."""
         for b, nodes, pairs, sign in (
             (self.slave, self._s, slave_pairs, 1.0),
             (self.master, self._m, master_pairs, -1.0),
         ):
-            frame, elastic, sel = nodes.rows(*pairs, dirs, states[b].A, sign)
+            pair_nodes, pair_w, pair_kc = pairs  # local ids, weights, nodes per row
+            frame, elastic, sel = nodes.rows(pair_nodes, pair_w, pair_kc, dirs, states[b].A, sign)
             rows.blocks[b] = (frame, elastic)
             if sel is not None:
                 rows.nodal[b] = sel

@@ -171,13 +171,14 @@ def script_stamp(scripts: Path | Sequence[Path], settings: Mapping[str, Any]) ->
     (kept verbatim under "settings"); meshes the scripts make are covered by the scripts,
     gmsh's version and the settings."""
     paths = [Path(scripts)] if isinstance(scripts, (str, Path)) else [Path(p) for p in scripts]
-    inputs = {
+    settings_kept = dict(settings)
+    inputs: dict[str, Any] = {
         "format": FORMAT,
         "code": run_code_version(),
         "libraries": library_versions(),
         "scenario": {
             "scripts": {p.name: hashlib.sha256(p.read_bytes()).hexdigest() for p in paths},
-            "settings": dict(settings),
+            "settings": settings_kept,
         },
         "mesh_files": {},
     }
@@ -189,7 +190,7 @@ def script_stamp(scripts: Path | Sequence[Path], settings: Mapping[str, Any]) ->
         "scenario_sha256": _hash(inputs["scenario"], 16),
         "mesh_files": {},
         "scripts": sorted(p.name for p in paths),
-        "settings": inputs["scenario"]["settings"],
+        "settings": settings_kept,
     }
 
 
