@@ -495,11 +495,10 @@ class MoreauJeanIntegrator:
         """Massless coordinates to equilibrium at the step's end (integrate.massless); the
         carried k_hat q and k_hat q_dot follow (the mass-weighted contractions do not see
         massless coordinates)."""
-        for b, dq, dv in equilibrate_step_end(
+        for b, _, _, k_dq, k_dv in equilibrate_step_end(
             self.massless, self.system.bodies, self.loads, t + th * h, h, states, new_states, held
         ):
             c = self.carried_state.of_state(b, new_states[b])
             if c is not None:
-                ml = self.massless[b]
-                c.Kq = c.Kq + ml.k_times(dq)
-                c.Kqd = c.Kqd + ml.k_times(dv)
+                c.Kq = c.Kq + k_dq
+                c.Kqd = c.Kqd + k_dv
