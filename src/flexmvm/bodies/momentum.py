@@ -367,3 +367,24 @@ def momentum_terms_nodal(
     momentum[3:6] = -(ASt.T @ xr_m) + J @ xw_m + np.array([am0, am1, am2])
     _frame_velocity_forces(A, S, J, w, W, Om, s1x_m, H, force)
     _frame_gravity(mass, S, g, gb, force)
+
+
+@numba.njit(cache=True, nogil=True, fastmath={"reassoc", "contract"})
+def increment_norm(
+    A, q, Lq, mass, S0, S1, G0, G1, dv, mqq_dqd, dq, k_dq
+):  # pragma: no cover - compiled
+    """dv^T M(A, q) dv + dq^T k_hat dq for the energy ledger's numerical dissipation
+    (integrate.energy_ledger): M from Lq = L(q) (3, 3, nq) as in momentum_terms, mqq_dqd =
+    M_qq dv_q, k_dq = k_hat dq. One call instead of ~25 numpy calls per body and step; the
+    same terms to round-off."""
+    S, J = _frame_inertia(q, Lq, S0, S1, G0, G1)
+    Mwq = _rotation_coupling(Lq, G1)
+    ASt = A @ _skew(S)
+    out = np.empty(dv.shape[0])
+    _mass_times(A, ASt, J, S1, Mwq, mass, dv, mqq_dqd, out)
+    total = 0.0
+    for i in range(dq.shape[0]):
+        total += dq[i] * k_dq[i]
+    for i in range(dv.shape[0]):
+        total += dv[i] * out[i]
+    return total

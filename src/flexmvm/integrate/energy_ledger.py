@@ -49,6 +49,7 @@ from typing import TYPE_CHECKING, Protocol, runtime_checkable
 
 import numpy as np
 
+from flexmvm.bodies.momentum import increment_norm
 from flexmvm.bodies.rotation import cross3
 from flexmvm.integrate.row_products import body_impulse, flat_product
 from flexmvm.loads.applied import midpoint_states, start_run
@@ -195,7 +196,8 @@ class EnergyLedger:
         """sum over bodies of dv^T M dv + dq^T k_hat dq, M at the step's end (module doc):
         one product with M_qq and one with k_hat per body; the frame's rotational terms only
         when omega changed, from the integrator's carried contractions of the end state (the
-        integrator's own, made by its step: no pass over the nodes)."""
+        integrator's own, made by its step: no pass over the nodes). With those carried in
+        the dense form, a body's sum is one compiled call (bodies.momentum.increment_norm)."""
         total = 0.0
         for b, (body, s0, s1) in enumerate(zip(self.system.bodies, start, end)):
             dv, dq = s1.v - s0.v, s1.q - s0.q
@@ -204,6 +206,14 @@ class EnergyLedger:
                 continue
             dqd = dv[6:]
             k_dq, mqq_dqd = self._products(b, body, s0, s1, dq, dqd)
+            c1 = self.fresh.of_state(b, s1) if self.fresh is not None else None
+            if c1 is not None and c1.Lq.ndim == 3:  # the whole sum in one compiled call
+                inv = body.inv
+                total += increment_norm(
+                    s1.A, s1.q, c1.Lq, inv.mass, inv.S0, inv.S1, inv.G0, body.G1_array,
+                    dv, mqq_dqd, dq, k_dq,
+                )  # fmt: skip
+                continue
             total += float(dq @ k_dq) + float(dqd @ mqq_dqd)
             coupling = s1.A @ (body.inv.S1 @ dqd)  # A S1 dq_dot, the translation-elastic part
             total += body.inv.mass * float(dv[:3] @ dv[:3]) + 2.0 * float(dv[:3] @ coupling)

@@ -41,6 +41,7 @@ from flexmvm.errors import SolverError
 from flexmvm.fe.solvers.cholesky import ldl_factor
 from flexmvm.integrate.dense_solve import cho_solve
 from flexmvm.integrate.lcp import regularised_cho
+from flexmvm.integrate.massless_kernels import add_delassus, body_part, body_update
 from flexmvm.loads.applied import applied_forces
 
 
@@ -52,6 +53,7 @@ class MasslessCoordinates:
     K_s: sp.csr_matrix  # rows s of k_hat (ns, nq)
     K_cols: sp.csc_matrix  # columns s of k_hat (nq, ns)
     solve: object  # x = K_ss^-1 b
+    cho: tuple | None = None  # (c, lower): K_ss's dense Cholesky factor (the compiled path)
 
     @classmethod
     def of(cls, body) -> MasslessCoordinates | None:
@@ -85,6 +87,7 @@ class MasslessCoordinates:
             )
         K = sp.csr_matrix(body.k_hat)
         K_s = K[s]
+        cho = None
         K_ss = sp.csc_matrix(K_s[:, s])
         try:
             if body.is_sparse:
@@ -97,7 +100,7 @@ class MasslessCoordinates:
             raise SolverError(
                 f"body {body.name!r}: stiffness of the massless contact nodes is singular ({exc})"
             ) from None
-        return cls(s, K_s, sp.csc_matrix(K_s.T), solve)
+        return cls(s, K_s, sp.csc_matrix(K_s.T), solve, cho)
 
     def free_change(self, q: np.ndarray, force_s: np.ndarray) -> np.ndarray:
         """dq_s (ns,) that brings q[s] to K_ss q_s = force_s - K_sn q_n, the other
@@ -182,13 +185,14 @@ def check_contact_law(system, massless: list[MasslessCoordinates | None]) -> Non
 
 def equilibrate_step_end(
     massless, bodies, loads: tuple, t_theta: float, h: float, states, new_states, held
-) -> list[tuple[int, np.ndarray, np.ndarray]]:
+) -> list[tuple]:
     """Massless coordinates of every body to equilibrium at the step's end (module doc),
     under the step's constraint impulses as forces lambda / h and the point loads acting at
     t_theta = t + theta h, with the rows that carried an impulse held; their velocity the
     step's mean velocity. new_states are changed in place. held: [(rows, lambda)] of the
-    step's constraints (contact, joints). Returns [(body, dq_s, dq_dot_s)], the changes made
-    (for quantities carried with the state: k_hat q and k_hat q_dot)."""
+    step's constraints (contact, joints). Returns [(body, dq_s, dq_dot_s, K_cols dq_s,
+    K_cols dq_dot_s)]: the changes made, and those of the quantities carried with the state
+    (k_hat q and k_hat q_dot)."""
     todo = [b for b, ml in enumerate(massless) if ml is not None]
     if not todo:
         return []
@@ -198,6 +202,13 @@ def equilibrate_step_end(
         if rows is not None and lam is not None and len(lam)
     ]
     applied = applied_forces(loads, bodies, new_states, t_theta)
+    if all(massless[b].cho is not None for b in todo):
+        return _compiled_step_end(massless, todo, applied, h, states, new_states, held)
+    return _reference_step_end(massless, todo, applied, h, states, new_states, held)
+
+
+def _reference_step_end(massless, todo, applied, h, states, new_states, held) -> list:
+    """equilibrate_step_end through equilibrate (any K_ss factor: sparse bodies' LDL^T)."""
     parts = [_step_end_part(massless[b], b, new_states[b], applied.get(b), h, held) for b in todo]
     # rows with no massless column in any body impose nothing here
     if parts and parts[0][3].shape[0]:
@@ -211,7 +222,58 @@ def equilibrate_step_end(
         v_s = (q[ml.s] - st.q[ml.s]) / h
         dv = v_s - qd[ml.s]
         qd[ml.s] = v_s
-        changes.append((b, dq, dv))
+        changes.append((b, dq, dv, ml.k_times(dq), ml.k_times(dv)))
+    return changes
+
+
+def _compiled_step_end(massless, todo, applied, h, states, new_states, held) -> list:
+    """equilibrate_step_end for bodies whose K_ss has a dense factor, in the compiled kernels
+    of integrate.massless_kernels (the same sums, equal to round-off)."""
+    m = sum(len(lam) for _, lam, _ in held)
+    on = np.zeros(m, dtype=np.bool_)
+    lam_all = np.zeros(m)
+    offset = 0
+    for _, lam, nz in held:
+        on[offset + nz] = True
+        lam_all[offset : offset + len(lam)] = lam
+        offset += len(lam)
+    parts = []
+    for b in todo:
+        ml, new = massless[b], new_states[b]
+        blocks = [rows.blocks.get(b) for rows, _, _ in held]
+        if len(held) == 1 and blocks[0] is not None:
+            E = np.ascontiguousarray(blocks[0][1], dtype=float)
+        else:
+            E = np.zeros((m, len(new.q)))
+            offset = 0
+            for blk, (_, lam, _) in zip(blocks, held):
+                if blk is not None:
+                    E[offset : offset + len(lam)] = blk[1]
+                offset += len(lam)
+        f = applied.get(b)
+        f_s = np.zeros(len(ml.s)) if f is None else np.ascontiguousarray(f[6:][ml.s])
+        K = ml.K_s
+        B, nonzero = body_part(new.q, K.indptr, K.indices, K.data, ml.s, E, lam_all, on, h, f_s)
+        parts.append((B, cho_solve(ml.cho, B), nonzero))  # [dq0, Y]: one dpotrs
+    keep = np.zeros(int(on.sum()), dtype=np.bool_)
+    for part in parts:
+        keep |= part[2]
+    keep = np.flatnonzero(keep)
+    mu = np.zeros(0)
+    if keep.size:
+        D, rhs = np.zeros((keep.size, keep.size)), np.zeros(keep.size)
+        for B, X, _ in parts:
+            add_delassus(B, X, keep, D, rhs)
+        mu = cho_solve(regularised_cho(0.5 * (D + D.T), "massless-node"), rhs)
+    changes = []
+    for b, (_, X, _) in zip(todo, parts):
+        ml, new = massless[b], new_states[b]
+        Kc = ml.K_cols
+        made = body_update(
+            new.q, new.v[6:], states[b].q, ml.s, X, keep, mu, h,
+            Kc.indptr, Kc.indices, Kc.data, Kc.shape[0],
+        )  # fmt: skip
+        changes.append((b, *made))
     return changes
 
 

@@ -69,6 +69,7 @@ from flexmvm.integrate.newton_iterate import (
 from flexmvm.integrate.plastic_bodies import PlasticBodies
 from flexmvm.integrate.plastic_tangent import PlasticTangent
 from flexmvm.integrate.relaxation import AitkenRelaxation, relaxed_iterate
+from flexmvm.integrate.residual_kernels import iterate_velocities, residual_and_scale
 from flexmvm.integrate.row_products import flat_product, merge_contacts
 from flexmvm.integrate.stall_report import stall_report
 from flexmvm.integrate.state import BodyState
@@ -181,10 +182,9 @@ class MoreauJeanIntegrator:
         """Body b's residual M(x_m) (v+ - v-) - h F(x_m, v_m), its midpoint and end states
         and its momentum scale; applied: the applied loads' force on it (loads.applied)."""
         body, g = self.system.bodies[b], self.gravity
-        vm = th * vp + (1.0 - th) * st.v
+        vm, dv = iterate_velocities(st.v, vp, th)  # th vp + (1 - th) v-, vp - v- (bit for bit)
         mid = st.advanced(vm, th * h)
         end = st.advanced(vm, h)
-        dv = vp - st.v
         if body.nq:
             Lq_m, Lqd_m, Kq_m = self.carried_state.midpoint(b, st, vp, th, h)
             if b in self.plastic:  # the return at the midpoint (integrate.plastic_bodies)
@@ -253,10 +253,11 @@ class MoreauJeanIntegrator:
                 mid.A, e[0], dv, vm, e[1], e[1], e[0], e[0], e[0], inv.mass, inv.S0,
                 e[2], inv.G0, e[1], g, inertia, F, momentum,
             )  # fmt: skip
-        if applied is not None:
-            F += applied
-        scale = max(np.abs(inertia).max(), h * np.abs(F).max(), np.abs(momentum).max())
-        return inertia - h * F, mid, end, scale
+        # F += applied, R = inertia - h F and the momentum scale in one call (bit for bit)
+        R, scale = residual_and_scale(
+            inertia, F, momentum, _NO_COORDINATES[0] if applied is None else applied, h
+        )
+        return R, mid, end, scale
 
     # ---------------------------------------------------------------- the step
     def step(self, t: float, states: list[BodyState], h: float) -> StepResult:
@@ -490,11 +491,10 @@ class MoreauJeanIntegrator:
         """Massless coordinates to equilibrium at the step's end (integrate.massless); the
         carried k_hat q and k_hat q_dot follow (the mass-weighted contractions do not see
         massless coordinates)."""
-        for b, dq, dv in equilibrate_step_end(
+        for b, _, _, k_dq, k_dv in equilibrate_step_end(
             self.massless, self.system.bodies, self.loads, t + th * h, h, states, new_states, held
         ):
             c = self.carried_state.of_state(b, new_states[b])
             if c is not None:
-                ml = self.massless[b]
-                c.Kq = c.Kq + ml.k_times(dq)
-                c.Kqd = c.Kqd + ml.k_times(dv)
+                c.Kq = c.Kq + k_dq
+                c.Kqd = c.Kqd + k_dv
