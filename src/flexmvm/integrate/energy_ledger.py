@@ -45,7 +45,7 @@ StoringLoad), and of an integrator by integrate.step.Integrator: nothing is prob
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Protocol, runtime_checkable
+from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
 
 import numpy as np
 
@@ -55,7 +55,10 @@ from flexmvm.integrate.row_products import body_impulse, flat_product
 from flexmvm.loads.applied import midpoint_states, start_run
 
 if TYPE_CHECKING:
+    from flexmvm.integrate.carried import CarriedState
+    from flexmvm.integrate.plastic_bodies import PlasticBodies
     from flexmvm.integrate.step import Integrator
+    from flexmvm.integrate.system import System
 
 
 class Load(Protocol):
@@ -135,13 +138,13 @@ class EnergyLedger:
     the integrator's carried contractions (the mass matrix of a full-FE body without a pass
     over its nodes)."""
 
-    system: object
-    carried: object = None
+    system: System
+    carried: Any = None  # callable (b, state) -> (L(q), L(q_dot)), or None
     # the integrator's carried state (integrate.carried.CarriedState), whose k_hat q and
     # M_qq q_dot of a step's end give the dissipation's products for free; None: computed
-    fresh: object = None
+    fresh: CarriedState | None = None
     # the integrator's plastic bodies (integrate.plastic_bodies.PlasticBodies); None: none
-    plastic: object = None
+    plastic: PlasticBodies | None = None
     w_loads: np.ndarray = field(init=False)
     d_loads: np.ndarray = field(init=False)
     w_joints: np.ndarray = field(init=False)
