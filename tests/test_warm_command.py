@@ -73,3 +73,30 @@ def test_a_corrupt_guard_entry_is_rebuilt(tmp_path, monkeypatch):
     with pytest.warns(UserWarning, match="holds NaN or inf in residual_time_s: evicted"):
         again = build_scenario(_tiny(), SetupCache()).info[1].truncation
     assert again == pytest.approx(guard, rel=1e-12)
+
+
+def test_registering_the_commands_imports_no_numerical_stage():
+    """`flexmvm` registers every sub-command before it runs one: that imports click and the
+    command modules only (0.03 s), not flexmvm.scenarios and its numpy, scipy, numba (1.2 s,
+    through the study command's --kind choices; before). ~1 s (a fresh interpreter)."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys; from flexmvm.cli import app; app._register(); "
+        "print(sorted(m for m in ('numpy', 'scipy', 'numba', 'flexmvm.scenarios') "
+        "if m in sys.modules))"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, check=True, timeout=120
+    )
+    assert out.stdout.strip() == "[]", out.stdout + out.stderr
+
+
+def test_the_study_kinds_are_the_retaining_model_kinds():
+    """The --kind choices of `flexmvm study materials`, spelled out in cli/study_cmd.py, are
+    the model kinds that retain nodes."""
+    from flexmvm.cli.study_cmd import RETAINING_MODELS
+    from flexmvm.scenarios import ModelKind
+
+    assert RETAINING_MODELS == [k.value for k in ModelKind if k.retains_nodes]
