@@ -64,6 +64,11 @@ STREAM_BYTES_PER_S = 5e9
 MAX_FACTORS = 10
 
 
+#: Version of full_factor's counting, in its cache entries' key (the code version covers
+#: fe/, mesh/, reduction/, not this module): bump when full_factor counts differently.
+COUNTS_VERSION = 1
+
+
 @dataclass(frozen=True)
 class FullFactor:
     """Nonzeros of a full-FE body's K and M and the stored entries of its iteration matrix's
@@ -86,14 +91,21 @@ class FullFactor:
 def full_factor(fe, fixed_dofs=()) -> FullFactor:
     """The FullFactor of FE model ``fe`` (its M and K) without its reference condition's
     ``fixed_dofs`` (the full-FE body's coordinates): the symbolic analysis of the pattern of
-    W = M + (theta h)^2 K in the order the integrator factors it with."""
+    W = M + (theta h)^2 K in the order the integrator factors it with: from SPLIT_MIN_N rows
+    the one a full-FE run keeps in the setup cache under W's pattern (scenarios.solver_choice:
+    ~1.7 s for a 25,000-DOF rod, made once for the reduced and the full runs)."""
+    from flexmvm import setup_cache
+    from flexmvm.fe.solvers import ldl
     from flexmvm.fe.solvers.ordering import elimination_order, iteration_pattern
     from flexmvm.fe.solvers.symbolic import SymbolicFactor
 
     free = np.setdiff1d(np.arange(fe.K.shape[0]), np.asarray(fixed_dofs, np.int64))
     m, k = (sp.csr_matrix(a)[free][:, free] for a in (fe.M, fe.K))
     w = iteration_pattern(m, k)
-    order = elimination_order(w)
+    if w.shape[0] >= ldl.SPLIT_MIN_N:
+        order = setup_cache.cached_elimination_order(w, elimination_order)
+    else:
+        order = elimination_order(w)
     symbolic = SymbolicFactor(w, order if order is not None and order.size else None)
     return FullFactor(int(k.nnz), int(m.nnz), int(symbolic.nnz))
 
@@ -108,7 +120,7 @@ def cached_full_factor(
     from flexmvm import setup_cache
 
     fixed = [int(i) for i in np.asarray(fixed_dofs).ravel()]
-    inputs = None if source is None else {**source, "fixed_dofs": fixed}
+    inputs = None if source is None else {**source, "fixed_dofs": fixed, "v": COUNTS_VERSION}
     counts = setup_cache.cached_factor_counts(
         inputs, lambda: full_factor(load_fe(), fixed).as_dict()
     )
