@@ -35,10 +35,9 @@ from flexmvm.mesh.point_location import tet_weights
 from flexmvm.mesh.rod import RodMesh
 from flexmvm.reduction.interface import Patch, contact_patch, patch_nodes
 from flexmvm.reduction.kinds import kind_spec
-from flexmvm.reduction.truncation import modal_residual
 from flexmvm.scenarios.body_reference import reference_label
-from flexmvm.scenarios.cache_keys import ContactMass, mesh_key
-from flexmvm.scenarios.cost import check_cost, reduced_cost
+from flexmvm.scenarios.cache_keys import ContactMass, mesh_key, mesh_source
+from flexmvm.scenarios.cost import cached_full_factor, check_cost, reduced_cost, step_sizes
 from flexmvm.scenarios.drive_build import (
     joint_label,
     joint_name,
@@ -61,7 +60,7 @@ from flexmvm.scenarios.setup import SetupCache, default_setup, timed
 from flexmvm.scenarios.solver_choice import with_elimination_order
 from flexmvm.scenarios.stiffening_schema import stiffened
 from flexmvm.scenarios.supports import bedded_key, clamp_label, support_joints
-from flexmvm.setup_cache.ring_parts import cached_guard, cached_ring_parts
+from flexmvm.setup_cache.ring_parts import cached_ring_parts
 
 #: the kinds whose modes are fixed-interface (Craig-Bampton) modes: the truncation guard's
 TRUNCATION_GUARDED = (ModelKind.MVM, ModelKind("mvm-sparse"))
@@ -109,12 +108,14 @@ def build_body(
     massless: np.ndarray | None = None,
     surfaces: tuple[str, ...] = (),
     supports=(),
+    sizes: int = 1,
 ) -> tuple[FlexibleBody, BodyInfo]:
     """The body of ``cfg``; ``massless``: its contact nodes whose mass is redistributed
     (retained ones only for the MVM kinds, none for a modal or rigid model); ``surfaces``: its
     contact surfaces, which an automatic reference keeps away from; ``supports``: the
     scenario's, of which a clamp of this body replaces its reference (scenarios.supports). A
     rigid body has no reference condition (nothing to support: no elastic coordinates).
+    ``sizes``: the run's step sizes (scenarios.cost.step_sizes), for its cost guard.
     Meshes, FE models, bases and body parts come through ``setup``."""
     where = f"bodies[{cfg.name}]"
     material = cfg.material_obj()
@@ -140,9 +141,11 @@ def build_body(
         if nodes.size:
             key = ContactMass(key, tuple(int(i) for i in nodes))
     columns = spec.cost_columns(len(retained), modes)
-    if columns is not None:
-        fe = setup.fe_model(fe_key, material)
-        cost = reduced_cost(cfg.name, mesh.n_nodes, columns, fe.K.nnz)
+    if columns is not None:  # scenarios.cost: the full-FE factor's counts through the cache
+        fixed = setup.reference_condition(key, mesh, ref_set).fixed_dofs
+        load_fe = lambda: setup.fe_model(fe_key, material)
+        full = cached_full_factor(mesh_source(fe_key), fixed, load_fe)
+        cost = reduced_cost(cfg.name, mesh.n_nodes, columns, full.k_nnz, full=full, sizes=sizes)
         check_cost(cost, cfg.model.allow_costly, f"{where}.model")
     args = (key, material, kind, retained, modes, ref_set, interface)
     body = _kind_body(spec, cfg, setup, mesh, args, fe_key)
@@ -165,11 +168,11 @@ def build_body(
 
 def _truncation(setup: SetupCache, args: tuple, fe_key) -> dict | None:
     """The truncation guard (reduction/truncation.modal_residual) of the Craig-Bampton basis
-    setup.basis(*args) on the FE model of ``fe_key``; None without retained nodes."""
+    setup.basis(*args) on the FE model of ``fe_key``, through the setup cache
+    (SetupCache.truncation); None without retained nodes."""
     if not args[3]:
         return None
-    fe, basis = setup.fe_model(fe_key, args[1]), setup.basis(*args)
-    return cached_guard(fe, basis, lambda: modal_residual(fe, basis))  # factors K_EE
+    return setup.truncation(fe_key, *args)
 
 
 def _kind_body(spec, cfg, setup: SetupCache, mesh: Mesh, args: tuple, fe_key) -> FlexibleBody:
@@ -223,7 +226,9 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
         massless = None
         if any(c.redistribute_mass for c in sc.contacts):
             massless = contact_nodes(sc, cfg.name, setup.mesh(mesh_key(cfg)))
-        body, info = build_body(cfg, setup, massless, contact_surfaces(sc, cfg.name), sc.supports)
+        sizes = step_sizes(sc.time.dt_s, sc.time.dt_max_s)
+        surfaces = contact_surfaces(sc, cfg.name)
+        body, info = build_body(cfg, setup, massless, surfaces, sc.supports, sizes)
         bodies.append(body)
         infos.append(info)
         states.append(initial_state(body, cfg.placement))

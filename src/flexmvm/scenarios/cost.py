@@ -1,70 +1,204 @@
-"""What a reduced body will cost before it is built, against its full-FE body.
+"""What a reduced body will cost before it is built, against its full-FE body: memory and the
+bytes a Newton iteration streams (its time), both from what each model holds.
 
 A reduced (Craig-Bampton MVM) body of nq elastic coordinates holds dense matrices: its basis
-Psi (3 n x nq), m_hat and k_hat (nq x nq) and the six distinct G2 inertia blocks (nq x nq
-each) of the floating frame's invariants (bodies.invariants) -- 8 nq^2 + 3 n nq numbers.
-The full-FE body holds sparse M and K and the L D L^T factor of M + h^2/4 K, about
-FILL_PER_NNZ times the nonzeros of K. A retained region of a few thousand nodes (a wide
-ball on a fine tet10 mesh) makes the reduced body cost many times the full one: a 2 mm ball
-on a 28,000-DOF block kept 3,090 nodes, 9,289 coordinates, 18.6 GB against 1.2 GB for full
-FE. Such a body is built with a ReducedCostWarning that says so (kind ``mvm-sparse`` keeps a
-large region sparse: its dense part is the region's ring, not its volume, docs/concepts.md),
-and refused only when it would not fit: more than REFUSE_SHARE of the machine's memory,
-unless ``model.allow_costly`` is set. The right size of a region is a few Hertz contact radii
-(DESIGN.md, "Sizing a reduced region").
+Psi (3 n x nq), m_hat and k_hat (nq x nq), the six distinct G2 inertia blocks (nq x nq each)
+of the floating frame's invariants (bodies.invariants) and one dense Cholesky factor of its
+iteration matrix per step size (integrate.body_solver caches one per size): 8 nq^2 + 3 n nq +
+s nq^2 numbers for s step sizes. A Newton iteration streams m_hat, k_hat and the G2 blocks
+and solves with the factor: ~9 nq^2 numbers.
+
+The full-FE body holds sparse M and K (CSR: 12 bytes an entry), its iteration matrix W = M +
+(theta h)^2 K while it is factored, and one L D L^T factor of W per step size, whose stored
+entries are read off the symbolic analysis (fe.solvers.symbolic, with the elimination order
+the integrator uses: fe.solvers.ordering.elimination_order) -- the fill, not a guess: 4.2 x
+nnz(K) on sphere_block's tet10 block, 2.6 x on sphere_beam's beam. A Newton iteration solves
+with the factor (forward and backward: L read twice) and multiplies by M and K.
+
+Measured against these estimates (2-core AMD EPYC, docs/notes/2026-11-29-warm-command.md):
+the shipped reduced scenarios estimate the reduced body both smaller and cheaper a step than
+full FE, as their runs measure (peak RSS and simulation time of `flexmvm run --model full` /
+`--model mvm`). The time estimate leaves out the per-step work both models share (contact
+search, Python between kernels, ~10 ms a step on sphere_block), so it overstates either
+side's share; the comparison is what it is used for.
+
+A body estimated to cost more than MARGIN x its full-FE body's memory or time a step is built
+with a ReducedCostWarning that says so (kind ``mvm-sparse`` keeps a large region sparse: its
+dense part is the region's ring, not its volume, docs/concepts.md), and refused only when it
+would not fit: more than REFUSE_SHARE of the machine's memory, unless ``model.allow_costly``
+is set. The right size of a region is a few Hertz contact radii (DESIGN.md, "Sizing a reduced
+region").
 """
 
 from __future__ import annotations
 
+import math
 import os
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass
+
+import numpy as np
+import scipy.sparse as sp
 
 from flexmvm.errors import InputError
 
-#: Nonzeros of the L D L^T factor of M + h^2/4 K per nonzero of K (fe.cholesky's symbolic
-#: analysis with the package's ordering): measured 3.7 on a tet10 beam of 29,340 DOF and 2.5
-#: on the seed's rods (25,000 DOF); taken as 4, with M and K themselves (2 nnz) on top: an
-#: estimate of the order of the memory, not a budget.
+#: Stored entries of the L D L^T factor per nonzero of K where no symbolic analysis was made
+#: (reduced_cost without ``full``: the studies' quick estimates): measured 4.2 on
+#: sphere_block's tet10 block, 2.6 on sphere_beam's, 2.5 on the seed's rods; taken as 4.
 FILL_PER_NNZ = 4.0
 _BYTES = 8
+#: Bytes of one CSR entry (value and column index).
+_CSR_BYTES = 12
+
+#: A reduced body is warned about when its estimated memory or time a step exceeds this
+#: multiple of its full-FE body's: the estimates leave out what both models share (module
+#: doc) and were measured within this factor of the runs' differences.
+MARGIN = 1.5
+
+#: Streaming rate [bytes/s] that turns the bytes a Newton iteration reads into a time, for
+#: the messages only (the comparison is of bytes): a 2-core AMD EPYC's measured order.
+STREAM_BYTES_PER_S = 5e9
+
+#: Factors the integrator keeps per body (integrate.body_solver.MAX_CACHED): the step sizes
+#: whose factors a run holds at once.
+MAX_FACTORS = 10
+
+
+#: Version of full_factor's counting, in its cache entries' key (the code version covers
+#: fe/, mesh/, reduction/, not this module): bump when full_factor counts differently.
+COUNTS_VERSION = 1
+
+
+@dataclass(frozen=True)
+class FullFactor:
+    """Nonzeros of a full-FE body's K and M and the stored entries of its iteration matrix's
+    L D L^T factor (the symbolic analysis's, or estimated: FullFactor.estimated)."""
+
+    k_nnz: int
+    m_nnz: int
+    l_nnz: int
+
+    @classmethod
+    def estimated(cls, k_nnz: int) -> FullFactor:
+        """Without a symbolic analysis: L FILL_PER_NNZ x nnz(K), M a third of K (lumped by
+        node blocks)."""
+        return cls(int(k_nnz), int(k_nnz) // 3, int(FILL_PER_NNZ * k_nnz))
+
+    def as_dict(self) -> dict:
+        return {"k_nnz": self.k_nnz, "m_nnz": self.m_nnz, "l_nnz": self.l_nnz}
+
+
+def full_factor(fe, fixed_dofs=()) -> FullFactor:
+    """The FullFactor of FE model ``fe`` (its M and K) without its reference condition's
+    ``fixed_dofs`` (the full-FE body's coordinates): the symbolic analysis of the pattern of
+    W = M + (theta h)^2 K in the order the integrator factors it with: from SPLIT_MIN_N rows
+    the one a full-FE run keeps in the setup cache under W's pattern (scenarios.solver_choice:
+    ~1.7 s for a 25,000-DOF rod, made once for the reduced and the full runs)."""
+    from flexmvm import setup_cache
+    from flexmvm.fe.solvers import ldl
+    from flexmvm.fe.solvers.ordering import elimination_order, iteration_pattern
+    from flexmvm.fe.solvers.symbolic import SymbolicFactor
+
+    free = np.setdiff1d(np.arange(fe.K.shape[0]), np.asarray(fixed_dofs, np.int64))
+    m, k = (sp.csr_matrix(a)[free][:, free] for a in (fe.M, fe.K))
+    w = iteration_pattern(m, k)
+    if w.shape[0] >= ldl.SPLIT_MIN_N:
+        order = setup_cache.cached_elimination_order(w, elimination_order)
+    else:
+        order = elimination_order(w)
+    symbolic = SymbolicFactor(w, order if order is not None and order.size else None)
+    return FullFactor(int(k.nnz), int(m.nnz), int(symbolic.nnz))
+
+
+def cached_full_factor(
+    source: Mapping | None, fixed_dofs: np.ndarray, load_fe: Callable[[], object]
+) -> FullFactor:
+    """full_factor(load_fe(), fixed_dofs) through the setup cache under the FE model's key
+    inputs ``source`` (scenarios.cache_keys.mesh_source; None: not cached) and the fixed
+    DOFs: a warm run neither loads M and K for it nor repeats the analysis (0.3 s on
+    sphere_block's 11,748 DOF)."""
+    from flexmvm import setup_cache
+
+    fixed = [int(i) for i in np.asarray(fixed_dofs).ravel()]
+    inputs = None if source is None else {**source, "fixed_dofs": fixed, "v": COUNTS_VERSION}
+    counts = setup_cache.cached_factor_counts(
+        inputs, lambda: full_factor(load_fe(), fixed).as_dict()
+    )
+    return FullFactor(**counts)
+
+
+def step_sizes(dt_s: float, dt_max_s: float | None) -> int:
+    """Step sizes of a run, each with its own factor (integrate.run_result.TimeGrid.ticks:
+    dt_s 2^k up to dt_max_s), at most MAX_FACTORS."""
+    if not dt_max_s or not dt_s > 0 or dt_max_s <= dt_s:
+        return 1
+    return min(MAX_FACTORS, math.floor(math.log2(dt_max_s / dt_s) + 1e-9) + 1)
 
 
 @dataclass(frozen=True)
 class BodyCost:
-    """Generalized coordinates and the estimated memory [bytes] of one body's matrices,
-    reduced as asked and as full FE."""
+    """Generalized coordinates, the estimated memory [bytes] of one body's matrices and the
+    bytes a Newton iteration streams, reduced as asked and as full FE (module doc)."""
 
     name: str
     dof: int
     bytes: float
     full_dof: int
     full_bytes: float
+    step_bytes: float = 0.0
+    full_step_bytes: float = 0.0
 
     def line(self) -> str:
         return (
             f"body {self.name!r}: reduced model {self.dof} DOF, ~{_mb(self.bytes)} of "
-            f"dense matrices; full FE {self.full_dof} DOF, ~{_mb(self.full_bytes)}"
+            f"dense matrices, ~{_ms(self.step_bytes)} a Newton iteration; full FE "
+            f"{self.full_dof} DOF, ~{_mb(self.full_bytes)}, ~{_ms(self.full_step_bytes)}"
         )
 
     def as_dict(self) -> dict:
         return {
             "dof": self.dof,
             "memory_MB": self.bytes / 1e6,
+            "iteration_MB": self.step_bytes / 1e6,
             "full_fe_dof": self.full_dof,
             "full_fe_memory_MB": self.full_bytes / 1e6,
+            "full_fe_iteration_MB": self.full_step_bytes / 1e6,
         }
+
+    def costlier(self, margin: float = MARGIN) -> bool:
+        """Whether the reduced body is estimated larger or slower a step than full FE by more
+        than ``margin``."""
+        return self.bytes > margin * self.full_bytes or (
+            self.step_bytes > margin * self.full_step_bytes
+        )
 
 
 def _mb(x: float) -> str:
     return f"{x / 1e9:.1f} GB" if x >= 1e9 else f"{x / 1e6:.0f} MB"
 
 
-def reduced_cost(name: str, n_nodes: int, nq: int, k_nnz: int) -> BodyCost:
+def _ms(x: float) -> str:
+    return f"{1e3 * x / STREAM_BYTES_PER_S:.2g} ms"
+
+
+def reduced_cost(
+    name: str,
+    n_nodes: int,
+    nq: int,
+    k_nnz: int,
+    *,
+    full: FullFactor | None = None,
+    sizes: int = 1,
+) -> BodyCost:
     """The cost of a reduced body of nq elastic coordinates on a mesh of n_nodes nodes whose
-    stiffness matrix has k_nnz nonzeros (module doc)."""
-    dense = _BYTES * (8.0 * nq * nq + 3.0 * n_nodes * nq)
-    full = _BYTES * (2.0 + FILL_PER_NNZ) * k_nnz
-    return BodyCost(name, 6 + nq, dense, 6 + 3 * n_nodes - 6, full)
+    stiffness matrix has k_nnz nonzeros, and of its full-FE body (``full``: its symbolic
+    analysis, else FullFactor.estimated), for a run of ``sizes`` step sizes (module doc)."""
+    full = FullFactor.estimated(k_nnz) if full is None else full
+    dense = _BYTES * ((8.0 + sizes) * nq * nq + 3.0 * n_nodes * nq)
+    sparse = _CSR_BYTES * (2.0 * full.k_nnz + full.m_nnz) + _BYTES * sizes * full.l_nnz
+    step = _BYTES * 9.0 * nq * nq
+    full_step = _BYTES * 2.0 * full.l_nnz + _CSR_BYTES * (full.k_nnz + full.m_nnz)
+    return BodyCost(name, 6 + nq, dense, 6 + 3 * n_nodes - 6, sparse, step, full_step)
 
 
 #: The share of the machine's physical memory above which a reduced body is refused (it
@@ -86,21 +220,32 @@ REFUSE_ABOVE_BYTES = REFUSE_SHARE * _physical_bytes()
 
 
 class ReducedCostWarning(UserWarning):
-    """A reduced body that costs more than its full-FE body (small enough to be built)."""
+    """A reduced body estimated larger or slower a step than its full-FE body by more than
+    MARGIN (small enough to be built)."""
 
 
 def check_cost(cost: BodyCost, allow: bool, where: str) -> None:
-    """InputError (one line) when the reduced body would take more than REFUSE_ABOVE_BYTES
-    (REFUSE_SHARE of the machine's memory) and ``allow`` (model.allow_costly) is not set; a
-    ReducedCostWarning when it costs more than its full-FE body."""
-    if allow or cost.bytes <= cost.full_bytes:
+    """Nothing when ``allow`` (model.allow_costly) is set or the reduced body is estimated
+    within MARGIN of its full-FE body's memory and time a step; InputError (one line) when it
+    is also larger than full FE and would take more than REFUSE_ABOVE_BYTES (REFUSE_SHARE of
+    the machine's memory); else a ReducedCostWarning saying how it costs more."""
+    if allow or not cost.costlier():
         return
-    if cost.bytes <= REFUSE_ABOVE_BYTES:
+    if cost.bytes <= REFUSE_ABOVE_BYTES or cost.bytes <= cost.full_bytes:
         import warnings
 
+        how = " and ".join(
+            word
+            for word, more in (
+                ("memory", cost.bytes > MARGIN * cost.full_bytes),
+                ("time a step", cost.step_bytes > MARGIN * cost.full_step_bytes),
+            )
+            if more
+        )
         warnings.warn(
-            f"{where}: the reduced model costs more than full FE ({cost.line()}); kind "
-            "'mvm-sparse' keeps a large region sparse, kind 'full' is as cheap",
+            f"{where}: the reduced model costs more than full FE (its {how} more than "
+            f"{MARGIN:g} x; {cost.line()}); kind 'mvm-sparse' keeps a large region sparse, "
+            "kind 'full' is as cheap",
             ReducedCostWarning,
             stacklevel=3,
         )

@@ -50,6 +50,7 @@ from flexmvm.reduction.interface import (
 )
 from flexmvm.reduction.kinds import ModelKind, kind_spec
 from flexmvm.reduction.rod_reference import rod_reference
+from flexmvm.reduction.truncation import modal_residual
 from flexmvm.scenarios.body_reference import support
 from flexmvm.scenarios.cache_keys import (
     ContactMass,
@@ -381,6 +382,39 @@ class SetupCache:
         big = self.caches.body_parts(key, material, kind, retained, floor, ref_set)
         n_static = self.caches.basis(key, material, kind, retained, floor, ref_set).n_static
         return big.leading(3 * len(retained) + n_static + modes)
+
+    def truncation(
+        self,
+        fe_key: MeshKey,
+        key: MeshKey,
+        material: Material,
+        kind: ModelKind,
+        retained: tuple,
+        modes: int,
+        ref_set: str,
+        interface: InterfaceSpec | None = None,
+    ) -> dict:
+        """The truncation guard (reduction.truncation.modal_residual) of the basis
+        self.basis(key, ...) on the FE model of ``fe_key``: the disk cache (keyed by the
+        basis's inputs, the FE model's and the mode floor the basis is cut from), else
+        computed; a warm run then neither loads the FE model for it nor factors its K_ii."""
+        args = (key, material, kind, retained, modes, ref_set, interface)
+        cut = kind_spec(kind).cuts_modes and modes < self.mode_floor
+        extra = (interface_inputs(interface) or {}) | {
+            "guard_fe_model": mesh_source(fe_key),
+            "mode_floor": self.mode_floor if cut else 0,
+        }
+        return setup_cache.cached_truncation(
+            mesh_source(key),
+            material,
+            kind,
+            ref_set,
+            self.basis(*args).reference,
+            np.array(retained, dtype=np.int64),
+            modes,
+            lambda: modal_residual(self.fe_model(fe_key, material), self.basis(*args)),
+            extra=extra,
+        )
 
     def reference_condition(self, key: MeshKey, mesh: Mesh, ref_set: str):
         """The reference condition of label ``ref_set`` (ProcessCaches.reference_condition)."""

@@ -5,7 +5,11 @@ free-free mode pool (``freemodes-``: frequencies and M-normalised modes of the l
 modes, keyed by mesh, material and k; 36 MB for the seed rod's 178) and the patch vectors'
 static responses (``patchstatic-``: keyed by mesh, material, reference, surface, patch node and
 radii), so bases that differ only in ``modes`` (and share a ``mode_pool``) share them; and the
-elimination orders of large iteration matrices (``order-``: keyed by their sparsity pattern).
+elimination orders of large iteration matrices (``order-``: keyed by their sparsity pattern);
+and a Craig-Bampton basis's truncation guard (``truncation-``: keyed by its basis's inputs and
+its FE model's; it factors K_ii, which a warm run then does not) and the cost guard's counts of
+a full-FE body's factor (``factorcounts-``: keyed by its FE model's inputs; a symbolic
+analysis, setup_cache/guard_entries.py).
 
 An entry is one ``.npz`` file (``np.savez``, no pickles; sparse matrices as their CSR
 arrays) named ``<kind>-<key>.npz``. The key is a SHA-256 of the canonical JSON of every input
@@ -37,6 +41,7 @@ from flexmvm.setup_cache.entries import (
     free_modes_key,
     patch_statics_key,
 )
+from flexmvm.setup_cache.guard_entries import cached_factor_counts, cached_truncation
 from flexmvm.setup_cache.store import (
     BODY_SOURCES,
     CHECKSUM,
@@ -72,9 +77,11 @@ __all__ = [
     "cached_basis",
     "cached_body",
     "cached_elimination_order",
+    "cached_factor_counts",
     "cached_fe",
     "cached_free_modes",
     "cached_patch_statics",
+    "cached_truncation",
     "checksum",
     "clear",
     "code_version",

@@ -112,7 +112,7 @@ def cached_fe(
     return fe
 
 
-def _basis_inputs(
+def basis_inputs(
     source: Mapping,
     material: Material,
     kind: ModelKind,
@@ -149,7 +149,7 @@ def basis_key(
 ) -> str:
     """Entry name of a basis: its FE model's inputs, kind, reference, retained nodes, modes
     and the kind's further parameters ``extra``."""
-    inputs = _basis_inputs(
+    inputs = basis_inputs(
         source, material, kind, reference_set, reference, retained, n_modes, extra
     )
     return make_key("basis", inputs, version)
@@ -167,7 +167,7 @@ def body_key(
     extra: Mapping | None = None,
 ) -> str:
     """Entry name of a body's parts: the inputs of its basis, under the BODY_SOURCES version."""
-    inputs = _basis_inputs(
+    inputs = basis_inputs(
         source, material, kind, reference_set, reference, retained, n_modes, extra
     )
     return make_key("body", inputs, code_version(BODY_SOURCES) if version is None else version)

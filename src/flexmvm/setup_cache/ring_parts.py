@@ -4,8 +4,7 @@ and the basis's identity (kind, reference, retained nodes, columns, mode frequen
 - ``ringparts``: the parts of a ring body (kind mvm-sparse, bodies/ring_body.py): its sparse
   G2 blocks, M_qq and k_hat, the dense S1, G1, and its corner. Warm, a run reads them back
   instead of the basis's exterior rows (GBs on a 263,691-DOF plate) and their products.
-- ``guard``: the truncation guard's numbers (reduction/truncation.modal_residual), which
-  factor K_EE as the basis does: warm, no factorization.
+(The truncation guard's numbers: setup_cache/guard_entries.py.)
 """
 
 from __future__ import annotations
@@ -31,8 +30,6 @@ from flexmvm.setup_cache.store import (
 
 #: Code version of a ring body's parts: its basis's and bodies/ring_body.py.
 RING_SOURCES = BODY_SOURCES + ("bodies/ring_body.py",)
-#: Code version of the truncation guard: the basis's and reduction/ (in CODE_SOURCES).
-GUARD_SOURCES = BODY_SOURCES
 
 
 def _sha(*arrays) -> str:
@@ -110,31 +107,3 @@ def cached_ring_parts(
     parts, corner = build()
     save(key, _ring_arrays(parts, corner))
     return parts, corner
-
-
-_GUARD_KEYS = ("residual_time_s", "modal_residual", "n_modes", "highest_mode_hz")
-
-
-def cached_guard(fe, basis, build: Callable[[], dict]) -> dict:
-    """The truncation guard's dict (reduction/truncation.modal_residual) of ``basis`` on
-    ``fe`` from the cache, else ``build()`` stored."""
-    key = make_key("guard", basis_identity(fe, basis), code_version(GUARD_SOURCES))
-
-    def decode(arrays):
-        v = arrays["values"]
-        if v.shape != (len(_GUARD_KEYS),):
-            raise ValueError("stored guard is malformed")
-        out = {k: float(x) for k, x in zip(_GUARD_KEYS, v, strict=True)}
-        out["n_modes"] = int(out["n_modes"])
-        if v[3] < 0.0:  # stored for None (a NaN would fail the entry's check)
-            out["highest_mode_hz"] = None
-        return out
-
-    hit = decoded(key, decode)
-    if hit is not None:
-        return hit
-    guard = build()
-    if set(guard) == set(_GUARD_KEYS):
-        values = [-1.0 if guard[k] is None else float(guard[k]) for k in _GUARD_KEYS]
-        save(key, {"values": np.array(values)})
-    return guard
