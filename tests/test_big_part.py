@@ -19,7 +19,7 @@ pytest.importorskip("gmsh")
 import flexmvm as fm
 from flexmvm.bodies import ring_body
 from flexmvm.integrate.driver import simulate
-from flexmvm.scenarios import build as scenario_build
+from flexmvm.scenarios import setup as scenario_setup
 from flexmvm.scenarios.build import build_scenario
 from flexmvm.scenarios.setup import SetupCache
 
@@ -106,7 +106,7 @@ def runs(scenario, tmp_path_factory):
         cold, f_cold = _run(scenario)
         mp.setattr(ring_body, "split_ring_psi", _refuse("psi's corner rows"))
         mp.setattr(ring_body, "ring_parts", _refuse("the ring parts"))
-        mp.setattr(scenario_build, "modal_residual", _refuse("the truncation guard"))
+        mp.setattr(scenario_setup, "modal_residual", _refuse("the truncation guard"))
         warm, f_warm = _run(scenario)
     return cold, f_cold, warm, f_warm
 
