@@ -159,7 +159,8 @@ def test_caches_can_be_cleared_and_bounded():
         assert caches.fe_model.cache_info().maxsize == 1
         assert caches.basis.cache_info().maxsize == 2
         fm.run(fm.load_scenario(TINY).with_time(t_end_s=1e-6))
-        assert caches.fe_model.cache_info().currsize == 1
+        # at most the bound (a warm reduced body loads no FE model: setup cache on disk)
+        assert caches.fe_model.cache_info().currsize <= 1
         assert caches.basis.cache_info().currsize == 2  # b1 full, b2 mvm: the bound
         fm.clear_caches()
         assert caches.fe_model.cache_info().currsize == 0 == caches.basis.cache_info().currsize
