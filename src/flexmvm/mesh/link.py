@@ -22,7 +22,7 @@ from flexmvm.mesh.gmsh_session import (
     physical_group,
     run_gmsh,
 )
-from flexmvm.mesh.parts import block
+from flexmvm.mesh.part_shapes import block
 
 #: The rod of scenarios/slider_crank.toml: length, width (in the mechanism's plane), height [m].
 ROD_LENGTH_M, ROD_WIDTH_M, ROD_HEIGHT_M = 0.300, 0.008, 0.008

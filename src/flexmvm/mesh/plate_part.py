@@ -9,7 +9,7 @@ import os
 from pathlib import Path
 
 from flexmvm.mesh.gmsh_session import Refinement
-from flexmvm.mesh.parts import block, sphere
+from flexmvm.mesh.part_shapes import block, sphere
 
 #: Plate size [m]: 100 x 100 x 4 mm (lx, ly, lz).
 PLATE_SIZE_M = (0.100, 0.100, 0.004)

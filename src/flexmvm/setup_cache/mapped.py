@@ -21,6 +21,7 @@ from flexmvm.setup_cache.store import (
     SUFFIX,
     UNREADABLE,
     cache_dir,
+    decoded,
     enabled,
     evict,
 )
@@ -127,11 +128,4 @@ def decoded_mapped(
     key: str, decode: Callable[[Mapping[str, np.ndarray]], object], mapped: Collection[str]
 ):
     """store.decoded on load_mapped(key, mapped)."""
-    arrays = load_mapped(key, mapped)
-    if arrays is None:
-        return None
-    try:
-        return decode(arrays)
-    except UNREADABLE as exc:
-        evict(cache_dir() / (key + SUFFIX), f"malformed ({exc})")
-        return None
+    return decoded(key, decode, lambda k: load_mapped(k, mapped))

@@ -214,9 +214,14 @@ def clear() -> int:
     return len(files)
 
 
-def decoded(key: str, decode: Callable[[Mapping[str, np.ndarray]], object]):
-    """decode(arrays of entry ``key``), or None if the entry is absent or malformed."""
-    arrays = load(key)
+def decoded(
+    key: str,
+    decode: Callable[[Mapping[str, np.ndarray]], object],
+    loader: Callable[[str], Mapping[str, np.ndarray] | None] | None = None,
+):
+    """decode(arrays of entry ``key``), or None if the entry is absent or malformed (evicted);
+    the arrays read by ``loader(key)`` (default: load; setup_cache.mapped: memory-mapped)."""
+    arrays = load(key) if loader is None else loader(key)
     if arrays is None:
         return None
     try:
