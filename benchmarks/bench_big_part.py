@@ -35,6 +35,8 @@ from pathlib import Path
 
 from bench_ring_body import commit_hash, cpu_name  # the same machine line
 
+from flexmvm.mesh.plate_part import PLATE_MESHES
+
 ROOT = Path(__file__).resolve().parent.parent
 SCENARIO = ROOT / "scenarios" / "plate_impact.toml"
 
@@ -177,6 +179,10 @@ def main() -> None:
     args = ap.parse_args()
     work = Path(args.work or tempfile.mkdtemp(prefix="flexmvm-bigpart-"))
     work.mkdir(parents=True, exist_ok=True)
+    for name, make in PLATE_MESHES:  # the plate's mesh is made, not kept in git
+        if not (SCENARIO.parent / "meshes" / name).exists():
+            print(f"meshing {name} (gmsh)", flush=True)
+            make(SCENARIO.parent / "meshes" / name)
     print(
         f"CPU: {cpu_name()}; commit {commit_hash()}; {os.cpu_count()} cores;"
         f" load {os.getloadavg()}; setup cache {work}",
