@@ -4,8 +4,11 @@ one for a name registered by a user, and remove it again (a test's toy entry).""
 
 from __future__ import annotations
 
+from collections.abc import MutableMapping
 from enum import Enum
 from typing import Any, TypeVar
+
+from flexmvm.errors import InputError
 
 E = TypeVar("E", bound=Enum)
 
@@ -39,3 +42,32 @@ def remove_member(enum_cls: type[Enum], member: Enum) -> None:
     del enum_cls._member_map_[member.name]
     enum_cls._member_names_.remove(member.name)
     type.__delattr__(enum_cls, member.name)
+
+
+def register(enum_cls: type[E], table: MutableMapping[E, Any], spec: Any, what: str) -> E:
+    """Register ``spec`` in ``table`` under its name (``spec.name``) and return its member of
+    ``enum_cls``, made for a name not in it yet (member name: the name in upper case, dashes
+    as underscores). ``what`` names the thing in errors ("model kind"). InputError for a
+    name that is not a lower-case string or is registered already."""
+    name = spec.name
+    if not isinstance(name, str) or not name or name != name.strip().lower():
+        raise InputError(f"{what} name {name!r}; expected a lower-case string")
+    member = member_of(enum_cls, name)
+    if member is not None and member in table:
+        raise InputError(f"{what} {name!r} is registered already")
+    if member is None:
+        member = add_member(enum_cls, name.upper().replace("-", "_"), name)
+    table[member] = spec
+    return member
+
+
+def unregister(
+    enum_cls: type[E], table: MutableMapping[E, Any], name: str, built_in: frozenset, what: str
+) -> None:
+    """Remove what register added under ``name`` (not one of the ``built_in`` names): its
+    entry in ``table`` and its member of ``enum_cls``."""
+    member = member_of(enum_cls, name)
+    if member is None or name in built_in:
+        raise InputError(f"{what} {name!r}: not a registered added {what.split()[-1]}")
+    table.pop(member, None)
+    remove_member(enum_cls, member)

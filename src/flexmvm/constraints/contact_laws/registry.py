@@ -13,7 +13,7 @@ from __future__ import annotations
 from enum import StrEnum
 from typing import TYPE_CHECKING
 
-from flexmvm.enum_registry import add_member, member_of, remove_member
+from flexmvm.enum_registry import member_of, register, unregister
 from flexmvm.errors import InputError
 
 if TYPE_CHECKING:
@@ -41,26 +41,13 @@ def register_law(spec: ContactLawSpec) -> ContactLaw:
     """Register ``spec`` under its name (``spec.name``, the scenario file's contact ``law``)
     and return its ContactLaw, made for a name not in ContactLaw yet (member name: the name
     in upper case, dashes as underscores). InputError for a name already registered."""
-    name = spec.name
-    if not isinstance(name, str) or not name or name != name.strip().lower():
-        raise InputError(f"contact law name {name!r}; expected a lower-case string")
-    law = member_of(ContactLaw, name)
-    if law is not None and law in LAWS:
-        raise InputError(f"contact law {name!r} is registered already")
-    if law is None:
-        law = add_member(ContactLaw, name.upper().replace("-", "_"), name)
-    LAWS[law] = spec
-    return law
+    return register(ContactLaw, LAWS, spec, "contact law")
 
 
 def unregister_law(name: str) -> None:
     """Remove a law registered by register_law that is not built in (a test's toy law): its
     spec and its ContactLaw member."""
-    law = member_of(ContactLaw, name)
-    if law is None or name in _BUILT_IN:
-        raise InputError(f"contact law {name!r}: not a registered added law")
-    LAWS.pop(law, None)
-    remove_member(ContactLaw, law)
+    unregister(ContactLaw, LAWS, name, _BUILT_IN, "contact law")
 
 
 _BUILT_IN = frozenset(law.value for law in ContactLaw)

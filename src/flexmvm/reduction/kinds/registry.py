@@ -13,7 +13,7 @@ from __future__ import annotations
 from enum import StrEnum
 from typing import TYPE_CHECKING
 
-from flexmvm.enum_registry import add_member, member_of, remove_member
+from flexmvm.enum_registry import member_of, register, unregister
 from flexmvm.errors import InputError
 
 if TYPE_CHECKING:
@@ -72,26 +72,13 @@ def register_kind(spec: ModelKindSpec) -> ModelKind:
     """Register ``spec`` under its name (``spec.name``, the scenario file's ``model.kind``)
     and return its ModelKind, made for a name not in ModelKind yet (its member name: the
     name in upper case, dashes as underscores). InputError for a name already registered."""
-    name = spec.name
-    if not isinstance(name, str) or not name or name != name.strip().lower():
-        raise InputError(f"model kind name {name!r}; expected a lower-case string")
-    kind = member_of(ModelKind, name)
-    if kind is not None and kind in KINDS:
-        raise InputError(f"model kind {name!r} is registered already")
-    if kind is None:
-        kind = add_member(ModelKind, name.upper().replace("-", "_"), name)
-    KINDS[kind] = spec
-    return kind
+    return register(ModelKind, KINDS, spec, "model kind")
 
 
 def unregister_kind(name: str) -> None:
     """Remove a kind registered by register_kind that is not built in (a test's toy kind):
     its spec and its ModelKind member."""
-    kind = member_of(ModelKind, name)
-    if kind is None or name in _BUILT_IN:
-        raise InputError(f"model kind {name!r}: not a registered added kind")
-    KINDS.pop(kind, None)
-    remove_member(ModelKind, kind)
+    unregister(ModelKind, KINDS, name, _BUILT_IN, "model kind")
 
 
 _BUILT_IN = frozenset(k.value for k in ModelKind)
