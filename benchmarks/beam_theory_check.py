@@ -1,10 +1,15 @@
 """The beam theory of scenarios/sphere_beam.toml side by side with flexmvm's full FE and MVM
 runs of it (docs/beam_impact.md): contact windows, peaks and NCC against the full FE, and a
-figure. It reads two finished runs and computes the theory (seconds); the runs take minutes:
+figure. It runs the scenario's full FE and MVM models (about a minute of CPU) and computes the
+theory (seconds); the record carries each run's provenance stamp:
+
+    python benchmarks/beam_theory_check.py --run --out docs/beam_impact
+
+or reads two finished runs (the record then has no stamp: not for docs/):
 
     flexmvm run scenarios/sphere_beam.toml --out /tmp/sb-full --no-fields --no-theory
     flexmvm run scenarios/sphere_beam.toml --model mvm --out /tmp/sb-mvm --no-fields --no-theory
-    python benchmarks/beam_theory_check.py /tmp/sb-full /tmp/sb-mvm --out docs/beam_impact
+    python benchmarks/beam_theory_check.py /tmp/sb-full /tmp/sb-mvm --out /tmp/sb-theory
 
 Five theories, to tell what separates the FE model from beam theory + Hertz:
 - "Hertz": the theory as shipped (flexmvm.theory.sphere_beam);
@@ -45,6 +50,23 @@ def read_run(run_dir: Path):
     h = np.genfromtxt(run_dir / "history.csv", delimiter=",", names=True)
     probes = {n[: -len("_vx_mps")]: h[n] for n in h.dtype.names if n.endswith("_vx_mps")}
     return h["t_s"], h["contact_force_N"], probes
+
+
+def run_models(sc) -> tuple[tuple, tuple, dict]:
+    """The scenario's full FE and MVM runs in this process: (t, force, probes) of each and
+    their provenance stamps."""
+    from flexmvm.scenarios.provenance import stamp
+    from flexmvm.scenarios.run import run_scenario
+
+    out, stamps = [], {}
+    for kind in ("full", "mvm"):
+        run_sc = sc.with_kind(kind)
+        srun = run_scenario(run_sc, label=kind)
+        names = [p.name for p in run_sc.probes]
+        probes = {n: srun.probe(n).v[:, 0] for n in names}
+        out.append((np.asarray(srun.t), np.asarray(srun.contact_force), probes))
+        stamps[kind] = stamp(run_sc)
+    return out[0], out[1], stamps
 
 
 def fe_bending_ratio(sc, case) -> tuple[float, float]:
@@ -104,14 +126,20 @@ def row(name: str, t, f, probes, ref) -> dict:
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("full", type=Path)
-    ap.add_argument("mvm", type=Path)
+    ap.add_argument("full", type=Path, nargs="?")
+    ap.add_argument("mvm", type=Path, nargs="?")
+    ap.add_argument("--run", action="store_true", help="run full FE and MVM here (stamped)")
     ap.add_argument("--out", type=Path, default=None)
     args = ap.parse_args()
+    if args.run == (args.full is not None):
+        ap.error("give either --run or the two run folders FULL MVM")
     sc = load_scenario(SCENARIO)
     t_end = sc.time.t_end_s
     case = sphere_beam_case(sc)
-    full, mvm = read_run(args.full), read_run(args.mvm)
+    if args.run:
+        full, mvm, stamps = run_models(sc)
+    else:
+        full, mvm, stamps = read_run(args.full), read_run(args.mvm), {}
     f_fe, f_t = fe_bending_ratio(sc, case)
     k, p = fit_local_law(*full, case.impact.sphere_mass_kg, case.impact.speed_mps)
     k_d, p_d, c_d = depth_corrected_law(case.impact)
@@ -160,7 +188,7 @@ def main() -> None:
     if args.out is not None:
         args.out.mkdir(parents=True, exist_ok=True)
         (args.out / "sphere_beam_theory.json").write_text(
-            json.dumps({"info": info, "rows": rows}, indent=1) + "\n"
+            json.dumps({"info": info, "rows": rows, "provenance": stamps}, indent=1) + "\n"
         )
         plot(args.out / "sphere_beam_theory.png", curves)
 
