@@ -248,8 +248,7 @@ class Scenario(Frozen):
                     "contact node has no velocity of its own: docs/contact_law.md)",
                     f"contacts[{i}].redistribute_mass",
                 )
-        seen = [(c.slave, c.master) for c in self.contacts]
-        _unique([f"{s} on {m}" for s, m in seen], "contacts", "contact", "")
+        _unique_pairs(self.contacts)
         for i, j in enumerate(self.joints):
             _known_body(bodies, j.body, f"joints[{i}].body")
             if j.body2 is not None:
@@ -433,6 +432,20 @@ class Scenario(Frozen):
         if t_end_s is not None or dt_s is not None:
             sc = sc.with_time(t_end_s=t_end_s, dt_s=dt_s)
         return sc
+
+
+def _unique_pairs(contacts) -> None:
+    """Each (slave, master) pair built once: a table's own, and its reverse when two_pass."""
+    seen: dict[tuple[str, str], str] = {}
+    for i, c in enumerate(contacts):
+        for k, pair in enumerate(c.pairs):
+            where = f"contacts[{i}]" + (" (its two_pass reverse)" if k else "")
+            if pair in seen:
+                raise problem(
+                    f"duplicate contact '{pair[0]} on {pair[1]}' (also {seen[pair]})",
+                    f"contacts[{i}]",
+                )
+            seen[pair] = where
 
 
 def _unique(names: list[str], section: str, what: str, suffix: str) -> None:
