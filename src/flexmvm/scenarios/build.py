@@ -241,7 +241,7 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
         t.output_dt_s,
         t.theta,
         t.output_contact_dt_s,
-        t.hf_damping_time_s,
+        t.damping_time_s,  # hf_damping_time_s, "auto" resolved
         field_output_dt_s=t.field_output_dt_s,
         field_precision=t.field_precision,
     )
