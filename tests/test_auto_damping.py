@@ -124,3 +124,21 @@ def test_the_command_line_prints_what_the_damping_took(capsys, tmp_path):
     assert code == 0
     line = next(x for x in out.splitlines() if x.startswith("numerical damping"))
     assert "J, " in line and "% of the initial energy" in line
+
+
+def test_a_costly_damping_is_said_to_be_the_schemes():
+    """The plate of issue 51 (0.204 of 2.013 mJ at 12.5 us): the line names the share and
+    points to "auto"; a cheap one (the tiny case's 3.5e-5) does not."""
+    from flexmvm.scenarios.run import numerical_dissipation_line
+
+    plate = {
+        "numerical_dissipation_J": 0.204e-3,
+        "numerical_dissipation_share": 0.204 / 2.013,
+        "hf_damping_time_s": 12.5e-6,
+    }
+    line = numerical_dissipation_line(plate)
+    assert line.startswith("numerical damping (theta > 1/2) took 0.000204 J, 10.1 %")
+    assert '"auto"' in line and "\n" not in line
+    cheap = {**plate, "numerical_dissipation_share": 3.5e-5}
+    assert '"auto"' not in numerical_dissipation_line(cheap)
+    assert numerical_dissipation_line({"numerical_dissipation_J": 0.0}) is None
