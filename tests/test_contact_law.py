@@ -260,25 +260,26 @@ def test_conserving_scheme_flag_and_its_energy_warning():
     short = {"t_end_s": 2e-6}
     assert (
         run_scenario(_scenario("position", True).with_time(**short)).summary[
-            "energy_conserving_scheme"
+            "contact_laws_add_no_energy"
         ]
         is True
     )
     assert (
         run_scenario(_scenario("position", True, 0.55).with_time(**short)).summary[
-            "energy_conserving_scheme"
+            "contact_laws_add_no_energy"
         ]
         is True
     )
     assert (
         run_scenario(_scenario("velocity", False).with_time(**short)).summary[
-            "energy_conserving_scheme"
+            "contact_laws_add_no_energy"
         ]
         is False
     )
-    unstable = {"energy_gain_rel_max": 4.6e-4, "energy_conserving_scheme": True}
+    unstable = {"energy_gain_rel_max": 4.6e-4, "contact_laws_add_no_energy": True}
     assert "theta = 0.55" in energy_gain_warning(unstable)
-    assert energy_gain_warning(unstable | {"energy_conserving_scheme": False}) is None
+    assert energy_gain_warning(unstable | {"contact_laws_add_no_energy": False}) is None
     assert (
-        energy_gain_warning({"energy_gain_rel_max": 7e-7, "energy_conserving_scheme": True}) is None
+        energy_gain_warning({"energy_gain_rel_max": 7e-7, "contact_laws_add_no_energy": True})
+        is None
     )

@@ -64,6 +64,7 @@ def command(
     whole, and only if it is empty or an unchanged earlier output of `flexmvm run`. Comparisons that cannot be made are printed and listed in
     summary.json under "failures"."""
     from flexmvm.scenarios.main_job import run_main_job
+    from flexmvm.scenarios.run import numerical_dissipation_line
 
     summary = run_main_job(
         scenario,
@@ -87,6 +88,9 @@ def command(
         "wall_time_s",
     )
     click.echo("  ".join(f"{k} = {summary[k]:.4g}" for k in keys if summary.get(k) is not None))
+    damping = numerical_dissipation_line(summary)  # the scheme's damping, its cost
+    if damping is not None:
+        click.echo(damping)
     click.echo(
         "dof (6 frame + elastic): "
         + ", ".join(

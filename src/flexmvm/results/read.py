@@ -20,6 +20,7 @@ import numpy as np
 from flexmvm.errors import InputError
 from flexmvm.integrate.run_result import FieldPrecision, ProbeHistory, RunResult
 from flexmvm.results.history import read_history
+from flexmvm.results.summary_keys import with_current_keys
 
 __all__ = ["FieldFrames", "WrittenRun", "read_run"]
 
@@ -175,7 +176,7 @@ def read_run(path) -> WrittenRun:
     if not (d / "history.csv").is_file() and not (d / "results.h5").is_file():
         raise InputError(f"{d}: no written run here; expected history.csv and results.h5")
     try:
-        summary = json.loads((d / "summary.json").read_text())
+        summary = with_current_keys(json.loads((d / "summary.json").read_text()))
     except FileNotFoundError:
         summary = {}
     except (OSError, ValueError) as exc:

@@ -241,12 +241,21 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
         t.output_dt_s,
         t.theta,
         t.output_contact_dt_s,
-        t.hf_damping_time_s,
+        t.damping_time_s,  # hf_damping_time_s, "auto" resolved
         field_output_dt_s=t.field_output_dt_s,
         field_precision=t.field_precision,
     )
     contacts = tuple(
-        _contact(c, k, bodies, infos, index, grid.theta_rule()) for k, c in enumerate(sc.contacts)
+        _contact(
+            c.model_copy(update={"slave": s, "master": m}),
+            k,
+            bodies,
+            infos,
+            index,
+            grid.theta_rule(),
+        )
+        for k, c in enumerate(sc.contacts)
+        for s, m in c.pairs  # two_pass: also the reverse pair, same law and options
     )
     groups = [_joint(j, k, bodies, infos, index, states) for k, j in enumerate(sc.joints)]
     supported = support_joints(sc.supports, index, states)

@@ -42,6 +42,11 @@ class ContactConfig(Frozen):
     # the velocity law's penetration recovery beta [-]: u_N+ >= beta max(0, -g) / h
     # (None: contact.pairs.PENETRATION_RECOVERY); docs/studies.md "Material study" for when 0
     penetration_recovery: Annotated[float, Strict(), Ge(0.0), Le(1.0)] | None = None
+    # two-pass: also the reverse pair (the master's surface nodes against the slave's facets,
+    # the same law and options), so that each surface is checked against the other: a master
+    # edge or corner can otherwise go through the slave surface (docs/contact_law.md,
+    # "When one pair is not enough"); the builder adds it (scenarios.build)
+    two_pass: bool = False
 
     @model_serializer(mode="wrap")
     def _dump(self, handler):
@@ -54,6 +59,7 @@ class ContactConfig(Frozen):
                 ("redistribute_mass", False),
                 ("law", ContactLaw.VELOCITY),
                 ("penetration_recovery", None),
+                ("two_pass", False),
             ):
                 if key in data and data[key] == default:
                     data.pop(key)
@@ -75,6 +81,12 @@ class ContactConfig(Frozen):
         if refused is not None:
             raise problem(*refused)
         return self
+
+    @property
+    def pairs(self) -> tuple[tuple[str, str], ...]:
+        """(slave, master) of the pairs this table builds: itself, and its reverse if two_pass."""
+        one = ((self.slave, self.master),)
+        return one + ((self.master, self.slave),) if self.two_pass else one
 
     @property
     def slave_body(self) -> str:

@@ -18,6 +18,8 @@ from __future__ import annotations
 
 import numpy as np
 
+from flexmvm.results.summary_keys import with_current_keys
+
 #: A guarded body whose contact impulse falls outside its covered nodes by more than this
 #: fraction of its total contact impulse gets a console warning (the record is always kept).
 WARN_FRACTION = 0.01
@@ -121,7 +123,7 @@ ENERGY_GAIN_WARN = 5e-3
 
 
 #: A run whose step adds no energy (every contact on the position law, theta >= 1/2: summary
-#: ``energy_conserving_scheme``) that gains more than this is warned of: its stable runs
+#: ``contact_laws_add_no_energy``) that gains more than this is warned of: its stable runs
 #: measured at theta = 1/2 kept the energy to 1e-6 of the start, the unstable ones (both rods
 #: Craig-Bampton below h = 0.5 us) gained 4.6e-4 and more (docs/contact_law.md).
 CONSERVING_ENERGY_GAIN_WARN = 1e-4
@@ -133,7 +135,8 @@ def energy_gain_warning(summary: dict, threshold: float = ENERGY_GAIN_WARN) -> s
     gain = summary.get("energy_gain_rel_max")
     if gain is None:
         return None
-    if summary.get("energy_conserving_scheme") and gain > min(
+    summary = with_current_keys(summary)  # a stored summary may have the old key
+    if summary.get("contact_laws_add_no_energy") and gain > min(
         threshold, CONSERVING_ENERGY_GAIN_WARN
     ):
         return (

@@ -26,13 +26,16 @@ def problem(text: str, key: str = "") -> PydanticCustomError:
     return PydanticCustomError(ERROR_TYPE, "{problem}", {"problem": text, "key": key})
 
 
+_UNION_TAGS = {"material": ("preset", "inline"), "hf_damping_time_s": ("number", "auto")}
+
+
 def _format_loc(loc: tuple[int | str, ...], extra: str) -> str:
     out = ""
     for k, part in enumerate(loc):
         if isinstance(part, int):
             out += f"[{part}]"
-        elif part in ("preset", "inline") and k > 0 and loc[k - 1] == "material":
-            continue
+        elif k > 0 and part in _UNION_TAGS.get(loc[k - 1], ()):
+            continue  # a tagged union's branch (the material's, the damping time's)
         else:
             out += f".{part}" if out else str(part)
     if extra:

@@ -24,15 +24,17 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 from pathlib import Path
-from typing import Annotated, Any
+from typing import Annotated, Any, Literal
 
 import numpy as np
 from annotated_types import Ge, Le
 from pydantic import (
+    Discriminator,
     Field,
     PrivateAttr,
     Strict,
     StringConstraints,
+    Tag,
     ValidationError,
     model_serializer,
     model_validator,
@@ -41,8 +43,10 @@ from pydantic import (
 from flexmvm.bodies.build import ModelKind
 from flexmvm.constraints.contact_laws import massless_laws
 from flexmvm.constraints.joints import JointType
+from flexmvm.errors import InputError
 from flexmvm.integrate import DEFAULT_THETA
 from flexmvm.integrate.run_result import FieldPrecision
+from flexmvm.integrate.theta import auto_damping_time
 from flexmvm.integrate.theta import theta_for_damping_time as damped_theta
 from flexmvm.materials import Material
 from flexmvm.scenarios.body_schema import (
@@ -83,10 +87,26 @@ def theta_for_damping_time(dt_s: float, tau_s: float) -> float:
     return damped_theta(dt_s, tau_s)
 
 
+def _is_number(x: Any) -> bool:
+    return isinstance(x, (int, float)) and not isinstance(x, bool) and x > 0
+
+
+def _damping_time(data: dict) -> Any:
+    """hf_damping_time_s as a number: "auto" resolved from dt_s, t_end_s and
+    contact_duration_s (integrate.theta.auto_damping_time), None while one is missing."""
+    tau = data.get("hf_damping_time_s")
+    if tau != "auto":
+        return tau
+    args = [data.get(k) for k in ("dt_s", "t_end_s", "contact_duration_s")]
+    return auto_damping_time(*args) if all(_is_number(x) for x in args) else None
+
+
 def _damped_theta(data: dict) -> Any:
     """time.theta from hf_damping_time_s (a "before" check: numbers of the wrong type are
     left to the fields' own checks)."""
-    tau, dt = data["hf_damping_time_s"], data.get("dt_s")
+    tau, dt = _damping_time(data), data.get("dt_s")
+    if tau is None:
+        return data.get("theta", DEFAULT_THETA)
     if not all(
         isinstance(x, (int, float)) and not isinstance(x, bool) and x > 0 for x in (tau, dt)
     ):
@@ -113,6 +133,18 @@ def _damped_theta(data: dict) -> Any:
     return theta
 
 
+def _damping_tag(value: Any) -> str:
+    return "auto" if isinstance(value, str) else "number"
+
+
+# hf_damping_time_s: a number of seconds, or "auto" (scenarios/problems.py drops the tags from
+# error locations, as it does the material's)
+DampingTime = Annotated[
+    Annotated[Positive, Tag("number")] | Annotated[Literal["auto"], Tag("auto")],
+    Discriminator(_damping_tag),
+]
+
+
 class TimeConfig(Frozen):
     """Step ``dt_s`` while a contact is active or near, up to ``dt_max_s`` in free flight."""
 
@@ -129,7 +161,13 @@ class TimeConfig(Frozen):
     # cannot resolve decays as exp(-t / tau), the free-flight steps damp resolved motion as
     # dt_s does, and theta - 1/2 = O(h) keeps the scheme second order (integrate.theta;
     # docs/contact_law.md, "theta = 1/2 + h / (4 tau)")
-    hf_damping_time_s: Positive | None = None
+    # "auto": tau chosen from dt_s, t_end_s and contact_duration_s (integrate.theta,
+    # auto_damping_time: the contact's resolved motion loses at most AUTO_WINDOW_LOSS of its
+    # energy over the window); the property damping_time_s gives the number
+    hf_damping_time_s: DampingTime | None = None
+    # the contact's duration [s] that hf_damping_time_s = "auto" protects (read by it only);
+    # default for two rods in end impact: the 1D wave-Hertz pulse's (theory.scenario)
+    contact_duration_s: Positive | None = None
     # fields (q, q_dot: displacements, stresses) kept and written every field_output_dt_s [s]
     # (the first output at or after each multiple, and the last), the histories every
     # output_dt_s; None: q kept at every output, about 100 frames written
@@ -158,14 +196,27 @@ class TimeConfig(Frozen):
             data.pop(
                 "hf_damping_time_s" if data.get("hf_damping_time_s") is None else "theta", None
             )
-            if data.get("field_output_dt_s") is None:  # as before these keys existed
-                data.pop("field_output_dt_s", None)
+            for key in ("field_output_dt_s", "contact_duration_s"):  # as before the keys existed
+                if data.get(key) is None:
+                    data.pop(key, None)
             if data.get("field_precision") in (FieldPrecision.FLOAT32, "float32"):
                 data.pop("field_precision", None)
         return data
 
+    @property
+    def damping_time_s(self) -> float | None:
+        """hf_damping_time_s as a number [s] ("auto" resolved), None without one."""
+        return _damping_time(self.__dict__)
+
     @model_validator(mode="after")
     def _check(self) -> TimeConfig:
+        if self.hf_damping_time_s == "auto" and self.contact_duration_s is None:
+            raise problem(
+                'hf_damping_time_s = "auto" needs contact_duration_s [s], the duration of the '
+                "contact whose motion the damping must keep (e.g. Hertz's: "
+                "flexmvm.theory.hertz.hertz_impact); found only for two rods in end impact",
+                "contact_duration_s",
+            )
         if self.dt_s > self.t_end_s:  # first: the checks below compare with dt_s
             raise problem(f"must be <= t_end_s = {self.t_end_s!r}, got {self.dt_s!r}", "dt_s")
         if self.dt_max_s < self.dt_s:
@@ -222,6 +273,11 @@ class Scenario(Frozen):
     def _dump(self, handler):  # without empty tables: as before the keys existed (study keys)
         return drop_empty_tables(without_empty(handler(self), "supports"))
 
+    @model_validator(mode="before")
+    @classmethod
+    def _auto_damping(cls, data: Any) -> Any:
+        return with_rod_contact_duration(data)
+
     @model_validator(mode="after")
     def _cross_references(self) -> Scenario:
         _unique([b.name for b in self.bodies], "bodies", "body", ".name")
@@ -248,8 +304,7 @@ class Scenario(Frozen):
                     "contact node has no velocity of its own: docs/contact_law.md)",
                     f"contacts[{i}].redistribute_mass",
                 )
-        seen = [(c.slave, c.master) for c in self.contacts]
-        _unique([f"{s} on {m}" for s, m in seen], "contacts", "contact", "")
+        _unique_pairs(self.contacts)
         for i, j in enumerate(self.joints):
             _known_body(bodies, j.body, f"joints[{i}].body")
             if j.body2 is not None:
@@ -433,6 +488,42 @@ class Scenario(Frozen):
         if t_end_s is not None or dt_s is not None:
             sc = sc.with_time(t_end_s=t_end_s, dt_s=dt_s)
         return sc
+
+
+def with_rod_contact_duration(data: Any) -> Any:
+    """``data`` with time.contact_duration_s set, for hf_damping_time_s = "auto" without it, to
+    the contact duration of the 1D wave-Hertz pulse (theory.scenario.theory_pulse) when the
+    scenario is two rods in end impact; unchanged otherwise (TimeConfig then says what is
+    missing, or the scenario's own problems are reported)."""
+    time = data.get("time") if isinstance(data, dict) else None
+    if not isinstance(time, dict) or time.get("hf_damping_time_s") != "auto":
+        return data
+    if time.get("contact_duration_s") is not None:
+        return data
+    from flexmvm.theory.scenario import theory_pulse
+
+    plain = {**time}
+    plain.pop("hf_damping_time_s")
+    try:
+        sc = Scenario.model_validate({**data, "time": plain})
+        duration = theory_pulse(sc, None)["contact_duration_s"]
+    except (ValidationError, InputError):
+        return data
+    return {**data, "time": {**time, "contact_duration_s": float(duration)}}
+
+
+def _unique_pairs(contacts) -> None:
+    """Each (slave, master) pair built once: a table's own, and its reverse when two_pass."""
+    seen: dict[tuple[str, str], str] = {}
+    for i, c in enumerate(contacts):
+        for k, pair in enumerate(c.pairs):
+            where = f"contacts[{i}]" + (" (its two_pass reverse)" if k else "")
+            if pair in seen:
+                raise problem(
+                    f"duplicate contact '{pair[0]} on {pair[1]}' (also {seen[pair]})",
+                    f"contacts[{i}]",
+                )
+            seen[pair] = where
 
 
 def _unique(names: list[str], section: str, what: str, suffix: str) -> None:

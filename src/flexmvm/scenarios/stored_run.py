@@ -22,6 +22,7 @@ import numpy as np
 from flexmvm.errors import announce_recompute
 from flexmvm.results.atomic import file_sha256, write_json_atomic
 from flexmvm.results.history import history_problem, history_record, read_history, write_history
+from flexmvm.results.summary_keys import with_current_keys
 from flexmvm.scenarios.provenance import run_inputs, stamp, stamp_mismatch
 from flexmvm.scenarios.schema import Scenario
 
@@ -97,7 +98,7 @@ def load_or_run(
             t,
             f,
             p,
-            json.loads((d / "summary.json").read_text()),
+            with_current_keys(json.loads((d / "summary.json").read_text())),
             json.loads((d / "key.json").read_text()),
         )
     if problem not in (None, "absent"):

@@ -28,7 +28,7 @@ class ContactLawSpec(Protocol):
     @property
     def massless_nodes(self) -> bool: ...  # may carry massless (redistributed) contact nodes
     @property
-    def conserves_energy(self) -> bool: ...  # adds no energy (energy_conserving_scheme)
+    def conserves_energy(self) -> bool: ...  # adds no energy (contact_laws_add_no_energy)
     @property
     def holds_pairs(self) -> bool: ...  # closed pairs keep the geometry they closed with
 

@@ -1,0 +1,83 @@
+"""summary.json's keys say what they mean (issue "Numbers a user can trust, part three", item 8):
+``energy_conserving_scheme`` (true when every contact is on the position law, even on a scheme
+that damped 10 % of a plate's energy) is ``contact_laws_add_no_energy``, beside the energy the
+scheme's damping took (``numerical_dissipation_J``, ``numerical_dissipation_share``) and the
+damping time in use (``hf_damping_time_s``). Runs written before the rename are read under the
+current names by one mapping (results.summary_keys), in results.read.read_run and
+scenarios.stored_run."""
+
+from __future__ import annotations
+
+import json
+import shutil
+from pathlib import Path
+
+import pytest
+from test_cli_failures import TINY
+
+import flexmvm as fm
+from flexmvm.results.read import read_run
+from flexmvm.results.summary_keys import RENAMED_KEYS, with_current_keys
+from flexmvm.scenarios.guard import energy_gain_warning
+from flexmvm.scenarios.run import run_scenario
+from flexmvm.scenarios.stored_run import load_or_run
+
+STORED = Path(__file__).resolve().parents[1] / "docs" / "validation" / "short_full"
+
+
+def test_a_run_writes_the_new_keys():
+    """The tiny case (velocity law, theta = 0.55 fixed): its contact law may add energy, its
+    scheme took a share of it (> 0: theta > 1/2), no damping time."""
+    s = run_scenario(fm.load_scenario(TINY).with_time(t_end_s=6e-6), warn=False).summary
+    assert "energy_conserving_scheme" not in s
+    assert s["contact_laws_add_no_energy"] is False
+    assert s["numerical_dissipation_J"] == s["energy_ledger"]["dissipation_numerical_J"] > 0
+    assert 0 < s["numerical_dissipation_share"] < 1e-3
+    assert s["hf_damping_time_s"] is None
+
+
+def test_the_mapping_renames_old_keys_and_keeps_new_ones():
+    old = {"energy_conserving_scheme": True, "max_contact_force_N": 1.0}
+    assert with_current_keys(old) == {
+        "contact_laws_add_no_energy": True,
+        "max_contact_force_N": 1.0,
+    }
+    both = {"energy_conserving_scheme": True, "contact_laws_add_no_energy": False}
+    assert with_current_keys(both) == {"contact_laws_add_no_energy": False}
+    new = {"contact_laws_add_no_energy": True}
+    assert with_current_keys(new) is new
+    assert set(RENAMED_KEYS) == {"energy_conserving_scheme"}
+
+
+def test_a_run_written_before_the_rename_is_read_under_the_new_key(tmp_path):
+    """docs/validation/short_full (written with the old key) read by read_run."""
+    assert "energy_conserving_scheme" in json.loads((STORED / "summary.json").read_text())
+    d = tmp_path / "old_run"
+    shutil.copytree(STORED, d)
+    s = read_run(d).summary
+    assert s["contact_laws_add_no_energy"] is True and "energy_conserving_scheme" not in s
+
+
+def test_a_stored_run_is_read_under_the_new_key(monkeypatch, tmp_path):
+    """scenarios.stored_run: a stored run that passes its check comes back with the new key."""
+    from flexmvm.scenarios import stored_run
+
+    d = tmp_path / "stored"
+    shutil.copytree(STORED, d)
+    monkeypatch.setattr(stored_run, "stored_run_problem", lambda d, sc: None)
+    run = load_or_run(d, fm.load_scenario(TINY), "old", progress=False)
+    assert run.summary["contact_laws_add_no_energy"] is True
+    assert "energy_conserving_scheme" not in run.summary
+
+
+def test_the_energy_warning_reads_an_old_summary():
+    """energy_gain_warning's position-law bound (1e-4) applies to a summary with the old key."""
+    line = energy_gain_warning({"energy_gain_rel_max": 4.6e-4, "energy_conserving_scheme": True})
+    assert line is not None and "position law" in line
+    assert energy_gain_warning({"energy_gain_rel_max": 4.6e-4}) is None
+
+
+@pytest.mark.parametrize("key", ["numerical_dissipation_J", "contact_laws_add_no_energy"])
+def test_the_docs_name_the_new_keys(key):
+    docs = Path(__file__).resolve().parents[1] / "docs" / "scenario_format.md"
+    assert key in docs.read_text()
