@@ -28,7 +28,7 @@ from flexmvm.integrate.theta import ThetaRule
 from flexmvm.scenarios import TimeConfig
 from flexmvm.scenarios.load import load_scenario
 from flexmvm.scenarios.run import run_scenario
-from flexmvm.scenarios.schema import theta_for_damping_time
+from flexmvm.scenarios.time_schema import theta_for_damping_time
 
 OMEGA = 2 * np.pi * 1000.0  # [rad/s]: period 1 ms
 PERIOD = 2 * np.pi / OMEGA

@@ -26,7 +26,10 @@ def problem(text: str, key: str = "") -> PydanticCustomError:
     return PydanticCustomError(ERROR_TYPE, "{problem}", {"problem": text, "key": key})
 
 
-_UNION_TAGS = {"material": ("preset", "inline"), "hf_damping_time_s": ("number", "auto")}
+_UNION_TAGS: dict[int | str, tuple[str, ...]] = {
+    "material": ("preset", "inline"),
+    "hf_damping_time_s": ("number", "auto"),
+}
 
 
 def _format_loc(loc: tuple[int | str, ...], extra: str) -> str:

@@ -165,7 +165,7 @@ def _rod_histories(sc, dt: float | None):
     return sol.t, sol.contact_force, probes, info
 
 
-def theory_pulse(sc, body: str) -> dict:
+def theory_pulse(sc, body: str | None) -> dict:
     """The 1D force pulse of the contact of ``body``: contact duration T_c [s] (first
     interval above 1 % of the peak, solved over at least four round trips of either rod),
     peak force [N] overall and within the scenario's end time, law, impact speed and the
