@@ -25,7 +25,7 @@ from pathlib import Path
 from flexmvm.scenarios import load_scenario
 from flexmvm.scenarios.run import run_scenario
 from flexmvm.studies.grid import mvm_scenario, parse_model, reference_scenario, seed_scheme
-from flexmvm.studies.reference import scored_row
+from flexmvm.studies.reference_run import scored_row
 
 ROOT = Path(__file__).resolve().parents[1]
 T_END, DT, OTHER = 8e-4, 1e-6, "mvm:3-5:40"

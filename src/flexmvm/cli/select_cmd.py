@@ -172,7 +172,7 @@ def command(
     fig_front_ncc_dof.png."""
     from flexmvm.metrics.ncc import Target
     from flexmvm.studies.interface import parse_patches
-    from flexmvm.studies.regions import parse_node_sets, parse_radii
+    from flexmvm.studies.region_families import parse_node_sets, parse_radii
     from flexmvm.studies.selection import run_selection_study
 
     regions = (
@@ -215,7 +215,7 @@ def command(
 
 def _allowing_costly(scenario: Path, body: str):
     """The scenario of file ``scenario`` with body ``body``'s model.allow_costly set (the
-    study's candidates take it: studies/grid.py, studies/regions.py)."""
+    study's candidates take it: studies/grid.py, studies/region_families.py)."""
     from flexmvm.scenarios import load_scenario
 
     sc = load_scenario(scenario)

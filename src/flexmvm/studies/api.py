@@ -15,7 +15,7 @@ from flexmvm.scenarios import ModelKind, Scenario, load_scenario
 from flexmvm.studies import materials as material_studies
 from flexmvm.studies.main_guard import in_process_by_default
 from flexmvm.studies.materials import SEED_ORDER, MaterialStudy
-from flexmvm.studies.regions import RegionFamily
+from flexmvm.studies.region_families import RegionFamily
 from flexmvm.studies.selection import SelectionStudy, select_models
 
 __all__ = ["material_study", "select"]
@@ -68,7 +68,7 @@ def select(
     grid patches x ``interface_modes`` (``interface_rows``; summary ``interface`` and
     ``best_overall``), in the same brute force or the same search as the node selections.
     A body of any mesh: ``radii_m`` (ball radii [m] about ``centre_m``, default the body's
-    region ball centre or the expected contact point, studies/regions.py) and/or
+    region ball centre or the expected contact point, studies/region_families.py) and/or
     ``node_sets`` (node-set names of its mesh) replace ``layers`` x ``laps``; rows then carry
     ``region``. ``patch_surface``: the facet set of the interface kind's patches (default: a
     mesh body's contact surface, about the regions' centre).

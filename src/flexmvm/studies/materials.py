@@ -13,7 +13,7 @@ retains the selection's nodes (studies.grid.study_kind): ``mvm`` (Craig-Bampton,
 directory holds one kind (a rerun with another kind is refused: its stored params differ).
 
 - ``DIR/<material>/reference/history.csv``: the reference of each material (case ``ref-<mat>``;
-  one that fails its check, studies.reference.reference_problem, is announced and recomputed);
+  one that fails its check, studies.reference_run.reference_problem, is announced and recomputed);
 - ``DIR/cases/<mat>-l<i>-j<j>-m<m>.json``: the MVM runs (studies.selection.run_selection_case),
   keyed by the material scenario's provenance stamp and its reference's SHA-256 (a case of
   another code version or reference is recomputed, said in one line);
@@ -69,7 +69,7 @@ from flexmvm.studies.material_report import (
     material_rows,
     material_summary,
 )
-from flexmvm.studies.reference import reference_history, reference_problem
+from flexmvm.studies.reference_run import reference_history, reference_problem
 from flexmvm.studies.report import echo_failures
 from flexmvm.studies.runner import (
     Case,
@@ -142,7 +142,7 @@ class MaterialStudy:
 
 
 def _drop_failing_reference(sc: Scenario, body: str, mat_dir: Path, record: Path) -> None:
-    """A stored reference of one material that fails its check (studies.reference
+    """A stored reference of one material that fails its check (studies.reference_run
     reference_problem: another code version, cut short, edited) is announced and removed with
     its case record, so that its case computes it again."""
     problem = reference_problem(sc, body, mat_dir)

@@ -11,7 +11,7 @@ run in which the study body is full FE (the other bodies unchanged), computed on
 sweep and stored in ``DIR/reference/history.csv``.
 
 A body of any mesh (issue 34) has no i-j rings: its families are *regions*, balls of given
-radii about one centre or node sets of its mesh (studies/regions.py), x the same mode counts,
+radii about one centre or node sets of its mesh (studies/region_families.py), x the same mode counts,
 with the same reference, cases, resume, search and guard; its ncc.csv rows carry ``region``
 instead of ``layers, laps`` and its figure is the NCC-DOF front (fig_front_ncc_dof.png).
 
@@ -23,7 +23,7 @@ Files of a study directory ``DIR``:
 
 - ``reference/history.csv`` (+ ``reference/reference.json``: the scenario it was run from, so a
   rerun reuses it only for the same scenario, its provenance stamp and the history's record,
-  checked before reuse: studies/reference.py), the full-FE reference;
+  checked before reuse: studies/reference_run.py), the full-FE reference;
 - ``cases/<key>.json`` one per MVM run (flexmvm.studies.runner: atomic, a rerun resumes; a case
   of another code version or reference, or a damaged one, is recomputed and said), key
   ``l<i>-j<j>-m<m>``;
@@ -88,8 +88,13 @@ from flexmvm.studies.interface import (
     run_interface_case,
 )
 from flexmvm.studies.node_grid import NodeGrid
-from flexmvm.studies.reference import case_reference, reference_history, scored_row, study_version
-from flexmvm.studies.regions import (
+from flexmvm.studies.reference_run import (
+    case_reference,
+    reference_history,
+    scored_row,
+    study_version,
+)
+from flexmvm.studies.region_families import (
     RegionFamily,
     RegionGrid,
     failed_region_row,
@@ -254,7 +259,7 @@ def select_models(
     both kinds (search.rank_key), and ``summary["grid_size"]`` / ``summary["exact"]`` the node
     kind's (``exact`` false: ``--search`` stopped that kind at best_overall's DOF, see
     ``exact_note`` and search.kind_exact).
-    ``regions`` (studies/regions.py: ball radii about ``centre_m`` or node sets) replaces the
+    ``regions`` (studies/region_families.py: ball radii about ``centre_m`` or node sets) replaces the
     i-j grid by region families x ``modes``, for a body of any mesh (``layers`` and ``laps``
     are then ignored; rows carry ``region``, ``nodes``, ``modes``); ``patch_surface``: the
     facet set of the interface kind's patches (default: a mesh body's contact surface, about
@@ -301,7 +306,7 @@ def _silent(_line: str) -> None:
 
 def _reference(sc, body, out, progress, announce, echo) -> tuple[Path, bool]:
     """The reference step: the full-FE history of ``body`` in ``out`` (computed, or loaded
-    when stored and valid: studies.reference.reference_history) and its console line.
+    when stored and valid: studies.reference_run.reference_history) and its console line.
     Returns (its path, whether it was computed)."""
     hist, ref_made = reference_history(sc, body, out, progress=progress, announce=announce)
     echo(f"reference (full FE {body}): {'computed' if ref_made else 'loaded'} {hist}")
@@ -359,7 +364,7 @@ def _sweep(
 def run_study_case(case: Case, reference: str | Path | None = None) -> dict:
     """One run of a selection study, of any kind: the interface kind's (params ``kind``
     "interface", studies/interface.py), a region family's (params ``region``,
-    studies/regions.py) or a node selection's (:func:`run_selection_case`)."""
+    studies/region_families.py) or a node selection's (:func:`run_selection_case`)."""
     if case.params.get("kind") == "interface":
         return run_interface_case(case, reference=reference)
     if "region" in case.params:
@@ -406,7 +411,7 @@ def run_selection_study(
     its files and console lines (module doc): :func:`select_models`, then ncc.csv,
     selection.json, the two figures and the summary line. ``t_end_s``, ``dt_s`` override the
     scenario's end time and contact step, ``other`` the model of the other bodies
-    (grid.study_scenario). With ``regions`` (region families of any body, studies/regions.py)
+    (grid.study_scenario). With ``regions`` (region families of any body, studies/region_families.py)
     ncc.csv has a row per region x modes and the figure is fig_front_ncc_dof.png (force NCC
     against DOF per region family, and the interface kind's with ``patches``). Returns the
     selection.json content.
