@@ -1,5 +1,5 @@
 """PlasticBody.respond compiled (plasticity.kernels) against its numpy reference
-(plasticity.reference), same bodies, same states, one run.
+(plasticity.kernels_numpy), same bodies, same states, one run.
 
     python benchmarks/bench_plasticity.py [--repeats 3] [--cells 100]
 
@@ -24,8 +24,8 @@ from flexmvm.materials import ALUMINIUM
 from flexmvm.mesh.io import read_mesh
 from flexmvm.mesh.structured import hex27_beam
 from flexmvm.plasticity.body import PlasticBody
+from flexmvm.plasticity.kernels_numpy import respond_numpy
 from flexmvm.plasticity.material import J2Plasticity
-from flexmvm.plasticity.reference import respond_numpy
 from flexmvm.plasticity.return_mapping import von_mises
 
 ROOT = Path(__file__).resolve().parents[1]

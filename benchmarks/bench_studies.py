@@ -36,6 +36,7 @@ from pathlib import Path
 
 from flexmvm.metrics.ncc import Target
 from flexmvm.setup_cache import ENV_DIR
+from flexmvm.studies.options import BasisSpec, StudyOptions
 from flexmvm.studies.selection import run_selection_study
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -94,21 +95,18 @@ def main() -> None:
         f"seed scenario, t_end = {a.t_end:g} s, dt = {a.dt:g} s, other body {a.other}, "
         f"target {a.target}, out {out}"
     )
-    kw = {"t_end_s": a.t_end, "dt_s": a.dt, "other": a.other}
+    options = StudyOptions(
+        n_workers=a.workers, progress=True, t_end_s=a.t_end, dt_s=a.dt, other=a.other, echo=print
+    )
     t0 = time.perf_counter()
     brute = run_selection_study(
         SEED,
         "b2",
         out / "brute",
-        layers,
-        laps,
-        modes,
+        BasisSpec(layers=layers, laps=laps, modes=modes),
         target,
         search=False,
-        scheduler=None,
-        n_workers=a.workers,
-        progress=True,
-        **kw,
+        options=options,
     )
     t_brute = time.perf_counter() - t0
     rows = (out / "brute" / "ncc.csv").read_text().splitlines()[1:]
@@ -125,15 +123,10 @@ def main() -> None:
         SEED,
         "b2",
         out / "search",
-        layers,
-        laps,
-        modes,
+        BasisSpec(layers=layers, laps=laps, modes=modes),
         target,
         search=True,
-        scheduler=None,
-        n_workers=a.workers,
-        progress=True,
-        **kw,
+        options=options,
     )
     t_search = time.perf_counter() - t0
     print(f"search: {found['runs']} runs in {t_search:.1f} s wall")

@@ -33,7 +33,7 @@ from flexmvm.scenarios.compare import compare_runs
 from flexmvm.scenarios.provenance import stamp, stamp_mismatch
 from flexmvm.scenarios.run import run_scenario
 from flexmvm.studies.grid import study_scenario
-from flexmvm.studies.reference import reference_history
+from flexmvm.studies.reference_run import reference_history
 
 ROOT = Path(__file__).resolve().parents[1]
 SEED = ROOT / "scenarios" / "rod_impact.toml"

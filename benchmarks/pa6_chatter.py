@@ -37,7 +37,7 @@ from flexmvm.scenarios.compare import compare_runs
 from flexmvm.scenarios.run import run_scenario
 from flexmvm.studies.grid import mvm_scenario, study_scenario
 from flexmvm.studies.materials import material_scenario
-from flexmvm.studies.reference import reference_history
+from flexmvm.studies.reference_run import reference_history
 
 ROOT = Path(__file__).resolve().parents[1]
 MODELS = [("1-1", 43), ("1-3", 7), ("1-3", 43), ("1-4", 43), ("1-5", 43), ("if0.66", 10)]

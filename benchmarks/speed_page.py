@@ -14,6 +14,7 @@ from __future__ import annotations
 import datetime as _dt
 import os
 import platform
+import sys
 import textwrap
 from importlib import metadata
 from pathlib import Path
@@ -31,10 +32,11 @@ _COMPILED_ALREADY_S = 0.5
 
 def machine_facts() -> dict:
     """What the page says of the machine and the software, measured now: CPU model,
-    architecture and cores (flexmvm.validation.suite.machine), physical memory [GiB], the
+    architecture and cores (tools.validation.suite.machine), physical memory [GiB], the
     1-min load average (other jobs on a shared machine), the UTC date and the versions of
     Python, numpy, scipy and numba."""
-    from flexmvm.validation.suite import machine
+    sys.path.insert(0, str(Path(__file__).resolve().parents[1]))  # the repository's tools/
+    from tools.validation.suite import machine
 
     try:
         memory_gib = os.sysconf("SC_PHYS_PAGES") * os.sysconf("SC_PAGE_SIZE") / 2**30

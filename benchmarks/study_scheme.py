@@ -18,15 +18,14 @@ from __future__ import annotations
 
 import argparse
 import json
+import sys
 import time
 from pathlib import Path
 
 from flexmvm.scenarios import load_scenario
 from flexmvm.scenarios.run import run_scenario
 from flexmvm.studies.grid import mvm_scenario, parse_model, reference_scenario, seed_scheme
-from flexmvm.studies.reference import scored_row
-from flexmvm.validation.paths import git_commit
-from flexmvm.validation.runs import now
+from flexmvm.studies.reference_run import scored_row
 
 ROOT = Path(__file__).resolve().parents[1]
 T_END, DT, OTHER = 8e-4, 1e-6, "mvm:3-5:40"
@@ -98,6 +97,10 @@ def main() -> None:
     args = ap.parse_args()
     cands = CANDIDATES[:2] if args.quick else CANDIDATES
     sc = load_scenario(ROOT / "scenarios" / "rod_impact.toml")
+    sys.path.insert(0, str(ROOT))  # the repository's tools/ (this file runs as a script)
+    from tools.validation.paths import git_commit
+    from tools.validation.runs import now
+
     out = {"meta": {"commit": git_commit(), "computed_utc": now(), "settings": SETTINGS}}
     for name, scheme in (("shipped scheme", shipped(sc)), ("study scheme", study(sc))):
         out[name] = side(scheme, cands)

@@ -1,5 +1,5 @@
 """The reference condition of mesh bodies: "auto" (scenarios/body_reference.py,
-reduction.reference.far_reference) when a mesh_file body names none, none for rigid bodies,
+reduction.reference_condition.far_reference) when a mesh_file body names none, none for rigid bodies,
 end_b for rods; on the shipped sphere_beam scenario (its meshes are stored, no gmsh needed)."""
 
 import tomllib

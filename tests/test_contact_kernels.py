@@ -1,4 +1,4 @@
-"""Compiled contact kernels against the numpy reference (contact.geometry, contact.reference).
+"""Compiled contact kernels against the numpy reference (contact.geometry, contact.numpy_step).
 
 Projection of single pairs on random warped quads and triangles, then the whole provider
 (kinematics, warm-started search, rows) along a random trajectory, each step compared with
@@ -14,7 +14,7 @@ import pytest
 import scipy.sparse as sp
 
 from flexmvm.bodies.body import FlexibleBody
-from flexmvm.contact import reference as ref
+from flexmvm.contact import numpy_step as ref
 from flexmvm.contact.geometry import MasterSurface, project_points
 from flexmvm.contact.kinematics import body_kinematics
 from flexmvm.contact.nodes import ContactNodes

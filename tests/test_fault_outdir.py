@@ -3,8 +3,8 @@
 A user's file written into --out during a run is kept; a mount point is written in place; a
 hand-edited manifest entry is not trusted; two runs into one folder cannot both succeed; a
 stale staging folder is recognised when its pid was reused; a failed run keeps its result
-(non-finite summary values, a degenerate facet, a failing full-FE reference); validate does
-not overwrite a user's D.md. Each check is exact (files, bytes, one-line messages): there is
+(non-finite summary values, a degenerate facet, a failing full-FE reference); the validation
+tool does not overwrite a user's D.md. Each check is exact (files, bytes, one-line messages): there is
 no tolerance to choose.
 """
 
@@ -249,17 +249,26 @@ def test_a_failing_reference_does_not_hide_the_scenarios_run(tmp_path, capsys, m
 
 
 def test_validate_refuses_a_users_report_page_beside_out(tmp_path, capsys, monkeypatch):
-    """validate --out D with a user's D.md: refused in one line before any case runs, D.md
-    unchanged; a page validate wrote (the generated header) is accepted."""
-    from flexmvm.validation import report, suite
+    """python -m tools.validation --out D with a user's D.md: refused in one line before any
+    case runs, D.md unchanged; a page the tool wrote (the generated header) is accepted."""
+    from tools.validation import command, report, suite
+
+    def validate(argv):
+        code = 0
+        try:
+            command.main([str(a) for a in argv])
+        except SystemExit as exc:
+            code = exc.code
+        out = capsys.readouterr()
+        return code, out.out, out.err
 
     ran = []
     monkeypatch.setattr(suite, "run_validation", lambda *a, **k: ran.append(a))
     (tmp_path / "D.md").write_text("# my notes\n")
-    code, _, err = _in_process(["validate", "--out", tmp_path / "D"], capsys)
+    code, _, err = validate(["--out", tmp_path / "D"])
     _one_line(err, 2, code, "D.md", "did not write")
     assert ran == [] and (tmp_path / "D.md").read_text() == "# my notes\n"
     opening = report._template("header").template.split("$")[0]
     (tmp_path / "D.md").write_text(opening + "2026-01-01 ...\n")
-    code, _, err = _in_process(["validate", "--out", tmp_path / "D"], capsys)
+    code, _, err = validate(["--out", tmp_path / "D"])
     assert code == 0 and len(ran) == 1, err

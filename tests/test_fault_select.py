@@ -151,7 +151,7 @@ def _no_space(*args, **kwargs):
 @pytest.mark.parametrize(
     ("module", "name", "file"),
     [
-        ("flexmvm.studies.reference", "write_history", "reference/history.csv"),
+        ("flexmvm.studies.reference_run", "write_history", "reference/history.csv"),
         ("flexmvm.studies.runner", "write_json_atomic", "cases/l1-j1-m7.json"),
         ("flexmvm.studies.selection_files", "write_json_atomic", "selection.json"),
     ],

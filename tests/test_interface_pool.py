@@ -21,7 +21,7 @@ from flexmvm.materials import ALUMINIUM, BRASS
 from flexmvm.reduction import interface as iface
 from flexmvm.reduction.basis import BasisKind
 from flexmvm.reduction.interface import InterfaceSpec, participation_pool
-from flexmvm.reduction.reference import three_two_one
+from flexmvm.reduction.reference_condition import three_two_one
 from flexmvm.scenarios import setup as scenario_setup
 from flexmvm.studies.interface import interface_cases, mode_pools, run_interface_case
 
@@ -152,7 +152,7 @@ def test_a_second_mode_count_solves_no_eigenproblem(tiny, monkeypatch):
 
 
 def test_run_interface_case_records_the_pool(tiny, tmp_path):
-    from flexmvm.studies.reference import reference_history
+    from flexmvm.studies.reference_run import reference_history
 
     sc = tiny.with_time(t_end_s=5e-6)
     hist, _ = reference_history(sc, "b2", tmp_path)

@@ -12,7 +12,7 @@ import numpy as np
 
 from flexmvm.scenarios import load_scenario
 from flexmvm.scenarios.run import run_scenario
-from flexmvm.validation import acceptance
+from tools.validation import acceptance
 
 TINY = Path(__file__).parent / "data" / "tiny_impact.toml"
 

@@ -101,7 +101,7 @@ def test_accepted_steps_balance_linear_momentum(monkeypatch, scheme):
     put in equilibrium at the step's end after it (integrate.massless), moving their positions
     and rates away from the step's solution, so only the translational rows are recomputed
     (the massless coordinates have no mass: no momentum row sees them)."""
-    from flexmvm import validation
+    from tools import validation
 
     seen = []
     step = MoreauJeanIntegrator.step

@@ -1,5 +1,5 @@
 """The compiled plastic response (flexmvm.plasticity.kernels via PlasticBody.respond and
-radial_return) against its numpy reference (flexmvm.plasticity.reference), and the body on a
+radial_return) against its numpy reference (flexmvm.plasticity.kernels_numpy), and the body on a
 subset of its cells (PlasticBody.on_cells, point_ids).
 
 Both paths evaluate the same equations (Simo and Hughes 1998, box 3.2; f_int = sum B^T
@@ -30,8 +30,8 @@ from test_fe import box_hex, box_tet10, hex_wedge_mesh
 from flexmvm.errors import InputError
 from flexmvm.materials import Material
 from flexmvm.plasticity.body import PlasticBody
+from flexmvm.plasticity.kernels_numpy import radial_return_numpy, respond_numpy
 from flexmvm.plasticity.material import J2Plasticity
-from flexmvm.plasticity.reference import radial_return_numpy, respond_numpy
 from flexmvm.plasticity.return_mapping import PointState, radial_return, von_mises
 
 STEEL = Material(E=200e9, nu=0.3, rho=7800.0, name="steel")

@@ -69,7 +69,7 @@ def test_search_does_not_accept_a_plastic_zone_outside_the_region():
 
 
 def test_study_row_carries_the_plastic_zone():
-    """A study row of a plastic body (studies.reference.scored_row) carries the run's plastic
+    """A study row of a plastic body (studies.reference_run.scored_row) carries the run's plastic
     work, dent and plastic cell count (summary ``plastic.<body>``), exactly: the MVM-vs-full
     table of a plastic region study reads them from its cases (docs/plasticity.md, "Sphere on
     block: the region for the plastic zone"); an elastic body's row has none. A half-sine
@@ -78,7 +78,7 @@ def test_study_row_carries_the_plastic_zone():
 
     import numpy as np
 
-    from flexmvm.studies.reference import scored_row
+    from flexmvm.studies.reference_run import scored_row
 
     t = np.linspace(0.0, 1e-4, 201)
     f = np.where(t < 8e-5, np.sin(np.pi * t / 8e-5), 0.0) * 500.0

@@ -24,7 +24,7 @@ from flexmvm.materials import ALUMINIUM
 from flexmvm.mesh.io import read_mesh
 from flexmvm.reduction.basis import Basis, BasisKind, build_basis
 from flexmvm.reduction.kinds.mvm_sparse import ring_columns, ring_psi, split_ring_psi
-from flexmvm.reduction.reference import far_reference
+from flexmvm.reduction.reference_condition import far_reference
 
 BLOCK = Path(__file__).parents[1] / "scenarios" / "meshes" / "block_60x60x30.msh"
 TOL = 1e-12

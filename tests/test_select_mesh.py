@@ -2,7 +2,7 @@
 coarse rigid sphere (R 10 mm, tet4 of 2.5 mm) at 0.5 m/s onto the middle of a free aluminium
 box beam 100 x 10 x 10 mm (tet4, 1.5 mm at the contact, 5 mm elsewhere: 320 nodes).
 
-- The estimate (studies/region.py) against Hertz's closed form (theory/hertz.py, Johnson eq.
+- The estimate (studies/region_estimate.py) against Hertz's closed form (theory/hertz.py, Johnson eq.
   11.24) with the sphere's true radius and the bodies' true masses.
 - `select` with region families (ball radii x modes) against the full-FE beam over 100 us
   (the first impact): measured 2026-11-27, force NCC ball 1.5 mm (4 nodes) + 5 modes 0.724,
@@ -132,7 +132,7 @@ def test_estimate_against_hertz(scenario_file):
 
 
 def _holds_the_touched_facets(sc, body: str, est) -> None:
-    """The rule a + h (studies/region.py): h is the largest diameter of the contact facets
+    """The rule a + h (studies/region_estimate.py): h is the largest diameter of the contact facets
     that the circle of radius a about the point meets, and the ball holds all their nodes.
     Found here independently of the module's point-to-triangle distance: each facet sampled
     on a barycentric grid of step 1/40 (points 1/40 of a facet apart: a facet missed would
@@ -280,7 +280,7 @@ def test_node_set_families_count_their_sets_nodes(scenario_file, meshes):
     960-DOF beam, too small to refuse)."""
     from flexmvm.mesh.io import read_mesh
     from flexmvm.scenarios.cost import ReducedCostWarning
-    from flexmvm.studies.regions import RegionFamily, RegionGrid
+    from flexmvm.studies.region_families import RegionFamily, RegionGrid
 
     n_top = len(read_mesh(meshes[1]).node_set("top"))
     with pytest.warns(ReducedCostWarning, match="region set top"):
@@ -397,8 +397,8 @@ def test_region_case_keeps_the_scenarios_allow_costly(scenario_file, monkeypatch
     step): 8 s at load 5, most of it the first build of the beam."""
     from flexmvm.scenarios import cost, run
     from flexmvm.scenarios.build import build_scenario
-    from flexmvm.studies import regions
-    from flexmvm.studies.regions import RegionFamily, RegionGrid, run_region_case
+    from flexmvm.studies import region_families as regions
+    from flexmvm.studies.region_families import RegionFamily, RegionGrid, run_region_case
 
     class Built(Exception):
         pass

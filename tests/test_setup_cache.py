@@ -21,7 +21,7 @@ from flexmvm.fe.assembly import assemble
 from flexmvm.materials import ALUMINIUM, Material
 from flexmvm.mesh.rod import RodSpec, rod_mesh
 from flexmvm.reduction.basis import BasisKind, build_basis
-from flexmvm.reduction.reference import three_two_one
+from flexmvm.reduction.reference_condition import three_two_one
 from flexmvm.reduction.rod_reference import rod_reference
 from flexmvm.scenarios import setup as scenario_setup
 from flexmvm.scenarios.setup import SetupCache

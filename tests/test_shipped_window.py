@@ -20,7 +20,7 @@ from flexmvm.integrate.driver import simulate
 from flexmvm.integrate.run_result import TimeGrid
 from flexmvm.integrate.state import BodyState
 from flexmvm.scenarios import load_scenario
-from flexmvm.validation import cases
+from tools.validation import cases
 
 SEED = Path(__file__).parents[1] / "scenarios" / "rod_impact.toml"
 

@@ -34,7 +34,6 @@ STAGES = [
     "plots",
     "scenarios",
     "studies",
-    "validation",
     "cli",
 ]
 
@@ -70,6 +69,24 @@ def test_stages_point_one_way():
             if STAGES.index(other) > STAGES.index(own):
                 wrong.append(f"{rel}:{line} ({own}) imports {module} ({other})")
     assert not wrong, "\n".join(wrong)
+
+
+#: Top-level names of the repository's own code outside the package (tools/validation, the
+#: benchmarks' scripts, the tests): they may import flexmvm, flexmvm never imports them.
+REPOSITORY_ONLY = ("tools", "benchmarks", "tests")
+
+
+def test_package_imports_no_repository_tool():
+    """The package works from a wheel: no module of flexmvm imports the repository's tools
+    (tools.validation calls git and writes the checkout's docs/), benchmarks or tests."""
+    wrong = [
+        f"{path.relative_to(PACKAGE)}:{line} imports {module}"
+        for path in sorted(PACKAGE.rglob("*.py"))
+        for module, line in _imports(path)
+        if module.split(".")[0] in REPOSITORY_ONLY
+    ]
+    assert not wrong, "\n".join(wrong)
+    assert not (PACKAGE / "validation").exists(), "the validation is tools/validation, not a stage"
 
 
 def test_every_stage_is_listed():

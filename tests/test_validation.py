@@ -2,10 +2,10 @@
 
     python -m pytest -m validation   (cases stored in docs/validation/, reused when their key
                                       matches: the package source hash and every run setting)
-    flexmvm validate                  (the same cases; writes docs/validation.md; also
-                                      `python -m flexmvm.validation`)
+    python -m tools.validation        (the same cases; writes docs/validation.md; a repository
+                                      tool, run from the root; it replaced `flexmvm validate`)
 
-Every bound, with its reason, is a row of flexmvm.validation.acceptance.ACCEPTANCE, the table
+Every bound, with its reason, is a row of tools.validation.acceptance.ACCEPTANCE, the table
 the report states its acceptance from; each test checks every row of its case. Full-FE runs of
 the seed rods (two 25,000-DOF bodies) take several minutes each. The short version of the seed
 case is checked live in the default run (tests/test_validation_live.py).
@@ -18,8 +18,8 @@ from pathlib import Path
 
 import pytest
 
-from flexmvm import validation
-from flexmvm.validation import acceptance
+from tools import validation
+from tools.validation import acceptance
 
 pytestmark = pytest.mark.validation
 OUT = Path(__file__).resolve().parents[1] / "docs" / "validation"
@@ -78,7 +78,7 @@ def _stored_case_problems(report: dict, section: str) -> list[str]:
     from flexmvm.results.atomic import file_sha256
     from flexmvm.results.history import history_problem
     from flexmvm.scenarios import provenance
-    from flexmvm.validation.cases import case, stored_cases
+    from tools.validation.cases import case, stored_cases
 
     names = case(section).stored
     metas = {k: v for k, v in stored_cases(report).items() if k in names}
@@ -105,7 +105,7 @@ def _stored_case_problems(report: dict, section: str) -> list[str]:
             bad.append(f"{name} ({d.name}): summary.json is not the one written with the run")
         stamp = key.get("provenance") or {}
         bad += [
-            f"{name}: {what} {stamp.get(what)} (this checkout {v}): run `flexmvm validate`"
+            f"{name}: {what} {stamp.get(what)} (this checkout {v}): run `python -m tools.validation`"
             for what, v in now.items()
             if stamp.get(what) != v
         ]
@@ -130,12 +130,30 @@ def test_stored_report_meets_the_table(section):
     assert not bad, "\n".join(bad)
 
 
+def test_stored_report_stamp_is_this_checkouts():
+    """validation.json's own stamp (meta) is this checkout's: the package source's hash
+    (scenarios.provenance.run_code_version, which the runs' keys cover too) and the validation
+    tool's (tools.validation.paths.tool_version: its modules and templates, which render the
+    page from the runs). An edit of either makes the stored report stale, named here."""
+    from flexmvm.scenarios import provenance
+    from tools.validation.paths import tool_version
+
+    meta = json.loads((OUT / "validation.json").read_text())["meta"]
+    now = {"code_version": provenance.run_code_version(), "tool_version": tool_version()}
+    bad = [
+        f"meta {what} {meta.get(what)} (this checkout {v}): run `python -m tools.validation`"
+        for what, v in now.items()
+        if meta.get(what) != v
+    ]
+    assert not bad, "\n".join(bad)
+
+
 def test_flat_page_reports_the_peak_against_st_venant():
     """The flat case's page shows its peak beside the plateau: the stored run's 720.25 N is
     +16.3 % over St Venant's 619.38 N (the 3D rods' ring about the plateau, which the
     acceptance's plateau mean hides), with the reason (docs/validation.md, rendered by
-    flexmvm.validation.report from the stored numbers)."""
-    from flexmvm.validation.report import _flat
+    tools.validation.report from the stored numbers)."""
+    from tools.validation.report import _flat
 
     flat = json.loads((OUT / "validation.json").read_text())["flat_vs_st_venant"]
     text = _flat(flat)

@@ -1,4 +1,4 @@
-"""The validation report's stored cases (flexmvm.validation, issue 11): a case is reused only
+"""The validation report's stored cases (tools.validation, issue 11): a case is reused only
 when the code version and every setting of the run match, never by its folder name alone."""
 
 from __future__ import annotations
@@ -10,9 +10,9 @@ from pathlib import Path
 import pytest
 
 import flexmvm.scenarios.run as run_module
-from flexmvm import validation
 from flexmvm.errors import StaleDataWarning
 from flexmvm.scenarios import ModelConfig, load_scenario, provenance, scenario_from_dict
+from tools import validation
 
 TINY = Path(__file__).parent / "data" / "tiny_impact.toml"
 

@@ -11,7 +11,7 @@ before the impact, is checked on the short event that tests/test_pendulum.py run
 other checks: test_short_pendulum_impact_with_gravity_and_strings.)
 
 Tolerances come from the short case's measured convergence (docs/validation.md, "Short seed
-case", made by `python -m flexmvm.validation`): halving the step changes the force by NCC
+case", made by `python -m tools.validation`): halving the step changes the force by NCC
 1 - 2e-7 and the peak by 0.015 %; refining the contact zone (first element 0.15 mm, 4 core
 elements: 23,751 + 22,113 DOF) moves the peak by 1.0 % and the contact end by 3 %, and brings
 the force NCC against theory from 0.9972 to 0.9994 (peak +3.7 % -> +2.8 %). So at this mesh
@@ -30,7 +30,6 @@ from pathlib import Path
 import numpy as np
 from _short_case import short_run
 
-from flexmvm import validation
 from flexmvm.materials import ALUMINIUM, BRASS, Material
 from flexmvm.scenarios import ModelConfig
 from flexmvm.scenarios.compare import compare_runs
@@ -38,7 +37,8 @@ from flexmvm.scenarios.run import run_scenario
 from flexmvm.studies.grid import seed_scheme
 from flexmvm.theory.scenario import theory_histories
 from flexmvm.theory.wave import ContactLaw, Rod1D, two_rod_impact
-from flexmvm.validation import acceptance
+from tools import validation
+from tools.validation import acceptance
 
 ROOT = Path(__file__).resolve().parents[1]
 V0, L, R = 0.21, 0.1, 0.01

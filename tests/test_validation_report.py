@@ -12,11 +12,10 @@ from pathlib import Path
 
 import pytest
 
-from flexmvm.cli import app
-from flexmvm.validation import acceptance
-from flexmvm.validation.acceptance import Bound, Criterion
-from flexmvm.validation.cases import CASES, stored_cases
-from flexmvm.validation.report import render
+from tools.validation import acceptance, command
+from tools.validation.acceptance import Bound, Criterion
+from tools.validation.cases import CASES, stored_cases
+from tools.validation.report import render
 
 ROOT = Path(__file__).resolve().parents[1]
 STORED = ROOT / "docs" / "validation" / "validation.json"
@@ -81,15 +80,15 @@ def test_every_row_reads_a_number_of_the_stored_report(stored):
 
 
 def test_command_help_and_unknown_case(tmp_path, capsys, monkeypatch):
-    """`python -m flexmvm.validation --help` is the `flexmvm validate` command's (run in
-    process, as `python -m` runs it); an unknown case is one line on stderr and exit status
-    2, before anything runs."""
-    monkeypatch.setattr(sys, "argv", ["flexmvm.validation", "--help"])
-    runpy.run_module("flexmvm.validation", run_name="__main__")  # returns: exit status 0
+    """`python -m tools.validation --help` shows the command's options (run in process, as
+    `python -m` runs it); an unknown case is one line on stderr and exit status 2, before
+    anything runs."""
+    monkeypatch.setattr(sys, "argv", ["tools.validation", "--help"])
+    runpy.run_module("tools.validation", run_name="__main__")  # returns: exit status 0
     out = capsys.readouterr().out
-    assert "Usage: flexmvm validate" in out and "--recompute" in out
+    assert "Usage: python -m tools.validation" in out and "--recompute" in out
     with pytest.raises(SystemExit) as done:
-        app.run(["validate", "--out", str(tmp_path), "--case", "nope"])
+        command.main(["--out", str(tmp_path), "--case", "nope"])
     captured = capsys.readouterr()
     assert done.value.code == 2 and captured.out == ""
     assert captured.err.strip().splitlines() == [

@@ -63,7 +63,7 @@ _API = {
     "material_study": "flexmvm.studies.api",
     "estimate_selection": "flexmvm.studies.estimate",
     "estimate_interface": "flexmvm.studies.estimate",
-    "estimate_region": "flexmvm.studies.region",
+    "estimate_region": "flexmvm.studies.region_estimate",
     # per-process caches
     "clear_caches": "flexmvm.scenarios.setup",
     "set_cache_sizes": "flexmvm.scenarios.setup",

@@ -110,6 +110,14 @@ class FlexibleBody:
         """The compact contraction of a basis that selects nodal DOFs (full FE), else None."""
         return NodalContraction.of(self.psi, self.inv.Ms, self.X)
 
+    @property
+    def _nodal_basis(self) -> NodalContraction:
+        """nodal, where a compact (2D) carried contraction is used: only a basis selecting
+        nodal DOFs makes one (carried_contractions)."""
+        nodal = self.nodal
+        assert nodal is not None, "a compact contraction comes from a nodal basis"
+        return nodal
+
     def node_of_coordinate(self, k: int) -> tuple[int, int] | None:
         """(mesh node, direction 0/1/2) of elastic coordinate k for a basis that selects
         nodal DOFs (full FE), else None."""
@@ -135,7 +143,7 @@ class FlexibleBody:
     def contraction_trace(self, Lc: np.ndarray) -> np.ndarray:
         """M_qq x from a carried contraction Lc of x (M_qq = sum_a G2[a][a])."""
         if Lc.ndim == 2:
-            return self.nodal.trace(Lc)
+            return self._nodal_basis.trace(Lc)
         return Lc[0, 0] + Lc[1, 1] + Lc[2, 2]
 
     def contractions(self, x: np.ndarray, pool=None) -> np.ndarray:
@@ -148,6 +156,7 @@ class FlexibleBody:
         if packed is not None:
             return packed(x, pool)
         if inv.Ms is not None:
+            assert inv.PT is not None  # set with Ms (bodies.invariants)
             # G2[b][a] x = P_b^T M_s (P_a x): one M_s product with 3 columns instead of nine
             # products with the G2 blocks (each as large as M_s)
             U = np.column_stack([inv.PT[a].T @ x for a in range(3)])
@@ -174,7 +183,7 @@ class FlexibleBody:
             return S, np.trace(G) * np.eye(3) - G, np.zeros((3, 0)), np.zeros((3, 3, 0))
         if Lq is not None and Lq.ndim == 2:
             # compact form (bodies.nodal_contraction): G = G0 + Q^T (M_s X) + Cq Q
-            nodal = self.nodal
+            nodal = self._nodal_basis
             Cq = nodal.first_moment_matrix(Lq)
             Q = nodal.scattered(q)
             G = self.inv.G0 + Q.T @ nodal.MsX + Cq @ Q
@@ -222,7 +231,7 @@ class FlexibleBody:
         if not self.nq:
             return Mw0
         if Lq is not None and Lq.ndim == 2:
-            nodal = self.nodal
+            nodal = self._nodal_basis
             return nodal.antisymmetric(nodal.first_moment_matrix(Lq))
         if Lq is None and stack is not None:
             return Mw0 + (stack @ q).reshape(3, self.nq)

@@ -52,7 +52,6 @@ def _register() -> None:
         "region_cmd",
         "study_cmd",
         "cache_cmd",
-        "validate_cmd",
         "compare_cmd",
     ):
         try:

@@ -1,5 +1,5 @@
 """`flexmvm region SCENARIO --body NAME`: the retained region a contact needs (the Hertz
-estimate of studies/region.py) and what it costs on the body's mesh."""
+estimate of studies/region_estimate.py) and what it costs on the body's mesh."""
 
 from __future__ import annotations
 
@@ -17,7 +17,7 @@ import click
     type=float,
     default=None,
     help="Region radius per Hertz contact radius [default: none, the radius is a + h, "
-    "h the size of the contact facets within a: studies/region.py].",
+    "h the size of the contact facets within a: studies/region_estimate.py].",
 )
 @click.option(
     "--radius-mm",
@@ -63,7 +63,7 @@ def command(
     contact facets within a; or --factor x a), its nodes, DOF and memory against full FE.
     Prints the scenario's `region` line to use."""
     from flexmvm.scenarios import load_scenario
-    from flexmvm.studies.region import estimate_region
+    from flexmvm.studies.region_estimate import estimate_region
 
     sc = load_scenario(scenario)
     est = estimate_region(

@@ -156,14 +156,8 @@ def command(
     interface_modes,
     search,
     allow_costly,
-    scheduler,
-    workers,
-    serial,
-    t_end,
-    dt,
-    other,
     out_dir,
-    progress,
+    options,
 ) -> None:
     """Selection study: node selections x mode counts of BODY against the full-FE force;
     writes ncc.csv, selection.json, fig7_ncc_map.png, fig8_ncc_modes.png (with --patches
@@ -172,7 +166,8 @@ def command(
     fig_front_ncc_dof.png."""
     from flexmvm.metrics.ncc import Target
     from flexmvm.studies.interface import parse_patches
-    from flexmvm.studies.regions import parse_node_sets, parse_radii
+    from flexmvm.studies.options import BasisSpec
+    from flexmvm.studies.region_families import parse_node_sets, parse_radii
     from flexmvm.studies.selection import run_selection_study
 
     regions = (
@@ -181,41 +176,28 @@ def command(
     ) or None
     centre_m = parse_point(centre, "centre") if centre is not None else None
 
-    grid = (parse_range(layers, "layers"), parse_range(laps, "laps"), parse_range(modes, "modes"))
-    patch_sets = parse_patches(patches) if patches is not None else None
-    if_modes = parse_range(interface_modes, "interface-modes")
+    basis = BasisSpec(
+        layers=parse_range(layers, "layers"),
+        laps=parse_range(laps, "laps"),
+        modes=parse_range(modes, "modes"),
+        kind=kind,
+        patches=parse_patches(patches) if patches is not None else None,
+        interface_modes=parse_range(interface_modes, "interface-modes"),
+        regions=regions,
+        centre_m=centre_m,
+        patch_surface=patch_surface,
+    )
     tgt = Target.parse(target)
-    check_workers(workers, scheduler)
+    check_workers(options.n_workers, options.scheduler)
     studied = _allowing_costly(scenario, body) if allow_costly else scenario
     with study_output(out_dir):
-        run_selection_study(
-            studied,
-            body,
-            out_dir,
-            *grid,
-            target=tgt,
-            search=search,
-            scheduler=scheduler,
-            n_workers=workers,
-            progress=progress,
-            t_end_s=t_end,
-            dt_s=dt,
-            other=other,
-            serial=serial,
-            echo=click.echo,
-            kind=kind,
-            patches=patch_sets,
-            interface_modes=if_modes,
-            regions=regions,
-            centre_m=centre_m,
-            patch_surface=patch_surface,
-        )
+        run_selection_study(studied, body, out_dir, basis, tgt, search, options)
     click.echo(f"wrote {out_dir}")
 
 
 def _allowing_costly(scenario: Path, body: str):
     """The scenario of file ``scenario`` with body ``body``'s model.allow_costly set (the
-    study's candidates take it: studies/grid.py, studies/regions.py)."""
+    study's candidates take it: studies/grid.py, studies/region_families.py)."""
     from flexmvm.scenarios import load_scenario
 
     sc = load_scenario(scenario)

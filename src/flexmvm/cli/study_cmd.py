@@ -56,20 +56,14 @@ def materials(
     selections,
     modes,
     kind,
-    scheduler,
-    workers,
-    serial,
-    t_end,
-    dt,
-    other,
-    progress,
+    options,
 ) -> None:
     """Body BODY of W, Cu, Al, PA6 (seed table 2): runs of the KIND model against each
     full-FE reference; writes materials.csv, materials.json, fig9_materials.png."""
     from flexmvm.cli.select_cmd import parse_range
     from flexmvm.studies.materials import parse_selections, run_materials_study
 
-    check_workers(workers, scheduler)
+    check_workers(options.n_workers, options.scheduler)
     names = [m.strip() for m in materials.split(",") if m.strip()]
     with study_output(out_dir):
         run_materials_study(
@@ -79,14 +73,7 @@ def materials(
             materials=names,
             selections=parse_selections(selections),
             modes=parse_range(modes, "modes"),
-            scheduler=scheduler,
-            n_workers=workers,
-            progress=progress,
-            t_end_s=t_end,
-            dt_s=dt,
-            other=other,
-            serial=serial,
-            echo=click.echo,
             kind=kind,
+            options=options,
         )
     click.echo(f"wrote {out_dir}")

@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import contextlib
 import errno
+import functools
 import re
 import sys
 from collections.abc import Iterator
@@ -45,10 +46,29 @@ _OPTIONS = (
 
 
 def study_run_options(command):
-    """Decorator adding --scheduler, --workers, --serial, --t-end, --dt, --other."""
+    """Decorator adding --scheduler, --workers, --serial, --t-end, --dt, --other, passed to
+    ``command`` with its --progress as one frozen ``options``
+    (flexmvm.studies.options.StudyOptions, console lines through click.echo)."""
+
+    @functools.wraps(command)
+    def with_options(**kw):
+        from flexmvm.studies.options import StudyOptions
+
+        options = StudyOptions(
+            scheduler=kw.pop("scheduler"),
+            n_workers=kw.pop("workers"),
+            serial=kw.pop("serial"),
+            progress=kw.pop("progress"),
+            t_end_s=kw.pop("t_end"),
+            dt_s=kw.pop("dt"),
+            other=kw.pop("other"),
+            echo=click.echo,
+        )
+        return command(options=options, **kw)
+
     for option in reversed(_OPTIONS):
-        command = option(command)
-    return command
+        with_options = option(with_options)
+    return with_options
 
 
 def check_workers(workers: int | None, scheduler: str | None = None) -> None:

@@ -53,11 +53,11 @@ from flexmvm.constraints.rows import Rows
 from flexmvm.contact.geometry import BroadPhase, MasterSurface
 from flexmvm.contact.held_pairs import gap_offsets, hold_pairs
 from flexmvm.contact.nodes import ContactNodes
+from flexmvm.contact.numpy_step import body_rows
 from flexmvm.contact.pair_options import pair_options
 from flexmvm.contact.pair_rows import active_pairs, predicted_min_gap
 from flexmvm.contact.penetration import Penetration, SurfaceMeasure
 from flexmvm.contact.projection import DEGENERATE_QUAD, DEGENERATE_TRI
-from flexmvm.contact.reference import body_rows
 from flexmvm.contact.search import scan_nodes
 from flexmvm.contact.search_state import ProjectionMemo, SearchState, facet_surface
 from flexmvm.errors import InputError, SolverError
@@ -96,7 +96,7 @@ class PointToSurfaceContact:
 
     Per call the contact-node kinematics, the search and the rows run in compiled kernels
     (contact.kinematics, contact.search, contact.pair_rows) on arrays kept here; the result
-    equals the numpy reference (contact.reference) to round-off. Search state kept between calls, which never changes a
+    equals the numpy reference (contact.numpy_step) to round-off. Search state kept between calls, which never changes a
     result: per slave node a superset of its broad-phase candidates, rebuilt once the node
     has moved far enough to leave it, and the facet chosen last time, tried first.
     """

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from enum import Enum
+from typing import Any
 
 import numpy as np
 
@@ -54,6 +55,23 @@ class TimeGrid:
     field_output_dt_s: float | None = None
     # the precision the fields are written in (RunResult.field_precision)
     field_precision: FieldPrecision = FieldPrecision.FLOAT64
+
+    @classmethod
+    def from_config(cls, time: Any) -> TimeGrid:
+        """The grid of a scenario's [time] table (scenarios.schema.TimeConfig: the same field
+        names; its damping time with "auto" resolved), every field by name rather than seven by
+        position."""
+        return cls(
+            t_end_s=time.t_end_s,
+            dt_s=time.dt_s,
+            dt_max_s=time.dt_max_s,
+            output_dt_s=time.output_dt_s,
+            theta=time.theta,
+            output_contact_dt_s=time.output_contact_dt_s,
+            hf_damping_time_s=time.damping_time_s,  # "auto" resolved
+            field_output_dt_s=time.field_output_dt_s,
+            field_precision=time.field_precision,
+        )
 
     def theta_rule(self) -> ThetaRule:
         """theta of each step size (integrate.theta)."""

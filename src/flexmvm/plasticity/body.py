@@ -13,7 +13,7 @@ integration point in one PointState, points numbered block by block, cell-major.
 
 respond runs the compiled kernels (kernels.block_response: return and element assembly per
 cell, the element tangents added straight into the CSR data through a slot map found once
-per body); reference.py keeps the numpy form they are checked against. A body restricted to
+per body); kernels_numpy.py keeps the numpy form they are checked against. A body restricted to
 some cells (on_cells) costs what those cells cost: the time step evaluates only the cells
 that can yield.
 """

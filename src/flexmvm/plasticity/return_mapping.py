@@ -13,7 +13,7 @@ modulus kappa, shear modulus mu and the state (eps_p, alpha, beta) of step n:
     C     = kappa 1 (x) 1 + 2 mu theta (I - 1/3 1 (x) 1) - 2 mu theta_bar n (x) n
     theta = 1 - 2 mu dgam / ||xi_tr||,  theta_bar = 1 / (1 + (H_iso + H_kin) / (3 mu)) - (1 - theta)
 
-The compiled per-point kernel is kernels.return_point; reference.py keeps the numpy form.
+The compiled per-point kernel is kernels.return_point; kernels_numpy.py keeps the numpy form.
 
 Voigt storage, order (xx, yy, zz, xy, yz, zx): strains (the input strain and the plastic
 strain) carry engineering shears gamma_ij = 2 eps_ij, as B u gives them; stresses and the

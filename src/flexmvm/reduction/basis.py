@@ -52,7 +52,7 @@ from flexmvm.reduction.kinds import Basis, BasisRequest, ModelKind, kind_spec
 from flexmvm.reduction.kinds.mvm import massless_patterns
 from flexmvm.reduction.kinds.registry import BasisKind
 from flexmvm.reduction.kinds.spec import MasslessStatics
-from flexmvm.reduction.reference import ReferenceCondition
+from flexmvm.reduction.reference_condition import ReferenceCondition
 
 
 def _retained(fe: FEModel, reference: ReferenceCondition, nodes) -> np.ndarray:

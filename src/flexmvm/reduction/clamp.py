@@ -41,7 +41,7 @@ import numpy as np
 
 from flexmvm.errors import InputError
 from flexmvm.mesh.mesh import Mesh
-from flexmvm.reduction.reference import (
+from flexmvm.reduction.reference_condition import (
     RIGID_COND_MAX,
     ReferenceCondition,
     check_rigid,

@@ -49,7 +49,7 @@ from flexmvm.errors import InputError, MeshError
 from flexmvm.fe.assembly import FEModel
 from flexmvm.fe.modes import factor, free_modes
 from flexmvm.mesh.mesh import Mesh
-from flexmvm.reduction.reference import ReferenceCondition, rigid_body_modes
+from flexmvm.reduction.reference_condition import ReferenceCondition, rigid_body_modes
 
 #: A patch vector whose M-norm drops below this fraction when made orthogonal to the columns
 #: before it adds nothing (the radius is too close to another one, or the modes hold it).

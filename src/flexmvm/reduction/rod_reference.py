@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 
 from flexmvm.errors import InputError
-from flexmvm.reduction.reference import ReferenceCondition
+from flexmvm.reduction.reference_condition import ReferenceCondition
 
 
 def rod_reference(rod) -> ReferenceCondition:

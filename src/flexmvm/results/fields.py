@@ -201,13 +201,13 @@ class StressOperator:
             rows.append(conn.ravel())
             cols.append(offset + np.arange(conn.size))
             offset += conn.size
-        rows = np.concatenate(rows) if rows else np.zeros(0, int)
-        cols = np.concatenate(cols) if cols else np.zeros(0, int)
-        count = np.bincount(rows, minlength=n).astype(float)
+        row = np.concatenate(rows) if rows else np.zeros(0, int)
+        col = np.concatenate(cols) if cols else np.zeros(0, int)
+        count = np.bincount(row, minlength=n).astype(float)
         self._node_weight = 1.0 / np.maximum(count, 1.0)  # (n,)
-        w = self._node_weight[rows]
+        w = self._node_weight[row]
         # average over the cells sharing a node (unweighted); nodes in no cell get zero
-        self._average = sp.csr_matrix((w, (rows, cols)), shape=(n, offset))
+        self._average = sp.csr_matrix((w, (row, col)), shape=(n, offset))
 
     def nodal_stress(self, u_local: np.ndarray) -> np.ndarray:
         """Node-averaged stress (n, 3, 3) [Pa] of u_local (n, 3) or (3 n,) [m]."""
@@ -349,8 +349,10 @@ def nodal_fields(
     u = elastic_displacement(body, q) if u is None else u
     s = body.X + u
     local = np.cross(fv[3:], s)
-    if q_dot is not None or u_dot is not None:
-        local = local + (elastic_displacement(body, q_dot) if u_dot is None else u_dot)
+    if u_dot is None and q_dot is not None:
+        u_dot = elastic_displacement(body, q_dot)
+    if u_dot is not None:
+        local = local + u_dot
     reference = reference_positions(body, r0, A0)
     return NodalFields(
         reference=reference,

@@ -203,7 +203,7 @@ def remove_stale_partials(final: Path, echo=None) -> list[Path]:
     reused pid is not mistaken for it) is left alone. Returns the removed paths; ``echo`` (a
     print-like callable) is told of each.
     """
-    removed = []
+    removed: list[Path] = []
     parent = final.absolute().parent
     if not parent.is_dir():
         return removed

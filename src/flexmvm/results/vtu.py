@@ -70,7 +70,8 @@ class _Appended:
     """DataArray tags and their raw appended bytes, offsets counted from `start`."""
 
     def __init__(self, level: int, start: int = 0):
-        self.level, self.offset, self.parts = level, start, []
+        self.level, self.offset = level, start
+        self.parts: list[bytes] = []
 
     def tag(self, name: str, data: np.ndarray) -> str:
         text = _data_array(name, data, self.offset)

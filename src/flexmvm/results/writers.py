@@ -79,7 +79,7 @@ def write_history_csv(
             columns[f"{name}_v{_AXES[k]}_mps"] = v[:, i, k]
         if probe_axis is None:
             columns[f"{name}_v_mps"] = np.linalg.norm(v[:, i], axis=1)
-    write_history_columns(path, run.t, run.contact_force, columns)
+    write_history_columns(Path(path), run.t, run.contact_force, columns)
 
 
 def write_summary_json(path: str | os.PathLike[str], summary: Mapping[str, Any]) -> None:

@@ -14,7 +14,7 @@ import numpy as np
 
 from flexmvm.errors import InputError, MeshError
 from flexmvm.mesh.mesh import Mesh
-from flexmvm.reduction.reference import ReferenceCondition, far_reference, three_two_one
+from flexmvm.reduction.reference_condition import ReferenceCondition, far_reference, three_two_one
 from flexmvm.scenarios.body_schema import AUTO_REFERENCE
 from flexmvm.scenarios.supports import clamp_reference
 

@@ -233,18 +233,7 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
         infos.append(info)
         states.append(initial_state(body, cfg.placement))
     index = {cfg.name: i for i, cfg in enumerate(sc.bodies)}
-    t = sc.time
-    grid = TimeGrid(
-        t.t_end_s,
-        t.dt_s,
-        t.dt_max_s,
-        t.output_dt_s,
-        t.theta,
-        t.output_contact_dt_s,
-        t.damping_time_s,  # hf_damping_time_s, "auto" resolved
-        field_output_dt_s=t.field_output_dt_s,
-        field_precision=t.field_precision,
-    )
+    grid = TimeGrid.from_config(sc.time)
     contacts = tuple(
         _contact(
             c.model_copy(update={"slave": s, "master": m}),

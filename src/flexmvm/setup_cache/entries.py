@@ -19,7 +19,7 @@ from flexmvm.materials import Material
 from flexmvm.mesh.mesh import Mesh
 from flexmvm.reduction.basis import Basis
 from flexmvm.reduction.kinds import ModelKind, kind_spec
-from flexmvm.reduction.reference import ReferenceCondition
+from flexmvm.reduction.reference_condition import ReferenceCondition
 from flexmvm.setup_cache.mapped import decoded_mapped
 from flexmvm.setup_cache.store import (
     BODY_SOURCES,

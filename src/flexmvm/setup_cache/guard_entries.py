@@ -16,7 +16,7 @@ import numpy as np
 
 from flexmvm.materials import Material
 from flexmvm.reduction.kinds import ModelKind
-from flexmvm.reduction.reference import ReferenceCondition
+from flexmvm.reduction.reference_condition import ReferenceCondition
 from flexmvm.setup_cache.entries import basis_inputs
 from flexmvm.setup_cache.store import decoded, make_key, save
 

@@ -1,5 +1,5 @@
 """The expected first contact point of two placed surfaces and their relative curvature
-there, from their meshes alone (studies.region's steps 2, 3 and the facet size h of step 6):
+there, from their meshes alone (studies.region_estimate's steps 2, 3 and the facet size h of step 6):
 the point from the nodes' outward normals, the curvature from a polynomial fit of each
 surface's height over the tangent plane (Johnson, *Contact Mechanics*, 1985, sect. 4.1).
 Lengths in metres, global coordinates.
@@ -89,7 +89,7 @@ def _surface_point(nodes: np.ndarray, fs, p: np.ndarray) -> np.ndarray:
 
 
 def facet_size(nodes: np.ndarray, fs, point: np.ndarray, a: float) -> float:
-    """h of the rule a + h [m] (studies.region module doc, step 6): the largest diameter
+    """h of the rule a + h [m] (studies.region_estimate module doc, step 6): the largest diameter
     (largest node-to-node distance) of the facets of ``fs`` (node positions ``nodes``) that
     the ball of radius ``a`` about ``point`` meets; the facet nearest the point if none (a
     mesh coarser than a)."""
@@ -109,7 +109,7 @@ def facet_size(nodes: np.ndarray, fs, point: np.ndarray, a: float) -> float:
 
 def _curvature(points: np.ndarray, x0: np.ndarray, n: np.ndarray) -> tuple[np.ndarray, float]:
     """(curvature tensor (3, 3) in the tangent plane of ``n``, convex positive [1/m]; radius of
-    the fitted patch [m]) of the surface nodes ``points`` nearest ``x0`` (studies.region
+    the fitted patch [m]) of the surface nodes ``points`` nearest ``x0`` (studies.region_estimate
     module doc, step 3).
     The height is fitted by a polynomial of degree 4 in (u, v) (2 with fewer than 15 nodes),
     so that the quartic fall-off of a sphere over a patch of a few elements (r^4 / 8 R^3) is
@@ -138,7 +138,7 @@ def _curvature(points: np.ndarray, x0: np.ndarray, n: np.ndarray) -> tuple[np.nd
 
 def first_contact(x: np.ndarray, fs, px: np.ndarray, pfs) -> tuple[np.ndarray, np.ndarray]:
     """(expected first contact point (3,), the body's outward unit normal there (3,)), global,
-    from the body's nodes ``x`` and surface ``fs`` and the partner's ``px``, ``pfs`` (studies.region
+    from the body's nodes ``x`` and surface ``fs`` and the partner's ``px``, ``pfs`` (studies.region_estimate
     module doc, step 2). The point is the point of the body's facets nearest the partner's
     first node: on the body, also at an edge or a corner, where the projection onto the
     tangent plane of a node's averaged normal left the body."""
@@ -160,7 +160,7 @@ def equivalent_radius(
     body_points: np.ndarray, partner_points: np.ndarray, point: np.ndarray, n: np.ndarray, what: str
 ) -> tuple[float, tuple[float, float]]:
     """(R_e [m], principal radii (R', R'') [m]) of the two surfaces' summed curvature at
-    ``point`` (studies.region module doc, step 3); InputError naming ``what`` without
+    ``point`` (studies.region_estimate module doc, step 3); InputError naming ``what`` without
     curvature."""
     curv_b, rho_b = _curvature(body_points, point, n)
     curv_p, rho_p = _curvature(partner_points, point, -n)

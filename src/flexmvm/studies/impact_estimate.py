@@ -1,4 +1,4 @@
-"""The expected impact of a contact, from the scenario alone (studies.region's steps 4 and 5):
+"""The expected impact of a contact, from the scenario alone (studies.region_estimate's steps 4 and 5):
 the closing speed at the contact point from the bodies' initial motions, and the Hertz impact
 of the two bodies with what each body brings to it (its modulus, its mass, its impedance).
 
@@ -79,7 +79,7 @@ def held(sc: Scenario, body: str) -> bool:
 def _pivot(cfg, j, mesh) -> np.ndarray:
     """Global position [m] at t = 0 of joint ``j``'s point on body ``cfg`` (its ``point_m``,
     its ``ground_m``, or the centroid of its node set)."""
-    from flexmvm.studies.region import placed_nodes
+    from flexmvm.studies.region_estimate import placed_nodes
 
     if j.point_m is not None:
         return cfg.placement.to_global(j.point_m)
@@ -162,7 +162,7 @@ def _axis_inertia(cfg, pivot: np.ndarray, axis: np.ndarray) -> float:
     through ``pivot``: sum of its nodes' lumped masses (rows of M) x their squared distance
     from the axis."""
     from flexmvm.scenarios.setup import default_setup
-    from flexmvm.studies.region import placed_nodes
+    from flexmvm.studies.region_estimate import placed_nodes
 
     fe = default_setup().free_modes_source(cfg)[0]
     rel = placed_nodes(cfg, fe.mesh.nodes)[0] - pivot

@@ -34,7 +34,7 @@ from flexmvm.reduction.interface import ModeChoice
 from flexmvm.results.atomic import file_sha256, write_table_csv
 from flexmvm.scenarios import Scenario, interface, scenario_from_dict
 from flexmvm.scenarios.guard import VALIDITY_KEYS
-from flexmvm.studies.reference import case_reference, scored_row
+from flexmvm.studies.reference_run import case_reference, scored_row
 from flexmvm.studies.report import failure_list
 from flexmvm.studies.runner import Case
 

@@ -13,7 +13,7 @@ retains the selection's nodes (studies.grid.study_kind): ``mvm`` (Craig-Bampton,
 directory holds one kind (a rerun with another kind is refused: its stored params differ).
 
 - ``DIR/<material>/reference/history.csv``: the reference of each material (case ``ref-<mat>``;
-  one that fails its check, studies.reference.reference_problem, is announced and recomputed);
+  one that fails its check, studies.reference_run.reference_problem, is announced and recomputed);
 - ``DIR/cases/<mat>-l<i>-j<j>-m<m>.json``: the MVM runs (studies.selection.run_selection_case),
   keyed by the material scenario's provenance stamp and its reference's SHA-256 (a case of
   another code version or reference is recomputed, said in one line);
@@ -69,7 +69,8 @@ from flexmvm.studies.material_report import (
     material_rows,
     material_summary,
 )
-from flexmvm.studies.reference import reference_history, reference_problem
+from flexmvm.studies.options import StudyOptions, with_settings
+from flexmvm.studies.reference_run import reference_history, reference_problem
 from flexmvm.studies.report import echo_failures
 from flexmvm.studies.runner import (
     Case,
@@ -142,7 +143,7 @@ class MaterialStudy:
 
 
 def _drop_failing_reference(sc: Scenario, body: str, mat_dir: Path, record: Path) -> None:
-    """A stored reference of one material that fails its check (studies.reference
+    """A stored reference of one material that fails its check (studies.reference_run
     reference_problem: another code version, cut short, edited) is announced and removed with
     its case record, so that its case computes it again."""
     problem = reference_problem(sc, body, mat_dir)
@@ -161,21 +162,22 @@ def material_study(
     materials: Iterable[str] = SEED_ORDER,
     selections: Sequence[tuple[int, int]] | str = ((1, 1), (2, 2)),
     modes: Iterable[int] = range(7, 44, 12),
-    scheduler: str | None = None,
-    n_workers: int | None = None,
-    progress: bool = False,
-    *,
-    serial: bool = False,
     kind: ModelKind | str = ModelKind.MVM,
+    options: StudyOptions | None = None,
+    **settings: Any,
 ) -> MaterialStudy:
     """The material study of ``body`` in scenario ``sc`` (module doc), its cases and references
     stored in ``out_dir`` (a rerun resumes); no table, figure or console output (see
-    :func:`run_materials_study`). ``kind``: the reduced model (module doc).
+    :func:`run_materials_study`). ``kind``: the reduced model (module doc); ``options``
+    (studies.options.StudyOptions: scheduler, n_workers, serial, progress) where the cases
+    run, its fields also accepted as keyword arguments (``settings``).
 
     Raises InputError for an unknown material name (keys of SEED_MATERIALS), a kind that
     retains no nodes, a bad body or a selection beyond the mesh. A reference or a case that
     fails is listed in ``failures``, not raised.
     """
+    opts = with_settings(options, StudyOptions(), settings, "material_study")
+    scheduler, n_workers, serial = opts.scheduler, opts.n_workers, opts.serial
     out = Path(out_dir).resolve()
     materials = _check_materials(materials)
     selections = parse_selections(selections)
@@ -193,7 +195,7 @@ def material_study(
     )
     scen = {m: material_scenario(sc, body, m, SEED_MATERIALS[m]) for m in materials}
     cases, results, case_failed, ref_failed = _run_material_cases(
-        scen, body, out, selections, modes, kind, (scheduler, n_workers, serial), progress
+        scen, body, out, selections, modes, kind, (scheduler, n_workers, serial), opts.progress
     )
     rows = material_rows(cases, results, case_failed, rod, kind, SEED_MATERIALS)
     result = material_summary(
@@ -345,6 +347,10 @@ def _echo_summary(
         )
 
 
+#: run_materials_study's options when none are given: progress bars, console lines printed.
+_COMMAND = StudyOptions(progress=True, echo=print)
+
+
 def run_materials_study(
     scenario: str | Path | Scenario,
     out_dir: str | Path,
@@ -352,16 +358,9 @@ def run_materials_study(
     materials: Iterable[str] = SEED_ORDER,
     selections: Sequence[tuple[int, int]] | str = ((1, 1), (2, 2)),
     modes: Iterable[int] = range(7, 44, 12),
-    scheduler: str | None = None,
-    n_workers: int | None = None,
-    progress: bool = True,
-    *,
-    t_end_s: float | None = None,
-    dt_s: float | None = None,
-    other: str | None = None,
-    serial: bool = False,
-    echo: Callable[[str], Any] = print,
     kind: ModelKind | str = ModelKind.MVM,
+    options: StudyOptions | None = None,
+    **settings: Any,
 ) -> dict:
     """The material study of ``body`` in ``scenario`` (a Scenario or a scenario file) with its
     files and console lines (module doc): :func:`material_study`, then materials.csv,
@@ -372,25 +371,15 @@ def run_materials_study(
     Raises as :func:`material_study`, and SolverError, after everything is written, if no run
     at all could be compared.
     """
+    opts = with_settings(options, _COMMAND, settings, "run_materials_study")
+    echo = print if opts.echo is None else opts.echo
     out = Path(out_dir).resolve()
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     kind = study_kind(kind)
     if redistributing_contacts(sc, body):
         echo(SEED_SCHEME_NOTE)
-    sc = study_scenario(sc, body, t_end_s=t_end_s, dt_s=dt_s, other=other)
-    study = material_study(
-        sc,
-        out,
-        body,
-        materials,
-        selections,
-        modes,
-        scheduler,
-        n_workers,
-        progress,
-        serial=serial,
-        kind=kind,
-    )
+    sc = study_scenario(sc, body, t_end_s=opts.t_end_s, dt_s=opts.dt_s, other=opts.other)
+    study = material_study(sc, out, body, materials, selections, modes, kind, opts)
     rows, result = study.rows, study.summary
     materials, per, failures = list(result["materials"]), result["materials"], result["failures"]
     n_per = len(result["selections"]) * len(result["modes"])

@@ -1,4 +1,4 @@
-"""The mode count of an estimated region model (studies.region's step 6), from a criterion
+"""The mode count of an estimated region model (studies.region_estimate's step 6), from a criterion
 rather than a fixed number: the body's elastic free-free modes below f_max = k / T_c, T_c the
 expected contact duration and k = BANDWIDTH (the rule of `flexmvm select`'s a-priori
 estimate, studies/estimate.py: a pulse of duration T_c has its energy below ~3 / T_c).

@@ -4,7 +4,7 @@ A rod body's candidates are its ``i-j`` node selections (``i`` layers from the c
 ``j`` laps about the axis: studies.grid.rod_of) x ``m`` fixed-interface modes. :class:`NodeGrid`
 is that grid checked against the mesh (studies.grid.check_grid), with the number of retained
 nodes of each selection, and it meets the selection study the way a body of any mesh's
-studies.regions.RegionGrid does: ``cases``, ``candidate``, ``grid_dict``.
+studies.region_families.RegionGrid does: ``cases``, ``candidate``, ``grid_dict``.
 
 DOF of a candidate: ``3 x retained nodes + modes`` (elastic coordinates, the seed's count;
 studies/selection.py module doc).

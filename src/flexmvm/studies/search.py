@@ -8,7 +8,7 @@ same answer as running the whole grid (:func:`brute_force`) with far fewer runs
 (:func:`smallest_passing`).
 
 Families. A candidate belongs to one *family*: a node selection ``(layers, laps)`` of a rod or
-a region family of any body (a ball radius or a node set, studies/regions.py; node kind: one
+a region family of any body (a ball radius or a node set, studies/region_families.py; node kind: one
 study has either, never both) or a patch-radius set (interface kind); within a family only
 the mode count varies.
 
@@ -103,7 +103,7 @@ class Candidate:
         dof: number of generalised coordinates of the model (>= 1), the cost to minimise.
         patch_radii_m: the interface kind's patch-radius set [m] (distinct radii > 0, may be
             empty: modes only); None for a node selection.
-        region: a region family of a mesh body (studies/regions.py): ``("ball", radius_m)``
+        region: a region family of a mesh body (studies/region_families.py): ``("ball", radius_m)``
             or ``("set", node_set_name)``, a node family like ``selection`` (its DOF 3 x
             nodes + modes). Exactly one of ``selection``, ``patch_radii_m`` and ``region``
             is given.

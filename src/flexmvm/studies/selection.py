@@ -11,7 +11,7 @@ run in which the study body is full FE (the other bodies unchanged), computed on
 sweep and stored in ``DIR/reference/history.csv``.
 
 A body of any mesh (issue 34) has no i-j rings: its families are *regions*, balls of given
-radii about one centre or node sets of its mesh (studies/regions.py), x the same mode counts,
+radii about one centre or node sets of its mesh (studies/region_families.py), x the same mode counts,
 with the same reference, cases, resume, search and guard; its ncc.csv rows carry ``region``
 instead of ``layers, laps`` and its figure is the NCC-DOF front (fig_front_ncc_dof.png).
 
@@ -23,7 +23,7 @@ Files of a study directory ``DIR``:
 
 - ``reference/history.csv`` (+ ``reference/reference.json``: the scenario it was run from, so a
   rerun reuses it only for the same scenario, its provenance stamp and the history's record,
-  checked before reuse: studies/reference.py), the full-FE reference;
+  checked before reuse: studies/reference_run.py), the full-FE reference;
 - ``cases/<key>.json`` one per MVM run (flexmvm.studies.runner: atomic, a rerun resumes; a case
   of another code version or reference, or a damaged one, is recomputed and said), key
   ``l<i>-j<j>-m<m>``;
@@ -60,8 +60,9 @@ docs/notes/2026-11-27-comment-measurements.md).
 
 from __future__ import annotations
 
+import dataclasses
 import functools
-from collections.abc import Callable, Iterable, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -88,9 +89,14 @@ from flexmvm.studies.interface import (
     run_interface_case,
 )
 from flexmvm.studies.node_grid import NodeGrid
-from flexmvm.studies.reference import case_reference, reference_history, scored_row, study_version
-from flexmvm.studies.regions import (
-    RegionFamily,
+from flexmvm.studies.options import BasisSpec, StudyOptions, split_settings, with_settings
+from flexmvm.studies.reference_run import (
+    case_reference,
+    reference_history,
+    scored_row,
+    study_version,
+)
+from flexmvm.studies.region_families import (
     RegionGrid,
     failed_region_row,
     run_region_case,
@@ -217,23 +223,11 @@ def select_models(
     sc: Scenario,
     body: str,
     out_dir: str | Path,
-    layers: Iterable[int] = range(1, 5),
-    laps: Iterable[int] = range(1, 6),
-    modes: Iterable[int] = range(7, 44, 6),
+    basis: BasisSpec | None = None,
     target: Target | None = None,
-    *,
     search: bool = False,
-    scheduler: str | None = None,
-    n_workers: int | None = None,
-    serial: bool = False,
-    progress: bool = False,
-    echo: Callable[[str], Any] | None = None,
-    kind: ModelKind | str = ModelKind.MVM,
-    patches: Sequence[Sequence[float]] | None = None,
-    interface_modes: Iterable[int] = (5, 10, 20),
-    regions: Sequence[RegionFamily] | None = None,
-    centre_m: Sequence[float] | None = None,
-    patch_surface: str | None = None,
+    options: StudyOptions | None = None,
+    **settings: Any,
 ) -> SelectionStudy:
     """The selection study of ``body`` in scenario ``sc`` (module doc), its cases and reference
     stored in ``out_dir`` (a rerun resumes); no table, figure or console output (see
@@ -242,6 +236,9 @@ def select_models(
     Brute force runs every case of the grid (one batch); ``search=True`` runs
     studies.search.smallest_passing with SEARCH_OPEN_PER_SLOT families open per case the
     cluster runs at once, each round's batch through run_cases (parallel, resumable).
+    ``basis`` (:class:`~flexmvm.studies.options.BasisSpec`): the candidates; ``options``
+    (:class:`~flexmvm.studies.options.StudyOptions`): where they run; their fields are also
+    accepted as keyword arguments (``settings``), replacing the objects' own.
     ``echo``: the console lines (none by default); a stored reference or case that fails its
     check is recomputed and said through it (default: errors.announce_recompute, a warning).
     ``scheduler``: address of a Dask scheduler; otherwise one LocalCluster of ``n_workers``
@@ -254,7 +251,7 @@ def select_models(
     both kinds (search.rank_key), and ``summary["grid_size"]`` / ``summary["exact"]`` the node
     kind's (``exact`` false: ``--search`` stopped that kind at best_overall's DOF, see
     ``exact_note`` and search.kind_exact).
-    ``regions`` (studies/regions.py: ball radii about ``centre_m`` or node sets) replaces the
+    ``regions`` (studies/region_families.py: ball radii about ``centre_m`` or node sets) replaces the
     i-j grid by region families x ``modes``, for a body of any mesh (``layers`` and ``laps``
     are then ignored; rows carry ``region``, ``nodes``, ``modes``); ``patch_surface``: the
     facet set of the interface kind's patches (default: a mesh body's contact surface, about
@@ -262,19 +259,27 @@ def select_models(
     Raises InputError for a bad body / grid / options, SolverError if the reference fails.
     Failed runs are listed in ``summary["failures"]``; they count as not reaching the target.
     """
+    run_kw, basis_kw = split_settings(settings, "select_models")
+    opts = with_settings(options, StudyOptions(), run_kw, "select_models")
+    spec = with_settings(basis, BasisSpec(), basis_kw, "select_models")
     target = Target(0.99) if target is None else target
     out = Path(out_dir).resolve()
     sc.body(body)
     sc = seed_scheme(sc, body)
-    kind = study_kind(kind)
-    grid = study_grid(sc, body, layers, laps, modes, kind, regions, centre_m)
-    where = patch_place(sc, body, patch_surface, grid.centre) if patches else {}
-    check_study_cluster(scheduler, n_workers, serial)  # before the reference
+    kind = study_kind(spec.kind)
+    grid = study_grid(
+        sc, body, spec.layers, spec.laps, spec.modes, kind, spec.regions, spec.centre_m
+    )
+    patches, interface_modes = spec.patches, spec.interface_modes
+    where = patch_place(sc, body, spec.patch_surface, grid.centre) if patches else {}
+    check_study_cluster(opts.scheduler, opts.n_workers, opts.serial)  # before the reference
     claim_study_dir(out, "flexmvm select", own=STUDY_FILES)
+    echo = opts.echo
     announce, echo = (announce_recompute, _silent) if echo is None else (echo, echo)
+    progress = opts.progress
     hist, ref_made = _reference(sc, body, out, progress, announce, echo)
     case_of, if_cases = candidate_cases(sc, body, grid, hist, patches, interface_modes, where, echo)
-    cluster = (scheduler, n_workers, serial)
+    cluster = (opts.scheduler, opts.n_workers, opts.serial)
     sweep = _run_candidates(
         sc, case_of, target, search, cluster, progress, out, hist, grid, announce
     )
@@ -301,7 +306,7 @@ def _silent(_line: str) -> None:
 
 def _reference(sc, body, out, progress, announce, echo) -> tuple[Path, bool]:
     """The reference step: the full-FE history of ``body`` in ``out`` (computed, or loaded
-    when stored and valid: studies.reference.reference_history) and its console line.
+    when stored and valid: studies.reference_run.reference_history) and its console line.
     Returns (its path, whether it was computed)."""
     hist, ref_made = reference_history(sc, body, out, progress=progress, announce=announce)
     echo(f"reference (full FE {body}): {'computed' if ref_made else 'loaded'} {hist}")
@@ -359,7 +364,7 @@ def _sweep(
 def run_study_case(case: Case, reference: str | Path | None = None) -> dict:
     """One run of a selection study, of any kind: the interface kind's (params ``kind``
     "interface", studies/interface.py), a region family's (params ``region``,
-    studies/regions.py) or a node selection's (:func:`run_selection_case`)."""
+    studies/region_families.py) or a node selection's (:func:`run_selection_case`)."""
     if case.params.get("kind") == "interface":
         return run_interface_case(case, reference=reference)
     if "region" in case.params:
@@ -377,36 +382,27 @@ def _failed_row(case: Case, line: str, grid: NodeGrid | RegionGrid) -> dict:
     return grid.failed_row(case, line)
 
 
+#: run_selection_study's options when none are given: progress bars, console lines printed.
+_COMMAND = StudyOptions(progress=True, echo=print)
+
+
 def run_selection_study(
     scenario: str | Path | Scenario,
     body: str,
     out_dir: str | Path,
-    layers: Iterable[int] = range(1, 5),
-    laps: Iterable[int] = range(1, 6),
-    modes: Iterable[int] = range(7, 44, 6),
+    basis: BasisSpec | None = None,
     target: Target | None = None,
     search: bool = False,
-    scheduler: str | None = None,
-    n_workers: int | None = None,
-    progress: bool = True,
-    *,
-    t_end_s: float | None = None,
-    dt_s: float | None = None,
-    other: str | None = None,
-    serial: bool = False,
-    echo: Callable[[str], Any] = print,
-    kind: ModelKind | str = ModelKind.MVM,
-    patches: Sequence[Sequence[float]] | None = None,
-    interface_modes: Iterable[int] = (5, 10, 20),
-    regions: Sequence[RegionFamily] | None = None,
-    centre_m: Sequence[float] | None = None,
-    patch_surface: str | None = None,
+    options: StudyOptions | None = None,
+    **settings: Any,
 ) -> dict:
     """The selection study of ``body`` in ``scenario`` (a Scenario or a scenario file) with
-    its files and console lines (module doc): :func:`select_models`, then ncc.csv,
-    selection.json, the two figures and the summary line. ``t_end_s``, ``dt_s`` override the
+    its files and console lines (module doc): :func:`select_models` (``basis``, ``options``
+    and ``settings`` as there; here progress bars and console lines on by default: echo
+    print), then ncc.csv, selection.json, the two figures and the summary line. ``t_end_s``,
+    ``dt_s`` (fields of ``options``) override the
     scenario's end time and contact step, ``other`` the model of the other bodies
-    (grid.study_scenario). With ``regions`` (region families of any body, studies/regions.py)
+    (grid.study_scenario). With ``regions`` (region families of any body, studies/region_families.py)
     ncc.csv has a row per region x modes and the figure is fig_front_ncc_dof.png (force NCC
     against DOF per region family, and the interface kind's with ``patches``). Returns the
     selection.json content.
@@ -414,38 +410,23 @@ def run_selection_study(
     Raises InputError for a bad body / grid / options, SolverError if the reference fails or,
     after everything is written, if every run failed.
     """
+    run_kw, basis_kw = split_settings(settings, "run_selection_study")
+    opts = with_settings(options, _COMMAND, run_kw, "run_selection_study")
+    spec = with_settings(basis, BasisSpec(), basis_kw, "run_selection_study")
+    echo = print if opts.echo is None else opts.echo
+    opts = dataclasses.replace(opts, echo=echo)
     target = Target(0.99) if target is None else target
     out = Path(out_dir).resolve()
     sc = scenario if isinstance(scenario, Scenario) else load_scenario(scenario)
     switched = bool(redistributing_contacts(sc, body))
-    sc = study_scenario(sc, body, t_end_s=t_end_s, dt_s=dt_s, other=other)
-    if not regions:
-        check_grid(sc, body, layers, laps, modes)
+    sc = study_scenario(sc, body, t_end_s=opts.t_end_s, dt_s=opts.dt_s, other=opts.other)
+    if not spec.regions:
+        check_grid(sc, body, spec.layers, spec.laps, spec.modes)
     if switched:
         echo(SEED_SCHEME_NOTE)
-    study = select_models(
-        sc,
-        body,
-        out,
-        layers,
-        laps,
-        modes,
-        target,
-        search=search,
-        scheduler=scheduler,
-        n_workers=n_workers,
-        serial=serial,
-        progress=progress,
-        echo=echo,
-        kind=kind,
-        patches=patches,
-        interface_modes=interface_modes,
-        regions=regions,
-        centre_m=centre_m,
-        patch_surface=patch_surface,
-    )
+    study = select_models(sc, body, out, spec, target, search, opts)
     result = study.summary
-    write_selection_files(out, study, sc.name, body, target, bool(regions))
+    write_selection_files(out, study, sc.name, body, target, bool(spec.regions))
     echo_summary(echo, result, target, out / "selection.json")
     failures = result["failures"] + result.get("interface", {}).get("failures", [])
     if failures and len(failures) == result["runs"] + result.get("interface", {}).get("runs", 0):

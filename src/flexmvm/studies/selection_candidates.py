@@ -13,7 +13,7 @@ from flexmvm.scenarios import ModelKind, Scenario
 from flexmvm.studies.grid import check_study_scheme
 from flexmvm.studies.interface import interface_cases
 from flexmvm.studies.node_grid import NodeGrid
-from flexmvm.studies.regions import RegionFamily, RegionGrid
+from flexmvm.studies.region_families import RegionFamily, RegionGrid
 from flexmvm.studies.runner import Case
 from flexmvm.studies.search import Candidate
 

@@ -9,7 +9,7 @@ from flexmvm.metrics.ncc import Target
 from flexmvm.results.atomic import write_json_atomic
 from flexmvm.results.output import writing
 from flexmvm.studies.interface import write_interface_csv
-from flexmvm.studies.regions import front_points, write_region_csv
+from flexmvm.studies.region_families import front_points, write_region_csv
 from flexmvm.studies.report import write_ncc_csv
 
 __all__ = ["kind_name", "write_selection_files"]

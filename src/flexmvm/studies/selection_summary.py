@@ -2,7 +2,7 @@
 
 From the dispatch step's :class:`Sweep` (every evaluated row by case key, the runs computed
 and loaded, the winner over both kinds and every candidate's score) and the study's grid
-(studies.node_grid.NodeGrid or studies.regions.RegionGrid): the node kind's table sorted as
+(studies.node_grid.NodeGrid or studies.region_families.RegionGrid): the node kind's table sorted as
 ncc.csv, its winner (the smallest-DOF model reaching the target), the run counts, the failures
 and, with the interface kind, that kind's answer and the winner over both
 (studies/selection.py module doc lists the fields).
@@ -19,7 +19,7 @@ from flexmvm.studies.case_store import Case
 from flexmvm.studies.grid import case_key
 from flexmvm.studies.interface import interface_summary, is_interface_key
 from flexmvm.studies.node_grid import NodeGrid
-from flexmvm.studies.regions import RegionGrid, region_key, region_winner, row_order
+from flexmvm.studies.region_families import RegionGrid, region_key, region_winner, row_order
 from flexmvm.studies.report import failure_list, target_dict, winner_dict
 from flexmvm.studies.search import Candidate, FamilyKind, best_passing, kind_exact
 

@@ -19,7 +19,7 @@ from flexmvm.reduction.kinds.spec import (
     MasslessStatics,
     NodesAndModes,
 )
-from flexmvm.reduction.reference import ReferenceCondition
+from flexmvm.reduction.reference_condition import ReferenceCondition
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,7 @@ from flexmvm.fe.modes import constrained_modes
 from flexmvm.reduction.kinds.mvm import node_dofs
 from flexmvm.reduction.kinds.registry import ModelKind
 from flexmvm.reduction.kinds.spec import Basis, BasisRequest, ModesFirst
-from flexmvm.reduction.reference import ReferenceCondition
+from flexmvm.reduction.reference_condition import ReferenceCondition
 
 
 @dataclass(frozen=True)

@@ -13,7 +13,7 @@ from flexmvm.fe.modes import solver_pool, spd_solver
 from flexmvm.reduction.kinds.mvm import fixed_interface_modes, node_dofs
 from flexmvm.reduction.kinds.registry import ModelKind
 from flexmvm.reduction.kinds.spec import Basis, BasisRequest, ModesFirst
-from flexmvm.reduction.reference import ReferenceCondition
+from flexmvm.reduction.reference_condition import ReferenceCondition
 
 
 @dataclass(frozen=True)

@@ -41,7 +41,7 @@ from flexmvm.reduction.kinds.mvm import (
 )
 from flexmvm.reduction.kinds.registry import ModelKind
 from flexmvm.reduction.kinds.spec import Basis, BasisRequest, MasslessStatics
-from flexmvm.reduction.reference import ReferenceCondition
+from flexmvm.reduction.reference_condition import ReferenceCondition
 
 
 @dataclass(frozen=True)

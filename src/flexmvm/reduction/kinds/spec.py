@@ -15,7 +15,7 @@ import scipy.sparse as sp
 from flexmvm.fe.assembly import FEModel
 from flexmvm.reduction.interface import InterfaceSources, InterfaceSpec
 from flexmvm.reduction.kinds.registry import ModelKind, kind_spec
-from flexmvm.reduction.reference import ReferenceCondition
+from flexmvm.reduction.reference_condition import ReferenceCondition
 
 
 class MasslessStatics(Enum):

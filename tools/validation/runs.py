@@ -18,7 +18,7 @@ from pathlib import Path
 from flexmvm.scenarios import Scenario
 from flexmvm.scenarios.provenance import run_inputs, run_key
 from flexmvm.scenarios.stored_run import StoredRun, load_or_run
-from flexmvm.validation.paths import git_commit
+from tools.validation.paths import git_commit
 
 #: A stored case (scenarios.stored_run).
 Case = StoredRun

@@ -13,11 +13,11 @@ from flexmvm.errors import InputError
 from flexmvm.results.atomic import write_json_atomic
 from flexmvm.scenarios import load_scenario
 from flexmvm.scenarios.provenance import run_code_version
-from flexmvm.validation import acceptance
-from flexmvm.validation.cases import CASES, stored_cases
-from flexmvm.validation.paths import git_commit, scenario_path
-from flexmvm.validation.report import write_report_md
-from flexmvm.validation.runs import now
+from tools.validation import acceptance
+from tools.validation.cases import CASES, stored_cases
+from tools.validation.paths import git_commit, scenario_path, tool_version
+from tools.validation.report import write_report_md
+from tools.validation.runs import now
 
 
 def machine() -> str:
@@ -60,6 +60,7 @@ def run_validation(
     report["meta"] = {
         "commit": commit,
         "code_version": run_code_version(),
+        "tool_version": tool_version(),
         "date": now(),
         "machine": machine(),
     }

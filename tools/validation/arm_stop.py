@@ -21,8 +21,8 @@ from flexmvm.errors import InputError
 from flexmvm.metrics.ncc import ncc
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario
 from flexmvm.scenarios.compare import compare_runs
-from flexmvm.validation.paths import scenario_path
-from flexmvm.validation.runs import Case, case_meta, conservation, run_case
+from tools.validation.paths import scenario_path
+from tools.validation.runs import Case, case_meta, conservation, run_case
 
 #: The probe whose swing velocity (global x at the arm's free end) is compared.
 TIP = "tip"

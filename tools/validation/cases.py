@@ -36,9 +36,9 @@ from flexmvm.scenarios import mvm as mvm_model
 from flexmvm.scenarios.compare import compare_runs
 from flexmvm.theory.scenario import theory_histories
 from flexmvm.theory.wave import Rod1D, st_venant_force
-from flexmvm.validation.arm_stop import arm_stop_case
-from flexmvm.validation.paths import scenario_path
-from flexmvm.validation.runs import Case, case_meta, conservation, run_case, truncate
+from tools.validation.arm_stop import arm_stop_case
+from tools.validation.paths import scenario_path
+from tools.validation.runs import Case, case_meta, conservation, run_case, truncate
 
 #: The seed runs' settings (docs/validation.md): contact step, seed window, flat window, step
 #: convergence window [s]. The seed and flat windows are their scenario files' own (2 ms, 2 us

@@ -14,14 +14,14 @@ import numpy as np
 
 from flexmvm.errors import InputError
 from flexmvm.results.atomic import write_text_atomic
-from flexmvm.validation import acceptance as acc
-from flexmvm.validation.cases import DT, SHORT_FINE_MESH
+from tools.validation import acceptance as acc
+from tools.validation.cases import DT, SHORT_FINE_MESH
 
 
 def _template(name: str) -> Template:
     """templates/<name>.md without its surrounding newlines (sections are joined by one
     blank line)."""
-    text = resources.files("flexmvm.validation").joinpath("templates", f"{name}.md")
+    text = resources.files("tools.validation").joinpath("templates", f"{name}.md")
     return Template(text.read_text(encoding="utf-8").strip("\n"))
 
 
@@ -130,7 +130,7 @@ def _energy_sentence(seed: dict) -> str:
     if "t_end_s" not in seed:
         return (
             "Energy over the shipped 2 ms window: not in these stored numbers (1 ms runs, "
-            "before 2026-11-29); `flexmvm validate` adds it."
+            "before 2026-11-29); `python -m tools.validation` adds it."
         )
     bound = acc.SEED_ENERGY_BOUND
     met = acc.met(seed, "seed", "seed, energy over the shipped window")
@@ -417,7 +417,7 @@ def _generated_opening() -> str:
 
 def claim_report_md(path: Path, what: str | None = None) -> None:
     """InputError unless ``path`` may receive the report page: it does not exist, is empty, or
-    is a page flexmvm validate wrote (it opens with the generated header), the way ``run``
+    is a page this tool wrote (it opens with the generated header), the way ``run``
     claims its folder. ``what`` names the path in the message (default ``--md <path>``)."""
     path = Path(path)
     what = what or f"--md {path}"
@@ -432,7 +432,7 @@ def claim_report_md(path: Path, what: str | None = None) -> None:
         raise InputError(f"{what}: cannot be read ({exc.strerror or exc})") from None
     if head and not head.startswith(_generated_opening()):
         raise InputError(
-            f"{what}: holds a file flexmvm validate did not write (it does not open with the "
+            f"{what}: holds a file the validation did not write (it does not open with the "
             "generated header); expected a new or empty file, or an earlier report page "
             "(which is replaced): move it or give --md another path"
         )

@@ -5,7 +5,7 @@ selections (studies/selection.py).
 
 Centre of the balls: ``centre_m`` if given, else the body's model's own region ball centre
 (the scenario's ``region = { ball = ... }``), else the expected first contact point of the
-region estimate (studies/region.py). Every family's nodes and memory are checked before
+region estimate (studies/region_estimate.py). Every family's nodes and memory are checked before
 the reference runs: a region that selects no node or costs more than full FE
 (scenarios/cost.py, refused unless ``model.allow_costly``) is a one-line error naming it.
 
@@ -29,7 +29,7 @@ from flexmvm.errors import InputError, MeshError, SolverError
 from flexmvm.results.atomic import file_sha256, write_table_csv
 from flexmvm.scenarios import ModelKind, Scenario, mvm, scenario_from_dict
 from flexmvm.scenarios.guard import VALIDITY_KEYS
-from flexmvm.studies.reference import case_reference, scored_row
+from flexmvm.studies.reference_run import case_reference, scored_row
 from flexmvm.studies.runner import Case
 from flexmvm.studies.search import Candidate
 
@@ -130,7 +130,7 @@ def _centre(sc: Scenario, body: str, centre_m) -> tuple[float, float, float]:
     if region is not None and region.ball is not None:
         x, y, z = (float(a) for a in region.ball.centre_m)
         return x, y, z
-    from flexmvm.studies.region import estimate_region
+    from flexmvm.studies.region_estimate import estimate_region
 
     # the expected contact point only: the closing speed and curvature are not needed
     return estimate_region(sc, body, speed_mps=1.0, radius_m=1.0, modes=0).centre_m
