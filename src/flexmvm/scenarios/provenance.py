@@ -10,8 +10,9 @@ a script that builds its own scenarios (a benchmark study) keeps :func:`script_s
 the same code and libraries, the script's SHA-256 and its settings in place of the scenario;
 :func:`script_stamp_mismatch` checks it.
 
-The package source is :func:`run_code_version`: a hash of every source file of flexmvm but
-the validation package (flexmvm/validation/), whose edits change no run. The libraries are
+The package source is :func:`run_code_version`: a hash of every source file of flexmvm (the
+validation, which runs cases but changes none, is a repository tool: tools/validation/). The
+libraries are
 numpy, scipy and numba (LIBRARIES: a new BLAS kernel or a new compiled kernel can change the
 last bits of a history), scikit-fem (it assembles the mass and stiffness matrices) and gmsh
 (it writes the meshes of the parts made at run time: flexmvm.mesh.parts).
@@ -54,13 +55,12 @@ FORMAT = 4
 #: (gmsh).
 LIBRARIES = ("numpy", "scipy", "numba", "scikit-fem", "gmsh")
 
-#: Package files whose edits change no run (the validation package: cases, report, command).
-_NOT_RUN_CODE = ("validation", "__pycache__")
+#: Package entries that are not source
+_NOT_RUN_CODE = ("__pycache__",)
 
 
 def run_code_version() -> str:
-    """Hash (16 hex) of every package source file except the validation package: what
-    a run's numbers depend on."""
+    """Hash (16 hex) of every package source file: what a run's numbers depend on."""
     root = Path(flexmvm.__file__).parent
     names = tuple(
         sorted(

@@ -1,5 +1,5 @@
 """A run stored in a directory and reused while it is the same run: ``history.csv``,
-``summary.json`` and ``key.json`` (the validation report's cases, flexmvm.validation).
+``summary.json`` and ``key.json`` (the validation report's cases, tools/validation).
 
 key.json holds the key and stamp of the run (scenarios.provenance: package source,
 numpy/scipy/numba, resolved scenario, mesh files), ``outputs`` (history.csv's record,
