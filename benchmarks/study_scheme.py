@@ -21,8 +21,8 @@ import json
 import time
 from pathlib import Path
 
+from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import load_scenario
-from flexmvm.scenarios.run import run_scenario
 from flexmvm.studies.grid import mvm_scenario, parse_model, reference_scenario, seed_scheme
 from flexmvm.studies.reference import scored_row
 from flexmvm.validation.paths import git_commit

@@ -77,7 +77,7 @@ def _stored_case_problems(report: dict, section: str) -> list[str]:
     versions with scikit-fem and gmsh)."""
     from flexmvm.results.atomic import file_sha256
     from flexmvm.results.history import history_problem
-    from flexmvm.scenarios import provenance
+    from flexmvm.runs import provenance
     from flexmvm.validation.cases import case, stored_cases
 
     names = case(section).stored

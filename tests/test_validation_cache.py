@@ -9,10 +9,11 @@ from pathlib import Path
 
 import pytest
 
-import flexmvm.scenarios.run as run_module
+import flexmvm.runs.run as run_module
 from flexmvm import validation
 from flexmvm.errors import StaleDataWarning
-from flexmvm.scenarios import ModelConfig, load_scenario, provenance, scenario_from_dict
+from flexmvm.runs import provenance
+from flexmvm.scenarios import ModelConfig, load_scenario, scenario_from_dict
 
 TINY = Path(__file__).parent / "data" / "tiny_impact.toml"
 

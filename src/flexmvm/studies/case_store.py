@@ -19,7 +19,7 @@ from typing import Any
 
 from flexmvm.errors import InputError
 from flexmvm.results.atomic import canonical_json
-from flexmvm.scenarios.provenance import stamp_mismatch
+from flexmvm.runs.provenance import stamp_mismatch
 
 __all__ = [
     "CASES_DIR",

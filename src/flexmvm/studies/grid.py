@@ -18,7 +18,7 @@ from flexmvm.studies.runner import Case
 
 def rod_of(sc: Scenario, body: str):
     """The (cached) RodMesh of rod body ``body``; InputError if there is no such rod body."""
-    from flexmvm.scenarios.setup import default_setup
+    from flexmvm.assembly.build_cache import default_setup
 
     cfg = sc.body(body)
     if cfg.rod is None:

@@ -17,8 +17,8 @@ import numpy as np
 
 from flexmvm.errors import InputError
 from flexmvm.materials import Material
+from flexmvm.runs.guard import VALIDITY_KEYS, invalid_reason
 from flexmvm.scenarios import ModelKind, Scenario
-from flexmvm.scenarios.guard import VALIDITY_KEYS, invalid_reason
 from flexmvm.studies.case_store import Case
 from flexmvm.studies.report import failed_case_row, failure_list
 

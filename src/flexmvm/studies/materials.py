@@ -51,9 +51,9 @@ from flexmvm.errors import InputError, SolverError, announce_recompute
 from flexmvm.materials import ALUMINIUM, COPPER, PA6, TUNGSTEN, Material
 from flexmvm.results.atomic import file_sha256, write_json_atomic, write_table_csv
 from flexmvm.results.outdir import claim_study_dir
+from flexmvm.runs.guard import WARN_FRACTION
+from flexmvm.runs.provenance import stamp
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario, scenario_from_dict
-from flexmvm.scenarios.guard import WARN_FRACTION
-from flexmvm.scenarios.provenance import stamp
 from flexmvm.studies.grid import (
     SEED_SCHEME_NOTE,
     check_grid,

@@ -21,10 +21,10 @@ from flexmvm.errors import InputError, announce_recompute
 from flexmvm.results.atomic import canonical_json, file_sha256, write_json_atomic
 from flexmvm.results.history import history_problem, history_record, read_history, write_history
 from flexmvm.results.output import writing
+from flexmvm.runs.compare import compare_runs
+from flexmvm.runs.guard import validity_fields
+from flexmvm.runs.provenance import stamp, stamp_mismatch
 from flexmvm.scenarios import Scenario
-from flexmvm.scenarios.compare import compare_runs
-from flexmvm.scenarios.guard import validity_fields
-from flexmvm.scenarios.provenance import stamp, stamp_mismatch
 
 
 def _read_meta(meta: Path) -> dict | None:
@@ -78,7 +78,7 @@ def reference_history(
     the code and the file are the same; module doc). A stored reference that fails its check
     is recomputed and ``announce``d (one line). Returns (path of history.csv, True if it was
     computed now). InputError if the stored reference is of another study."""
-    from flexmvm.scenarios.run import run_scenario
+    from flexmvm.runs.run import run_scenario
     from flexmvm.studies.grid import reference_scenario
 
     ref_dir = Path(out_dir) / "reference"

@@ -56,9 +56,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexmvm.assembly.cost import BodyCost, reduced_cost
 from flexmvm.errors import InputError, MeshError
 from flexmvm.scenarios import Scenario
-from flexmvm.scenarios.cost import BodyCost, reduced_cost
 from flexmvm.studies.contact_point import equivalent_radius, facet_size, first_contact
 from flexmvm.studies.impact_estimate import (
     body_thickness,
@@ -259,7 +259,7 @@ def _sides(c, body: str) -> tuple[str, str, str]:
 def _facet_sets(cfg, pcfg, surface: str, other_surface: str, where: str):
     """(fe, facet set) of body cfg's ``surface`` and of the partner pcfg's ``other_surface``,
     from the setup cache's full-FE bodies; InputError for an unknown or empty surface."""
-    from flexmvm.scenarios.setup import default_setup
+    from flexmvm.assembly.build_cache import default_setup
 
     setup = default_setup()
     fe, pfe = setup.free_modes_source(cfg)[0], setup.free_modes_source(pcfg)[0]

@@ -27,8 +27,8 @@ from typing import Any
 
 from flexmvm.errors import InputError, MeshError, SolverError
 from flexmvm.results.atomic import file_sha256, write_table_csv
+from flexmvm.runs.guard import VALIDITY_KEYS
 from flexmvm.scenarios import ModelKind, Scenario, mvm, scenario_from_dict
-from flexmvm.scenarios.guard import VALIDITY_KEYS
 from flexmvm.studies.reference import case_reference, scored_row
 from flexmvm.studies.runner import Case
 from flexmvm.studies.search import Candidate
@@ -149,9 +149,9 @@ class RegionGrid:
         centre_m=None,
         kind: ModelKind = ModelKind.MVM,
     ) -> None:
-        from flexmvm.scenarios.cost import check_cost, reduced_cost
-        from flexmvm.scenarios.mesh_lookup import retained_nodes
-        from flexmvm.scenarios.setup import default_setup
+        from flexmvm.assembly.build_cache import default_setup
+        from flexmvm.assembly.cost import check_cost, reduced_cost
+        from flexmvm.assembly.mesh_lookup import retained_nodes
 
         self.families = sorted(set(families), key=lambda f: f.key)
         if not self.families:
@@ -241,9 +241,9 @@ def failed_region_row(case: Case, line: str) -> dict:
 def run_region_case(case: Case, reference: str | Path | None = None) -> dict:
     """One run of a region family's model against the stored reference history (as
     selection.run_selection_case)."""
+    from flexmvm.assembly.build_cache import default_setup
+    from flexmvm.runs.run import run_scenario
     from flexmvm.scenarios import RegionSpec
-    from flexmvm.scenarios.run import run_scenario
-    from flexmvm.scenarios.setup import default_setup
 
     p = case.params
     sc = scenario_from_dict(p["scenario"], source=f"case {case.key}")

@@ -19,8 +19,8 @@ import numpy as np
 
 from flexmvm.errors import InputError
 from flexmvm.metrics.ncc import ncc
+from flexmvm.runs.compare import compare_runs
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario
-from flexmvm.scenarios.compare import compare_runs
 from flexmvm.validation.paths import scenario_path
 from flexmvm.validation.runs import Case, case_meta, conservation, run_case
 

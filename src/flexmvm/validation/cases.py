@@ -31,9 +31,9 @@ import numpy as np
 
 from flexmvm.errors import InputError
 from flexmvm.materials import ALUMINIUM, BRASS
+from flexmvm.runs.compare import compare_runs
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario
 from flexmvm.scenarios import mvm as mvm_model
-from flexmvm.scenarios.compare import compare_runs
 from flexmvm.theory.scenario import theory_histories
 from flexmvm.theory.wave import Rod1D, st_venant_force
 from flexmvm.validation.arm_stop import arm_stop_case
@@ -263,7 +263,7 @@ def pendulum_case(out: Path, recompute: bool = False) -> dict:
     b1's start height), the impact phase against the seed case with the same models and
     scheme (the seed_mvm case: rod_impact.toml as shipped) aligned at first contact, the momenta
     after the separation against the rigid pendulum, the strings' drift."""
-    from flexmvm.scenarios.pendulum import impact_comparison
+    from flexmvm.runs.showcases.pendulum import impact_comparison
 
     sc = load_scenario(scenario_path("pendulum_release.toml"))
     c = run_case(out, "pendulum", sc, recompute)  # its summary's "pendulum": scenarios.run
@@ -312,7 +312,7 @@ def hertz_block_case(out: Path, recompute: bool = False) -> dict:
     as shipped: 0.2 ms) against Hertz with the block's recoil (scenarios.hertz_block): peak
     force and duration of the first contact, with the committed block (coarse) and one meshed
     finer at run time."""
-    from flexmvm.scenarios.hertz_block import (
+    from flexmvm.runs.showcases.hertz_block import (
         hertz_comparison,
         hertz_reference,
         sphere_block_scenario,

@@ -15,9 +15,9 @@ from __future__ import annotations
 import datetime as _dt
 from pathlib import Path
 
+from flexmvm.runs.provenance import run_inputs, run_key
+from flexmvm.runs.stored_run import StoredRun, load_or_run
 from flexmvm.scenarios import Scenario
-from flexmvm.scenarios.provenance import run_inputs, run_key
-from flexmvm.scenarios.stored_run import StoredRun, load_or_run
 from flexmvm.validation.paths import git_commit
 
 #: A stored case (scenarios.stored_run).

@@ -11,8 +11,8 @@ from pathlib import Path
 
 from flexmvm.errors import InputError
 from flexmvm.results.atomic import write_json_atomic
+from flexmvm.runs.provenance import run_code_version
 from flexmvm.scenarios import load_scenario
-from flexmvm.scenarios.provenance import run_code_version
 from flexmvm.validation import acceptance
 from flexmvm.validation.cases import CASES, stored_cases
 from flexmvm.validation.paths import git_commit, scenario_path

@@ -1,8 +1,8 @@
 """Turn a validated Scenario into a System, initial states, probes and a time grid: a plain
-function of the Scenario and of the setup cache it builds through (scenarios/setup.py: meshes,
+function of the Scenario and of the setup cache it builds through (assembly/build_cache.py: meshes,
 FE models, bases and body parts, cached per process and on disk). Mesh lookups (retained
-nodes, contact surfaces, joint points): scenarios/mesh_lookup.py; solver choices (elimination
-orders): scenarios/solver_choice.py.
+nodes, contact surfaces, joint points): assembly/mesh_lookup.py; solver choices (elimination
+orders): assembly/solver_choice.py.
 """
 
 from __future__ import annotations
@@ -11,6 +11,31 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexmvm.assembly.body_reference import reference_label
+from flexmvm.assembly.build_cache import SetupCache, default_setup, timed
+from flexmvm.assembly.cache_keys import ContactMass, MeshKey, mesh_key, mesh_source
+from flexmvm.assembly.cost import cached_full_factor, check_cost, reduced_cost, step_sizes
+from flexmvm.assembly.drive_build import (
+    joint_label,
+    joint_name,
+    prescribed_joints,
+    revolute_joints,
+)
+from flexmvm.assembly.initial_velocities import check_joint_velocities, with_rigid_motions
+from flexmvm.assembly.load_build import build_loads
+from flexmvm.assembly.mesh_lookup import (
+    body_point,
+    check_contact_surfaces,
+    contact_nodes,
+    contact_surfaces,
+    nearest_node,
+    retained_nodes,
+)
+from flexmvm.assembly.plastic_parts import plastic_parts
+from flexmvm.assembly.sag import quasi_static_sag
+from flexmvm.assembly.solver_choice import with_elimination_order
+from flexmvm.assembly.stiffened_body import stiffened
+from flexmvm.assembly.supports import bedded_key, clamp_label, support_joints
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.bodies.build import ModelKind, body_from_parts, rigid_body_from_fe
 from flexmvm.constraints.joints import (
@@ -32,34 +57,10 @@ from flexmvm.integrate.system import System
 from flexmvm.materials import Material
 from flexmvm.mesh.mesh import Mesh
 from flexmvm.mesh.point_location import tet_weights
-from flexmvm.mesh.rod import RodMesh
+from flexmvm.mesh.rod import RodMesh, RodSpec
 from flexmvm.reduction.interface import Patch, contact_patch, patch_nodes
 from flexmvm.reduction.kinds import kind_spec
-from flexmvm.scenarios.body_reference import reference_label
-from flexmvm.scenarios.cache_keys import ContactMass, mesh_key, mesh_source
-from flexmvm.scenarios.cost import cached_full_factor, check_cost, reduced_cost, step_sizes
-from flexmvm.scenarios.drive_build import (
-    joint_label,
-    joint_name,
-    prescribed_joints,
-    revolute_joints,
-)
-from flexmvm.scenarios.initial_motion import check_joint_velocities, with_rigid_motions
-from flexmvm.scenarios.load_build import build_loads
-from flexmvm.scenarios.mesh_lookup import (
-    body_point,
-    check_contact_surfaces,
-    contact_nodes,
-    contact_surfaces,
-    nearest_node,
-    retained_nodes,
-)
-from flexmvm.scenarios.plasticity_schema import plastic_parts, refuse_dynamic
-from flexmvm.scenarios.sag import quasi_static_sag
-from flexmvm.scenarios.setup import SetupCache, default_setup, timed
-from flexmvm.scenarios.solver_choice import with_elimination_order
-from flexmvm.scenarios.stiffening_schema import stiffened
-from flexmvm.scenarios.supports import bedded_key, clamp_label, support_joints
+from flexmvm.scenarios.plasticity_schema import refuse_dynamic
 from flexmvm.setup_cache.ring_parts import cached_ring_parts
 
 #: the kinds whose modes are fixed-interface (Craig-Bampton) modes: the truncation guard's
@@ -80,7 +81,7 @@ class BodyInfo:
     n_retained_nodes: int
     n_modes: int
     rod: RodMesh | None
-    # the validity guard (scenarios/guard.py): nodes where the basis leaves a contact free
+    # the validity guard (runs/guard.py): nodes where the basis leaves a contact free
     # (MVM kinds: the retained nodes; interface: the patch surface's nodes within the largest
     # patch radius); None: not guarded (full FE, modal, rigid). patch: the interface kind's
     # expected contact point.
@@ -113,16 +114,17 @@ def build_body(
     """The body of ``cfg``; ``massless``: its contact nodes whose mass is redistributed
     (retained ones only for the MVM kinds, none for a modal or rigid model); ``surfaces``: its
     contact surfaces, which an automatic reference keeps away from; ``supports``: the
-    scenario's, of which a clamp of this body replaces its reference (scenarios.supports). A
+    scenario's, of which a clamp of this body replaces its reference (assembly.supports). A
     rigid body has no reference condition (nothing to support: no elastic coordinates).
-    ``sizes``: the run's step sizes (scenarios.cost.step_sizes), for its cost guard.
+    ``sizes``: the run's step sizes (assembly.cost.step_sizes), for its cost guard.
     Meshes, FE models, bases and body parts come through ``setup``."""
     where = f"bodies[{cfg.name}]"
     material = cfg.material_obj()
-    key = mesh_key(cfg)
-    rod = setup.rod_mesh(key) if cfg.rod is not None else None
-    mesh = setup.mesh(key)
-    key = fe_key = bedded_key(key, cfg, supports)  # K with the body's spring beds
+    plain = mesh_key(cfg)
+    rod = setup.rod_mesh(plain) if isinstance(plain, RodSpec) else None  # a rod's key: its spec
+    mesh = setup.mesh(plain)
+    fe_key = bedded_key(plain, cfg, supports)  # K with the body's spring beds
+    key: MeshKey = fe_key
     kind = cfg.model.kind
     spec = kind_spec(kind)
     if not spec.has_basis:
@@ -139,9 +141,9 @@ def build_body(
     if massless is not None and massless.size and (spec.nodal or spec.retains_nodes):
         nodes = massless if spec.nodal else np.intersect1d(massless, retained)
         if nodes.size:
-            key = ContactMass(key, tuple(int(i) for i in nodes))
+            key = ContactMass(fe_key, tuple(int(i) for i in nodes))
     columns = spec.cost_columns(len(retained), modes)
-    if columns is not None:  # scenarios.cost: the full-FE factor's counts through the cache
+    if columns is not None:  # assembly.cost: the full-FE factor's counts through the cache
         fixed = setup.reference_condition(key, mesh, ref_set).fixed_dofs
         load_fe = lambda: setup.fe_model(fe_key, material)
         full = cached_full_factor(mesh_source(fe_key), fixed, load_fe)
