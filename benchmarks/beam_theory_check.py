@@ -38,7 +38,7 @@ import numpy as np
 from scipy.integrate import cumulative_trapezoid
 
 from flexmvm.metrics.ncc import contact_intervals
-from flexmvm.scenarios.compare import compare_runs
+from flexmvm.runs.compare import compare_runs
 from flexmvm.scenarios.load import load_scenario
 from flexmvm.theory.sphere_beam import case_histories, sphere_beam_case
 
@@ -55,8 +55,8 @@ def read_run(run_dir: Path):
 def run_models(sc) -> tuple[tuple, tuple, dict]:
     """The scenario's full FE and MVM runs in this process: (t, force, probes) of each and
     their provenance stamps."""
-    from flexmvm.scenarios.provenance import stamp
-    from flexmvm.scenarios.run import run_scenario
+    from flexmvm.runs.provenance import stamp
+    from flexmvm.runs.run import run_scenario
 
     out, stamps = [], {}
     for kind in ("full", "mvm"):
@@ -73,7 +73,7 @@ def fe_bending_ratio(sc, case) -> tuple[float, float]:
     """(f_FE, f_T) [Hz]: the first free-free bending frequency in the impact plane of the FE
     beam (the mode whose displacement lies most along the impact normal) and of the
     Timoshenko beam."""
-    from flexmvm.scenarios.setup import default_setup
+    from flexmvm.assembly.build_cache import default_setup
 
     cfg = sc.body(case.beam)
     _, source = default_setup().free_modes_source(cfg)

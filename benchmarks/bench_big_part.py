@@ -86,8 +86,8 @@ def child(kind: str, radius_m: float, t_end: float, out: Path) -> None:
     import numpy as np
 
     import flexmvm as fm
+    from flexmvm.assembly.build import build_scenario
     from flexmvm.integrate.driver import simulate
-    from flexmvm.scenarios.build import build_scenario
 
     logging.basicConfig(level=logging.INFO, format="    %(message)s", stream=sys.stderr)
     _sample_rss()

@@ -16,8 +16,8 @@ import time
 from pathlib import Path
 
 from flexmvm.integrate import energy_ledger
+from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import load_scenario
-from flexmvm.scenarios.run import run_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -10,9 +10,9 @@ from __future__ import annotations
 
 import argparse
 
+from flexmvm.runs.compare import compare_runs
+from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import load_scenario
-from flexmvm.scenarios.compare import compare_runs
-from flexmvm.scenarios.run import run_scenario
 
 
 def main() -> None:

@@ -49,8 +49,8 @@ def child(kind: str, radius_m: float, modes: int, t_end: float, out: Path) -> No
     import numpy as np
 
     import flexmvm as fm
+    from flexmvm.assembly.build import build_scenario
     from flexmvm.integrate.driver import simulate
-    from flexmvm.scenarios.build import build_scenario
 
     sc = fm.load_scenario(SCENARIO).with_time(t_end_s=t_end)
     if kind != "full":

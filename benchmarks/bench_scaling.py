@@ -90,8 +90,8 @@ def meshes(work: Path, far_mm: float) -> tuple[Path, Path]:
 
 def child(kind: str, plate: str, ball: str, radius_m: float, steps: int, out: Path) -> None:
     import flexmvm as fm
+    from flexmvm.assembly.build import build_scenario
     from flexmvm.integrate.driver import simulate
-    from flexmvm.scenarios.build import build_scenario
 
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / "plate.toml"

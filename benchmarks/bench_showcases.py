@@ -15,8 +15,8 @@ import platform
 import subprocess
 
 from flexmvm.metrics.ncc import ncc
+from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import load_scenario
-from flexmvm.scenarios.run import run_scenario
 
 SHOWCASES = ("scenarios/sphere_block.toml", "scenarios/sphere_beam.toml")
 

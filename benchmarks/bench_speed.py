@@ -48,7 +48,7 @@ SCENARIO = ROOT / "scenarios" / "rod_impact.toml"
 _SIM = r"""
 import json, sys, time
 from flexmvm.scenarios import load_scenario
-from flexmvm.scenarios.build import build_scenario
+from flexmvm.assembly.build import build_scenario
 from flexmvm.integrate.driver import simulate
 path, model, t_end = sys.argv[1], sys.argv[2], float(sys.argv[3])
 sc = load_scenario(path).with_overrides(model=None if model == "scenario" else model,

@@ -10,7 +10,7 @@ model kind for every body (full, mvm, mvm-seed, ...) or one per body, "b1=mvm,b2
 (redistribute_mass); SCENARIO: default scenarios/rod_impact_short.toml (the seed case:
 scenarios/rod_impact.toml). Writes a JSON line of measures:
 - energy: (E - E0) / E0 at the end (t_end, after separation) and the largest |E - E0| / E0;
-- ncc / peak_err: force history against `flexmvm theory` (scenarios.compare.compare_runs);
+- ncc / peak_err: force history against `flexmvm theory` (runs.compare.compare_runs);
 - pen: the run's max_penetration_m (both directions, after every step);
 - ring: the mean over the steps of the contact interval (k-1, k, k+1 all at h) and over the
   contact nodes (slave nodes that carried an impulse at any step, and the nodes of their
@@ -39,11 +39,11 @@ from pathlib import Path
 import numpy as np
 
 import flexmvm as fm
+from flexmvm.assembly.build import build_scenario
 from flexmvm.contact.nodes import ContactNodes
 from flexmvm.integrate import driver
 from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
-from flexmvm.scenarios.build import build_scenario
-from flexmvm.scenarios.compare import compare_runs
+from flexmvm.runs.compare import compare_runs
 from flexmvm.theory.scenario import theory_histories
 
 SHORT = "scenarios/rod_impact_short.toml"

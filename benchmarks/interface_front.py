@@ -9,7 +9,7 @@ stores it (DIR/reference/history.csv), so a selection study with --out DIR reuse
 Each candidate b2 model is a name (model_of: 'mvm:1-3:25', 'interface:0.46:10' = one patch
 of radius 0.46 mm + 10 modes by participation, 'interface:0.2,0.46,0.9:20:frequency', or an
 alias of ALIASES, e.g. p1+10); a finished one is kept in
-DIR/front.json with its provenance stamp (flexmvm.scenarios.provenance: package source,
+DIR/front.json with its provenance stamp (flexmvm.runs.provenance: package source,
 numpy/scipy/numba, resolved scenario, mesh files) and the reference's SHA-256, and not rerun
 while both are the same; a row of another code version or reference is rerun, said in one
 line. Prints and writes (DIR/front.csv) DOF (elastic coordinates of
@@ -29,9 +29,9 @@ from pathlib import Path
 import flexmvm as fm
 from flexmvm.results.atomic import file_sha256
 from flexmvm.results.history import read_history
-from flexmvm.scenarios.compare import compare_runs
-from flexmvm.scenarios.provenance import stamp, stamp_mismatch
-from flexmvm.scenarios.run import run_scenario
+from flexmvm.runs.compare import compare_runs
+from flexmvm.runs.provenance import stamp, stamp_mismatch
+from flexmvm.runs.run import run_scenario
 from flexmvm.studies.grid import study_scenario
 from flexmvm.studies.reference_run import reference_history
 

@@ -32,9 +32,9 @@ from pathlib import Path
 from flexmvm.materials import PA6
 from flexmvm.results.atomic import write_json_atomic
 from flexmvm.results.history import read_history
+from flexmvm.runs.compare import compare_runs
+from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import interface, load_scenario, scenario_from_dict
-from flexmvm.scenarios.compare import compare_runs
-from flexmvm.scenarios.run import run_scenario
 from flexmvm.studies.grid import mvm_scenario, study_scenario
 from flexmvm.studies.materials import material_scenario
 from flexmvm.studies.reference_run import reference_history
@@ -61,7 +61,7 @@ def row_masses() -> dict:
     import numpy as np
     import scipy.sparse.linalg as sla
 
-    from flexmvm.scenarios.build import build_scenario
+    from flexmvm.assembly.build import build_scenario
     from flexmvm.studies.grid import reference_scenario, rod_of
 
     sc = load_scenario(ROOT / "scenarios" / "rod_impact.toml")

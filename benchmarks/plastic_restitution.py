@@ -8,7 +8,7 @@ docs/plasticity.md "Restitution against Thornton (1997)").
 --from-csv runs nothing: it reads a stored study (the CSV and the JSON beside it), adds the
 published-law columns below to its rows and redraws the figure; the FE numbers are kept. It
 refuses, in one line, a study whose provenance stamp (the JSON's meta "provenance":
-scenarios.provenance.script_stamp of this script, its setup and speeds: code, libraries
+runs.provenance.script_stamp of this script, its setup and speeds: code, libraries
 with scikit-fem and gmsh, this script's SHA-256) is not the one this code would write.
 
 Speeds are v / v_y, v_y = theory.thornton.yield_velocity (p_y = 1.61 Y, m* the reduced mass
@@ -54,6 +54,7 @@ from pathlib import Path
 
 import numpy as np
 
+from flexmvm.assembly.build import build_scenario
 from flexmvm.integrate.driver import simulate
 from flexmvm.mesh.gmsh_session import Refinement
 from flexmvm.mesh.io import read_mesh
@@ -62,11 +63,10 @@ from flexmvm.mesh.quality import mesh_volume
 from flexmvm.plasticity.body import PlasticBody
 from flexmvm.plasticity.material import J2Plasticity
 from flexmvm.plasticity.return_mapping import von_mises
-from flexmvm.scenarios.build import build_scenario
-from flexmvm.scenarios.hertz_block import SPHERE_BLOCK
+from flexmvm.runs.plastic_summary import plastic_summary
+from flexmvm.runs.provenance import script_stamp, script_stamp_mismatch
+from flexmvm.runs.showcases.hertz_block import SPHERE_BLOCK
 from flexmvm.scenarios.load import scenario_from_dict
-from flexmvm.scenarios.plastic_summary import plastic_summary
-from flexmvm.scenarios.provenance import script_stamp, script_stamp_mismatch
 from flexmvm.theory import thornton
 from flexmvm.theory.hertz import hertz_impact
 from flexmvm.theory.restitution_fits import (

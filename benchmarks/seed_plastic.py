@@ -18,7 +18,7 @@ rod_impact_short_plastic.toml). Runs, one after another in this process:
 
 --reuse OUT0 takes the elastic and plastic runs of an earlier OUT0 (their rows from its JSON,
 their curves from its .npz files) and runs only the MVM forms; it refuses, in one line, a row
-whose provenance stamp (scenarios.provenance.stamp: code, libraries, resolved scenario, mesh
+whose provenance stamp (runs.provenance.stamp: code, libraries, resolved scenario, mesh
 files) is not the stamp of the run it stands for here.
 
 ``--mvm model`` is BODY with the scenario's own model table as kind mvm (its region and modes:
@@ -29,7 +29,7 @@ contact (v0 - J / m1: momentum, rigid-body part), the coefficient of restitution
 e = J / (m* v0) - 1 (m* = m1 m2 / (m1 + m2): the rods' centres of mass), per plastic body its
 plastic work, permanent indentation, peak equivalent plastic strain and the retained-region
 guard; every run against the elastic one and the MVM runs against the plastic one (force NCC
-over the contact window, peak / impulse / duration errors: scenarios.compare.compare_runs),
+over the contact window, peak / impulse / duration errors: runs.compare.compare_runs),
 and against the 1D wave-Hertz theory (elastic; `flexmvm theory`). Printed as a table; OUT gets
 seed_plastic.json (all numbers), each run's curves (LABEL.npz) and seed_plastic.png (the seed's
 fig. 5 layout: contact force, and the axial velocities of BODY's impact end and free end;
@@ -48,10 +48,10 @@ import numpy as np
 
 from flexmvm.errors import InputError, SimulationFailed
 from flexmvm.materials import Material
+from flexmvm.runs.compare import compare_runs
+from flexmvm.runs.provenance import stamp, stamp_mismatch
+from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import ModelConfig, load_scenario
-from flexmvm.scenarios.compare import compare_runs
-from flexmvm.scenarios.provenance import stamp, stamp_mismatch
-from flexmvm.scenarios.run import run_scenario
 from flexmvm.theory.scenario import theory_histories
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -104,7 +104,7 @@ def _row(label: str, run, sc, refs: dict) -> dict:
 def reused_rows(record: Path, scenarios: dict) -> list[dict]:
     """The rows of a stored seed_plastic.json named in ``scenarios`` ({run label: the scenario
     it stands for now}), each checked against that scenario's provenance stamp; SystemExit with
-    one line naming the run and what differs (scenarios.provenance.stamp_mismatch) if any
+    one line naming the run and what differs (runs.provenance.stamp_mismatch) if any
     row is not the same run."""
     rows = [r for r in json.loads(record.read_text())["rows"] if r["run"] in scenarios]
     for row in rows:

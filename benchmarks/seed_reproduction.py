@@ -9,7 +9,7 @@
 SCENARIO defaults to scenarios/rod_impact_seed_mesh.toml. One reference run (BODY full FE, the
 other bodies as --other says), then one run per model of BODY: those of --models and the grid
 (every kind x layers x laps x modes). Each is compared with the reference (force NCC, peak,
-impulse and duration errors: scenarios.compare.compare_runs) and with the 1D wave-Hertz theory
+impulse and duration errors: runs.compare.compare_runs) and with the 1D wave-Hertz theory
 of the scenario (flexmvm theory); the reference too. Printed as a table and written to --json
 (numbers, settings, the git commit of the code). The grids of one kind are also
 `flexmvm select --kind K` and `flexmvm study materials --kind K` (Dask, resumable); this script
@@ -24,9 +24,9 @@ import subprocess
 import time
 from pathlib import Path
 
+from flexmvm.runs.compare import compare_runs
+from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import ModelConfig, full, load_scenario
-from flexmvm.scenarios.compare import compare_runs
-from flexmvm.scenarios.run import run_scenario
 from flexmvm.studies.grid import study_scenario
 from flexmvm.theory.scenario import theory_histories
 

@@ -30,12 +30,12 @@ from pathlib import Path
 import numpy as np
 import scipy.sparse as sp
 
+from flexmvm.assembly.build_cache import default_setup
 from flexmvm.fe.assembly import assemble
 from flexmvm.fe.modes import factor
 from flexmvm.reduction.basis import BasisKind, build_basis
 from flexmvm.reduction.rod_reference import rod_reference
 from flexmvm.scenarios import load_scenario
-from flexmvm.scenarios.setup import default_setup
 
 ROOT = Path(__file__).resolve().parents[1]
 MESHES = {

@@ -28,8 +28,8 @@ from pathlib import Path
 import numpy as np
 
 from flexmvm.integrate import theta as theta_module
+from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import load_scenario
-from flexmvm.scenarios.run import run_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 SHIPPED_AT = theta_module.ThetaRule.at

@@ -54,8 +54,8 @@ STRIKER, TARGET = "b1", "b2"  # the brass striker, the aluminium rod
 
 
 def _built(model: str, t_end: float, scenario: Path):
+    from flexmvm.assembly.build import build_scenario
     from flexmvm.scenarios import load_scenario
-    from flexmvm.scenarios.build import build_scenario
 
     sc = load_scenario(scenario).with_overrides(model=model, t_end_s=t_end, dt_s=None)
     return build_scenario(sc)

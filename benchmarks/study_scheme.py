@@ -22,8 +22,8 @@ import sys
 import time
 from pathlib import Path
 
+from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import load_scenario
-from flexmvm.scenarios.run import run_scenario
 from flexmvm.studies.grid import mvm_scenario, parse_model, reference_scenario, seed_scheme
 from flexmvm.studies.reference_run import scored_row
 

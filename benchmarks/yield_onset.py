@@ -33,7 +33,7 @@ equivalent plastic strain.
 
 Writes OUT/yield_onset.json (one row per run) and prints the table; each run's CPU time
 (process time) is in its row. One run after another: the machine is shared. Each row keeps its
-provenance stamp (scenarios.provenance.script_stamp of this script and plastic_restitution.py,
+provenance stamp (runs.provenance.script_stamp of this script and plastic_restitution.py,
 its case and speed: code, libraries with scikit-fem and gmsh); rows are appended to an
 existing record only if every row in it is stamped by this code (else one line and exit:
 rows of two code versions are not one table).
@@ -50,6 +50,7 @@ from pathlib import Path
 import numpy as np
 from plastic_restitution import scenario as restitution_scenario
 
+from flexmvm.assembly.build import build_scenario
 from flexmvm.integrate.driver import simulate
 from flexmvm.integrate.theta import theta_for_damping_time
 from flexmvm.mesh.gmsh_session import Refinement
@@ -59,10 +60,9 @@ from flexmvm.mesh.quality import mesh_volume
 from flexmvm.plasticity.body import PlasticBody
 from flexmvm.plasticity.material import J2Plasticity
 from flexmvm.plasticity.return_mapping import von_mises
-from flexmvm.scenarios.build import build_scenario
-from flexmvm.scenarios.hertz_block import SPHERE_BLOCK
+from flexmvm.runs.provenance import script_stamp, script_stamp_mismatch
+from flexmvm.runs.showcases.hertz_block import SPHERE_BLOCK
 from flexmvm.scenarios.load import scenario_from_dict
-from flexmvm.scenarios.provenance import script_stamp, script_stamp_mismatch
 from flexmvm.theory.hertz import hertz_impact
 from flexmvm.theory.hertz_yield import yield_onset
 

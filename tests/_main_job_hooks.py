@@ -1,4 +1,4 @@
-"""Replacements of flexmvm.scenarios.main_job._run_and_write for tests/test_cli_failures.py, at
+"""Replacements of flexmvm.runs.main_job._run_and_write for tests/test_cli_failures.py, at
 module level so the main job's worker processes (spawned) can import them."""
 
 from __future__ import annotations
@@ -8,7 +8,7 @@ import time
 from pathlib import Path
 
 from flexmvm.errors import SolverError
-from flexmvm.scenarios import main_job
+from flexmvm.runs import main_job
 
 _REAL = main_job._run_and_write
 

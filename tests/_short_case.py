@@ -16,10 +16,10 @@ from pathlib import Path
 import numpy as np
 from _recording import simulate_recording
 
+from flexmvm.assembly.build import build_scenario
 from flexmvm.contact.nodes import ContactNodes
+from flexmvm.runs.run import ScenarioRun, summarize
 from flexmvm.scenarios import load_scenario
-from flexmvm.scenarios.build import build_scenario
-from flexmvm.scenarios.run import ScenarioRun, summarize
 from flexmvm.studies.grid import seed_scheme
 
 SHORT = Path(__file__).parents[1] / "scenarios" / "rod_impact_short.toml"

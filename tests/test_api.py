@@ -150,7 +150,7 @@ def test_compare_takes_runs_results_and_tuples(tiny_run):
 def test_caches_can_be_cleared_and_bounded():
     """fm.set_cache_sizes bounds the caches of the process-wide setup cache that fm.run builds
     through, fm.clear_caches empties them; a bad name or bound is one InputError line."""
-    from flexmvm.scenarios.setup import default_setup
+    from flexmvm.assembly.build_cache import default_setup
 
     caches = default_setup().caches
     try:

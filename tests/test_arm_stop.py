@@ -37,7 +37,7 @@ from flexmvm.mesh import parts
 
 # the coarse test arm's full-FE body (1,194 DOF) is as small as its reduced one: the
 # reduced-cost guard's warning is expected here
-pytestmark = pytest.mark.filterwarnings("ignore::flexmvm.scenarios.cost.ReducedCostWarning")
+pytestmark = pytest.mark.filterwarnings("ignore::flexmvm.assembly.cost.ReducedCostWarning")
 
 ARM_X = 0.270  # struck point's distance from the pivot [m]
 T_SPIN = 2.0e-3  # the motor's pulse [s]
@@ -279,8 +279,8 @@ def test_frame_block_is_the_mass_matrix_of_its_configuration(runs):
 def test_node_set_joint_errors_are_one_line(meshes, joint, message):
     """node_set stands for point_m on fixed, spherical and revolute joints only, never
     beside it, and names a set the body has: each a one-line error naming the key."""
+    from flexmvm.assembly.build import build_scenario
     from flexmvm.errors import InputError
-    from flexmvm.scenarios.build import build_scenario
 
     data = _data(meshes, {"kind": "full"})
     data["joints"][0] = {"body": "arm", **joint}

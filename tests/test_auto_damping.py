@@ -21,10 +21,10 @@ import pytest
 from test_cli_failures import RUN_FAST, TINY, _in_process
 
 from flexmvm.integrate.theta import AUTO_WINDOW_LOSS, auto_damping_time
-from flexmvm.scenarios.hertz_block import hertz_reference
+from flexmvm.runs.run import run_scenario
+from flexmvm.runs.showcases.hertz_block import hertz_reference
 from flexmvm.scenarios.load import load_scenario, scenario_from_dict
 from flexmvm.scenarios.problems import ScenarioError
-from flexmvm.scenarios.run import run_scenario
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
 
@@ -129,7 +129,7 @@ def test_the_command_line_prints_what_the_damping_took(capsys, tmp_path):
 def test_a_costly_damping_is_said_to_be_the_schemes():
     """The plate of issue 51 (0.204 of 2.013 mJ at 12.5 us): the line names the share and
     points to "auto"; a cheap one (the tiny case's 3.5e-5) does not."""
-    from flexmvm.scenarios.run import numerical_dissipation_line
+    from flexmvm.runs.run import numerical_dissipation_line
 
     plate = {
         "numerical_dissipation_J": 0.204e-3,

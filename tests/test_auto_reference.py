@@ -1,4 +1,4 @@
-"""The reference condition of mesh bodies: "auto" (scenarios/body_reference.py,
+"""The reference condition of mesh bodies: "auto" (assembly/body_reference.py,
 reduction.reference_condition.far_reference) when a mesh_file body names none, none for rigid bodies,
 end_b for rods; on the shipped sphere_beam scenario (its meshes are stored, no gmsh needed)."""
 
@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from flexmvm.assembly.build import build_scenario
 from flexmvm.errors import InputError
 from flexmvm.scenarios import load_scenario, scenario_from_dict
-from flexmvm.scenarios.build import build_scenario
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
 
@@ -93,11 +93,11 @@ def test_sphere_scenarios_start(name, model):
     the rest is not the Newton tolerance's) and no node
     penetrates more than 1 um (the velocity law pushes back 0.2 of a penetration per step).
     The MVM beam (471 DOF, ~57 MB of dense matrices against full FE's ~65 MB with its
-    factors, and faster a step: scenarios.cost) builds without a ReducedCostWarning."""
+    factors, and faster a step: assembly.cost) builds without a ReducedCostWarning."""
     import warnings
 
-    from flexmvm.scenarios.cost import ReducedCostWarning
-    from flexmvm.scenarios.run import run_scenario
+    from flexmvm.assembly.cost import ReducedCostWarning
+    from flexmvm.runs.run import run_scenario
 
     sc = load_scenario(SCENARIOS / f"{name}.toml").with_overrides(model=model, t_end_s=10e-6)
     with warnings.catch_warnings():

@@ -17,11 +17,11 @@ import scipy.sparse as sp
 pytest.importorskip("gmsh")
 
 import flexmvm as fm
+from flexmvm.assembly import build_cache as scenario_setup
+from flexmvm.assembly.build import build_scenario
+from flexmvm.assembly.build_cache import SetupCache
 from flexmvm.bodies import ring_body
 from flexmvm.integrate.driver import simulate
-from flexmvm.scenarios import setup as scenario_setup
-from flexmvm.scenarios.build import build_scenario
-from flexmvm.scenarios.setup import SetupCache
 
 ROOT = Path(__file__).resolve().parents[1]
 

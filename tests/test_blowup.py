@@ -1,4 +1,4 @@
-"""A run that blew up fails instead of reporting success (scenarios/blowup.py; issue "Numbers a
+"""A run that blew up fails instead of reporting success (runs/blowup.py; issue "Numbers a
 user can trust, part three", item 8): a penetration beyond a share of the penetrated body's
 thinnest extent, or an energy gain beyond a share of its start, ends the run with status
 "failed", exit 2 and its histories written, in one line naming the node, the bodies, the
@@ -17,8 +17,8 @@ from test_cli_failures import RUN_FAST, TINY, _in_process, _one_line
 
 import flexmvm as fm
 from flexmvm.errors import SimulationFailed
-from flexmvm.scenarios import blowup
-from flexmvm.scenarios.run import run_scenario
+from flexmvm.runs import blowup
+from flexmvm.runs.run import run_scenario
 
 
 def test_a_penetration_beyond_the_bound_fails_the_run(monkeypatch):

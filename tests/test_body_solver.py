@@ -218,7 +218,7 @@ def test_a_deferred_refresh_solves_as_an_immediate_one(sparse):
 
 
 def test_an_order_found_absent_is_not_sought_again(monkeypatch):
-    """A body whose elimination order was looked for and none exists (scenarios.solver_choice stores
+    """A body whose elimination order was looked for and none exists (assembly.solver_choice stores
     an empty order) is factored in SuperLU's minimum degree without a second search; a body
     with no order at all (None, built through the API) gets one searched by the solver."""
     import flexmvm.integrate.body_solver as bs

@@ -12,10 +12,10 @@ from pathlib import Path
 
 import numpy as np
 
+from flexmvm.assembly.build import build_scenario
 from flexmvm.contact.pairs import PENETRATION_RECOVERY
 from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
 from flexmvm.scenarios import load_scenario, scenario_from_dict
-from flexmvm.scenarios.build import build_scenario
 
 CASE = Path(__file__).parent / "data" / "short_flat_impact.toml"
 N_STEPS = 160  # 40 us: the contact of these rods lasts ~20 us (2 L / c of the brass rod)

@@ -322,7 +322,7 @@ def test_reference_failure_keeps_the_scenarios_run(tmp_path, capsys, monkeypatch
     run is written all the same (issue 48: a failing reference never hides it), its summary's
     failures names the reference; the one-line error names the reference; no temporary
     directory is left beside DIR."""
-    from flexmvm.scenarios import main_job
+    from flexmvm.runs import main_job
 
     real = main_job._run_and_write
 
@@ -353,7 +353,7 @@ def test_reference_failure_in_the_second_process(tmp_path):
     script = (
         f"import sys; sys.path.insert(0, {str(Path(__file__).parent)!r})\n"
         "import _main_job_hooks\n"
-        "from flexmvm.scenarios import main_job\n"
+        "from flexmvm.runs import main_job\n"
         "main_job._run_and_write = _main_job_hooks.reference_fails\n"
         "from flexmvm.cli import main as cli_main\n"
         f"cli_main.main({argv!r})\n"

@@ -18,11 +18,11 @@ import pytest
 import scipy.linalg as sla
 import scipy.sparse as sp
 
+from flexmvm.assembly.build import build_scenario
 from flexmvm.integrate import dense_solve
 from flexmvm.integrate.driver import simulate
 from flexmvm.integrate.massless import MasslessCoordinates, csr_times
 from flexmvm.scenarios import load_scenario
-from flexmvm.scenarios.build import build_scenario
 
 DATA = Path(__file__).parent / "data"
 WRAPPERS = ("cho_factor", "cho_solve", "lu_factor", "lu_solve")

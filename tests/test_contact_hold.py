@@ -12,9 +12,9 @@ import numpy as np
 import pytest
 from _recording import simulate_recording
 
+from flexmvm.assembly.build import build_scenario
 from flexmvm.contact.held_pairs import gap_offsets, hold_pairs
 from flexmvm.scenarios import load_scenario, scenario_from_dict
-from flexmvm.scenarios.build import build_scenario
 
 SEED = Path(__file__).parents[1] / "scenarios" / "rod_impact.toml"
 

@@ -13,8 +13,8 @@ from pathlib import Path
 import numpy as np
 
 from flexmvm.materials import ALUMINIUM, BRASS
+from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import load_scenario, scenario_from_dict
-from flexmvm.scenarios.run import run_scenario
 from flexmvm.theory.wave import Rod1D, st_venant_force
 
 CASE = Path(__file__).parent / "data" / "short_flat_impact.toml"

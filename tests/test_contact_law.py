@@ -18,6 +18,7 @@ import pytest
 from _recording import simulate_recording
 from _short_case import short_run
 
+from flexmvm.assembly.build import build_scenario
 from flexmvm.constraints.contact import ContactLaw
 from flexmvm.contact.pairs import PointToSurfaceContact
 from flexmvm.errors import InputError, SolverError
@@ -25,7 +26,6 @@ from flexmvm.integrate import driver
 from flexmvm.integrate.massless import MasslessCoordinates
 from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
 from flexmvm.scenarios import load_scenario, scenario_from_dict
-from flexmvm.scenarios.build import build_scenario
 from flexmvm.scenarios.problems import ScenarioError
 
 CASE = Path(__file__).parent / "data" / "short_flat_impact.toml"
@@ -254,8 +254,8 @@ def test_conserving_scheme_flag_and_its_energy_warning():
     above 1e-4 (the unstable both-MVM runs gained 4.6e-4 and more, docs/contact_law.md) is
     warned of, where the general threshold (5e-3) would stay silent. The velocity law's
     penetration recovery can add energy: not flagged."""
-    from flexmvm.scenarios.guard import energy_gain_warning
-    from flexmvm.scenarios.run import run_scenario
+    from flexmvm.runs.guard import energy_gain_warning
+    from flexmvm.runs.run import run_scenario
 
     short = {"t_end_s": 2e-6}
     assert (

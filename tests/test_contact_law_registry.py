@@ -135,7 +135,7 @@ def test_the_step_and_its_report_probe_no_capability():
         "integrate/driver.py",
         "integrate/energy_ledger.py",
         "integrate/massless.py",
-        "scenarios/run.py",
+        "runs/run.py",
     ):
         tree = ast.parse((PACKAGE / name).read_text(encoding="utf-8"))
         calls = [

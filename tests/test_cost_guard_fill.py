@@ -1,4 +1,4 @@
-"""The cost guard (issue 49 item 4, scenarios/cost.py): full FE estimated from its factor's fill
+"""The cost guard (issue 49 item 4, assembly/cost.py): full FE estimated from its factor's fill
 (the symbolic analysis of its iteration matrix), memory and time a step compared, a warning
 only beyond MARGIN.
 
@@ -18,13 +18,12 @@ import numpy as np
 import pytest
 
 import flexmvm as fm
-from flexmvm.integrate.body_solver import MAX_CACHED, BodySolver
-from flexmvm.integrate.run_result import TimeGrid
-from flexmvm.scenarios import cost
-from flexmvm.scenarios.body_reference import reference_label
-from flexmvm.scenarios.build import build_scenario
-from flexmvm.scenarios.cache_keys import mesh_key, mesh_source
-from flexmvm.scenarios.cost import (
+from flexmvm.assembly import cost
+from flexmvm.assembly.body_reference import reference_label
+from flexmvm.assembly.build import build_scenario
+from flexmvm.assembly.build_cache import SetupCache
+from flexmvm.assembly.cache_keys import mesh_key, mesh_source
+from flexmvm.assembly.cost import (
     BodyCost,
     FullFactor,
     ReducedCostWarning,
@@ -34,9 +33,10 @@ from flexmvm.scenarios.cost import (
     reduced_cost,
     step_sizes,
 )
-from flexmvm.scenarios.mesh_lookup import contact_surfaces, retained_nodes
-from flexmvm.scenarios.setup import SetupCache
-from flexmvm.scenarios.supports import bedded_key
+from flexmvm.assembly.mesh_lookup import contact_surfaces, retained_nodes
+from flexmvm.assembly.supports import bedded_key
+from flexmvm.integrate.body_solver import MAX_CACHED, BodySolver
+from flexmvm.integrate.run_result import TimeGrid
 
 ROOT = Path(__file__).resolve().parents[1]
 TINY = Path(__file__).parent / "data" / "tiny_impact.toml"

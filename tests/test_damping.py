@@ -30,6 +30,8 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 from _cantilever import scenario
 
+from flexmvm.assembly.build import build_scenario
+from flexmvm.assembly.build_cache import SetupCache
 from flexmvm.bodies.build import body_from_fe
 from flexmvm.bodies.damping import ModalDamping, RayleighDamping, rayleigh_from_ratios
 from flexmvm.errors import InputError, SolverError
@@ -43,10 +45,8 @@ from flexmvm.integrate.state import BodyState
 from flexmvm.materials import ALUMINIUM
 from flexmvm.reduction.basis import BasisKind, build_basis
 from flexmvm.reduction.clamp import clamp_condition
-from flexmvm.scenarios.build import build_scenario
 from flexmvm.scenarios.load import scenario_from_dict
 from flexmvm.scenarios.problems import ScenarioError
-from flexmvm.scenarios.setup import SetupCache
 
 # zeta = 2 % at 50 Hz and 2 % at 2 kHz: 2.4 % at the rod's first bending mode (40.5 Hz),
 # 0.63 % at its second (254 Hz)

@@ -19,7 +19,7 @@ NEEDED_LIBRARIES = {"scikit-fem", "gmsh"}
 
 
 def is_stamp(d) -> bool:
-    """d is a provenance stamp (flexmvm.scenarios.provenance.stamp or script_stamp)."""
+    """d is a provenance stamp (flexmvm.runs.provenance.stamp or script_stamp)."""
     return (
         isinstance(d, dict)
         and {"key", "code", "libraries"} <= set(d)

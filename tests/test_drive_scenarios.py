@@ -16,10 +16,10 @@ import numpy as np
 import pytest
 
 import flexmvm as fm
+from flexmvm.assembly.build import build_scenario
 from flexmvm.errors import InputError
 from flexmvm.results.writers import write_results_h5
 from flexmvm.scenarios import ScenarioError, scenario_from_dict
-from flexmvm.scenarios.build import build_scenario
 
 pytest.importorskip("gmsh")
 

@@ -183,7 +183,7 @@ def test_a_folder_that_cannot_be_renamed_gets_its_files_moved_in(tmp_path, monke
 def test_non_finite_summary_values_are_written_as_null(tmp_path, capsys, monkeypatch):
     """A NaN in the summary (momentum_residual_rel) no longer loses the run: summary.json is
     written with null there and the field listed in non_finite_fields."""
-    from flexmvm.scenarios import run as run_mod
+    from flexmvm.runs import run as run_mod
 
     real = run_mod.summarize
 
@@ -229,7 +229,7 @@ def test_a_degenerate_facet_after_a_step_is_a_step_failure(tmp_path, capsys, mon
 def test_a_failing_reference_does_not_hide_the_scenarios_run(tmp_path, capsys, monkeypatch):
     """The full-FE reference fails: the scenario's own run is still written (its summary's
     failures names the reference), and the one-line error names the reference."""
-    from flexmvm.scenarios import main_job
+    from flexmvm.runs import main_job
 
     real = main_job._run_and_write
 

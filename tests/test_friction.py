@@ -20,6 +20,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from flexmvm.assembly.build import build_scenario
 from flexmvm.errors import InputError, SolverError
 from flexmvm.fe.assembly import assemble
 from flexmvm.integrate.coulomb import (
@@ -29,9 +30,8 @@ from flexmvm.integrate.coulomb import (
 )
 from flexmvm.integrate.driver import simulate
 from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
+from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import load_scenario, scenario_from_dict
-from flexmvm.scenarios.build import build_scenario
-from flexmvm.scenarios.run import run_scenario
 
 G = 9.81
 ROT_UP = {"axis": [0.0, 1.0, 0.0], "angle_deg": -90.0}  # rod local +x -> global +z

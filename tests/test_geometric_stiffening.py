@@ -25,6 +25,7 @@ import scipy.sparse as sp
 from test_fe import box_hex, box_tet10
 from threadpoolctl import threadpool_limits
 
+from flexmvm.assembly.build import build_scenario
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.bodies.spin_modes import spin_frequencies
 from flexmvm.bodies.stiffening import geometric_stiffening
@@ -42,7 +43,6 @@ from flexmvm.integrate.system import System
 from flexmvm.materials import ALUMINIUM
 from flexmvm.mesh.io import write_mesh
 from flexmvm.scenarios import ScenarioError, scenario_from_dict
-from flexmvm.scenarios.build import build_scenario
 
 L, WIDTH, THICK = 1.0, 0.04, 0.02
 K1 = 1.193  # Southwell coefficient, first flapwise mode, hub radius 0

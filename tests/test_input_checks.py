@@ -7,13 +7,13 @@ from pathlib import Path
 
 import pytest
 
+from flexmvm.assembly.build import build_scenario
+from flexmvm.assembly.build_cache import SetupCache
 from flexmvm.errors import InputError, MeshError
 from flexmvm.materials import MAX_NU, Material
 from flexmvm.mesh.io import read_mesh
-from flexmvm.scenarios.build import build_scenario
 from flexmvm.scenarios.load import scenario_from_dict
 from flexmvm.scenarios.problems import ScenarioError
-from flexmvm.scenarios.setup import SetupCache
 
 gmsh = pytest.importorskip("gmsh")
 

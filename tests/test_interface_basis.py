@@ -1,4 +1,4 @@
-"""The interface basis (reduction/interface.py) and the validity guard (scenarios/guard.py),
+"""The interface basis (reduction/interface.py) and the validity guard (runs/guard.py),
 issue 12.
 
 Statics: a Hertz load the basis was built from has its full-FE static response (inertia
@@ -37,7 +37,7 @@ from flexmvm.reduction.interface import (
     interface_columns,
 )
 from flexmvm.reduction.rod_reference import rod_reference
-from flexmvm.scenarios.run import ReducedBasisWarning
+from flexmvm.runs.run import ReducedBasisWarning
 
 ROOT = Path(__file__).resolve().parents[1]
 SHORT = ROOT / "scenarios" / "rod_impact_short.toml"

@@ -16,13 +16,13 @@ import pytest
 
 import flexmvm as fm
 from flexmvm import setup_cache
+from flexmvm.assembly import build_cache as scenario_setup
 from flexmvm.errors import InputError, StaleDataWarning
 from flexmvm.materials import ALUMINIUM, BRASS
 from flexmvm.reduction import interface as iface
 from flexmvm.reduction.basis import BasisKind
 from flexmvm.reduction.interface import InterfaceSpec, participation_pool
 from flexmvm.reduction.reference_condition import three_two_one
-from flexmvm.scenarios import setup as scenario_setup
 from flexmvm.studies.interface import interface_cases, mode_pools, run_interface_case
 
 SETUP = scenario_setup.default_setup()  # what fm.clear_caches empties
@@ -50,7 +50,7 @@ def tiny():
 
 
 class Counter:
-    """Wraps a function of module scenarios.setup and counts its calls."""
+    """Wraps a function of module assembly.build_cache and counts its calls."""
 
     def __init__(self, fn):
         self.fn, self.calls = fn, 0

@@ -113,8 +113,8 @@ def test_contact_runs_check_every_lcp(monkeypatch):
     from pathlib import Path
 
     from flexmvm.integrate import coulomb
+    from flexmvm.runs.run import run_scenario
     from flexmvm.scenarios import ModelConfig, load_scenario
-    from flexmvm.scenarios.run import run_scenario
 
     seen = []
 

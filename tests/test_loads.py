@@ -30,7 +30,7 @@ from flexmvm.loads import (
     RotationalSpring,
     TimeHistory,
 )
-from flexmvm.scenarios.energy_report import momentum_report
+from flexmvm.runs.energy_report import momentum_report
 
 
 def _rigid(mass=1.0, half=(0.1, 0.15, 0.2), name="m") -> FlexibleBody:

@@ -18,8 +18,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import ScenarioError, scenario_from_dict
-from flexmvm.scenarios.run import run_scenario
 
 CASE = Path(__file__).parent / "data" / "short_flat_impact.toml"
 
@@ -88,7 +88,7 @@ def test_driven_rod_converges_and_its_ledger_closes():
     w_in = led["balance_reference_J"]
     assert abs(sum(led["work_joints_J"].values())) < 1e-6 * w_in
     assert led["load_damper_dissipation_J"]["springs[1] linear"] > 0
-    # the energy guard counts the loads' work as input: no rise beyond it (scenarios.run
+    # the energy guard counts the loads' work as input: no rise beyond it (runs.run
     # energy_gain; the run's energy rises from 0 by the motor's work)
     assert s["energy_gain_rel_max"] is not None and s["energy_gain_rel_max"] < 1e-6
     assert s["momentum_rel_error"] is None
@@ -156,12 +156,12 @@ def test_rod_swings_the_way_the_motor_turns():
 
 
 def test_energy_gain_counts_inputs_and_catches_the_rest():
-    """scenarios.run.energy_gain: a rise of the energy equal to the loads' and joints' work is
+    """runs.run.energy_gain: a rise of the energy equal to the loads' and joints' work is
     no gain; 1 J more than they did is (relative to the largest input work when E(0) = 0)."""
     from types import SimpleNamespace
 
     from flexmvm.integrate.energy_ledger import EnergyLedgerHistory
-    from flexmvm.scenarios.run import energy_gain
+    from flexmvm.runs.run import energy_gain
 
     t = np.linspace(0.0, 1.0, 5)
     zero = np.zeros(5)

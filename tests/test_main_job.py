@@ -6,7 +6,7 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
-from flexmvm.scenarios.main_job import run_main_job
+from flexmvm.runs.main_job import run_main_job
 
 TINY = Path(__file__).parent / "data" / "tiny_impact.toml"
 

@@ -8,13 +8,13 @@ import pytest
 import scipy.sparse.linalg as sla
 
 import flexmvm as fm
+from flexmvm.assembly.build import build_scenario
 from flexmvm.errors import InputError
 from flexmvm.fe.assembly import assemble
 from flexmvm.fe.mass_redistribution import moments, redistribute_mass
 from flexmvm.integrate.massless import MasslessCoordinates
 from flexmvm.materials import ALUMINIUM
 from flexmvm.mesh.rod import EndShape, RodSpec, rod_mesh
-from flexmvm.scenarios.build import build_scenario
 
 SHORT = "scenarios/rod_impact_short.toml"
 
@@ -81,10 +81,10 @@ def test_a_contact_surface_too_large_says_what_to_change():
     from pathlib import Path
 
     import flexmvm as fm
+    from flexmvm.assembly.build_cache import default_setup
+    from flexmvm.assembly.cache_keys import mesh_key
     from flexmvm.errors import InputError
     from flexmvm.fe.mass_redistribution import redistribute_mass
-    from flexmvm.scenarios.cache_keys import mesh_key
-    from flexmvm.scenarios.setup import default_setup
 
     sc = fm.load_scenario(Path(__file__).parent / "data" / "tiny_impact.toml")
     cfg = sc.body("b2")

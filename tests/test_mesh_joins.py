@@ -14,17 +14,17 @@ import numpy as np
 import pytest
 from _cantilever import ROD
 
+from flexmvm.assembly.build import build_scenario
+from flexmvm.assembly.build_cache import SetupCache
+from flexmvm.assembly.cache_keys import MergedFile, mesh_key, mesh_source
 from flexmvm.errors import MeshError
 from flexmvm.mesh.connectivity import connectivity_report
 from flexmvm.mesh.integrity import check_faces
 from flexmvm.mesh.io import MeshWarning, read_mesh
 from flexmvm.mesh.quality import mesh_volume
 from flexmvm.mesh.rod import EndShape, RodSpec, rod_mesh
-from flexmvm.scenarios.build import build_scenario
-from flexmvm.scenarios.cache_keys import MergedFile, mesh_key, mesh_source
 from flexmvm.scenarios.load import scenario_from_dict
 from flexmvm.scenarios.problems import ScenarioError
-from flexmvm.scenarios.setup import SetupCache
 
 gmsh = pytest.importorskip("gmsh")
 

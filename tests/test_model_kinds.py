@@ -11,12 +11,12 @@ import numpy as np
 import pytest
 
 import flexmvm as fm
+from flexmvm.assembly.build import build_scenario
+from flexmvm.assembly.build_cache import SetupCache
 from flexmvm.bodies.build import body_from_fe
 from flexmvm.errors import InputError
 from flexmvm.fe.modes import constrained_modes
 from flexmvm.reduction.kinds import KINDS, Basis, BasisRequest, kind_spec, unregister_kind
-from flexmvm.scenarios.build import build_scenario
-from flexmvm.scenarios.setup import SetupCache
 
 TINY = Path(__file__).parent / "data" / "tiny_impact.toml"
 

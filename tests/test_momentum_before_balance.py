@@ -10,8 +10,8 @@ from pathlib import Path
 
 import numpy as np
 
+from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import load_scenario
-from flexmvm.scenarios.run import run_scenario
 from tools.validation import acceptance
 
 TINY = Path(__file__).parent / "data" / "tiny_impact.toml"

@@ -16,8 +16,8 @@ import pytest
 
 from flexmvm.integrate import driver, moreau_jean
 from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
+from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import load_scenario
-from flexmvm.scenarios.run import run_scenario
 from flexmvm.studies.grid import seed_scheme
 
 TINY = Path(__file__).parent / "data" / "tiny_impact.toml"

@@ -50,8 +50,8 @@ def test_shipped_arm_starts_from_rest_with_every_step_converged():
     """The first 3 us of scenarios/arm_stop.toml in full FE (38,502 DOF, ~30 s): its first
     step, from rest with the motor's torque sin^2 ~ 0, stalled at a residual of 1.6e-8 of its
     round-off scale and was counted not converged (measured before this check: 1 of 5 steps)."""
+    from flexmvm.assembly.build import build_scenario
     from flexmvm.integrate.driver import simulate
-    from flexmvm.scenarios.build import build_scenario
     from flexmvm.scenarios.load import scenario_from_dict
 
     scenarios = Path(__file__).parents[1] / "scenarios"

@@ -115,7 +115,7 @@ def test_select_command_passes_one_options_object(tmp_path, monkeypatch):
 
 def test_time_grid_from_config_is_the_positional_grid():
     """TimeGrid.from_config(sc.time) equals the grid built field by field in position, as
-    scenarios/build.py did, for the seed scenario (hf damping, contact outputs) and a tiny one."""
+    assembly/build.py did, for the seed scenario (hf damping, contact outputs) and a tiny one."""
     for path in (ROOT / "scenarios" / "rod_impact.toml", TINY):
         t = load_scenario(path).time
         positional = TimeGrid(

@@ -17,16 +17,16 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
+from flexmvm.assembly.build import build_scenario
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.bodies.rotation import axis_angle
 from flexmvm.constraints.joints import BodyPoint, DistanceJoint
 from flexmvm.constraints.rows import Rows
 from flexmvm.errors import InputError
 from flexmvm.integrate.state import BodyState
-from flexmvm.scenarios import load_scenario, scenario_from_dict
-from flexmvm.scenarios.build import build_scenario
-from flexmvm.scenarios.compare import compare_runs
-from flexmvm.scenarios.pendulum import (
+from flexmvm.runs.compare import compare_runs
+from flexmvm.runs.run import run_scenario
+from flexmvm.runs.showcases.pendulum import (
     attachment_positions,
     force_onset,
     impact_comparison,
@@ -34,7 +34,7 @@ from flexmvm.scenarios.pendulum import (
     momenta_after_separation,
     strings,
 )
-from flexmvm.scenarios.run import run_scenario
+from flexmvm.scenarios import load_scenario, scenario_from_dict
 from flexmvm.theory.scenario import theory_histories
 
 ROOT = Path(__file__).resolve().parents[1]

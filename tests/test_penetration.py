@@ -24,8 +24,8 @@ from flexmvm.bodies.body import FlexibleBody
 from flexmvm.contact.geometry import MasterSurface
 from flexmvm.contact.pairs import PointToSurfaceContact
 from flexmvm.contact.penetration import EDGE_TOL
+from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import load_scenario
-from flexmvm.scenarios.run import run_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 SHORT = ROOT / "tests" / "data" / "short_flat_impact.toml"
@@ -199,9 +199,9 @@ def test_summary_reports_where_and_when():
 def test_simulate_refuses_an_overlap_unless_continuing():
     """In process: the same 1 mm overlap (rigid rods) is an InputError from simulate; with
     check_overlap=False (a continuation) the run goes on and reports the depth at t = 0."""
+    from flexmvm.assembly.build import build_scenario
     from flexmvm.errors import InputError
     from flexmvm.integrate.driver import simulate
-    from flexmvm.scenarios.build import build_scenario
 
     sc = load_scenario(SHORT).with_overrides(model="rigid", t_end_s=1e-6)
     built = build_scenario(sc)
@@ -222,10 +222,10 @@ def test_overlap_at_rest_is_held_without_energy_gain(recovery):
     beta * 10 um / h = 8 m/s, h = 0.25 us, a rise of the kinetic energy by a factor of
     hundreds that nothing in the system supplies); with penetration_recovery = 0 likewise. No
     gain, no warning; energy_gain_warning still names a gain above its threshold."""
+    from flexmvm.assembly.build import build_scenario
     from flexmvm.integrate.driver import simulate
-    from flexmvm.scenarios.build import build_scenario
-    from flexmvm.scenarios.guard import ENERGY_GAIN_WARN, energy_gain_warning
-    from flexmvm.scenarios.run import summarize
+    from flexmvm.runs.guard import ENERGY_GAIN_WARN, energy_gain_warning
+    from flexmvm.runs.run import summarize
 
     data = load_scenario(SHORT).with_overrides(model="rigid", t_end_s=5e-6).model_dump(mode="json")
     for b in data["bodies"]:

@@ -28,13 +28,13 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
+from flexmvm.assembly.build import build_scenario
 from flexmvm.integrate.driver import simulate
 from flexmvm.mesh.gmsh_session import Refinement
 from flexmvm.mesh.io import read_mesh
 from flexmvm.mesh.parts import block
 from flexmvm.mesh.quality import mesh_volume
-from flexmvm.scenarios.build import build_scenario
-from flexmvm.scenarios.hertz_block import SPHERE_BLOCK
+from flexmvm.runs.showcases.hertz_block import SPHERE_BLOCK
 from flexmvm.scenarios.load import scenario_from_dict
 from flexmvm.theory.hertz import hertz_impact
 from flexmvm.theory.hertz_yield import yield_onset
@@ -262,7 +262,7 @@ def test_outputs_carry_the_plastic_strain(strike, tmp_path):
     import meshio
 
     from flexmvm.results.writers import write_paraview_series
-    from flexmvm.scenarios.run import summarize
+    from flexmvm.runs.run import summarize
 
     built, res = strike["plastic"]
     report = res.plastic["block"]
@@ -279,7 +279,7 @@ def test_outputs_carry_the_plastic_strain(strike, tmp_path):
     assert np.array_equal(np.concatenate(cells), report.cell_equivalent_plastic_strain)
 
 
-@pytest.mark.filterwarnings("ignore::flexmvm.scenarios.cost.ReducedCostWarning")
+@pytest.mark.filterwarnings("ignore::flexmvm.assembly.cost.ReducedCostWarning")
 def test_mvm_plastic_block_yields_in_its_whole_retained_cells_only(block_mesh):
     """The block MVM (the nodes within 0.6 mm of the contact kept, 4 modes): its PlasticPart
     allows the cells whose nodes are all retained, where psi is the identity (PlasticBodies
@@ -369,7 +369,7 @@ def test_consistent_tangent_option_gives_the_same_run(strike, coarse_mesh, monke
     assert abs(w - w_ref) < 1e-6 * w_ref, (w, w_ref)
 
 
-@pytest.mark.filterwarnings("ignore::flexmvm.scenarios.cost.ReducedCostWarning")
+@pytest.mark.filterwarnings("ignore::flexmvm.assembly.cost.ReducedCostWarning")
 def test_plastic_zone_outside_the_region_stops_the_run_when_asked(block_mesh):
     """``model.plastic_outside = "stop"``: a reduced block (the nodes within 0.6 mm kept, 4
     modes) struck at 1.5 v_y, whose plastic zone grows past the region's whole cells, stops

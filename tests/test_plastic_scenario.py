@@ -10,10 +10,10 @@ from pathlib import Path
 
 import pytest
 
+from flexmvm.assembly.build import build_scenario
 from flexmvm.errors import InputError
 from flexmvm.plasticity import J2Plasticity
 from flexmvm.scenarios import ScenarioError, scenario_from_dict
-from flexmvm.scenarios.build import build_scenario
 from flexmvm.scenarios.plasticity_schema import plasticity_of
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"

@@ -7,7 +7,7 @@ full FE plastic with 21 % of the plastic work missing). Dictionaries only: well 
 from __future__ import annotations
 
 from flexmvm.metrics.ncc import Target
-from flexmvm.scenarios.guard import invalid_reason, validity_fields
+from flexmvm.runs.guard import invalid_reason, validity_fields
 from flexmvm.studies.search import Candidate, smallest_passing
 from flexmvm.studies.selection import FAIL_SCORE, score
 

@@ -13,7 +13,7 @@ import pytest
 import flexmvm as fm
 from flexmvm.mesh.mesh import CellBlock, CellType, Mesh
 from flexmvm.mesh.point_location import tet_weights
-from flexmvm.scenarios.run import run_scenario
+from flexmvm.runs.run import run_scenario
 
 BLOCK = Path(__file__).parents[1] / "scenarios" / "sphere_block.toml"
 
@@ -83,7 +83,7 @@ def test_a_point_off_the_body_is_refused_in_one_line():
     data = sc.model_dump(mode="json")
     data["probes"].append({"name": "off", "body": "block", "point_m": [0.0, 0.0, 0.05]})
     with pytest.raises(fm.InputError, match="off the body") as info:
-        from flexmvm.scenarios.build import build_scenario
+        from flexmvm.assembly.build import build_scenario
 
         build_scenario(fm.scenario_from_dict(data, base_dir=BLOCK.parent))
     assert "\n" not in str(info.value)

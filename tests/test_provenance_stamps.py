@@ -15,7 +15,7 @@ from pathlib import Path
 import pytest
 
 import flexmvm as fm
-from flexmvm.scenarios import provenance
+from flexmvm.runs import provenance
 
 ROOT = Path(__file__).resolve().parents[1]
 TINY = ROOT / "tests" / "data" / "tiny_impact.toml"

@@ -1,6 +1,6 @@
 """A reduced body that would cost more memory than its full-FE body is built with a warning
 naming both costs, and refused before it is built when it would not fit (more than
-REFUSE_SHARE of the machine's memory; scenarios.cost), in one line; `allow_costly = true`
+REFUSE_SHARE of the machine's memory; assembly.cost), in one line; `allow_costly = true`
 forces it."""
 
 from __future__ import annotations
@@ -10,9 +10,9 @@ from pathlib import Path
 import pytest
 
 import flexmvm as fm
+from flexmvm.assembly.build import build_scenario
+from flexmvm.assembly.cost import check_cost, reduced_cost
 from flexmvm.errors import InputError
-from flexmvm.scenarios.build import build_scenario
-from flexmvm.scenarios.cost import check_cost, reduced_cost
 
 TINY = Path(__file__).parent / "data" / "tiny_impact.toml"
 
@@ -36,7 +36,7 @@ def _wide(allow: bool, kind: str = "mvm"):
 def test_a_region_holding_the_whole_body_is_refused_in_one_line(monkeypatch):
     """The reduced tiny rod (1,892 DOF, ~266 MB against ~20 MB for full FE): a warning when it
     fits, refused in one line when it would not (the limit set low here)."""
-    from flexmvm.scenarios import cost
+    from flexmvm.assembly import cost
 
     monkeypatch.setattr(cost, "REFUSE_ABOVE_BYTES", 1e12)
     with pytest.warns(cost.ReducedCostWarning, match="costs more than full FE"):
@@ -59,7 +59,7 @@ def test_cost_model_orders_the_issue_case(monkeypatch):
     nodes, K with ~2.0 M nonzeros): 7.6 GB, refused on a machine of 8 GB, built with a
     warning on one of 24 GB (it was refused on both); the shipped seed b2 (129 DOF on a
     25,000-DOF rod, 4.5 M nonzeros) is far below its full-FE cost."""
-    from flexmvm.scenarios import cost
+    from flexmvm.assembly import cost
 
     block = reduced_cost("block", 9394, 9289, 2_000_000)
     assert block.bytes > 10 * block.full_bytes  # 7.6 GB against 0.1 GB
@@ -80,7 +80,7 @@ def test_the_sparse_kind_is_not_costed_as_dense(monkeypatch):
     refused by it (the limit set low: mvm is refused there)."""
     import warnings
 
-    from flexmvm.scenarios import cost
+    from flexmvm.assembly import cost
 
     monkeypatch.setattr(cost, "REFUSE_ABOVE_BYTES", 1e6)
     with pytest.raises(InputError):

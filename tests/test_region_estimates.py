@@ -88,7 +88,7 @@ def _scenario(folder, motion: str = "velocity_mps = [0.0, 0.0, -1.0]", extra: st
 
 
 def _ball_mass(sc) -> float:
-    from flexmvm.scenarios.setup import default_setup
+    from flexmvm.assembly.build_cache import default_setup
 
     return float(default_setup().free_modes_source(sc.body("ball"))[0].M_scalar.sum())
 
@@ -220,7 +220,7 @@ def test_centre_on_the_body_at_an_edge(folder):
 def test_mode_count_from_the_contact_duration(folder):
     """Without --modes the count is the plate's elastic free-free modes below 3 / T_c, its
     f_max that; the modes below it counted by hand from the body's free-free spectrum."""
-    from flexmvm.scenarios.setup import default_setup
+    from flexmvm.assembly.build_cache import default_setup
 
     sc = _scenario(folder)
     est = fm.estimate_region(sc, "plate")

@@ -172,7 +172,7 @@ def test_sphere_on_block_through_the_scenario_kind():
     here and 3.5e-11 over 100 us: the round-off of two factorizations carried through the
     steps)."""
     import flexmvm as fm
-    from flexmvm.scenarios.run import run_scenario
+    from flexmvm.runs.run import run_scenario
 
     path = Path(__file__).parents[1] / "scenarios" / "sphere_block.toml"
     sc = fm.load_scenario(path).with_time(t_end_s=3e-5)

@@ -1,7 +1,7 @@
 """`flexmvm run` prints the plastic guard's warning at its end (issue 51, item 2;
 docs/scenario_format.md, `plastic_outside = "warn"`): a reduced plastic body whose cells
 outside its retained region reach the yield stress goes on, and the command says so, as it
-says the contact guard's and the energy gain's warnings (scenarios/main_job.py)."""
+says the contact guard's and the energy gain's warnings (runs/main_job.py)."""
 
 from __future__ import annotations
 
@@ -11,7 +11,7 @@ import pytest
 from click.testing import CliRunner
 from test_plastic_dynamics import Y, _block, _hertz, _impact, _yield_speed
 
-from flexmvm.scenarios.cost import ReducedCostWarning
+from flexmvm.assembly.cost import ReducedCostWarning
 
 
 def _toml(value) -> str:

@@ -167,8 +167,8 @@ def test_case_of_another_version_is_recomputed_and_named(tmp_path):
     changed; under the same version it is loaded."""
     from pathlib import Path
 
+    from flexmvm.runs.provenance import stamp
     from flexmvm.scenarios import load_scenario
-    from flexmvm.scenarios.provenance import stamp
 
     sc = load_scenario(Path(__file__).parent / "data" / "tiny_impact.toml")
     old = stamp(sc) | {"code": "0" * 16, "key": "0" * 32}

@@ -13,14 +13,14 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
+from flexmvm.assembly.build import build_scenario
+from flexmvm.assembly.build_cache import default_setup
 from flexmvm.fe.assembly import assemble
 from flexmvm.fe.modes import constrained_modes, factor
 from flexmvm.reduction.basis import BasisKind, build_basis
 from flexmvm.reduction.rod_reference import rod_reference
+from flexmvm.runs.main_job import run_main_job
 from flexmvm.scenarios import load_scenario
-from flexmvm.scenarios.build import build_scenario
-from flexmvm.scenarios.main_job import run_main_job
-from flexmvm.scenarios.setup import default_setup
 
 ROOT = Path(__file__).resolve().parents[1]
 SEED_MESH = ROOT / "scenarios" / "rod_impact_seed_mesh.toml"

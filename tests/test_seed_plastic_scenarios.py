@@ -66,8 +66,8 @@ def test_plastic_block_scenario_is_sphere_block_with_yield_added():
     of E as the full-FE run of the plastic dynamics note), 130 us, and its MVM form the select
     study's answer: the nodes within 1.1 mm of (0, 0, -0.2) mm, 713 nodes holding 309 whole
     tet10 cells (exact integers of the page's table). Builds no system: ~1 s (one mesh read)."""
+    from flexmvm.assembly.mesh_lookup import retained_nodes
     from flexmvm.mesh.io import read_mesh
-    from flexmvm.scenarios.mesh_lookup import retained_nodes
 
     p = load_scenario(SCENARIOS / "sphere_block_plastic.toml")
     e = load_scenario(SCENARIOS / "sphere_block.toml")

@@ -123,8 +123,8 @@ def test_estimate_against_hertz(scenario_file):
         2.0 * est.contact_radius_m, rel=1e-12
     )
     # its nodes and DOF are those of the region it states, as the builder selects it
+    from flexmvm.assembly.build import build_scenario
     from flexmvm.scenarios import RegionSpec
-    from flexmvm.scenarios.build import build_scenario
 
     sc = sc.with_model("beam", fm.mvm(region=RegionSpec(**est.region()), modes=est.modes))
     info = next(b for b in build_scenario(sc).info if b.name == "beam")
@@ -137,7 +137,7 @@ def _holds_the_touched_facets(sc, body: str, est) -> None:
     Found here independently of the module's point-to-triangle distance: each facet sampled
     on a barycentric grid of step 1/40 (points 1/40 of a facet apart: a facet missed would
     reach less than h/40 into the circle)."""
-    from flexmvm.scenarios.setup import default_setup
+    from flexmvm.assembly.build_cache import default_setup
 
     mesh = default_setup().free_modes_source(sc.body(body))[0].mesh
     fs, centre, a = mesh.facet_set(est.surface), np.array(est.centre_m), est.contact_radius_m
@@ -278,8 +278,8 @@ def test_node_set_families_count_their_sets_nodes(scenario_file, meshes):
     candidates' DOF are 3 x the set's nodes + modes, the family sorts after the balls, and its
     cost is checked before any run (a warning here: the top face costs more than full FE on a
     960-DOF beam, too small to refuse)."""
+    from flexmvm.assembly.cost import ReducedCostWarning
     from flexmvm.mesh.io import read_mesh
-    from flexmvm.scenarios.cost import ReducedCostWarning
     from flexmvm.studies.region_families import RegionFamily, RegionGrid
 
     n_top = len(read_mesh(meshes[1]).node_set("top"))
@@ -395,8 +395,8 @@ def test_region_case_keeps_the_scenarios_allow_costly(scenario_file, monkeypatch
     that this 960-DOF beam's top face (costlier than full FE, module doc of the node-set test)
     is refused as a large body's would be; the run stops right after the build (no time
     step): 8 s at load 5, most of it the first build of the beam."""
+    from flexmvm.assembly.build import build_scenario
     from flexmvm.scenarios import cost, run
-    from flexmvm.scenarios.build import build_scenario
     from flexmvm.studies import region_families as regions
     from flexmvm.studies.region_families import RegionFamily, RegionGrid, run_region_case
 

@@ -15,6 +15,8 @@ import pytest
 import scipy.sparse as sp
 
 from flexmvm import setup_cache
+from flexmvm.assembly import build_cache as scenario_setup
+from flexmvm.assembly.build_cache import SetupCache
 from flexmvm.bodies.build import body_from_fe, body_from_parts, body_parts
 from flexmvm.errors import StaleDataWarning
 from flexmvm.fe.assembly import assemble
@@ -23,8 +25,6 @@ from flexmvm.mesh.rod import RodSpec, rod_mesh
 from flexmvm.reduction.basis import BasisKind, build_basis
 from flexmvm.reduction.reference_condition import three_two_one
 from flexmvm.reduction.rod_reference import rod_reference
-from flexmvm.scenarios import setup as scenario_setup
-from flexmvm.scenarios.setup import SetupCache
 
 SPEC = RodSpec(length_m=0.04, radius_m=0.005, n_rings=2, first_element_m=1e-3, max_element_m=0.01)
 SOURCE = setup_cache.rod_source(SPEC)
@@ -235,8 +235,8 @@ def test_run_after_nan_entries_succeeds_and_names_them(cache):
     (before: every later run failed on the iteration matrix, never naming the cache)."""
     from pathlib import Path
 
+    from flexmvm.runs.run import run_scenario
     from flexmvm.scenarios import load_scenario
-    from flexmvm.scenarios.run import run_scenario
 
     sc = load_scenario(Path(__file__).parent / "data" / "tiny_impact.toml").with_overrides(
         t_end_s=2e-6

@@ -33,7 +33,7 @@ ROD = SliderCrank(0.15, 0.30, OMEGA, STEEL["E"], STEEL["rho"], 0.008**2, 0.008**
 
 # the reduced rod's basis (a dense 230-coordinate body) is not smaller than the coarse
 # full-FE rod's sparse one: the reduced-cost guard's warning is expected here
-pytestmark = pytest.mark.filterwarnings("ignore::flexmvm.scenarios.cost.ReducedCostWarning")
+pytestmark = pytest.mark.filterwarnings("ignore::flexmvm.assembly.cost.ReducedCostWarning")
 
 
 def _data(t_end: float, dt: float, rod_model: dict, rod_mesh: Path | None = None) -> dict:

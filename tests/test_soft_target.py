@@ -17,9 +17,9 @@ from pathlib import Path
 
 import pytest
 
+from flexmvm.runs.compare import compare_runs
+from flexmvm.runs.run import EnergyGainWarning, run_scenario
 from flexmvm.scenarios import load_scenario, scenario_from_dict
-from flexmvm.scenarios.compare import compare_runs
-from flexmvm.scenarios.run import EnergyGainWarning, run_scenario
 from flexmvm.studies.grid import mvm_scenario, study_scenario
 
 # Long (two 0.7 ms MVM runs): in `pytest -m validation`, not the default run.

@@ -70,7 +70,7 @@ def _scenario(meshes, model: dict, t_end: float):
 def test_start_check_takes_the_near_side_of_a_convex_master(meshes):
     """Before the closest-point rule, a beam node 6.6 cm from the sphere projected inside a
     facet on the sphere's far side and was read as 7.7 cm inside it: InputError at t = 0."""
-    from flexmvm.scenarios.build import build_scenario
+    from flexmvm.assembly.build import build_scenario
 
     built = build_scenario(_scenario(meshes, {"kind": "full"}, 1e-6))
     pens = built.system.contacts[0].penetration(built.system.bodies, built.states, deep=True)

@@ -13,8 +13,8 @@ import numpy as np
 import pytest
 
 from flexmvm.errors import InputError
+from flexmvm.runs.main_job import _theory
 from flexmvm.scenarios.load import load_scenario, scenario_from_dict
-from flexmvm.scenarios.main_job import _theory
 from flexmvm.theory.scenario import theory_histories
 from flexmvm.theory.sphere_beam import LAW, sphere_beam_case
 

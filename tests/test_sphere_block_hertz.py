@@ -2,7 +2,7 @@
 form, on the committed meshes (tet10 block, 0.3 mm at the contact, 11,748 DOF; the sphere's
 0.1 mm facets as master), full FE over 110 us (220 steps of 0.5 us).
 
-Hertz with the free block's recoil (flexmvm.scenarios.hertz_block.hertz_reference): 615.1 N,
+Hertz with the free block's recoil (flexmvm.runs.showcases.hertz_block.hertz_reference): 615.1 N,
 86.7 us. Measured: peak 623.7 N (+1.4 %), duration 85.5 us (-1.4 %): a static indentation of
 the same mesh (tests/test_quadratic_contact.py) is 3.6 % stiffer than Hertz at the peak's
 approach, and a contact stiffer by c changes the peak by c^(2/5) and the duration by
@@ -17,7 +17,7 @@ from __future__ import annotations
 import pytest
 
 from flexmvm.errors import InputError
-from flexmvm.scenarios.hertz_block import (
+from flexmvm.runs.showcases.hertz_block import (
     SPHERE_BLOCK,
     compare_with_hertz,
     hertz_block_check,

@@ -21,12 +21,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from flexmvm.assembly.build import build_scenario
 from flexmvm.bodies.spin_modes import spin_frequencies, spin_quasi_static
 from flexmvm.integrate.body_solver import SPIN_TOL
 from flexmvm.mesh.structured import spin_up_beam_part
+from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import load_scenario, scenario_from_dict
-from flexmvm.scenarios.build import build_scenario
-from flexmvm.scenarios.run import run_scenario
 from flexmvm.time_functions import SpinUp
 
 SCENARIO = Path(__file__).resolve().parents[1] / "scenarios" / "spin_up.toml"

@@ -32,7 +32,12 @@ STAGES = [
     "results",
     "setup_cache",
     "plots",
+    # a scenario file in three stages, one job each (docs/architecture.md): the schema and its
+    # loading (a Scenario: values only), the assembly of a System from it (through the setup
+    # cache), and the runs made of a System (summaries, guards, comparisons, stored runs)
     "scenarios",
+    "assembly",
+    "runs",
     "studies",
     "cli",
 ]
@@ -119,3 +124,42 @@ def test_no_private_names_across_modules():
                             f"{node.module}.{alias.name}"
                         )
     assert not wrong, "\n".join(wrong)
+
+
+#: What a build makes (bodies, states, FE models, plastic parts, the system): the schema stage
+#: (scenarios/) holds values and checks them, so none of its modules imports these; the
+#: assembly stage makes them from its tables
+BUILT = {
+    "flexmvm.bodies.body": {"FlexibleBody"},
+    "flexmvm.bodies.stiffening": {"geometric_stiffening"},
+    "flexmvm.integrate.state": {"BodyState"},
+    "flexmvm.integrate.system": {"System"},
+    "flexmvm.integrate.plastic_bodies": {"PlasticPart"},
+    "flexmvm.plasticity.body": {"PlasticBody"},
+    "flexmvm.fe.assembly": {"FEModel", "assemble"},
+}
+
+
+def test_schema_stage_builds_nothing():
+    """A schema module reads and checks a table; what the table makes is built by the assembly
+    stage (e.g. a body's geometric stiffening: assembly/stiffened_body.py)."""
+    wrong = []
+    for path in sorted((PACKAGE / "scenarios").rglob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom) and node.module in BUILT:
+                names = {a.name for a in node.names} & BUILT[node.module]
+                if names:
+                    wrong.append(f"{path.relative_to(PACKAGE)}:{node.lineno} {sorted(names)}")
+    assert not wrong, "\n".join(wrong)
+
+
+def test_showcase_code_is_in_showcases():
+    """Code for one shipped scenario file (the pendulum release's measures, the sphere on
+    block's Hertz check) sits in runs/showcases/, not in a stage's own modules."""
+    showcases = {"pendulum.py", "hertz_block.py"}
+    found = {
+        p.relative_to(PACKAGE).as_posix()
+        for p in PACKAGE.rglob("*.py")
+        if p.name in showcases and "plots" not in p.parts
+    }
+    assert found == {f"runs/showcases/{name}" for name in showcases}, found

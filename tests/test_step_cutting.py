@@ -122,7 +122,7 @@ def test_the_hook_sees_every_accepted_step_of_the_integrator_the_call_chose():
     halves included, in order: each step starts from the states the last one ended with (the
     same objects), at the time it ended (to round-off of the tick grid, 1e-12 relative), and
     the hook's step sizes and impulses are the run's step history exactly. ~3 s."""
-    from flexmvm.scenarios.build import build_scenario
+    from flexmvm.assembly.build import build_scenario
 
     built = build_scenario(_tiny())
     dt = built.grid.dt_s

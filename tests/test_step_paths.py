@@ -30,13 +30,13 @@ import numpy as np
 import pytest
 import scipy.sparse as sp
 
+from flexmvm.assembly.build import build_scenario
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.integrate.body_solver import BodySolver
 from flexmvm.integrate.driver import simulate
 from flexmvm.metrics.ncc import compare_force
+from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import load_scenario
-from flexmvm.scenarios.build import build_scenario
-from flexmvm.scenarios.run import run_scenario
 
 DATA = Path(__file__).parent / "data"
 REFERENCE = DATA / "step_histories_tiny_flat.npz"

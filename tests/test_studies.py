@@ -257,7 +257,7 @@ def test_cli_one_line_errors(tmp_path, args, message):
 
 
 def test_materials_study_two_materials(tmp_path):
-    from flexmvm.scenarios.guard import ENERGY_GAIN_WARN, WARN_FRACTION
+    from flexmvm.runs.guard import ENERGY_GAIN_WARN, WARN_FRACTION
     from flexmvm.studies.materials import run_materials_study
 
     res = run_materials_study(
@@ -318,8 +318,8 @@ def test_materials_study_of_the_seed_eq4_kind(tmp_path, monkeypatch):
     library result; a rerun of the directory with another kind is refused (stored params
     differ) rather than mixing kinds."""
     import flexmvm as fm
+    from flexmvm.assembly.build_cache import SetupCache
     from flexmvm.reduction.basis import BasisKind
-    from flexmvm.scenarios.setup import SetupCache
 
     built = []
 
@@ -430,8 +430,8 @@ def test_mode_floor_cuts_the_larger_craig_bampton_basis():
     the same constraint modes (exact: same factor and right-hand sides)."""
     import numpy as np
 
+    from flexmvm.assembly.build_cache import default_setup
     from flexmvm.reduction.basis import BasisKind
-    from flexmvm.scenarios.setup import default_setup
 
     cfg = load_scenario(TINY).body("b2")
     spec, mat = cfg.rod.spec(), cfg.material_obj()
@@ -482,7 +482,7 @@ def test_score_refuses_a_run_outside_its_models_validity():
     without the records (unguarded, or rows stored before the checks existed), the NCC
     decides."""
     from flexmvm.metrics.ncc import Target
-    from flexmvm.scenarios.guard import ENERGY_GAIN_WARN, WARN_FRACTION
+    from flexmvm.runs.guard import ENERGY_GAIN_WARN, WARN_FRACTION
     from flexmvm.studies.selection import FAIL_SCORE, score
 
     target = Target.parse("ncc>=0.99")

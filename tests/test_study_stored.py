@@ -13,7 +13,7 @@ from pathlib import Path
 import pytest
 
 from flexmvm.metrics.ncc import Target
-from flexmvm.scenarios import provenance
+from flexmvm.runs import provenance
 from flexmvm.studies.selection import run_selection_study
 
 TINY = Path(__file__).parent / "data" / "tiny_impact.toml"

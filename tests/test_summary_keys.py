@@ -4,7 +4,7 @@ that damped 10 % of a plate's energy) is ``contact_laws_add_no_energy``, beside 
 scheme's damping took (``numerical_dissipation_J``, ``numerical_dissipation_share``) and the
 damping time in use (``hf_damping_time_s``). Runs written before the rename are read under the
 current names by one mapping (results.summary_keys), in results.read.read_run and
-scenarios.stored_run."""
+runs.stored_run."""
 
 from __future__ import annotations
 
@@ -18,9 +18,9 @@ from test_cli_failures import TINY
 import flexmvm as fm
 from flexmvm.results.read import read_run
 from flexmvm.results.summary_keys import RENAMED_KEYS, with_current_keys
-from flexmvm.scenarios.guard import energy_gain_warning
-from flexmvm.scenarios.run import run_scenario
-from flexmvm.scenarios.stored_run import load_or_run
+from flexmvm.runs.guard import energy_gain_warning
+from flexmvm.runs.run import run_scenario
+from flexmvm.runs.stored_run import load_or_run
 
 STORED = Path(__file__).resolve().parents[1] / "docs" / "validation" / "short_full"
 
@@ -59,8 +59,8 @@ def test_a_run_written_before_the_rename_is_read_under_the_new_key(tmp_path):
 
 
 def test_a_stored_run_is_read_under_the_new_key(monkeypatch, tmp_path):
-    """scenarios.stored_run: a stored run that passes its check comes back with the new key."""
-    from flexmvm.scenarios import stored_run
+    """runs.stored_run: a stored run that passes its check comes back with the new key."""
+    from flexmvm.runs import stored_run
 
     d = tmp_path / "stored"
     shutil.copytree(STORED, d)

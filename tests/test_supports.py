@@ -1,5 +1,5 @@
 """Supports (issue 35): a body clamped on a node set, its frame fixed and the set's nodal
-coordinates removed (reduction.clamp, scenarios.supports), for full-FE and reduced bodies.
+coordinates removed (reduction.clamp, assembly.supports), for full-FE and reduced bodies.
 
 Closed form: Euler-Bernoulli cantilever, w_n = (beta_n L)^2 sqrt(E I / (rho A L^4)), beta_1 L =
 1.875104, beta_2 L = 4.694091 (Timoshenko, Vibration Problems in Engineering). The rod (L =
@@ -23,13 +23,13 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 from _cantilever import CLAMP, L, R, scenario
 
+from flexmvm.assembly.build import build_scenario
+from flexmvm.assembly.build_cache import SetupCache
 from flexmvm.errors import InputError
 from flexmvm.fe.modes import shift_invert_modes
 from flexmvm.materials import ALUMINIUM
-from flexmvm.scenarios.build import build_scenario
 from flexmvm.scenarios.load import scenario_from_dict
 from flexmvm.scenarios.problems import ScenarioError
-from flexmvm.scenarios.setup import SetupCache
 
 
 @functools.cache

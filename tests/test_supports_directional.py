@@ -1,6 +1,6 @@
 """Supports beyond one clamp (issue 52 item 5, issue 53 item 2): a clamp on several node sets,
 node sets held in chosen directions (pinned, roller, symmetry, fixed axes; reduction.clamp,
-scenarios.supports) and a spring bed on a facet set (fe/spring_bed.py).
+assembly.supports) and a spring bed on a facet set (fe/spring_bed.py).
 
 Closed forms:
 - Simply supported beam: f_n = (n^2 pi / (2 L^2)) sqrt(E I / (rho A)) (Euler-Bernoulli). The
@@ -34,6 +34,8 @@ import scipy.sparse as sp
 from _cantilever import ROD
 from scipy.sparse.linalg import spsolve
 
+from flexmvm.assembly.build import build_scenario
+from flexmvm.assembly.build_cache import SetupCache
 from flexmvm.errors import InputError
 from flexmvm.fe.assembly import assemble
 from flexmvm.fe.modes import shift_invert_modes
@@ -43,10 +45,8 @@ from flexmvm.mesh.io import write_mesh
 from flexmvm.mesh.mesh import FacetSet, Mesh
 from flexmvm.mesh.structured import hex27_beam
 from flexmvm.reduction.clamp import bed_rigid_stiffness, held_condition, held_dofs
-from flexmvm.scenarios.build import build_scenario
 from flexmvm.scenarios.load import scenario_from_dict
 from flexmvm.scenarios.problems import ScenarioError
-from flexmvm.scenarios.setup import SetupCache
 from flexmvm.theory.timoshenko import TimoshenkoBeam, simply_supported_omega
 
 L, B, H, NX = 1.0, 0.05, 0.05, 20

@@ -25,9 +25,9 @@ from flexmvm.integrate.run_result import TimeGrid
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import System
 from flexmvm.integrate.theta import ThetaRule
+from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import TimeConfig
 from flexmvm.scenarios.load import load_scenario
-from flexmvm.scenarios.run import run_scenario
 from flexmvm.scenarios.time_schema import theta_for_damping_time
 
 OMEGA = 2 * np.pi * 1000.0  # [rad/s]: period 1 ms

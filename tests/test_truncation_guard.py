@@ -17,8 +17,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from flexmvm.assembly.build import build_scenario
 from flexmvm.reduction.truncation import RATIO_WARN, first_contact_duration
-from flexmvm.scenarios.build import build_scenario
 from flexmvm.scenarios.load import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]

@@ -7,7 +7,7 @@ its end face's lower edge at 5 m/s onto the top of a coarse aluminium cantilever
 6 mm, tet4, 6 mm elements, clamped at x = 120 mm), both full FE (324 + 558 DOF), the edge 3 mm
 from the nearest top nodes. With the one pair cantilever.top -> link.surface the edge goes
 straight through: no contact force, and the penetration measure reads only its reach, the
-pair's search radius 2e-4 m (3 % of the 6 mm thickness), so before scenarios.blowup's reach
+pair's search radius 2e-4 m (3 % of the 6 mm thickness), so before runs.blowup's reach
 bound the run "completed". ``two_pass = true`` adds the reverse pair (same law, options):
 penetration 7.3e-9 m, peak 3.75 kN. About 1 s of CPU per run after the kernels compile."""
 
@@ -20,9 +20,9 @@ import pytest
 from flexmvm.errors import SimulationFailed
 from flexmvm.mesh.link import connecting_rod
 from flexmvm.mesh.part_shapes import beam
+from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios.load import scenario_from_dict
 from flexmvm.scenarios.problems import ScenarioError
-from flexmvm.scenarios.run import run_scenario
 
 STEEL = {"name": "steel", "E_pa": 210.0e9, "nu": 0.3, "rho_kg_m3": 7850.0}
 ONE_PAIR = {"slave": "cant.top", "master": "link.surface", "law": "position"}

@@ -77,7 +77,7 @@ def _stored_case_problems(report: dict, section: str) -> list[str]:
     versions with scikit-fem and gmsh)."""
     from flexmvm.results.atomic import file_sha256
     from flexmvm.results.history import history_problem
-    from flexmvm.scenarios import provenance
+    from flexmvm.runs import provenance
     from tools.validation.cases import case, stored_cases
 
     names = case(section).stored
@@ -132,10 +132,10 @@ def test_stored_report_meets_the_table(section):
 
 def test_stored_report_stamp_is_this_checkouts():
     """validation.json's own stamp (meta) is this checkout's: the package source's hash
-    (scenarios.provenance.run_code_version, which the runs' keys cover too) and the validation
+    (runs.provenance.run_code_version, which the runs' keys cover too) and the validation
     tool's (tools.validation.paths.tool_version: its modules and templates, which render the
     page from the runs). An edit of either makes the stored report stale, named here."""
-    from flexmvm.scenarios import provenance
+    from flexmvm.runs import provenance
     from tools.validation.paths import tool_version
 
     meta = json.loads((OUT / "validation.json").read_text())["meta"]

@@ -9,7 +9,7 @@ from pathlib import Path
 
 import pytest
 
-import flexmvm.scenarios.run as run_module
+import flexmvm.runs.run as run_module
 from flexmvm.errors import StaleDataWarning
 from flexmvm.scenarios import ModelConfig, load_scenario, provenance, scenario_from_dict
 from tools import validation

@@ -31,9 +31,9 @@ import numpy as np
 from _short_case import short_run
 
 from flexmvm.materials import ALUMINIUM, BRASS, Material
+from flexmvm.runs.compare import compare_runs
+from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import ModelConfig
-from flexmvm.scenarios.compare import compare_runs
-from flexmvm.scenarios.run import run_scenario
 from flexmvm.studies.grid import seed_scheme
 from flexmvm.theory.scenario import theory_histories
 from flexmvm.theory.wave import ContactLaw, Rod1D, two_rod_impact

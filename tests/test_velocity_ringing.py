@@ -24,7 +24,7 @@ R_M, L_M, OMEGA = 0.15, 0.30, 150.0  # crank, rod [m], crank speed [rad/s]
 OFFSET_M = -0.004  # the pin probes sit on the rod's -y edge, 4 mm off its axis
 T_END = 0.013  # the ringing peaked at ~10 ms before the projection
 
-pytestmark = pytest.mark.filterwarnings("ignore::flexmvm.scenarios.cost.ReducedCostWarning")
+pytestmark = pytest.mark.filterwarnings("ignore::flexmvm.assembly.cost.ReducedCostWarning")
 
 
 def _rigid_point(phi: np.ndarray, s: float, d: float) -> np.ndarray:

@@ -11,10 +11,10 @@ from pathlib import Path
 import pytest
 
 import flexmvm as fm
-import flexmvm.scenarios.setup as setup_stage
+import flexmvm.assembly.build_cache as setup_stage
 from flexmvm import setup_cache
-from flexmvm.scenarios.build import build_scenario
-from flexmvm.scenarios.setup import SetupCache
+from flexmvm.assembly.build import build_scenario
+from flexmvm.assembly.build_cache import SetupCache
 
 TINY = Path(__file__).parent / "data" / "tiny_impact.toml"
 

@@ -49,14 +49,14 @@ _API = {
     "damping": "flexmvm.scenarios.mechanism",
     "rigid_motion": "flexmvm.scenarios.mechanism",
     # runs and comparisons
-    "run": "flexmvm.scenarios.run",
-    "ScenarioRun": "flexmvm.scenarios.run",
+    "run": "flexmvm.runs.run",
+    "ScenarioRun": "flexmvm.runs.run",
     "RunResult": "flexmvm.integrate.run_result",
-    "compare": "flexmvm.scenarios.compare",
-    "RunComparison": "flexmvm.scenarios.compare",
+    "compare": "flexmvm.runs.compare",
+    "RunComparison": "flexmvm.runs.compare",
     "theory_histories": "flexmvm.theory.scenario",
     "write_run": "flexmvm.results.output",
-    "read_run": "flexmvm.scenarios.written_run",
+    "read_run": "flexmvm.runs.written_run",
     "Target": "flexmvm.metrics.ncc",
     # studies
     "select": "flexmvm.studies.api",
@@ -65,9 +65,9 @@ _API = {
     "estimate_interface": "flexmvm.studies.estimate",
     "estimate_region": "flexmvm.studies.region_estimate",
     # per-process caches
-    "clear_caches": "flexmvm.scenarios.setup",
-    "set_cache_sizes": "flexmvm.scenarios.setup",
-    "cache_sizes": "flexmvm.scenarios.setup",
+    "clear_caches": "flexmvm.assembly.build_cache",
+    "set_cache_sizes": "flexmvm.assembly.build_cache",
+    "cache_sizes": "flexmvm.assembly.build_cache",
     # errors
     "FlexmvmError": "flexmvm.errors",
     "InputError": "flexmvm.errors",

@@ -4,7 +4,7 @@ the impact, swung into a grounded rigid sphere; full FE (the reference) and the 
 (`flexmvm run --model mvm`) side by side.
 
 Numbers reported: the MVM against full FE (contact force NCC over the contact window, peak,
-impulse and duration errors: scenarios.compare.compare_runs; the tip's swing velocity NCC from
+impulse and duration errors: runs.compare.compare_runs; the tip's swing velocity NCC from
 the motor's end on, where the coast, the impact, the rebound and the vibration are: over the
 whole run the spin-up's rise alone would make it near 1), each run's energy ledger (its
 balance residual relative to the input work, the motor's work, the numerical dissipation),
@@ -19,8 +19,8 @@ import numpy as np
 
 from flexmvm.errors import InputError
 from flexmvm.metrics.ncc import ncc
+from flexmvm.runs.compare import compare_runs
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario
-from flexmvm.scenarios.compare import compare_runs
 from tools.validation.paths import scenario_path
 from tools.validation.runs import Case, case_meta, conservation, run_case
 

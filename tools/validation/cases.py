@@ -31,9 +31,9 @@ import numpy as np
 
 from flexmvm.errors import InputError
 from flexmvm.materials import ALUMINIUM, BRASS
+from flexmvm.runs.compare import compare_runs
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario
 from flexmvm.scenarios import mvm as mvm_model
-from flexmvm.scenarios.compare import compare_runs
 from flexmvm.theory.scenario import theory_histories
 from flexmvm.theory.wave import Rod1D, st_venant_force
 from tools.validation.arm_stop import arm_stop_case
@@ -244,7 +244,7 @@ def short_case(out: Path, recompute: bool = False, plot: bool = False) -> dict:
 
 
 def _as_run(c: Case) -> SimpleNamespace:
-    """A stored case as scenarios.pendulum.impact_comparison reads a run: times, force,
+    """A stored case as runs.showcases.pendulum.impact_comparison reads a run: times, force,
     contact intervals and the probes' axial velocities."""
     names = list(c.probes)
     v = np.stack([c.probes[n] for n in names], axis=1)[:, :, None] if names else None
@@ -263,10 +263,10 @@ def pendulum_case(out: Path, recompute: bool = False) -> dict:
     b1's start height), the impact phase against the seed case with the same models and
     scheme (the seed_mvm case: rod_impact.toml as shipped) aligned at first contact, the momenta
     after the separation against the rigid pendulum, the strings' drift."""
-    from flexmvm.scenarios.pendulum import impact_comparison
+    from flexmvm.runs.showcases.pendulum import impact_comparison
 
     sc = load_scenario(scenario_path("pendulum_release.toml"))
-    c = run_case(out, "pendulum", sc, recompute)  # its summary's "pendulum": scenarios.run
+    c = run_case(out, "pendulum", sc, recompute)  # its summary's "pendulum": runs.run
     ref = run_case(out, "seed_mvm", seed_scenario(), recompute)
     ev = c.summary["pendulum"]
     g = float(np.linalg.norm(sc.gravity_mps2))
@@ -309,10 +309,10 @@ def _hertz_block_mesh(out: Path, fine_m: float) -> Path:
 
 def hertz_block_case(out: Path, recompute: bool = False) -> dict:
     """A rigid steel sphere (R 10 mm, 0.5 m/s) on a free aluminium block (sphere_block.toml
-    as shipped: 0.2 ms) against Hertz with the block's recoil (scenarios.hertz_block): peak
+    as shipped: 0.2 ms) against Hertz with the block's recoil (runs.showcases.hertz_block): peak
     force and duration of the first contact, with the committed block (coarse) and one meshed
     finer at run time."""
-    from flexmvm.scenarios.hertz_block import (
+    from flexmvm.runs.showcases.hertz_block import (
         hertz_comparison,
         hertz_reference,
         sphere_block_scenario,

@@ -4,7 +4,7 @@ a report.
 The validation is a repository tool (``python -m tools.validation`` from the repository root):
 it reads the repository's ``scenarios/*.toml``, writes docs/validation.md and docs/validation/
 by default, and stamps a report with the checkout's commit (git) and the hashes of the package
-source (flexmvm.scenarios.provenance.run_code_version) and of this tool's source
+source (flexmvm.runs.provenance.run_code_version) and of this tool's source
 (:func:`tool_version`).
 """
 

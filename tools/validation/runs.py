@@ -1,7 +1,7 @@
 """A validation case's stored run: run it, or load it while it is the same run.
 
 A finished case is stored in DIR/<case>/ (history.csv, summary.json, key.json;
-scenarios/stored_run.py) and reused only if its key matches: scenarios.provenance.run_key, the
+runs/stored_run.py) and reused only if its key matches: runs.provenance.run_key, the
 one key of every stored run (a SHA-256 of the package source but this validation package, the
 numpy, scipy and numba versions and the whole resolved scenario: every body, mesh parameter,
 model, contact, joint, probe and time setting, t_end, dt, theta; mesh files by content hash),
@@ -15,12 +15,12 @@ from __future__ import annotations
 import datetime as _dt
 from pathlib import Path
 
+from flexmvm.runs.provenance import run_inputs, run_key
+from flexmvm.runs.stored_run import StoredRun, load_or_run
 from flexmvm.scenarios import Scenario
-from flexmvm.scenarios.provenance import run_inputs, run_key
-from flexmvm.scenarios.stored_run import StoredRun, load_or_run
 from tools.validation.paths import git_commit
 
-#: A stored case (scenarios.stored_run).
+#: A stored case (runs.stored_run).
 Case = StoredRun
 
 #: The summary entries a case's report keeps of each run: conservation, solver health, cost.
@@ -45,12 +45,12 @@ CONSERVATION_KEYS = (
 
 
 def case_inputs(sc: Scenario) -> dict:
-    """Everything a run depends on (scenarios.provenance.run_inputs)."""
+    """Everything a run depends on (runs.provenance.run_inputs)."""
     return run_inputs(sc)
 
 
 def case_key(sc: Scenario) -> str:
-    """The key of a stored case (scenarios.provenance.run_key)."""
+    """The key of a stored case (runs.provenance.run_key)."""
     return run_key(sc)
 
 

@@ -11,8 +11,8 @@ from pathlib import Path
 
 from flexmvm.errors import InputError
 from flexmvm.results.atomic import write_json_atomic
+from flexmvm.runs.provenance import run_code_version
 from flexmvm.scenarios import load_scenario
-from flexmvm.scenarios.provenance import run_code_version
 from tools.validation import acceptance
 from tools.validation.cases import CASES, stored_cases
 from tools.validation.paths import git_commit, scenario_path, tool_version

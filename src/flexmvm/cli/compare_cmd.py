@@ -26,8 +26,8 @@ def command(run: Path, reference: Path, axis: str | None) -> None:
     peak, impulse and contact duration, and NCC of each probe's velocity (--axis) both runs
     have.
     Comparisons that cannot be made are printed with their reason."""
-    from flexmvm.scenarios.compare import compare
-    from flexmvm.scenarios.written_run import read_run
+    from flexmvm.runs.compare import compare
+    from flexmvm.runs.written_run import read_run
 
     c = compare(read_run(run), read_run(reference), axis)
     shown = axis or "as each probe's axis"

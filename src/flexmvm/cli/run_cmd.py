@@ -63,8 +63,8 @@ def command(
     2; a run interrupted or killed leaves DIR as it was. An existing DIR is replaced as a
     whole, and only if it is empty or an unchanged earlier output of `flexmvm run`. Comparisons that cannot be made are printed and listed in
     summary.json under "failures"."""
-    from flexmvm.scenarios.main_job import run_main_job
-    from flexmvm.scenarios.run import numerical_dissipation_line
+    from flexmvm.runs.main_job import run_main_job
+    from flexmvm.runs.run import numerical_dissipation_line
 
     summary = run_main_job(
         scenario,

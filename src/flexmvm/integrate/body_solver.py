@@ -38,7 +38,7 @@ MAX_CACHED = 10
 # (its value in W + the body's spin_crit): BodySolver.use_spin
 SPIN_TOL = 0.1
 
-#: The factorizations as they happen, with the set-up's stages (scenarios.setup.SETUP_LOG)
+#: The factorizations as they happen, with the set-up's stages (assembly.build_cache.SETUP_LOG)
 SETUP_LOG = logging.getLogger("flexmvm.setup")
 
 

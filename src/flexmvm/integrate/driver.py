@@ -340,7 +340,7 @@ def _add_row_impulses(acc: dict, crows, lam: np.ndarray, t: float) -> None:
     """Add the compressive normal impulses of the step's unilateral normal rows (keys
     (contact, slave node, master facet); not tangent or bond rows) to acc[key] = [impulse
     [N s], first time [s] it carried one]: where on the surfaces a run's contact was carried
-    (the validity guard of reduced bases, scenarios/guard.py)."""
+    (the validity guard of reduced bases, runs/guard.py)."""
     w = crows.normal_weight
     for i in np.nonzero(lam > 0.0)[0]:
         key = crows.keys[i]

@@ -192,7 +192,7 @@ class RunResult:
     newton_residual_max: float = 0.0  # largest relative momentum residual at a step's exit
     lcp_residual_max: float = 0.0  # largest complementarity residual of any LCP solve
     # normal contact row (contact name, slave node, master facet) -> [impulse [N s], first
-    # time it carried one [s]] over the run (the reduced-basis guard, scenarios/guard.py)
+    # time it carried one [s]] over the run (the reduced-basis guard, runs/guard.py)
     contact_row_impulses: dict = field(default_factory=dict)
     momentum_residual: np.ndarray = field(default_factory=lambda: np.zeros(3))
     # sum over all steps of the translational momentum residuals of all bodies as the solves
@@ -218,7 +218,7 @@ class RunResult:
     # the precision the writers write q, q_dot and the ParaView point data in (kept float64
     # in memory)
     field_precision: FieldPrecision = FieldPrecision.FLOAT64
-    # the resolved scenario's JSON form the run was made of (scenarios.run; written to
+    # the resolved scenario's JSON form the run was made of (runs.run; written to
     # results.h5, read back by flexmvm.results.read); None: not made from a scenario
     scenario: dict | None = None
 

@@ -207,7 +207,7 @@ def plot_materials(
 ) -> None:
     """Seed fig. 9: ncc_force against modes, a colour per material, a line style per
     selection; rows carry material, selection ('i-j'), modes, ncc_force. Rows with
-    ``valid`` False (a run outside its model's validity, scenarios.guard.invalid_reason) get
+    ``valid`` False (a run outside its model's validity, runs.guard.invalid_reason) get
     open markers."""
 
     _check(rows, "plot_materials")

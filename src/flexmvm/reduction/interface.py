@@ -27,7 +27,7 @@ floating frame of the 3-2-1 reference: reference DOF rows zero):
 
 The two expensive parts, the free-free mode pool and the patch vectors' static solve, do not
 depend on ``n_modes``: ``interface_columns`` takes them from an InterfaceSources (the setup
-cache's, scenarios/build.py), so the bases of one patch set that differ only in their mode
+cache's, assembly/build.py), so the bases of one patch set that differ only in their mode
 count share one eigen solve and one factor of K when they share the pool (a study gives all
 of them the pool of its largest mode count: studies/interface.py, participation_pool).
 

@@ -113,7 +113,7 @@ class WrittenRun:
         self.path, self.result, self.summary = path, result, summary
         self._curves = curves  # history.csv's (t, force, {probe: vx}) of a run without h5
         self.label = path.name
-        self.scenario: Any = None  # the Scenario it ran (scenarios.written_run.read_run)
+        self.scenario: Any = None  # the Scenario it ran (runs.written_run.read_run)
 
     @property
     def t(self) -> np.ndarray:

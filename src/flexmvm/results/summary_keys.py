@@ -1,11 +1,11 @@
 """summary.json's renamed keys, and the one mapping that reads a summary written before a
-rename under the current names (results.read.read_run, scenarios.stored_run).
+rename under the current names (results.read.read_run, runs.stored_run).
 
 A key says what it means: ``energy_conserving_scheme`` was true when every contact used the
 position law (constraints/contact_laws: ``conserves_energy``), not that the scheme kept the
 energy (at theta > 1/2 it damps: a plate impact lost 10 % with it true, issue 51); it is
 ``contact_laws_add_no_energy`` now, beside ``numerical_dissipation_J`` and
-``numerical_dissipation_share`` (the energy the scheme's theta > 1/2 took, scenarios.run).
+``numerical_dissipation_share`` (the energy the scheme's theta > 1/2 took, runs.run).
 """
 
 from __future__ import annotations

@@ -1,9 +1,9 @@
-"""Scenarios: the schema (schema.py, a body's tables body_schema.py; value types fields.py,
-error lines problems.py), reading
-files and dicts (load.py), building a System from a scenario (build.py, through the setup cache
-of setup.py), running it (run.py),
-comparing runs (compare.py) and the main job (main_job.py); a mechanism's tables made from Python
-(mechanism.py).
+"""Scenarios: the schema and its loading (the first of three stages, docs/architecture.md). The
+schema (schema.py, a body's tables body_schema.py, one module per table kind *_schema.py; value
+types fields.py, error lines problems.py), reading files and dicts (load.py), the model
+constructors (model_constructors.py) and a mechanism's tables made from Python (mechanism.py).
+A Scenario holds values only: a System is built from it by flexmvm.assembly (build.py) and run
+by flexmvm.runs (run.py).
 
 ``load_scenario(path)`` reads and validates a file (docs/scenario_format.md) and returns a frozen
 :class:`Scenario`; every problem is one :class:`ScenarioError` line (file, key path, problem).

@@ -214,7 +214,7 @@ class ModelConfig(Frozen):
     mode_choice: ModeChoice = ModeChoice.PARTICIPATION
     mode_pool: Count | None = None
     # build a reduced body even when its dense matrices would take more memory than the
-    # full-FE body's sparse ones (scenarios.cost; refused by default)
+    # full-FE body's sparse ones (assembly.cost; refused by default)
     allow_costly: bool = False
     geometric_stiffening: StiffeningKey = None  # stiffening_schema.py; a rigid kind ignores it
     # a plastic body (material.plasticity): its Newton matrix while it yields, the elastic W
@@ -313,7 +313,7 @@ class Placement(Frozen):
     rotation: Rotation = Rotation()
     velocity_mps: Velocity = ZERO3
     angular_velocity_radps: AngularVelocity = ZERO3
-    # start in the quasi-static sag on the body's joints under gravity (at rest; scenarios/sag.py)
+    # start in the quasi-static sag on the body's joints under gravity (at rest; assembly/sag.py)
     sagged: Annotated[bool, Strict()] = False
     # the initial motion about a point instead (scenarios/initial_motion.py)
     rigid_motion: RigidMotionConfig | None = None

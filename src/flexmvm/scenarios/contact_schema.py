@@ -45,7 +45,7 @@ class ContactConfig(Frozen):
     # two-pass: also the reverse pair (the master's surface nodes against the slave's facets,
     # the same law and options), so that each surface is checked against the other: a master
     # edge or corner can otherwise go through the slave surface (docs/contact_law.md,
-    # "When one pair is not enough"); the builder adds it (scenarios.build)
+    # "When one pair is not enough"); the builder adds it (assembly.build)
     two_pass: bool = False
 
     @model_serializer(mode="wrap")

@@ -1,7 +1,7 @@
 """The scenario's ``[[loads]]`` and ``[[springs]]`` tables (pydantic v2): applied forces, body
 torques and motor torques (constant or a time table), linear spring-dampers between points and
 rotational ones on revolute joints (flexmvm.loads). ``check_load_references`` checks the
-cross-references (bodies, joints) from the Scenario; scenarios/load_build.py builds them;
+cross-references (bodies, joints) from the Scenario; assembly/load_build.py builds them;
 docs/scenario_format.md lists the keys."""
 
 from __future__ import annotations

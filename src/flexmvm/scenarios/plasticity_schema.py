@@ -1,19 +1,16 @@
-"""The ``plasticity`` table of an inline material (J2, von Mises: flexmvm.plasticity), the
-plastic parts of a built scenario (full-FE bodies: integrate.plastic_bodies) and the one-line
-refusal of the bodies the dynamic run cannot make plastic yet (reduced, modal, rigid)."""
+"""The ``plasticity`` table of an inline material (J2, von Mises: flexmvm.plasticity) and the
+one-line refusal of the bodies the dynamic run cannot make plastic yet (reduced, modal, rigid).
+The plastic parts of a built scenario: assembly/plastic_parts.py."""
 
 from __future__ import annotations
 
 from enum import StrEnum
 from typing import Annotated
 
-import numpy as np
 from annotated_types import Ge
 from pydantic import Field
 
 from flexmvm.errors import InputError
-from flexmvm.integrate.plastic_bodies import PlasticPart
-from flexmvm.plasticity.body import PlasticBody
 from flexmvm.plasticity.material import J2Plasticity
 from flexmvm.scenarios.fields import Frozen, Num, Positive
 
@@ -76,28 +73,3 @@ def refuse_dynamic(scenario) -> None:
                 f"contacts[{k}]: redistribute_mass cannot be used with a plastic body "
                 f"({', '.join(sorted(names & {c.slave_body, c.master_body}))})"
             )
-
-
-def plastic_parts(scenario, infos) -> tuple[PlasticPart, ...]:
-    """The PlasticPart of every plastic body of ``scenario`` (infos: the built BodyInfo of
-    each body, in order: its mesh and elastic material)."""
-    parts = []
-    for k, (cfg, info) in enumerate(zip(scenario.bodies, infos)):
-        plastic = plasticity_of(cfg)
-        if plastic is None:
-            continue
-        model = PlasticBody.build(info.mesh, info.material, plastic)
-        allowed = None
-        if cfg.model.kind.retains_nodes:  # the cells whose nodes are all retained
-            kept = np.zeros(info.mesh.n_nodes, bool)
-            kept[info.covered_nodes] = True
-            allowed = tuple(kept[bl.nodes].all(axis=1) for bl in model.blocks)
-            if not any(a.any() for a in allowed):
-                raise InputError(
-                    f"bodies[{cfg.name}].model: no cell has all its nodes retained "
-                    f"({len(info.covered_nodes)} nodes kept), so none can yield: keep a region "
-                    "that holds whole cells around the contact"
-                )
-        stop = cfg.model.plastic_outside is PlasticOutside.STOP
-        parts.append(PlasticPart(k, model, allowed, cfg.model.plastic_tangent, stop))
-    return tuple(parts)

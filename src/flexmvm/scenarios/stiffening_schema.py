@@ -1,5 +1,6 @@
 """A body's ``[bodies.model] geometric_stiffening`` table (bodies.stiffening): the spin axis
-whose centrifugal prestress stiffens the body, and what the builder makes of it.
+whose centrifugal prestress stiffens the body (the builder makes the stiffened body of it:
+assembly/stiffened_body.py).
 
     geometric_stiffening = { axis = [0, 0, 1], point_m = [0, 0, 0] }
 
@@ -11,15 +12,11 @@ support); it is scaled by the square of the frame's spin about the axis at every
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from typing import Annotated
 
 from pydantic import Field, field_validator
 
-from flexmvm.bodies.body import FlexibleBody
-from flexmvm.bodies.stiffening import geometric_stiffening
-from flexmvm.errors import InputError
 from flexmvm.scenarios.fields import ZERO3, Frozen, Vec3
 from flexmvm.scenarios.problems import problem
 
@@ -43,17 +40,4 @@ class StiffeningConfig(Frozen):
 StiffeningKey = Annotated[StiffeningConfig | None, Field(exclude_if=lambda value: value is None)]
 
 
-def stiffened(body: FlexibleBody, spec: StiffeningConfig, fe, basis, where: str) -> FlexibleBody:
-    """``body`` (built on ``basis`` from the FE model ``fe``) with the geometric stiffening of
-    ``spec``, the unit-spin prestress held at the basis' reference DOFs (its clamp's, or its
-    3-2-1 support's). InputError naming ``where`` for supports that leave the body free."""
-    try:
-        st = geometric_stiffening(
-            fe, basis.psi, body.k_hat, spec.axis, basis.reference.fixed_dofs, spec.point_m
-        )
-    except InputError as exc:
-        raise InputError(f"{where}: {exc}") from None
-    return dataclasses.replace(body, stiffening=st)
-
-
-__all__ = ["StiffeningConfig", "StiffeningKey", "stiffened"]
+__all__ = ["StiffeningConfig", "StiffeningKey"]

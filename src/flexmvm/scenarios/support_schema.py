@@ -3,7 +3,7 @@ on them in chosen directions (pinned, roller, symmetry plane, ``fixed`` axes) (r
 its frame fixed at its placement, the held nodal coordinates removed), and the checks of the
 supports against the bodies and joints (called by schema.Scenario); and spring beds on facet
 sets (fe/spring_bed.py: their stiffness added to K). Several supports of one body are merged
-(a DOF held by two is held once). The builder's side is scenarios/supports.py;
+(a DOF held by two is held once). The builder's side is assembly/supports.py;
 docs/scenario_format.md lists the keys."""
 
 from __future__ import annotations

@@ -4,7 +4,7 @@
   K_ii), keyed by the basis's inputs (entries.basis_inputs) and what else the guard depends
   on (its FE model, a mode floor);
 - ``factorcounts-``: the nonzeros of a full-FE body's K and M and the stored entries of its
-  iteration matrix's factor (the cost guard's, scenarios.cost.full_factor: a symbolic
+  iteration matrix's factor (the cost guard's, assembly.cost.full_factor: a symbolic
   analysis), keyed by the FE model's inputs.
 """
 
@@ -71,7 +71,7 @@ _FACTOR_COUNTS = ("k_nnz", "m_nnz", "l_nnz")
 
 
 def cached_factor_counts(source: Mapping | None, build: Callable[[], dict]) -> dict:
-    """{k_nnz, m_nnz, l_nnz} of the FE model of key inputs ``source`` (scenarios.cache_keys
+    """{k_nnz, m_nnz, l_nnz} of the FE model of key inputs ``source`` (assembly.cache_keys
     mesh_source) from the cache, else ``build()`` stored; source None: build, no caching."""
     if source is None:
         return build()

@@ -19,7 +19,7 @@ from typing import Any
 
 from flexmvm.errors import InputError
 from flexmvm.results.atomic import canonical_json
-from flexmvm.scenarios.provenance import stamp_mismatch
+from flexmvm.runs.provenance import stamp_mismatch
 
 __all__ = [
     "CASES_DIR",
@@ -160,7 +160,7 @@ _VERSION_WORDS = {"reference_sha256": "compared with another reference history"}
 
 def _version_change(stored: Any, current: Any) -> str | None:
     """None if the stored ``version`` is ``current``; else what differs, in words (a
-    ``provenance`` entry by scenarios.provenance.stamp_mismatch, any other by its name)."""
+    ``provenance`` entry by runs.provenance.stamp_mismatch, any other by its name)."""
     if canonical_json(stored) == canonical_json(current):
         return None
     if not isinstance(stored, Mapping) or not isinstance(current, Mapping):

@@ -42,8 +42,8 @@ def estimate_selection(
     contact_radius_m, n_modes_below_f_max, rule}. ``target`` is recorded only: the rule does
     not depend on the NCC level (k sets the bandwidth).
     """
+    from flexmvm.assembly.build_cache import default_setup
     from flexmvm.reduction.basis import BasisKind
-    from flexmvm.scenarios.setup import default_setup
 
     if not k > 0:
         raise InputError(f"k: expected a number > 0, got {k!r}")
@@ -182,6 +182,7 @@ def _interface_modes(cfg, surface: str, a: float, f_max: float, grid: list[int] 
     """(freqs [Hz] of the free-free modes the Hertz load of radius a [m] on ``surface``
     excites below f_max [Hz], kept [Hz]: those the participation choice keeps for the count
     m, m: that count, rounded up to ``grid`` (its largest if none is enough)) of body cfg."""
+    from flexmvm.assembly.build_cache import default_setup
     from flexmvm.reduction.interface import (
         InterfaceSpec,
         chosen_modes,
@@ -189,7 +190,6 @@ def _interface_modes(cfg, surface: str, a: float, f_max: float, grid: list[int] 
         excited_modes_below,
         hertz_load,
     )
-    from flexmvm.scenarios.setup import default_setup
 
     # the setup cache's mode pools, shared with the bases
     fe, free = default_setup().free_modes_source(cfg)

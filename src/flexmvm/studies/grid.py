@@ -18,7 +18,7 @@ from flexmvm.studies.runner import Case
 
 def rod_of(sc: Scenario, body: str):
     """The (cached) RodMesh of rod body ``body``; InputError if there is no such rod body."""
-    from flexmvm.scenarios.setup import default_setup
+    from flexmvm.assembly.build_cache import default_setup
 
     cfg = sc.body(body)
     if cfg.rod is None:
@@ -124,7 +124,7 @@ def selection_cases(
 
     Keys ``l<i>-j<j>-m<m>``; params {body, layers, laps, modes, modes_max (the grid's largest
     mode count: each selection's Craig-Bampton basis is solved once with it and cut,
-    scenarios.setup.SetupCache.with_mode_floor), scenario (sc.model_dump(json)),
+    assembly.build_cache.SetupCache.with_mode_floor), scenario (sc.model_dump(json)),
     reference_sha256 (of the reference history CSV ``reference``, or None)}. The path itself is
     not a parameter, so a study directory can be moved; it is given to the case function as
     ``functools.partial(run_selection_case, reference=path)``. Raises InputError for an

@@ -161,7 +161,7 @@ def _axis_inertia(cfg, pivot: np.ndarray, axis: np.ndarray) -> float:
     """Moment of inertia [kg m^2] of body cfg at its placement about the unit ``axis``
     through ``pivot``: sum of its nodes' lumped masses (rows of M) x their squared distance
     from the axis."""
-    from flexmvm.scenarios.setup import default_setup
+    from flexmvm.assembly.build_cache import default_setup
     from flexmvm.studies.region_estimate import placed_nodes
 
     fe = default_setup().free_modes_source(cfg)[0]
@@ -226,7 +226,7 @@ def _mass(sc: Scenario, cfg, mesh, point: np.ndarray, n: np.ndarray) -> float:
     """The body's mass [kg] at ``point`` along ``n`` (module doc): its whole mass if free;
     J / ((point - p) x n . a)^2 if it turns about one undriven revolute joint to the ground
     (pivot p, axis a, J its moment of inertia about it); inf if held otherwise."""
-    from flexmvm.scenarios.setup import default_setup
+    from flexmvm.assembly.build_cache import default_setup
 
     ground = [j for j in sc.joints if j.body == cfg.name and j.body2 is None]
     swing = [j for _, j in _motored(sc, cfg.name)] or [

@@ -32,8 +32,8 @@ from typing import Any
 from flexmvm.errors import InputError, SolverError
 from flexmvm.reduction.interface import ModeChoice
 from flexmvm.results.atomic import file_sha256, write_table_csv
+from flexmvm.runs.guard import VALIDITY_KEYS
 from flexmvm.scenarios import Scenario, interface, scenario_from_dict
-from flexmvm.scenarios.guard import VALIDITY_KEYS
 from flexmvm.studies.reference_run import case_reference, scored_row
 from flexmvm.studies.report import failure_list
 from flexmvm.studies.runner import Case
@@ -174,7 +174,7 @@ def mode_pools(
     """The ``mode_pool`` of each mode count of patch set ``radii`` of body ``cfg`` (module
     doc): the pool of the largest count whose pool exists, for that count and the smaller ones
     (0 excluded); None for the others and for the frequency choice."""
-    from flexmvm.scenarios.setup import default_setup
+    from flexmvm.assembly.build_cache import default_setup
 
     pools: dict[int, int | None] = {m: None for m in counts}
     if ModeChoice(mode_choice) is not ModeChoice.PARTICIPATION:
@@ -213,7 +213,7 @@ def _model(p, reference: str = "end_b") -> Any:
 def run_interface_case(case: Case, reference: str | Path | None = None) -> dict:
     """One interface run of the study against the stored reference history (as
     selection.run_selection_case)."""
-    from flexmvm.scenarios.run import run_scenario
+    from flexmvm.runs.run import run_scenario
 
     p = case.params
     sc = scenario_from_dict(p["scenario"], source=f"case {case.key}")

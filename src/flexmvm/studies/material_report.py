@@ -3,7 +3,7 @@
 From the evaluated runs of every material (studies/materials.py): one row per run with the
 material's properties (a run that raised gets its grid fields and ``failed``), the mean NCC of
 the force per material over all its runs and over the models valid for every material
-(scenarios.guard.invalid_reason), whether those means decrease in the seed's order, the
+(runs.guard.invalid_reason), whether those means decrease in the seed's order, the
 failures, and the theory's contact radius beside the selections' radii (studies/materials.py
 module doc lists the fields).
 """
@@ -17,8 +17,8 @@ import numpy as np
 
 from flexmvm.errors import InputError
 from flexmvm.materials import Material
+from flexmvm.runs.guard import VALIDITY_KEYS, invalid_reason
 from flexmvm.scenarios import ModelKind, Scenario
-from flexmvm.scenarios.guard import VALIDITY_KEYS, invalid_reason
 from flexmvm.studies.case_store import Case
 from flexmvm.studies.report import failed_case_row, failure_list
 
@@ -30,7 +30,7 @@ _NOTE = (
     "(restricted to the materials run; false if a material has no mean). "
     "n_cases: the runs the mean covers (runs - failed). The _valid means and "
     "ordering: over valid_models, the models whose run is valid for every "
-    "material (scenarios.guard.invalid_reason: at most WARN_FRACTION of the "
+    "material (runs.guard.invalid_reason: at most WARN_FRACTION of the "
     "contact impulse on nodes the basis holds stiff, no energy rise above "
     "ENERGY_GAIN_WARN); guard_outside_validity: the invalid runs"
 )
@@ -129,7 +129,7 @@ def _decreasing(means: list[float | None]) -> bool:
 
 def _valid_models(rows: Sequence[dict], reason: Mapping[str, str | None]) -> set[tuple]:
     """The models (selection, modes) every material's run of which has an NCC and is valid
-    (scenarios.guard.invalid_reason): the same models for every material, as the seed's
+    (runs.guard.invalid_reason): the same models for every material, as the seed's
     ordering compares."""
     common = {(r["selection"], int(r["modes"])) for r in rows}
     for r in rows:

@@ -21,7 +21,7 @@ directory holds one kind (a rerun with another kind is refused: its stored param
   ncc_<probe>...,peak_err,impulse_err,duration_err,guard_outside_fraction,energy_gain_rel_max,
   wall_time_s``
   (guard_outside_fraction: the share of the contact impulse on surface nodes the reduced basis
-  holds stiff, scenarios/guard.py; energy_gain_rel_max: the largest rise of the total energy);
+  holds stiff, runs/guard.py; energy_gain_rel_max: the largest rise of the total energy);
 - ``DIR/materials.json``: the model ``kind``, per-material mean NCC of the force over the runs
   (the same selections x modes for every material; ``n_cases`` = the runs the mean covers,
   ``failed`` the runs without an NCC), ``failures`` (``{"case", "reason"}``: failed
@@ -30,7 +30,7 @@ directory holds one kind (a rerun with another kind is refused: its stored param
   (restricted to the materials run), and the observed order; the same over the runs the
   validity checks accept for every material (``valid_models``; ``mean_ncc_force_valid``,
   ``n_valid``, ``seed_ordering_holds_valid``) and the runs they do not (``guard_outside_validity``
-  with the reason, scenarios.guard.invalid_reason: a contact patch wider than the retained
+  with the reason, runs.guard.invalid_reason: a contact patch wider than the retained
   nodes, as PA6's on selections up to 1-3, or an energy rise; docs/studies.md "Material
   study");
 - ``DIR/fig9_materials.png``: NCC against modes per material and selection.
@@ -51,9 +51,9 @@ from flexmvm.errors import InputError, SolverError, announce_recompute
 from flexmvm.materials import ALUMINIUM, COPPER, PA6, TUNGSTEN, Material
 from flexmvm.results.atomic import file_sha256, write_json_atomic, write_table_csv
 from flexmvm.results.outdir import claim_study_dir
+from flexmvm.runs.guard import WARN_FRACTION
+from flexmvm.runs.provenance import stamp
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario, scenario_from_dict
-from flexmvm.scenarios.guard import WARN_FRACTION
-from flexmvm.scenarios.provenance import stamp
 from flexmvm.studies.grid import (
     SEED_SCHEME_NOTE,
     check_grid,

@@ -60,7 +60,7 @@ def estimated_modes(cfg, modes: int | None, duration_s: float) -> tuple[int, str
     """(mode count, "given" | "model" | "criterion", f_max [Hz], capped) of the estimated
     model: ``modes`` if given, else the body's model's (a kind that uses modes), else the
     criterion of studies/mode_estimate.py at the contact duration ``duration_s`` [s]."""
-    from flexmvm.scenarios.setup import default_setup
+    from flexmvm.assembly.build_cache import default_setup
 
     if modes is not None:
         return int(modes), "given", math.nan, False

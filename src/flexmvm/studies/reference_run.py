@@ -1,7 +1,7 @@
 """The full-FE reference of a study: run once, stored as ``reference/history.csv`` with the
 scenario it was run from (``reference/reference.json``), reused while the study is the same.
 
-reference.json holds {identity (body, scenario), provenance (scenarios.provenance.stamp of
+reference.json holds {identity (body, scenario), provenance (runs.provenance.stamp of
 the reference run: package source, numpy/scipy/numba, resolved scenario, mesh files), history
 (results.history.history_record: SHA-256, samples, first and last time), summary}. A stored
 reference of another study (identity) is refused; one run under another code version, one
@@ -21,10 +21,10 @@ from flexmvm.errors import InputError, announce_recompute
 from flexmvm.results.atomic import canonical_json, file_sha256, write_json_atomic
 from flexmvm.results.history import history_problem, history_record, read_history, write_history
 from flexmvm.results.output import writing
+from flexmvm.runs.compare import compare_runs
+from flexmvm.runs.guard import validity_fields
+from flexmvm.runs.provenance import stamp, stamp_mismatch
 from flexmvm.scenarios import Scenario
-from flexmvm.scenarios.compare import compare_runs
-from flexmvm.scenarios.guard import validity_fields
-from flexmvm.scenarios.provenance import stamp, stamp_mismatch
 
 
 def _read_meta(meta: Path) -> dict | None:
@@ -78,7 +78,7 @@ def reference_history(
     the code and the file are the same; module doc). A stored reference that fails its check
     is recomputed and ``announce``d (one line). Returns (path of history.csv, True if it was
     computed now). InputError if the stored reference is of another study."""
-    from flexmvm.scenarios.run import run_scenario
+    from flexmvm.runs.run import run_scenario
     from flexmvm.studies.grid import reference_scenario
 
     ref_dir = Path(out_dir) / "reference"
@@ -135,8 +135,8 @@ def case_reference(case, reference=None):
 
 def scored_row(row: dict, run, body: str, t_ref, f_ref, probes_ref) -> dict:
     """A study case's row completed by its run against the reference histories: the
-    comparison's numbers (scenarios.compare.compare_runs), its first error as "failed", the
-    validity fields of ``body`` (scenarios.guard), a plastic ``body``'s plastic work [J],
+    comparison's numbers (runs.compare.compare_runs), its first error as "failed", the
+    validity fields of ``body`` (runs.guard), a plastic ``body``'s plastic work [J],
     permanent indentation [m] and plastic cells (summary.json ``plastic``) and the run's wall
     time."""
     cmp = compare_runs(t_ref, f_ref, probes_ref, *run.result.curves())

@@ -35,7 +35,7 @@ Steps (all at the scenario's initial placements, in SI units):
    point touches (``facet_size_m``; the linear sub-facets of a quadratic mesh, whose nodes all
    carry contact), or ``factor x a`` if a factor is given; its nodes, its DOF 3 x nodes +
    modes (the free-free modes below 3 / contact duration unless given:
-   studies/mode_estimate.py) and its memory (scenarios/cost.py).
+   studies/mode_estimate.py) and its memory (assembly/cost.py).
 
 The rule a + h. The ball must hold every node of the facets the contact circle touches (a node
 outside the region moves only as the basis lets it: held stiff, the contact force comes out
@@ -56,9 +56,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from flexmvm.assembly.cost import BodyCost, reduced_cost
 from flexmvm.errors import InputError, MeshError
 from flexmvm.scenarios import Scenario
-from flexmvm.scenarios.cost import BodyCost, reduced_cost
 from flexmvm.studies.contact_point import equivalent_radius, facet_size, first_contact
 from flexmvm.studies.impact_estimate import (
     body_thickness,
@@ -259,7 +259,7 @@ def _sides(c, body: str) -> tuple[str, str, str]:
 def _facet_sets(cfg, pcfg, surface: str, other_surface: str, where: str):
     """(fe, facet set) of body cfg's ``surface`` and of the partner pcfg's ``other_surface``,
     from the setup cache's full-FE bodies; InputError for an unknown or empty surface."""
-    from flexmvm.scenarios.setup import default_setup
+    from flexmvm.assembly.build_cache import default_setup
 
     setup = default_setup()
     fe, pfe = setup.free_modes_source(cfg)[0], setup.free_modes_source(pcfg)[0]

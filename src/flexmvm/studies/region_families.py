@@ -7,7 +7,7 @@ Centre of the balls: ``centre_m`` if given, else the body's model's own region b
 (the scenario's ``region = { ball = ... }``), else the expected first contact point of the
 region estimate (studies/region_estimate.py). Every family's nodes and memory are checked before
 the reference runs: a region that selects no node or costs more than full FE
-(scenarios/cost.py, refused unless ``model.allow_costly``) is a one-line error naming it.
+(assembly/cost.py, refused unless ``model.allow_costly``) is a one-line error naming it.
 
 Keys ``ball<radius in um>-m<modes>`` and ``set-<name>-m<modes>``; params {body, region
 (the RegionSpec as JSON), nodes, modes, modes_max, scenario, reference_sha256} (+ kind when not
@@ -27,8 +27,8 @@ from typing import Any
 
 from flexmvm.errors import InputError, MeshError, SolverError
 from flexmvm.results.atomic import file_sha256, write_table_csv
+from flexmvm.runs.guard import VALIDITY_KEYS
 from flexmvm.scenarios import ModelKind, Scenario, mvm, scenario_from_dict
-from flexmvm.scenarios.guard import VALIDITY_KEYS
 from flexmvm.studies.reference_run import case_reference, scored_row
 from flexmvm.studies.runner import Case
 from flexmvm.studies.search import Candidate
@@ -138,7 +138,7 @@ def _centre(sc: Scenario, body: str, centre_m) -> tuple[float, float, float]:
 
 class RegionGrid:
     """The region families x mode counts of body ``body`` (module doc), checked against its
-    mesh: nodes per family, costs within the full-FE body's (scenarios/cost.py)."""
+    mesh: nodes per family, costs within the full-FE body's (assembly/cost.py)."""
 
     def __init__(
         self,
@@ -149,9 +149,9 @@ class RegionGrid:
         centre_m=None,
         kind: ModelKind = ModelKind.MVM,
     ) -> None:
-        from flexmvm.scenarios.cost import check_cost, reduced_cost
-        from flexmvm.scenarios.mesh_lookup import retained_nodes
-        from flexmvm.scenarios.setup import default_setup
+        from flexmvm.assembly.build_cache import default_setup
+        from flexmvm.assembly.cost import check_cost, reduced_cost
+        from flexmvm.assembly.mesh_lookup import retained_nodes
 
         self.families = sorted(set(families), key=lambda f: f.key)
         if not self.families:
@@ -241,9 +241,9 @@ def failed_region_row(case: Case, line: str) -> dict:
 def run_region_case(case: Case, reference: str | Path | None = None) -> dict:
     """One run of a region family's model against the stored reference history (as
     selection.run_selection_case)."""
+    from flexmvm.assembly.build_cache import default_setup
+    from flexmvm.runs.run import run_scenario
     from flexmvm.scenarios import RegionSpec
-    from flexmvm.scenarios.run import run_scenario
-    from flexmvm.scenarios.setup import default_setup
 
     p = case.params
     sc = scenario_from_dict(p["scenario"], source=f"case {case.key}")

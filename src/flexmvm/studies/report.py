@@ -10,7 +10,7 @@ from typing import Any
 
 from flexmvm.metrics.ncc import Target
 from flexmvm.results.atomic import write_table_csv
-from flexmvm.scenarios.guard import VALIDITY_KEYS
+from flexmvm.runs.guard import VALIDITY_KEYS
 from flexmvm.studies.runner import Case
 from flexmvm.studies.search import Candidate
 

@@ -5,7 +5,7 @@ function ``fn(case) -> mapping``. :func:`run_cases` stores every finished case a
 atomically, in ``out_dir/cases/<key>.json`` as ``{"key", "params", "result", "result_sha256",
 "version"}``; a rerun loads the stored cases and computes only the others, so a killed sweep
 resumes where it stopped. A stored case is loaded only if it passes its check: readable, its
-``version`` (what the study passes: studies key theirs by scenarios.provenance.stamp, the
+``version`` (what the study passes: studies key theirs by runs.provenance.stamp, the
 package source, numpy/scipy/numba, the resolved scenario and mesh files, and by their reference
 history) the current one, and its result the one whose SHA-256 was written with it; otherwise
 it is recomputed and that is announced in one line per reason.

@@ -70,8 +70,8 @@ from typing import Any
 from flexmvm.errors import SolverError, announce_recompute
 from flexmvm.metrics.ncc import Comparison, Target
 from flexmvm.results.outdir import claim_study_dir
+from flexmvm.runs.guard import invalid_reason
 from flexmvm.scenarios import ModelKind, Scenario, load_scenario, scenario_from_dict
-from flexmvm.scenarios.guard import invalid_reason
 from flexmvm.studies.batches import Batches
 from flexmvm.studies.grid import (
     SEED_SCHEME_NOTE,
@@ -154,7 +154,7 @@ def run_selection_case(case: Case, reference: str | Path | None = None) -> dict:
     impulse_err, duration_err, wall_time_s}; a run whose solver fails returns the grid fields
     with ``failed`` (one line) instead of the metrics.
     """
-    from flexmvm.scenarios.run import run_scenario
+    from flexmvm.runs.run import run_scenario
 
     p = case.params
     sc = scenario_from_dict(p["scenario"], source=f"case {case.key}")
@@ -169,7 +169,7 @@ def run_selection_case(case: Case, reference: str | Path | None = None) -> dict:
         "dof": 3 * nodes + m,
         "dof_total": 3 * nodes + m + 6,
     }
-    from flexmvm.scenarios.setup import default_setup
+    from flexmvm.assembly.build_cache import default_setup
 
     setup = default_setup().with_mode_floor(int(p.get("modes_max", m)))
     try:
@@ -188,7 +188,7 @@ def run_selection_case(case: Case, reference: str | Path | None = None) -> dict:
 def score(row: dict, target: Target) -> float:
     """NCC of the force if the row meets the target's error bounds, else FAIL_SCORE; so that
     ``score >= target.ncc_min`` is ``target.met_by(...)``. A run outside its model's validity
-    (scenarios.guard.invalid_reason: contact on surface nodes the basis holds stiff, or an
+    (runs.guard.invalid_reason: contact on surface nodes the basis holds stiff, or an
     energy rise, chatter) scores FAIL_SCORE whatever its NCC: a study never picks it."""
     if any(k not in row for k in _METRICS) or invalid_reason(row) is not None:
         return FAIL_SCORE

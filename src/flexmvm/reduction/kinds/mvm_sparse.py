@@ -64,7 +64,7 @@ class RingCraigBampton(CraigBampton):
         )
 
     def cost_columns(self, n_retained: int, n_modes: int) -> int | None:
-        # not costed by the dense estimate (scenarios/cost.py: 8 nq^2 + 3 n nq numbers): its
+        # not costed by the dense estimate (assembly/cost.py: 8 nq^2 + 3 n nq numbers): its
         # dense part is the corner, which the region's node count does not give
         return None
 

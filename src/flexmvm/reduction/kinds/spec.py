@@ -91,7 +91,7 @@ class ModelKindSpec(Protocol):
     cost, None: not costed), study_fields (the model of a study's 'kind:args' text),
     body_builder (None: bodies.build.body_from_parts on the cached parts; else called as
     body_builder(name, fe, basis, damping=..., parts_cache=...), parts_cache(fe, basis, build)
-    the setup cache's entry for what it builds: scenarios/build.py)."""
+    the setup cache's entry for what it builds: assembly/build.py)."""
 
     # read-only properties, so that a frozen dataclass satisfies them
     @property

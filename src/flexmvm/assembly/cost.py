@@ -92,7 +92,7 @@ def full_factor(fe, fixed_dofs=()) -> FullFactor:
     """The FullFactor of FE model ``fe`` (its M and K) without its reference condition's
     ``fixed_dofs`` (the full-FE body's coordinates): the symbolic analysis of the pattern of
     W = M + (theta h)^2 K in the order the integrator factors it with: from SPLIT_MIN_N rows
-    the one a full-FE run keeps in the setup cache under W's pattern (scenarios.solver_choice:
+    the one a full-FE run keeps in the setup cache under W's pattern (assembly.solver_choice:
     ~1.7 s for a 25,000-DOF rod, made once for the reduced and the full runs)."""
     from flexmvm import setup_cache
     from flexmvm.fe.solvers import ldl
@@ -114,7 +114,7 @@ def cached_full_factor(
     source: Mapping | None, fixed_dofs: np.ndarray, load_fe: Callable[[], object]
 ) -> FullFactor:
     """full_factor(load_fe(), fixed_dofs) through the setup cache under the FE model's key
-    inputs ``source`` (scenarios.cache_keys.mesh_source; None: not cached) and the fixed
+    inputs ``source`` (assembly.cache_keys.mesh_source; None: not cached) and the fixed
     DOFs: a warm run neither loads M and K for it nor repeats the analysis (0.3 s on
     sphere_block's 11,748 DOF)."""
     from flexmvm import setup_cache

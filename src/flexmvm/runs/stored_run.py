@@ -1,7 +1,7 @@
 """A run stored in a directory and reused while it is the same run: ``history.csv``,
 ``summary.json`` and ``key.json`` (the validation report's cases, tools/validation).
 
-key.json holds the key and stamp of the run (scenarios.provenance: package source,
+key.json holds the key and stamp of the run (runs.provenance: package source,
 numpy/scipy/numba, resolved scenario, mesh files), ``outputs`` (history.csv's record,
 results.history.history_record: SHA-256, samples, first and last time; summary.json's SHA-256)
 and whatever the caller adds (commit, date). A stored run is loaded only if its key is the
@@ -23,7 +23,7 @@ from flexmvm.errors import announce_recompute
 from flexmvm.results.atomic import file_sha256, write_json_atomic
 from flexmvm.results.history import history_problem, history_record, read_history, write_history
 from flexmvm.results.summary_keys import with_current_keys
-from flexmvm.scenarios.provenance import run_inputs, stamp, stamp_mismatch
+from flexmvm.runs.provenance import run_inputs, stamp, stamp_mismatch
 from flexmvm.scenarios.schema import Scenario
 
 __all__ = ["StoredRun", "load_or_run", "stored_run_problem"]
@@ -103,7 +103,7 @@ def load_or_run(
         )
     if problem not in (None, "absent"):
         announce_recompute(f"{label}: {problem}: recomputed")
-    from flexmvm.scenarios.run import run_scenario
+    from flexmvm.runs.run import run_scenario
 
     r = run_scenario(sc, progress=progress)
     t, f, p = r.result.curves()

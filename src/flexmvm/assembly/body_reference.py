@@ -12,11 +12,11 @@ from __future__ import annotations
 
 import numpy as np
 
+from flexmvm.assembly.supports import clamp_reference
 from flexmvm.errors import InputError, MeshError
 from flexmvm.mesh.mesh import Mesh
 from flexmvm.reduction.reference_condition import ReferenceCondition, far_reference, three_two_one
 from flexmvm.scenarios.body_schema import AUTO_REFERENCE
-from flexmvm.scenarios.supports import clamp_reference
 
 _AUTO_OPEN, _AUTO_CLOSE = f"{AUTO_REFERENCE}[", "]"
 

@@ -1,4 +1,4 @@
-"""summary.json's energy ledger and momentum report of a run (scenarios/run.py summarize).
+"""summary.json's energy ledger and momentum report of a run (runs/run.py summarize).
 
 Energy: the ledger's works and dissipations (integrate.energy_ledger) at the run's end, and the
 balance E(t) - E(0) - works + dissipations (its residual), relative to the input work (the

@@ -36,7 +36,7 @@ from flexmvm.scenarios.schema import Scenario
 from flexmvm.theory.hertz import HertzImpact, effective_modulus, hertz_impact
 
 #: The shipped scenario (coarse form: its committed meshes).
-SPHERE_BLOCK = Path(__file__).resolve().parents[3] / "scenarios" / "sphere_block.toml"
+SPHERE_BLOCK = Path(__file__).resolve().parents[4] / "scenarios" / "sphere_block.toml"
 #: The end of the check's run [s]: the contact (~87 us) and a margin to see it open.
 T_END_S = 110e-6
 
@@ -101,7 +101,7 @@ def hertz_comparison(
 def compare_with_hertz(sc: Scenario, t_end_s: float = T_END_S) -> dict:
     """Run ``sc`` (fm.run) over t_end_s and compare its first contact with
     :func:`hertz_reference` (:func:`hertz_comparison`'s dict)."""
-    from flexmvm.scenarios.run import run_scenario
+    from flexmvm.runs.run import run_scenario
 
     hz = hertz_reference(sc)
     run = run_scenario(sc.with_time(t_end_s=t_end_s), warn=False)

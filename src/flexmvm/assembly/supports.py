@@ -17,10 +17,12 @@ from __future__ import annotations
 
 import numpy as np
 
+from flexmvm.assembly.cache_keys import MergedFile, SpringBeds
 from flexmvm.constraints.joints import ground_joint
 from flexmvm.errors import InputError, MeshError
 from flexmvm.fe.spring_bed import BedDirection, beds_stiffness
 from flexmvm.mesh.mesh import Mesh
+from flexmvm.mesh.rod import RodSpec
 from flexmvm.reduction.clamp import (
     AXES,
     ClampCondition,
@@ -30,7 +32,6 @@ from flexmvm.reduction.clamp import (
     held_condition,
     held_dofs,
 )
-from flexmvm.scenarios.cache_keys import SpringBeds
 from flexmvm.scenarios.support_schema import AxisFrame, SupportType
 
 #: A spring bed of a body: (facet set, stiffness [N/m^3], body axis or "normal").
@@ -133,7 +134,9 @@ def _merged_sets(cfg, supports) -> tuple[dict[str, str], tuple[Bed, ...], list[i
     return merged, tuple(sorted(beds)), ids, single
 
 
-def bedded_key(key, cfg, supports):
+def bedded_key(
+    key: RodSpec | str | MergedFile, cfg, supports
+) -> RodSpec | str | MergedFile | SpringBeds:
     """The mesh key of body ``cfg`` with its spring beds (SpringBeds), or ``key`` itself for
     a body on none."""
     beds = _merged_sets(cfg, supports)[1]

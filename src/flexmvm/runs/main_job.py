@@ -29,6 +29,7 @@ import sys
 from concurrent.futures import FIRST_EXCEPTION, ProcessPoolExecutor, wait
 from pathlib import Path
 
+from flexmvm.assembly.build_cache import SETUP_LOG
 from flexmvm.bodies.build import ModelKind
 from flexmvm.errors import (
     FlexmvmError,
@@ -41,14 +42,13 @@ from flexmvm.processes import die_with_parent
 from flexmvm.reduction.truncation import truncation_warnings
 from flexmvm.results.outdir import staged_dir
 from flexmvm.results.output import write_run, write_summary, writing
-from flexmvm.scenarios import pendulum
-from flexmvm.scenarios.compare import compare_runs
-from flexmvm.scenarios.guard import guard_warnings
+from flexmvm.runs.compare import compare_runs
+from flexmvm.runs.guard import guard_warnings
+from flexmvm.runs.plastic_summary import plastic_guard_warnings
+from flexmvm.runs.run import energy_gain_warning, run_scenario
+from flexmvm.runs.showcases import pendulum
 from flexmvm.scenarios.load import load_scenario
-from flexmvm.scenarios.plastic_summary import plastic_guard_warnings
-from flexmvm.scenarios.run import energy_gain_warning, run_scenario
 from flexmvm.scenarios.schema import Scenario
-from flexmvm.scenarios.setup import SETUP_LOG
 
 
 def _theory(sc, failures: list[dict]):
@@ -92,7 +92,7 @@ class RunStopped(SolverError):
 
 @contextlib.contextmanager
 def _stages_printed(label: str, enabled: bool):
-    """With progress on, the set-up's stages (scenarios.setup.SETUP_LOG: mesh, assembly,
+    """With progress on, the set-up's stages (assembly.build_cache.SETUP_LOG: mesh, assembly,
     basis, invariants, factorizations) printed to stderr as they happen, one line each
     ("flexmvm: <run>: basis mvm built (...): 12.3 s"), in this process or the reference's."""
     if not enabled:
@@ -126,7 +126,7 @@ def _run_and_write(sc, label: str, out_dir: Path, fields: bool, progress: bool):
             "written, summary status 'failed')"
         ) from None
     write_run(out_dir, run, fields=fields)
-    if "pendulum" in run.summary:  # scenarios.run.summarize: a pendulum release
+    if "pendulum" in run.summary:  # runs.run.summarize: a pendulum release
         with writing(out_dir / f"{sc.name}_event.png"):
             _plot_event(out_dir / f"{sc.name}_event.png", run, f"{sc.name} ({label})")
     return run.summary, run.result.curves(), run.result.n_steps, run.result.wall_time_s
@@ -198,9 +198,9 @@ def run_main_job(
         echo(f"warning: {line}")
     for line in truncation_warnings(summary.get("modal_truncation_guard") or {}):
         echo(f"warning: {line}")
-    line = energy_gain_warning(summary)
-    if line is not None:
-        echo(f"warning: {line}")
+    gain = energy_gain_warning(summary)
+    if gain is not None:
+        echo(f"warning: {gain}")
     failures = summary["failures"]
     if failures:
         echo(
@@ -254,7 +254,7 @@ def _run_into(
     echo,
     jobs: int,
     want_theory: bool = True,
-) -> dict:
+) -> tuple[dict, BaseException | None]:
     """The job proper, writing into out_dir (the staging directory). Returns (summary, the
     full-FE reference's exception or None): a failed reference is listed in the summary's
     failures and does not stop the scenario's own run from being written."""

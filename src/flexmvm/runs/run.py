@@ -8,19 +8,19 @@ from pathlib import Path
 
 import numpy as np
 
+from flexmvm.assembly.build import BuiltScenario, build_scenario
+from flexmvm.assembly.build_cache import SetupCache
 from flexmvm.errors import SimulationFailed
 from flexmvm.integrate.driver import simulate
 from flexmvm.integrate.run_result import ProbeHistory, RunResult, StepHistory
 from flexmvm.reduction.truncation import truncation_report, truncation_warnings
-from flexmvm.scenarios import pendulum
-from flexmvm.scenarios.blowup import blowup_failure
-from flexmvm.scenarios.build import BuiltScenario, build_scenario
-from flexmvm.scenarios.energy_report import momentum_report, report_entries
-from flexmvm.scenarios.guard import contact_guard, energy_gain_warning, guard_warnings
+from flexmvm.runs.blowup import blowup_failure
+from flexmvm.runs.energy_report import momentum_report, report_entries
+from flexmvm.runs.guard import contact_guard, energy_gain_warning, guard_warnings
+from flexmvm.runs.plastic_summary import plastic_guard_warnings, plastic_summary
+from flexmvm.runs.showcases import pendulum
 from flexmvm.scenarios.load import load_scenario
-from flexmvm.scenarios.plastic_summary import plastic_guard_warnings, plastic_summary
 from flexmvm.scenarios.schema import Scenario
-from flexmvm.scenarios.setup import SetupCache
 
 
 @dataclass
@@ -78,7 +78,7 @@ MOMENTUM_ERROR_NOTE = (
 
 
 class ReducedBasisWarning(UserWarning):
-    """Contact fell on surface nodes a reduced basis holds stiff (scenarios/guard.py)."""
+    """Contact fell on surface nodes a reduced basis holds stiff (runs/guard.py)."""
 
 
 class EnergyGainWarning(UserWarning):
@@ -97,7 +97,7 @@ def run_scenario(
     guard fires (summary reduced_contact_guard).
 
     Raises SimulationFailed when the run stops before its end time (a step that did not
-    converge at the smallest step), or when it blew up (scenarios.blowup: a contact gone
+    converge at the smallest step), or when it blew up (runs.blowup: a contact gone
     through a surface, energy put in): its ``partial`` is the ScenarioRun up to the failure,
     whose summary has ``status = "failed"`` and the reason in ``failure``."""
     built = build_scenario(sc, setup)
@@ -111,7 +111,7 @@ def run_scenario(
         raise SimulationFailed(str(exc), partial) from exc
     res.scenario = sc.model_dump(mode="json")  # what results.h5 keeps (results.read)
     summary = summarize(res, built)
-    blown = blowup_failure(summary, built)  # a run that blew up fails (scenarios.blowup)
+    blown = blowup_failure(summary, built)  # a run that blew up fails (runs.blowup)
     if blown is not None:
         failed = {**summary, "status": "failed", "failure": blown}
         raise SimulationFailed(blown, ScenarioRun(label, built, res, failed))
@@ -183,7 +183,7 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         "momentum_rel_error": mom_err,
         "momentum_rel_error_converged": mom_err_converged,
         "momentum_error_note": MOMENTUM_ERROR_NOTE,
-        **report_entries(res, built, why_not, subsystems),  # scenarios.energy_report
+        **report_entries(res, built, why_not, subsystems),  # runs.energy_report
         "energy_rel_error": e_err,
         "energy_rel_error_max": e_err_max,
         # the largest rise of the total energy over its start beyond the inputs' work [-] (energy_gain)
@@ -297,7 +297,7 @@ def energy_gain(res: RunResult) -> float | None:
     E(t) - E(0) less the work of the applied loads, the joints (drives, prescribed motions)
     and a spinning body's stiffening (integrate.energy_ledger), relative to E(0) or, for a run
     that starts at rest, to the largest input work; None when both are zero. Contact and the
-    scheme may only take energy (scenarios.guard.ENERGY_GAIN_WARN)."""
+    scheme may only take energy (runs.guard.ENERGY_GAIN_WARN)."""
     E = res.total_energy
     led = res.energy_ledger
     inputs = np.zeros_like(E)

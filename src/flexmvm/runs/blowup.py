@@ -18,7 +18,7 @@ REACH_FAIL_SHARE of its pair's search radius therefore fails the run too.
 
 The bounds are far from any healthy run: the stored validation and study runs penetrate at
 most 5.6 um (a soft PA6 rod, 20 mm across; 1/18 of REACH_FAIL_SHARE x 2e-4 m) and gain at
-most ENERGY_GAIN_WARN (0.5 %) of their energy (scenarios/guard.py warns there).
+most ENERGY_GAIN_WARN (0.5 %) of their energy (runs/guard.py warns there).
 """
 
 from __future__ import annotations
@@ -26,7 +26,7 @@ from __future__ import annotations
 import numpy as np
 
 #: Total energy risen beyond the inputs' work by more than this share of its start (or of the
-#: largest input work, scenarios.run.energy_gain): the run failed
+#: largest input work, runs.run.energy_gain): the run failed
 ENERGY_GAIN_FAIL = 0.1
 #: A node deeper in the other body's contact surface than this share of that body's thinnest
 #: extent (the smallest side of its bounding box in its own frame): the run failed

@@ -22,10 +22,11 @@ class MergedFile:
 
 @dataclass(frozen=True)
 class ContactMass:
-    """The mesh key (a RodSpec or a mesh file path) of a body whose contact nodes ``nodes``
-    carry no mass (fe/mass_redistribution.py): a key of its own for every cache."""
+    """The mesh key (a RodSpec or a mesh file path, either on spring beds) of a body whose
+    contact nodes ``nodes`` carry no mass (fe/mass_redistribution.py): a key of its own for
+    every cache."""
 
-    key: RodSpec | str | MergedFile
+    key: RodSpec | str | MergedFile | SpringBeds
     nodes: tuple[int, ...]
 
 

@@ -111,7 +111,7 @@ def outside_validity(fraction: float | None, threshold: float = WARN_FRACTION) -
 
 
 #: A run whose total energy rises above its start, beyond the work of its loads, drives and
-#: spin (scenarios.run.energy_gain), by more than this share gets a warning. Nothing in it can add energy: the Moreau-Jean step with theta >= 1/2
+#: spin (runs.run.energy_gain), by more than this share gets a warning. Nothing in it can add energy: the Moreau-Jean step with theta >= 1/2
 #: and frictionless or Coulomb contact, joints and gravity (in the potential) keep or lose it;
 #: what could was the velocity law's penetration recovery when it pushed a penetrated node out
 #: at beta (-g) / h whatever its mass: on reduced bodies whose contact reached the edge of the
@@ -163,7 +163,7 @@ VALIDITY_KEYS = ("guard_outside_fraction", "energy_gain_rel_max", "plastic_cells
 def plastic_cells_outside(summary: dict, body: str) -> int | None:
     """The most cells of the reduced plastic ``body`` outside its retained region that reached
     the yield stress in one step (summary ``plastic.<body>.cells_yield_outside_retained``,
-    scenarios.plastic_summary); None: not a plastic body (0 for a full-FE one: it retains all)."""
+    runs.plastic_summary); None: not a plastic body (0 for a full-FE one: it retains all)."""
     entry = summary.get("plastic", {}).get(body)
     if entry is None or "cells_yield_outside_retained" not in entry:
         return None

@@ -8,10 +8,10 @@ import dataclasses
 import numpy as np
 import scipy.sparse as sp
 
+from flexmvm.assembly.build_cache import SetupCache
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.fe.solvers import ldl
 from flexmvm.fe.solvers.ordering import elimination_order, iteration_pattern
-from flexmvm.scenarios.setup import SetupCache
 
 
 def with_elimination_order(body: FlexibleBody, setup: SetupCache) -> FlexibleBody:

@@ -1,5 +1,5 @@
 """Build a scenario's [[loads]] and [[springs]] (load_schema.py) into flexmvm.loads objects,
-once its bodies, their initial states and mesh lookups exist (scenarios/build.py)."""
+once its bodies, their initial states and mesh lookups exist (assembly/build.py)."""
 
 from __future__ import annotations
 
@@ -7,6 +7,7 @@ import math
 
 import numpy as np
 
+from flexmvm.assembly.mesh_lookup import body_point
 from flexmvm.constraints.joints import BodyPoint, NodeSetPoint
 from flexmvm.errors import InputError, MeshError
 from flexmvm.loads import (
@@ -18,7 +19,6 @@ from flexmvm.loads import (
     RotationalSpring,
 )
 from flexmvm.scenarios.load_schema import LoadFrame, LoadType, SpringType
-from flexmvm.scenarios.mesh_lookup import body_point
 
 
 def _point(b, bodies, infos, point_m, node_set, where):

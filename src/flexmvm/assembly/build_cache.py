@@ -10,7 +10,7 @@ A SetupCache owns
   not M and K;
 - the policies: the caches' bounds and the Craig-Bampton mode floor.
 
-It is passed explicitly (scenarios.build.build_scenario(sc, setup)); ``default_setup()`` is the
+It is passed explicitly (assembly.build.build_scenario(sc, setup)); ``default_setup()`` is the
 process-wide instance behind ``fm.clear_caches``, ``fm.set_cache_sizes`` and
 ``fm.cache_sizes``, and what a build uses when given none. A mode floor is a view
 (``setup.with_mode_floor(n)``) sharing its caches, not a switch.
@@ -29,6 +29,17 @@ import numpy as np
 import scipy.sparse as sp
 
 from flexmvm import setup_cache
+from flexmvm.assembly.body_reference import support
+from flexmvm.assembly.cache_keys import (
+    ContactMass,
+    MergedFile,
+    MeshKey,
+    SpringBeds,
+    interface_inputs,
+    mesh_key,
+    mesh_source,
+    plain_key,
+)
 from flexmvm.bodies.build import BodyParts, body_parts
 from flexmvm.errors import InputError
 from flexmvm.fe.assembly import FEModel, assemble
@@ -51,17 +62,6 @@ from flexmvm.reduction.interface import (
 from flexmvm.reduction.kinds import ModelKind, kind_spec
 from flexmvm.reduction.rod_reference import rod_reference
 from flexmvm.reduction.truncation import modal_residual
-from flexmvm.scenarios.body_reference import support
-from flexmvm.scenarios.cache_keys import (
-    ContactMass,
-    MergedFile,
-    MeshKey,
-    SpringBeds,
-    interface_inputs,
-    mesh_key,
-    mesh_source,
-    plain_key,
-)
 
 #: The per-process caches by what they hold, with their default bounds (entries).
 CACHE_SIZES = {"meshes": 8, "fe_models": 8, "bases": 64, "body_parts": 16}
@@ -151,7 +151,7 @@ class ProcessCaches:
             return dataclasses.replace(
                 fe, M_scalar=m_scalar, M=sp.csr_matrix(sp.kron(m_scalar, sp.identity(3)))
             )
-        if isinstance(key, SpringBeds):  # K + the beds' stiffness (scenarios/supports.py)
+        if isinstance(key, SpringBeds):  # K + the beds' stiffness (assembly/supports.py)
             fe = self.fe_model(key.key, material)
             return with_spring_bed(fe, beds_stiffness(fe.mesh, key.beds))
 
