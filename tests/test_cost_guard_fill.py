@@ -18,7 +18,7 @@ import numpy as np
 import pytest
 
 import flexmvm as fm
-from flexmvm.integrate.body_solver import MAX_CACHED, BodySolver
+from flexmvm.integrate.moreau_jean.body_solver import MAX_CACHED, BodySolver
 from flexmvm.integrate.run_result import TimeGrid
 from flexmvm.scenarios import cost
 from flexmvm.scenarios.body_reference import reference_label

@@ -11,7 +11,7 @@ import flexmvm as fm
 from flexmvm.errors import InputError
 from flexmvm.fe.assembly import assemble
 from flexmvm.fe.mass_redistribution import moments, redistribute_mass
-from flexmvm.integrate.massless import MasslessCoordinates
+from flexmvm.integrate.moreau_jean.massless import MasslessCoordinates
 from flexmvm.materials import ALUMINIUM
 from flexmvm.mesh.rod import EndShape, RodSpec, rod_mesh
 from flexmvm.scenarios.build import build_scenario

@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 
 from flexmvm.bodies.spin_modes import spin_frequencies, spin_quasi_static
-from flexmvm.integrate.body_solver import SPIN_TOL
+from flexmvm.integrate.moreau_jean.body_solver import SPIN_TOL
 from flexmvm.mesh.structured import spin_up_beam_part
 from flexmvm.scenarios import load_scenario, scenario_from_dict
 from flexmvm.scenarios.build import build_scenario

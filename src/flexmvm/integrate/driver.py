@@ -1,5 +1,5 @@
 """The time loop: step-size policy, outputs, contact bookkeeping. The scheme is separate
-(moreau_jean.py, the default; simulate's ``integrator`` chooses another, behind the contract
+(moreau_jean/scheme.py, the default; simulate's ``integrator`` chooses another, behind the contract
 of step.py); this file decides which step to take and what to keep, and calls simulate's
 ``on_step`` hook after every accepted step.
 
@@ -69,7 +69,7 @@ class AcceptedStep:
 
 
 def moreau_jean(exploit_nonrotating: bool = True) -> IntegratorFactory:
-    """The default integrator: the Moreau-Jean scheme (moreau_jean.py) with the grid's
+    """The default integrator: the Moreau-Jean scheme (moreau_jean/scheme.py) with the grid's
     theta of each step size (TimeGrid.theta_rule)."""
 
     def make(system: System, grid: TimeGrid) -> Integrator:
@@ -99,8 +99,8 @@ def simulate(
     from a state in contact, whose penetration is then only measured.
 
     exploit_nonrotating: let steps whose frames do not rotate take the linear one-solve step
-    (integrate.nonrotating; verified against the full equations). False forces the general
-    Newton step everywhere (for comparison). For the default integrator only.
+    (integrate.moreau_jean.nonrotating; verified against the full equations). False forces the
+    general Newton step everywhere (for comparison). For the default integrator only.
 
     integrator: the factory of the run's integrator (default: moreau_jean()).
     on_step: called after every accepted step with an AcceptedStep (custom output,

@@ -55,9 +55,8 @@ from flexmvm.integrate.row_products import body_impulse, flat_product
 from flexmvm.loads.applied import midpoint_states, start_run
 
 if TYPE_CHECKING:
-    from flexmvm.integrate.carried import CarriedState
     from flexmvm.integrate.plastic_bodies import PlasticBodies
-    from flexmvm.integrate.step import Integrator
+    from flexmvm.integrate.step import CarriedStates, Integrator
     from flexmvm.integrate.system import System
 
 
@@ -140,9 +139,9 @@ class EnergyLedger:
 
     system: System
     carried: Any = None  # callable (b, state) -> (L(q), L(q_dot)), or None
-    # the integrator's carried state (integrate.carried.CarriedState), whose k_hat q and
-    # M_qq q_dot of a step's end give the dissipation's products for free; None: computed
-    fresh: CarriedState | None = None
+    # the integrator's carried state (integrate.step.CarriedStates), whose k_hat q and M_qq
+    # q_dot of a step's end give the dissipation's products for free; None: computed
+    fresh: CarriedStates | None = None
     # the integrator's plastic bodies (integrate.plastic_bodies.PlasticBodies); None: none
     plastic: PlasticBodies | None = None
     w_loads: np.ndarray = field(init=False)
@@ -230,8 +229,8 @@ class EnergyLedger:
 
     def _products(self, b, body, s0, s1, dq, dqd) -> tuple[np.ndarray, np.ndarray]:
         """(k_hat dq, M_qq dq_dot): differences of the carried k_hat q and M_qq q_dot of the
-        step's two ends when the integrator carried both (its Newton step: integrate.carried,
-        Kq+ = Kq- + h k_hat q_dot_m), else one product each."""
+        step's two ends when the integrator carried both (its Newton step:
+        integrate.moreau_jean.carried, Kq+ = Kq- + h k_hat q_dot_m), else one product each."""
         c1 = self.fresh.of_state(b, s1) if self.fresh is not None else None
         c0 = self._ends.get(b)
         self._ends[b] = None if c1 is None else (s1.q, s1.v, c1.Kq, c1.Mqd)

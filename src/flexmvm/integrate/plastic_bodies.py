@@ -46,9 +46,9 @@ class PlasticPart:
     elastic material and J2Plasticity; the mesh the body's psi maps to); allowed: per cell
     block a bool mask of the cells that may yield (a reduced body: those whose nodes are all
     retained, where psi is the identity), None: all (full FE); tangent: its Newton iteration
-    matrix while it yields is the consistent tangent W_t (integrate.plastic_tangent), else the
-    elastic W; stop_outside: a reduced body whose cells outside the allowed ones reach yield
-    stops the run (PlasticBodies.outside_stop), else the run counts them and goes on."""
+    matrix while it yields is the consistent tangent W_t (integrate.moreau_jean.plastic_tangent),
+    else the elastic W; stop_outside: a reduced body whose cells outside the allowed ones reach
+    yield stops the run (PlasticBodies.outside_stop), else the run counts them and goes on."""
 
     body: int
     model: PlasticBody

@@ -3,7 +3,7 @@ or q_dot, so a step needs one new contraction L(dq_dot) per residual instead of 
 L(q_dot_m) and M_wq(q) (one pass over the G2 blocks of a full-FE rod instead of ~3;
 docs/performance.md).
 
-With the Moreau-Jean midpoint (moreau_jean.py) q_dot_m = q_dot + theta dq_dot and
+With the Moreau-Jean midpoint (moreau_jean/scheme.py) q_dot_m = q_dot + theta dq_dot and
 q_m = q + theta h q_dot_m, so
 
     L(q_dot_m) = L(q_dot) + theta L(dq_dot),     L(q_m) = L(q) + theta h L(q_dot_m),
@@ -56,7 +56,8 @@ class MidpointTerms:
 
 class CarriedState:
     """The carried contractions of every body of a system (module doc). images: the W-images
-    k_hat dq_dot is taken from (integrate.w_images); pool: the G2 contraction's threads."""
+    k_hat dq_dot is taken from (integrate.moreau_jean.w_images); pool: the G2 contraction's
+    threads."""
 
     def __init__(self, bodies, images, pool=None):
         self.bodies = bodies

@@ -26,8 +26,8 @@ from flexmvm.errors import SolverError
 from flexmvm.fe.solvers.cholesky import cholesky_ldl
 from flexmvm.fe.solvers.ordering import elimination_order
 from flexmvm.fe.solvers.symbolic import SymbolicFactor
-from flexmvm.integrate.compliance import NodalColumns, NodalCompliance, nodal_compliance
-from flexmvm.integrate.dense_solve import cho_factor, cho_solve, lu_factor, lu_solve
+from flexmvm.integrate.moreau_jean.compliance import NodalColumns, NodalCompliance, nodal_compliance
+from flexmvm.integrate.moreau_jean.dense_solve import cho_factor, cho_solve, lu_factor, lu_solve
 
 # Factors kept per body, least recently used dropped first: the variable step takes dt_s 2^k
 # for k = 0..9 (pendulum_release.toml: 0.5 us to 256 us), and a swing that comes down to the
@@ -344,7 +344,7 @@ class BodySolver:
         """B^T xf (nq,) for a frame vector xf (6,), B = [A S1; M_wq] the frame-elastic block
         of the W that solve(), solve_frame() and the contact columns use (with the A and
         M_wq of the last prepare / refresh_coupling). For x = W^-1 b: W_qq x_q = b_q - B^T x_f
-        (what integrate.w_images takes k_hat dq_dot from)."""
+        (what integrate.moreau_jean.w_images takes k_hat dq_dot from)."""
         self._flush()
         return self.body.inv.S1.T @ (self._A.T @ xf[:3]) + self._mw(self._f).T @ xf[3:6]
 
@@ -380,7 +380,7 @@ class BodySolver:
                   [ S1^T A^T  W_qq ]      (3 x 3; S1 W_qq^-1 S1^T is cached per h)
 
         W_t is constant while A is: the non-rotating step is linear in v+ (see
-        integrate.nonrotating)."""
+        integrate.moreau_jean.nonrotating)."""
         self._A = A
         if not np.isfinite(A).all():
             raise SolverError(
@@ -446,7 +446,7 @@ class BodySolver:
     ) -> NodalCompliance:
         """D = Phi W^-1 Phi^T (m, m) and the velocity correction W^-1 Phi^T lambda of the
         rows Phi = [bf (m, 6), N psi] (N = selector (m, 3 n_nodes)) from the cached nodal
-        columns (integrate.compliance), with the frame block of the last prepare()."""
+        columns (integrate.moreau_jean.compliance), with the frame block of the last prepare()."""
         self._flush()
         f = self._factor(h)
         return nodal_compliance(

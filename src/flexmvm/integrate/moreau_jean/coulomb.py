@@ -42,8 +42,8 @@ import numpy as np
 
 from flexmvm.constraints.contact import ContactRows
 from flexmvm.errors import SolverError
-from flexmvm.integrate.dense_solve import cho_solve
-from flexmvm.integrate.lcp import eliminate_equalities, solve_checked
+from flexmvm.integrate.moreau_jean.dense_solve import cho_solve
+from flexmvm.integrate.moreau_jean.lcp import eliminate_equalities, solve_checked
 
 # the sweeps stop at this natural residual (relative to the velocity scale): the frictionless
 # LCP's bound (lcp.LCP_RTOL), so a frictional step is solved to the same relative accuracy

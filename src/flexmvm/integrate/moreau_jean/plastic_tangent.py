@@ -39,7 +39,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from flexmvm.errors import SolverError
-from flexmvm.integrate.dense_solve import cho_solve, lu_solve
+from flexmvm.integrate.moreau_jean.dense_solve import cho_solve, lu_solve
 
 #: The form of a sparse (full-FE) body's W_t: "woodbury" on the elastic factor, or
 #: "refactor" (W_t factored; on W's symbolic analysis only where the patterns agree)

@@ -3,7 +3,7 @@
 Mass redistribution on the contact boundary (fe.mass_redistribution; Khenous, Laborde and
 Renard 2008) leaves the contact nodes of a full-FE body without mass: their rows of M_qq are
 zero, and with them every inertia term of the floating frame (the inertia invariants are
-mass-weighted). Their rows of the Moreau-Jean step (moreau_jean.py) are then algebraic,
+mass-weighted). Their rows of the Moreau-Jean step (moreau_jean/scheme.py) are then algebraic,
 
     0 = h F_s(x_m) + (Phi^T lambda)_s,        F_s = -(k_hat q)_s + f_s,
 
@@ -39,9 +39,9 @@ import scipy.sparse as sp
 
 from flexmvm.errors import SolverError
 from flexmvm.fe.solvers.cholesky import ldl_factor
-from flexmvm.integrate.dense_solve import cho_solve
-from flexmvm.integrate.lcp import regularised_cho
-from flexmvm.integrate.massless_kernels import add_delassus, body_part, body_update
+from flexmvm.integrate.moreau_jean.dense_solve import cho_solve
+from flexmvm.integrate.moreau_jean.lcp import regularised_cho
+from flexmvm.integrate.moreau_jean.massless_kernels import add_delassus, body_part, body_update
 from flexmvm.loads.applied import applied_forces
 
 
@@ -94,7 +94,7 @@ class MasslessCoordinates:
                 solve = ldl_factor(K_ss)
             else:
                 cho = sla.cho_factor(K_ss.toarray())
-                # dpotrs straight (integrate.dense_solve): scipy's cho_solve, bit for bit
+                # dpotrs straight (dense_solve): scipy's cho_solve, bit for bit
                 solve = lambda b, cho=cho: cho_solve(cho, b)
         except (SolverError, np.linalg.LinAlgError) as exc:
             raise SolverError(
@@ -228,7 +228,7 @@ def _reference_step_end(massless, todo, applied, h, states, new_states, held) ->
 
 def _compiled_step_end(massless, todo, applied, h, states, new_states, held) -> list:
     """equilibrate_step_end for bodies whose K_ss has a dense factor, in the compiled kernels
-    of integrate.massless_kernels (the same sums, equal to round-off)."""
+    of integrate.moreau_jean.massless_kernels (the same sums, equal to round-off)."""
     m = sum(len(lam) for _, lam, _ in held)
     on = np.zeros(m, dtype=np.bool_)
     lam_all = np.zeros(m)
