@@ -124,7 +124,10 @@ class _Tally:
         self.impulse, self.jimpulse = 0.0, np.zeros(n_joint_rows)
         self.intervals: list[list[float]] = []
         self.max_pen, self.drift = 0.0, 0.0
-        self.step_t, self.step_h, self.step_impulse = [], [], []
+        # per accepted step: its end time [s], size [s] and normal contact impulse [N s]
+        self.step_t: list[float] = []
+        self.step_h: list[float] = []
+        self.step_impulse: list[float] = []
         self.row_impulses: dict = {}  # normal contact row key -> [impulse [N s], first time [s]]
         self.n_loose, self.worst_res, self.worst_lcp = 0, 0.0, 0.0
         self.p_res = np.zeros(3)
@@ -310,8 +313,8 @@ def _accept(parts, states, tally, integ, on_step):
 
 
 def _advance(
-    integ, t: float, states, h: float, h_min: float, cuts: list
-) -> list[tuple[float, float, object]]:
+    integ: Integrator, t: float, states: list[BodyState], h: float, h_min: float, cuts: list
+) -> list[tuple[float, float, StepResult]]:
     """Steps from t over h: [(start, size, StepResult)]. A step whose Newton iteration fails
     (it diverges, or has not reached the tolerance or the round-off floor in max_iter
     iterates) is taken as two halves instead, recursively down to h_min = dt_s /
@@ -376,7 +379,8 @@ class _Penetrations:
     def __init__(self, system: System):
         self.system = system
         self.measured = bool(system.contacts)
-        self.depth, self.at, self.by_direction = 0.0, None, {}
+        self.depth, self.at = 0.0, None
+        self.by_direction: dict[str, float] = {}  # "b1 nodes into b2" -> deepest [m]
         self.floors: dict[int, list[float]] = {}  # per provider, per direction: deepest so far
 
     def _measure(self, states, t, deep):

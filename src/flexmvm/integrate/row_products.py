@@ -65,10 +65,10 @@ def merge_contacts(a: ContactRows, b: ContactRows) -> ContactRows:
             if f is not None
         ]
         friction = FrictionRows(
-            *(
-                np.concatenate([getattr(f, k) for f in parts])
-                for k in ("normal", "tangent", "mu", "directions")
-            )
+            np.concatenate([f.normal for f in parts]),
+            np.concatenate([f.tangent for f in parts]),
+            np.concatenate([f.mu for f in parts]),
+            np.concatenate([f.directions for f in parts]),
         )
     return ContactRows(
         stack([a.rows, b.rows]),

@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from flexmvm.errors import SolverError
 from flexmvm.integrate.row_products import flat_product
 from flexmvm.integrate.state import BodyState
 
@@ -97,7 +98,10 @@ class CarriedState:
 
     def mass_increment(self, b: int) -> np.ndarray:
         """M_qq dq_dot of body b's last midpoint (midpoint())."""
-        return self._midpoint[b].M_dqd
+        p = self._midpoint[b]
+        if p is None:
+            raise SolverError(f"body {b}: mass_increment asked before its midpoint()")
+        return p.M_dqd
 
     def midpoint(self, b: int, st: BodyState, vp: np.ndarray, th: float, h: float):
         """L(q_m), L(q_dot_m) and k_hat q_m at the midpoint of the iterate vp: one contraction

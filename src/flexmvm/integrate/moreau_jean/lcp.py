@@ -79,7 +79,7 @@ class Elimination:
 
     D: np.ndarray
     c: np.ndarray
-    cho: tuple | None
+    cho: tuple[np.ndarray, bool] | None
     De_inv_Deu: np.ndarray
     De_inv_ce: np.ndarray
 

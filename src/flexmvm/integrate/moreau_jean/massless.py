@@ -30,6 +30,7 @@ mass moves); the strain energy of the alternation is removed.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numba
@@ -52,8 +53,9 @@ class MasslessCoordinates:
     s: np.ndarray  # (ns,) indices into q
     K_s: sp.csr_matrix  # rows s of k_hat (ns, nq)
     K_cols: sp.csc_matrix  # columns s of k_hat (nq, ns)
-    solve: object  # x = K_ss^-1 b
-    cho: tuple | None = None  # (c, lower): K_ss's dense Cholesky factor (the compiled path)
+    solve: Callable[[np.ndarray], np.ndarray]  # x = K_ss^-1 b
+    # (c, lower): K_ss's dense Cholesky factor (the compiled path)
+    cho: tuple[np.ndarray, bool] | None = None
 
     @classmethod
     def of(cls, body) -> MasslessCoordinates | None:
@@ -258,19 +260,19 @@ def _compiled_step_end(massless, todo, applied, h, states, new_states, held) -> 
     keep = np.zeros(int(on.sum()), dtype=np.bool_)
     for part in parts:
         keep |= part[2]
-    keep = np.flatnonzero(keep)
+    kept = np.flatnonzero(keep)
     mu = np.zeros(0)
-    if keep.size:
-        D, rhs = np.zeros((keep.size, keep.size)), np.zeros(keep.size)
+    if kept.size:
+        D, rhs = np.zeros((kept.size, kept.size)), np.zeros(kept.size)
         for B, X, _ in parts:
-            add_delassus(B, X, keep, D, rhs)
+            add_delassus(B, X, kept, D, rhs)
         mu = cho_solve(regularised_cho(0.5 * (D + D.T), "massless-node"), rhs)
     changes = []
     for b, (_, X, _) in zip(todo, parts):
         ml, new = massless[b], new_states[b]
         Kc = ml.K_cols
         made = body_update(
-            new.q, new.v[6:], states[b].q, ml.s, X, keep, mu, h,
+            new.q, new.v[6:], states[b].q, ml.s, X, kept, mu, h,
             Kc.indptr, Kc.indices, Kc.data, Kc.shape[0],
         )  # fmt: skip
         changes.append((b, *made))

@@ -42,7 +42,7 @@ def applies(system, states: list[BodyState]) -> bool:
     every frame enters the step with omega exactly 0."""
     return (
         not system.joints
-        and all(getattr(load, "state_independent", False) for load in system.loads)
+        and all(load.state_independent for load in system.loads)
         and all(not np.any(st.v[3:6]) for st in states)
     )
 

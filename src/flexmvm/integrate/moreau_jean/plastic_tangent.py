@@ -74,8 +74,7 @@ class PlasticTangent:
     def __init__(self, plastic, solvers, enabled: bool | None = None, policy: str | None = None):
         self.plastic, self.solvers = plastic, solvers
         if enabled is None:
-            parts = getattr(plastic, "parts", {})
-            self.bodies = {b for b in plastic.history if parts[b].tangent}
+            self.bodies = {b for b in plastic.history if plastic.parts[b].tangent}
         else:
             self.bodies = set(plastic.history) if enabled else set()
         self.enabled = bool(self.bodies)

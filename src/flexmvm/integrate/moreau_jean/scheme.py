@@ -386,6 +386,8 @@ class MoreauJeanIntegrator:
         images = self.images
         if s.contact_compliance is None:
             self._contact_columns(s, h, crows)
+        compliance = s.contact_compliance
+        assert compliance is not None  # made by _contact_columns
         if n_j + m_c == 0:
             s.v_plus = s.v_free
             images.plus = dict(images.free)
@@ -412,7 +414,7 @@ class MoreauJeanIntegrator:
             dv = Yb @ lam[:n_j]
             v_plus[b] = v_plus[b] + dv
             images.impulses(b, self.solvers[b], jrows, lam[:n_j], dv)
-        for b, cb in s.contact_compliance.items():
+        for b, cb in compliance.items():
             dv = cb.velocity(lam[n_j:])
             v_plus[b] = v_plus[b] + dv
             images.impulses(b, self.solvers[b], crows.rows, lam[n_j:], dv)
