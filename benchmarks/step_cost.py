@@ -194,8 +194,9 @@ def _back_substitutions(target, striker) -> dict:
 
 def _factors(integ) -> list[object]:
     """Per body of the run, the factor its step solved with (the last one made: one step
-    size through the contact). Read from the body solvers' caches (integrate.body_solver),
-    which have no public accessor: this is a measurement, not a use."""
+    size through the contact). Read from the body solvers' caches
+    (integrate.moreau_jean.body_solver), which have no public accessor: this is a measurement, not a
+    use."""
     out = []
     for solver in integ.solvers:
         made = [f.solve.__self__ for f in solver._cache.values()]
@@ -219,7 +220,7 @@ def measure_full(scenario: Path) -> dict:
     target, striker = factors[TARGET], factors[STRIKER]
     rods = {id(f) for f in factors.values()}
     # the rods' W; other sparse solves of the step (the massless contact nodes' K_ss,
-    # integrate.massless) are counted apart
+    # integrate.moreau_jean.massless) are counted apart
     inside = {True: [], False: []}
     for a, b, _, i in log.calls:
         if b > t0 and a < t1:

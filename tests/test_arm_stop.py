@@ -236,8 +236,8 @@ def test_frame_block_is_the_mass_matrix_of_its_configuration(runs):
     Checked at the arm's most deformed state of the run, q scaled up 10x to make the quadratic
     part count: J and M_wq equal to the exact ones (inertia_terms) to 1e-12 of J, and the
     Schur complement positive definite."""
-    from flexmvm.integrate.carried import CarriedState
-    from flexmvm.integrate.iteration_matrix import IterationMatrices
+    from flexmvm.integrate.moreau_jean.carried import CarriedState
+    from flexmvm.integrate.moreau_jean.iteration_matrix import IterationMatrices
     from flexmvm.integrate.state import BodyState
 
     mvm = runs[1]

@@ -8,7 +8,7 @@ import pytest
 import scipy.sparse as sp
 
 from flexmvm.bodies.body import FlexibleBody
-from flexmvm.integrate.body_solver import BodySolver
+from flexmvm.integrate.moreau_jean.body_solver import BodySolver
 
 
 def _body(sparse: bool, n=40, seed=1):
@@ -106,7 +106,7 @@ def test_schur_complement_follows_a_kept_coupling_to_first_order(sparse):
     makes the frame Schur complement of the current M_wq to first order in the drift: its
     error is second order (here relative drift 1e-5: the error must fall by more than 1e3
     against the stale complement; measured 1.9e4 and 5.0e4 on these bodies)."""
-    from flexmvm.integrate.dense_solve import lu_solve
+    from flexmvm.integrate.moreau_jean.dense_solve import lu_solve
 
     body, rng = _body(sparse)
     h = 1e-3
@@ -221,7 +221,7 @@ def test_an_order_found_absent_is_not_sought_again(monkeypatch):
     """A body whose elimination order was looked for and none exists (assembly.solver_choice stores
     an empty order) is factored in SuperLU's minimum degree without a second search; a body
     with no order at all (None, built through the API) gets one searched by the solver."""
-    import flexmvm.integrate.body_solver as bs
+    import flexmvm.integrate.moreau_jean.body_solver as bs
 
     calls = []
 

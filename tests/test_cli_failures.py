@@ -171,7 +171,7 @@ def test_nan_reaching_the_lcp_names_the_time(tmp_path, capsys, monkeypatch):
     """A NaN in the contact LCP: SolverError at its source, the step's time added by the
     driver (after the step was cut down to its smallest size); one line, exit 2, and what was
     computed before it kept in the output directory, marked failed."""
-    from flexmvm.integrate import coulomb, lcp
+    from flexmvm.integrate.moreau_jean import coulomb, lcp
 
     def poisoned(D, c, n_eq, *args, **kwargs):
         return lcp.solve_checked(D, np.full_like(c, np.nan), n_eq, *args, **kwargs)
@@ -234,7 +234,7 @@ def test_command_path_and_one_line():
 def test_lcp_refuses_non_finite_input():
     D = np.eye(2)
     with pytest.raises(SolverError, match="non-finite"):
-        from flexmvm.integrate.lcp import solve_mixed_lcp
+        from flexmvm.integrate.moreau_jean.lcp import solve_mixed_lcp
 
         solve_mixed_lcp(D, np.array([-1.0, np.nan]), 0)
     with pytest.raises(SolverError, match="matrix"):
@@ -244,7 +244,7 @@ def test_lcp_refuses_non_finite_input():
 @pytest.mark.parametrize("sparse", [True, False])
 def test_body_solver_refuses_a_non_finite_iteration_matrix(sparse):
     from flexmvm.bodies.body import FlexibleBody
-    from flexmvm.integrate.body_solver import BodySolver
+    from flexmvm.integrate.moreau_jean.body_solver import BodySolver
 
     n = 6
     X = np.random.default_rng(0).normal(size=(n, 3))

@@ -2,11 +2,11 @@
 
 The Newton step of reduced bodies factors and solves small dense matrices (the 6 x 6 frame Schur
 complements, the contact and massless-node Delassus blocks) and multiplies with the massless
-coordinates' rows of k_hat on every step. Those go straight to LAPACK (integrate.dense_solve)
-and to compiled CSR/CSC products (integrate.massless) instead of scipy's wrappers, in the same
-arithmetic: the results must be the reference path's bit for bit (tolerance 0), and a step must
-not go through scipy.linalg's factor/solve wrappers at all (only the factorization of W per
-step size, once, may).
+coordinates' rows of k_hat on every step. Those go straight to LAPACK
+(integrate.moreau_jean.dense_solve) and to compiled CSR/CSC products
+(integrate.moreau_jean.massless) instead of scipy's wrappers, in the same arithmetic: the results
+must be the reference path's bit for bit (tolerance 0), and a step must not go through
+scipy.linalg's factor/solve wrappers at all (only the factorization of W per step size, once, may).
 """
 
 from __future__ import annotations
@@ -19,9 +19,9 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from flexmvm.assembly.build import build_scenario
-from flexmvm.integrate import dense_solve
 from flexmvm.integrate.driver import simulate
-from flexmvm.integrate.massless import MasslessCoordinates, csr_times
+from flexmvm.integrate.moreau_jean import dense_solve
+from flexmvm.integrate.moreau_jean.massless import MasslessCoordinates, csr_times
 from flexmvm.scenarios import load_scenario
 
 DATA = Path(__file__).parent / "data"
@@ -114,7 +114,7 @@ def test_reduced_step_makes_no_scipy_wrapper_call_and_equals_the_reference(monke
     # once per body and run: W_qq's factor (one step size) and the massless nodes' K_ss
     assert sum(calls.values()) <= 2 * n_bodies, calls
 
-    from flexmvm.integrate import body_solver, coulomb, lcp, massless
+    from flexmvm.integrate.moreau_jean import body_solver, coulomb, lcp, massless
 
     for module in (body_solver, coulomb, lcp, massless):
         for name in WRAPPERS:
@@ -213,10 +213,10 @@ def _massless_case(seed: int):
 
 def test_massless_step_end_compiled_equals_the_reference_path():
     """The massless nodes' equilibrium at a step's end through the compiled kernels
-    (integrate.massless_kernels) equals the numpy/scipy reference path (equilibrate) to
+    (integrate.moreau_jean.massless_kernels) equals the numpy/scipy reference path (equilibrate) to
     1e-12 relative: the same sums, the triangular solves and Phi_s^T lambda in another order
     (measured ~1e-15). Ends q and q_dot in place, dq, dq_dot and K_cols dq, K_cols dq_dot."""
-    from flexmvm.integrate import massless as mod
+    from flexmvm.integrate.moreau_jean import massless as mod
 
     out = []
     for path in (mod._compiled_step_end, mod._reference_step_end):
@@ -245,7 +245,7 @@ def test_massless_step_end_of_dense_bodies_makes_no_numpy_solve(monkeypatch):
     """The dense bodies' massless equilibrium goes through the kernels: no K_ss solve through
     MasslessCoordinates.solve, no csr_times, no k_times (the ~60 small calls of 5-30 us a
     step that were 1.4 ms of the seed all-MVM step)."""
-    from flexmvm.integrate import massless as mod
+    from flexmvm.integrate.moreau_jean import massless as mod
 
     massless, loads, states, new_states, held = _massless_case(9)
 
@@ -292,10 +292,13 @@ def test_increment_norm_kernel_equals_the_numpy_terms():
 
 def test_residual_ends_in_kernels_equal_numpy_bit_for_bit():
     """v_m, dv, F += applied, R = inertia - h F and the momentum scale of a body's residual
-    (integrate.residual_kernels) are numpy's expressions bit for bit (tolerance 0: the same
-    elementwise operations in the same order), with and without an applied force, and with a
+    (integrate.moreau_jean.residual_kernels) are numpy's expressions bit for bit (tolerance 0: the
+    same elementwise operations in the same order), with and without an applied force, and with a
     NaN the scale is what numpy's path gives."""
-    from flexmvm.integrate.residual_kernels import iterate_velocities, residual_and_scale
+    from flexmvm.integrate.moreau_jean.residual_kernels import (
+        iterate_velocities,
+        residual_and_scale,
+    )
 
     rng = np.random.default_rng(12)
     v, vp = rng.standard_normal(40), rng.standard_normal(40)

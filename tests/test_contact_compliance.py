@@ -1,6 +1,6 @@
-"""integrate.compliance: the contact compliance D = Phi W^-1 Phi^T and the velocity correction
-W^-1 Phi^T lambda from the cached nodal columns equal the explicit dense formulas (W^-1 by a
-dense solve) to 1e-10 relative, for the 6 x 6 frame Schur complement (Newton step) and the
+"""integrate.moreau_jean.compliance: the contact compliance D = Phi W^-1 Phi^T and the velocity
+correction W^-1 Phi^T lambda from the cached nodal columns equal the explicit dense formulas (W^-1
+by a dense solve) to 1e-10 relative, for the 6 x 6 frame Schur complement (Newton step) and the
 3 x 3 translational one (non-rotating step); also after the cache grew, and after
 refresh_coupling replaced M_w (the cached M_w c_j and psi_j Z_w must follow). A selector
 given as a NodalSelector (CSR arrays, read by a compiled kernel) gives bit for bit what its
@@ -12,7 +12,7 @@ import scipy.sparse as sp
 
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.constraints.rows import NodalSelector, Rows, stack
-from flexmvm.integrate.body_solver import BodySolver
+from flexmvm.integrate.moreau_jean.body_solver import BodySolver
 
 H_STEP = 1e-3
 TOL = 1e-10

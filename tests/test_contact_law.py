@@ -23,8 +23,8 @@ from flexmvm.constraints.contact import ContactLaw
 from flexmvm.contact.pairs import PointToSurfaceContact
 from flexmvm.errors import InputError, SolverError
 from flexmvm.integrate import driver
-from flexmvm.integrate.massless import MasslessCoordinates
 from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
+from flexmvm.integrate.moreau_jean.massless import MasslessCoordinates
 from flexmvm.scenarios import load_scenario, scenario_from_dict
 from flexmvm.scenarios.problems import ScenarioError
 
@@ -91,8 +91,8 @@ def test_end_gap_held_to_round_off(theta):
 @pytest.mark.parametrize("theta", [0.5, 0.55])
 def test_no_penetration_with_redistribution(theta):
     """Massless contact nodes, held in equilibrium after each step with the rows that carried
-    an impulse held (integrate.massless): the penetration measured after every step, both
-    directions, stays below 1e-9 of the step's approach h v0 (flat faces: no chord error)."""
+    an impulse held (integrate.moreau_jean.massless): the penetration measured after every step,
+    both directions, stays below 1e-9 of the step's approach h v0 (flat faces: no chord error)."""
     run, _ = _run("position", True, theta)
     assert run.contact_intervals
     assert max(run.max_penetration_by_direction_m.values()) <= 1e-9 * 0.25e-6 * 0.21
@@ -125,7 +125,7 @@ def test_integrator_refuses_massless_nodes_under_the_velocity_law():
 def test_massless_nodes_in_equilibrium_at_step_ends():
     """Redistributed contact nodes have no mass: their coordinates (every DOF of both contact
     faces) are algebraic and are held in equilibrium at the end of every step
-    (integrate.massless). After the separation (no force on them) every output has
+    (integrate.moreau_jean.massless). After the separation (no force on them) every output has
     (k_hat q)_s = 0 to 1e-9 of |k_hat_s| |q| (round-off of the solve with K_ss; without the
     end equilibrium their end positions alternate about the midpoint equilibrium, measured
     ~1e-3 of it on this case), and their rates are the step's mean velocity."""

@@ -35,7 +35,7 @@ from flexmvm.assembly.cost import (
 )
 from flexmvm.assembly.mesh_lookup import contact_surfaces, retained_nodes
 from flexmvm.assembly.supports import bedded_key
-from flexmvm.integrate.body_solver import MAX_CACHED, BodySolver
+from flexmvm.integrate.moreau_jean.body_solver import MAX_CACHED, BodySolver
 from flexmvm.integrate.run_result import TimeGrid
 
 ROOT = Path(__file__).resolve().parents[1]

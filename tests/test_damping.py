@@ -39,7 +39,7 @@ from flexmvm.fe.assembly import assemble
 from flexmvm.fe.mass_redistribution import redistribute_mass
 from flexmvm.fe.modes import shift_invert_modes
 from flexmvm.integrate.driver import simulate
-from flexmvm.integrate.massless import MasslessCoordinates
+from flexmvm.integrate.moreau_jean.massless import MasslessCoordinates
 from flexmvm.integrate.run_result import TimeGrid
 from flexmvm.integrate.state import BodyState
 from flexmvm.materials import ALUMINIUM
@@ -255,8 +255,8 @@ def test_damping_forms_refuse_bad_input():
 )
 def test_massless_contact_nodes_take_damping_that_leaves_them_undamped(damping, accepted):
     """Contact nodes without mass (fe.mass_redistribution) are held in equilibrium at step
-    ends (integrate.massless), which holds only if nothing damps them: alpha M leaves their
-    rows of c_hat zero and is accepted; beta K does not and is refused in one line."""
+    ends (integrate.moreau_jean.massless), which holds only if nothing damps them: alpha M leaves
+    their rows of c_hat zero and is accepted; beta K does not and is refused in one line."""
     built = _rod("full")
     body = built.system.bodies[0]
     mesh = built.info[0].mesh

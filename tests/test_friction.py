@@ -1,5 +1,5 @@
-"""Coulomb friction at impulse level (issue 14 part 2): the cone problem (integrate/coulomb.py)
-and closed forms of rigid bodies in contact.
+"""Coulomb friction at impulse level (issue 14 part 2): the cone problem
+(integrate/moreau_jean/coulomb.py) and closed forms of rigid bodies in contact.
 
 - The solver on single contacts (closed form of the 3 x 3 problem) and on random contact
   problems of rigid bodies with redundant contact points (its natural residual, the cone).
@@ -23,13 +23,13 @@ import pytest
 from flexmvm.assembly.build import build_scenario
 from flexmvm.errors import InputError, SolverError
 from flexmvm.fe.assembly import assemble
-from flexmvm.integrate.coulomb import (
+from flexmvm.integrate.driver import simulate
+from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
+from flexmvm.integrate.moreau_jean.coulomb import (
     COULOMB_RTOL,
     coulomb_residual,
     solve_coulomb_checked,
 )
-from flexmvm.integrate.driver import simulate
-from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
 from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import load_scenario, scenario_from_dict
 

@@ -8,8 +8,8 @@ pressed by d into an elastic half-space of E* = E / (1 - nu^2) carries
 The body is the aluminium test rod of src/flexmvm/mesh/rod.py (radius b = 10 mm, 20 mm long,
 flat end A, hex27), clamped on its end-B face. The static contact problem is solved with the
 package's FE stiffness (fe.assembly, factored by fe.cholesky) and its LCP solver
-(integrate.lcp.solve_checked): with P selecting the axial DOFs of the end-A face nodes near
-the axis and G = P K^-1 P^T (the face's axial compliance), the nodal contact forces lambda
+(integrate.moreau_jean.lcp.solve_checked): with P selecting the axial DOFs of the end-A face nodes
+near the axis and G = P K^-1 P^T (the face's axial compliance), the nodal contact forces lambda
 solve
 
     G lambda + (r^2 / (2 R) - d) >= 0,  lambda >= 0,  complementary,
@@ -45,7 +45,7 @@ import numpy as np
 
 from flexmvm.fe.assembly import assemble
 from flexmvm.fe.solvers.cholesky import ldl_factor
-from flexmvm.integrate.lcp import solve_checked
+from flexmvm.integrate.moreau_jean.lcp import solve_checked
 from flexmvm.materials import ALUMINIUM
 from flexmvm.mesh.rod import RodSpec, rod_mesh
 

@@ -1,6 +1,6 @@
 """Joint rows carry their nodal selector N (elastic part = N psi), so the integrator can apply
-W^-1 through cached nodal columns (integrate.body_solver.BodySolver.solve_nodal). N psi must be the
-elastic part exactly (same products: 1e-14 relative); a row with an elastic part given
+W^-1 through cached nodal columns (integrate.moreau_jean.body_solver.BodySolver.solve_nodal). N psi
+must be the elastic part exactly (same products: 1e-14 relative); a row with an elastic part given
 without N leaves the body without a selector (it then takes the back-substitution)."""
 
 import numpy as np

@@ -5,7 +5,7 @@ Tolerance: 1e-9 relative to |D| |l| + |c|; the solver adds a 1e-12 relative regu
 
 import numpy as np
 
-from flexmvm.integrate.lcp import solve_mixed_lcp
+from flexmvm.integrate.moreau_jean.lcp import solve_mixed_lcp
 
 
 def test_random_mixed_lcps_satisfy_complementarity():
@@ -32,7 +32,7 @@ def test_separating_rows_get_no_impulse():
 # -- positive semidefinite Delassus matrices, as contact produces them ----------------------
 from scipy.optimize import minimize
 
-from flexmvm.integrate.lcp import LCP_RTOL, complementarity_residual, solve_checked
+from flexmvm.integrate.moreau_jean.lcp import LCP_RTOL, complementarity_residual, solve_checked
 
 
 def _two_reduced_bodies_delassus(rng, m: int, n1: int, n2: int):
@@ -112,7 +112,7 @@ def test_contact_runs_check_every_lcp(monkeypatch):
     bodies modal with 4 modes, so 25 rows act on 2 x 10 coordinates (rank <= 20)."""
     from pathlib import Path
 
-    from flexmvm.integrate import coulomb
+    from flexmvm.integrate.moreau_jean import coulomb
     from flexmvm.runs.run import run_scenario
     from flexmvm.scenarios import ModelConfig, load_scenario
 
@@ -141,7 +141,7 @@ def test_active_set_kernel_agrees_with_nnls():
     random SPD problems of 1..60 rows with condition numbers below 1e4 (the seed case's
     Delassus matrices: below 6) the impulses agree to 1e-10 of their largest and both
     complementarity residuals are round-off (<= 1e-12)."""
-    from flexmvm.integrate.lcp import _nnls, _refine, active_set_qp
+    from flexmvm.integrate.moreau_jean.lcp import _nnls, _refine, active_set_qp
 
     rng = np.random.default_rng(7)
     n_active = 0
@@ -165,7 +165,7 @@ def test_redundant_rows_and_the_nnls_fallback(monkeypatch):
     one at a time and never needs the singular block); with the kernel made to fail (as it
     does on a singular passive block), solve_mixed_lcp falls back to NNLS on the regularised
     factor and still solves the LCP."""
-    from flexmvm.integrate import lcp
+    from flexmvm.integrate.moreau_jean import lcp
 
     D = np.array([[1.0, 1.0, 0.2], [1.0, 1.0, 0.2], [0.2, 0.2, 2.0]])
     c = np.array([-1.0, -1.0, -0.5])

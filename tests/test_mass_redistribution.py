@@ -12,7 +12,7 @@ from flexmvm.assembly.build import build_scenario
 from flexmvm.errors import InputError
 from flexmvm.fe.assembly import assemble
 from flexmvm.fe.mass_redistribution import moments, redistribute_mass
-from flexmvm.integrate.massless import MasslessCoordinates
+from flexmvm.integrate.moreau_jean.massless import MasslessCoordinates
 from flexmvm.materials import ALUMINIUM
 from flexmvm.mesh.rod import EndShape, RodSpec, rod_mesh
 

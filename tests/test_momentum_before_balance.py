@@ -1,6 +1,6 @@
 """A free run's momentum is judged before the balance of its steps' translational rows
-(issue 51, item 1): that balance (integrate/momentum_balance.py) shifts each frame velocity
-after convergence, so the momentum after it (`momentum_rel_error`) is round-off by
+(issue 51, item 1): that balance (integrate/moreau_jean/momentum_balance.py) shifts each frame
+velocity after convergence, so the momentum after it (`momentum_rel_error`) is round-off by
 construction and proves nothing; what the Newton tolerance left shows before it
 (`momentum_rel_error_converged`, and the residuals summed, `momentum_residual_rel`)."""
 

@@ -14,8 +14,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from flexmvm.integrate import driver, moreau_jean
+from flexmvm.integrate import driver
 from flexmvm.integrate.moreau_jean import MoreauJeanIntegrator
+from flexmvm.integrate.moreau_jean import scheme as mj_scheme
 from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import load_scenario
 from flexmvm.studies.grid import seed_scheme
@@ -59,7 +60,7 @@ def test_steps_stopped_on_the_floor_are_counted(monkeypatch, tmp_path):
     assert s["steps_not_converged"] == 0 and s["n_steps"] == 12
     assert s["newton_residual_max"] > 1e-18
 
-    monkeypatch.setattr(moreau_jean, "roundoff_momenta", lambda bodies: np.zeros(len(bodies)))
+    monkeypatch.setattr(mj_scheme, "roundoff_momenta", lambda bodies: np.zeros(len(bodies)))
     s = run_scenario(tiny).summary
     assert s["steps_not_converged"] == s["n_steps"] == 12
     assert s["newton_residual_max"] > 1e-18
@@ -98,8 +99,8 @@ def test_accepted_steps_balance_linear_momentum(monkeypatch, scheme):
     leave translational rows up to the tolerance (measured 3.7e-11 here), which sum to a
     momentum error with a sign. On the damped scheme (velocity law, theta = 0.55) every other
     row is within rtol too; on the scenario's own scheme the massless contact coordinates are
-    put in equilibrium at the step's end after it (integrate.massless), moving their positions
-    and rates away from the step's solution, so only the translational rows are recomputed
+    put in equilibrium at the step's end after it (integrate.moreau_jean.massless), moving their
+    positions and rates away from the step's solution, so only the translational rows are recomputed
     (the massless coordinates have no mass: no momentum row sees them)."""
     from tools import validation
 

@@ -1,5 +1,6 @@
 """A Newton step that stalls below the round-off of its positions is converged
-(integrate.newton_iterate.roundoff_momenta, at_roundoff; issue 35: zero steps not converged).
+(integrate.moreau_jean.newton_iterate.roundoff_momenta, at_roundoff; issue 35: zero steps not
+converged).
 
 A body at rest on a joint has a momentum scale of round-off only (the joint's impulse against
 the round-off of its constraint, ~1e-8 N s on the shipped arm), so its residual relative to
@@ -16,7 +17,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from flexmvm.integrate.newton_iterate import at_roundoff, roundoff_momenta
+from flexmvm.integrate.moreau_jean.newton_iterate import at_roundoff, roundoff_momenta
 
 EPS = np.finfo(float).eps
 

@@ -339,12 +339,12 @@ def test_rebound_at_three_yield_speeds_against_thornton_and_the_study(coarse_mes
 
 def test_consistent_tangent_option_gives_the_same_run(strike, coarse_mesh, monkeypatch):
     """``model.plastic_tangent = true``: the block's yielding steps iterate on the consistent
-    tangent W_t (integrate.plastic_tangent, installed at least once here) instead of the
+    tangent W_t (integrate.moreau_jean.plastic_tangent, installed at least once here) instead of the
     elastic W. The residual is the same, so the converged run is the elastic-W run's to the
     Newton tolerance: the contact force history within 1e-6 of its peak and the plastic work
     within 1e-6 relative (the Newton rtol is 1e-8 of the momentum scale; measured on the
     aluminium sphere on block: q within 1.9e-12 m of 1.6e-5 m). About 3 s."""
-    from flexmvm.integrate import plastic_tangent
+    from flexmvm.integrate.moreau_jean import plastic_tangent
 
     installed = []
     update = plastic_tangent.PlasticTangent.update

@@ -1,4 +1,5 @@
-"""The consistent tangent in the Newton step of a yielding body (integrate/plastic_tangent.py).
+"""The consistent tangent in the Newton step of a yielding body
+(integrate/moreau_jean/plastic_tangent.py).
 
 - The Woodbury solve on the elastic factor (and the refactored sparse form) equals a direct sparse solve of
   W_t = W_el + c P^T (K_t - K_el) P to round-off (relative 1e-9: the capacitance matrix of a
@@ -19,8 +20,8 @@ import scipy.sparse.linalg as spla
 from test_fe import box_hex
 
 from flexmvm.fe import assemble
-from flexmvm.integrate import plastic_tangent
-from flexmvm.integrate.plastic_tangent import tangent_solve
+from flexmvm.integrate.moreau_jean import plastic_tangent
+from flexmvm.integrate.moreau_jean.plastic_tangent import tangent_solve
 from flexmvm.materials import Material
 from flexmvm.plasticity.body import PlasticBody
 from flexmvm.plasticity.material import J2Plasticity

@@ -35,7 +35,7 @@ import pytest
 
 from flexmvm.fe.assembly import assemble
 from flexmvm.fe.solvers.cholesky import ldl_factor
-from flexmvm.integrate.lcp import solve_checked
+from flexmvm.integrate.moreau_jean.lcp import solve_checked
 from flexmvm.materials import ALUMINIUM
 from flexmvm.mesh import read_mesh
 

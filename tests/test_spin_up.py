@@ -23,7 +23,7 @@ import pytest
 
 from flexmvm.assembly.build import build_scenario
 from flexmvm.bodies.spin_modes import spin_frequencies, spin_quasi_static
-from flexmvm.integrate.body_solver import SPIN_TOL
+from flexmvm.integrate.moreau_jean.body_solver import SPIN_TOL
 from flexmvm.mesh.structured import spin_up_beam_part
 from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import load_scenario, scenario_from_dict

@@ -163,3 +163,68 @@ def test_showcase_code_is_in_showcases():
         if p.name in showcases and "plots" not in p.parts
     }
     assert found == {f"runs/showcases/{name}" for name in showcases}, found
+
+
+# integrate/ in three rooms, lowest first: the step contract (what an integrator fulfils and
+# the driver reads), the Moreau-Jean scheme's own package, the driver's side (the time loop,
+# its outputs and energy ledger). A room imports only itself and the rooms before it; outside
+# integrate/moreau_jean/ the scheme is taken from the package (its __init__), never from its
+# modules. A new module of integrate/ joins a room here.
+INTEGRATE_ROOMS = [
+    {"integrate", "state", "system", "step", "theta", "row_products", "plastic_bodies"},
+    {"moreau_jean"},
+    {"energy_ledger", "run_result", "recorder", "progress", "driver"},
+]
+SCHEME = PACKAGE / "integrate" / "moreau_jean"
+
+
+def _integrate_room(module: str) -> int | None:
+    parts = module.split(".")
+    if parts[:2] != ["flexmvm", "integrate"]:
+        return None
+    name = parts[2] if len(parts) > 2 and parts[2] != "__init__" else "integrate"
+    return next(k for k, room in enumerate(INTEGRATE_ROOMS) if name in room)
+
+
+def test_integrate_rooms_point_one_way():
+    """The contract does not import the scheme or the driver, the scheme does not import the
+    driver's side, and nothing outside the scheme's package reaches into its modules."""
+    scheme_modules = {p.stem for p in SCHEME.glob("*.py")} - {"__init__"}
+    wrong = []
+    for path in sorted(PACKAGE.rglob("*.py")):
+        rel = path.relative_to(PACKAGE)
+        inside = SCHEME in path.parents
+        own = (
+            _integrate_room("flexmvm." + ".".join(rel.with_suffix("").parts))
+            if rel.parts[0] == "integrate"
+            else None
+        )
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        for node in ast.walk(tree):
+            if not (isinstance(node, ast.ImportFrom) and node.module and node.level == 0):
+                continue
+            module = node.module
+            other = _integrate_room(module)
+            if other is None:
+                continue
+            reaches = module.startswith("flexmvm.integrate.moreau_jean.") or (
+                module == "flexmvm.integrate.moreau_jean"
+                and any(a.name in scheme_modules for a in node.names)
+            )
+            if reaches and not inside:
+                wrong.append(f"{rel}:{node.lineno} imports {module} (a module of the scheme)")
+            if own is not None and other > own:
+                wrong.append(f"{rel}:{node.lineno} imports {module} (a later room of integrate/)")
+    assert not wrong, "\n".join(wrong)
+
+
+def test_every_integrate_module_has_a_room():
+    """integrate/ holds the contract, the scheme's package and the driver's side: a module
+    directly in it is in one of INTEGRATE_ROOMS (a piece of the scheme goes in moreau_jean/)."""
+    here = {
+        p.stem if p.suffix == ".py" else p.name
+        for p in (PACKAGE / "integrate").iterdir()
+        if p.name != "__init__.py" and (p.suffix == ".py" or (p / "__init__.py").exists())
+    }
+    assert SCHEME.is_dir()
+    assert here <= set().union(*INTEGRATE_ROOMS), sorted(here - set().union(*INTEGRATE_ROOMS))

@@ -14,9 +14,9 @@
   3.8 % of their range; tiny and tiny_mvm NCC 0.999996, peak -0.30 %, axial probe velocities
   by 4.6 % and 5.0 % of their range (the one-node contact of these coarse meshes re-closes,
   and the uncapped recovery pushed it out each time).
-- The non-rotating step (integrate.nonrotating) against the general Newton step on a case where
-  it applies (flat-on-flat: no moment on either frame): the same history to 1e-8 of the peak,
-  since both solve the same equations, one exactly, the other to rtol = 1e-10.
+- The non-rotating step (integrate.moreau_jean.nonrotating) against the general Newton step on a
+  case where it applies (flat-on-flat: no moment on either frame): the same history to 1e-8 of the
+  peak, since both solve the same equations, one exactly, the other to rtol = 1e-10.
 - Its pieces: the translational bordered solve against a dense solve; M_wq(q) from the stacked
   antisymmetric blocks against the full inertia terms.
 """
@@ -32,8 +32,8 @@ import scipy.sparse as sp
 
 from flexmvm.assembly.build import build_scenario
 from flexmvm.bodies.body import FlexibleBody
-from flexmvm.integrate.body_solver import BodySolver
 from flexmvm.integrate.driver import simulate
+from flexmvm.integrate.moreau_jean.body_solver import BodySolver
 from flexmvm.metrics.ncc import compare_force
 from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import load_scenario
@@ -159,7 +159,7 @@ def test_body_threads_setting(monkeypatch):
     from types import SimpleNamespace
 
     from flexmvm.errors import SolverError
-    from flexmvm.integrate.body_threads import BodyThreads
+    from flexmvm.integrate.moreau_jean.body_threads import BodyThreads
     from flexmvm.threads import ENV_THREADS
 
     full = SimpleNamespace(nq=9, is_sparse=True, contracts_in_halves=False)
@@ -227,8 +227,8 @@ def test_one_full_fe_body_splits_its_solves_without_changing_the_history(monkeyp
 
 @pytest.mark.parametrize("key", ["tiny", "flat"])
 def test_k_dq_from_w_images_agrees_with_the_product(monkeypatch, key):
-    """Full-FE bodies take k_hat dq_dot from W_qq dq_dot (integrate.w_images). Checked on
-    every residual here (IMAGE_CHECK_STEPS = 1): the image and the product agree within
+    """Full-FE bodies take k_hat dq_dot from W_qq dq_dot (integrate.moreau_jean.w_images). Checked
+    on every residual here (IMAGE_CHECK_STEPS = 1): the image and the product agree within
     IMAGE_RTOL (1e-11) of the largest term summed on every step of a case with one (tiny) and
     two (flat) full-FE bodies, so no body falls back; and the check can fail: with the impulse
     increments left out of the image, b1 of tiny falls back to the product, and the history
@@ -236,7 +236,7 @@ def test_k_dq_from_w_images_agrees_with_the_product(monkeypatch, key):
     leaves). (The flat case's contact steps are mostly non-rotating steps, which need no
     k_hat dq_dot.)"""
     from flexmvm.integrate import moreau_jean as mj
-    from flexmvm.integrate import w_images
+    from flexmvm.integrate.moreau_jean import w_images
 
     monkeypatch.setattr(w_images, "IMAGE_CHECK_STEPS", 1)
     made = []

@@ -4,7 +4,7 @@ theta = 0.55 and with theta(h) = 1/2 + h / (4 tau) taken for each step size (int
 Test system: one elastic coordinate, a breathing mode of two point masses m on the x axis
 (psi moves them apart symmetrically: no rigid-body content, no frame coupling), so the frame
 stays at rest and q is a linear oscillator m_q q'' + k q = 0 with omega^2 = k / m_q. One step
-of the scheme (moreau_jean.py: v_m = theta v+ + (1 - theta) v-, force at q + theta h v_m,
+of the scheme (moreau_jean/scheme.py: v_m = theta v+ + (1 - theta) v-, force at q + theta h v_m,
 q+ = q + h v_m) is then the linear map written out in `_scheme_map`; the integrator must follow
 it to round-off, and its error against the exact cos/sin must fall as h^order.
 """

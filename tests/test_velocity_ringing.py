@@ -1,6 +1,7 @@
 """Pin velocities of the slider-crank free of step-to-step ringing (issue 51, item 9): the
-end-of-step velocity projection onto the joints' velocity rows (integrate.velocity_projection)
-against the rigid mechanism's closed-form kinematics and MVM against full FE.
+end-of-step velocity projection onto the joints' velocity rows
+(integrate.moreau_jean.velocity_projection) against the rigid mechanism's closed-form kinematics and
+MVM against full FE.
 
 Before the projection the position-level joint rows left v+ = (v_m - (1 - theta) v-) / theta
 along them: an alternation at the step's Nyquist frequency, fed by the turning mechanism and

@@ -1,8 +1,8 @@
 """How many threads flexmvm's own thread pools may use (FLEXMVM_THREADS).
 
 One setting for every place that splits work over threads: the per-body work of several
-full-FE bodies in a step (integrate.body_threads) and the two elimination-tree halves of a
-supernodal LDL^T solve (fe.ldl), e.g. in a Craig-Bampton build. Unset: the machine's cores;
+full-FE bodies in a step (integrate.moreau_jean.body_threads) and the two elimination-tree halves of
+a supernodal LDL^T solve (fe.ldl), e.g. in a Craig-Bampton build. Unset: the machine's cores;
 1: everything on the calling thread (e.g. a study's many single-threaded workers).
 """
 

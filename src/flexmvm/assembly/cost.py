@@ -4,7 +4,7 @@ bytes a Newton iteration streams (its time), both from what each model holds.
 A reduced (Craig-Bampton MVM) body of nq elastic coordinates holds dense matrices: its basis
 Psi (3 n x nq), m_hat and k_hat (nq x nq), the six distinct G2 inertia blocks (nq x nq each)
 of the floating frame's invariants (bodies.invariants) and one dense Cholesky factor of its
-iteration matrix per step size (integrate.body_solver caches one per size): 8 nq^2 + 3 n nq +
+iteration matrix per step size (integrate.moreau_jean.body_solver caches one per size): 8 nq^2 + 3 n nq +
 s nq^2 numbers for s step sizes. A Newton iteration streams m_hat, k_hat and the G2 blocks
 and solves with the factor: ~9 nq^2 numbers.
 
@@ -59,7 +59,7 @@ MARGIN = 1.5
 #: the messages only (the comparison is of bytes): a 2-core AMD EPYC's measured order.
 STREAM_BYTES_PER_S = 5e9
 
-#: Factors the integrator keeps per body (integrate.body_solver.MAX_CACHED): the step sizes
+#: Factors the integrator keeps per body (integrate.moreau_jean.body_solver.MAX_CACHED): the step sizes
 #: whose factors a run holds at once.
 MAX_FACTORS = 10
 

@@ -26,7 +26,7 @@ equals that of the projected Rayleigh matrix (alpha I + beta diag(w_i^2)); the d
 the boundary block and the mass coupling alpha M_bm (K_bm = 0 for Craig-Bampton), which
 vanish for a body clamped at its interface (reduction.clamp: no boundary coordinates left),
 where modal and Rayleigh damping agree exactly. Undamped boundary rows also keep a massless
-retained node algebraic (integrate.massless).
+retained node algebraic (integrate.moreau_jean.massless).
 """
 
 from __future__ import annotations

@@ -54,7 +54,8 @@ class ContactRows:
     n_eq: int = 0
     normal_weight: np.ndarray | None = None  # (m,): row impulse -> compressive normal impulse
     friction: FrictionRows | None = None  # None: no friction cone (the exact LCP path)
-    # (sticking, sliding) cones at the last solution of the step (set by integrate.coulomb)
+    # (sticking, sliding) cones at the last solution of the step (set by
+    # integrate.moreau_jean.coulomb)
     stick_slip: tuple[int, int] = (0, 0)
 
     @classmethod

@@ -131,8 +131,8 @@ class NodeSetPoint:
     def add_row(self, rows: Rows, row: int, direction, sign: float, bodies, states) -> None:
         """rows[row] += sign * d^T dx_bar/dv: frame part [d, s_bar x A^T d], elastic part
         psi_bar^T A^T d. No nodal selector: through the cached nodal columns of W_qq^-1
-        (integrate.compliance) a row on every DOF of a hole face would gather those columns at
-        every iterate, dearer than one back-substitution with the rows' columns
+        (integrate.moreau_jean.compliance) a row on every DOF of a hole face would gather those
+        columns at every iterate, dearer than one back-substitution with the rows' columns
         (docs/notes/2026-11-27-comment-measurements.md, "Joints")."""
         body = bodies[self.body]
         st = states[self.body]

@@ -7,7 +7,7 @@ selector N (m, 3 n_nodes) with elastic part = N psi: the integrator then applies
 psi^T N^T through cached nodal columns instead of one back-substitution per row. The
 selector is a scipy CSR matrix, or (contact rows, made every step) a NodalSelector: the same
 CSR arrays without the scipy object, which the nodal columns read directly
-(integrate.compliance.NodalColumns.touch).
+(integrate.moreau_jean.compliance.NodalColumns.touch).
 """
 
 from __future__ import annotations

@@ -1,5 +1,5 @@
 """The time loop: step-size policy, outputs, contact bookkeeping. The scheme is separate
-(moreau_jean.py, the default; simulate's ``integrator`` chooses another, behind the contract
+(moreau_jean/scheme.py, the default; simulate's ``integrator`` chooses another, behind the contract
 of step.py); this file decides which step to take and what to keep, and calls simulate's
 ``on_step`` hook after every accepted step.
 
@@ -69,7 +69,7 @@ class AcceptedStep:
 
 
 def moreau_jean(exploit_nonrotating: bool = True) -> IntegratorFactory:
-    """The default integrator: the Moreau-Jean scheme (moreau_jean.py) with the grid's
+    """The default integrator: the Moreau-Jean scheme (moreau_jean/scheme.py) with the grid's
     theta of each step size (TimeGrid.theta_rule)."""
 
     def make(system: System, grid: TimeGrid) -> Integrator:
@@ -99,8 +99,8 @@ def simulate(
     from a state in contact, whose penetration is then only measured.
 
     exploit_nonrotating: let steps whose frames do not rotate take the linear one-solve step
-    (integrate.nonrotating; verified against the full equations). False forces the general
-    Newton step everywhere (for comparison). For the default integrator only.
+    (integrate.moreau_jean.nonrotating; verified against the full equations). False forces the
+    general Newton step everywhere (for comparison). For the default integrator only.
 
     integrator: the factory of the run's integrator (default: moreau_jean()).
     on_step: called after every accepted step with an AcceptedStep (custom output,
@@ -124,7 +124,10 @@ class _Tally:
         self.impulse, self.jimpulse = 0.0, np.zeros(n_joint_rows)
         self.intervals: list[list[float]] = []
         self.max_pen, self.drift = 0.0, 0.0
-        self.step_t, self.step_h, self.step_impulse = [], [], []
+        # per accepted step: its end time [s], size [s] and normal contact impulse [N s]
+        self.step_t: list[float] = []
+        self.step_h: list[float] = []
+        self.step_impulse: list[float] = []
         self.row_impulses: dict = {}  # normal contact row key -> [impulse [N s], first time [s]]
         self.n_loose, self.worst_res, self.worst_lcp = 0, 0.0, 0.0
         self.p_res = np.zeros(3)
@@ -310,8 +313,8 @@ def _accept(parts, states, tally, integ, on_step):
 
 
 def _advance(
-    integ, t: float, states, h: float, h_min: float, cuts: list
-) -> list[tuple[float, float, object]]:
+    integ: Integrator, t: float, states: list[BodyState], h: float, h_min: float, cuts: list
+) -> list[tuple[float, float, StepResult]]:
     """Steps from t over h: [(start, size, StepResult)]. A step whose Newton iteration fails
     (it diverges, or has not reached the tolerance or the round-off floor in max_iter
     iterates) is taken as two halves instead, recursively down to h_min = dt_s /
@@ -376,7 +379,8 @@ class _Penetrations:
     def __init__(self, system: System):
         self.system = system
         self.measured = bool(system.contacts)
-        self.depth, self.at, self.by_direction = 0.0, None, {}
+        self.depth, self.at = 0.0, None
+        self.by_direction: dict[str, float] = {}  # "b1 nodes into b2" -> deepest [m]
         self.floors: dict[int, list[float]] = {}  # per provider, per direction: deepest so far
 
     def _measure(self, states, t, deep):

@@ -44,45 +44,23 @@ StoringLoad), and of an integrator by integrate.step.Integrator: nothing is prob
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass, field
-from typing import TYPE_CHECKING, Any, Protocol, runtime_checkable
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from flexmvm.bodies.momentum import increment_norm
 from flexmvm.bodies.rotation import cross3
 from flexmvm.integrate.row_products import body_impulse, flat_product
+from flexmvm.integrate.system import Load, StoringLoad
 from flexmvm.loads.applied import midpoint_states, start_run
 
 if TYPE_CHECKING:
-    from flexmvm.integrate.carried import CarriedState
     from flexmvm.integrate.plastic_bodies import PlasticBodies
-    from flexmvm.integrate.step import Integrator
+    from flexmvm.integrate.state import BodyState
+    from flexmvm.integrate.step import CarriedStates, Integrator
     from flexmvm.integrate.system import System
-
-
-class Load(Protocol):
-    """What the ledger asks of every applied load (flexmvm.loads)."""
-
-    name: str  # the key of its work ("": loads[k] <Kind>)
-
-    def forces(self, bodies, states, t: float) -> dict[int, np.ndarray]:
-        """{body: generalized force (6 + nq,)} at states (with velocities) and time t [s]."""
-        ...
-
-
-@runtime_checkable
-class StoringLoad(Load, Protocol):
-    """A load that stores energy and dissipates some (a spring-damper: loads.spring,
-    loads.revolute): its stored energy is set against its elastic work."""
-
-    def energy(self, bodies, states) -> float:
-        """The energy stored [J] at states."""
-        ...
-
-    def dissipation_rate(self, bodies, states) -> float:
-        """The power its damper dissipates [W] at states (with velocities)."""
-        ...
 
 
 def load_label(k: int, load: Load) -> str:
@@ -139,10 +117,11 @@ class EnergyLedger:
     over its nodes)."""
 
     system: System
-    carried: Any = None  # callable (b, state) -> (L(q), L(q_dot)), or None
-    # the integrator's carried state (integrate.carried.CarriedState), whose k_hat q and
-    # M_qq q_dot of a step's end give the dissipation's products for free; None: computed
-    fresh: CarriedState | None = None
+    # (b, state) -> (L(q), L(q_dot)): the integrator's carried contractions, or None
+    carried: Callable[[int, BodyState], tuple[np.ndarray, np.ndarray]] | None = None
+    # the integrator's carried state (integrate.step.CarriedStates), whose k_hat q and M_qq
+    # q_dot of a step's end give the dissipation's products for free; None: computed
+    fresh: CarriedStates | None = None
     # the integrator's plastic bodies (integrate.plastic_bodies.PlasticBodies); None: none
     plastic: PlasticBodies | None = None
     w_loads: np.ndarray = field(init=False)
@@ -158,7 +137,9 @@ class EnergyLedger:
         self.w_joints = np.zeros(len(self.system.joints))
         self.sums = np.zeros(5)  # ... and the plastic bodies' correction work
         # per load: stores energy (StoringLoad), asked once per run
-        self._storing = [isinstance(load, StoringLoad) for load in self.system.loads]
+        self._storing: list[StoringLoad | None] = [
+            load if isinstance(load, StoringLoad) else None for load in self.system.loads
+        ]
         self.rows = []
         self._ends: dict = {}  # body -> (q, v, k_hat q, M_qq q_dot) of the last step's end
 
@@ -174,8 +155,9 @@ class EnergyLedger:
         for k, load in enumerate(sysm.loads):
             for b, f in load.forces(bodies, mids, t_m).items():
                 self.w_loads[k] += h * float(f @ vms[b])
-            if self._storing[k]:
-                self.d_loads[k] += h * load.dissipation_rate(bodies, mids)
+            storing = self._storing[k]
+            if storing is not None:
+                self.d_loads[k] += h * storing.dissipation_rate(bodies, mids)
         lam_j, offset = result.joint_impulses, 0
         for k, joint in enumerate(sysm.joints):
             n = joint.n_rows
@@ -230,8 +212,8 @@ class EnergyLedger:
 
     def _products(self, b, body, s0, s1, dq, dqd) -> tuple[np.ndarray, np.ndarray]:
         """(k_hat dq, M_qq dq_dot): differences of the carried k_hat q and M_qq q_dot of the
-        step's two ends when the integrator carried both (its Newton step: integrate.carried,
-        Kq+ = Kq- + h k_hat q_dot_m), else one product each."""
+        step's two ends when the integrator carried both (its Newton step:
+        integrate.moreau_jean.carried, Kq+ = Kq- + h k_hat q_dot_m), else one product each."""
         c1 = self.fresh.of_state(b, s1) if self.fresh is not None else None
         c0 = self._ends.get(b)
         self._ends[b] = None if c1 is None else (s1.q, s1.v, c1.Kq, c1.Mqd)
@@ -243,8 +225,8 @@ class EnergyLedger:
         """The sums so far, and the springs' stored energy at states: one output."""
         bodies = self.system.bodies
         stored = [
-            load.energy(bodies, states) if storing else 0.0
-            for load, storing in zip(self.system.loads, self._storing)
+            storing.energy(bodies, states) if storing is not None else 0.0
+            for storing in self._storing
         ]
         sums = self.sums.copy()
         if self.plastic is not None:

@@ -22,6 +22,7 @@ The history lives here, beside the BodyState: a run without plastic bodies makes
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import TYPE_CHECKING
 
 import numpy as np
 import scipy.sparse as sp
@@ -30,6 +31,9 @@ import scipy.sparse.linalg as spla
 from flexmvm.errors import InputError, SolverError
 from flexmvm.plasticity.body import PlasticBody
 from flexmvm.plasticity.step_history import StepHistory
+
+if TYPE_CHECKING:
+    from flexmvm.integrate.system import System
 
 #: The modified Newton iteration on the elastic W contracts by 0.3 to 0.6 per iterate while
 #: points yield (the elastic tangent is stiffer than the plastic one; measured on the sphere
@@ -46,9 +50,9 @@ class PlasticPart:
     elastic material and J2Plasticity; the mesh the body's psi maps to); allowed: per cell
     block a bool mask of the cells that may yield (a reduced body: those whose nodes are all
     retained, where psi is the identity), None: all (full FE); tangent: its Newton iteration
-    matrix while it yields is the consistent tangent W_t (integrate.plastic_tangent), else the
-    elastic W; stop_outside: a reduced body whose cells outside the allowed ones reach yield
-    stops the run (PlasticBodies.outside_stop), else the run counts them and goes on."""
+    matrix while it yields is the consistent tangent W_t (integrate.moreau_jean.plastic_tangent),
+    else the elastic W; stop_outside: a reduced body whose cells outside the allowed ones reach
+    yield stops the run (PlasticBodies.outside_stop), else the run counts them and goes on."""
 
     body: int
     model: PlasticBody
@@ -88,10 +92,10 @@ class PlasticReport:
 class PlasticBodies:
     """The plastic bodies of a system through a run (module doc)."""
 
-    def __init__(self, system):
+    def __init__(self, system: System):
         self.bodies = system.bodies
         self.history: dict[int, StepHistory] = {}
-        for part in getattr(system, "plastic", ()):
+        for part in system.plastic:
             body = self.bodies[part.body]
             if body.psi.shape[0] != part.model.n_dof:
                 raise InputError(
@@ -101,7 +105,7 @@ class PlasticBodies:
             if not body.is_sparse:
                 _check_identity_rows(body, part)
             self.history[part.body] = StepHistory(part.model, allowed=part.allowed)
-        self.parts = {part.body: part for part in getattr(system, "plastic", ())}
+        self.parts = {part.body: part for part in system.plastic}
         self._mid: dict[int, tuple[np.ndarray, np.ndarray | None]] = {}
 
     def __bool__(self) -> bool:

@@ -2,6 +2,11 @@
 
 from __future__ import annotations
 
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from tqdm import tqdm
+
 
 class StepProgress:
     """The step bar: simulated time [us] of the run's span, the steps taken beside it. Made at
@@ -11,7 +16,7 @@ class StepProgress:
 
     def __init__(self, enabled: bool, n_ticks: int, dt: float):
         self.enabled, self.n_ticks, self.dt = enabled, n_ticks, dt
-        self.bar = None
+        self.bar: tqdm | None = None  # made by the first update
 
     def update(self, tick: int, n_steps: int) -> None:
         if not self.enabled:

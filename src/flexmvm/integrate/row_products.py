@@ -1,14 +1,20 @@
 """Constraint rows and a body's coordinates: the generalized impulse Phi_b^T lambda of a
-body, the step's contact rows merged over the contact providers, and matrix @ vector as a
-flat array for dense and sparse matrices alike."""
+body, the step's contact rows merged over the contact providers (and their impulses handed
+back to them), and matrix @ vector as a flat array for dense and sparse matrices alike."""
 
 from __future__ import annotations
+
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from flexmvm.constraints.contact import ContactRows, FrictionRows
 from flexmvm.constraints.rows import Rows, stack
 from flexmvm.errors import SolverError
+
+if TYPE_CHECKING:
+    from flexmvm.integrate.state import BodyState
+    from flexmvm.integrate.system import System
 
 
 def body_impulse(rows: Rows, b: int, body, lam: np.ndarray) -> np.ndarray:
@@ -59,10 +65,10 @@ def merge_contacts(a: ContactRows, b: ContactRows) -> ContactRows:
             if f is not None
         ]
         friction = FrictionRows(
-            *(
-                np.concatenate([getattr(f, k) for f in parts])
-                for k in ("normal", "tangent", "mu", "directions")
-            )
+            np.concatenate([f.normal for f in parts]),
+            np.concatenate([f.tangent for f in parts]),
+            np.concatenate([f.mu for f in parts]),
+            np.concatenate([f.directions for f in parts]),
         )
     return ContactRows(
         stack([a.rows, b.rows]),
@@ -73,3 +79,21 @@ def merge_contacts(a: ContactRows, b: ContactRows) -> ContactRows:
         np.concatenate([wa, wb]),
         friction,
     )
+
+
+def candidate_rows(system: System, states: list[BodyState], h: float):
+    """The step's contact rows (all providers merged) and per provider (provider, its
+    rows, their offset)."""
+    crows = ContactRows.empty()
+    parts = []
+    for provider in system.contacts:
+        part = provider.candidate_rows(system.bodies, states, h)
+        parts.append((provider, part, crows.rows.m))
+        crows = merge_contacts(crows, part)
+    return crows, parts
+
+
+def after_step(parts, lam_c: np.ndarray, h: float) -> None:
+    """Each provider's share of the accepted contact impulses lam_c (candidate_rows' parts)."""
+    for provider, part, offset in parts:
+        provider.after_step(part, lam_c[offset : offset + part.rows.m], h)

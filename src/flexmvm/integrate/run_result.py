@@ -131,7 +131,7 @@ class FrictionSummary:
     """Friction over a run (contacts with friction_coefficient > 0): the resultant of all
     tangential impulses [N s] (global, summed over steps), the largest per-step tangential
     force |sum l_T t| / h [N], and the most cones sticking / sliding in one step (cones
-    carrying a compressive impulse; integrate.coulomb.stick_slip)."""
+    carrying a compressive impulse; integrate.moreau_jean.coulomb.stick_slip)."""
 
     impulse_ns: np.ndarray = field(default_factory=lambda: np.zeros(3))
     force_max_n: float = 0.0
@@ -198,8 +198,8 @@ class RunResult:
     # sum over all steps of the translational momentum residuals of all bodies as the solves
     # left them, before their balance [N s]: a free system's momentum error without it
     # (n_out, 3) the linear momentum the steps' translational balance
-    # (integrate.momentum_balance.balance_translation) added up to each output time [N s]:
-    # momentum - momentum_shift is the momentum of the steps as converged, before the balance
+    # (integrate.moreau_jean.momentum_balance.balance_translation) added up to each output time [N
+    # s]: momentum - momentum_shift is the momentum of the steps as converged, before the balance
     momentum_shift: np.ndarray | None = None
     wall_time_s: float = 0.0
     friction: FrictionSummary | None = None  # None: no contact with friction in the system

@@ -1,7 +1,8 @@
 """The contract between the time loop (driver.py) and an integrator: what a step gives
-(StepResult) and what the driver asks of the integrator that takes it (Integrator). The
-Moreau-Jean scheme (moreau_jean.py) is the one integrator of the package; another one is
-passed to driver.simulate as a factory (driver.IntegratorFactory)."""
+(StepResult), what the driver and the energy ledger ask of the integrator that takes it
+(Integrator) and of the products it may carry with its states (CarriedStates). The Moreau-Jean
+scheme (integrate/moreau_jean/) is the one integrator of the package; another one is passed to
+driver.simulate as a factory (driver.IntegratorFactory). Nothing here imports the scheme."""
 
 from __future__ import annotations
 
@@ -14,7 +15,6 @@ from flexmvm.constraints.contact import ContactRows
 from flexmvm.integrate.state import BodyState
 
 if TYPE_CHECKING:
-    from flexmvm.integrate.carried import CarriedState
     from flexmvm.integrate.plastic_bodies import PlasticBodies
     from flexmvm.integrate.theta import ThetaRule
 
@@ -35,11 +35,34 @@ class StepResult:
     translation_residual: np.ndarray | None = None  # (3,) sum over bodies of the exit
     # residual's translational rows as the solves left them, before their balance [N s]
     # (3,) the linear momentum the balance of the translational rows added to the step's
-    # solution [N s] (integrate.momentum_balance): zero when not taken
+    # solution [N s] (integrate.moreau_jean.momentum_balance): zero when not taken
     momentum_shift: np.ndarray | None = None
     lcp_residual: float = 0.0  # largest complementarity residual of the step's LCP solves
     # work [J] of the plastic bodies' force correction psi^T c(q_m) . dq (plastic_bodies)
     plastic_work: float = 0.0
+
+
+class CarriedProducts(Protocol):
+    """L(q) (bodies.body.carried_contractions: (3, 3, nq), or (3, n) for full FE), k_hat q and
+    M_qq q_dot of one body at the state they were made for (the scheme's
+    carried.CarriedContractions)."""
+
+    @property
+    def Lq(self) -> np.ndarray: ...
+
+    @property
+    def Kq(self) -> np.ndarray: ...
+
+    @property
+    def Mqd(self) -> np.ndarray: ...
+
+
+class CarriedStates(Protocol):
+    """What the energy ledger asks of the products an integrator carries with its states:
+    ``of_state(b, state)`` gives body b's CarriedProducts if they were made for exactly that
+    state (its q and v arrays), else None (the ledger then computes them)."""
+
+    def of_state(self, b: int, st: BodyState) -> CarriedProducts | None: ...
 
 
 class Integrator(Protocol):
@@ -51,16 +74,30 @@ class Integrator(Protocol):
     and the energy ledger read the attributes below, each declared here (None where the
     integrator has none), never probed for."""
 
-    order: int
-    n_joint_rows: int
-    n_nonrotating_steps: int
-    # theta of each step size (the ledger's numerical dissipation); None: taken as 1/2
-    theta_rule: ThetaRule | None
-    # the elastic-plastic bodies' history (plastic_bodies); None or empty (false): none
-    plastic: PlasticBodies | None
-    # k_hat q and M_qq q_dot carried with the states it produced (carried.py); None: the
-    # ledger computes its products afresh
-    carried_state: CarriedState | None
+    @property
+    def order(self) -> int: ...
+
+    @property
+    def n_joint_rows(self) -> int: ...
+
+    @property
+    def n_nonrotating_steps(self) -> int: ...
+
+    @property
+    def theta_rule(self) -> ThetaRule | None:
+        """theta of each step size (the ledger's numerical dissipation); None: taken as 1/2."""
+        ...
+
+    @property
+    def plastic(self) -> PlasticBodies | None:
+        """The elastic-plastic bodies' history (plastic_bodies); None or empty (false): none."""
+        ...
+
+    @property
+    def carried_state(self) -> CarriedStates | None:
+        """k_hat q and M_qq q_dot carried with the states it produced; None: the ledger
+        computes its products afresh."""
+        ...
 
     def step(self, t: float, states: list[BodyState], h: float) -> StepResult: ...
 

@@ -1,4 +1,4 @@
-"""theta of the Moreau-Jean step (moreau_jean.py) as a property of the step size h.
+"""theta of the Moreau-Jean step (moreau_jean/scheme.py) as a property of the step size h.
 
 Fixed: theta for every h (1/2: the implicit midpoint rule, second order; above 1/2 first order,
 error ~ (theta - 1/2) h). With a damping time tau (a scenario's time.hf_damping_time_s) and

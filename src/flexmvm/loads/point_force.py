@@ -69,7 +69,7 @@ class PointForce:
     @property
     def state_independent(self) -> bool:
         """Fixed in space: the force does not turn with the body (the linear step of
-        integrate.nonrotating may take it)."""
+        integrate.moreau_jean.nonrotating may take it)."""
         return not self.follower
 
     def forces(self, bodies, states, t: float) -> dict[int, np.ndarray]:

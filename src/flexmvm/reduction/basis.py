@@ -29,8 +29,8 @@ retained nodes' columns and the modes (MasslessStatics):
   case (b2 1-3 + 37: 129 DOF with the frame, ALL's 193) its force matches ALL's and its full
   FE's at theta = 1/2 (docs/contact_law.md).
 The coordinates u_c have zero rows in m_hat: the integrator holds them in equilibrium at the
-step ends (integrate/massless.py). Without the split a constraint mode drags interior mass
-along and the redistribution leaves the retained contact coordinates massive.
+step ends (integrate/moreau_jean/massless.py). Without the split a constraint mode drags interior
+mass along and the redistribution leaves the retained contact coordinates massive.
 
 Every Psi has zero rows at the reference DOFs (ReferenceCondition), so q carries no
 rigid-body motion. The reduced matrices are m_hat = Psi^T M Psi, k_hat = Psi^T K Psi

@@ -69,7 +69,7 @@ class ScenarioRun:
 MOMENTUM_ERROR_NOTE = (
     "momentum_rel_error: max over the outputs of |p(t) - p(0)| / |p(0)| of the run as "
     "returned, whose steps' translational rows are balanced after convergence (a shift of "
-    "each frame velocity, integrate.momentum_balance.balance_translation): round-off by "
+    "each frame velocity, integrate.moreau_jean.momentum_balance.balance_translation): round-off by "
     "construction, not evidence of convergence. momentum_rel_error_converged: the same of "
     "the momentum the steps converged to, before that shift (p(t) minus the shifts so far): "
     "what the Newton tolerance left, it grows when the tolerance is loosened. "

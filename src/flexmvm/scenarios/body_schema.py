@@ -218,7 +218,7 @@ class ModelConfig(Frozen):
     allow_costly: bool = False
     geometric_stiffening: StiffeningKey = None  # stiffening_schema.py; a rigid kind ignores it
     # a plastic body (material.plasticity): its Newton matrix while it yields, the elastic W
-    # (False) or the consistent tangent W_t (True; integrate/plastic_tangent.py), and what a
+    # (False) or the consistent tangent W_t (True; integrate/moreau_jean/plastic_tangent.py), and what a
     # reduced body does when cells outside its retained region reach yield: "warn" (the run
     # goes on, elastic there, and says so) or "stop" (the run fails there, keeping what it
     # computed); an elastic body ignores both

@@ -111,7 +111,7 @@ class Scenario(Frozen):
                     f"slave and master are both on body {c.slave_body!r}", f"contacts[{i}].master"
                 )
             if c.redistribute_mass and not c.law.spec.massless_nodes:
-                # a massless node has no velocity of its own (integrate.massless): under the
+                # a massless node has no velocity of its own (integrate.moreau_jean.massless): under the
                 # velocity law its end velocity flips every step, each flip an inelastic
                 # impact (-10 % energy at theta = 1/2, -3 % at 0.55: docs/contact_law.md)
                 laws = " or ".join(f'law = "{law}"' for law in massless_laws())

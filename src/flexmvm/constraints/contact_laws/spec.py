@@ -16,7 +16,7 @@ Theta = float | Callable[[float], float] | None
 @runtime_checkable
 class ContactLawSpec(Protocol):
     """Everything the program asks of a contact law (contact.pairs, contact.pair_options,
-    the scenario schema, integrate.massless, the run's summary)."""
+    the scenario schema, integrate.moreau_jean.massless, the run's summary)."""
 
     # read-only properties, so that a frozen dataclass satisfies them
     @property

@@ -32,8 +32,9 @@ Constraints (seed eq. 11, at impulse level):
 Penetration through a step: docs/contact_law.md, "Penetration through a step".
 
 Massless coordinates (contact nodes whose mass was redistributed, fe.mass_redistribution) are
-algebraic: after every step they are put in equilibrium at the step's end (integrate.massless),
-which keeps them from alternating about their midpoint equilibrium (undamped at theta = 1/2).
+algebraic: after every step they are put in equilibrium at the step's end
+(integrate.moreau_jean.massless), which keeps them from alternating about their midpoint equilibrium
+(undamped at theta = 1/2).
 
 Solved by modified Newton with the per-body matrix W = M + theta^2 h^2 K (factored once per
 h, see body_solver); constraint impulses by the mixed LCP on the Delassus matrix
@@ -52,32 +53,37 @@ import numpy as np
 
 from flexmvm.bodies.momentum import momentum_terms, momentum_terms_nodal
 from flexmvm.errors import SolverError
-from flexmvm.integrate import DEFAULT_THETA, nonrotating
-from flexmvm.integrate.body_solver import BodySolver
-from flexmvm.integrate.body_threads import BodyThreads
-from flexmvm.integrate.carried import CarriedState
-from flexmvm.integrate.coulomb import solve_contact_impulses
-from flexmvm.integrate.iteration_matrix import IterationMatrices
-from flexmvm.integrate.massless import MasslessCoordinates, check_contact_law, equilibrate_step_end
-from flexmvm.integrate.momentum_balance import balance_translation, balanced_residuals
-from flexmvm.integrate.newton_iterate import (
+from flexmvm.integrate import DEFAULT_THETA
+from flexmvm.integrate.moreau_jean import nonrotating
+from flexmvm.integrate.moreau_jean.body_solver import BodySolver
+from flexmvm.integrate.moreau_jean.body_threads import BodyThreads
+from flexmvm.integrate.moreau_jean.carried import CarriedState
+from flexmvm.integrate.moreau_jean.coulomb import solve_contact_impulses
+from flexmvm.integrate.moreau_jean.iteration_matrix import IterationMatrices
+from flexmvm.integrate.moreau_jean.massless import (
+    MasslessCoordinates,
+    check_contact_law,
+    equilibrate_step_end,
+)
+from flexmvm.integrate.moreau_jean.momentum_balance import balance_translation, balanced_residuals
+from flexmvm.integrate.moreau_jean.newton_iterate import (
     NewtonIterate,
     joint_rows,
     relative_residual,
     roundoff_momenta,
 )
+from flexmvm.integrate.moreau_jean.plastic_tangent import PlasticTangent
+from flexmvm.integrate.moreau_jean.relaxation import AitkenRelaxation, relaxed_iterate
+from flexmvm.integrate.moreau_jean.residual_kernels import iterate_velocities, residual_and_scale
+from flexmvm.integrate.moreau_jean.stall_report import stall_report
+from flexmvm.integrate.moreau_jean.velocity_projection import project_joint_velocities
+from flexmvm.integrate.moreau_jean.w_images import WImages
 from flexmvm.integrate.plastic_bodies import PlasticBodies
-from flexmvm.integrate.plastic_tangent import PlasticTangent
-from flexmvm.integrate.relaxation import AitkenRelaxation, relaxed_iterate
-from flexmvm.integrate.residual_kernels import iterate_velocities, residual_and_scale
-from flexmvm.integrate.row_products import flat_product, merge_contacts
-from flexmvm.integrate.stall_report import stall_report
+from flexmvm.integrate.row_products import after_step, candidate_rows, flat_product
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.step import StepResult
-from flexmvm.integrate.system import ContactRows, System
+from flexmvm.integrate.system import System
 from flexmvm.integrate.theta import ThetaRule
-from flexmvm.integrate.velocity_projection import project_joint_velocities
-from flexmvm.integrate.w_images import WImages
 from flexmvm.loads.applied import midpoint_forces
 
 __all__ = ["MoreauJeanIntegrator", "StepResult"]
@@ -142,7 +148,7 @@ class MoreauJeanIntegrator:
         self.matrices = IterationMatrices(
             bodies, self.solvers, self.threads, self.carried_state, self.images
         )
-        # relaxation of a step whose iteration stalls (integrate.relaxation)
+        # relaxation of a step whose iteration stalls (integrate.moreau_jean.relaxation)
         self.relax = AitkenRelaxation(
             [float(np.ptp(body.X, axis=0).max()) if len(body.X) else 1.0 for body in bodies]
         )
@@ -155,7 +161,7 @@ class MoreauJeanIntegrator:
     def carried(self, b: int, st: BodyState) -> tuple[np.ndarray, np.ndarray]:
         """(L(q), L(q_dot)) of body b at state st in the body's carried form
         (FlexibleBody.carried_contractions: compact for full-FE bodies): the carried ones if st
-        is the state this integrator produced, else computed (integrate.carried)."""
+        is the state this integrator produced, else computed (integrate.moreau_jean.carried)."""
         c = self.carried_state.at(b, st)
         return c.Lq, c.Lqd
 
@@ -168,7 +174,7 @@ class MoreauJeanIntegrator:
     # ---------------------------------------------------------------- the momentum balance
     def _residuals(self, t, states, v_plus, h, th):
         """Momentum residuals without constraint forces, midpoint and end configurations
-        (per body, on threads when several bodies are full FE: integrate.body_threads);
+        (per body, on threads when several bodies are full FE: integrate.moreau_jean.body_threads);
         th: the step's theta."""
         applied = midpoint_forces(self.loads, self.system.bodies, states, v_plus, h, th, t)
         out = self.threads.each(
@@ -262,11 +268,11 @@ class MoreauJeanIntegrator:
     # ---------------------------------------------------------------- the step
     def step(self, t: float, states: list[BodyState], h: float) -> StepResult:
         """One step from t to t + h. Frames that do not rotate (omega = 0, no joints) take the
-        linear step of integrate.nonrotating, verified against the rotational rows; any other
-        step, or one whose verification fails, the general modified-Newton step."""
+        linear step of integrate.moreau_jean.nonrotating, verified against the rotational rows; any
+        other step, or one whose verification fails, the general modified-Newton step."""
         th = self.theta_rule.at(h)
         self.tangent.start_step(h)  # the W a step starts from (plastic_tangent)
-        crows, parts = self._candidate_rows(states, h)
+        crows, parts = candidate_rows(self.system, states, h)
         if self.exploit_nonrotating and nonrotating.applies(self.system, states):
             out = nonrotating.nonrotating_step(
                 self.system, self.solvers, th, self.rtol, self.loads, t, states, h, crows
@@ -282,7 +288,7 @@ class MoreauJeanIntegrator:
                 self.n_nonrotating_steps += 1
                 new_states, lam_c, res_t, lcp_res = out
                 self._equilibrate_massless(t, h, th, states, new_states, [(crows.rows, lam_c)])
-                self._after_step(parts, lam_c, h)
+                after_step(parts, lam_c, h)
                 return StepResult(
                     new_states,
                     np.zeros(0),
@@ -294,22 +300,6 @@ class MoreauJeanIntegrator:
                     lcp_residual=lcp_res,
                 )
         return self._newton_step(t, states, h, th, crows, parts)
-
-    def _candidate_rows(self, states, h):
-        """The step's contact rows (all providers merged) and per provider (provider, its
-        rows, their offset)."""
-        crows = ContactRows.empty()
-        parts = []
-        for provider in self.system.contacts:
-            part = provider.candidate_rows(self.system.bodies, states, h)
-            parts.append((provider, part, crows.rows.m))
-            crows = merge_contacts(crows, part)
-        return crows, parts
-
-    @staticmethod
-    def _after_step(parts, lam_c, h):
-        for provider, part, offset in parts:
-            provider.after_step(part, lam_c[offset : offset + part.rows.m], h)
 
     def _newton_step(self, t, states, h, th, crows, parts) -> StepResult:
         """The modified Newton iteration: v_free = v+ - W^-1 R(v+), then the constraint
@@ -396,6 +386,8 @@ class MoreauJeanIntegrator:
         images = self.images
         if s.contact_compliance is None:
             self._contact_columns(s, h, crows)
+        compliance = s.contact_compliance
+        assert compliance is not None  # made by _contact_columns
         if n_j + m_c == 0:
             s.v_plus = s.v_free
             images.plus = dict(images.free)
@@ -422,7 +414,7 @@ class MoreauJeanIntegrator:
             dv = Yb @ lam[:n_j]
             v_plus[b] = v_plus[b] + dv
             images.impulses(b, self.solvers[b], jrows, lam[:n_j], dv)
-        for b, cb in s.contact_compliance.items():
+        for b, cb in compliance.items():
             dv = cb.velocity(lam[n_j:])
             v_plus[b] = v_plus[b] + dv
             images.impulses(b, self.solvers[b], crows.rows, lam[n_j:], dv)
@@ -450,7 +442,7 @@ class MoreauJeanIntegrator:
                 self.rtol,
             )
             shift = res_t - converged_t
-        self._after_step(parts, lam[n_j:], h)
+        after_step(parts, lam[n_j:], h)
         new_states = [e for e in ends]
         for st, vp in zip(new_states, v_plus):
             st.v = vp
@@ -488,8 +480,8 @@ class MoreauJeanIntegrator:
         )
 
     def _equilibrate_massless(self, t, h, th, states, new_states, held) -> None:
-        """Massless coordinates to equilibrium at the step's end (integrate.massless); the
-        carried k_hat q and k_hat q_dot follow (the mass-weighted contractions do not see
+        """Massless coordinates to equilibrium at the step's end (integrate.moreau_jean.massless);
+        the carried k_hat q and k_hat q_dot follow (the mass-weighted contractions do not see
         massless coordinates)."""
         for b, _, _, k_dq, k_dv in equilibrate_step_end(
             self.massless, self.system.bodies, self.loads, t + th * h, h, states, new_states, held

@@ -12,10 +12,12 @@ translation with constant M_wq, approximate otherwise; the residual is always ex
 
 from __future__ import annotations
 
+import functools
 import logging
 import time
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import TypeVar
 
 import numpy as np
 import scipy.linalg as sla
@@ -26,8 +28,8 @@ from flexmvm.errors import SolverError
 from flexmvm.fe.solvers.cholesky import cholesky_ldl
 from flexmvm.fe.solvers.ordering import elimination_order
 from flexmvm.fe.solvers.symbolic import SymbolicFactor
-from flexmvm.integrate.compliance import NodalColumns, NodalCompliance, nodal_compliance
-from flexmvm.integrate.dense_solve import cho_factor, cho_solve, lu_factor, lu_solve
+from flexmvm.integrate.moreau_jean.compliance import NodalColumns, NodalCompliance, nodal_compliance
+from flexmvm.integrate.moreau_jean.dense_solve import cho_factor, cho_solve, lu_factor, lu_solve
 
 # Factors kept per body, least recently used dropped first: the variable step takes dt_s 2^k
 # for k = 0..9 (pendulum_release.toml: 0.5 us to 256 us), and a swing that comes down to the
@@ -41,16 +43,25 @@ SPIN_TOL = 0.1
 #: The factorizations as they happen, with the set-up's stages (assembly.build_cache.SETUP_LOG)
 SETUP_LOG = logging.getLogger("flexmvm.setup")
 
+T = TypeVar("T")
+
+
+#: x = W_qq^-1 b for b (nq,) or (nq, k): a factor's back-substitution
+Solve = Callable[[np.ndarray], np.ndarray]
+
 
 @dataclass
 class _Factor:
-    solve: object  # callable: (nq,) or (nq, k) -> same
+    solve: Solve
     Zr: np.ndarray  # W_qq^-1 S1^T (nq, 3)
     Zw: np.ndarray  # W_qq^-1 M_wq(0)^T (nq, 3)
     S1Zr: np.ndarray
     S1Zw: np.ndarray
     MwZr: np.ndarray
     MwZw: np.ndarray
+    # the M_wq of Zw when not M_wq(0) (refresh_coupling, a plastic tangent); None: M_wq(0)
+    Mw_used: np.ndarray | None = None
+    nodal: NodalColumns | None = None  # the nodal column cache (made on first use: _nodal)
 
 
 class BodySolver:
@@ -76,15 +87,24 @@ class BodySolver:
         self._max = max_cached
         self.n_factorizations = 0
         self._Mw0 = body.inertia_terms(np.zeros(body.nq))[2] if body.nq else np.zeros((3, 0))
-        self._schur = None
+        # the frame block's factor: lu_factor of the 6 x 6 Schur complement (prepare), and
+        # the rigid body's cho_factor of M_ff / the translational one's of S_t or its mass
+        self._schur: tuple[np.ndarray, np.ndarray] | None = None
+        self._rigid: tuple[np.ndarray, bool] | None = None
+        self._schur_t: tuple[np.ndarray, bool] | None = None
+        self._mass_t = np.zeros(0)  # a rigid body's m (3,) of W_t (prepare_translation)
+        self._f: _Factor | None = None  # the factor of the last prepare: None for a rigid body
         self._A = np.eye(3)
-        self._dMw = None  # M_wq(q) - the M_wq in W, when refresh_coupling kept the old one
-        self._pending = None  # (h, M_wq) of a deferred refresh (refresh_coupling)
-        self._frame_args = None
+        # M_wq(q) - the M_wq in W, when refresh_coupling kept the old one
+        self._dMw: np.ndarray | None = None
+        # (h, M_wq) of a deferred refresh (refresh_coupling)
+        self._pending: tuple[float, np.ndarray] | None = None
+        self._frame_args: tuple[float, np.ndarray, np.ndarray] | None = None
         self.n_coupling_updates = 0
         self.spin = 0.0  # s [rad^2/s^2] of the geometric stiffening in W (use_spin)
         self.n_spin_updates = 0
-        self._tangent = None  # (h, _Factor) of a plastic tangent's W (use_tangent)
+        # (h, _Factor) of a plastic tangent's W (use_tangent)
+        self._tangent: tuple[float, _Factor] | None = None
         self.n_tangent_updates = 0
 
     def use_spin(self, s: float, tol: float = SPIN_TOL) -> None:
@@ -117,6 +137,7 @@ class BodySolver:
                 self._order.append(h)
             return f
         b = self.body
+        solve: Solve
         t0 = time.perf_counter()
         W = self.elastic_matrix(h)
         data = W.data if sp.issparse(W) else np.asarray(W)
@@ -151,7 +172,7 @@ class BodySolver:
                 raise SolverError(
                     f"body {b.name!r}: iteration matrix M + h^2/4 K is not positive definite"
                 ) from None
-            solve = lambda rhs, cho=cho: cho_solve(cho, rhs)
+            solve = functools.partial(cho_solve, cho)
         self.n_factorizations += 1
         SETUP_LOG.info(
             "body %r: iteration matrix factored at h = %.3g s (%d coordinates): %.1f s",
@@ -173,13 +194,15 @@ class BodySolver:
         b = self.body
         th = self.theta(h) if callable(self.theta) else self.theta
         W = b.inv.M_qq + (th * th * h * h) * b.k_hat
-        if self.spin:  # geometric stiffening at the spin squared s of use_spin
-            W = W + (th * th * h * h * self.spin) * b.stiffening.K_G
+        stiffening = b.stiffening
+        if self.spin and stiffening is not None:  # at the spin squared s of use_spin (only
+            # a stiffened body's is ever nonzero)
+            W = W + (th * th * h * h * self.spin) * stiffening.K_G
         if b.c_hat is not None:
             W = W + (th * h) * b.c_hat
         return W
 
-    def _make_factor(self, solve, M_wq: np.ndarray) -> _Factor:
+    def _make_factor(self, solve: Solve, M_wq: np.ndarray) -> _Factor:
         """The factor record of a W_qq solve: its frame columns Z for the coupling M_wq."""
         S1 = self.body.inv.S1
         Zr = np.asarray(solve(np.ascontiguousarray(S1.T)))
@@ -189,7 +212,7 @@ class BodySolver:
             f.Mw_used = M_wq.copy()
         return f
 
-    def elastic_solve(self, h: float):
+    def elastic_solve(self, h: float) -> Solve:
         """The W_qq^-1 of the elastic W at h (the cached factor; a pending refresh done)."""
         self._flush()
         return self._elastic(lambda: self._factor(h).solve)
@@ -198,7 +221,7 @@ class BodySolver:
         """nodal_inverse of the elastic W at h (its cached nodal columns)."""
         return self._elastic(lambda: self.nodal_inverse(h, selector))
 
-    def factor_like_w(self, W: sp.spmatrix):
+    def factor_like_w(self, W: sp.spmatrix) -> Solve:
         """The solve of a sparse SPD matrix like W_qq (a plastic tangent's W_t): on W's
         symbolic analysis where the patterns agree, else analysed anew; call after W was
         factored."""
@@ -209,14 +232,14 @@ class BodySolver:
                 f"body {self.body.name!r}: the plastic tangent's iteration matrix ({exc})"
             ) from None
 
-    def _elastic(self, make):
+    def _elastic(self, make: Callable[[], T]) -> T:
         tangent, self._tangent = self._tangent, None
         try:
             return make()
         finally:
             self._tangent = tangent
 
-    def use_tangent(self, h: float, solve) -> None:
+    def use_tangent(self, h: float | None, solve: Solve | None) -> None:
         """Solve with W_qq,t^-1 = ``solve`` at h (a plastic body's tangent W: integrate.
         plastic_tangent) until the next use_tangent; None: the elastic W again. The frame
         columns and the frame block (last prepare) are made for it."""
@@ -226,6 +249,7 @@ class BodySolver:
                 return
             self._tangent = None
         else:
+            assert h is not None  # a tangent is used at a step size
             f_el = self._tangent[1] if self._tangent is not None else self._factor(h)
             self._tangent = (h, self._make_factor(solve, self._mw(f_el)))
             self.n_tangent_updates += 1
@@ -245,9 +269,9 @@ class BodySolver:
             return
         self._pending = None
         f = self._factor(h)
-        ref = getattr(f, "Mw_used", self._Mw0)
+        ref = self._mw(f)
         dMw = M_wq - ref
-        if np.linalg.norm(dMw) <= tol * max(np.linalg.norm(ref), 1e-300):
+        if np.linalg.norm(dMw) <= tol * max(float(np.linalg.norm(ref)), 1e-300):
             self._dMw = dMw
             return
         self._dMw = None
@@ -274,7 +298,8 @@ class BodySolver:
         Y = np.asarray(f.solve(np.ascontiguousarray(cols)))
         k = Y.shape[1] - 3
         self._install_coupling(f, np.ascontiguousarray(Y[:, k:]), M_wq)
-        self.prepare(*self._frame_args)
+        if self._frame_args is not None:  # made by the prepare() that waited for the columns
+            self.prepare(*self._frame_args)
         return Y[:, :k]
 
     def prepare(self, h: float, A: np.ndarray, Mff: np.ndarray) -> None:
@@ -288,7 +313,7 @@ class BodySolver:
         if not self.body.nq:
             self._f = None
             try:
-                self._schur = cho_factor(Mff)
+                self._rigid = cho_factor(Mff)
             except np.linalg.LinAlgError:
                 raise SolverError(
                     f"body {self.body.name!r}: rigid-body mass matrix is singular "
@@ -330,7 +355,7 @@ class BodySolver:
     def solve(self, b: np.ndarray) -> np.ndarray:
         """x = W^-1 b for b of shape (nv,) or (nv, k)."""
         if self._f is None:
-            return cho_solve(self._schur, b)
+            return cho_solve(self._made(self._rigid, "prepare"), b)
         f = self._f
         y = self._flush(b[6:])  # a deferred refresh: [b_q, M_wq^T] in one back-substitution
         if y is not None:
@@ -344,24 +369,27 @@ class BodySolver:
         """B^T xf (nq,) for a frame vector xf (6,), B = [A S1; M_wq] the frame-elastic block
         of the W that solve(), solve_frame() and the contact columns use (with the A and
         M_wq of the last prepare / refresh_coupling). For x = W^-1 b: W_qq x_q = b_q - B^T x_f
-        (what integrate.w_images takes k_hat dq_dot from)."""
+        (what integrate.moreau_jean.w_images takes k_hat dq_dot from)."""
         self._flush()
-        return self.body.inv.S1.T @ (self._A.T @ xf[:3]) + self._mw(self._f).T @ xf[3:6]
+        return (
+            self.body.inv.S1.T @ (self._A.T @ xf[:3])
+            + self._mw(self._made(self._f, "prepare")).T @ xf[3:6]
+        )
 
     def solve_frame(self, bf: np.ndarray) -> np.ndarray:
         """x = W^-1 [bf; 0] for bf (6,): the frame Schur complement and the cached columns Z,
         no back-substitution."""
         self._flush()
         if self._f is None:
-            return cho_solve(self._schur, bf)
+            return cho_solve(self._made(self._rigid, "prepare"), bf)
         return self._bordered(bf, np.zeros(self.body.nq))
 
     def _bordered(self, bf: np.ndarray, y: np.ndarray) -> np.ndarray:
         """W^-1 [bf; bq] from y = W_qq^-1 bq (the frame Schur complement of prepare())."""
-        f, A = self._f, self._A
+        f, A = self._made(self._f, "prepare"), self._A
         # M_fq~ y
         My = np.concatenate([A @ (self.body.inv.S1 @ y), self._mw(f) @ y])
-        xf = lu_solve(self._schur, bf - My)
+        xf = lu_solve(self._made(self._schur, "prepare"), bf - My)
         Zx = f.Zr @ (A.T @ xf[:3]) + f.Zw @ xf[3:]
         return np.concatenate([xf, y - Zx])
 
@@ -380,7 +408,7 @@ class BodySolver:
                   [ S1^T A^T  W_qq ]      (3 x 3; S1 W_qq^-1 S1^T is cached per h)
 
         W_t is constant while A is: the non-rotating step is linear in v+ (see
-        integrate.nonrotating)."""
+        integrate.moreau_jean.nonrotating)."""
         self._A = A
         if not np.isfinite(A).all():
             raise SolverError(
@@ -391,7 +419,7 @@ class BodySolver:
         m = self.body.inv.mass
         if not self.body.nq:
             self._f = None
-            self._schur_t = np.full(3, m)
+            self._mass_t = np.full(3, m)
             return
         f = self._factor(h)
         self._f = f
@@ -408,24 +436,33 @@ class BodySolver:
         already known (contact columns from nodal_inverse; b may then be just its first three
         rows). Needs prepare_translation."""
         if self._f is None:
-            return b / self._schur_t[:, None] if b.ndim == 2 else b / self._schur_t
+            return b / self._mass_t[:, None] if b.ndim == 2 else b / self._mass_t
         f, A = self._f, self._A
         bt = b[:3]
         y = np.asarray(f.solve(b[3:])) if yq is None else yq
         if y.ndim == 1 and b.ndim == 2:
             y = y[:, None]
-        xt = cho_solve(self._schur_t, bt - A @ (self.body.inv.S1 @ y))
+        xt = cho_solve(
+            self._made(self._schur_t, "prepare_translation"), bt - A @ (self.body.inv.S1 @ y)
+        )
         return np.concatenate([xt, y - f.Zr @ (A.T @ xt)])
 
     def _mw(self, f: _Factor) -> np.ndarray:
-        return getattr(f, "Mw_used", self._Mw0)
+        """The M_wq of f's frame columns."""
+        return f.Mw_used if f.Mw_used is not None else self._Mw0
 
     def _nodal(self, f: _Factor) -> NodalColumns:
         """The nodal column cache of factor f (made on first use)."""
-        cache = getattr(f, "nodal", None)
+        cache = f.nodal
         if cache is None:
             cache = f.nodal = NodalColumns(self.body.psi, self.body.inv.S1, f.Zr, f.Zw, self._mw(f))
         return cache
+
+    def _made(self, factor: T | None, by: str) -> T:
+        """A factor of the last prepare (`by` names it), or SolverError if none was made."""
+        if factor is None:
+            raise SolverError(f"body {self.body.name!r}: solved before {by}()")
+        return factor
 
     def nodal_inverse(self, h: float, selector: sp.csr_matrix) -> np.ndarray:
         """W_qq^-1 psi^T N^T (nq, m) for the nodal selector N (m, 3 n_nodes), exactly.
@@ -446,12 +483,11 @@ class BodySolver:
     ) -> NodalCompliance:
         """D = Phi W^-1 Phi^T (m, m) and the velocity correction W^-1 Phi^T lambda of the
         rows Phi = [bf (m, 6), N psi] (N = selector (m, 3 n_nodes)) from the cached nodal
-        columns (integrate.compliance), with the frame block of the last prepare()."""
+        columns (integrate.moreau_jean.compliance), with the frame block of the last prepare()."""
         self._flush()
         f = self._factor(h)
-        return nodal_compliance(
-            self._nodal(f), f.solve, bf, selector, (self._A, self._schur, f.Zr, f.Zw, self._mw(f))
-        )
+        frame = (self._A, self._made(self._schur, "prepare"), f.Zr, f.Zw, self._mw(f))
+        return nodal_compliance(self._nodal(f), f.solve, bf, selector, frame)
 
     def translation_compliance(
         self, h: float, bf: np.ndarray, selector: sp.csr_matrix
@@ -459,6 +495,5 @@ class BodySolver:
         """As contact_compliance for W_t (prepare_translation): D (m, m) and the velocity
         correction (3 + nq,) = [dr_dot, dq_dot] of the rows [bf[:, :3], N psi]."""
         f = self._factor(h)
-        return nodal_compliance(
-            self._nodal(f), f.solve, bf, selector, (self._A, self._schur_t, f.Zr, None, None)
-        )
+        frame = (self._A, self._made(self._schur_t, "prepare_translation"), f.Zr, None, None)
+        return nodal_compliance(self._nodal(f), f.solve, bf, selector, frame)

@@ -3,7 +3,7 @@
 Mass redistribution on the contact boundary (fe.mass_redistribution; Khenous, Laborde and
 Renard 2008) leaves the contact nodes of a full-FE body without mass: their rows of M_qq are
 zero, and with them every inertia term of the floating frame (the inertia invariants are
-mass-weighted). Their rows of the Moreau-Jean step (moreau_jean.py) are then algebraic,
+mass-weighted). Their rows of the Moreau-Jean step (moreau_jean/scheme.py) are then algebraic,
 
     0 = h F_s(x_m) + (Phi^T lambda)_s,        F_s = -(k_hat q)_s + f_s,
 
@@ -30,6 +30,7 @@ mass moves); the strain energy of the alternation is removed.
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numba
@@ -39,9 +40,9 @@ import scipy.sparse as sp
 
 from flexmvm.errors import SolverError
 from flexmvm.fe.solvers.cholesky import ldl_factor
-from flexmvm.integrate.dense_solve import cho_solve
-from flexmvm.integrate.lcp import regularised_cho
-from flexmvm.integrate.massless_kernels import add_delassus, body_part, body_update
+from flexmvm.integrate.moreau_jean.dense_solve import cho_solve
+from flexmvm.integrate.moreau_jean.lcp import regularised_cho
+from flexmvm.integrate.moreau_jean.massless_kernels import add_delassus, body_part, body_update
 from flexmvm.loads.applied import applied_forces
 
 
@@ -52,8 +53,9 @@ class MasslessCoordinates:
     s: np.ndarray  # (ns,) indices into q
     K_s: sp.csr_matrix  # rows s of k_hat (ns, nq)
     K_cols: sp.csc_matrix  # columns s of k_hat (nq, ns)
-    solve: object  # x = K_ss^-1 b
-    cho: tuple | None = None  # (c, lower): K_ss's dense Cholesky factor (the compiled path)
+    solve: Callable[[np.ndarray], np.ndarray]  # x = K_ss^-1 b
+    # (c, lower): K_ss's dense Cholesky factor (the compiled path)
+    cho: tuple[np.ndarray, bool] | None = None
 
     @classmethod
     def of(cls, body) -> MasslessCoordinates | None:
@@ -94,7 +96,7 @@ class MasslessCoordinates:
                 solve = ldl_factor(K_ss)
             else:
                 cho = sla.cho_factor(K_ss.toarray())
-                # dpotrs straight (integrate.dense_solve): scipy's cho_solve, bit for bit
+                # dpotrs straight (dense_solve): scipy's cho_solve, bit for bit
                 solve = lambda b, cho=cho: cho_solve(cho, b)
         except (SolverError, np.linalg.LinAlgError) as exc:
             raise SolverError(
@@ -228,7 +230,7 @@ def _reference_step_end(massless, todo, applied, h, states, new_states, held) ->
 
 def _compiled_step_end(massless, todo, applied, h, states, new_states, held) -> list:
     """equilibrate_step_end for bodies whose K_ss has a dense factor, in the compiled kernels
-    of integrate.massless_kernels (the same sums, equal to round-off)."""
+    of integrate.moreau_jean.massless_kernels (the same sums, equal to round-off)."""
     m = sum(len(lam) for _, lam, _ in held)
     on = np.zeros(m, dtype=np.bool_)
     lam_all = np.zeros(m)
@@ -258,19 +260,19 @@ def _compiled_step_end(massless, todo, applied, h, states, new_states, held) -> 
     keep = np.zeros(int(on.sum()), dtype=np.bool_)
     for part in parts:
         keep |= part[2]
-    keep = np.flatnonzero(keep)
+    kept = np.flatnonzero(keep)
     mu = np.zeros(0)
-    if keep.size:
-        D, rhs = np.zeros((keep.size, keep.size)), np.zeros(keep.size)
+    if kept.size:
+        D, rhs = np.zeros((kept.size, kept.size)), np.zeros(kept.size)
         for B, X, _ in parts:
-            add_delassus(B, X, keep, D, rhs)
+            add_delassus(B, X, kept, D, rhs)
         mu = cho_solve(regularised_cho(0.5 * (D + D.T), "massless-node"), rhs)
     changes = []
     for b, (_, X, _) in zip(todo, parts):
         ml, new = massless[b], new_states[b]
         Kc = ml.K_cols
         made = body_update(
-            new.q, new.v[6:], states[b].q, ml.s, X, keep, mu, h,
+            new.q, new.v[6:], states[b].q, ml.s, X, kept, mu, h,
             Kc.indptr, Kc.indices, Kc.data, Kc.shape[0],
         )  # fmt: skip
         changes.append((b, *made))

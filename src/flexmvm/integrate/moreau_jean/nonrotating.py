@@ -2,7 +2,7 @@
 
 When every body enters the step with omega = 0 and no joint acts, take omega+ = 0. The
 quadratic-velocity forces vanish, A stays constant, and the translational and elastic rows of
-the scheme (see moreau_jean.py) are linear in dv = v+ - v- with constant coefficients:
+the scheme (see moreau_jean/scheme.py) are linear in dv = v+ - v- with constant coefficients:
 
     [ m I       A S1 ] [dr_dot]   [ h (m g + f_r)                                      ]
     [ S1^T A^T  W_qq ] [dq_dot] = [ h (S1^T A^T g + f_q - K (q + theta h q_dot) - C q_dot) ]
@@ -10,7 +10,8 @@ the scheme (see moreau_jean.py) are linear in dv = v+ - v- with constant coeffic
 
 with W_qq = M_qq + theta h C + theta^2 h^2 K (body_solver). So one back-substitution per body
 gives v_free, D = Phi W_t^-1 Phi^T and W_t^-1 Phi^T lambda come from the cached nodal
-columns (integrate.compliance), and the LCP on D gives lambda. No Newton iteration is needed.
+columns (integrate.moreau_jean.compliance), and the LCP on D gives lambda. No Newton iteration is
+needed.
 
 Then the rotational rows of the full scheme are evaluated at this solution (omega_m = 0,
 domega = 0):
@@ -29,8 +30,8 @@ from __future__ import annotations
 import numpy as np
 
 from flexmvm.bodies.rotation import cross3
-from flexmvm.integrate.compliance import DenseCompliance
-from flexmvm.integrate.coulomb import solve_contact_impulses
+from flexmvm.integrate.moreau_jean.compliance import DenseCompliance
+from flexmvm.integrate.moreau_jean.coulomb import solve_contact_impulses
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import ContactRows
 from flexmvm.loads.applied import applied_forces
@@ -41,7 +42,7 @@ def applies(system, states: list[BodyState]) -> bool:
     every frame enters the step with omega exactly 0."""
     return (
         not system.joints
-        and all(getattr(load, "state_independent", False) for load in system.loads)
+        and all(load.state_independent for load in system.loads)
         and all(not np.any(st.v[3:6]) for st in states)
     )
 
@@ -132,7 +133,8 @@ def _contact_impulses(
     system, solvers, h, crows: ContactRows, v_free, v_plus
 ) -> tuple[np.ndarray, float]:
     """(lambda (m,), complementarity residual) of the LCP on D = Phi W_t^-1 Phi^T; adds W_t^-1 Phi^T lambda to v_plus.
-    Bodies with nodal rows go through the cached nodal columns (integrate.compliance)."""
+    Bodies with nodal rows go through the cached nodal columns
+    (integrate.moreau_jean.compliance)."""
     rows = crows.rows
     D = np.zeros((rows.m, rows.m))
     c = -crows.lower.copy()

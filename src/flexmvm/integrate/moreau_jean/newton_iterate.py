@@ -11,7 +11,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from flexmvm.constraints.rows import Rows, stack
-from flexmvm.integrate.relaxation import ACTIVATE_RATIO
+from flexmvm.integrate.moreau_jean.relaxation import ACTIVATE_RATIO
 from flexmvm.integrate.row_products import body_impulse
 
 ROUNDOFF_FLOOR = 1e-7  # a residual below this that stops decreasing is round-off (large bases)
@@ -34,7 +34,7 @@ class NewtonIterate:
     last_norm: float = np.inf  # largest absolute residual of the last iterate
     last_rel: float = np.inf  # its relative residual
     lcp_max: float = 0.0  # largest complementarity residual of the LCP solves
-    relaxed: bool = False  # the last iterate was relaxed (integrate.relaxation)
+    relaxed: bool = False  # the last iterate was relaxed (integrate.moreau_jean.relaxation)
     stalled: bool = False
     at_roundoff: bool = False  # stopped on the round-off of the positions (at_roundoff)
     rel: float = np.inf  # relative residual (constraint impulses included)
@@ -61,8 +61,8 @@ class NewtonIterate:
         ):
             return True
         # a residual over the tolerance only in its translational rows is not accepted either,
-        # though their balance (integrate.momentum_balance) would bring it within: accepting
-        # it raised the momentum error after the seed case's separation fourfold
+        # though their balance (integrate.moreau_jean.momentum_balance) would bring it within:
+        # accepting it raised the momentum error after the seed case's separation fourfold
         self.stalled = it >= 2 and self.rel > ACTIVATE_RATIO * self.last_rel
         self.last_rel = self.rel
         return False

@@ -39,7 +39,7 @@ import scipy.linalg as sla
 import scipy.sparse as sp
 
 from flexmvm.errors import SolverError
-from flexmvm.integrate.dense_solve import cho_solve, lu_solve
+from flexmvm.integrate.moreau_jean.dense_solve import cho_solve, lu_solve
 
 #: The form of a sparse (full-FE) body's W_t: "woodbury" on the elastic factor, or
 #: "refactor" (W_t factored; on W's symbolic analysis only where the patterns agree)
@@ -74,8 +74,7 @@ class PlasticTangent:
     def __init__(self, plastic, solvers, enabled: bool | None = None, policy: str | None = None):
         self.plastic, self.solvers = plastic, solvers
         if enabled is None:
-            parts = getattr(plastic, "parts", {})
-            self.bodies = {b for b in plastic.history if parts[b].tangent}
+            self.bodies = {b for b in plastic.history if plastic.parts[b].tangent}
         else:
             self.bodies = set(plastic.history) if enabled else set()
         self.enabled = bool(self.bodies)

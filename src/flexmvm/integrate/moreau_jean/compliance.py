@@ -32,7 +32,7 @@ import numpy as np
 import scipy.sparse as sp
 
 from flexmvm.constraints.rows import NodalSelector
-from flexmvm.integrate.dense_solve import cho_solve, lu_solve
+from flexmvm.integrate.moreau_jean.dense_solve import cho_solve, lu_solve
 
 
 @numba.njit(cache=True)

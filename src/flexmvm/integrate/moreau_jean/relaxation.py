@@ -83,7 +83,8 @@ def relaxed_iterate(
 ) -> tuple[list[np.ndarray], bool]:
     """(v_plus, relaxed): the iterate ``after`` = G(``before``), or once the step has stalled
     Aitken's relaxed one before + w (after - before); images (the W-images of the full-FE
-    bodies, integrate.w_images: linear in v_plus) relaxed alike, in place, from image_before."""
+    bodies, integrate.moreau_jean.w_images: linear in v_plus) relaxed alike, in place, from
+    image_before."""
     w = relax.factor(before, after, stalled)
     if w == 1.0:
         return after, False

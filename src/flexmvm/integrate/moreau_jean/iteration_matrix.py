@@ -6,7 +6,7 @@ rigid motions (full FE: S ~ the mass within c h of the reference nodes, ~1e-5 of
 so W's coupling B must be that of the current configuration: it is refreshed at the start of
 a step when it drifted (3 back-substitutions; every step for small bases, by COUPLING_TOL for
 large ones; in between S follows it to first order, BodySolver.prepare) and again at the
-midpoint when an iteration does not reduce the residual (moreau_jean.py). The measurements
+midpoint when an iteration does not reduce the residual (moreau_jean/scheme.py). The measurements
 behind COUPLING_TOL and FRAME_ONLY_FRACTION are in docs/performance.md.
 """
 
@@ -16,7 +16,7 @@ import numpy as np
 
 from flexmvm.constraints.contact import ContactRows
 from flexmvm.constraints.rows import Rows
-from flexmvm.integrate.compliance import DenseCompliance
+from flexmvm.integrate.moreau_jean.compliance import DenseCompliance
 
 SMALL_BASIS = 400  # up to this many elastic coordinates: refresh every step (cheap)
 # Larger bases: refresh when M_wq moved by this much (relative). The bordered solve uses the
@@ -103,8 +103,8 @@ class IterationMatrices:
 
     def contact_compliance(self, crows: ContactRows, h: float) -> dict:
         """Per body touched by the contact rows: its D = Phi_b W_b^-1 Phi_b^T (m, m) and its
-        velocity correction W_b^-1 Phi_b^T lambda (integrate.compliance). Large bodies with
-        nodal rows go through the cached nodal columns of W_qq^-1 (exact; no (nq, m) block),
+        velocity correction W_b^-1 Phi_b^T lambda (integrate.moreau_jean.compliance). Large bodies
+        with nodal rows go through the cached nodal columns of W_qq^-1 (exact; no (nq, m) block),
         others through explicit columns W^-1 Phi^T."""
 
         def one(b):

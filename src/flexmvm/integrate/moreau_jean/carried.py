@@ -3,7 +3,7 @@ or q_dot, so a step needs one new contraction L(dq_dot) per residual instead of 
 L(q_dot_m) and M_wq(q) (one pass over the G2 blocks of a full-FE rod instead of ~3;
 docs/performance.md).
 
-With the Moreau-Jean midpoint (moreau_jean.py) q_dot_m = q_dot + theta dq_dot and
+With the Moreau-Jean midpoint (moreau_jean/scheme.py) q_dot_m = q_dot + theta dq_dot and
 q_m = q + theta h q_dot_m, so
 
     L(q_dot_m) = L(q_dot) + theta L(dq_dot),     L(q_m) = L(q) + theta h L(q_dot_m),
@@ -21,6 +21,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from flexmvm.errors import SolverError
 from flexmvm.integrate.row_products import flat_product
 from flexmvm.integrate.state import BodyState
 
@@ -56,7 +57,8 @@ class MidpointTerms:
 
 class CarriedState:
     """The carried contractions of every body of a system (module doc). images: the W-images
-    k_hat dq_dot is taken from (integrate.w_images); pool: the G2 contraction's threads."""
+    k_hat dq_dot is taken from (integrate.moreau_jean.w_images); pool: the G2 contraction's
+    threads."""
 
     def __init__(self, bodies, images, pool=None):
         self.bodies = bodies
@@ -96,7 +98,10 @@ class CarriedState:
 
     def mass_increment(self, b: int) -> np.ndarray:
         """M_qq dq_dot of body b's last midpoint (midpoint())."""
-        return self._midpoint[b].M_dqd
+        p = self._midpoint[b]
+        if p is None:
+            raise SolverError(f"body {b}: mass_increment asked before its midpoint()")
+        return p.M_dqd
 
     def midpoint(self, b: int, st: BodyState, vp: np.ndarray, th: float, h: float):
         """L(q_m), L(q_dot_m) and k_hat q_m at the midpoint of the iterate vp: one contraction

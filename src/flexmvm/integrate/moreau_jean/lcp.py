@@ -25,7 +25,7 @@ import numpy as np
 import scipy.linalg as sla
 
 from flexmvm.errors import SolverError
-from flexmvm.integrate.dense_solve import cho_factor, cho_solve
+from flexmvm.integrate.moreau_jean.dense_solve import cho_factor, cho_solve
 
 _REG = 1e-12
 # The regularisation above perturbs w by ~_REG D l, NNLS stops at its own round-off: both
@@ -35,7 +35,7 @@ LCP_RTOL = 1e-8
 
 def regularised_cho(D: np.ndarray, what: str):
     """Cholesky factor of D + _REG mean(diag D) I (scipy cho_factor, lower); SolverError
-    naming `what` if it is not positive definite (also used by integrate.coulomb)."""
+    naming `what` if it is not positive definite (also used by integrate.moreau_jean.coulomb)."""
     m = len(D)
     scale = max(float(np.trace(D)) / m, 1e-300)
     try:
@@ -79,7 +79,7 @@ class Elimination:
 
     D: np.ndarray
     c: np.ndarray
-    cho: tuple | None
+    cho: tuple[np.ndarray, bool] | None
     De_inv_Deu: np.ndarray
     De_inv_ce: np.ndarray
 

@@ -42,8 +42,8 @@ import numpy as np
 
 from flexmvm.constraints.contact import ContactRows
 from flexmvm.errors import SolverError
-from flexmvm.integrate.dense_solve import cho_solve
-from flexmvm.integrate.lcp import eliminate_equalities, solve_checked
+from flexmvm.integrate.moreau_jean.dense_solve import cho_solve
+from flexmvm.integrate.moreau_jean.lcp import eliminate_equalities, solve_checked
 
 # the sweeps stop at this natural residual (relative to the velocity scale): the frictionless
 # LCP's bound (lcp.LCP_RTOL), so a frictional step is solved to the same relative accuracy
@@ -237,9 +237,11 @@ def solve_coulomb(
     out[u] = lu
     if n_eq:
         out[e] = el.equalities(lu)
+        cho = el.cho
+        assert cho is not None  # n_eq > 0: D_ee was factored (lcp.eliminate_equalities)
         # two refinement sweeps of the equalities with the true D (see lcp._refine)
         for _ in range(2):
-            out[e] -= cho_solve(el.cho, D[e] @ out + c[e])
+            out[e] -= cho_solve(cho, D[e] @ out + c[e])
     return out, sweeps
 
 
@@ -329,6 +331,8 @@ def solve_friction(
     last iterate's). Rows without friction cones go to lcp.solve_checked instead (the
     callers branch on crows.friction)."""
     fr = crows.friction
+    if fr is None:
+        raise SolverError("solve_friction: the contact rows carry no friction cones")
     normal, tangent = n_joint + fr.normal, n_joint + fr.tangent
     lam, res = solve_coulomb_checked(D, c, n_joint + crows.n_eq, normal, tangent, fr.mu, warm)
     crows.stick_slip = stick_slip(D, c, lam, normal, tangent, fr.mu)

@@ -1,6 +1,6 @@
 """The massless coordinates' equilibrium at a step's end in compiled kernels (issue 49 item 3).
 
-integrate.massless.equilibrate_step_end computes, per body with massless coordinates s and
+integrate.moreau_jean.massless.equilibrate_step_end computes, per body with massless coordinates s and
 a dense K_ss factor, the force on them (Phi_s^T lambda / h + f_s), the free change
 dq0 = K_ss^-1 (force - K_sn q_n), the held rows' columns P = Phi_s and Y = K_ss^-1 P^T, then
 over the bodies D = sum P Y and the multipliers mu of the held rows, and per body

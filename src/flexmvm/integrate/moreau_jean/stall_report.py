@@ -1,5 +1,5 @@
 """Where a step's iteration stalled, in one line, for the error of a step that does not
-converge (moreau_jean.py)."""
+converge (moreau_jean/scheme.py)."""
 
 from __future__ import annotations
 

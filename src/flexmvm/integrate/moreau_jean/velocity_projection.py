@@ -1,6 +1,6 @@
 """The end-of-step velocity projection onto the joints' velocity constraint (issue 51, item 9).
 
-The Moreau-Jean step (moreau_jean.py) closes the joints at position level,
+The Moreau-Jean step (moreau_jean/scheme.py) closes the joints at position level,
 phi(x(t) (+) h v_m) = 0, so its rows fix the midpoint velocity v_m = theta v+ + (1 - theta) v-
 and leave v+ = (v_m - (1 - theta) v-) / theta along them: a velocity error e in
 range(M^-1 Phi^T) changes neither v_m nor any position, and goes on as
@@ -22,8 +22,8 @@ no other factorization; the rows are closed exactly whatever the metric). Positi
 touched (the joints stay closed at position level) and a system without joints is not touched
 at all (the seed case's histories stay bit for bit).
 
-Taken only at theta > 1/2 (moreau_jean.py), where the scheme already damps what the step cannot
-resolve: the projection removes the energy of the velocity's part across the rows (1/2 r^T
+Taken only at theta > 1/2 (moreau_jean/scheme.py), where the scheme already damps what the step
+cannot resolve: the projection removes the energy of the velocity's part across the rows (1/2 r^T
 D^-1 r per step, r = Phi_e v+ + d phi / d t), so at theta = 1/2 it would spoil the midpoint
 rule's energy balance, which tests hold to 1e-8 (a driven arm) and 1e-10 J (a rotational
 spring); a mechanism run at theta = 1/2 keeps its ringing (the slider-crank: +-190 m/s at pin B).
@@ -71,7 +71,7 @@ def project_joint_velocities(system, matrices, carried, states, t: float, h: flo
 
 def _shift_velocity(body, carried, b: int, st, dv: np.ndarray) -> None:
     """st.v += dv (a new array) with body b's carried L(q_dot), k_hat q_dot and M_qq q_dot
-    updated by the same increment (integrate.carried), when they were made for st."""
+    updated by the same increment (integrate.moreau_jean.carried), when they were made for st."""
     c = carried.of_state(b, st)
     st.v = st.v + dv
     if c is None:
