@@ -52,7 +52,7 @@ import numpy as np
 
 from flexmvm.bodies.momentum import momentum_terms, momentum_terms_nodal
 from flexmvm.errors import SolverError
-from flexmvm.integrate import DEFAULT_THETA, nonrotating
+from flexmvm.integrate import DEFAULT_THETA, fused_newton, nonrotating
 from flexmvm.integrate.body_solver import BodySolver
 from flexmvm.integrate.body_threads import BodyThreads
 from flexmvm.integrate.carried import CarriedState
@@ -142,6 +142,7 @@ class MoreauJeanIntegrator:
         self.matrices = IterationMatrices(
             bodies, self.solvers, self.threads, self.carried_state, self.images
         )
+        self.fused = [fused_newton.applies(self, b) for b in range(len(bodies))]
         # relaxation of a step whose iteration stalls (integrate.relaxation)
         self.relax = AitkenRelaxation(
             [float(np.ptp(body.X, axis=0).max()) if len(body.X) else 1.0 for body in bodies]
@@ -181,6 +182,8 @@ class MoreauJeanIntegrator:
     def _residual(self, b, t, st, vp, h, th, applied=None):
         """Body b's residual M(x_m) (v+ - v-) - h F(x_m, v_m), its midpoint and end states
         and its momentum scale; applied: the applied loads' force on it (loads.applied)."""
+        if self.fused[b]:  # one compiled call (integrate.fused_newton; bit for bit)
+            return fused_newton.fused_residual(self, b, t, st, vp, h, th, applied)
         body, g = self.system.bodies[b], self.gravity
         vm, dv = iterate_velocities(st.v, vp, th)  # th vp + (1 - th) v-, vp - v- (bit for bit)
         mid = st.advanced(vm, th * h)
