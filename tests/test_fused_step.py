@@ -118,53 +118,6 @@ def test_run_with_the_fused_residual_equals_the_reference_run(model, tmp_path, m
     assert np.array_equal(fast.probe_v, ref.probe_v)
 
 
-def _approach(tmp: Path):
-    """The tiny seed case with a 2 mm gap closing at 2 m/s and steps growing to 8 us before
-    the impact (at 1 ms): the driver looks ahead for contact (min_gap_ahead) on the steps
-    without contact rows, beyond the 1 mm search radius for the first ~0.5 ms."""
-    text = (DATA / "tiny_impact.toml").read_text()
-    text = text.replace("dt_max_s = 0.25e-6", "dt_max_s = 8.0e-6")
-    text = text.replace("output_dt_s = 1.0e-6", "output_dt_s = 8.0e-6")
-    text = text.replace("[0.21, 0.0, 0.0]", "[2.0, 0.0, 0.0]")  # b1's velocity
-    text = text.replace("position_m = [0.0, 0.0, 0.0]", "position_m = [-2.0e-3, 0.0, 0.0]", 1)
-    path = tmp / "tiny_gap.toml"
-    path.write_text(text)
-    return build_scenario(load_scenario(path).with_overrides(model="mvm", t_end_s=1.004e-3))
-
-
-def test_step_rows_reuse_a_clear_look_ahead_and_equal_the_reference(tmp_path, monkeypatch):
-    """A look-ahead scan that found no facet within its reach leaves the step's own scan at
-    the same state and a shorter reach nothing to find: it is not made (fewer scans), and the
-    run (approach, impact, contact) is the one that scans every time, bit for bit."""
-    from flexmvm.contact import pairs
-
-    calls = [0]
-    scan = pairs.scan_nodes
-    monkeypatch.setattr(
-        pairs, "scan_nodes", lambda *a: calls.__setitem__(0, calls[0] + 1) or scan(*a)
-    )
-    built = _approach(tmp_path)
-    fast = simulate(built.system, built.states, built.grid, built.probes)
-    n_fast = calls[0]
-    assert fast.contact_force.max() > 0.0 and fast.contact_intervals[0][0] > 0.9e-3
-    look = pairs.PointToSurfaceContact.min_gap_ahead
-
-    def look_and_forget(self, *args):  # the reference: the step scans again
-        gap = look(self, *args)
-        self._clear = None
-        return gap
-
-    monkeypatch.setattr(pairs.PointToSurfaceContact, "min_gap_ahead", look_and_forget)
-    calls[0] = 0
-    built = _approach(tmp_path)
-    ref = simulate(built.system, built.states, built.grid, built.probes)
-    assert n_fast < calls[0] - 10, (n_fast, calls[0])
-    assert fast.n_steps == ref.n_steps
-    assert np.array_equal(fast.contact_force, ref.contact_force)
-    assert np.array_equal(fast.total_energy, ref.total_energy)
-    assert np.array_equal(fast.probe_v, ref.probe_v)
-
-
 def test_node_velocities_without_np_cross_equal_it_bit_for_bit(monkeypatch):
     """The recorder's probe velocities (FlexibleBody.node_velocities) take w x s from
     rotation.cross_rows, not np.cross (~30 us of axis handling a call, twice per output):

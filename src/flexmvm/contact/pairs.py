@@ -189,8 +189,6 @@ class PointToSurfaceContact:
         self._held_d = np.zeros(ns)
         # the last candidate rows': (idx, facets, w, normal, off, A_m)
         self._row_geometry: tuple | None = None
-        # (node set versions, reach) of a look-ahead scan that found no facet (min_gap_ahead)
-        self._clear: tuple | None = None
 
     # -- geometry -----------------------------------------------------------------------------
     def _kinematics(self, states) -> float:
@@ -224,19 +222,9 @@ class PointToSurfaceContact:
             raise SolverError(f"{self._who}: " + _failure(status, facet))
         return n
 
-    def _versions(self) -> tuple:
-        """The node sets' update counts (ContactNodes.version): unchanged, the scan's inputs
-        (positions, velocities, master frame) are those of the last scan."""
-        return int(self._s.version[0]), int(self._m.version[0])
-
     def min_gap_ahead(self, bodies, states, horizon_s: float) -> float:
         speed = self._kinematics(states)
-        reach = self.search_radius + speed * horizon_s
-        found = self._scan(states, reach)
-        # nothing within this reach: a scan at this state within a shorter one finds nothing
-        # either (the driver's look-ahead, then the step's rows at the same state)
-        self._clear = (self._versions(), reach) if found == 0 else None
-        if found == 0:
+        if self._scan(states, self.search_radius + speed * horizon_s) == 0:
             return np.inf
         if self._bonds:
             return -np.inf
@@ -258,10 +246,7 @@ class PointToSurfaceContact:
     # -- constraint rows ----------------------------------------------------------------------
     def candidate_rows(self, bodies, states, h: float) -> ContactRows:
         speed = self._kinematics(states)
-        reach = self.search_radius + 2 * speed * h
-        clear, self._clear = self._clear, None
-        if clear is None or clear[0] != self._versions() or reach > clear[1]:
-            self._scan(states, reach)  # (else: facet all -1 from the look-ahead's scan)
+        self._scan(states, self.search_radius + 2 * speed * h)
         A_m = states[self.master].A
         if self._holds:
             hold_pairs(
