@@ -25,7 +25,7 @@ import scipy.sparse as sp
 from flexmvm.bodies.contraction import G2Contraction
 from flexmvm.bodies.invariants import InertiaInvariants, inertia_invariants
 from flexmvm.bodies.nodal_contraction import NodalContraction
-from flexmvm.bodies.rotation import cross3, skew
+from flexmvm.bodies.rotation import cross3, cross_rows, skew
 from flexmvm.mesh.mesh import Mesh
 
 if TYPE_CHECKING:
@@ -342,7 +342,7 @@ class FlexibleBody:
         """Global velocities x_dot_k = r_dot + A (w x s_k + psi_k q_dot), (len(nodes), 3)."""
         s = self.X[nodes] + self.local_displacements(nodes, q)
         sd = self.local_displacements(nodes, v[6:]) if self.nq else np.zeros_like(s)
-        return v[:3] + (np.cross(v[3:6], s) + sd) @ A.T
+        return v[:3] + (cross_rows(v[3:6], s) + sd) @ A.T
 
     def point_jacobian(self, k: int, A, q, direction: np.ndarray):
         """Row d^T dx_k/dv for a global direction d: returns (frame part (6,), q part (nq,))."""

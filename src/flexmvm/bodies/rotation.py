@@ -16,6 +16,17 @@ def cross3(a, b) -> np.ndarray:
     )
 
 
+def cross_rows(w, s: np.ndarray) -> np.ndarray:
+    """w x s_k for a 3-vector w and every row of s (n, 3): np.cross(w, s) bit for bit (the
+    same products and differences), without its ~30 us of axis handling per call (the
+    recorder's probe velocities, twice per output)."""
+    out = np.empty(s.shape)
+    out[:, 0] = w[1] * s[:, 2] - w[2] * s[:, 1]
+    out[:, 1] = w[2] * s[:, 0] - w[0] * s[:, 2]
+    out[:, 2] = w[0] * s[:, 1] - w[1] * s[:, 0]
+    return out
+
+
 def skew(v: np.ndarray) -> np.ndarray:
     """Skew-symmetric matrix v~ with v~ w = v x w."""
     x, y, z = v

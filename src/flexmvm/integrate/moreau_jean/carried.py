@@ -103,6 +103,11 @@ class CarriedState:
             raise SolverError(f"body {b}: mass_increment asked before its midpoint()")
         return p.M_dqd
 
+    def set_midpoint(self, b: int, terms: MidpointTerms) -> None:
+        """Body b's midpoint terms as an iterate's residual made them elsewhere
+        (integrate.moreau_jean.fused_newton: what midpoint() would have kept)."""
+        self._midpoint[b] = terms
+
     def midpoint(self, b: int, st: BodyState, vp: np.ndarray, th: float, h: float):
         """L(q_m), L(q_dot_m) and k_hat q_m at the midpoint of the iterate vp: one contraction
         L(dq_dot) and one k_hat dq_dot per iterate (none on the first, where dq_dot = 0)."""

@@ -54,7 +54,7 @@ import numpy as np
 from flexmvm.bodies.momentum import momentum_terms, momentum_terms_nodal
 from flexmvm.errors import SolverError
 from flexmvm.integrate import DEFAULT_THETA
-from flexmvm.integrate.moreau_jean import nonrotating
+from flexmvm.integrate.moreau_jean import fused_newton, nonrotating
 from flexmvm.integrate.moreau_jean.body_solver import BodySolver
 from flexmvm.integrate.moreau_jean.body_threads import BodyThreads
 from flexmvm.integrate.moreau_jean.carried import CarriedState
@@ -148,6 +148,7 @@ class MoreauJeanIntegrator:
         self.matrices = IterationMatrices(
             bodies, self.solvers, self.threads, self.carried_state, self.images
         )
+        self.fused = [fused_newton.applies(self, b) for b in range(len(bodies))]
         # relaxation of a step whose iteration stalls (integrate.moreau_jean.relaxation)
         self.relax = AitkenRelaxation(
             [float(np.ptp(body.X, axis=0).max()) if len(body.X) else 1.0 for body in bodies]
@@ -187,6 +188,8 @@ class MoreauJeanIntegrator:
     def _residual(self, b, t, st, vp, h, th, applied=None):
         """Body b's residual M(x_m) (v+ - v-) - h F(x_m, v_m), its midpoint and end states
         and its momentum scale; applied: the applied loads' force on it (loads.applied)."""
+        if self.fused[b]:  # one compiled call (integrate.moreau_jean.fused_newton; bit for bit)
+            return fused_newton.fused_residual(self, b, t, st, vp, h, th, applied)
         body, g = self.system.bodies[b], self.gravity
         vm, dv = iterate_velocities(st.v, vp, th)  # th vp + (1 - th) v-, vp - v- (bit for bit)
         mid = st.advanced(vm, th * h)
@@ -203,48 +206,14 @@ class MoreauJeanIntegrator:
             inv, nodal = body.inv, body.nodal
             if nodal is not None:
                 momentum_terms_nodal(
-                    mid.A,
-                    mid.q,
-                    dv,
-                    vm,
-                    Lq_m,
-                    Lqd_m,
-                    Kq_m,
-                    mqq_dv,
-                    mqq_vm,
-                    inv.mass,
-                    inv.S0,
-                    inv.S1,
-                    inv.G0,
-                    nodal.MsX,
-                    nodal.node,
-                    nodal.comp,
-                    g,
-                    inertia,
-                    F,
-                    momentum,
-                )
+                    mid.A, mid.q, dv, vm, Lq_m, Lqd_m, Kq_m, mqq_dv, mqq_vm, inv.mass, inv.S0,
+                    inv.S1, inv.G0, nodal.MsX, nodal.node, nodal.comp, g, inertia, F, momentum,
+                )  # fmt: skip
             else:
                 momentum_terms(
-                    mid.A,
-                    mid.q,
-                    dv,
-                    vm,
-                    Lq_m,
-                    Lqd_m,
-                    Kq_m,
-                    mqq_dv,
-                    mqq_vm,
-                    inv.mass,
-                    inv.S0,
-                    inv.S1,
-                    inv.G0,
-                    body.G1_array,
-                    g,
-                    inertia,
-                    F,
-                    momentum,
-                )
+                    mid.A, mid.q, dv, vm, Lq_m, Lqd_m, Kq_m, mqq_dv, mqq_vm, inv.mass, inv.S0,
+                    inv.S1, inv.G0, body.G1_array, g, inertia, F, momentum,
+                )  # fmt: skip
             if body.c_hat is not None:
                 F[6:] -= flat_product(body.c_hat, vm[6:])
             if body.stiffening is not None:  # the spin's prestress (bodies.stiffening)
