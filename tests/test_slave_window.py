@@ -104,36 +104,41 @@ def test_window_moves_fewer_nodes_and_changes_nothing(scenario, monkeypatch):
             assert np.array_equal(np.asarray(a), np.asarray(b)), name
 
 
-def test_window_maxima_are_exact_whether_or_not_the_bound_holds():
+def test_window_moves_its_rows_as_the_whole_update_does():
     """ContactNodes with a window moves only its rows, bit for bit as the whole update does,
-    and returns the largest velocity component and displacement over every node: from the
-    window when the bound over the outside nodes allows it, else by moving those too (the
-    largest psi row put outside the window). Tolerance 0: the same arithmetic."""
+    leaves the others as they were, and returns the largest velocity component and
+    displacement over the window (those of the nodes that can reach the master); the column
+    bounds of the drift bound are the largest |psi_i[:, k]| over the rows, dense or CSR.
+    Tolerance 0: the same arithmetic."""
     from types import SimpleNamespace
 
+    import scipy.sparse as sp
+
     from flexmvm.contact.nodes import ContactNodes
-    from flexmvm.contact.slave_window import column_bounds, outside_bounds
+    from flexmvm.contact.slave_window import column_bounds
 
     rng = np.random.default_rng(7)
     n, nq = 60, 5
     A = np.linalg.qr(rng.normal(size=(3, 3)))[0]
-    v = rng.normal(size=6 + nq)
-    v[:6] *= 1e-3  # a slow frame: the elastic velocities decide the largest component
-    st = SimpleNamespace(q=1e-4 * rng.normal(size=nq), v=v, r=rng.normal(size=3), A=A)
-    for big_outside in (False, True):
-        psi = 1e-3 * rng.normal(size=(3 * n, nq))
-        psi[:30] *= 100.0  # the first 10 nodes (the window) move the most
-        if big_outside:
-            psi[3 * 50 : 3 * 51] *= 1e6  # node 50, outside, moves the most
-        body = SimpleNamespace(X=rng.normal(size=(n, 3)), psi=psi, nq=nq)
+    st = SimpleNamespace(
+        q=1e-4 * rng.normal(size=nq), v=rng.normal(size=6 + nq), r=rng.normal(size=3), A=A
+    )
+    rows = np.arange(10, 25)
+    for sparse in (False, True):
+        psi = rng.normal(size=(3 * n, nq)) * (rng.random((3 * n, nq)) < (0.1 if sparse else 1))
+        body = SimpleNamespace(
+            X=rng.normal(size=(n, 3)), psi=sp.csr_matrix(psi) if sparse else psi, nq=nq
+        )
         whole, win = ContactNodes(body, np.arange(n)), ContactNodes(body, np.arange(n))
-        want = whole.update(st)
-        rows, out = np.arange(10), np.arange(10, n)
-        c_out = column_bounds(win, out)
-        x_out = float(np.linalg.norm(body.X[out], axis=1).max())
-        win.set_rows(rows, (out, c_out, x_out), invalidate=True)
-        bound_v, _ = outside_bounds(c_out, x_out, st.q, st.v)
-        assert (bound_v > abs(whole.xd[:10]).max()) == big_outside
-        assert win.update(st) == want
+        assert win.dense is not sparse
+        whole.update(st)
+        win.x[:] = -7.0
+        win.set_rows(rows, invalidate=True)
+        vmax, umax = win.update(st)
+        assert vmax == np.abs(whole.xd[rows]).max()
+        assert umax == np.linalg.norm(whole.u[rows], axis=1).max()
         for name in ("u", "ud", "s", "x", "xd"):
             np.testing.assert_array_equal(getattr(win, name)[rows], getattr(whole, name)[rows])
+        assert (np.delete(win.x, rows, axis=0) == -7.0).all()
+        want = np.linalg.norm(psi.reshape(n, 3, nq)[rows], axis=1).max(axis=0)
+        np.testing.assert_allclose(column_bounds(win, rows), want, rtol=1e-14)

@@ -49,16 +49,13 @@ class ContactNodes:
             np.zeros(2),
             self.version,
         )
-        # the rows moved per update (contact.slave_window: None, every node) and the bounds
-        # over the others (outside rows, column bounds, largest |X|)
+        # the rows moved per update (contact.slave_window; None: every node)
         self.window_rows: np.ndarray | None = None
-        self._outside: tuple | None = None
 
-    def set_rows(self, rows: np.ndarray | None, outside: tuple | None, invalidate: bool) -> None:
-        """Move only the nodes `rows` per update (None: every node), with the bounds
-        `outside` over the others (slave_window.window_kinematics_memo). invalidate: the
-        next update recomputes even at an unchanged state (rows not computed before)."""
-        self.window_rows, self._outside = rows, outside
+    def set_rows(self, rows: np.ndarray | None, invalidate: bool) -> None:
+        """Move only the nodes `rows` per update (None: every node; slave_window).
+        invalidate: the next update recomputes even at an unchanged state."""
+        self.window_rows = rows
         if invalidate:
             self._last[2][0] = np.nan
 
@@ -87,7 +84,7 @@ class ContactNodes:
         """Positions x, velocities xd (global), body-frame positions s at state st (kept
         when st holds the values of the last update). Returns (largest velocity component
         [m/s], largest displacement |u| [m]). With a window (set_rows) only its nodes are
-        moved; the maxima are over every node all the same."""
+        moved, and the maxima are theirs."""
         if self.window_rows is not None:
             return window_kinematics_memo(
                 self.X,
@@ -107,7 +104,6 @@ class ContactNodes:
                 self.xd,
                 self._last,
                 self.window_rows,
-                self._outside,
             )
         return body_kinematics_memo(
             self.X,

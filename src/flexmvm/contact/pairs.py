@@ -206,17 +206,18 @@ class PointToSurfaceContact:
     # -- geometry -----------------------------------------------------------------------------
     def _kinematics(self, states, reach=None) -> float:
         """Node positions / velocities of both bodies; returns the speed of the reach rule:
-        largest slave plus largest master velocity component [m/s]. reach(speed) [m]: the
+        largest slave plus largest master velocity component [m/s], the slave's over its
+        window when it has one (the nodes that can reach the master). reach(speed) [m]: the
         reach of the call, which the slave window (if any) is made to cover; np.inf: every
         slave node moved."""
         vs, u_s = self._s.update(states[self.slave])
         vm, self._u_max = self._m.update(states[self.master])
-        speed = float(vs + vm)
         if self._window is not None and reach is not None:
-            need = self._window.need(reach(speed), u_s, self._u_max)
+            need = self._window.need(reach(float(vs + vm)), u_s, self._u_max)
             keep = np.flatnonzero((self._held >= 0) | self._bonded)
-            self._window.ensure(states[self.slave], states[self.master], need, keep)
-        return speed
+            if self._window.ensure(states[self.slave], states[self.master], need, keep):
+                vs, _ = self._s.update(states[self.slave])  # the new window's
+        return float(vs + vm)
 
     def _scan(self, states, reach: float) -> int:
         """Closest facet, gap and normal velocity of every slave node within reach (into
