@@ -254,7 +254,10 @@ class SlaveWindow:
         return True
 
     def _holds(self, st, st_m, need: float) -> bool:
-        if self._ref is None or not np.isfinite(need) or self.reach_w > need + 3.0 * self.margin:
+        # refreshed too when the window is far wider than the need (after a call with a long
+        # reach: the start's deep check, min_gap_ahead's horizon), with room enough that
+        # calls of different needs in turn do not refresh it each time
+        if self._ref is None or not np.isfinite(need) or self.reach_w > 4.0 * need + self.margin:
             return False
         q0, r0, A0, rm0, Am0, s0, l0, c_out = self._ref
         d = window_drift(st.q, q0, c_out, st.r - r0, st.A - A0, s0, st_m.r - rm0, st_m.A - Am0, l0)
