@@ -21,6 +21,7 @@ import scipy.sparse as sp
 from flexmvm.constraints.rows import NodalSelector
 from flexmvm.contact.kinematics import body_kinematics_memo
 from flexmvm.contact.pair_rows import body_rows
+from flexmvm.contact.slave_window import window_kinematics_memo
 
 _DENSE_FILL = 0.25  # gathered rows with more non-zeros than this fraction are stored dense
 
@@ -48,6 +49,15 @@ class ContactNodes:
             np.zeros(2),
             self.version,
         )
+        # the rows moved per update (contact.slave_window; None: every node)
+        self.window_rows: np.ndarray | None = None
+
+    def set_rows(self, rows: np.ndarray | None, invalidate: bool) -> None:
+        """Move only the nodes `rows` per update (None: every node; slave_window).
+        invalidate: the next update recomputes even at an unchanged state."""
+        self.window_rows = rows
+        if invalidate:
+            self._last[2][0] = np.nan
 
     def _gather(self, body, n: int) -> None:
         self.psi_c = np.zeros((0, 3, 0))
@@ -73,7 +83,28 @@ class ContactNodes:
     def update(self, st) -> tuple[float, float]:
         """Positions x, velocities xd (global), body-frame positions s at state st (kept
         when st holds the values of the last update). Returns (largest velocity component
-        [m/s], largest displacement |u| [m])."""
+        [m/s], largest displacement |u| [m]). With a window (set_rows) only its nodes are
+        moved, and the maxima are theirs."""
+        if self.window_rows is not None:
+            return window_kinematics_memo(
+                self.X,
+                self.psi_c,
+                self.indptr,
+                self.indices,
+                self.data,
+                self.dense,
+                st.q,
+                st.v,
+                st.r,
+                st.A,
+                self.u,
+                self.ud,
+                self.s,
+                self.x,
+                self.xd,
+                self._last,
+                self.window_rows,
+            )
         return body_kinematics_memo(
             self.X,
             self.psi_c,

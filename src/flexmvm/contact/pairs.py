@@ -60,6 +60,7 @@ from flexmvm.contact.penetration import Penetration, SurfaceMeasure
 from flexmvm.contact.projection import DEGENERATE_QUAD, DEGENERATE_TRI
 from flexmvm.contact.search import scan_nodes
 from flexmvm.contact.search_state import ProjectionMemo, SearchState, facet_surface
+from flexmvm.contact.slave_window import MARGIN_PER_SEARCH_RADIUS, WINDOW_MIN_NODES, SlaveWindow
 from flexmvm.errors import InputError, SolverError
 
 __all__ = ["PointToSurfaceContact", "body_rows", "tangent_basis"]
@@ -151,6 +152,18 @@ class PointToSurfaceContact:
             raise InputError(
                 f"{name}: slave facets refer to nodes outside body {bodies[slave].name!r}"
             )
+        self._window = None  # the slave nodes moved per step (contact.slave_window)
+        if len(self.slave_nodes) >= WINDOW_MIN_NODES:
+            r_f = 0.0
+            if slave_surface is not None:
+                r_f = float(BroadPhase(bodies[slave].X, slave_surface).circumradius.max())
+            self._window = SlaveWindow(
+                self._s,
+                self._facets.box,
+                self.search_radius,
+                r_f,
+                MARGIN_PER_SEARCH_RADIUS * self.search_radius,
+            )
         self._measure = SurfaceMeasure(
             bodies,
             slave,
@@ -191,11 +204,19 @@ class PointToSurfaceContact:
         self._row_geometry: tuple | None = None
 
     # -- geometry -----------------------------------------------------------------------------
-    def _kinematics(self, states) -> float:
+    def _kinematics(self, states, reach=None) -> float:
         """Node positions / velocities of both bodies; returns the speed of the reach rule:
-        largest slave plus largest master velocity component [m/s]."""
-        vs, _ = self._s.update(states[self.slave])
+        largest slave plus largest master velocity component [m/s], the slave's over its
+        window when it has one (the nodes that can reach the master). reach(speed) [m]: the
+        reach of the call, which the slave window (if any) is made to cover; np.inf: every
+        slave node moved."""
+        vs, u_s = self._s.update(states[self.slave])
         vm, self._u_max = self._m.update(states[self.master])
+        if self._window is not None and reach is not None:
+            need = self._window.need(reach(float(vs + vm)), u_s, self._u_max)
+            keep = np.flatnonzero((self._held >= 0) | self._bonded)
+            if self._window.ensure(states[self.slave], states[self.master], need, keep):
+                vs, _ = self._s.update(states[self.slave])  # the new window's
         return float(vs + vm)
 
     def _scan(self, states, reach: float) -> int:
@@ -223,7 +244,7 @@ class PointToSurfaceContact:
         return n
 
     def min_gap_ahead(self, bodies, states, horizon_s: float) -> float:
-        speed = self._kinematics(states)
+        speed = self._kinematics(states, lambda v: self.search_radius + v * horizon_s)
         if self._scan(states, self.search_radius + speed * horizon_s) == 0:
             return np.inf
         if self._bonds:
@@ -236,6 +257,8 @@ class PointToSurfaceContact:
         into the master surface, then (with a slave_surface) master surface nodes into the
         slave surface. deep: the start check's reach, over both surfaces' extent. floors (per
         direction [m], default 0): only deeper penetrations are sought; shallower read 0."""
+        if self._window is not None:
+            self._kinematics(states, lambda v: np.inf if deep else self.search_radius + self._u_max)
         out = []
         for status, facet, pen in self._measure.measure(states, deep, floors):
             if status:
@@ -245,7 +268,7 @@ class PointToSurfaceContact:
 
     # -- constraint rows ----------------------------------------------------------------------
     def candidate_rows(self, bodies, states, h: float) -> ContactRows:
-        speed = self._kinematics(states)
+        speed = self._kinematics(states, lambda v: self.search_radius + 2 * v * h)
         self._scan(states, self.search_radius + 2 * speed * h)
         A_m = states[self.master].A
         if self._holds:
