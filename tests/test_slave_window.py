@@ -18,9 +18,9 @@ import pytest
 pytest.importorskip("gmsh")
 
 import flexmvm as fm
+from flexmvm.assembly.build import build_scenario
 from flexmvm.contact import pairs
 from flexmvm.integrate.driver import simulate
-from flexmvm.scenarios.build import build_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -81,7 +81,7 @@ def body_kinematics(X, psi_c, indptr, indices, data, dense, q, v, r, A, u, ud, s
 
 
 @numba.njit(cache=True)
-def _same_bits(a, b):
+def same_bits(a, b):
     """a and b (1-D float64, equal length) hold the same values bit for bit (a NaN never
     matches, so it is always recomputed; 0.0 and -0.0 differ)."""
     for i in range(a.shape[0]):
@@ -123,12 +123,12 @@ def body_kinematics_memo(
     same = q.shape[0] == last_q.shape[0] and v.shape[0] == last_v.shape[0]
     if same:
         for i in range(3):
-            same = same and _same_bits(A[i], last_frame[3 + 3 * i : 6 + 3 * i])
+            same = same and same_bits(A[i], last_frame[3 + 3 * i : 6 + 3 * i])
         same = (
             same
-            and _same_bits(r, last_frame[0:3])
-            and _same_bits(q, last_q)
-            and _same_bits(v, last_v)
+            and same_bits(r, last_frame[0:3])
+            and same_bits(q, last_q)
+            and same_bits(v, last_v)
         )
     if same:
         return last_out[0], last_out[1]

@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING
 import numba
 import numpy as np
 
-from flexmvm.contact.kinematics import _same_bits
+from flexmvm.contact.kinematics import same_bits
 
 if TYPE_CHECKING:
     from flexmvm.contact.nodes import ContactNodes
@@ -136,12 +136,12 @@ def window_kinematics_memo(
     same = q.shape[0] == last_q.shape[0] and v.shape[0] == last_v.shape[0]
     if same:
         for i in range(3):
-            same = same and _same_bits(A[i], last_frame[3 + 3 * i : 6 + 3 * i])
+            same = same and same_bits(A[i], last_frame[3 + 3 * i : 6 + 3 * i])
         same = (
             same
-            and _same_bits(r, last_frame[0:3])
-            and _same_bits(q, last_q)
-            and _same_bits(v, last_v)
+            and same_bits(r, last_frame[0:3])
+            and same_bits(q, last_q)
+            and same_bits(v, last_v)
         )
     if same:
         return last_out[0], last_out[1]
