@@ -15,35 +15,34 @@ import numpy as np
 import pytest
 
 import flexmvm as fm
-from flexmvm.bodies.moving_region import (
-    MovingOutside,
-    MovingRegion,
-    MovingRegionWarning,
-    project_state,
-)
+from flexmvm.bodies.moving_region import MovingRegion, MovingRegionWarning, project_state
 from flexmvm.errors import SimulationFailed
 from flexmvm.integrate.state import BodyState
-from flexmvm.scenarios.moving_region import moving_setup, run_moving
+from flexmvm.scenarios.moving_region import moving_setup
+from flexmvm.scenarios.setup import default_setup
 
 SCENARIOS = Path(__file__).resolve().parents[1] / "scenarios"
-# windows: one every top-face station (12.5 mm), each the stations within 37.5 mm (7 x 3 top
-# nodes); 10 global modes (46 Hz .. 4 kHz)
-MODES, SPACING, HALF = 10, 0.0125, 0.0375
+# the shipped windows: one every top-face station (12.5 mm), each the stations within 37.5 mm
+# (7 x 3 top nodes); 10 global modes (46 Hz .. 4 kHz)
 
 
-def _scenario(t_end_s: float) -> fm.Scenario:
-    """The shipped scenario (60 m/s, 50 us steps) until t_end_s."""
+def _scenario(t_end_s: float, kind: str = "full", **moving) -> fm.Scenario:
+    """The shipped scenario (60 m/s, 50 us steps) until t_end_s, the beam's model ``kind``
+    and its moving-region keys changed by ``moving``."""
     with open(SCENARIOS / "moving_load.toml", "rb") as f:
         d = tomllib.load(f)
     for b in d["bodies"]:
         b["mesh_file"] = str(SCENARIOS / b["mesh_file"])
     d["time"].update(t_end_s=t_end_s)
+    d["bodies"][0]["model"]["kind"] = kind
+    d["bodies"][0]["model"]["moving"].update(moving)
     return fm.scenario_from_dict(d)
 
 
 @pytest.fixture(scope="module")
 def windows():
-    return moving_setup(_scenario(1e-3), "beam", "top", MODES, SPACING, HALF)
+    sc = _scenario(1e-3)
+    return moving_setup(sc.bodies[0], sc.supports, default_setup())
 
 
 def test_window_basis_nodal_form(windows):
@@ -65,8 +64,8 @@ def test_window_basis_nodal_form(windows):
 def test_switch_projection_keeps_momentum_and_energy(windows):
     """A state on window 10 (a static deflection under the window's centre node plus a
     velocity field of the global modes and the window's nodes) carried to window 11: the
-    linear and angular momentum kept to round-off (1e-12 of their size, measured 3e-16 and
-    2e-16), the kinetic energy not raised (the M-metric projection with the momentum rows;
+    linear and angular momentum kept to round-off (1e-12 of their size, measured 2e-16 and
+    1e-16), the kinetic energy not raised (the M-metric projection with the momentum rows;
     <= 1 + 1e-12, measured 1 - 1.6e-5) nor the strain energy (<= 1 + 1e-9: the K-metric
     projection with the shared nodes held to their values, which alone could raise it;
     measured 1 - 2e-10), the shared nodes' displacements exact (measured 0.0)."""
@@ -105,11 +104,10 @@ def test_moving_region_against_full_fe():
     docs/notes/2026-11-29-moving-region.md), the contact force's mean 2 N to 1e-3 (measured
     1.9997 N), every switch's energy jump below 1e-3 of the beam's energy then (measured
     2.1e-4 at most, at the first switches where that energy is smallest) and its momentum
-    jump round-off (measured 3.5e-18 kg m/s). ~10 s of CPU, two runs."""
-    sc = _scenario(5e-3)
-    full = fm.run(sc).result
-    mv = run_moving(sc, "beam", "top", MODES, SPACING, HALF)
-    res = mv.result
+    jump round-off (measured 3.9e-18 kg m/s). ~10 s of CPU, two runs."""
+    full = fm.run(_scenario(5e-3)).result
+    mv = fm.run(_scenario(5e-3, "mvm-moving"))
+    res, region = mv.result, mv.built.switches
 
     def deflection(r):
         z = r.probe_x[:, r.probe_names.index("mid_axis"), 2]
@@ -117,9 +115,9 @@ def test_moving_region_against_full_fe():
 
     w_full, w_mv = deflection(full), deflection(res)
     assert np.abs(w_mv - w_full).max() <= 1e-3 * w_full.max()
-    assert len(mv.region.switches) >= 20
+    assert len(region.switches) >= 20
     assert res.contact_force[1:].mean() == pytest.approx(2.0, rel=1e-3)
-    for s in mv.region.switches:
+    for s in region.switches:
         e0, e1 = s.kinetic[0] + s.strain[0], s.kinetic[1] + s.strain[1]
         assert abs(e1 - e0) <= 1e-3 * e0
         assert np.abs(s.momentum[1] - s.momentum[0]).max() <= 1e-12
@@ -130,15 +128,14 @@ def test_guard_where_no_window_covers():
     driven to 0.3 m: the guard warns once and the run completes (outside = WARN), or the run
     stops there keeping what it computed (STOP: SimulationFailed with its partial result,
     up to t ~ 0.2 m / 60 m/s = 3.5 ms)."""
-    sc = _scenario(5e-3)
-    args = ("beam", "top", MODES, SPACING, HALF)
-    with pytest.warns(MovingRegionWarning, match="no window|windows cover"):
-        mv = run_moving(sc, *args, outside=MovingOutside.WARN, s_range=(-0.5, -0.3))
-    assert mv.result.t[-1] == pytest.approx(5e-3)
-    assert mv.region.uncovered is not None
+    span = {"s_range_m": [-0.5, -0.3]}
+    with pytest.warns(MovingRegionWarning, match="windows cover"):
+        mv = fm.run(_scenario(5e-3, "mvm-moving", outside="warn", **span))
+    assert mv.t[-1] == pytest.approx(5e-3)
+    assert mv.built.switches.uncovered is not None
     with warnings.catch_warnings():
         warnings.simplefilter("error", MovingRegionWarning)
         with pytest.raises(SimulationFailed, match="windows cover") as exc:
-            run_moving(sc, *args, outside=MovingOutside.STOP, s_range=(-0.5, -0.3))
+            fm.run(_scenario(5e-3, "mvm-moving", outside="stop", **span))
     partial = exc.value.partial
     assert 3.0e-3 <= partial.t[-1] <= 4.0e-3

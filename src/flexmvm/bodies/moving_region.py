@@ -26,6 +26,7 @@ driver keeping what it computed), as plastic_outside does for a plastic zone.
 from __future__ import annotations
 
 import dataclasses
+import time
 import warnings
 from dataclasses import dataclass
 from enum import Enum
@@ -91,6 +92,8 @@ class MovingRegion:
         self.switches: list[Switch] = []
         self.uncovered: str | None = None  # the guard's message, once the contact left
         self.centres: list[tuple[float, float]] = []  # (t, s) of the contact centre
+        self.switch_cpu_s = 0.0  # CPU [s] of the switches (projections, rebinds, integrators)
+        self.setup_cpu_s = 0.0  # CPU [s] of the windows' setup, when its maker measured it
 
     def body(self, k: int):
         """The FlexibleBody of window k (its parts made on first use)."""
@@ -117,7 +120,12 @@ class MovingRegion:
         if abs(s - w.centres[self.window]) <= (0.5 + self.hysteresis) * w.spacing_m:
             return None
         new = w.nearest(s)
-        return None if new == self.window else self.switch_window(t_s, system, states, new, s)
+        if new == self.window:
+            return None
+        c0 = time.process_time()
+        moved = self.switch_window(t_s, system, states, new, s)
+        self.switch_cpu_s += time.process_time() - c0
+        return moved
 
     def outside_stop(self) -> str | None:
         """The guard's message when the run must stop (STOP), else None."""
@@ -217,7 +225,9 @@ def project_state(
     """The state on window ``new`` of the state ``st`` on window ``old`` (module doc): q by
     the K-metric projection with the shared window nodes' displacements exact and the first
     moment kept; q_dot by the M-metric projection with both momenta kept (and, with
-    keep_velocity, the shared nodes' velocities exact)."""
+    keep_velocity, the shared nodes' velocities exact). The new window's k_hat and M_qq are
+    its body's; the old field enters by one product with K and with M and one with psi_new^T
+    (O(nnz K + n_dof nq), no product of the two bases)."""
     fe = windows.factor.fe
     psi_a, psi_b = windows.basis(old).psi, windows.basis(new).psi
     nodes_a, nodes_b = windows.basis(old).retained_nodes, windows.basis(new).retained_nodes
@@ -225,7 +235,8 @@ def project_state(
     cols_a = (3 * np.searchsorted(nodes_a, shared)[:, None] + np.arange(3)).ravel()
     cols_b = (3 * np.searchsorted(nodes_b, shared)[:, None] + np.arange(3)).ravel()
     S1a, S1b = body_a.inv.S1, body_b.inv.S1
-    q = _closest(fe.K, psi_b, psi_a @ st.q, S1b, S1a @ st.q, cols_b, st.q[cols_a])
+    ku = psi_b.T @ (fe.K @ (psi_a @ st.q))
+    q = _closest(body_b.k_hat, ku, S1b, S1a @ st.q, cols_b, st.q[cols_a])
     qd_old = st.v[6:]
     frame_v = np.r_[st.A.T @ st.v[:3], st.v[3:6]]  # r_dot in the body frame, omega
     h_old = body_a.angular_momentum(np.zeros(3), np.eye(3), st.q, np.r_[frame_v, qd_old])
@@ -233,24 +244,25 @@ def project_state(
     h_rest = cross3(S, frame_v[:3]) + J @ frame_v[3:]
     keep = (cols_b, qd_old[cols_a]) if keep_velocity else (cols_b[:0], qd_old[cols_a[:0]])
     rows, target = np.vstack([S1b, M_wq]), np.r_[S1a @ qd_old, h_old - h_rest]
-    qd = _closest(fe.M, psi_b, psi_a @ qd_old, rows, target, *keep)
+    mu = psi_b.T @ (fe.M @ (psi_a @ qd_old))
+    qd = _closest(body_b.inv.M_qq, mu, rows, target, *keep)
     return BodyState(st.r.copy(), st.A.copy(), q, np.r_[st.v[:6], qd])
 
 
-def _closest(W, psi, u, C, d, fixed, values) -> np.ndarray:
-    """x = argmin |psi x - u|_W with x[fixed] = values and C x = d (C (k, nq)): the
-    coordinates ``fixed`` set, the others by the KKT system of the rest, solved by least
-    squares (its rows may be dependent)."""
-    x = np.zeros(psi.shape[1])
+def _closest(G, g, C, d, fixed, values) -> np.ndarray:
+    """x = argmin 1/2 x^T G x - g^T x (G = psi^T W psi, g = psi^T W u: the W-closest psi x to
+    u) with x[fixed] = values and C x = d (C (k, nq)): the coordinates ``fixed`` set, the
+    others by the KKT system of the rest, solved by least squares (its rows may be
+    dependent)."""
+    G = np.asarray(G.toarray() if hasattr(G, "toarray") else G)
+    x = np.zeros(G.shape[0])
     x[fixed] = values
-    free = np.setdiff1d(np.arange(psi.shape[1]), fixed)
-    P = psi[:, free]
-    WP = W @ P
-    G = P.T @ WP
-    g = WP.T @ (u - psi[:, fixed] @ values)
+    free = np.setdiff1d(np.arange(G.shape[0]), fixed)
+    Gf = G[np.ix_(free, free)]
+    gf = g[free] - G[np.ix_(free, fixed)] @ values
     Cf = C[:, free]
     k = C.shape[0]
-    kkt = np.block([[G, Cf.T], [Cf, np.zeros((k, k))]])
-    rhs = np.r_[g, d - C[:, fixed] @ values]
+    kkt = np.block([[Gf, Cf.T], [Cf, np.zeros((k, k))]])
+    rhs = np.r_[gf, d - C[:, fixed] @ values]
     x[free] = sla.lstsq(kkt, rhs, lapack_driver="gelsy")[0][: free.size]
     return x

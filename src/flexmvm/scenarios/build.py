@@ -13,6 +13,7 @@ import numpy as np
 
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.bodies.build import ModelKind, body_from_parts, rigid_body_from_fe
+from flexmvm.bodies.moving_region import MovingRegion
 from flexmvm.constraints.joints import (
     BodyPoint,
     DistanceJoint,
@@ -54,6 +55,7 @@ from flexmvm.scenarios.mesh_lookup import (
     nearest_node,
     retained_nodes,
 )
+from flexmvm.scenarios.moving_region import covered_nodes, moving_body
 from flexmvm.scenarios.plasticity_schema import plastic_parts, refuse_dynamic
 from flexmvm.scenarios.sag import quasi_static_sag
 from flexmvm.scenarios.setup import SetupCache, default_setup, timed
@@ -100,6 +102,8 @@ class BuiltScenario:
     probes: list[Probe]
     grid: TimeGrid
     info: list[BodyInfo]
+    # a moving region's run-time state, the run's switches (bodies/moving_region.py); None: none
+    switches: MovingRegion | None = None
 
 
 def build_body(
@@ -220,7 +224,7 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
     through ``setup`` (default: the process-wide default_setup())."""
     refuse_dynamic(sc)
     setup = default_setup() if setup is None else setup
-    bodies, infos, states = [], [], []
+    bodies, infos, states, switches = [], [], [], None
     for cfg in sc.bodies:
         check_contact_surfaces(sc, cfg.name, setup.mesh(mesh_key(cfg)))
         massless = None
@@ -228,7 +232,10 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
             massless = contact_nodes(sc, cfg.name, setup.mesh(mesh_key(cfg)))
         sizes = step_sizes(sc.time.dt_s, sc.time.dt_max_s)
         surfaces = contact_surfaces(sc, cfg.name)
-        body, info = build_body(cfg, setup, massless, surfaces, sc.supports, sizes)
+        if cfg.model.moves:  # a moving region (scenarios/moving_region.py)
+            body, info, switches = _moving(cfg, sc, setup, len(bodies), switches)
+        else:
+            body, info = build_body(cfg, setup, massless, surfaces, sc.supports, sizes)
         bodies.append(body)
         infos.append(info)
         states.append(initial_state(body, cfg.placement))
@@ -271,7 +278,32 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
     labels = [joint_label(j, k) for k, j in enumerate(sc.joints)]
     labels += [f"supports[{k}]" for k in range(len(sc.supports))]
     check_joint_velocities(system.bodies, states, groups + supported, labels)
-    return BuiltScenario(system, states, probes, grid, infos)
+    return BuiltScenario(system, states, probes, grid, infos, switches)
+
+
+def _moving(cfg, sc, setup: SetupCache, index: int, switches):
+    """(body, BodyInfo, MovingRegion) of the moving region ``cfg``, the index-th body;
+    InputError for a second one (a run drives one)."""
+    if switches is not None:
+        raise InputError(
+            f"bodies[{cfg.name}].model.moving: a second moving region (body "
+            f"{switches.name!r} is one); expected one per scenario"
+        )
+    body, region = moving_body(cfg, sc.supports, setup, index)
+    mesh = setup.mesh(mesh_key(cfg))
+    covered = covered_nodes(region, mesh.node_set(cfg.model.moving.path))
+    info = BodyInfo(
+        cfg.name,
+        cfg.model.kind,
+        mesh,
+        cfg.material_obj(),
+        body.nv,
+        len(covered),
+        cfg.model.modes,
+        None,
+        covered,
+    )
+    return body, info, region
 
 
 def _contact(c, k, bodies, infos, index, theta):

@@ -29,7 +29,7 @@ from threadpoolctl import threadpool_limits
 
 from flexmvm.errors import InputError
 from flexmvm.fe.assembly import FEModel
-from flexmvm.fe.modes import shift_invert_modes, solver_pool, spd_solver, to_hz
+from flexmvm.fe.modes import shift_invert_modes, spd_solver, to_hz
 from flexmvm.reduction.kinds.mvm import node_dofs
 from flexmvm.reduction.kinds.registry import ModelKind
 from flexmvm.reduction.kinds.spec import Basis, BasisRequest, NodesAndModes
@@ -72,8 +72,9 @@ class GlobalFactor:
     def of(cls, fe: FEModel, reference, n_modes: int) -> GlobalFactor:
         free = reference.free_dofs(fe.n_dof)
         k_ff = fe.K[free][:, free]
-        with threadpool_limits(limits=1, user_api="blas"), solver_pool() as pool:
-            solve = spd_solver(k_ff, pool)
+        # no thread pool: the factor outlives this call (every window's solves use it)
+        with threadpool_limits(limits=1, user_api="blas"):
+            solve = spd_solver(k_ff)
             lam, modes = shift_invert_modes(fe.M[free][:, free], k_ff, n_modes, 0.0, solve=solve)
         phi = np.zeros((fe.n_dof, n_modes))
         phi[free] = modes
