@@ -4,19 +4,17 @@ MovingRegion.after_step whether the contact centre has left the window (with hys
 if so, gets the system with the body of the new window and the states carried over.
 
 What is carried across a switch (docs/notes/2026-11-29-moving-load.md, design note): the frame
-state (r, A, r_dot, omega) unchanged; the elastic field projected, keeping exact
-
-- the displacements and velocities of the nodes both windows hold (they are coordinates of
-  both: the contact nodes, so the gap and with the position law the contact force do not
-  jump);
-- the body's first moment S1 q (its centre of mass) and its linear and angular momentum
-  (S1 q_dot and the angular momentum at the new q), as equality rows of a small KKT system;
-
-and otherwise closest to the old field in the K metric (displacements: the strain energy of
-the part the new window cannot hold is dropped) and the M metric (velocities). The integrator
-is made again for the new system (its iteration matrices depend on the basis; a window has a
-few dozen coordinates, so this costs a few small factorisations), and the contact providers'
-gathered psi rows are re-gathered (ContactNodes.rebind).
+state (r, A, r_dot, omega) unchanged; q projected in the K metric on the new window with the
+displacements of the nodes both windows hold kept exactly (they are coordinates of both: the
+contact nodes, so the gap and with the position law the contact force do not jump) and the
+first moment S1 q kept; q_dot projected in the M metric with the linear momentum (S1 q_dot)
+and the angular momentum at the new q kept (equality rows of a small KKT system): the kinetic
+energy of the part the new window cannot hold is dropped, none is added. (Keeping the shared
+nodes' velocities exactly too raised the kinetic energy at every switch until the run blew up:
+docs/notes/2026-11-29-moving-region.md.) The integrator is made again for the new system (its
+iteration matrices depend on the basis; a window has a few dozen coordinates, so this costs a
+few small factorisations), and the contact providers' gathered psi rows are re-gathered
+(ContactNodes.rebind).
 
 The guard: a contact that carries force at a path parameter no window covers is reported
 (``outside``: WARN, once, the run going on in the last window) or stops the run (STOP, the
@@ -35,7 +33,8 @@ import numpy as np
 import scipy.linalg as sla
 from threadpoolctl import threadpool_limits
 
-from flexmvm.bodies.build import body_from_parts, body_parts
+from flexmvm.bodies.build import BodyParts, body_from_parts
+from flexmvm.bodies.invariants import inertia_invariants
 from flexmvm.bodies.rotation import cross3
 from flexmvm.integrate.state import BodyState
 from flexmvm.reduction.kinds.mvm_moving import MovingWindows
@@ -101,7 +100,8 @@ class MovingRegion:
             fe = self.windows.factor.fe
             with threadpool_limits(limits=1, user_api="blas"):  # small products, shared cores
                 basis = self.windows.basis(k)
-                parts = body_parts(fe, basis)
+                inv = inertia_invariants(fe.mesh.nodes, fe.M_scalar, basis.psi)
+                parts = BodyParts(inv, self.windows.stiffness(k))  # k_hat without K psi
             self._bodies[k] = body_from_parts(self.name, fe.mesh, basis, parts)
         return self._bodies[k]
 

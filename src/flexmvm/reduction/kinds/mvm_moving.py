@@ -101,18 +101,25 @@ class GlobalFactor:
 
     def window_basis(self, nodes: np.ndarray) -> Basis:
         """The window of ``nodes``: span{attachment modes, Phi} in nodal form (module doc)."""
-        psi, freqs = nodal_form(self.fe, self.attachment(nodes), self.phi, node_dofs(nodes))
-        return Basis(ModelKind(NAME), psi, nodes, self.phi.shape[1], self.reference, freqs)
+        return self.window(nodes)[0]
+
+    def window(self, nodes: np.ndarray) -> tuple[Basis, np.ndarray]:
+        """(the window's Basis, its k_hat = psi^T K psi (nq, nq) [N/m]) (nodal_form)."""
+        psi, freqs, k_hat = nodal_form(self.fe, self.attachment(nodes), self.phi, node_dofs(nodes))
+        basis = Basis(ModelKind(NAME), psi, nodes, self.phi.shape[1], self.reference, freqs)
+        return basis, k_hat
 
 
 def nodal_form(
     fe: FEModel, statics: np.ndarray, phi: np.ndarray, b: np.ndarray
-) -> tuple[np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """span{statics, phi} (n_dof, 3 n_w + m) rewritten as [T, Z]: T = statics F^-1 with F =
     statics[b] (the window's flexibility, symmetric positive definite): the static constraint
     modes of the window DOFs b (T[b] = I, the least strain energy with those values), and
     Z = phi - T phi[b] (the global modes with the window held, Z[b] = 0) made M-orthonormal
-    and K-orthogonal by Rayleigh-Ritz (their frequencies returned, [Hz]). InputError when F
+    and K-orthogonal by Rayleigh-Ritz (their frequencies returned, [Hz]). Returned with the
+    reduced stiffness without a product with K: K T = E F^-1 (E the unit columns at b), so
+    T^T K T = F^-1 and T^T K Z = F^-1 Z[b] = 0; Z^T K Z = diag(omega^2). InputError when F
     is singular (a DOF in b held by the reference condition)."""
     F = 0.5 * (statics[b] + statics[b].T)
     try:
@@ -126,7 +133,12 @@ def nodal_form(
     m_z = Z.T @ (fe.M @ Z)
     k_z = Z.T @ (fe.K @ Z)
     lam, vec = sla.eigh(0.5 * (k_z + k_z.T), 0.5 * (m_z + m_z.T))
-    return np.hstack([T, Z @ vec]), to_hz(np.maximum(lam, 0.0))
+    n_b, n_z = b.size, phi.shape[1]
+    k_hat = np.zeros((n_b + n_z, n_b + n_z))
+    f_inv = sla.cho_solve(chol, np.eye(n_b))
+    k_hat[:n_b, :n_b] = 0.5 * (f_inv + f_inv.T)
+    k_hat[n_b:, n_b:] = np.diag(lam)
+    return np.hstack([T, Z @ vec]), to_hz(np.maximum(lam, 0.0)), k_hat
 
 
 @dataclass(frozen=True)
@@ -180,9 +192,15 @@ class MovingWindows:
         return self.path.nodes[(s >= lo - tol) & (s <= lo + 2.0 * hw + tol)]
 
     def basis(self, k: int) -> Basis:
+        """Window k's Basis (made on first use, kept)."""
         if k not in self._bases:
-            self._bases[k] = self.factor.window_basis(self.nodes(k))
-        return self._bases[k]
+            self._bases[k] = self.factor.window(self.nodes(k))
+        return self._bases[k][0]
+
+    def stiffness(self, k: int) -> np.ndarray:
+        """Window k's k_hat (nq, nq) [N/m], from its construction (nodal_form)."""
+        self.basis(k)
+        return self._bases[k][1]
 
     def nearest(self, s: float) -> int:
         return int(np.argmin(np.abs(self.centres - s)))
