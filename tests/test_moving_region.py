@@ -139,3 +139,17 @@ def test_guard_where_no_window_covers():
             fm.run(_scenario(5e-3, "mvm-moving", outside="stop", **span))
     partial = exc.value.partial
     assert 3.0e-3 <= partial.t[-1] <= 4.0e-3
+
+
+def test_moving_keys_checked_and_left_out_of_dumps():
+    """[bodies.model.moving]: half_width_m below spacing_m / 2 is refused in one line naming
+    the key; a model without ``moving`` dumps without it (the cache and study keys that hash
+    the dumps stay those of before the key existed), one with it keeps it."""
+    with pytest.raises(fm.ScenarioError, match=r"half_width_m.*>= spacing_m / 2"):
+        _scenario(1e-3, half_width_m=0.005)
+    sc = _scenario(1e-3)
+    assert "moving" in sc.model_dump(mode="json")["bodies"][0]["model"]
+    data = sc.model_dump(mode="json")
+    del data["bodies"][0]["model"]["moving"]
+    plain = fm.scenario_from_dict(data)
+    assert "moving" not in plain.model_dump(mode="json")["bodies"][0]["model"]
