@@ -56,6 +56,7 @@ def test_built_in_kinds_answer_as_the_enum_did():
         "interface": (True, False, False, True, False, True, False),
         "rigid": (False, False, False, False, False, False, False),
         "mvm-sparse": (True, True, True, True, False, False, True),
+        "mvm-moving": (True, True, True, True, False, False, True),
     }
     got = {
         k.value: (s.has_basis, s.retains_nodes, s.uses_modes, s.reads_modes, s.nodal)

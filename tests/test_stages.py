@@ -173,7 +173,7 @@ def test_showcase_code_is_in_showcases():
 INTEGRATE_ROOMS = [
     {"integrate", "state", "system", "step", "theta", "row_products", "plastic_bodies"},
     {"moreau_jean"},
-    {"energy_ledger", "run_result", "recorder", "progress", "driver"},
+    {"energy_ledger", "run_result", "recorder", "progress", "moving_region", "driver"},
 ]
 SCHEME = PACKAGE / "integrate" / "moreau_jean"
 

@@ -8,7 +8,17 @@ import click
 
 # the values of flexmvm.bodies.build.ModelKind, spelled out so that `--help` does not import
 # the numerical stages (tests/test_cli.py checks they agree)
-MODELS = ["full", "mvm", "mvm-seed", "mvm-seed-fixed", "modal", "interface", "rigid", "mvm-sparse"]
+MODELS = [
+    "full",
+    "mvm",
+    "mvm-seed",
+    "mvm-seed-fixed",
+    "modal",
+    "interface",
+    "rigid",
+    "mvm-sparse",
+    "mvm-moving",
+]
 
 
 @click.command("run")

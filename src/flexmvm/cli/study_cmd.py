@@ -11,7 +11,7 @@ from flexmvm.cli.study_options import check_workers, study_output, study_run_opt
 # the values of flexmvm.bodies.build.ModelKind that retain nodes, spelled out so that
 # registering the command (every `flexmvm` command does) does not import the numerical
 # stages (1.2 s: flexmvm.scenarios; tests/test_warm_command.py checks they agree)
-RETAINING_MODELS = ["mvm", "mvm-seed", "mvm-seed-fixed", "mvm-sparse"]
+RETAINING_MODELS = ["mvm", "mvm-seed", "mvm-seed-fixed", "mvm-sparse", "mvm-moving"]
 
 
 @click.group("study")

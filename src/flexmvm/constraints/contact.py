@@ -100,6 +100,11 @@ class ContactProvider(Protocol):
         """Smallest predicted gap [m] within horizon_s at current velocities (step policy)."""
         ...
 
+    def rebind(self, index: int, body) -> None:
+        """Body ``index``'s basis changed (a moving region's window switch): the contact's
+        rows of its nodes gathered again from ``body``."""
+        ...
+
     def penetration(self, bodies, states, deep: bool = False, floors=None):
         """Deepest penetration per measured direction (contact.penetration.Penetration list) at
         `states`; None when the provider does not measure it (the driver then falls back on

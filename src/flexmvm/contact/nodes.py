@@ -59,6 +59,21 @@ class ContactNodes:
         if invalidate:
             self._last[2][0] = np.nan
 
+    def rebind(self, body) -> None:
+        """Gather the rows of the same nodes from ``body`` (another basis of the same mesh: a
+        moving region's window switch, integrate/moving_region.py); the last update forgotten and
+        the version advanced (projections kept for the old rows are not reused)."""
+        self.nq = body.nq
+        self._gather(body, len(self.nodes))
+        self.version[0] += 1
+        self._last = (
+            np.zeros(self.nq),
+            np.zeros(6 + self.nq),
+            np.full(12, np.nan),
+            np.zeros(2),
+            self.version,
+        )
+
     def _gather(self, body, n: int) -> None:
         self.psi_c = np.zeros((0, 3, 0))
         self.indptr = np.zeros(3 * n + 1, dtype=np.int64)

@@ -243,6 +243,14 @@ class PointToSurfaceContact:
             raise SolverError(f"{self._who}: " + _failure(status, facet))
         return n
 
+    def rebind(self, index: int, body) -> None:
+        """Body ``index``'s basis changed (a moving region's switch): its nodes' psi rows here
+        and in the penetration measure gathered again from ``body``, in place."""
+        for nodes, which in ((self._s, self.slave), (self._m, self.master)):
+            if which == index:
+                nodes.rebind(body)
+        self._measure.rebind(index, body)
+
     def min_gap_ahead(self, bodies, states, horizon_s: float) -> float:
         speed = self._kinematics(states, lambda v: self.search_radius + v * horizon_s)
         if self._scan(states, self.search_radius + speed * horizon_s) == 0:

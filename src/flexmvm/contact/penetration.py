@@ -169,6 +169,13 @@ class SurfaceMeasure:
                 )
             )
 
+    def rebind(self, index: int, body) -> None:
+        """Body ``index``'s basis changed: its nodes' psi rows gathered again (a ContactNodes
+        shared with the pair is gathered twice, to the same rows)."""
+        for nodes, which in ((self._s, self.slave), (self._m, self.master)):
+            if which == index:
+                nodes.rebind(body)
+
     def measure(
         self, states, deep: bool = False, floors=None
     ) -> list[tuple[int, int, Penetration]]:

@@ -138,10 +138,7 @@ def window_kinematics_memo(
         for i in range(3):
             same = same and same_bits(A[i], last_frame[3 + 3 * i : 6 + 3 * i])
         same = (
-            same
-            and same_bits(r, last_frame[0:3])
-            and same_bits(q, last_q)
-            and same_bits(v, last_v)
+            same and same_bits(r, last_frame[0:3]) and same_bits(q, last_q) and same_bits(v, last_v)
         )
     if same:
         return last_out[0], last_out[1]

@@ -91,6 +91,7 @@ def simulate(
     check_overlap: bool = True,
     integrator: IntegratorFactory | None = None,
     on_step: Callable[[AcceptedStep], None] | None = None,
+    switches=None,
 ) -> RunResult:
     """Integrate from t0 over grid.t_end_s; returns histories at every output time.
 
@@ -108,10 +109,17 @@ def simulate(
 
     BLAS runs single-threaded inside the loop: its operations are small (vectors of nq,
     matrices of a few hundred), where thread start-up costs more than it saves, and on a
-    loaded machine far more (docs/notes/2026-11-27-comment-measurements.md)."""
+    loaded machine far more (docs/notes/2026-11-27-comment-measurements.md).
+
+    switches: a moving region (integrate.moving_region.MovingRegion) asked after every accepted
+    step whether its body switches window (after_step -> (system, states) or None); at a
+    switch the integrator is made again for the new system; its guard (outside_stop) stops
+    the run as plastic_outside does."""
     make = integrator if integrator is not None else moreau_jean(exploit_nonrotating)
     with threadpool_limits(limits=1, user_api="blas"):
-        return _simulate(system, states, grid, probes, progress, t0, make, on_step, check_overlap)
+        return _simulate(
+            system, states, grid, probes, progress, t0, make, on_step, check_overlap, switches
+        )
 
 
 class _Tally:
@@ -214,7 +222,7 @@ class _Tally:
 
 
 def _simulate(
-    system, states, grid, probes, progress, t0, make_integrator, on_step, check_overlap
+    system, states, grid, probes, progress, t0, make_integrator, on_step, check_overlap, switches
 ) -> RunResult:
     n_ticks, out_ticks, k_max = grid.ticks()
     fine_ticks = grid.contact_output_ticks()
@@ -264,19 +272,22 @@ def _simulate(
         stop = plastic.outside_stop() if plastic is not None else None
         if stop is not None:  # a reduced plastic body's zone left its region (plastic_outside)
             fail(f"at t = {t + h:.6g} s (step {tally.n_steps}): {stop}")
+        if switches is not None:  # a moving region's window switch (integrate/moving_region.py)
+            moved = switches.after_step(t + h, system, states, parts[-1][2])
+            if switches.outside_stop() is not None:
+                fail(f"at t = {t + h:.6g} s (step {tally.n_steps}): {switches.outside_stop()}")
+            if moved is not None:
+                system, states = moved
+                integ = _rebound(system, make_integrator(system, grid), rec, pen, tally)
         tick += span
         fine = fine_ticks is not None and level == 0 and tick % fine_ticks == 0
         if tick % out_ticks == 0 or tick >= n_ticks or fine:
             span_t = (tick - last_out) * dt
             last_out = tick
             rec.record(
-                t0 + tick * dt,
-                states,
-                tally.impulse / span_t,
-                tally.jimpulse / span_t,
-                integ.carried,
-                integ.carried_products,
-            )
+                t0 + tick * dt, states, tally.impulse / span_t, tally.jimpulse / span_t,
+                integ.carried, integ.carried_products,
+            )  # fmt: skip
             try:
                 _check_finite(rec.rows[-1], system, t0 + tick * dt)
             except SolverError as exc:
@@ -287,6 +298,14 @@ def _simulate(
             bar.update(min(tick, n_ticks), tally.n_steps)
     bar.close()
     return tally.result(rec, integ, wall0)
+
+
+def _rebound(system, integ, rec, pen, tally):
+    """integ, the integrator made for ``system`` after a window switch, with the recorder,
+    the penetration measure and the energy ledger pointed at the new system and integrator."""
+    rec.system = pen.system = tally.ledger.system = system
+    tally.ledger.carried, tally.ledger.fresh = integ.carried, integ.carried_state
+    return integ
 
 
 def _or_fail(fail, tally, t_s: float, fn, *args):

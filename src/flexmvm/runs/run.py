@@ -102,7 +102,14 @@ def run_scenario(
     whose summary has ``status = "failed"`` and the reason in ``failure``."""
     built = build_scenario(sc, setup)
     try:
-        res = simulate(built.system, built.states, built.grid, built.probes, progress=progress)
+        res = simulate(
+            built.system,
+            built.states,
+            built.grid,
+            built.probes,
+            progress=progress,
+            switches=built.switches,  # a moving region (assembly/moving_region.py)
+        )
     except SimulationFailed as exc:
         if not isinstance(exc.partial, RunResult):
             raise

@@ -45,6 +45,7 @@ from flexmvm.scenarios.fields import (
     check_rod_set,
 )
 from flexmvm.scenarios.initial_motion import RigidMotionConfig
+from flexmvm.scenarios.moving_schema import MovingKey
 from flexmvm.scenarios.plasticity_schema import (
     PlasticitySpec,
     PlasticOutside,
@@ -224,6 +225,8 @@ class ModelConfig(Frozen):
     # computed); an elastic body ignores both
     plastic_tangent: PlasticTangentKey = False
     plastic_outside: PlasticOutsideKey = PlasticOutside.WARN
+    # the windows of a moving region (kind mvm-moving; scenarios/moving_schema.py)
+    moving: MovingKey = None
 
     @field_validator("selection")
     @classmethod
@@ -238,7 +241,7 @@ class ModelConfig(Frozen):
         if self.selection is not None and self.region is not None:
             raise problem("give selection or region, not both", "region")
         kind = self.kind.value
-        if self.kind.retains_nodes and self.retained is None:
+        if self.kind.retains_nodes and self.retained is None and not self.moves:
             raise problem(f"kind {kind!r} needs selection = 'i-j' or a region", "selection")
         if self.kind.uses_modes and self.modes < 1:
             raise problem(f"must be >= 1 for kind {kind!r}, got {self.modes}", "modes")
@@ -254,6 +257,11 @@ class ModelConfig(Frozen):
             if self.mode_pool is not None and self.mode_pool < self.modes:
                 raise problem(f"must be >= modes = {self.modes}, got {self.mode_pool}", "mode_pool")
         return self
+
+    @property
+    def moves(self) -> bool:
+        """A moving region: kind mvm-moving with its windows (``moving``) given."""
+        return self.kind.value == "mvm-moving" and self.moving is not None
 
     def interface_spec(self) -> InterfaceSpec:
         """The reduction.interface.InterfaceSpec of the interface kind's keys."""

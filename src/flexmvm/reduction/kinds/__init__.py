@@ -10,6 +10,7 @@ from flexmvm.reduction.kinds import (
     interface,
     modal,
     mvm,
+    mvm_moving,
     mvm_seed,
     mvm_seed_fixed,
     mvm_sparse,
@@ -32,6 +33,7 @@ register_kind(mvm_seed_fixed.SPEC)
 register_kind(modal.SPEC)
 register_kind(interface.SPEC)
 register_kind(rigid.SPEC)
+register_kind(mvm_moving.SPEC)
 
 __all__ = [
     "KINDS",

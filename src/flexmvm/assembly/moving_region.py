@@ -1,0 +1,96 @@
+"""A scenario body as a moving region (issue 53 item 1; integrate/moving_region.py,
+reduction/kinds/mvm_moving.py): ``model.kind = "mvm-moving"`` with ``[bodies.model.moving]``
+(scenarios/moving_schema.py). Its FE model and reference condition (its supports, or its
+reference) come from the setup cache, the windows are made along the node set ``path`` and
+the body starts on the window nearest its first contact (the path's start by default);
+build_scenario keeps the MovingRegion as the run's ``switches`` (simulate)."""
+
+from __future__ import annotations
+
+import time
+
+import numpy as np
+
+from flexmvm.assembly.body_build import BodyInfo
+from flexmvm.assembly.body_reference import reference_label
+from flexmvm.assembly.build_cache import SetupCache
+from flexmvm.assembly.cache_keys import mesh_key
+from flexmvm.assembly.supports import bedded_key, clamp_label
+from flexmvm.errors import InputError, MeshError
+from flexmvm.integrate.moving_region import MovingRegion
+from flexmvm.reduction.kinds.mvm_moving import MovingWindows, moving_windows
+
+
+def moving_setup(cfg, supports, setup) -> MovingWindows:
+    """The windows of body ``cfg`` (its model's ``moving`` and ``modes``) on its FE model
+    under its supports' condition (or its reference's), through ``setup``."""
+    mv, where = cfg.model.moving, f"bodies[{cfg.name}].model.moving"
+    mesh = setup.mesh(mesh_key(cfg))
+    fe_key = bedded_key(mesh_key(cfg), cfg, supports)
+    fe = setup.fe_model(fe_key, cfg.material_obj())
+    label = clamp_label(cfg, mesh, supports) or reference_label(
+        cfg.model.reference, mesh, (), f"bodies[{cfg.name}].model.reference"
+    )
+    reference = setup.reference_condition(fe_key, mesh, label)
+    try:
+        path = mesh.node_set(mv.path)
+    except MeshError as exc:
+        raise InputError(f"{where}.path: {exc}") from None
+    return moving_windows(
+        fe,
+        reference,
+        path,
+        cfg.model.modes,
+        mv.spacing_m,
+        mv.half_width_m,
+        mv.s_range_m,
+    )
+
+
+def moving_body(cfg, supports, setup, index: int, start_s: float | None = None):
+    """(the first window's body, its MovingRegion) of body ``cfg``, the ``index``-th of its
+    scenario; every window's basis and parts made now (the region's ``setup_cpu_s``: CPU [s])."""
+    c0 = time.process_time()
+    windows = moving_setup(cfg, supports, setup)
+    start = 0 if start_s is None else windows.nearest(start_s)
+    region = MovingRegion(index, windows, cfg.name, start, cfg.model.moving.outside)
+    for k in range(len(windows.centres)):
+        region.body(k)
+    region.setup_cpu_s = time.process_time() - c0
+    return region.body(start), region
+
+
+def covered_nodes(region: MovingRegion, path_nodes: np.ndarray) -> np.ndarray:
+    """The nodes the windows cover together and the path's held nodes (on a support, left out
+    of the windows) within the covered interval: the validity guard's covered nodes."""
+    w = region.windows
+    X = w.factor.fe.mesh.nodes[path_nodes]
+    s = (X - w.path.origin) @ w.path.axis
+    lo, hi = w.covered
+    held = path_nodes[(s >= lo) & (s <= hi) & ~np.isin(path_nodes, w.path.nodes)]
+    return np.unique(np.concatenate([held, *(w.nodes(k) for k in range(len(w.centres)))]))
+
+
+def moving_body_info(cfg, sc, setup: SetupCache, index: int, switches: MovingRegion | None):
+    """(body, BodyInfo, MovingRegion) of the moving region ``cfg``, the index-th body of
+    scenario ``sc``; InputError for a second one (a run drives one)."""
+    if switches is not None:
+        raise InputError(
+            f"bodies[{cfg.name}].model.moving: a second moving region (body "
+            f"{switches.name!r} is one); expected one per scenario"
+        )
+    body, region = moving_body(cfg, sc.supports, setup, index)
+    mesh = setup.mesh(mesh_key(cfg))
+    covered = covered_nodes(region, mesh.node_set(cfg.model.moving.path))
+    info = BodyInfo(
+        cfg.name,
+        cfg.model.kind,
+        mesh,
+        cfg.material_obj(),
+        body.nv,
+        len(covered),
+        cfg.model.modes,
+        None,
+        covered,
+    )
+    return body, info, region
