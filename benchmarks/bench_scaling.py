@@ -4,7 +4,8 @@ scaling table of docs/performance.md in one command.
 
     python benchmarks/bench_scaling.py [--far-mm 10,4,2.5,2,1.7,1.2,1] [--nodes
         10,100,1000,3000,10000] [--steps 20] [--work DIR] [--dense-limit 4000]
-        [--memory-limit-gb 8] [--json FILE] [--markdown FILE]
+        [--memory-limit-gb 8] [--json FILE] [--markdown FILE] [--sweeps body,region]
+        [--no-warm-up]
 
 The part: a 100 x 100 x 4 mm aluminium plate clamped on its sides, gmsh tet10, 0.2 mm within
 1 mm of its centre and --far-mm elsewhere (one plate per value), struck at its centre by a rigid
@@ -15,7 +16,7 @@ Two sweeps, every case a process of its own (FLEXMVM_NO_CACHE=1: set-up measured
 after a two-step run of each kind on the coarsest plate that compiles the kernels:
 - body size: each plate in full FE and as mvm-sparse with the region of the first --nodes
   count of at least 100 nodes + 60 modes;
-- region size: the --far-mm plate nearest 48,000 DOF in full FE (from the first sweep), as
+- region size: the --far-mm plate nearest 48,000 DOF (its full FE the reference), as
   mvm-sparse and as mvm for every --nodes count (the region: the ball about the contact
   point holding that many mesh nodes; mvm skipped above --dense-limit retained DOF, its dense
   matrices growing as their square).
@@ -362,6 +363,8 @@ def main() -> None:
     ap.add_argument("--memory-limit-gb", type=float, default=8.0)
     ap.add_argument("--json", default=None)
     ap.add_argument("--markdown", default=None)
+    ap.add_argument("--sweeps", default="body,region", help="of body,region")
+    ap.add_argument("--no-warm-up", action="store_true", help="kernels compiled already")
     args = ap.parse_args()
     work = Path(args.work or tempfile.mkdtemp(prefix="flexmvm-scaling-"))
     work.mkdir(parents=True, exist_ok=True)
@@ -370,26 +373,35 @@ def main() -> None:
     fars = [float(x) for x in args.far_mm.split(",")]
     counts = [int(x) for x in args.nodes.split(",")]
     plate, ball = meshes(work, max(fars))
-    for kind in ("full", "mvm-sparse", "mvm"):  # numba compiles here, not in the timed runs
-        _run(kind, plate, ball, radius_for(plate, 100), 2)
+    if not args.no_warm_up:  # numba compiles here, not in the timed runs
+        for kind in ("full", "mvm-sparse", "mvm"):
+            _run(kind, plate, ball, radius_for(plate, 100), 2)
     first = next((n for n in counts if n >= 100), counts[0])
-    pairs = body_sweep(args, work, fars, first)
-    ref = min(pairs, key=lambda p: abs(math.log(p[2] / 48000.0)))
-    plate, ball = meshes(work, ref[0]["far_mm"])
-    rows = region_sweep(args, plate, ball, counts)
+    pairs, rows, text = [], [], ""
+    if "body" in args.sweeps:
+        pairs = body_sweep(args, work, fars, first)
+        text += (
+            f"Body size (mvm-sparse: the ~{first} nodes about the contact + 60 modes; "
+            f"{args.steps} steps of 0.5 us; floor at {STREAM_BYTES_PER_S / 1e9:g} GB/s):\n\n"
+            + body_table(pairs)
+        )
+    if "region" in args.sweeps:  # the plate nearest 48,000 DOF, its full FE as the reference
+        far = min(fars, key=lambda f: abs(math.log(mesh_dof(meshes(work, f)[0]) / 48000.0)))
+        plate, ball = meshes(work, far)
+        ref = _run("full", plate, ball, 0.0, args.steps)
+        print(_line(ref), flush=True)
+        rows = region_sweep(args, plate, ball, counts)
+        text += (
+            f"\n\nRegion size on the {mesh_dof(plate):,}-DOF plate ({far:g} mm):\n\n"
+            + region_table(ref, rows)
+        )
     load1 = os.getloadavg()
-    text = (
-        f"Body size (mvm-sparse: the ~{first} nodes about the contact + 60 modes; "
-        f"{args.steps} steps of 0.5 us; floor at {STREAM_BYTES_PER_S / 1e9:g} GB/s):\n\n"
-        + body_table(pairs)
-        + f"\n\nRegion size on the {ref[2]:,}-DOF plate ({ref[0]['far_mm']:g} mm):\n\n"
-        + region_table(ref[0], rows)
-    )
     print(f"load at the end {load1}\n\n{text}")
     if args.markdown:
         Path(args.markdown).write_text(text + "\n")
     if args.json:
-        settings = {k: getattr(args, k) for k in ("far_mm", "nodes", "steps", "dense_limit")}
+        keys = ("far_mm", "nodes", "steps", "dense_limit", "sweeps")
+        settings = {k: getattr(args, k) for k in keys}
         settings["memory_limit_gb"] = args.memory_limit_gb
         scripts = [Path(__file__), Path(__file__).with_name("bench_ring_body.py")]
         record = {
