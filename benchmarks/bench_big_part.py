@@ -3,6 +3,7 @@ reduced (its own model, kind mvm-sparse), and a region of ~3,000 retained nodes 
 
     python benchmarks/bench_big_part.py [--work DIR] [--skip-full] [--big-radius-mm 1.25]
         [--t-end-us T]
+        [--cases cold,warm,big-cold,big-warm] [--memory-limit-gb 8]
 
 Every case is a process of its own, run one after the other (never two at once: full FE
 takes ~10 GB): full FE (FLEXMVM_NO_CACHE=1); the reduced model cold (an empty setup cache in
@@ -10,7 +11,8 @@ takes ~10 GB): full FE (FLEXMVM_NO_CACHE=1); the reduced model cold (an empty se
 the run loads its parts); with --cases big-cold,big-warm the big region (--big-radius-mm:
 2,967 nodes, 944 on its ring, a corner of ~2,900 columns; its cold set-up holds the exterior
 rows of the corner twice, ~20 bytes an entry: ~15 GB beside K_EE's factor, more than this
-2-core, 23 GB machine has free beside other jobs: not measured here). Prints the CPU,
+2-core, 23 GB machine has free beside other jobs: region_estimate reads the ring off the
+mesh and big-cold runs only if its estimated peak is under --memory-limit-gb). Prints the CPU,
 the commit, per case the set-up and simulation wall and CPU times (time.process_time: every
 thread of the process), the peak RSS after the set-up and at the end, the resident set when
 the run starts, and against full FE the simulation ratio, the memory ratio, the force NCC and
@@ -79,6 +81,43 @@ def _sample_rss(every_s: float = 0.05) -> None:
             time.sleep(every_s)
 
     threading.Thread(target=sample, daemon=True).start()
+
+
+def region_estimate(radius_m: float, modes: int = 60) -> dict:
+    """The cold set-up's peak [bytes] of the ball region of ``radius_m`` about the top face's
+    centre, read off the mesh (no FE model): its nodes, its ring (the retained nodes sharing an
+    element with the rest), the corner n_c = 3 ring + modes and the exterior's n_i DOFs. The
+    basis's solve holds K_EE's factor (FACTOR_BYTES, measured: the 75-node region's basis
+    stage peaked at 4.7 GB with a 0.5 GB corner), the ring's right-hand sides and their
+    solutions (8 bytes an entry each); ring_psi then holds B (8) and psi (12) beside the FE
+    model (FE_BYTES). assembly/cost.py does not cost kind mvm-sparse (cost_columns None)."""
+    import meshio
+    import numpy as np
+
+    mesh = meshio.read(SCENARIO.parent / "meshes" / PLATE_MESHES[0][0])
+    tets = np.vstack([c.data for c in mesh.cells if c.data.shape[1] == 10])
+    inside = np.zeros(mesh.points.shape[0], bool)
+    used = np.unique(tets)
+    inside[used] = np.linalg.norm(mesh.points[used], axis=1) <= radius_m
+    mixed = inside[tets].any(axis=1) & (~inside[tets]).any(axis=1)
+    ring = np.unique(tets[mixed][inside[tets[mixed]]]).size
+    n_i = FREE_DOF - 3 * int(inside.sum())
+    n_c = 3 * ring + modes
+    solve = FACTOR_BYTES + 2 * 8.0 * n_i * 3 * ring
+    psi = 20.0 * n_i * n_c
+    return {
+        "nodes": int(inside.sum()),
+        "ring": ring,
+        "corner": n_c,
+        "exterior_dof": n_i,
+        "peak_bytes": FE_BYTES + max(solve, psi),
+    }
+
+
+#: The plate's DOFs free of the clamp, the FE model's and K_EE's factor's resident bytes
+#: (docs/notes/2026-11-29-big-part.md: the model assembled at 1.3 GB, the 75-node region's
+#: basis stage at 4.7 GB).
+FREE_DOF, FE_BYTES, FACTOR_BYTES = 263_685, 1.3e9, 3.0e9
 
 
 def child(kind: str, radius_m: float, t_end: float, out: Path) -> None:
@@ -176,6 +215,7 @@ def main() -> None:
     ap.add_argument("--cases", default="cold,warm", help="of cold,warm,big-cold,big-warm")
     ap.add_argument("--big-radius-mm", type=float, default=1.25)  # ~3,000 nodes
     ap.add_argument("--t-end-us", type=float, default=0.0, help="0: the scenario's")
+    ap.add_argument("--memory-limit-gb", type=float, default=8.0, help="big-cold above: no run")
     args = ap.parse_args()
     work = Path(args.work or tempfile.mkdtemp(prefix="flexmvm-bigpart-"))
     work.mkdir(parents=True, exist_ok=True)
@@ -206,6 +246,12 @@ def main() -> None:
         (f"region {args.big_radius_mm:g} mm warm", args.big_radius_mm * 1e-3, "big"),
     ]
     chosen = args.cases.split(",")
+    if "big-cold" in chosen:
+        est = region_estimate(args.big_radius_mm * 1e-3)
+        print(f"region {args.big_radius_mm:g} mm estimated: {est}", flush=True)
+        if est["peak_bytes"] > args.memory_limit_gb * 1e9:
+            print(f"  over --memory-limit-gb {args.memory_limit_gb:g}: not run", flush=True)
+            chosen = [c for c in chosen if not c.startswith("big")]
     names = ("cold", "warm", "big-cold", "big-warm")
     for name, (label, radius, cache) in zip(names, cases, strict=True):
         if name not in chosen:
