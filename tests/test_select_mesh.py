@@ -395,8 +395,9 @@ def test_region_case_keeps_the_scenarios_allow_costly(scenario_file, monkeypatch
     that this 960-DOF beam's top face (costlier than full FE, module doc of the node-set test)
     is refused as a large body's would be; the run stops right after the build (no time
     step): 8 s at load 5, most of it the first build of the beam."""
+    from flexmvm.assembly import cost
     from flexmvm.assembly.build import build_scenario
-    from flexmvm.scenarios import cost, run
+    from flexmvm.runs import run
     from flexmvm.studies import region_families as regions
     from flexmvm.studies.region_families import RegionFamily, RegionGrid, run_region_case
 

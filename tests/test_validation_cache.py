@@ -11,7 +11,8 @@ import pytest
 
 import flexmvm.runs.run as run_module
 from flexmvm.errors import StaleDataWarning
-from flexmvm.scenarios import ModelConfig, load_scenario, provenance, scenario_from_dict
+from flexmvm.runs import provenance
+from flexmvm.scenarios import ModelConfig, load_scenario, scenario_from_dict
 from tools import validation
 
 TINY = Path(__file__).parent / "data" / "tiny_impact.toml"
