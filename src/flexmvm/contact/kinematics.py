@@ -51,18 +51,26 @@ def frame_kinematics(X, u, ud, r, A, v, s, x, xd):
     (max |xd component| [m/s], max |u| [m])."""
     vmax = 0.0
     umax = 0.0
-    w0, w1, w2 = v[3], v[4], v[5]
     for c in range(X.shape[0]):
-        s0, s1, s2 = X[c, 0] + u[c, 0], X[c, 1] + u[c, 1], X[c, 2] + u[c, 2]
-        s[c, 0], s[c, 1], s[c, 2] = s0, s1, s2
-        l0 = w1 * s2 - w2 * s1 + ud[c, 0]
-        l1 = w2 * s0 - w0 * s2 + ud[c, 1]
-        l2 = w0 * s1 - w1 * s0 + ud[c, 2]
-        for i in range(3):
-            x[c, i] = r[i] + (s0 * A[i, 0] + s1 * A[i, 1] + s2 * A[i, 2])
-            xd[c, i] = v[i] + (l0 * A[i, 0] + l1 * A[i, 1] + l2 * A[i, 2])
-            vmax = max(vmax, abs(xd[c, i]))
-        umax = max(umax, np.sqrt(u[c, 0] ** 2 + u[c, 1] ** 2 + u[c, 2] ** 2))
+        vmax, umax = node_frame(X, u, ud, r, A, v, c, s, x, xd, vmax, umax)
+    return vmax, umax
+
+
+@numba.njit(cache=True)
+def node_frame(X, u, ud, r, A, v, c, s, x, xd, vmax, umax):
+    """frame_kinematics for node c alone; returns (vmax, umax) raised by its |xd| components
+    and its |u| (the running maxima of the caller's loop)."""
+    w0, w1, w2 = v[3], v[4], v[5]
+    s0, s1, s2 = X[c, 0] + u[c, 0], X[c, 1] + u[c, 1], X[c, 2] + u[c, 2]
+    s[c, 0], s[c, 1], s[c, 2] = s0, s1, s2
+    l0 = w1 * s2 - w2 * s1 + ud[c, 0]
+    l1 = w2 * s0 - w0 * s2 + ud[c, 1]
+    l2 = w0 * s1 - w1 * s0 + ud[c, 2]
+    for i in range(3):
+        x[c, i] = r[i] + (s0 * A[i, 0] + s1 * A[i, 1] + s2 * A[i, 2])
+        xd[c, i] = v[i] + (l0 * A[i, 0] + l1 * A[i, 1] + l2 * A[i, 2])
+        vmax = max(vmax, abs(xd[c, i]))
+    umax = max(umax, np.sqrt(u[c, 0] ** 2 + u[c, 1] ** 2 + u[c, 2] ** 2))
     return vmax, umax
 
 
@@ -120,6 +128,18 @@ def body_kinematics_memo(
     of these inputs only, so they are then already there. version[0] counts the updates that
     computed (what was kept for the positions, ProjectionMemo, is valid while it stands).
     Returns (max |xd component| [m/s], max |u| [m]), as body_kinematics."""
+    if unchanged(q, v, r, A, last_q, last_v, last_frame):
+        return last_out[0], last_out[1]
+    vmax, umax = body_kinematics(
+        X, psi_c, indptr, indices, data, dense, q, v, r, A, u, ud, s, x, xd
+    )
+    remember(q, v, r, A, vmax, umax, last_q, last_v, last_frame, last_out, version)
+    return vmax, umax
+
+
+@numba.njit(cache=True)
+def unchanged(q, v, r, A, last_q, last_v, last_frame):
+    """q, v, r and A are bit for bit those last remembered (body_kinematics_memo)."""
     same = q.shape[0] == last_q.shape[0] and v.shape[0] == last_v.shape[0]
     if same:
         for i in range(3):
@@ -127,11 +147,13 @@ def body_kinematics_memo(
         same = (
             same and same_bits(r, last_frame[0:3]) and same_bits(q, last_q) and same_bits(v, last_v)
         )
-    if same:
-        return last_out[0], last_out[1]
-    vmax, umax = body_kinematics(
-        X, psi_c, indptr, indices, data, dense, q, v, r, A, u, ud, s, x, xd
-    )
+    return same
+
+
+@numba.njit(cache=True)
+def remember(q, v, r, A, vmax, umax, last_q, last_v, last_frame, last_out, version):
+    """An update computed from q, v, r, A gave (vmax, umax): kept for the next unchanged()
+    (a q or v of another length is not kept: NaN in last_frame), version advanced."""
     version[0] += 1
     if q.shape[0] == last_q.shape[0] and v.shape[0] == last_v.shape[0]:
         last_q[:] = q
@@ -142,4 +164,3 @@ def body_kinematics_memo(
         last_out[0], last_out[1] = vmax, umax
     else:
         last_frame[0] = np.nan
-    return vmax, umax

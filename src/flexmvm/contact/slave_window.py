@@ -37,7 +37,7 @@ from typing import TYPE_CHECKING
 import numba
 import numpy as np
 
-from flexmvm.contact.kinematics import same_bits
+from flexmvm.contact.kinematics import node_frame, remember, unchanged
 
 if TYPE_CHECKING:
     from flexmvm.contact.nodes import ContactNodes
@@ -91,18 +91,8 @@ def _frame_rows(X, u, ud, r, A, v, rows, s, x, xd):
     [m/s], max |u| [m]) over them."""
     vmax = 0.0
     umax = 0.0
-    w0, w1, w2 = v[3], v[4], v[5]
     for c in rows:
-        s0, s1, s2 = X[c, 0] + u[c, 0], X[c, 1] + u[c, 1], X[c, 2] + u[c, 2]
-        s[c, 0], s[c, 1], s[c, 2] = s0, s1, s2
-        l0 = w1 * s2 - w2 * s1 + ud[c, 0]
-        l1 = w2 * s0 - w0 * s2 + ud[c, 1]
-        l2 = w0 * s1 - w1 * s0 + ud[c, 2]
-        for i in range(3):
-            x[c, i] = r[i] + (s0 * A[i, 0] + s1 * A[i, 1] + s2 * A[i, 2])
-            xd[c, i] = v[i] + (l0 * A[i, 0] + l1 * A[i, 1] + l2 * A[i, 2])
-            vmax = max(vmax, abs(xd[c, i]))
-        umax = max(umax, np.sqrt(u[c, 0] ** 2 + u[c, 1] ** 2 + u[c, 2] ** 2))
+        vmax, umax = node_frame(X, u, ud, r, A, v, c, s, x, xd, vmax, umax)
     return vmax, umax
 
 
@@ -133,28 +123,12 @@ def window_kinematics_memo(
     (last_q, last_v, last_frame, last_out, version), as there), else the window's rows.
     Returns (max |xd component| [m/s], max |u| [m]) over the window."""
     last_q, last_v, last_frame, last_out, version = last
-    same = q.shape[0] == last_q.shape[0] and v.shape[0] == last_v.shape[0]
-    if same:
-        for i in range(3):
-            same = same and same_bits(A[i], last_frame[3 + 3 * i : 6 + 3 * i])
-        same = (
-            same and same_bits(r, last_frame[0:3]) and same_bits(q, last_q) and same_bits(v, last_v)
-        )
-    if same:
+    if unchanged(q, v, r, A, last_q, last_v, last_frame):
         return last_out[0], last_out[1]
     vmax, umax = rows_kinematics(
         X, psi_c, indptr, indices, data, dense, q, v, r, A, rows, u, ud, s, x, xd
     )
-    version[0] += 1
-    if q.shape[0] == last_q.shape[0] and v.shape[0] == last_v.shape[0]:
-        last_q[:] = q
-        last_v[:] = v
-        last_frame[0:3] = r
-        for i in range(3):
-            last_frame[3 + 3 * i : 6 + 3 * i] = A[i]
-        last_out[0], last_out[1] = vmax, umax
-    else:
-        last_frame[0] = np.nan
+    remember(q, v, r, A, vmax, umax, last_q, last_v, last_frame, last_out, version)
     return vmax, umax
 
 
