@@ -195,3 +195,26 @@ def test_stiffness_table_is_its_record():
     record = json.loads((DOCS / "seed_reproduction" / "stiffness.json").read_text())
     missing = _missing(stiffness_table_rows(record))
     assert not missing, f"docs/seed_reproduction.md lacks the record's rows: {missing}"
+
+
+def test_seed_table_rows_read_every_column():
+    """The seed-mesh rows are made from the record's numbers: another peak is another row."""
+    v = {"ncc_force": 0.9245, "ncc_force_whole": 0.9864, "peak_err": 0.0714}
+    v |= {"impulse_err": -0.0082, "duration_err": -0.0272}
+    r = {
+        "model": "mvm-seed:1-1:37",
+        "dof": {"b2": 46},
+        "vs_full": v,
+        "vs_theory": {"ncc_force": 0.4625, "ncc_force_whole": 0.6164},
+        "max_contact_force_N": 755.6,
+        "contact_intervals_s": [[0.0, 4.23e-4]],
+        "max_penetration_m": 4.77e-8,
+    }
+    one = seed_mesh_table_rows({"body": "b2", "rows": [r]})[0]
+    assert one == (
+        "| eq. (4) 1-1 + 37 | 46 | 0.9245 / 0.9864 | +7.14 % | -0.82 % | -2.72 % | 755.6 N | "
+        "423.0 us | 4.8e-8 m | 0.4625 / 0.6164 |"
+    )
+    assert (
+        seed_mesh_table_rows({"body": "b2", "rows": [r | {"max_contact_force_N": 756.0}]})[0] != one
+    )
