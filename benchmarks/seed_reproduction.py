@@ -8,7 +8,8 @@
 
 SCENARIO defaults to scenarios/rod_impact_seed_mesh.toml. One reference run (BODY full FE, the
 other bodies as --other says), then one run per model of BODY: those of --models and the grid
-(every kind x layers x laps x modes). Each is compared with the reference (force NCC, peak,
+(every kind x layers x laps x modes). Each row carries its run's provenance stamp
+(runs.provenance.stamp: code, libraries, resolved scenario, mesh files). Each is compared with the reference (force NCC, peak,
 impulse and duration errors: runs.compare.compare_runs) and with the 1D wave-Hertz theory
 of the scenario (flexmvm theory); the reference too. Printed as a table and written to --json
 (numbers, settings, the git commit of the code). The grids of one kind are also
@@ -25,6 +26,7 @@ import time
 from pathlib import Path
 
 from flexmvm.runs.compare import compare_runs
+from flexmvm.runs.provenance import stamp
 from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import ModelConfig, full, load_scenario
 from flexmvm.studies.grid import study_scenario
@@ -43,7 +45,7 @@ def _model(text: str, reference: str) -> ModelConfig:
     return ModelConfig(kind=kind, selection=sel, modes=int(modes), reference=reference)
 
 
-def _row(label: str, run, ref_curves, theory) -> dict:
+def _row(label: str, sc, run, ref_curves, theory) -> dict:
     s = run.summary
     curves = run.result.curves()
     row = {
@@ -57,6 +59,7 @@ def _row(label: str, run, ref_curves, theory) -> dict:
         "energy_rel_error": s["energy_rel_error"],
         "wall_time_s": s["wall_time_s"],
         "n_steps": s["n_steps"],
+        "provenance": stamp(sc),
     }
     if ref_curves is not None:
         row["vs_full"] = compare_runs(*ref_curves, *curves)
@@ -124,7 +127,7 @@ def main() -> None:
     ref_sc = base.with_model(args.body, full(reference=ref_set))
     ref = run_scenario(ref_sc, label="full")
     ref_curves = ref.result.curves()
-    rows = [_row("full", ref, None, theory)]
+    rows = [_row("full", ref_sc, ref, None, theory)]
     head = (
         f"{'model of ' + args.body:22s} {'DOF':>6s} {'NCC':>7s} {'peak':>9s} {'impulse':>9s} "
         f"{'duration':>9s} {'F_max N':>8s} {'end us':>7s} {'pen um':>8s} "
@@ -138,7 +141,7 @@ def main() -> None:
     print(_fmt(rows[0], args.body), flush=True)
     for text in models:
         sc = base.with_overrides(body_models={args.body: _model(text, ref_set)})
-        row = _row(text, run_scenario(sc, label=text), ref_curves, theory)
+        row = _row(text, sc, run_scenario(sc, label=text), ref_curves, theory)
         rows.append(row)
         print(_fmt(row, args.body), flush=True)
     out = {

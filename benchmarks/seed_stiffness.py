@@ -15,6 +15,9 @@ whole rod that every basis must carry) and the stiffness ratio to full FE. Full 
 reference: Craig-Bampton reproduces it exactly for loads on its retained nodes (its constraint
 modes are the static response); the seed's eq. (4) bases do not.
 
+Each mesh's record carries a provenance stamp (runs.provenance.script_stamp: code, libraries,
+this script, its settings and the run key of the scenario the rod is read from).
+
 Meshes: `seed` = scenarios/rod_impact_seed_mesh.toml's b2 (779 nodes), `default` =
 scenarios/rod_impact.toml's b2 (8,349 nodes).
 """
@@ -35,6 +38,7 @@ from flexmvm.fe.assembly import assemble
 from flexmvm.fe.modes import factor
 from flexmvm.reduction.basis import BasisKind, build_basis
 from flexmvm.reduction.rod_reference import rod_reference
+from flexmvm.runs.provenance import script_stamp, stamp
 from flexmvm.scenarios import load_scenario
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -125,6 +129,16 @@ def study(mesh_name: str, selections: list[tuple[int, int]], modes: int, a_m: fl
         "hertz_radius_m": a_m,
         "hertz_load_integrated_N": total,
         "rows": [],
+        "provenance": script_stamp(
+            Path(__file__),
+            {
+                "mesh": mesh_name,
+                "scenario_key": stamp(sc)["key"],
+                "modes": modes,
+                "selections": [f"{i}-{j}" for i, j in selections],
+                "hertz_radius_m": a_m,
+            },
+        ),
     }
     full = {}
     for name, f in loads.items():

@@ -68,3 +68,153 @@ def test_beam_table_rows_read_every_column():
     one = beam_table_rows({"rows": [r]})[0]
     assert one == "| MVM | 1.2-80.3 | 257.5 | 1.0000 / 1.0000 | -0.1 % | -0.0 % | 0.9997 / 0.9997 |"
     assert beam_table_rows({"rows": [r | {"peak_N": 258.0}]})[0] != one
+
+
+#: docs/seed_reproduction.md's names of benchmarks/seed_reproduction.py's model kinds
+SEED_KINDS = {"mvm-seed": "eq. (4)", "mvm-seed-fixed": "eq. (4)-fixed", "mvm": "CB"}
+SEED_PAGE = DOCS / "seed_reproduction.md"
+
+
+def _seed_name(model: str, with_modes: bool) -> str:
+    """'mvm-seed:1-1:37' -> 'eq. (4) 1-1 + 37' (or 'eq. (4) 1-1'); 'full' -> 'full FE'."""
+    if model == "full":
+        return "full FE"
+    kind, sel, modes = model.split(":")
+    return f"{SEED_KINDS[kind]} {sel}" + (f" + {modes}" if with_modes else "")
+
+
+def _sci(x: float, decimals: int = 1) -> str:
+    """4.7e-8 as the page writes it (no zero-padded exponent)."""
+    mant, exp = f"{x:.{decimals}e}".split("e")
+    return f"{mant}e{int(exp)}"
+
+
+def _nccs(v: dict) -> str:
+    """'contact / whole': force NCC over the contact window and over the run's window."""
+    return f"{v['ncc_force']:.4f} / {v['ncc_force_whole']:.4f}"
+
+
+def seed_mesh_table_rows(record: dict) -> list[str]:
+    """The seed-mesh model table of docs/seed_reproduction.md from its record
+    (docs/seed_reproduction/seed_mesh_1-1_37.json): NCC to four digits, errors in % to two,
+    forces to 0.1 N, the contact's end to 0.1 us (the step is 0.5 us)."""
+    rows = []
+    body = record["body"]
+    for r in record["rows"]:
+        v = r.get("vs_full")
+        errs = (
+            "- | - | - | -"
+            if v is None
+            else f"{_nccs(v)} | {100 * v['peak_err']:+.2f} % | "
+            f"{100 * v['impulse_err']:+.2f} % | {100 * v['duration_err']:+.2f} %"
+        )
+        end = 1e6 * r["contact_intervals_s"][0][1]
+        rows.append(
+            f"| {_seed_name(r['model'], True)} | {r['dof'][body]:,} | {errs} | "
+            f"{r['max_contact_force_N']:.1f} N | {end:.1f} us | {_sci(r['max_penetration_m'])} m | "
+            f"{_nccs(r['vs_theory'])} |"
+        )
+    return rows
+
+
+def default_mesh_table_rows(record: dict) -> list[str]:
+    """The default-mesh table of docs/seed_reproduction.md from its record
+    (docs/seed_reproduction/default_mesh_37modes.json): penetrations in um to two digits."""
+    rows = []
+    body = record["body"]
+    for r in record["rows"]:
+        pen = r["max_penetration_by_direction_m"]
+        depth = f"{1e6 * pen['b2 nodes into b1']:.2f} / {1e6 * pen['b1 nodes into b2']:.2f} um"
+        v = r.get("vs_full")
+        if v is None:
+            end = 1e6 * r["contact_intervals_s"][0][1]
+            cells = f"- | {r['max_contact_force_N']:.1f} N | {end:.0f} us"
+        else:
+            cells = f"{_nccs(v)} | {100 * v['peak_err']:+.2f} % | {100 * v['duration_err']:+.2f} %"
+        rows.append(f"| {_seed_name(r['model'], False)} | {r['dof'][body]:,} | {cells} | {depth} |")
+    return rows
+
+
+def _ratio(x: float) -> str:
+    return f"{x:.3f}" if x < 10 else f"{x:.1f}"
+
+
+#: the stiffness table's columns: (basis, selection) of docs/seed_reproduction/stiffness.json
+STIFF_COLUMNS = [
+    ("mvm", "1-1"),
+    ("mvm-seed", "1-1"),
+    ("mvm-seed-fixed", "1-1"),
+    ("mvm", "1-3"),
+    ("mvm-seed", "1-3"),
+    ("mvm-seed-fixed", "1-3"),
+    ("mvm-seed", "2-2"),
+    ("mvm-seed", "1-5"),
+]
+STIFF_ROWS = [
+    ("seed", "point", "seed, point on the centre node"),
+    ("default", "hertz", "default, Hertz pressure a = {a} mm"),
+    ("default", "point", "default, point on the centre node"),
+]
+
+
+def stiffness_table_rows(record: list) -> list[str]:
+    """The static stiffness table of docs/seed_reproduction.md from its record
+    (docs/seed_reproduction/stiffness.json): compliance to four digits, its local part to
+    three, the stiffness ratios to three decimals (one above 10)."""
+    meshes = {m["mesh"]: m for m in record}
+    rows = []
+    for mesh, load, label in STIFF_ROWS:
+        m = meshes[mesh]
+        by = {(r["basis"], r["selection"]): r for r in m["rows"]}
+        full = by[("full", "-")]
+        c, local = full[f"{load}_compliance_m_per_N"], full[f"{load}_local_m_per_N"]
+        ratios = " | ".join(_ratio(by[k][f"{load}_stiffness_vs_full"]) for k in STIFF_COLUMNS)
+        name = label.format(a=f"{1e3 * m['hertz_radius_m']:.3f}")
+        rows.append(f"| {name} | {_sci(c, 3)} m/N ({_sci(local, 2)}) | {ratios} |")
+    return rows
+
+
+def _missing(rows: list[str]) -> list[str]:
+    page = SEED_PAGE.read_text().replace("**", "")
+    return [row for row in rows if row not in page]
+
+
+def test_seed_mesh_table_is_its_record():
+    record = json.loads((DOCS / "seed_reproduction" / "seed_mesh_1-1_37.json").read_text())
+    missing = _missing(seed_mesh_table_rows(record))
+    assert not missing, f"docs/seed_reproduction.md lacks the record's rows: {missing}"
+
+
+def test_default_mesh_table_is_its_record():
+    record = json.loads((DOCS / "seed_reproduction" / "default_mesh_37modes.json").read_text())
+    missing = _missing(default_mesh_table_rows(record))
+    assert not missing, f"docs/seed_reproduction.md lacks the record's rows: {missing}"
+
+
+def test_stiffness_table_is_its_record():
+    record = json.loads((DOCS / "seed_reproduction" / "stiffness.json").read_text())
+    missing = _missing(stiffness_table_rows(record))
+    assert not missing, f"docs/seed_reproduction.md lacks the record's rows: {missing}"
+
+
+def test_seed_table_rows_read_every_column():
+    """The seed-mesh rows are made from the record's numbers: another peak is another row."""
+    v = {"ncc_force": 0.9245, "ncc_force_whole": 0.9864, "peak_err": 0.0714}
+    v |= {"impulse_err": -0.0082, "duration_err": -0.0272}
+    r = {
+        "model": "mvm-seed:1-1:37",
+        "dof": {"b2": 46},
+        "vs_full": v,
+        "vs_theory": {"ncc_force": 0.4625, "ncc_force_whole": 0.6164},
+        "max_contact_force_N": 755.6,
+        "contact_intervals_s": [[0.0, 4.23e-4]],
+        "max_penetration_m": 4.77e-8,
+    }
+    one = seed_mesh_table_rows({"body": "b2", "rows": [r]})[0]
+    assert one == (
+        "| eq. (4) 1-1 + 37 | 46 | 0.9245 / 0.9864 | +7.14 % | -0.82 % | -2.72 % | 755.6 N | "
+        "423.0 us | 4.8e-8 m | 0.4625 / 0.6164 |"
+    )
+    assert (
+        seed_mesh_table_rows({"body": "b2", "rows": [r | {"max_contact_force_N": 756.0}]})[0] != one
+    )
