@@ -44,26 +44,31 @@ def announce_recompute(message: str) -> None:
     warnings.warn(message, StaleDataWarning, stacklevel=3)
 
 
-def notes_as_lines() -> None:
-    """From now on show every StaleDataWarning of this process as one stderr line,
-    ``flexmvm: note: <message>``, not Python's two lines with the source line; other warnings
-    as before. The CLI calls it, and the worker processes of a run's main job."""
-    import sys
-    import warnings
+class _NotesHook:
+    """The warnings.showwarning notes_as_lines installs: a StaleDataWarning as one line,
+    every other warning through the hook it replaced (``previous``)."""
 
-    previous = warnings.showwarning
-    if getattr(previous, "flexmvm_notes", False):
-        return
+    def __init__(self, previous) -> None:
+        self.previous = previous
 
-    def show(message, category, filename, lineno, file=None, line=None):
+    def __call__(self, message, category, filename, lineno, file=None, line=None) -> None:
+        import sys
+
         if issubclass(category, StaleDataWarning):
             text = " ".join(str(message).split())
             print(f"flexmvm: note: {text}", file=sys.stderr if file is None else file, flush=True)
         else:
-            previous(message, category, filename, lineno, file, line)
+            self.previous(message, category, filename, lineno, file, line)
 
-    show.flexmvm_notes = True  # type: ignore[attr-defined]  # marks the installed hook
-    warnings.showwarning = show
+
+def notes_as_lines() -> None:
+    """From now on show every StaleDataWarning of this process as one stderr line,
+    ``flexmvm: note: <message>``, not Python's two lines with the source line; other warnings
+    as before. The CLI calls it, and the worker processes of a run's main job."""
+    import warnings
+
+    if not isinstance(warnings.showwarning, _NotesHook):  # installed once
+        warnings.showwarning = _NotesHook(warnings.showwarning)
 
 
 class OutputError(FlexmvmError, OSError):

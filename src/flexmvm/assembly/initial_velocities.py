@@ -55,7 +55,7 @@ def joint_pivot(group, bodies, states) -> np.ndarray:
     """The pivot of a scenario joint (its list of constraint objects): the position of its
     point on its first body (the first object's p1)."""
     first = group[0]
-    point = getattr(first, "p1", None)
+    point = first.pivot
     if point is None:
         raise InputError(f"a {type(first).__name__} has no pivot point to turn about")
     return np.asarray(point.position(bodies, states), float)

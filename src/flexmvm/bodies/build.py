@@ -91,7 +91,7 @@ def body_from_parts(
         parts.k_hat,
         mesh,
         c_hat,
-        getattr(basis.kind, "value", ""),
+        str(basis.kind),
         **fields,
     )
 

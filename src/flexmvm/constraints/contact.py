@@ -83,10 +83,12 @@ class ContactProvider(Protocol):
     """Every attribute and method the time step, the time loop and a run's report ask of a
     contact definition."""
 
+    name: str  # the contact's name (the first item of its rows' keys, the outputs' key)
     mu: float  # Coulomb friction coefficient of the contact (0: frictionless)
     law: ContactLaw  # the normal rows' law (its spec: law.spec, constraints/contact_laws/)
     slave: int  # the body of the slave nodes (index in System.bodies)
     master: int  # the body of the master facets
+    search_radius: float  # [m] the reach within which a pair is a candidate row
 
     def candidate_rows(self, bodies, states, h: float) -> ContactRows:
         """Rows of the pairs that may close within the coming step of size h [s]."""

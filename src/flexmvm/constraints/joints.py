@@ -14,6 +14,7 @@ from enum import StrEnum
 from typing import TypeGuard
 
 import numpy as np
+import scipy.sparse as sp
 
 from flexmvm.bodies.rotation import cross3
 from flexmvm.constraints.rows import Rows
@@ -111,9 +112,7 @@ class NodeSetPoint:
             raise InputError("a node-set point needs at least one node")
         idx = (3 * ids[:, None] + np.arange(3)).ravel()
         psi_bar = (
-            np.asarray(
-                body.psi[idx, :].todense() if hasattr(body.psi, "todense") else body.psi[idx, :]
-            )
+            np.asarray(body.psi[idx, :].todense() if sp.issparse(body.psi) else body.psi[idx, :])
             .reshape(len(ids), 3, body.nq)
             .mean(axis=0)
             if body.nq
@@ -169,6 +168,12 @@ class Joint:
     def time_rate(self, bodies, states, t: float) -> np.ndarray:
         return np.zeros(self.n_rows)
 
+    @property
+    def pivot(self) -> BodyPoint | NodeSetPoint | None:
+        """The body point the joint holds (its p1), which an initial spin of its body may
+        turn about; None for a joint without one (an orientation lock, a drive row)."""
+        return None
+
 
 @dataclass(frozen=True)
 class SphericalJoint(Joint):
@@ -177,6 +182,10 @@ class SphericalJoint(Joint):
     p1: BodyPoint | NodeSetPoint
     p2: Anchor
     n_rows: int = 3
+
+    @property
+    def pivot(self) -> BodyPoint | NodeSetPoint:
+        return self.p1
 
     def evaluate(self, bodies, states, t):
         phi = self.p1.position(bodies, states) - _anchor_position(self.p2, bodies, states)
@@ -196,6 +205,10 @@ class DistanceJoint(Joint):
     p2: Anchor
     length: float
     n_rows: int = 1
+
+    @property
+    def pivot(self) -> BodyPoint | NodeSetPoint:
+        return self.p1
 
     def __post_init__(self) -> None:
         if not self.length > 0:
@@ -220,6 +233,10 @@ class PrescribedMotion(Joint):
     x0: tuple[float, float, float]
     velocity: tuple[float, float, float]
     n_rows: int = 3
+
+    @property
+    def pivot(self) -> BodyPoint | NodeSetPoint:
+        return self.p1
 
     def evaluate(self, bodies, states, t):
         target = np.asarray(self.x0) + np.asarray(self.velocity) * t

@@ -38,6 +38,10 @@ class PrescribedPath(Joint):
     displacement: TimeFunction
     n_rows: int = 3
 
+    @property
+    def pivot(self) -> BodyPoint | NodeSetPoint:
+        return self.p1
+
     def __post_init__(self) -> None:
         d0 = np.asarray(self.displacement.value(0.0), float)
         if d0.shape != (3,):

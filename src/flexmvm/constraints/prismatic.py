@@ -34,6 +34,10 @@ class LineLock(Joint):
     normals: tuple[tuple[float, float, float], tuple[float, float, float]]
     n_rows: int = 2
 
+    @property
+    def pivot(self) -> BodyPoint | NodeSetPoint:
+        return self.p1
+
     def evaluate(self, bodies, states, t):
         d = self.p1.position(bodies, states) - np.asarray(self.origin, float)
         rows = Rows(2)

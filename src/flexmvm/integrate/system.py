@@ -40,6 +40,17 @@ class Load(Protocol):
         not rotate (integrate.moreau_jean.nonrotating) may take it."""
         ...
 
+    @property
+    def acted_on(self) -> frozenset[int]:
+        """The bodies the load acts on, whatever its value (a run's momentum report groups
+        the bodies that exchange momentum by them)."""
+        ...
+
+    def reset(self) -> None:
+        """Forget what the load keeps between its evaluations (at the start of a run,
+        loads.applied.start_run); nothing for a load that keeps nothing."""
+        ...
+
     def forces(self, bodies, states, t: float) -> dict[int, np.ndarray]:
         """{body: generalized force (6 + nq,)} at states (with velocities) and time t [s]."""
         ...

@@ -26,9 +26,7 @@ def start_run(loads) -> None:
     """Reset what a load keeps between its evaluations (the unwrapped angle of a revolute
     torque, loads.revolute) at the start of a run."""
     for load in loads:
-        reset = getattr(load, "reset", None)
-        if reset is not None:
-            reset()
+        load.reset()
 
 
 def midpoint_states(states, v_plus, h: float, theta: float) -> list:

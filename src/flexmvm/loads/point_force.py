@@ -72,6 +72,13 @@ class PointForce:
         integrate.moreau_jean.nonrotating may take it)."""
         return not self.follower
 
+    @property
+    def acted_on(self) -> frozenset[int]:
+        return frozenset({self.point.body})
+
+    def reset(self) -> None:
+        """Nothing kept between evaluations."""
+
     def forces(self, bodies, states, t: float) -> dict[int, np.ndarray]:
         """{body: generalized force (6 + nq,)} at the states (with their velocities) and t."""
         f = self.force_n.at(t)
@@ -103,6 +110,13 @@ class BodyTorque:
     @property
     def state_independent(self) -> bool:
         return not self.follower
+
+    @property
+    def acted_on(self) -> frozenset[int]:
+        return frozenset({self.body})
+
+    def reset(self) -> None:
+        """Nothing kept between evaluations."""
 
     def forces(self, bodies, states, t: float) -> dict[int, np.ndarray]:
         """{body: generalized force (6 + nq,)}: A^T tau (or tau) on the omega rows."""

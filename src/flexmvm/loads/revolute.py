@@ -61,6 +61,11 @@ class RevoluteAxis:
         A2 = states[body2].A if body2 is not None else np.eye(3)
         return cls(body1, body2, A1.T @ a, A1.T @ b, A2.T @ b)
 
+    @property
+    def bodies(self) -> frozenset[int]:
+        """The bodies the axis joins (body 2 None: the ground, not a body)."""
+        return frozenset(b for b in (self.body1, self.body2) if b is not None)
+
     def reset(self) -> None:
         """Start a run: the angle is unwrapped from (-pi, pi] again (loads.applied.start_run)."""
         self.last[0] = 0.0
@@ -121,6 +126,10 @@ class RotationalSpring:
     external = False
     state_independent = False
 
+    @property
+    def acted_on(self) -> frozenset[int]:
+        return self.axis.bodies
+
     def reset(self) -> None:
         self.axis.reset()
 
@@ -158,6 +167,10 @@ class MotorTorque:
 
     external = False
     state_independent = False
+
+    @property
+    def acted_on(self) -> frozenset[int]:
+        return self.axis.bodies
 
     def reset(self) -> None:
         self.axis.reset()

@@ -71,6 +71,14 @@ class PointSpring:
     def state_independent(self) -> bool:
         return False
 
+    @property
+    def acted_on(self) -> frozenset[int]:
+        ends = (self.p1, self.p2)
+        return frozenset(p.body for p in ends if isinstance(p, (BodyPoint, NodeSetPoint)))
+
+    def reset(self) -> None:
+        """Nothing kept between evaluations."""
+
     def _geometry(self, bodies, states) -> tuple[float, np.ndarray, Rows]:
         """(length l [m], unit e (3,), the row J of l)."""
         p2 = self.p2

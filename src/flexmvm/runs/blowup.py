@@ -48,12 +48,9 @@ def _pairs_between(built, a: str, b: str) -> list[tuple[str, str, str, float]]:
     names = [i.name for i in built.info]
     out = []
     for c in built.system.contacts:
-        s, m = getattr(c, "slave", None), getattr(c, "master", None)
-        if s is None or m is None:
-            continue
+        s, m = c.slave, c.master
         if {names[s], names[m]} == {a, b}:
-            name = getattr(c, "name", f"{names[s]}->{names[m]}")
-            out.append((name, names[s], names[m], float(getattr(c, "search_radius", np.inf))))
+            out.append((c.name, names[s], names[m], float(c.search_radius)))
     return out
 
 

@@ -4,6 +4,7 @@ contact-duration errors (seed section 3.1; NCC alone is blind to scale and offse
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 
@@ -63,6 +64,14 @@ class RunComparison:
         return out
 
 
+@runtime_checkable
+class CurveSource(Protocol):
+    """What compare reads of a run (flexmvm.run's Run, a RunResult, a stored result): its
+    (t, contact force, {probe: velocity}) curves along an axis."""
+
+    def curves(self, axis=0) -> tuple: ...
+
+
 def _curves(run, axis: int | str | None = None) -> tuple:
     if isinstance(run, tuple) and len(run) == 3:
         if axis not in (None, 0, "x"):
@@ -71,7 +80,7 @@ def _curves(run, axis: int | str | None = None) -> tuple:
                 f"expected axis 0 with it, got {axis!r}"
             )
         return run
-    if hasattr(run, "curves"):
+    if isinstance(run, CurveSource):
         return run.curves(axis)
     raise InputError(
         f"compare: received {type(run).__name__}, expected a run (flexmvm.run), "

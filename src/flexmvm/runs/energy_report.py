@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from flexmvm.integrate.energy_ledger import load_label
+from flexmvm.integrate.system import StoringLoad
 
 #: relative size below which the sum of a joint row's translational parts is zero (round-off)
 CANCEL_TOL = 1e-12
@@ -58,7 +59,7 @@ def energy_ledger_summary(res, built) -> dict:
     springs = {
         n: float(led.load_energy[-1, k])
         for k, n in enumerate(led.load_names)
-        if hasattr(built.system.loads[k], "energy")
+        if isinstance(built.system.loads[k], StoringLoad)
     }
     return {
         "energy_ledger": {
@@ -109,23 +110,13 @@ def _links(system, states) -> list[set[int]]:
     for load in system.loads:
         links.append(_load_bodies(load))
     for c in system.contacts:
-        pair = {getattr(c, "slave", None), getattr(c, "master", None)}
-        links.append(set(range(len(system.bodies))) if None in pair else pair)
+        links.append({c.slave, c.master})
     return links
 
 
 def _load_bodies(load) -> set[int]:
-    """The bodies a load acts on, from its points and axis (whatever its value at t = 0)."""
-    found = set()
-    for name in ("p1", "p2", "point"):
-        b = getattr(getattr(load, name, None), "body", None)
-        if b is not None:
-            found.add(b)
-    axis = getattr(load, "axis", None)
-    if axis is not None:
-        found |= {b for b in (axis.body1, axis.body2) if b is not None}
-    body = getattr(load, "body", None)
-    return found | ({body} if isinstance(body, int) else set())
+    """The bodies a load acts on (its declared acted_on, whatever its value at t = 0)."""
+    return set(load.acted_on)
 
 
 def _components(n: int, links: list[set[int]]) -> list[set[int]]:
@@ -163,7 +154,7 @@ def momentum_report(res, built) -> tuple[str | None, dict]:
         reasons.append(f"joints[{k}] ({kind}) holds {who} to the ground, which exchanges momentum")
         held |= bodies
     for k, load in enumerate(system.loads):
-        if getattr(load, "external", True):
+        if load.external:
             who = ", ".join(repr(names[b]) for b in sorted(_load_bodies(load)))
             reasons.append(f"{load_label(k, load)} pushes {who} from outside")
             held |= _load_bodies(load)

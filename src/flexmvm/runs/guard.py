@@ -27,7 +27,7 @@ WARN_FRACTION = 0.01
 
 def _node_impulses(result, system) -> dict[int, dict[int, list[float]]]:
     """body index -> {node: [impulse [N s], first time [s]]} from the per-row record."""
-    providers = {getattr(c, "name", None): c for c in system.contacts}
+    providers = {c.name: c for c in system.contacts}
     out: dict[int, dict[int, list[float]]] = {}
 
     def add(body: int, node: int, x: float, t: float) -> None:

@@ -17,7 +17,7 @@ import numpy as np
 def _loaded_node(res, system, b: int) -> int | None:
     """The node of body b that carried the largest compressive contact impulse (as a slave
     node, or an equal share of a master facet), None if none."""
-    providers = {getattr(c, "name", None): c for c in system.contacts}
+    providers = {c.name: c for c in system.contacts}
     impulse: dict[int, float] = {}
     for key, (x, _) in res.contact_row_impulses.items():
         c = providers.get(key[0])

@@ -210,10 +210,11 @@ def check_load_references(loads, springs, joints, bodies, known_body) -> None:
     key)), body2 differs from body, ``joint`` is the index of a revolute [[joints]] entry."""
     for section, entries in (("loads", loads), ("springs", springs)):
         for i, e in enumerate(entries):
-            for key in ("body", "body2"):
-                if getattr(e, key, None) is not None:
-                    known_body(bodies, getattr(e, key), f"{section}[{i}].{key}")
-            if getattr(e, "body2", None) is not None and e.body2 == e.body:
+            body2 = e.body2 if isinstance(e, SpringConfig) else None  # a load has no body2
+            for key, name in (("body", e.body), ("body2", body2)):
+                if name is not None:
+                    known_body(bodies, name, f"{section}[{i}].{key}")
+            if body2 is not None and body2 == e.body:
                 raise problem(f"must differ from body {e.body!r}", f"{section}[{i}].body2")
             if e.joint is not None:
                 if e.joint >= len(joints):

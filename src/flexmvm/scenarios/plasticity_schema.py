@@ -49,7 +49,8 @@ class PlasticitySpec(Frozen):
 
 def plasticity_of(body) -> J2Plasticity | None:
     """The plasticity of a scenario body (a BodyConfig), None for an elastic one."""
-    spec = getattr(body.material, "plasticity", None)
+    material = body.material  # a preset's name (elastic) or an inline MaterialSpec
+    spec = None if isinstance(material, str) else material.plasticity
     return None if spec is None else spec.obj()
 
 

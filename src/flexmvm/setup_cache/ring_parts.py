@@ -51,7 +51,7 @@ def basis_identity(fe, basis) -> dict:
     return {
         "fe_sha256": _sha(fe.mesh.nodes, K.indptr, K.indices, K.data, Ms.indptr, Ms.data),
         "material": material_inputs(fe.material),
-        "kind": getattr(basis.kind, "value", str(basis.kind)),
+        "kind": str(basis.kind),
         "fixed_sha256": _sha(np.asarray(basis.reference.fixed_dofs, np.int64)),
         "retained": [int(k) for k in basis.retained_nodes],
         "n_modes": int(basis.n_modes),
