@@ -112,7 +112,7 @@ def test_slides_then_rolls_at_the_rigid_body_speed(rolling):
       the mesh's inertia 0.8 % below 2/5 m R^2 adds +0.23 %).
     - rolling holds: |slip| after t_r + 1 ms below 1e-3 v0 and its mean below 1e-4 v0 (a
       cone that let a sticking contact creep would show here). Measured 2.2e-5 v0 and
-      -6.8e-6 v0 as the run goes (its rolling steps cut to 12.5 us, see the xfail test
+      -6.8e-6 v0 as the run goes (its rolling steps cut to 6.25 us, see the xfail test
       below), 2.0e-4 v0 and -8.4e-6 v0 at h = 100 us uncut (the Coulomb floor removed by
       hand): the plate's ringing after a vertex impact."""
     res, m, I = rolling
@@ -140,7 +140,7 @@ def test_rolling_normal_force_and_friction_dissipation(rolling):
     3e-4 at h = 100 us uncut), its mean (vertex impacts and the plate's ringing after them
     included) within 0.5 % (measured -0.00 %; -0.04 % uncut, std 0.23 m g there: a vertex
     impact at 6.7 ms and the plate's step-to-step ringing after it, +-5 % decaying over
-    ~15 steps, against 6e-5 m g with the steps cut to 12.5 us).
+    ~15 steps, against 6e-5 m g with the steps cut to 6.25 us).
     The contact's work (integrate.energy_ledger) at the end, against the friction's
     dissipation (1/2) m v0^2 - (1/2)(m + I / R^2) v_r^2 with the mesh's inertia: within
     0.5 % (measured -0.29 %, -0.12 % uncut: the vertex impacts while sliding also take
