@@ -215,8 +215,16 @@ def solve_coulomb(
         m, n_eq, np.asarray(tangent, np.int64), np.asarray(mu, float), np.asarray(normal, np.int64)
     )
     e, u = slice(0, n_eq), slice(n_eq, m)
-    el = eliminate_equalities(D, c, n_eq)
-    Dp, cp = (0.5 * (el.D + el.D.T), el.c) if n_eq else (D, c)
+    # the equality rows scaled to a unit diagonal before their elimination (l_e = s_e l'_e):
+    # the Schur complement is the same, but the factor's regularisation (lcp.regularised_cho,
+    # _REG times the mean diagonal) is then ~_REG of every row's own scale; unscaled, a ground
+    # joint's rotational rows (~1e6) set the mean and shifted its translational rows (~1e2)
+    # by ~1e-8, which left a normal row at ~1e-8 of the velocity scale, above COULOMB_RTOL
+    # (docs/notes/2026-11-29-rolling-sphere.md)
+    s = np.ones(m)
+    s[e] = 1.0 / np.sqrt(np.maximum(np.diag(D)[e], 1e-300))
+    el = eliminate_equalities(D * np.outer(s, s), c * s, n_eq) if n_eq else None
+    Dp, cp = (0.5 * (el.D + el.D.T), el.c) if el is not None else (D, c)
     lu = np.zeros(m - n_eq)
     if warm is not None and len(warm) == m and np.isfinite(warm).all():
         lu = np.array(warm[n_eq:], dtype=float)
@@ -235,13 +243,13 @@ def solve_coulomb(
     )
     out = np.zeros(m)
     out[u] = lu
-    if n_eq:
-        out[e] = el.equalities(lu)
+    if el is not None:
+        out[e] = s[e] * el.equalities(lu)
         cho = el.cho
         assert cho is not None  # n_eq > 0: D_ee was factored (lcp.eliminate_equalities)
         # two refinement sweeps of the equalities with the true D (see lcp._refine)
         for _ in range(2):
-            out[e] -= cho_solve(cho, D[e] @ out + c[e])
+            out[e] -= s[e] * cho_solve(cho, s[e] * (D[e] @ out + c[e]))
     return out, sweeps
 
 
