@@ -67,3 +67,52 @@ def test_region_moving_options_and_errors(capsys):
     assert "Traceback" not in err
     with pytest.raises(Exception, match="no moving table"):
         estimate_moving_window(sc, "slider")
+
+
+def _moving_load(**moving):
+    """The shipped moving-load scenario, kind mvm-moving, its windows changed by ``moving``."""
+    import tomllib
+
+    import flexmvm as fm
+
+    with open(MOVING_LOAD, "rb") as f:
+        d = tomllib.load(f)
+    for b in d["bodies"]:
+        b["mesh_file"] = str(SCENARIOS / b["mesh_file"])
+    d["time"].update(t_end_s=1e-3)
+    d["bodies"][0]["model"]["kind"] = "mvm-moving"
+    d["bodies"][0]["model"]["moving"].update(moving)
+    return fm.scenario_from_dict(d)
+
+
+def test_moving_windows_in_the_setup_cache(tmp_path, monkeypatch):
+    """A moving region's setup is kept in the setup cache (a ``moving-`` entry): a second
+    setup of the same windows neither factors K_ff, nor computes modes, nor computes inertia
+    invariants (all three made to fail here), and its windows' bases and parts are those of
+    the first bit for bit (exact: the same columns and the same operations). Windows of 25 mm
+    (the estimate's) to keep it fast: ~1 s cold, ~0.5 s warm."""
+    import numpy as np
+
+    import flexmvm.integrate.moving_region as run_time
+    from flexmvm.assembly.build_cache import default_setup
+    from flexmvm.assembly.moving_region import moving_body
+    from flexmvm.reduction.kinds.mvm_moving import GlobalFactor
+
+    monkeypatch.setenv("FLEXMVM_CACHE_DIR", str(tmp_path))
+    sc, setup = _moving_load(half_width_m=0.025), default_setup()
+    cold = moving_body(sc.bodies[0], sc.supports, setup, 0)[1]
+    assert len(list(tmp_path.glob("moving-*.npz"))) == 1
+
+    def fails(*args, **kwargs):
+        raise AssertionError("a warm setup made this again")
+
+    monkeypatch.setattr(GlobalFactor, "of", classmethod(fails))
+    monkeypatch.setattr(run_time, "inertia_invariants", fails)
+    monkeypatch.setattr("flexmvm.reduction.kinds.mvm_moving.spd_solver", fails)
+    warm = moving_body(sc.bodies[0], sc.supports, setup, 0)[1]
+    assert len(warm.windows.centres) == len(cold.windows.centres) == 79
+    for k in range(79):
+        assert np.array_equal(warm.windows.basis(k).psi, cold.windows.basis(k).psi)
+        a, b = warm.parts[k], cold.parts[k]
+        assert np.array_equal(a.k_hat, b.k_hat) and np.array_equal(a.inv.M_qq, b.inv.M_qq)
+        assert np.array_equal(a.inv.G2[0][2], b.inv.G2[0][2])
