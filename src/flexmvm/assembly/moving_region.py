@@ -14,16 +14,28 @@ import numpy as np
 from flexmvm.assembly.body_build import BodyInfo
 from flexmvm.assembly.body_reference import reference_label
 from flexmvm.assembly.build_cache import SetupCache
-from flexmvm.assembly.cache_keys import mesh_key
+from flexmvm.assembly.cache_keys import mesh_key, mesh_source
 from flexmvm.assembly.supports import bedded_key, clamp_label
 from flexmvm.errors import InputError, MeshError
 from flexmvm.integrate.moving_region import MovingRegion
-from flexmvm.reduction.kinds.mvm_moving import MovingWindows, moving_windows
+from flexmvm.reduction.kinds.mvm_moving import GlobalFactor, MovingWindows, moving_windows
+from flexmvm.setup_cache.moving_entries import (
+    StoredWindows,
+    load_moving,
+    moving_key,
+    save_moving,
+)
 
 
 def moving_setup(cfg, supports, setup) -> MovingWindows:
     """The windows of body ``cfg`` (its model's ``moving`` and ``modes``) on its FE model
     under its supports' condition (or its reference's), through ``setup``."""
+    return _windows(cfg, supports, setup)[0]
+
+
+def _windows(cfg, supports, setup) -> tuple[MovingWindows, str | None, StoredWindows | None]:
+    """(windows, the setup-cache entry's key (None: not cached), the entry when stored):
+    moving_setup's windows, their factor from the entry when there is one."""
     mv, where = cfg.model.moving, f"bodies[{cfg.name}].model.moving"
     mesh = setup.mesh(mesh_key(cfg))
     fe_key = bedded_key(mesh_key(cfg), cfg, supports)
@@ -36,26 +48,39 @@ def moving_setup(cfg, supports, setup) -> MovingWindows:
         path = mesh.node_set(mv.path)
     except MeshError as exc:
         raise InputError(f"{where}.path: {exc}") from None
-    return moving_windows(
-        fe,
-        reference,
-        path,
-        cfg.model.modes,
-        mv.spacing_m,
-        mv.half_width_m,
-        mv.s_range_m,
+    source, modes = mesh_source(fe_key), cfg.model.modes
+    key = None
+    if source is not None:
+        shape = {"spacing_m": mv.spacing_m, "half_width_m": mv.half_width_m}
+        shape["s_range_m"] = None if mv.s_range_m is None else list(mv.s_range_m)
+        held = reference.fixed_dofs
+        key = moving_key(source, cfg.material_obj(), label, held, path, modes, shape)
+    stored = None if key is None else load_moving(key, fe.n_dof, modes)
+    factor = None
+    if stored is not None:
+        factor = GlobalFactor.stored(fe, reference, stored.phi, stored.freqs_hz, stored.columns)
+    windows = moving_windows(
+        fe, reference, path, modes, mv.spacing_m, mv.half_width_m, mv.s_range_m, factor
     )
+    return windows, key, stored
 
 
 def moving_body(cfg, supports, setup, index: int, start_s: float | None = None):
     """(the first window's body, its MovingRegion) of body ``cfg``, the ``index``-th of its
-    scenario; every window's basis and parts made now (the region's ``setup_cpu_s``: CPU [s])."""
+    scenario; every window's basis and parts made now (the region's ``setup_cpu_s``: CPU [s]),
+    or read from the setup cache's ``moving-`` entry (setup_cache/moving_entries.py; stored
+    when made)."""
     c0 = time.process_time()
-    windows = moving_setup(cfg, supports, setup)
+    windows, key, stored = _windows(cfg, supports, setup)
     start = 0 if start_s is None else windows.nearest(start_s)
     region = MovingRegion(index, windows, cfg.name, start, cfg.model.moving.outside)
+    if stored is not None:
+        region.parts.update(stored.parts)
     for k in range(len(windows.centres)):
         region.body(k)
+    if key is not None and stored is None:
+        f = windows.factor
+        save_moving(key, f.phi, f.freqs_hz, f.columns, region.parts)
     region.setup_cpu_s = time.process_time() - c0
     return region.body(start), region
 

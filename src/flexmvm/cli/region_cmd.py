@@ -47,6 +47,20 @@ import click
     default=None,
     help="Index of the contact in the scenario [default: the body's first].",
 )
+@click.option(
+    "--moving",
+    "moving",
+    default=None,
+    help="Size a moving region's windows along this node set instead [default: the body's "
+    "model.moving.path, when it has one]: studies/moving_window.py.",
+)
+@click.option(
+    "--force",
+    "force_n",
+    type=float,
+    default=None,
+    help="Contact force [N] of a moving region's contact, instead of the partner's force loads.",
+)
 @click.option("--json", "as_json", is_flag=True, help="Print the estimate as JSON.")
 def command(
     scenario: Path,
@@ -56,16 +70,23 @@ def command(
     speed: float | None,
     modes: int | None,
     contact: int | None,
+    moving: str | None,
+    force_n: float | None,
     as_json: bool,
 ) -> None:
     """Estimate the region BODY needs: a ball about the expected first contact point of
     radius a + h (a the Hertz contact radius of the expected impact, h the size of the
     contact facets within a; or --factor x a), its nodes, DOF and memory against full FE.
-    Prints the scenario's `region` line to use."""
+    Prints the scenario's `region` line to use. For a moving region (the body's model has a
+    `moving` table, or --moving PATH): the windows' spacing and half width (a + h + the
+    switch's hysteresis) and the `moving` line to use."""
     from flexmvm.scenarios import load_scenario
     from flexmvm.studies.region_estimate import estimate_region
 
     sc = load_scenario(scenario)
+    if moving is not None or sc.body(body).model.moving is not None:
+        _moving(sc, body, moving, force_n, radius_mm, contact, as_json)
+        return
     est = estimate_region(
         sc,
         body,
@@ -82,3 +103,23 @@ def command(
         click.echo(line)
     c = ", ".join(f"{a:.6g}" for a in est.centre_m)
     click.echo(f"region = {{ ball = {{ centre_m = [{c}], radius_m = {est.radius_m:.4g} }} }}")
+
+
+def _moving(sc, body, path, force_n, radius_mm, contact, as_json: bool) -> None:
+    """The moving region's windows (studies/moving_window.py), printed."""
+    from flexmvm.studies.moving_window import estimate_moving_window
+
+    est = estimate_moving_window(
+        sc,
+        body,
+        path=path,
+        force_n=force_n,
+        radius_m=None if radius_mm is None else radius_mm * 1e-3,
+        contact=contact,
+    )
+    if as_json:
+        click.echo(json.dumps(est.as_dict(), indent=2))
+        return
+    for line in est.lines():
+        click.echo(line)
+    click.echo(est.key())

@@ -32,13 +32,12 @@ from enum import Enum
 import numpy as np
 import scipy.linalg as sla
 import scipy.sparse as sp
-from threadpoolctl import threadpool_limits
 
 from flexmvm.bodies.build import BodyParts, body_from_parts
 from flexmvm.bodies.invariants import inertia_invariants
 from flexmvm.bodies.rotation import cross3
 from flexmvm.integrate.state import BodyState
-from flexmvm.reduction.kinds.mvm_moving import MovingWindows
+from flexmvm.reduction.kinds.mvm_moving import MovingWindows, one_blas_thread
 
 #: The switch's hysteresis: the contact centre must pass the half spacing by this fraction of
 #: the spacing before the body switches (no switching back and forth at a boundary)
@@ -89,6 +88,7 @@ class MovingRegion:
         self.index, self.windows, self.name = index, windows, name
         self.window, self.outside, self.hysteresis = start, MovingOutside(outside), hysteresis
         self._bodies: dict[int, object] = {}
+        self.parts: dict[int, BodyParts] = {}  # each window's parts (made, or from the cache)
         self.switches: list[Switch] = []
         self.uncovered: str | None = None  # the guard's message, once the contact left
         self.centres: list[tuple[float, float]] = []  # (t, s) of the contact centre
@@ -96,14 +96,16 @@ class MovingRegion:
         self.setup_cpu_s = 0.0  # CPU [s] of the windows' setup, when its maker measured it
 
     def body(self, k: int):
-        """The FlexibleBody of window k (its parts made on first use)."""
+        """The FlexibleBody of window k (its parts made on first use unless ``parts`` holds
+        them: a setup-cache entry)."""
         if k not in self._bodies:
             fe = self.windows.factor.fe
-            with threadpool_limits(limits=1, user_api="blas"):  # small products, shared cores
+            with one_blas_thread():  # small products, shared cores
                 basis = self.windows.basis(k)
-                inv = inertia_invariants(fe.mesh.nodes, fe.M_scalar, basis.psi)
-                parts = BodyParts(inv, self.windows.stiffness(k))  # k_hat without K psi
-            self._bodies[k] = body_from_parts(self.name, fe.mesh, basis, parts)
+                if k not in self.parts:
+                    inv = inertia_invariants(fe.mesh.nodes, fe.M_scalar, basis.psi)
+                    self.parts[k] = BodyParts(inv, self.windows.stiffness(k))  # no K psi
+            self._bodies[k] = body_from_parts(self.name, fe.mesh, basis, self.parts[k])
         return self._bodies[k]
 
     # -- the driver's hook -------------------------------------------------------------------

@@ -9,7 +9,8 @@ elimination orders of large iteration matrices (``order-``: keyed by their spars
 and a Craig-Bampton basis's truncation guard (``truncation-``: keyed by its basis's inputs and
 its FE model's; it factors K_ii, which a warm run then does not) and the cost guard's counts of
 a full-FE body's factor (``factorcounts-``: keyed by its FE model's inputs; a symbolic
-analysis, setup_cache/guard_entries.py).
+analysis, setup_cache/guard_entries.py); and a moving region's global modes, static columns and
+windows' parts (``moving-``: setup_cache/moving_entries.py).
 
 An entry is one ``.npz`` file (``np.savez``, no pickles; sparse matrices as their CSR
 arrays) named ``<kind>-<key>.npz``. The key is a SHA-256 of the canonical JSON of every input

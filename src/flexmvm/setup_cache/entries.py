@@ -325,7 +325,7 @@ def cached_patch_statics(
     return static
 
 
-def _parts_arrays(parts: BodyParts) -> dict[str, np.ndarray]:
+def parts_arrays(parts: BodyParts) -> dict[str, np.ndarray]:
     """Arrays of an entry: mass (1,), S0, S1, G0, G1 (3, 3, nq), G2 (3, 3, nq, nq), M_qq, k_hat."""
     inv, nq = parts.inv, parts.inv.nq
     G1 = np.array([[inv.G1[a][b] for b in range(3)] for a in range(3)]).reshape(3, 3, nq)
@@ -342,7 +342,7 @@ def _parts_arrays(parts: BodyParts) -> dict[str, np.ndarray]:
     }
 
 
-def _parts_from(arrays: Mapping[str, np.ndarray], nq: int) -> BodyParts:
+def parts_from(arrays: Mapping[str, np.ndarray], nq: int) -> BodyParts:
     a = arrays
     shapes = {
         "mass": (1,),
@@ -383,10 +383,10 @@ def cached_body(
     if source is None or kind_spec(kind).nodal:  # sparse parts: not kept
         return build()
     key = body_key(source, material, kind, reference_set, reference, retained, n_modes, extra=extra)
-    hit = decoded(key, lambda arrays: _parts_from(arrays, nq))
+    hit = decoded(key, lambda arrays: parts_from(arrays, nq))
     if hit is not None:
         return hit
     parts = build()
     if parts.inv.Ms is None and not sp.issparse(parts.k_hat):
-        save(key, _parts_arrays(parts))
+        save(key, parts_arrays(parts))
     return parts

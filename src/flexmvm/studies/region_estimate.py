@@ -53,6 +53,7 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -69,7 +70,7 @@ from flexmvm.studies.impact_estimate import (
 from flexmvm.studies.mode_estimate import estimated_modes
 from flexmvm.theory.hertz import HertzImpact
 
-__all__ = ["RegionEstimate", "estimate_region"]
+__all__ = ["ContactGeometry", "RegionEstimate", "contact_geometry", "estimate_region"]
 
 
 @dataclass(frozen=True)
@@ -307,6 +308,50 @@ def _curvature(radius_m, xs, xp, point, n, label) -> tuple[float, tuple[float, f
     return radius_m, (radius_m, radius_m)
 
 
+@dataclass(frozen=True)
+class ContactGeometry:
+    """A body's contact at the initial placements (module doc, steps 1 to 3): its index,
+    partner and surface, the two bodies' configs, full-FE models and facet sets, their placed
+    nodes (global), the expected first contact point and outward normal (global), and the
+    equivalent curvature radius R_e and principal radii [m]."""
+
+    contact: int
+    partner: str
+    surface: str
+    cfg: Any
+    pcfg: Any
+    fe: Any
+    fs: Any
+    pfe: Any
+    pfs: Any
+    x: np.ndarray
+    px: np.ndarray
+    point: np.ndarray
+    normal: np.ndarray
+    radius_m: float
+    principal_radii_m: tuple[float, float]
+
+
+def contact_geometry(
+    sc: Scenario, body: str, contact: int | None, radius_m: float | None
+) -> ContactGeometry:
+    """The ContactGeometry of body ``body``'s contact ``contact`` (default: its first), R_e
+    fitted or ``radius_m`` when given; InputError as estimate_region."""
+    k = _contact_of(sc, body, contact)
+    where = f"contacts[{k}]"
+    surface, partner, other_surface = _sides(sc.contacts[k], body)
+    cfg, pcfg = sc.body(body), sc.body(partner)
+    fe, fs, pfe, pfs = _facet_sets(cfg, pcfg, surface, other_surface, where)
+    x = placed_nodes(cfg, fe.mesh.nodes)[0]
+    px = placed_nodes(pcfg, pfe.mesh.nodes)[0]
+    point, n = first_contact(x, fs, px, pfs)
+    label = f"{where}: {body}.{surface} and {partner}.{other_surface}"
+    R, principal = _curvature(radius_m, x[fs.nodes], px[pfs.nodes], point, n, label)
+    return ContactGeometry(
+        k, partner, surface, cfg, pcfg, fe, fs, pfe, pfs, x, px, point, n, R, principal
+    )
+
+
 def estimate_region(
     sc: Scenario,
     body: str,
@@ -337,16 +382,12 @@ def estimate_region(
             without curvature or bodies without closing speed, each saying what to give.
     """
     radius_m, speed_mps = _checked_options(factor, radius_m, speed_mps, modes)
-    k = _contact_of(sc, body, contact)
+    g = contact_geometry(sc, body, contact, radius_m)
+    k, partner, surface, cfg, pcfg = g.contact, g.partner, g.surface, g.cfg, g.pcfg
+    fe, fs, pfe, pfs, x, px = g.fe, g.fs, g.pfe, g.pfs, g.x, g.px
+    point, n, R, principal = g.point, g.normal, g.radius_m, g.principal_radii_m
+    A, r = placed_nodes(cfg, fe.mesh.nodes)[1:]
     where = f"contacts[{k}]"
-    surface, partner, other_surface = _sides(sc.contacts[k], body)
-    cfg, pcfg = sc.body(body), sc.body(partner)
-    fe, fs, pfe, pfs = _facet_sets(cfg, pcfg, surface, other_surface, where)
-    x, A, r = placed_nodes(cfg, fe.mesh.nodes)
-    px = placed_nodes(pcfg, pfe.mesh.nodes)[0]
-    point, n = first_contact(x, fs, px, pfs)
-    label = f"{where}: {body}.{surface} and {partner}.{other_surface}"
-    R, principal = _curvature(radius_m, x[fs.nodes], px[pfs.nodes], point, n, label)
     v = speed_mps
     who = f"{where}: {body} and {partner}"
     if v is None:

@@ -21,13 +21,14 @@ integrate/moving_region.py's MovingRegion on a MovingWindows made here (moving_w
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 import scipy.linalg as sla
-from threadpoolctl import threadpool_limits
+from threadpoolctl import ThreadpoolController
 
 from flexmvm.errors import InputError
 from flexmvm.fe.assembly import FEModel
@@ -37,6 +38,17 @@ from flexmvm.reduction.kinds.registry import ModelKind
 from flexmvm.reduction.kinds.spec import Basis, BasisRequest, NodesAndModes
 
 NAME = "mvm-moving"
+
+
+@functools.lru_cache(maxsize=1)
+def _controller() -> ThreadpoolController:
+    return ThreadpoolController()
+
+
+def one_blas_thread():
+    """A context of one BLAS thread, threadpoolctl's libraries looked up once (a
+    threadpool_limits looks them up at each call: 2.6 ms, 0.2 s over 79 windows)."""
+    return _controller().limit(limits=1, user_api="blas")
 
 
 @dataclass(frozen=True)
@@ -75,12 +87,20 @@ class GlobalFactor:
         free = reference.free_dofs(fe.n_dof)
         k_ff = fe.K[free][:, free]
         # no thread pool: the factor outlives this call (every window's solves use it)
-        with threadpool_limits(limits=1, user_api="blas"):
+        with one_blas_thread():
             solve = spd_solver(k_ff)
             lam, modes = shift_invert_modes(fe.M[free][:, free], k_ff, n_modes, 0.0, solve=solve)
         phi = np.zeros((fe.n_dof, n_modes))
         phi[free] = modes
         return cls(fe, reference, free, solve, phi, to_hz(lam))
+
+    @classmethod
+    def stored(cls, fe: FEModel, reference, phi, freqs_hz, columns: dict) -> GlobalFactor:
+        """The factor of a setup-cache entry (setup_cache/moving_entries.py): the modes and
+        the nodes' static columns as stored; K_ff factored only if a node not stored is
+        asked for (a warm run asks for none)."""
+        free = reference.free_dofs(fe.n_dof)
+        return cls(fe, reference, free, _LazySolve(fe, free), phi, freqs_hz, dict(columns))
 
     def attachment(self, nodes: np.ndarray) -> np.ndarray:
         """(n_dof, 3 n_w) static responses to unit loads at the nodes' DOFs (a held DOF
@@ -94,12 +114,12 @@ class GlobalFactor:
             ok = (pos < self.free.size) & (self.free[np.minimum(pos, self.free.size - 1)] == b)
             rhs = np.zeros((self.free.size, b.size))
             rhs[pos[ok], np.flatnonzero(ok)] = 1.0
-            out = np.zeros((self.fe.n_dof, b.size))
-            with threadpool_limits(limits=1, user_api="blas"):
+            out = np.zeros((self.fe.n_dof, b.size), order="F")
+            with one_blas_thread():
                 out[self.free] = np.asarray(self.solve(rhs)).reshape(self.free.size, b.size)
             for j, k in enumerate(new):
                 self.columns[k] = out[:, 3 * j : 3 * j + 3]
-        return np.hstack([self.columns[int(k)] for k in nodes])
+        return _columns_side_by_side([self.columns[int(k)] for k in nodes])
 
     def window_basis(self, nodes: np.ndarray) -> Basis:
         """The window of ``nodes``: span{attachment modes, Phi} in nodal form (module doc)."""
@@ -110,6 +130,32 @@ class GlobalFactor:
         psi, freqs, k_hat = nodal_form(self.fe, self.attachment(nodes), self.phi, node_dofs(nodes))
         basis = Basis(ModelKind(NAME), psi, nodes, self.phi.shape[1], self.reference, freqs)
         return basis, k_hat
+
+
+class _LazySolve:
+    """K_ff^-1 of a stored GlobalFactor, factored on the first call (one BLAS thread)."""
+
+    def __init__(self, fe: FEModel, free: np.ndarray):
+        self.fe, self.free = fe, free
+        self._solve: Callable[[np.ndarray], Any] | None = None
+
+    def __call__(self, rhs: np.ndarray):
+        solve = self._solve
+        if solve is None:
+            with one_blas_thread():
+                solve = self._solve = spd_solver(self.fe.K[self.free][:, self.free])
+        return solve(rhs)
+
+
+def _columns_side_by_side(blocks: list[np.ndarray]) -> np.ndarray:
+    """np.hstack(blocks) in Fortran order: each block's columns copied whole (a C-order
+    hstack of column blocks of 12,000 rows took 18 ms a window on the fine beam)."""
+    out = np.empty((blocks[0].shape[0], sum(b.shape[1] for b in blocks)), order="F")
+    j = 0
+    for b in blocks:
+        out[:, j : j + b.shape[1]] = b
+        j += b.shape[1]
+    return out
 
 
 def nodal_form(
@@ -128,19 +174,35 @@ def nodal_form(
         chol = sla.cho_factor(F)
     except np.linalg.LinAlgError:
         raise InputError("a moving window holds a DOF its reference condition holds") from None
-    T = sla.cho_solve(chol, statics.T).T
+    n_b, n_z = b.size, phi.shape[1]
+    psi = np.empty((statics.shape[0], n_b + n_z), order="F")
+    psi[:, :n_b] = statics
+    T = _right_solve(chol, psi[:, :n_b])
     T[b] = np.eye(b.size)
     Z = phi - T @ phi[b]
     Z[b] = 0.0
     m_z = Z.T @ (fe.M @ Z)
     k_z = Z.T @ (fe.K @ Z)
     lam, vec = sla.eigh(0.5 * (k_z + k_z.T), 0.5 * (m_z + m_z.T))
-    n_b, n_z = b.size, phi.shape[1]
     k_hat = np.zeros((n_b + n_z, n_b + n_z))
     f_inv = sla.cho_solve(chol, np.eye(n_b))
     k_hat[:n_b, :n_b] = 0.5 * (f_inv + f_inv.T)
     k_hat[n_b:, n_b:] = np.diag(lam)
-    return np.hstack([T, Z @ vec]), to_hz(np.maximum(lam, 0.0)), k_hat
+    if not np.shares_memory(T, psi):  # dtrsm solved on a copy
+        psi[:, :n_b] = T
+    psi[:, n_b:] = Z @ vec
+    return psi, to_hz(np.maximum(lam, 0.0)), k_hat
+
+
+def _right_solve(chol, S: np.ndarray) -> np.ndarray:
+    """S F^-1 in place of S (Fortran order), F = U^T U (cho_factor's upper U): two
+    triangular solves from the right (cho_solve on S^T copied S to its transpose's
+    layout: 9 ms a window on the fine beam)."""
+    U, lower = chol
+    X = sla.blas.dtrsm(1.0, U, S, side=1, lower=int(lower), trans_a=int(lower), overwrite_b=1)
+    return sla.blas.dtrsm(
+        1.0, U, X, side=1, lower=int(lower), trans_a=1 - int(lower), overwrite_b=1
+    )
 
 
 @dataclass(frozen=True)
@@ -227,6 +289,7 @@ def moving_windows(
     spacing_m: float,
     half_width_m: float,
     s_range: tuple[float, float] | None = None,
+    factor: GlobalFactor | None = None,
 ) -> MovingWindows:
     """The windows along the path of ``path_nodes``: centres every ``spacing_m`` from the
     path's first to its last s (or over s_range, [m] in the path's s), each holding the path
@@ -239,6 +302,7 @@ def moving_windows(
             f"moving windows: spacing {spacing_m!r} m and half width {half_width_m!r} m; "
             "expected spacing > 0 and half width >= spacing / 2"
         )
+    factor = GlobalFactor.of(fe, reference, n_modes) if factor is None else factor
     held = np.unique(np.asarray(reference.fixed_dofs, dtype=np.int64) // 3)
     whole = Path.along(fe.mesh.nodes, path_nodes)
     path = Path(**_restricted(whole, held))
@@ -250,9 +314,7 @@ def moving_windows(
     lo, hi = (path.s.min(), path.s.max()) if s_range is None else s_range
     count = max(int(np.ceil((hi - lo) / spacing_m - 1e-9)) + 1, 1)
     centres = lo + spacing_m * np.arange(count)
-    return MovingWindows(
-        GlobalFactor.of(fe, reference, n_modes), path, centres, spacing_m, half_width_m, span
-    )
+    return MovingWindows(factor, path, centres, spacing_m, half_width_m, span)
 
 
 def _restricted(path: Path, held: np.ndarray) -> dict:
