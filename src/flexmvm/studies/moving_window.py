@@ -23,6 +23,7 @@ the pressing force, not of an impact.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -75,7 +76,7 @@ class MovingWindowEstimate:
         )
 
     def as_dict(self) -> dict:
-        d = {k: getattr(self, k) for k in self.__dataclass_fields__}
+        d = dataclasses.asdict(self)
         d["needed_m"] = self.needed_m
         d["key"] = self.key()
         return d
