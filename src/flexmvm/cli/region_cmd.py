@@ -96,13 +96,20 @@ def command(
         modes=modes,
         contact=contact,
     )
+    c = ", ".join(f"{a:.6g}" for a in est.centre_m)
+    _echo(
+        est, as_json, f"region = {{ ball = {{ centre_m = [{c}], radius_m = {est.radius_m:.4g} }} }}"
+    )
+
+
+def _echo(est, as_json: bool, key_line: str) -> None:
+    """An estimate as JSON, or its lines and the scenario key line to paste."""
     if as_json:
         click.echo(json.dumps(est.as_dict(), indent=2))
         return
     for line in est.lines():
         click.echo(line)
-    c = ", ".join(f"{a:.6g}" for a in est.centre_m)
-    click.echo(f"region = {{ ball = {{ centre_m = [{c}], radius_m = {est.radius_m:.4g} }} }}")
+    click.echo(key_line)
 
 
 def _moving(sc, body, path, force_n, radius_mm, contact, as_json: bool) -> None:
@@ -117,9 +124,4 @@ def _moving(sc, body, path, force_n, radius_mm, contact, as_json: bool) -> None:
         radius_m=None if radius_mm is None else radius_mm * 1e-3,
         contact=contact,
     )
-    if as_json:
-        click.echo(json.dumps(est.as_dict(), indent=2))
-        return
-    for line in est.lines():
-        click.echo(line)
-    click.echo(est.key())
+    _echo(est, as_json, est.key())
