@@ -49,11 +49,21 @@ def test_the_mapping_renames_old_keys_and_keeps_new_ones():
     assert set(RENAMED_KEYS) == {"energy_conserving_scheme"}
 
 
-def test_a_run_written_before_the_rename_is_read_under_the_new_key(tmp_path):
-    """docs/validation/short_full (written with the old key) read by read_run."""
-    assert "energy_conserving_scheme" in json.loads((STORED / "summary.json").read_text())
-    d = tmp_path / "old_run"
+def _old_run(d: Path) -> Path:
+    """docs/validation/short_full copied to d with its summary written under the old key (as
+    runs before the rename have it; the stored case itself is rewritten by each validation)."""
     shutil.copytree(STORED, d)
+    path = d / "summary.json"
+    summary = json.loads(path.read_text())
+    summary["energy_conserving_scheme"] = summary.pop("contact_laws_add_no_energy")
+    path.write_text(json.dumps(summary, indent=2) + "\n")
+    return d
+
+
+def test_a_run_written_before_the_rename_is_read_under_the_new_key(tmp_path):
+    """A run written with the old key, read by read_run."""
+    d = _old_run(tmp_path / "old_run")
+    assert "energy_conserving_scheme" in json.loads((d / "summary.json").read_text())
     s = read_run(d).summary
     assert s["contact_laws_add_no_energy"] is True and "energy_conserving_scheme" not in s
 
@@ -62,8 +72,7 @@ def test_a_stored_run_is_read_under_the_new_key(monkeypatch, tmp_path):
     """runs.stored_run: a stored run that passes its check comes back with the new key."""
     from flexmvm.runs import stored_run
 
-    d = tmp_path / "stored"
-    shutil.copytree(STORED, d)
+    d = _old_run(tmp_path / "stored")
     monkeypatch.setattr(stored_run, "stored_run_problem", lambda d, sc: None)
     run = load_or_run(d, fm.load_scenario(TINY), "old", progress=False)
     assert run.summary["contact_laws_add_no_energy"] is True
