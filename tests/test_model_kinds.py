@@ -137,3 +137,18 @@ def test_a_kind_reusing_another_builder_names_its_own_bases():
     finally:
         unregister_kind("modal-variant")
     assert [b.label for b in built.system.bodies] == ["modal-variant", "modal-variant"]
+
+
+def test_a_registered_kind_is_a_choice_of_the_commands(toy_kind):
+    """`flexmvm run --model` reads the registry (cli/kind_choice.py): a kind registered by
+    register_kind alone is a choice, no CLI list edited; `select` takes the selectable ones."""
+    from flexmvm.cli.run_cmd import command as run_command
+    from flexmvm.cli.select_cmd import command as select_command
+
+    (model,) = [p for p in run_command.params if p.name == "model"]
+    assert toy_kind.value in model.type.choices
+    (kind,) = [p for p in select_command.params if p.name == "kind"]
+    assert toy_kind.value not in kind.type.choices  # not selectable (KindSpec's default)
+    assert "mvm" in kind.type.choices and "mvm-moving" not in kind.type.choices
+    unregister_kind(toy_kind.value)
+    assert toy_kind.value not in model.type.choices

@@ -94,9 +94,10 @@ def test_registering_the_commands_imports_no_numerical_stage():
 
 
 def test_the_study_kinds_are_the_retaining_model_kinds():
-    """The --kind choices of `flexmvm study materials`, spelled out in cli/study_cmd.py, are
-    the model kinds that retain nodes."""
-    from flexmvm.cli.study_cmd import RETAINING_MODELS
+    """The --kind choices of `flexmvm study materials` are the model kinds that retain nodes,
+    read from the registry (cli/kind_choice.py)."""
+    from flexmvm.cli.study_cmd import materials
     from flexmvm.scenarios import ModelKind
 
-    assert RETAINING_MODELS == [k.value for k in ModelKind if k.retains_nodes]
+    (kind,) = [p for p in materials.params if p.name == "kind"]
+    assert list(kind.type.choices) == [k.value for k in ModelKind if k.retains_nodes]

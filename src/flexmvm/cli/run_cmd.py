@@ -6,19 +6,7 @@ from pathlib import Path
 
 import click
 
-# the values of flexmvm.bodies.build.ModelKind, spelled out so that `--help` does not import
-# the numerical stages (tests/test_cli.py checks they agree)
-MODELS = [
-    "full",
-    "mvm",
-    "mvm-seed",
-    "mvm-seed-fixed",
-    "modal",
-    "interface",
-    "rigid",
-    "mvm-sparse",
-    "mvm-moving",
-]
+from flexmvm.cli.kind_choice import every_kind
 
 
 @click.command("run")
@@ -32,7 +20,7 @@ MODELS = [
 )
 @click.option(
     "--model",
-    type=click.Choice(MODELS),
+    type=every_kind(),
     default=None,
     help="Model of every non-rigid body (then no full-FE reference runs). Default: "
     "the scenario's models.",

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import click
 
+from flexmvm.cli.kind_choice import selectable_kinds
 from flexmvm.cli.study_options import check_workers, study_output, study_run_options
 from flexmvm.errors import InputError
 
@@ -72,7 +73,7 @@ def parse_point(text: str, name: str) -> list[float]:
 )
 @click.option(
     "--kind",
-    type=click.Choice(["mvm", "mvm-sparse", "mvm-seed", "mvm-seed-fixed"]),
+    type=selectable_kinds(),
     default="mvm",
     show_default=True,
     help="Model of the candidates: Craig-Bampton (mvm) or the seed's eq. (4) readings.",

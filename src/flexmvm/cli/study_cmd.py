@@ -6,12 +6,8 @@ from pathlib import Path
 
 import click
 
+from flexmvm.cli.kind_choice import retaining_kinds
 from flexmvm.cli.study_options import check_workers, study_output, study_run_options
-
-# the values of flexmvm.bodies.build.ModelKind that retain nodes, spelled out so that
-# registering the command (every `flexmvm` command does) does not import the numerical
-# stages (1.2 s: flexmvm.scenarios; tests/test_warm_command.py checks they agree)
-RETAINING_MODELS = ["mvm", "mvm-seed", "mvm-seed-fixed", "mvm-sparse", "mvm-moving"]
 
 
 @click.group("study")
@@ -41,7 +37,7 @@ def command() -> None:
 )
 @click.option(
     "--kind",
-    type=click.Choice(RETAINING_MODELS),
+    type=retaining_kinds(),
     default="mvm",
     show_default=True,
     help="Reduced model of BODY: Craig-Bampton (mvm) or the seed's eq. (4) readings.",

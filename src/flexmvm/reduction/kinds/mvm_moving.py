@@ -57,6 +57,7 @@ class MovingModes(NodesAndModes):
     at the window; no static columns. Not cut to fewer modes (the held modes depend on m)."""
 
     name: str = NAME
+    selectable: bool = False  # its windows follow a path: not a candidate of a selection
 
     def build_basis(self, request: BasisRequest) -> Basis:
         fe, ref = request.fe, request.reference

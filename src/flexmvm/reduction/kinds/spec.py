@@ -86,7 +86,8 @@ class ModelKindSpec(Protocol):
     not kept in the setup cache), uses_patches (model.patch_* keys: the interface kind),
     cuts_modes (a basis of fewer modes is the leading columns of one of more: a study's mode
     floor), clampable (its basis is built under a reference condition, which a clamp
-    replaces: scenarios/support_schema.py). Hooks: build_basis, n_static and retained_columns and modal_columns (the damping
+    replaces: scenarios/support_schema.py), selectable (`flexmvm select` builds candidates
+    of it: a node selection and a mode count). Hooks: build_basis, n_static and retained_columns and modal_columns (the damping
     hook: where its modal coordinates are) of a basis, cost_columns (the dense columns to
     cost, None: not costed), study_fields (the model of a study's 'kind:args' text),
     body_builder (None: bodies.build.body_from_parts on the cached parts; else called as
@@ -112,6 +113,8 @@ class ModelKindSpec(Protocol):
     def cuts_modes(self) -> bool: ...
     @property
     def clampable(self) -> bool: ...
+    @property
+    def selectable(self) -> bool: ...
     @property
     def body_builder(self) -> Callable[..., Any] | None: ...
 
@@ -143,6 +146,8 @@ class KindSpec:
     uses_patches: bool = False
     cuts_modes: bool = False
     clampable: bool = True
+    # `flexmvm select` builds its candidates (a node selection and a mode count) of this kind
+    selectable: bool = False
     body_builder: Callable[..., Any] | None = None
 
     def build_basis(self, request: BasisRequest) -> Basis:
@@ -175,6 +180,7 @@ class NodesAndModes(KindSpec):
     retains_nodes: bool = True
     uses_modes: bool = True
     reads_modes: bool = True
+    selectable: bool = True
 
     def cost_columns(self, n_retained: int, n_modes: int) -> int | None:
         return 3 * n_retained + n_modes
