@@ -17,44 +17,30 @@ import numpy as np
 @numba.njit(cache=True, fastmath={"reassoc", "contract"})
 def dense_displacements(psi_c, q, qd, u, ud):
     """u = psi_k q, ud = psi_k qd (n_c, 3) for the gathered rows psi_c (n_c, 3, nq)."""
-    for c in range(psi_c.shape[0]):
-        node_dense_displacements(psi_c, c, q, qd, u, ud)
-
-
-@numba.njit(cache=True, fastmath={"reassoc", "contract"}, inline="always")
-def node_dense_displacements(psi_c, c, q, qd, u, ud):
-    """dense_displacements for node c alone."""
-    nq = psi_c.shape[2]
-    for j in range(3):
-        a = 0.0
-        b = 0.0
-        for k in range(nq):
-            p = psi_c[c, j, k]
-            a += p * q[k]
-            b += p * qd[k]
-        u[c, j] = a
-        ud[c, j] = b
+    n, _, nq = psi_c.shape
+    for c in range(n):
+        for j in range(3):
+            a = 0.0
+            b = 0.0
+            for k in range(nq):
+                p = psi_c[c, j, k]
+                a += p * q[k]
+                b += p * qd[k]
+            u[c, j] = a
+            ud[c, j] = b
 
 
 @numba.njit(cache=True)
 def csr_displacements(indptr, indices, data, q, qd, u, ud):
     """As dense_displacements for psi rows in CSR form (3 n_c rows, row 3 c + j)."""
-    for c in range((len(indptr) - 1) // 3):
-        node_csr_displacements(indptr, indices, data, c, q, qd, u, ud)
-
-
-@numba.njit(cache=True, inline="always")
-def node_csr_displacements(indptr, indices, data, c, q, qd, u, ud):
-    """csr_displacements for node c alone (rows 3 c + j)."""
-    for j in range(3):
-        row = 3 * c + j
+    for row in range(len(indptr) - 1):
         a = 0.0
         b = 0.0
         for e in range(indptr[row], indptr[row + 1]):
             a += data[e] * q[indices[e]]
             b += data[e] * qd[indices[e]]
-        u[c, j] = a
-        ud[c, j] = b
+        u[row // 3, row % 3] = a
+        ud[row // 3, row % 3] = b
 
 
 @numba.njit(cache=True)
@@ -70,7 +56,7 @@ def frame_kinematics(X, u, ud, r, A, v, s, x, xd):
     return vmax, umax
 
 
-@numba.njit(cache=True, inline="always")
+@numba.njit(cache=True)
 def node_frame(X, u, ud, r, A, v, c, s, x, xd, vmax, umax):
     """frame_kinematics for node c alone; returns (vmax, umax) raised by its |xd| components
     and its |u| (the running maxima of the caller's loop)."""

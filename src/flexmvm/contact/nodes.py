@@ -100,13 +100,44 @@ class ContactNodes:
         when st holds the values of the last update). Returns (largest velocity component
         [m/s], largest displacement |u| [m]). With a window (set_rows) only its nodes are
         moved, and the maxima are theirs."""
-        args = (
-            self.X, self.psi_c, self.indptr, self.indices, self.data, self.dense,
-            st.q, st.v, st.r, st.A, self.u, self.ud, self.s, self.x, self.xd,
-        )  # fmt: skip
         if self.window_rows is not None:
-            return window_kinematics_memo(*args, self._last, self.window_rows)
-        return body_kinematics_memo(*args, *self._last)
+            return window_kinematics_memo(
+                self.X,
+                self.psi_c,
+                self.indptr,
+                self.indices,
+                self.data,
+                self.dense,
+                st.q,
+                st.v,
+                st.r,
+                st.A,
+                self.u,
+                self.ud,
+                self.s,
+                self.x,
+                self.xd,
+                self._last,
+                self.window_rows,
+            )
+        return body_kinematics_memo(
+            self.X,
+            self.psi_c,
+            self.indptr,
+            self.indices,
+            self.data,
+            self.dense,
+            st.q,
+            st.v,
+            st.r,
+            st.A,
+            self.u,
+            self.ud,
+            self.s,
+            self.x,
+            self.xd,
+            *self._last,
+        )
 
     def rows(self, nodes, w, kc, dirs, A, sign: float):
         """sign * rows of the pairs (nodes, w (m, k) local ids / weights, kc (m,) nodes per

@@ -37,13 +37,7 @@ from typing import TYPE_CHECKING
 import numba
 import numpy as np
 
-from flexmvm.contact.kinematics import (
-    node_csr_displacements,
-    node_dense_displacements,
-    node_frame,
-    remember,
-    unchanged,
-)
+from flexmvm.contact.kinematics import node_frame, remember, unchanged
 
 if TYPE_CHECKING:
     from flexmvm.contact.nodes import ContactNodes
@@ -57,6 +51,38 @@ WINDOW_MIN_NODES = 2000
 MARGIN_PER_SEARCH_RADIUS = 1.0
 
 _ROUND = 1e-9  # relative round-off allowance of the bounds
+
+
+@numba.njit(cache=True, fastmath={"reassoc", "contract"})
+def _dense_rows(psi_c, rows, q, qd, u, ud):
+    """u = psi_k q, ud = psi_k qd for the nodes `rows` of the gathered rows psi_c (n_c, 3, nq)
+    (kinematics.dense_displacements on a subset)."""
+    nq = psi_c.shape[2]
+    for c in rows:
+        for j in range(3):
+            a = 0.0
+            b = 0.0
+            for k in range(nq):
+                p = psi_c[c, j, k]
+                a += p * q[k]
+                b += p * qd[k]
+            u[c, j] = a
+            ud[c, j] = b
+
+
+@numba.njit(cache=True)
+def _csr_rows(indptr, indices, data, rows, q, qd, u, ud):
+    """As _dense_rows for psi rows in CSR form (row 3 c + j of node c)."""
+    for c in rows:
+        for j in range(3):
+            row = 3 * c + j
+            a = 0.0
+            b = 0.0
+            for e in range(indptr[row], indptr[row + 1]):
+                a += data[e] * q[indices[e]]
+                b += data[e] * qd[indices[e]]
+            u[c, j] = a
+            ud[c, j] = b
 
 
 @numba.njit(cache=True)
@@ -77,11 +103,9 @@ def rows_kinematics(X, psi_c, indptr, indices, data, dense, q, v, r, A, rows, u,
     qd = v[6:]
     if psi_c.shape[2] > 0 or len(indices) > 0:
         if dense:
-            for c in rows:
-                node_dense_displacements(psi_c, c, q, qd, u, ud)
+            _dense_rows(psi_c, rows, q, qd, u, ud)
         else:
-            for c in rows:
-                node_csr_displacements(indptr, indices, data, c, q, qd, u, ud)
+            _csr_rows(indptr, indices, data, rows, q, qd, u, ud)
     else:
         for c in rows:
             for j in range(3):
