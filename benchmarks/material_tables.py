@@ -12,6 +12,8 @@ import json
 import sys
 from pathlib import Path
 
+from flexmvm.results.summary_keys import with_current_keys
+
 d = Path(sys.argv[1])
 res = json.loads((d / "materials.json").read_text())
 with open(d / "materials.csv", newline="") as fh:
@@ -24,13 +26,15 @@ for f in res["failures"]:
 print("\n| b2 | reference peak | theory | contact | theory duration | energy | reference wall |")
 print("|---|---|---|---|---|---|---|")
 for m in mats:
-    s = json.loads((d / m / "reference" / "reference.json").read_text())["summary"]
+    s = with_current_keys(
+        json.loads((d / m / "reference" / "reference.json").read_text())["summary"]
+    )
     per = res["materials"][m]
     iv = s["contact_intervals_s"]
     ivs = ", ".join(f"{a * 1e6:.0f}..{b * 1e6:.0f}" for a, b in iv)
     tp, td = per.get("theory_peak_force_N"), per.get("theory_contact_duration_s")
     print(
-        f"| {m} | {s['max_contact_force_N']:.1f} N | {tp:.1f} N ({(s['max_contact_force_N'] / tp - 1) * 100:+.1f} %) | {ivs} us | {td * 1e6:.0f} us | {s['energy_rel_error'] * 100:+.2f} % | {s['wall_time_s']:.0f} s |"
+        f"| {m} | {s['max_contact_force_interval_mean_N']:.1f} N | {tp:.1f} N ({(s['max_contact_force_interval_mean_N'] / tp - 1) * 100:+.1f} %) | {ivs} us | {td * 1e6:.0f} us | {s['energy_rel_change'] * 100:+.2f} % | {s['wall_time_s']:.0f} s |"
     )
 print(
     "\n| material | selection | "

@@ -147,7 +147,7 @@ def main(out: Path, quick: bool) -> None:
                 "peak_err": cmp["peak_err"],
                 "contact_intervals": len(run.result.contact_intervals),
                 "max_penetration_m": s["max_penetration_m"],
-                "energy_rel_error_max": s["energy_rel_error_max"],
+                "energy_rel_error_max": s["energy_rel_change_max"],
                 "guard_outside_fraction": None
                 if guard is None
                 else guard["impulse_fraction_outside"],

@@ -228,7 +228,7 @@ def run_pair(mesh: Path, s: float, sc: dict, m_star: float, y_pa: float, rho_bal
         row[f"e_frame_{key}"] = float(res.frame_v[-1, 0, 0] - res.frame_v[-1, 1, 0]) / v
         row[f"peak_force_{key}_n"] = float(np.max(res.contact_force))
         row[f"contact_{key}_s"] = float(sum(b - a for a, b in res.contact_intervals))
-        row[f"not_converged_{key}"] = int(res.steps_not_converged)
+        row[f"not_converged_{key}"] = int(res.steps_on_roundoff_floor)
         row[f"step_cuts_{key}"] = int(res.step_cuts)
         if key == "el":
             row["peak_von_mises_el_pa"] = peak_von_mises(built, res)

@@ -207,7 +207,7 @@ def elastic_row(out: Path, name: str, case: Case) -> dict:
         "peak_depth_over_a": float(-point[2] / onset.radius_m),
         "peak_off_axis_over_a": float(np.hypot(point[0], point[1]) / onset.radius_m),
         "v_y_mesh_ratio": ratio**-2.5,
-        "steps_not_converged": int(res.steps_not_converged),
+        "steps_not_converged": int(res.steps_on_roundoff_floor),
         "cpu_run_s": cpu_run,
         "cpu_total_s": time.process_time() - t0,
     }
@@ -229,7 +229,7 @@ def plastic_row(out: Path, name: str, case: Case, s: float) -> dict:
         "yielding_points": int(np.count_nonzero(alpha)),
         "peak_alpha": float(alpha.max()),
         "cells_returned": int(report.n_set_cells),
-        "steps_not_converged": int(res.steps_not_converged),
+        "steps_not_converged": int(res.steps_on_roundoff_floor),
         "cpu_s": time.process_time() - t0,
     }
 

@@ -27,7 +27,7 @@ def test_acceptance_reads_the_momentum_before_the_balance():
         "momentum_rel_error": 5e-11,
         "momentum_rel_error_converged": 2e-8,
         "lcp_residual_max": 0.0,
-        "steps_not_converged": 0,
+        "steps_on_roundoff_floor": 0,
     }
     (bad,) = acceptance.failures(numbers, "flat_vs_st_venant")
     assert bad.startswith("flat_vs_st_venant: momentum_rel_error_converged < 5e-09"), bad

@@ -1,7 +1,7 @@
 """Newton convergence and momentum are reported from the residuals, not assumed.
 
 Every step that stops on the round-off floor above the Newton tolerance is counted
-(`steps_not_converged`, with the worst residual `newton_residual_max`), the run says so on the
+(`steps_on_roundoff_floor`, with the worst residual `newton_residual_max`), the run says so on the
 console, and the linear momentum the solves left unbalanced is summed from the translational
 residual rows (`momentum_residual_rel`).
 """
@@ -39,7 +39,7 @@ def test_converged_run_reports_its_residuals(model):
     error of the steps as converged, evaluated from the states, below 0.1 rtol (measured
     2.5e-12 and 2.6e-12)."""
     s = _tiny(model)
-    assert s["steps_not_converged"] == 0
+    assert s["steps_on_roundoff_floor"] == 0
     assert 0.0 < s["newton_residual_max"] <= RTOL
     assert s["momentum_residual_rel"] <= 40 * RTOL
     assert s["momentum_rel_error_converged"] <= 0.1 * RTOL
@@ -57,12 +57,12 @@ def test_steps_stopped_on_the_floor_are_counted(monkeypatch, tmp_path):
     )
     tiny = load_scenario(TINY).with_overrides(t_end_s=3e-6)
     s = run_scenario(tiny).summary
-    assert s["steps_not_converged"] == 0 and s["n_steps"] == 12
+    assert s["steps_on_roundoff_floor"] == 0 and s["n_steps"] == 12
     assert s["newton_residual_max"] > 1e-18
 
     monkeypatch.setattr(mj_scheme, "roundoff_momenta", lambda bodies: np.zeros(len(bodies)))
     s = run_scenario(tiny).summary
-    assert s["steps_not_converged"] == s["n_steps"] == 12
+    assert s["steps_on_roundoff_floor"] == s["n_steps"] == 12
     assert s["newton_residual_max"] > 1e-18
 
     from click.testing import CliRunner
@@ -123,7 +123,7 @@ def test_accepted_steps_balance_linear_momentum(monkeypatch, scheme):
     if scheme == "damped":
         sc = seed_scheme(sc, "b2")  # velocity law, no redistribution, theta = 0.55
     s = run_scenario(sc.with_overrides(t_end_s=20e-6)).summary
-    assert s["steps_not_converged"] == 0
+    assert s["steps_on_roundoff_floor"] == 0
     assert len(seen) == 2 * s["n_steps"]
     assert max(t for t, _ in seen) < 1e-13
     if scheme == "damped":

@@ -54,7 +54,7 @@ def test_a_failing_step_is_cut_and_the_run_matches_one_with_that_step(monkeypatc
     n_failed = 4  # steps starting at 2.0, 2.25, 2.5, 2.75 us
     assert sizes[min(sizes)] == 4 * n_failed
     assert cut.summary["step_cuts"] == 3 * n_failed
-    assert cut.summary["smallest_step_s"] == pytest.approx(dt / 4)
+    assert cut.summary["dt_min_taken_s"] == pytest.approx(dt / 4)
     assert cut.summary["status"] == "completed"
     np.testing.assert_allclose(cut.t, ref.t)
     # outputs away from the cut window agree to the time-discretisation error of the window

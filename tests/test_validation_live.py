@@ -147,10 +147,10 @@ def _check_sane(run, e_min: float = 0.99) -> None:
       striker (m1 = 0.255 kg > m2 = 0.085 kg: the striker follows, slower)."""
     s, res = run.summary, run.result
     assert s["momentum_rel_error_converged"] < acceptance.MOMENTUM_CONVERGED_BOUND
-    assert s["max_contact_force_N"] > 0.0
+    assert s["max_contact_force_interval_mean_N"] > 0.0
     # every LCP met its complementarity tolerance (a tensile impulse reads ~1) and every step
     # converged to the Newton tolerance
-    assert s["lcp_residual_max"] <= 1e-8 and s["steps_not_converged"] == 0
+    assert s["lcp_residual_max"] <= 1e-8 and s["steps_on_roundoff_floor"] == 0
     assert s["contact_intervals_s"] and s["contact_intervals_s"][0][0] < 2e-6
     assert s["contact_intervals_s"][-1][1] < res.t[-1] - 10e-6
     E = res.total_energy
@@ -197,7 +197,7 @@ def test_short_full_fe_against_wave_hertz_theory():
     s = run.summary
     assert s["model"] == {"b1": "full", "b2": "full"} and s["dof"]["b2"] > 9000
     _penetration_ok(s)
-    assert abs(s["energy_rel_error"]) < 5e-4
+    assert abs(s["energy_rel_change"]) < 5e-4
     _check_sane(run)
 
 
@@ -378,7 +378,7 @@ def test_two_rigid_bodies_impact_conserves_momentum_and_loses_energy():
     m1, m2 = _masses(run)
     assert s["momentum_rel_error_converged"] < 2e-10 and s["lcp_residual_max"] <= 1e-8
     assert -2e-3 <= _restitution(run) <= 1.0
-    assert abs(-s["energy_rel_error"] - m2 / (m1 + m2)) < 0.01
+    assert abs(-s["energy_rel_change"] - m2 / (m1 + m2)) < 0.01
     steps = run.result.steps
     later = np.asarray(steps.t_s) > 2 * 0.5e-6
     impulses = np.asarray(steps.contact_impulse_Ns)
@@ -428,6 +428,6 @@ def test_two_rigid_bodies_rebound_with_the_schemes_restitution():
     assert abs(e - (1 - theta) / theta) < 5e-3
     m1, m2 = _masses(run)
     e_scheme = (1 - theta) / theta
-    assert abs(-s["energy_rel_error"] - (1 - e_scheme**2) * m2 / (m1 + m2)) < 1e-4
+    assert abs(-s["energy_rel_change"] - (1 - e_scheme**2) * m2 / (m1 + m2)) < 1e-4
     assert len(s["contact_intervals_s"]) == 1
     assert s["contact_intervals_s"][0][1] <= 2 * 2e-6

@@ -59,7 +59,7 @@ def test_bounds_and_failures():
             "jump_err": 0.0,
             "momentum_rel_error_converged": 0.0,
             "lcp_residual_max": 0.0,
-            "steps_not_converged": 0,
+            "steps_on_roundoff_floor": 0,
         },
         "flat_vs_st_venant",
     ) == [

@@ -78,10 +78,10 @@ def command(
         theory=theory,
     )
     keys = (
-        "max_contact_force_N",
+        "max_contact_force_interval_mean_N",
         "momentum_rel_error",
         "momentum_rel_error_converged",
-        "energy_rel_error",
+        "energy_rel_change",
         "max_penetration_m",
         "wall_time_s",
     )
@@ -96,11 +96,11 @@ def command(
         )
     )
     for label, s in (("", summary), ("full FE reference: ", summary.get("reference_full") or {})):
-        if s.get("steps_not_converged"):
+        if s.get("steps_on_roundoff_floor"):
             click.echo(
-                f"warning: {label}{s['steps_not_converged']} step(s) stopped on the "
+                f"warning: {label}{s['steps_on_roundoff_floor']} step(s) stopped on the "
                 f"round-off floor above the Newton tolerance (worst relative residual "
-                f"{s['newton_residual_max']:.2e}; summary.json steps_not_converged)",
+                f"{s['newton_residual_max']:.2e}; summary.json steps_on_roundoff_floor)",
                 err=True,
             )
     if "comparison_vs_full" in summary:

@@ -196,7 +196,7 @@ class _Tally:
             n_steps=self.n_steps,
             n_factorizations=integ.n_factorizations,
             n_nonrotating_steps=integ.n_nonrotating_steps,
-            steps_not_converged=self.n_loose,
+            steps_on_roundoff_floor=self.n_loose,
             newton_residual_max=self.worst_res,
             lcp_residual_max=self.worst_lcp,
             momentum_residual=self.p_res,
@@ -340,7 +340,7 @@ def _advance(
     2^MAX_STEP_CUTS, as implicit codes cut their step; the next step is back at the grid's
     size; a failure at h_min raises SolverError. A step that stops on the round-off floor
     (below newton_iterate.ROUNDOFF_FLOOR, no longer decreasing) is accepted, and the run counts
-    it in steps_not_converged and warns: cutting it would cost up to 2^MAX_STEP_CUTS steps
+    it in steps_on_roundoff_floor and warns: cutting it would cost up to 2^MAX_STEP_CUTS steps
     for a residual that is round-off. cuts = [number of steps cut, smallest step taken [s]],
     updated."""
     try:

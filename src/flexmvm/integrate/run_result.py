@@ -188,7 +188,7 @@ class RunResult:
     probe_axes: list[str] = field(default_factory=list)
     n_factorizations: int = 0
     n_nonrotating_steps: int = 0  # steps taken by the linear non-rotating step (nonrotating.py)
-    steps_not_converged: int = 0  # steps that stopped above the Newton rtol (round-off floor)
+    steps_on_roundoff_floor: int = 0  # steps that stopped above the Newton rtol (round-off floor)
     newton_residual_max: float = 0.0  # largest relative momentum residual at a step's exit
     lcp_residual_max: float = 0.0  # largest complementarity residual of any LCP solve
     # normal contact row (contact name, slave node, master facet) -> [impulse [N s], first

@@ -173,8 +173,12 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         "status": "completed" if res.failure is None else "failed",
         **({"failure": res.failure} if res.failure is not None else {}),
         "t_end_reached_s": float(res.t[-1]),
-        "max_contact_force_N": float(res.contact_force.max()) if res.contact_force.size else 0.0,
-        "min_contact_force_N": float(res.contact_force.min()) if res.contact_force.size else 0.0,
+        "max_contact_force_interval_mean_N": float(res.contact_force.max())
+        if res.contact_force.size
+        else 0.0,
+        "min_contact_force_interval_mean_N": float(res.contact_force.min())
+        if res.contact_force.size
+        else 0.0,
         "contact_intervals_s": [[float(a), float(b)] for a, b in res.contact_intervals],
         "dof": {i.name: int(i.dof) for i in built.info},
         "model": {i.name: i.model.value for i in built.info},
@@ -191,8 +195,8 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         "momentum_rel_error_converged": mom_err_converged,
         "momentum_error_note": MOMENTUM_ERROR_NOTE,
         **report_entries(res, built, why_not, subsystems),  # runs.energy_report
-        "energy_rel_error": e_err,
-        "energy_rel_error_max": e_err_max,
+        "energy_rel_change": e_err,
+        "energy_rel_change_max": e_err_max,
         # the largest rise of the total energy over its start beyond the inputs' work [-] (energy_gain)
         "energy_gain_rel_max": gain,
         # every contact on a law whose step adds no energy (the position law), not that the
@@ -211,10 +215,9 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         "drive_torque_max_abs_Nm": {k: float(np.abs(v).max()) for k, v in res.drive_torque.items()},
         # steps accepted on the Newton iteration's round-off floor above rtol, at the
         # smallest step (integrate.driver: such a step is first cut in halves)
-        "steps_not_converged": int(res.steps_not_converged),
-        # steps retried as two halves, and the smallest step taken [s]
+        "steps_on_roundoff_floor": int(res.steps_on_roundoff_floor),
+        # steps retried as two halves (dt_min_taken_s: the smallest step taken)
         "step_cuts": int(res.step_cuts),
-        "smallest_step_s": float(res.smallest_step_s),
         "newton_residual_max": float(res.newton_residual_max),
         "lcp_residual_max": float(res.lcp_residual_max),
         # the momentum the solves left unbalanced (their translational residuals summed,

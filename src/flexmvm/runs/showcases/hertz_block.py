@@ -79,7 +79,7 @@ def hertz_comparison(
     history force_N), duration_s (of the summary's first contact interval, from the steps with
     contact: to one step), the Hertz values hertz_peak_N and hertz_duration_s, the relative
     errors peak_err and duration_err, the contact radius hertz_contact_radius_m, and of the
-    summary the target's dof, energy_rel_error, steps_not_converged and status."""
+    summary the target's dof, energy_rel_change, steps_on_roundoff_floor and status."""
     intervals = summary["contact_intervals_s"]
     duration = intervals[0][1] - intervals[0][0] if intervals else 0.0
     peak = float(np.max(force_N))
@@ -92,8 +92,8 @@ def hertz_comparison(
         "duration_err": duration / hz.duration_s - 1.0,
         "hertz_contact_radius_m": hz.contact_radius_m,
         "dof": summary["dof"][target],
-        "energy_rel_error": summary["energy_rel_error"],
-        "steps_not_converged": summary["steps_not_converged"],
+        "energy_rel_change": summary["energy_rel_change"],
+        "steps_on_roundoff_floor": summary["steps_on_roundoff_floor"],
         "status": summary["status"],
     }
 
