@@ -146,6 +146,8 @@ class _Tally:
         )  # runs with friction report it even if no contact closes
         self.cuts = [0, dt_s]  # steps cut in two, smallest step taken [s]
         self.ledger: EnergyLedger | None = None  # the works of the steps (energy_ledger)
+        # factorisations and non-rotating steps of integrators a window switch retired
+        self.retired = [0, 0]
 
     def add(self, t_s: float, h_s: float, res: StepResult) -> None:
         """One accepted step from t_s over h_s; its end states measured for penetration."""
@@ -194,8 +196,8 @@ class _Tally:
             max_penetration_by_direction_m=pen.by_direction,
             max_joint_drift=self.drift,
             n_steps=self.n_steps,
-            n_factorizations=integ.n_factorizations,
-            n_nonrotating_steps=integ.n_nonrotating_steps,
+            n_factorizations=integ.n_factorizations + self.retired[0],
+            n_nonrotating_steps=integ.n_nonrotating_steps + self.retired[1],
             steps_on_roundoff_floor=self.n_loose,
             newton_residual_max=self.worst_res,
             lcp_residual_max=self.worst_lcp,
@@ -278,7 +280,7 @@ def _simulate(
                 fail(f"at t = {t + h:.6g} s (step {tally.n_steps}): {switches.outside_stop()}")
             if moved is not None:
                 system, states = moved
-                integ = _rebound(system, make_integrator(system, grid), rec, pen, tally)
+                integ = _rebound(system, integ, make_integrator(system, grid), rec, pen, tally)
         tick += span
         fine = fine_ticks is not None and level == 0 and tick % fine_ticks == 0
         if tick % out_ticks == 0 or tick >= n_ticks or fine:
@@ -300,9 +302,12 @@ def _simulate(
     return tally.result(rec, integ, wall0)
 
 
-def _rebound(system, integ, rec, pen, tally):
+def _rebound(system, old, integ, rec, pen, tally):
     """integ, the integrator made for ``system`` after a window switch, with the recorder,
-    the penetration measure and the energy ledger pointed at the new system and integrator."""
+    the penetration measure and the energy ledger pointed at the new system and integrator;
+    the counts of the retired integrator ``old`` kept in the tally (the run's totals)."""
+    tally.retired[0] += old.n_factorizations
+    tally.retired[1] += old.n_nonrotating_steps
     rec.system = pen.system = tally.ledger.system = system
     tally.ledger.carried, tally.ledger.fresh = integ.carried, integ.carried_state
     return integ
