@@ -104,6 +104,8 @@ class Rows:
         sums as k calls of add (each entry gets its terms in the order of the calls), without
         their per-row Python (a mechanism's joints add ~30 rows per Newton iterate)."""
         k = frame.shape[0]
+        if k == 0:  # no rows: nothing added, as no call of add
+            return
         if body not in self.blocks:
             self.blocks[body] = (np.zeros((self.m, 6)), np.zeros((self.m, nq)))
         bf, bq = self.blocks[body]
