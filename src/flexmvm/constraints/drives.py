@@ -122,6 +122,10 @@ class DrivenAngle(Joint):
         e_p = _turned(A2 @ self.ref2, a, float(self.angle.value(t)))
         return A1, A2, a, A1 @ self.ref1, e_p
 
+    def value(self, bodies, states, t):
+        _, _, a, e1, ep = self._directions(states, t)
+        return np.array([math.atan2(float(cross3(ep, e1) @ a), float(ep @ e1))])
+
     def evaluate(self, bodies, states, t):
         A1, A2, a, e1, ep = self._directions(states, t)
         x = cross3(ep, e1)

@@ -85,6 +85,24 @@ class BodyPoint:
             nodal = _no_elastic(body)
         rows.add(row, self.body, sign * fr, sign * qp, body.nq, nodal)
 
+    def add_rows(self, rows: Rows, row0: int, directions, sign: float, bodies, states) -> None:
+        """add_row for each direction (rows of `directions` (k, 3)) into rows row0.. (the
+        same arithmetic; a frame point's k rows added as one block)."""
+        if self.node is not None:
+            for i, d in enumerate(directions):
+                self.add_row(rows, row0 + i, d, sign, bodies, states)
+            return
+        body = bodies[self.body]
+        A = states[self.body].A
+        p = np.asarray(self.local, float)
+        k = len(directions)
+        frame = np.empty((k, 6))
+        for i, d in enumerate(directions):
+            d = np.asarray(d, float)
+            frame[i, :3], frame[i, 3:] = d, cross3(p, A.T @ d)
+        nodal = [_no_elastic(body)] * k
+        rows.add_block(row0, self.body, sign * frame, sign * np.zeros((k, body.nq)), body.nq, nodal)
+
 
 @dataclass(frozen=True, eq=False)
 class NodeSetPoint:
@@ -143,8 +161,26 @@ class NodeSetPoint:
             row, self.body, sign * fr, sign * qp, body.nq, None if body.nq else _no_elastic(body)
         )
 
+    def add_rows(self, rows: Rows, row0: int, directions, sign: float, bodies, states) -> None:
+        """add_row for each direction (rows of `directions` (k, 3)) into rows row0.., as one
+        block: the centroid's body-frame position once, the same products per row."""
+        body = bodies[self.body]
+        A = states[self.body].A
+        s_bar = self._local(states[self.body].q)
+        k = len(directions)
+        frame, elastic = np.empty((k, 6)), np.empty((k, body.nq))
+        for i, d in enumerate(directions):
+            d = np.asarray(d, float)
+            dl = A.T @ d
+            frame[i, :3], frame[i, 3:] = d, cross3(s_bar, dl)
+            elastic[i] = self.psi_bar.T @ dl
+        nodal = None if body.nq else [_no_elastic(body)] * k
+        rows.add_block(row0, self.body, sign * frame, sign * elastic, body.nq, nodal)
+
 
 Anchor = BodyPoint | NodeSetPoint | np.ndarray
+_AXES = np.eye(3)  # the rows' directions of a point coincidence (read only)
+_AXES.flags.writeable = False
 
 
 def _on_body(a: Anchor) -> TypeGuard[BodyPoint | NodeSetPoint]:
@@ -164,6 +200,12 @@ class Joint:
 
     def evaluate(self, bodies, states, t: float) -> tuple[np.ndarray, Rows]:
         raise NotImplementedError
+
+    def value(self, bodies, states, t: float) -> np.ndarray:
+        """phi (n_rows,) alone, as evaluate's (the same arithmetic): the Newton iteration
+        needs phi at the step's end and the rows at the midpoint only, and building rows it
+        throws away was half of a mechanism's joint work a step."""
+        return self.evaluate(bodies, states, t)[0]
 
     def time_rate(self, bodies, states, t: float) -> np.ndarray:
         return np.zeros(self.n_rows)
@@ -187,13 +229,15 @@ class SphericalJoint(Joint):
     def pivot(self) -> BodyPoint | NodeSetPoint:
         return self.p1
 
+    def value(self, bodies, states, t):
+        return self.p1.position(bodies, states) - _anchor_position(self.p2, bodies, states)
+
     def evaluate(self, bodies, states, t):
-        phi = self.p1.position(bodies, states) - _anchor_position(self.p2, bodies, states)
+        phi = self.value(bodies, states, t)
         rows = Rows(3)
-        for i, e in enumerate(np.eye(3)):
-            self.p1.add_row(rows, i, e, 1.0, bodies, states)
-            if _on_body(self.p2):
-                self.p2.add_row(rows, i, e, -1.0, bodies, states)
+        self.p1.add_rows(rows, 0, _AXES, 1.0, bodies, states)
+        if _on_body(self.p2):
+            self.p2.add_rows(rows, 0, _AXES, -1.0, bodies, states)
         return phi, rows
 
 
@@ -213,6 +257,10 @@ class DistanceJoint(Joint):
     def __post_init__(self) -> None:
         if not self.length > 0:
             raise InputError(f"distance joint length must be > 0 m, got {self.length!r}")
+
+    def value(self, bodies, states, t):
+        d = self.p1.position(bodies, states) - _anchor_position(self.p2, bodies, states)
+        return np.array([float(np.linalg.norm(d)) - self.length])
 
     def evaluate(self, bodies, states, t):
         d = self.p1.position(bodies, states) - _anchor_position(self.p2, bodies, states)
@@ -238,12 +286,14 @@ class PrescribedMotion(Joint):
     def pivot(self) -> BodyPoint | NodeSetPoint:
         return self.p1
 
-    def evaluate(self, bodies, states, t):
+    def value(self, bodies, states, t):
         target = np.asarray(self.x0) + np.asarray(self.velocity) * t
-        phi = self.p1.position(bodies, states) - target
+        return self.p1.position(bodies, states) - target
+
+    def evaluate(self, bodies, states, t):
+        phi = self.value(bodies, states, t)
         rows = Rows(3)
-        for i, e in enumerate(np.eye(3)):
-            self.p1.add_row(rows, i, e, 1.0, bodies, states)
+        self.p1.add_rows(rows, 0, _AXES, 1.0, bodies, states)
         return phi, rows
 
     def time_rate(self, bodies, states, t):
@@ -265,6 +315,14 @@ class OrientationLock(Joint):
     @property
     def n_rows(self) -> int:  # type: ignore[override]
         return len(self.pairs)
+
+    def value(self, bodies, states, t):
+        phi = np.zeros(len(self.pairs))
+        A1 = states[self.body1].A
+        A2 = states[self.body2].A if self.body2 is not None else np.eye(3)
+        for i, (u, w) in enumerate(self.pairs):
+            phi[i] = (A1 @ np.asarray(u, float)) @ (A2 @ np.asarray(w, float))
+        return phi
 
     def evaluate(self, bodies, states, t):
         rows = Rows(len(self.pairs))

@@ -52,12 +52,14 @@ class PrescribedPath(Joint):
                 f"[0, 0, 0] m, got {d0.tolist()}"
             )
 
-    def evaluate(self, bodies, states, t):
+    def value(self, bodies, states, t):
         target = self.x0 + np.asarray(self.displacement.value(t), float)
-        phi = self.p1.position(bodies, states) - target
+        return self.p1.position(bodies, states) - target
+
+    def evaluate(self, bodies, states, t):
+        phi = self.value(bodies, states, t)
         rows = Rows(3)
-        for i, e in enumerate(np.eye(3)):
-            self.p1.add_row(rows, i, e, 1.0, bodies, states)
+        self.p1.add_rows(rows, 0, np.eye(3), 1.0, bodies, states)
         return phi, rows
 
     def time_rate(self, bodies, states, t):

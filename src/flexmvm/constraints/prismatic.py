@@ -38,13 +38,17 @@ class LineLock(Joint):
     def pivot(self) -> BodyPoint | NodeSetPoint:
         return self.p1
 
+    def value(self, bodies, states, t):
+        d = self.p1.position(bodies, states) - np.asarray(self.origin, float)
+        return np.array([float(d @ np.asarray(n, float)) for n in self.normals])
+
     def evaluate(self, bodies, states, t):
         d = self.p1.position(bodies, states) - np.asarray(self.origin, float)
         rows = Rows(2)
         phi = np.zeros(2)
         for i, n in enumerate(self.normals):
             phi[i] = float(d @ np.asarray(n, float))
-            self.p1.add_row(rows, i, n, 1.0, bodies, states)
+        self.p1.add_rows(rows, 0, self.normals, 1.0, bodies, states)
         return phi, rows
 
 

@@ -90,6 +90,36 @@ class Rows:
             known[0].append((row, np.asarray(dofs, np.int64), np.asarray(values, float)))
             self._entries[body] = (known[0], n_dofs)
 
+    def add_block(
+        self,
+        row0: int,
+        body: int,
+        frame: np.ndarray,
+        elastic: np.ndarray | None,
+        nq: int,
+        nodal: list[tuple[np.ndarray, np.ndarray, int]] | None = None,
+    ) -> None:
+        """add() of the k rows row0 .. row0 + k - 1 at once: frame (k, 6), elastic (k, nq)
+        (None: zero), nodal one (dofs, values, n_dofs) per row or None, as add's. The same
+        sums as k calls of add (each entry gets its terms in the order of the calls), without
+        their per-row Python (a mechanism's joints add ~30 rows per Newton iterate)."""
+        k = frame.shape[0]
+        if k == 0:  # no rows: nothing added, as no call of add
+            return
+        if body not in self.blocks:
+            self.blocks[body] = (np.zeros((self.m, 6)), np.zeros((self.m, nq)))
+        bf, bq = self.blocks[body]
+        bf[row0 : row0 + k] += frame
+        if nq and elastic is not None:
+            bq[row0 : row0 + k] += elastic
+        known = self._entries.get(body, ([], 0))
+        if nodal is None or known is None or not nodal[0][2]:
+            self._entries[body] = None
+            return
+        for i, (dofs, values, _) in enumerate(nodal):
+            known[0].append((row0 + i, np.asarray(dofs, np.int64), np.asarray(values, float)))
+        self._entries[body] = (known[0], nodal[0][2])
+
     def nodal_selector(self, b: int) -> sp.csr_matrix | NodalSelector | None:
         """The nodal selector N (m, n_dofs) of body b (elastic part = N psi), or None."""
         sel = self.nodal.get(b)
@@ -134,9 +164,14 @@ def stack(parts: list[Rows]) -> Rows:
             out.blocks[b][0][start : start + p.m] = bf
             out.blocks[b][1][start : start + p.m] = bq
         start += p.m
-    # nodal selectors survive only if every part touching the body has one
+    # nodal selectors survive only if every part touching the body has one (checked before
+    # any is built: a mechanism's joint rows built, per iterate, the selectors of rows that
+    # other parts then left without one)
     for b in out.blocks:
-        sels = [p.nodal_selector(b) for p in parts if b in p.blocks]
+        touching = [p for p in parts if b in p.blocks]
+        if not all(b in p.nodal or p._entries.get(b) is not None for p in touching):
+            continue
+        sels = [p.nodal_selector(b) for p in touching]
         if all(s is not None for s in sels):
             n = sels[0].shape[1]  # type: ignore[union-attr]  # none is None
             blocks = [

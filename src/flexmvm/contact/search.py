@@ -13,11 +13,14 @@ and hand their arrays to the per-node helpers (see :func:`_search_node` for why)
 
 Projections made at unchanged node positions are kept and read again (search_state.
 ProjectionMemo, :func:`_try`): the penetration measure at the end of a step and the next
-step's search project the same pairs at the same positions. The small helpers of the search
-(_try, _closest, candidate_lists.node_candidates, ...) are separate compiled functions, not
-inlined: inlining them into the scans (numba ``inline="always"``, same results bit for bit)
-saves a few percent of a run but doubles the first-run compilation of the MVM path
-(docs/notes/2026-11-27-comment-measurements.md).
+step's search project the same pairs at the same positions. The three helpers called per
+node with many array arguments (_search_node, _closest, _try) are inlined into the scans
+(numba ``inline="always"``, same results bit for bit): a call of one cost ~0.4 us in the
+arguments' reference counts alone, as much as a projection, and inlined the sphere_block
+scan of 757 slave nodes (383 with a facet) takes 0.64 ms instead of 0.90 ms; the first-run
+compilation of the scans grows by about a second (docs/notes/2026-11-29-step-cost-cuts.md).
+The other helpers stay separate functions (inlining them too saved nothing measurable and
+compiled longer).
 
 Units: metres, seconds. Node arrays hold the contact nodes of one body only ("local" node
 indices 0..n_c-1); facets refer to local node indices of the body that carries them.
@@ -79,7 +82,7 @@ def _memo_begin(memo):
         versions[0], versions[1] = ver_s[0], ver_m[0]
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _try(g, i, xs, xm, conn, n_quads, params, work, memo, best, best_g):
     """Project xs (node i) on facet g; keep it in best when it beats best_g. Returns (status,
     best_g). memo = (facets (n, k), count (n,), records (n, k, REC_LEN)) of MemoArrays: up to k
@@ -128,7 +131,7 @@ def _slab_bound(p, geo, plane, g):
     return max(np.sqrt(a * a + b * b), np.sqrt(dd) - geo[g, 3])
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _closest(
     i,
     xs,
@@ -244,7 +247,7 @@ def _in_box(i, xs, r_m, A_m, box, reach, p):
     return inside_box
 
 
-@numba.njit(cache=True)
+@numba.njit(cache=True, inline="always")
 def _search_node(
     i,
     xs,

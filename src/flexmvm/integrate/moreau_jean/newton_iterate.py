@@ -76,8 +76,7 @@ def joint_rows(system, t, h, mids, ends):
     phis, parts = [], []
     for joint in system.joints:
         _, rows = joint.evaluate(bodies, mids, t + 0.5 * h)
-        phi, _ = joint.evaluate(bodies, ends, t + h)
-        phis.append(phi)
+        phis.append(joint.value(bodies, ends, t + h))
         parts.append(rows)
     return np.concatenate(phis), stack(parts)
 
