@@ -153,6 +153,13 @@ def run(
     return run_scenario(sc, label=label, progress=progress)
 
 
+def _energy_change(E: np.ndarray) -> tuple[float | None, float | None]:
+    """(E(t_end) - E(0)) / E(0) and the largest |E(t) - E(0)| / |E(0)| (None at E(0) = 0)."""
+    if E[0] == 0:
+        return None, None
+    return float((E[-1] - E[0]) / E[0]), float(np.abs(E - E[0]).max() / abs(E[0]))
+
+
 def summarize(res: RunResult, built: BuiltScenario) -> dict:
     """Numbers every run reports (units in the keys)."""
     p0 = res.momentum[0]
@@ -165,8 +172,7 @@ def summarize(res: RunResult, built: BuiltScenario) -> dict:
         mom_err_converged = float(np.abs(res.momentum - res.momentum_shift - p0).max() / scale)
     E = res.total_energy
     counts = res.steps.size_counts() if res.steps is not None else {}  # steps per size [s]
-    e_err = float((E[-1] - E[0]) / E[0]) if E[0] != 0 else None
-    e_err_max = float(np.abs(E - E[0]).max() / abs(E[0])) if E[0] != 0 else None
+    e_err, e_err_max = _energy_change(E)
     gain = energy_gain(res)
     return {
         # "completed", or "failed" with the reason: the histories then end at the failure
