@@ -171,3 +171,28 @@ def test_consistent_tangent_on_the_sparse_block_gives_the_same_run(mesh, runs, m
     assert np.abs(f - f_ref).max() < 1e-6 * np.abs(f_ref).max()
     w, w_ref = res.plastic["block"].plastic_work_j, ref.plastic["block"].plastic_work_j
     assert abs(w - w_ref) < 1e-6 * w_ref, (w, w_ref)
+
+
+@pytest.mark.filterwarnings("ignore::flexmvm.assembly.cost.ReducedCostWarning")
+def test_returns_alone_are_respond_s_bit_for_bit(runs):
+    """PlasticBody.returns (the step's returns without the element forces and tangents that
+    the modified Newton does not use) gives respond's stress, trial state and yielding points
+    exactly, from a history that has yielded (two displacements in turn)."""
+    built, _ = runs["mvm-sparse"]
+    (part,) = built.system.plastic
+    body = part.model.on_cells(np.flatnonzero(np.concatenate(part.allowed)))
+    rng = np.random.default_rng(1)
+    state = body.virgin_state()
+    for scale in (2e-6, 3e-6):
+        u = scale * rng.standard_normal(body.n_dof)
+        full, alone = body.respond(u, state), body.returns(u, state)
+        assert full.yielding.any()
+        assert np.array_equal(alone.stress, full.stress)
+        assert np.array_equal(alone.yielding, full.yielding)
+        for a, b in zip(
+            (alone.state.plastic_strain, alone.state.equivalent_plastic_strain),
+            (full.state.plastic_strain, full.state.equivalent_plastic_strain),
+        ):
+            assert np.array_equal(a, b)
+        assert np.array_equal(alone.state.back_stress, full.state.back_stress)
+        state = full.state
