@@ -10,7 +10,8 @@ yielded cells and the permanent dent.
 Every case is a process of its own (benchmarks/bench_showcases.py's form: a ten-step run of
 each first compiles the kernels and fills the setup cache as a user has it), run one after
 the other; CPU is time.process_time of the process (every thread). Prints the machine and a
-markdown table; --json writes the rows with the provenance stamp (runs.provenance.script_stamp).
+markdown table; --json writes the rows, each with the stamp of the resolved scenario it ran
+(runs.provenance.stamp), and the record's own (runs.provenance.script_stamp).
 """
 
 from __future__ import annotations
@@ -43,6 +44,7 @@ def child(kind: str, t_end: float, out: Path) -> None:
     from flexmvm.assembly.build import build_scenario
     from flexmvm.integrate.driver import simulate
     from flexmvm.runs.plastic_summary import plastic_summary
+    from flexmvm.runs.provenance import stamp
 
     sampler = _Sampler()
     c00 = time.process_time()
@@ -75,6 +77,7 @@ def child(kind: str, t_end: float, out: Path) -> None:
         "setup_peak_mb": setup_peak,
         "sim_peak_mb": max(sampler.peak, _rss_mb()),
         "peak_rss_mb": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0,
+        "provenance": stamp(sc),  # of the resolved scenario this case ran
         "warnings": sorted({f"{w.category.__name__}: {w.message}" for w in caught}),
         "plastic": plastic,
         "cells": (res.plastic["block"].cell_equivalent_plastic_strain > 0).tolist(),
@@ -171,8 +174,7 @@ def main() -> None:
     print(f"load at the end {load1}\n\n{HEAD}\n" + "\n".join(line(r) for r in rows))
     if args.json:
         settings = {"scenario": str(SCENARIO.relative_to(ROOT)), "t_end_s": args.t_end_s}
-        files = [Path(__file__), ROOT / "benchmarks" / "bench_showcases.py", SCENARIO]
-        stamp = script_stamp(files, settings)
+        stamp = script_stamp([Path(__file__), ROOT / "benchmarks" / "bench_showcases.py"], settings)
         record = {"cpu": cpu_name(), "load": [load0, load1], "rows": rows, "provenance": stamp}
         Path(args.json).write_text(json.dumps(record, indent=1))
 
