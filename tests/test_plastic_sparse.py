@@ -8,12 +8,13 @@ the identity: u there is a gather of q and psi^T c a scatter into q, with no pro
 exterior rows of the csr basis (dense in the corner columns), which only the guard of the cells
 outside the region reads, once per accepted step.
 
-The case: tests/test_plastic_dynamics.py's rigid sphere on the 10 x 10 x 5 mm tet10 block (0.3 mm
-within 0.8 mm of the contact, 4,962 DOF), Y 2.35 GPa, struck at 1.5 v_y; the block reduced to the
-nodes within 1.0 mm of the contact (1,257 coordinates) + 4 modes, 0.5 us steps over the contact.
-Measured: 152 cells yield in both, 7 steps in which 65 cells outside the region reach Y (the
-guard fires: this region is small for 1.5 v_y), force histories equal to 1.5e-13 of the peak,
-plastic work to 1.2e-12, residual displacement to 1.1e-12 of its largest entry.
+The case: tests/test_plastic_dynamics.py's rigid sphere on its coarse 10 x 10 x 5 mm tet10 block
+(0.5 mm within 1 mm of the contact, 3,867 DOF), Y 2.35 GPa, struck at 1.5 v_y; the block reduced
+to the nodes within 1.0 mm of the contact (357 coordinates) + 4 modes, 0.5 us steps over the
+contact (22 steps, ~0.6 s of CPU a run). Measured: 19 cells yield in both, 7 steps in which 46
+cells outside the region reach Y (the guard fires: this region is small for 1.5 v_y), force
+histories equal to 2.5e-13 of the peak, plastic work to 2.5e-13, residual displacement to
+4.1e-13 of its largest entry.
 """
 
 from __future__ import annotations
@@ -32,14 +33,14 @@ from flexmvm.integrate.plastic_bodies import PlasticBodies
 REGION = {"ball": {"centre_m": [0, 0, 0], "radius_m": 1.0e-3}}
 
 #: The two bases agree to ~1e-13 (test_ring_body.py); over the run's 22 Newton steps the
-#: histories measured agree to 1.5e-13 (force) - 1.2e-12 (plastic work): 1e-10 is round-off
-#: with a margin, far below any modelling difference (a mode more or less moves them 1e-3).
+#: histories measured agree to 2.5e-13 (force, plastic work) - 4.1e-13 (residual field): 1e-10
+#: is round-off with a margin, far below any modelling difference (a mode more moves them 1e-3).
 ROUND_OFF = 1e-10
 
 
 @pytest.fixture(scope="module")
 def mesh(tmp_path_factory):
-    return _block(tmp_path_factory.mktemp("plastic_sparse"), 0.3e-3, 0.8e-3)
+    return _block(tmp_path_factory.mktemp("plastic_sparse"), 0.5e-3, 1.0e-3)
 
 
 def _case(mesh, kind: str, run: bool = True, **model):
@@ -51,7 +52,7 @@ def _case(mesh, kind: str, run: bool = True, **model):
 
 @pytest.fixture(scope="module")
 def runs(mesh):
-    """The dense and the sparse body's runs (~3 s of CPU each)."""
+    """The dense and the sparse body's runs (~0.6 s of CPU each, and their builds)."""
     return {kind: _case(mesh, kind) for kind in ("mvm", "mvm-sparse")}
 
 
@@ -72,7 +73,7 @@ def test_sparse_plastic_run_is_the_dense_one_to_round_off(runs):
         p_d.hardening_energy_j, p_d.plastic_work_j
     )
     yielded = p_d.cell_equivalent_plastic_strain > 0
-    assert yielded.sum() > 100
+    assert yielded.sum() > 10
     assert np.array_equal(p_s.cell_equivalent_plastic_strain > 0, yielded)
     eps_d, eps_s = p_d.cell_equivalent_plastic_strain, p_s.cell_equivalent_plastic_strain
     assert np.abs(eps_s - eps_d).max() < ROUND_OFF * eps_d.max()
@@ -151,7 +152,7 @@ def test_consistent_tangent_on_the_sparse_block_gives_the_same_run(mesh, runs, m
     """``plastic_tangent = true`` on the mvm-sparse block works (W_t by the Woodbury identity on
     its sparse factor, integrate.moreau_jean.plastic_tangent, installed at least once): the run
     is the elastic-W run's to the Newton tolerance (force within 1e-6 of its peak, plastic work
-    1e-6 relative; measured 3e-11 and 4e-11). About 3 s."""
+    1e-6 relative; measured 2.3e-9 and 1.6e-7). About 2 s."""
     from flexmvm.integrate.moreau_jean import plastic_tangent
 
     installed = []
