@@ -10,7 +10,7 @@ Default: the six shipped non-rod showcases with a reduced form (SHOWCASES), each
 window (--t-end-s shortens every one of them). Full FE is ``flexmvm run --model full``; the
 reduced model is the scenario as shipped when it already has a reduced body
 (arm_stop_flexible: the arm mvm, the stop full FE), else ``--model mvm`` (each body's own
-region and modes). Every case is a process of its own, run one after the other (the setup cache
+region and modes; sphere_block_plastic ``--model mvm-sparse``, REDUCED_KIND). Every case is a process of its own, run one after the other (the setup cache
 as a user has it: FLEXMVM_CACHE_DIR or the default), CPU time is time.process_time of the
 process over the simulation alone (every thread; a ten-step run of each case first compiles
 the kernels), the simulation's resident peak is sampled
@@ -68,14 +68,19 @@ class _Sampler:
         self.peak = _rss_mb()
 
 
+#: the showcases whose reduced form is another kind than --model mvm (scenario name: kind)
+REDUCED_KIND = {"sphere_block_plastic": "mvm-sparse"}
+
+
 def reduced_form(sc):
-    """The scenario as shipped if one of its bodies is already reduced, else --model mvm."""
+    """The scenario as shipped if one of its bodies is already reduced, else --model mvm (or
+    REDUCED_KIND's)."""
     from flexmvm.reduction.kinds.registry import ModelKind
 
     shipped = {b.model.kind for b in sc.bodies if b.model.kind.spec.has_basis}
     if shipped - {ModelKind("full")}:
         return sc
-    return sc.with_kind("mvm")
+    return sc.with_kind(REDUCED_KIND.get(sc.name, "mvm"))
 
 
 def child(path: str, model: str, t_end: float, out: Path) -> None:

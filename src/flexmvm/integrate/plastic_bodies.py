@@ -16,6 +16,13 @@ the elastic energy and 1/2 q^T k_hat q at the output (StepHistory.strain_energy_
 the plastic work (dissipation and stored hardening, to the scheme's order): the ledger's
 ``plastic`` term, which closes the balance to the Newton tolerance (integrate.energy_ledger).
 
+A reduced body (the MVM kinds, psi dense or csr as kind mvm-sparse's) returns only the cells
+whose nodes are all retained, where psi is the identity (RetainedRows, checked at the start):
+its u there is a gather of q and psi^T c a scatter into q, with no product with psi's other
+rows (mvm-sparse: dense in its corner columns); the screen of the cells outside the set, whose
+guard covers every cell, takes the whole u = psi q_m once per accepted step. Full FE and the
+dense kind get the products' values exactly (a unit row times q is the entry).
+
 The history lives here, beside the BodyState: a run without plastic bodies makes none of it.
 """
 
@@ -95,6 +102,8 @@ class PlasticBodies:
     def __init__(self, system: System):
         self.bodies = system.bodies
         self.history: dict[int, StepHistory] = {}
+        # a reduced body: its allowed cells' DOFs and the coordinates psi maps them to
+        self.gather: dict[int, RetainedRows] = {}
         for part in system.plastic:
             body = self.bodies[part.body]
             if body.psi.shape[0] != part.model.n_dof:
@@ -102,11 +111,12 @@ class PlasticBodies:
                     f"body {body.name!r}: plasticity needs psi of {part.model.n_dof} rows "
                     f"(the plastic mesh's DOFs), got a psi of shape {body.psi.shape}"
                 )
-            if not body.is_sparse:
-                _check_identity_rows(body, part)
+            if part.allowed is not None or not body.is_sparse:
+                self.gather[part.body] = retained_rows(body, part)
             self.history[part.body] = StepHistory(part.model, allowed=part.allowed)
         self.parts = {part.body: part for part in system.plastic}
-        self._mid: dict[int, tuple[np.ndarray, np.ndarray | None]] = {}
+        # per body, the last midpoint: (q_m, u_m on the rows the returns read, psi^T c)
+        self._mid: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray | None]] = {}
 
     def __bool__(self) -> bool:
         return bool(self.history)
@@ -117,21 +127,42 @@ class PlasticBodies:
     @property
     def yielding(self) -> bool:
         """True if the last midpoint force of a body was not zero (its returns yield)."""
-        return any(c_q is not None for _, c_q in self._mid.values())
+        return any(mid[2] is not None for mid in self._mid.values())
 
     def stall_ratio(self, elastic: float) -> float:
         """The factor of the round-off floor test: STALL_RATIO while the returns yield, else
         ``elastic`` (the scheme's own)."""
         return STALL_RATIO if self.yielding else elastic
 
+    def displacement(self, b: int, q: np.ndarray) -> np.ndarray:
+        """u = psi q (3n,) [m] of body b where its returns read it: full FE the whole field; a
+        reduced body its allowed cells' DOFs (q's entries there: psi is the identity on them,
+        no product with the other rows), zero elsewhere."""
+        rows = self.gather.get(b)
+        if rows is None:
+            return self.bodies[b].psi @ q
+        u = np.zeros(self.history[b].body.n_dof)
+        u[rows.dofs] = q[rows.coordinates]
+        return u
+
+    def project(self, b: int, c: np.ndarray) -> np.ndarray:
+        """psi^T c (nq,) [N] of body b for a nodal force c (3n,) of its returned cells: a
+        reduced body's a scatter of c's allowed DOFs into their coordinates (c is zero on
+        the other rows: the returned cells are allowed ones)."""
+        rows = self.gather.get(b)
+        if rows is None:
+            return _project(self.bodies[b].psi, c)
+        c_q = np.zeros(self.bodies[b].nq)
+        c_q[rows.coordinates] = c[rows.dofs]
+        return c_q
+
     def midpoint_force(self, b: int, q_m: np.ndarray) -> np.ndarray | None:
         """psi^T c(psi q_m) (nq,) [N] of body b at the midpoint q_m, None where it is zero;
         the return is the step's trial."""
-        psi = self.bodies[b].psi
-        u = psi @ q_m
+        u = self.displacement(b, q_m)
         c = self.history[b].correction(u)
-        c_q = None if c is None else _project(psi, c)
-        self._mid[b] = (u, c_q)
+        c_q = None if c is None else self.project(b, c)
+        self._mid[b] = (np.array(q_m, dtype=float), u, c_q)
         return c_q
 
     def elastic_step(self, states, new_states, theta: float) -> bool:
@@ -146,12 +177,19 @@ class PlasticBodies:
                 return False
         return True
 
+    def _screened_field(self, b: int) -> np.ndarray:
+        """The whole u = psi q_m (3n,) [m] of body b's last midpoint, which the screen of its
+        cells outside the set reads (a reduced body's guard: every cell): full FE the
+        midpoint's own field, a reduced body one product with psi per accepted step."""
+        q_m, u, _ = self._mid[b]
+        return u if b not in self.gather else self.bodies[b].psi @ q_m
+
     def check(self) -> None:
         """Screen the accepted iterate's midpoints (StepHistory.check); SolverError (the
         driver takes the step again in halves, the set enlarged) if a cell outside the set
         had reached yield."""
         for b, hist in self.history.items():
-            if not hist.check(self._mid[b][0]):
+            if not hist.check(self._screened_field(b)):
                 raise SolverError(
                     f"body {self.bodies[b].name!r}: a cell outside the plastic set reached "
                     "yield; the set grew and the step is taken again"
@@ -174,7 +212,7 @@ class PlasticBodies:
         sum of psi^T c(q_m) . (q+ - q)."""
         work = 0.0
         for b, hist in self.history.items():
-            c_q = self._mid[b][1]
+            c_q = self._mid[b][2]
             if c_q is not None:
                 work += float(c_q @ (new_states[b].q - states[b].q))
             hist.commit()
@@ -184,7 +222,7 @@ class PlasticBodies:
     def strain_energy_correction(self, states) -> float:
         """Elastic energy minus 1/2 q^T k_hat q of the plastic bodies at states [J]."""
         return sum(
-            hist.strain_energy_correction(self.bodies[b].psi @ states[b].q)
+            hist.strain_energy_correction(self.displacement(b, states[b].q))
             for b, hist in self.history.items()
         )
 
@@ -200,7 +238,7 @@ class PlasticBodies:
             cells = hist.cell_equivalent_plastic_strain()
             history = np.array([row[b] for row in outputs]).reshape(len(outputs), len(cells))
             body = self.bodies[b]
-            c_q = _project(body.psi, hist.committed_correction())
+            c_q = self.project(b, hist.committed_correction())
             q_res = np.zeros(body.nq)
             if np.any(c_q) and sp.issparse(body.k_hat):
                 q_res = spla.spsolve(sp.csc_matrix(body.k_hat), -c_q)
@@ -230,9 +268,21 @@ def _project(psi, c: np.ndarray) -> np.ndarray:
     return psi[rows].T @ c[rows]
 
 
-def _check_identity_rows(body, part: PlasticPart) -> None:
-    """InputError unless a reduced body's psi is the identity on the DOFs of the cells it may
-    return (their strain is then that of their coordinates, exactly: the plan's MVM form)."""
+@dataclass(frozen=True)
+class RetainedRows:
+    """A reduced plastic body's gather: dofs (m,) the DOFs of the nodes of the cells it may
+    return, coordinates (m,) the q entry psi maps each to (psi[dofs[i]] is the unit row of
+    coordinates[i]), so that u[dofs] = q[coordinates] and psi^T c = scatter of c[dofs]."""
+
+    dofs: np.ndarray
+    coordinates: np.ndarray
+
+
+def retained_rows(body, part: PlasticPart) -> RetainedRows:
+    """The RetainedRows of a reduced body (dense or csr psi), read from psi's rows at the
+    DOFs of the allowed cells' nodes; InputError unless psi is the identity there, each row
+    one entry 1.0 in a column of its own (their strain is then that of their coordinates,
+    exactly: the plan's MVM form)."""
     if part.allowed is None:
         raise InputError(f"body {body.name!r}: a reduced plastic body needs its allowed cells")
     nodes = np.unique(
@@ -243,9 +293,21 @@ def _check_identity_rows(body, part: PlasticPart) -> None:
             ]
         )
     )
-    rows = np.asarray(body.psi)[(3 * nodes[:, None] + np.arange(3)).ravel()]
-    if not (np.all(np.count_nonzero(rows, axis=1) == 1) and np.all(rows.max(axis=1) == 1.0)):
+    dofs = (3 * nodes[:, None] + np.arange(3)).ravel()
+    if sp.issparse(body.psi):
+        rows = sp.csr_matrix(body.psi[dofs])
+        rows.eliminate_zeros()
+        ones = np.diff(rows.indptr) == 1
+        unit = bool(np.all(ones)) and bool(np.all(rows.data == 1.0))
+        coordinates = rows.indices.astype(np.int64) if unit else None
+    else:
+        rows = np.asarray(body.psi)[dofs]
+        ones = np.count_nonzero(rows, axis=1) == 1
+        unit = bool(np.all(ones)) and bool(np.all(rows.max(axis=1) == 1.0))
+        coordinates = np.argmax(rows, axis=1) if unit else None
+    if coordinates is None or np.unique(coordinates).size != dofs.size:
         raise InputError(
             f"body {body.name!r}: its basis is not the identity on the nodes of the cells "
             "allowed to yield (retained nodes)"
         )
+    return RetainedRows(dofs, coordinates)

@@ -30,7 +30,7 @@ from flexmvm.errors import InputError
 from flexmvm.fe.points import BlockPoints, integration_points
 from flexmvm.materials import Material
 from flexmvm.mesh.mesh import Mesh
-from flexmvm.plasticity.kernels import block_response
+from flexmvm.plasticity.kernels import block_response, block_returns
 from flexmvm.plasticity.material import J2Plasticity
 from flexmvm.plasticity.return_mapping import PointState, material_constants
 
@@ -54,6 +54,16 @@ class BodyResponse:
 
     force: np.ndarray
     tangent: sp.csr_matrix
+    stress: np.ndarray
+    state: PointState
+    yielding: np.ndarray
+
+
+@dataclass(frozen=True)
+class PointReturns:
+    """The returns of one displacement u: stress (n_points, 6) [Pa], the trial state and
+    yielding (n_points,) bool (BodyResponse's without its force and tangent)."""
+
     stress: np.ndarray
     state: PointState
     yielding: np.ndarray
@@ -160,11 +170,7 @@ class PlasticBody:
         ``state`` of the last step, by the compiled kernels (kernels.block_response). Raises
         InputError if the shapes do not match the body."""
         u = np.ascontiguousarray(u, dtype=float)
-        if u.shape != (self.n_dof,) or state.n_points != self.n_points:
-            raise InputError(
-                f"plastic body: u must have shape ({self.n_dof},) and the state "
-                f"{self.n_points} points, got {u.shape} and {state.n_points}"
-            )
+        self._check_shapes(u, state)
         pattern = self._pattern
         n = self.n_points
         force, data = np.zeros(self.n_dof), np.zeros(len(pattern.indices))
@@ -186,6 +192,34 @@ class PlasticBody:
         )
         tangent.has_canonical_format = True  # sorted, no duplicates: np.unique made it
         return BodyResponse(force, tangent, stress, new, yielding)
+
+    def _check_shapes(self, u: np.ndarray, state: PointState) -> None:
+        if u.shape != (self.n_dof,) or state.n_points != self.n_points:
+            raise InputError(
+                f"plastic body: u must have shape ({self.n_dof},) and the state "
+                f"{self.n_points} points, got {u.shape} and {state.n_points}"
+            )
+
+    def returns(self, u: np.ndarray, state: PointState) -> PointReturns:
+        """respond's stress, trial state and yielding at u (3n,) [m] from ``state`` (the same
+        values), without its force and tangent (kernels.block_returns): measured on 400 tet10
+        cells of the aluminium block, 0.74 ms a call against 4.5-5.0 ms."""
+        u = np.ascontiguousarray(u, dtype=float)
+        self._check_shapes(u, state)
+        n = self.n_points
+        stress, yielding = np.empty((n, 6)), np.empty(n, dtype=np.bool_)
+        new = PointState(np.empty((n, 6)), np.empty(n), np.empty((n, 6)))
+        old = [np.ascontiguousarray(a, dtype=float) for a in _arrays(state)]
+        mat = material_constants(self.material, self.plastic)
+        start = 0
+        for block in self.blocks:
+            pts = slice(start, start + block.n_points)
+            block_returns(
+                block.nodes, block.grad, u, *(a[pts] for a in old), mat, stress[pts],
+                *(a[pts] for a in _arrays(new)), yielding[pts],
+            )  # fmt: skip
+            start += block.n_points
+        return PointReturns(stress, new, yielding)
 
     @cached_property
     def _pattern(self) -> _Pattern:

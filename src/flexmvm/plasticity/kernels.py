@@ -208,3 +208,37 @@ def block_response(
             for col in range(k + 1, nd):
                 data[slots[e, k, col]] += ke[k, col]
                 data[slots[e, col, k]] += ke[k, col]
+
+
+@numba.njit(cache=True)
+def block_returns(
+    nodes, grad, u, eps_p, alpha, beta, mat, stress, eps_p_new, alpha_new, beta_new, yielding
+):  # pragma: no cover - compiled
+    """block_response's returns alone (the same strains and return_point, so the same stress
+    and state, bit for bit), without the element forces and tangents: what a time step's
+    correction needs (plasticity.step_history), whose force is that of the plastic strain."""
+    ne, nloc, _, nqp = grad.shape
+    ue, g = np.empty(3 * nloc), np.empty((nloc, 3))
+    strain, tangent, xi = np.empty(6), np.empty((6, 6)), np.empty(6)
+    for e in range(ne):
+        for a in range(nloc):
+            for i in range(3):
+                ue[3 * a + i] = u[3 * nodes[e, a] + i]
+        for q in range(nqp):
+            p = e * nqp + q
+            for a in range(nloc):
+                for j in range(3):
+                    g[a, j] = grad[e, a, j, q]
+            _point_strain(g, ue, strain)
+            alpha_new[p], yielding[p] = return_point(
+                strain,
+                eps_p[p],
+                alpha[p],
+                beta[p],
+                mat,
+                stress[p],
+                tangent,
+                eps_p_new[p],
+                beta_new[p],
+                xi,
+            )

@@ -11,7 +11,7 @@ since the radial return gives sigma = D_el (eps - eps_p) with the updated plasti
 eps_p (return_mapping.py; plastic strain is deviatoric). c is exactly zero where no point has
 plastic strain, so an elastic step is the elastic scheme's step.
 
-Only the cells of the plastic set are returned (PlasticBody.respond on a body made of those
+Only the cells of the plastic set are returned (PlasticBody.returns on a body made of those
 cells: the same integration points, a thin wrapper). The set starts empty and only grows: after
 every accepted step the cells whose elastic von Mises stress sqrt(3/2) |dev D_el B u| at the
 step's midpoint exceeds SCREEN_FRACTION Y at any point join it. For a cell outside the set the
@@ -26,7 +26,7 @@ import math
 
 import numpy as np
 
-from flexmvm.plasticity.body import BodyResponse, PlasticBody, strain_matrices
+from flexmvm.plasticity.body import PlasticBody, PointReturns, strain_matrices
 from flexmvm.plasticity.return_mapping import (
     PointState,
     deviator,
@@ -74,8 +74,10 @@ class StepHistory:
         self.n_refused = 0
         self._sub: PlasticBody | None = None
         self._sub_points = np.zeros(0, np.int64)
-        # (response, its point ids, their dx) of the last return
-        self._trial: tuple[BodyResponse, np.ndarray, np.ndarray] | None = None
+        # (returns, their point ids, their dx, the u and committed state they were made
+        # from) of the last return
+        self._trial: tuple[PointReturns, np.ndarray, np.ndarray, np.ndarray, PointState] | None
+        self._trial = None
         self._k_el = None  # (the set's body, its elastic tangent): tangent_difference
 
     # ------------------------------------------------------------------ the plastic set
@@ -157,8 +159,8 @@ class StepHistory:
             self.state.equivalent_plastic_strain[pts],
             self.state.back_stress[pts],
         )
-        resp = self._sub.respond(u, sub_state)
-        self._trial = (resp, pts, self._sub.point_volumes())
+        resp = self._sub.returns(u, sub_state)  # no force, no tangent: c is eps_p's (_force)
+        self._trial = (resp, pts, self._sub.point_volumes(), u, sub_state)
         eps_p = resp.state.plastic_strain
         return self._force(eps_p) if eps_p.any() else None
 
@@ -166,7 +168,7 @@ class StepHistory:
         """Ids (body state order) of the points that yield in the last return."""
         if self._trial is None:
             return np.zeros(0, np.int64)
-        resp, pts, _ = self._trial
+        resp, pts = self._trial[:2]
         return pts[resp.yielding]
 
     def tangent_difference(self):
@@ -179,7 +181,8 @@ class StepHistory:
         if self._k_el is None or self._k_el[0] is not self._sub:
             virgin = self._sub.virgin_state()
             self._k_el = (self._sub, self._sub.respond(np.zeros(self.body.n_dof), virgin).tangent)
-        diff = self._trial[0].tangent - self._k_el[1]
+        _, _, _, u, sub_state = self._trial  # the return's own tangent, made again here
+        diff = self._sub.respond(u, sub_state).tangent - self._k_el[1]
         diff.eliminate_zeros()
         return diff
 
@@ -214,7 +217,7 @@ class StepHistory:
         trial, self._trial = self._trial, None
         if trial is None:
             return
-        resp, pts, dx = trial
+        resp, pts, dx = trial[:3]
         d_eps_p = resp.state.plastic_strain - self.state.plastic_strain[pts]
         # sigma (tensor components) . d eps_p (engineering shears) = sigma : d eps_p
         self.plastic_work += float(np.sum(np.sum(resp.stress * d_eps_p, axis=1) * dx))
