@@ -22,11 +22,15 @@ full FE, as their runs measure (peak RSS and simulation time of `flexmvm run --m
 search, Python between kernels, ~10 ms a step on sphere_block), so it overstates either
 side's share; the comparison is what it is used for.
 
+Kind ``mvm-sparse`` keeps a large region sparse (its dense part is the region's ring, not its
+volume, docs/concepts.md): assembly/cost_sparse.py estimates what its body holds and streams
+from the mesh and the region, and the peak of its cold set-up (K_EE's factor beside psi's
+exterior rows), on which its fit is judged (BodyCost.peak_bytes).
+
 A body estimated to cost more than MARGIN x its full-FE body's memory or time a step is built
-with a ReducedCostWarning that says so (kind ``mvm-sparse`` keeps a large region sparse: its
-dense part is the region's ring, not its volume, docs/concepts.md), and refused only when it
-would not fit: more than REFUSE_SHARE of the machine's memory, unless ``model.allow_costly``
-is set. The right size of a region is a few Hertz contact radii (DESIGN.md, "Sizing a reduced
+with a ReducedCostWarning that says so, and refused only when it would not fit: more than
+REFUSE_SHARE of the machine's memory (an mvm-sparse body's set-up peak: whatever full FE
+would take), unless ``model.allow_costly`` is set. The right size of a region is a few Hertz contact radii (DESIGN.md, "Sizing a reduced
 region").
 """
 
@@ -147,11 +151,19 @@ class BodyCost:
     full_bytes: float
     step_bytes: float = 0.0
     full_step_bytes: float = 0.0
+    # the peak the fit is judged on (None: ``bytes``); what ``bytes`` is, for the messages
+    peak_bytes: float | None = None
+    held: str = "of dense matrices"
+
+    @property
+    def fit_bytes(self) -> float:
+        """The memory the guard's fit is judged on: the peak if estimated, else ``bytes``."""
+        return self.bytes if self.peak_bytes is None else self.peak_bytes
 
     def line(self) -> str:
         return (
-            f"body {self.name!r}: reduced model {self.dof} DOF, ~{_mb(self.bytes)} of "
-            f"dense matrices, ~{_ms(self.step_bytes)} a Newton iteration; full FE "
+            f"body {self.name!r}: reduced model {self.dof} DOF, ~{_mb(self.bytes)} "
+            f"{self.held}, ~{_ms(self.step_bytes)} a Newton iteration; full FE "
             f"{self.full_dof} DOF, ~{_mb(self.full_bytes)}, ~{_ms(self.full_step_bytes)}"
         )
 
@@ -227,11 +239,17 @@ class ReducedCostWarning(UserWarning):
 def check_cost(cost: BodyCost, allow: bool, where: str) -> None:
     """Nothing when ``allow`` (model.allow_costly) is set or the reduced body is estimated
     within MARGIN of its full-FE body's memory and time a step; InputError (one line) when it
-    is also larger than full FE and would take more than REFUSE_ABOVE_BYTES (REFUSE_SHARE of
-    the machine's memory); else a ReducedCostWarning saying how it costs more."""
-    if allow or not cost.costlier():
+    would take more than REFUSE_ABOVE_BYTES (REFUSE_SHARE of the machine's memory) and is
+    either larger than full FE or has an estimated peak (``peak_bytes``: kind mvm-sparse,
+    assembly.cost_sparse, refused on it before it allocates); else a ReducedCostWarning
+    saying how it costs more."""
+    if allow:
         return
-    if cost.bytes <= REFUSE_ABOVE_BYTES or cost.bytes <= cost.full_bytes:
+    if cost.peak_bytes is not None and cost.peak_bytes > REFUSE_ABOVE_BYTES:
+        raise _refused(cost, where)
+    if not cost.costlier():
+        return
+    if cost.fit_bytes <= REFUSE_ABOVE_BYTES or cost.bytes <= cost.full_bytes:
         import warnings
 
         how = " and ".join(
@@ -250,9 +268,14 @@ def check_cost(cost: BodyCost, allow: bool, where: str) -> None:
             stacklevel=3,
         )
         return
-    raise InputError(
-        f"{where}: the reduced model would not fit ({cost.dof} DOF, ~{_mb(cost.bytes)} of "
-        f"dense matrices, more than {REFUSE_SHARE:.0%} of this machine's "
+    raise _refused(cost, where)
+
+
+def _refused(cost: BodyCost, where: str) -> InputError:
+    """The one-line refusal of a reduced body that would not fit."""
+    return InputError(
+        f"{where}: the reduced model would not fit ({cost.dof} DOF, ~{_mb(cost.fit_bytes)} "
+        f"{cost.held}, more than {REFUSE_SHARE:.0%} of this machine's "
         f"{_mb(REFUSE_ABOVE_BYTES / REFUSE_SHARE)}; full FE {cost.full_dof} DOF, "
         f"~{_mb(cost.full_bytes)}); expected a smaller region (a few Hertz contact radii), "
         "kind 'mvm-sparse' or 'full', or allow_costly = true"
