@@ -108,8 +108,8 @@ def test_a_region_that_would_not_fit_is_refused_before_it_is_built(monkeypatch):
 
 
 def test_a_large_region_that_fits_is_built_as_mvm_sparse(monkeypatch):
-    """The same 5 mm region (4,427 DOF): as kind mvm its dense matrices (~1.3 GB estimated)
-    are refused on a machine of 1 GB; as mvm-sparse its set-up (~0.3 GB with the FE model)
+    """The same 5 mm region (4,433 DOF): as kind mvm its dense matrices (~2.1 GB estimated)
+    are refused on a machine of 1 GB; as mvm-sparse its set-up (~0.14 GB with the FE model)
     fits there and it is built without a warning (issue 49: regions refused as dense that
     fit in memory run). ~5 s."""
     monkeypatch.setattr(cost, "REFUSE_ABOVE_BYTES", cost.REFUSE_SHARE * 1e9)

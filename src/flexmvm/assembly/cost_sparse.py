@@ -17,8 +17,8 @@ assembly.cost.full_factor does for full FE). Then, in 8-byte numbers:
   inner DOFs first; the corner, a clique, is last);
 - the cold set-up's peak (what the guard's fit is judged on, with the FE model's K, M and
   M_s): K_EE's factor (about full FE's: the exterior is the body less the
-  region) with psi's exterior rows being filled in blocks of columns (BLOCK_BYTES a block's
-  right-hand sides and their solutions) and the modes' dense columns; then the body's parts
+  region) with psi's exterior rows being filled in blocks of columns (ring_block_bytes a block's
+  right-hand sides, as many for their solutions) and the modes' dense columns; then the body's parts
   made from psi in blocks of rows (the c x c products: CORNER_WORK numbers);
 - a Newton iteration streams the bordered factor twice (forward and backward), k_hat, M_qq,
   the stacked G2 part and the packed corner blocks (4.5 c^2).
@@ -34,13 +34,11 @@ import numpy as np
 import scipy.sparse as sp
 
 from flexmvm.assembly.cost import BodyCost, FullFactor
+from flexmvm.reduction.kinds.mvm_sparse import ring_block_bytes
 
 #: Bytes of a number and of a csr entry (value and column index), as assembly.cost counts.
 _BYTES, _CSR_BYTES = 8, 12
 
-#: Bytes of one block of constraint modes' right-hand sides (and as many for their
-#: solutions) in the ring basis's solve (reduction.kinds.mvm_sparse.RING_BLOCK_BYTES).
-BLOCK_BYTES = 2 * 256e6
 #: The dense c x c arrays the ring body's parts hold at once while they are made (the
 #: corner blocks D, k_hat's C and their coo/csr copies: measured ~12 of them).
 CORNER_WORK = 12.0
@@ -139,7 +137,8 @@ def ring_setup_bytes(shape: RingShape, full: FullFactor) -> float:
     n_i, c = float(shape.exterior_dof), float(shape.corner)
     psi = _CSR_BYTES * n_i * c
     modes = _BYTES * n_i * shape.extra_columns
-    basis = _BYTES * full.l_nnz + psi + min(BLOCK_BYTES, 2 * _BYTES * n_i * c) + modes
+    block = min(ring_block_bytes(shape.exterior_dof, shape.corner), _BYTES * n_i * c)
+    basis = _BYTES * full.l_nnz + psi + 2 * block + modes
     parts = psi + _BYTES * CORNER_WORK * c * c
     return max(basis, parts)
 

@@ -65,17 +65,25 @@ class RingCraigBampton(CraigBampton):
 
     def cost_columns(self, n_retained: int, n_modes: int) -> int | None:
         # not costed by the dense estimate (assembly/cost.py: 8 nq^2 + 3 n nq numbers): its
-        # dense part is the corner, which the region's node count does not give
+        # dense part is the corner, which the region's node count does not give; the
+        # assembly stage costs it by its ring (assembly/cost_sparse.py)
         return None
 
 
 SPEC = RingCraigBampton()
 
 
-#: Bytes of one block of the constraint modes' right-hand sides (as many again for their
-#: solutions): the ring's columns are solved a block at a time and written where they are
-#: kept (psi's exterior rows), so the set-up never holds all of them twice.
+#: Largest bytes of one block of the constraint modes' right-hand sides (as many again for
+#: their solutions): the ring's columns are solved a block at a time and written where they
+#: are kept (psi's exterior rows), so the set-up never holds all of them twice.
 RING_BLOCK_BYTES = 256e6
+
+
+def ring_block_bytes(n_rows: int, n_corner: int) -> float:
+    """Bytes of one block of right-hand sides for n_rows exterior rows and n_corner corner
+    columns: an eighth of psi's exterior rows (12 bytes an entry), from 16 MB up to
+    RING_BLOCK_BYTES (each block is a pass over K_EE's factor: fewer on a big part)."""
+    return min(RING_BLOCK_BYTES, max(16e6, 12.0 * n_rows * n_corner / 8))
 
 
 def ring_basis(
@@ -195,7 +203,7 @@ def ring_solve(
     write(j0, values) for corner columns j0.. (values (n_i, k)). K_EE is factored once
     (fe.modes.spd_solver); the massless ring nodes' static fields first (their static
     columns fix the corner's size), the modes, then the ring's constraint modes in blocks of
-    RING_BLOCK_BYTES: (number of static columns, mode frequencies [Hz])."""
+    ring_block_bytes: (number of static columns, mode frequencies [Hz])."""
     b = node_dofs(nodes)
     interior = np.setdiff1d(reference.free_dofs(fe.n_dof), b)
     ring = ring_positions(fe, interior, b)
@@ -229,7 +237,8 @@ def ring_solve(
         write_zero = np.zeros((interior.size, 1))
         for j in at:
             write(int(j), write_zero)
-        step = max(1, int(RING_BLOCK_BYTES // (8 * max(interior.size, 1))))
+        block_bytes = ring_block_bytes(interior.size, corner.size)
+        step = max(1, int(block_bytes // (8 * max(interior.size, 1))))
         for k in range(0, solved.size, step):
             block = solved[k : k + step]
             x = np.asarray(solve(k_rows[:, b[ring_cols[block]]].toarray()))
