@@ -130,7 +130,9 @@ def body_cost(
         return None
     fixed = setup.reference_condition(key, mesh, ref_set).fixed_dofs
     load_fe = lambda: setup.fe_model(fe_key, cfg.material_obj())
-    full = cached_full_factor(mesh_source(fe_key), fixed, load_fe)
+    # mvm-sparse: the minimum-degree fill (its K_EE's factor's order; the integrator's costs
+    # more set-up than the ring body on a big part: assembly.cost.full_factor)
+    full = cached_full_factor(mesh_source(fe_key), fixed, load_fe, integrator_order=not ring)
     if ring:
         light = massless is not None and np.intersect1d(massless, retained).size > 0
         extra = modes + (MASSLESS_COLUMNS if light else 0)

@@ -92,12 +92,16 @@ class FullFactor:
         return {"k_nnz": self.k_nnz, "m_nnz": self.m_nnz, "l_nnz": self.l_nnz}
 
 
-def full_factor(fe, fixed_dofs=()) -> FullFactor:
+def full_factor(fe, fixed_dofs=(), integrator_order: bool = True) -> FullFactor:
     """The FullFactor of FE model ``fe`` (its M and K) without its reference condition's
     ``fixed_dofs`` (the full-FE body's coordinates): the symbolic analysis of the pattern of
     W = M + (theta h)^2 K in the order the integrator factors it with: from SPLIT_MIN_N rows
     the one a full-FE run keeps in the setup cache under W's pattern (assembly.solver_choice:
-    ~1.7 s for a 25,000-DOF rod, made once for the reduced and the full runs)."""
+    ~1.7 s for a 25,000-DOF rod, made once for the reduced and the full runs). Without
+    ``integrator_order``: in the minimum-degree order (fe.solvers.ordering.mmd_order), the one
+    fe.solvers.spd_solver factors K_EE with for kind mvm-sparse's basis; the integrator's
+    dissection order makes its separator a dense clique for SuperLU, 8.3 GB of set-up on the
+    263,685-DOF plate, against 1.5 GB (its fill there 304 M entries, minimum degree's 218 M)."""
     from flexmvm import setup_cache
     from flexmvm.fe.solvers import ldl
     from flexmvm.fe.solvers.ordering import elimination_order, iteration_pattern
@@ -106,7 +110,9 @@ def full_factor(fe, fixed_dofs=()) -> FullFactor:
     free = np.setdiff1d(np.arange(fe.K.shape[0]), np.asarray(fixed_dofs, np.int64))
     m, k = (sp.csr_matrix(a)[free][:, free] for a in (fe.M, fe.K))
     w = iteration_pattern(m, k)
-    if w.shape[0] >= ldl.SPLIT_MIN_N:
+    if not integrator_order:
+        order = None  # SymbolicFactor's own: mmd_order
+    elif w.shape[0] >= ldl.SPLIT_MIN_N:
         order = setup_cache.cached_elimination_order(w, elimination_order)
     else:
         order = elimination_order(w)
@@ -115,18 +121,25 @@ def full_factor(fe, fixed_dofs=()) -> FullFactor:
 
 
 def cached_full_factor(
-    source: Mapping | None, fixed_dofs: np.ndarray, load_fe: Callable[[], object]
+    source: Mapping | None,
+    fixed_dofs: np.ndarray,
+    load_fe: Callable[[], object],
+    integrator_order: bool = True,
 ) -> FullFactor:
-    """full_factor(load_fe(), fixed_dofs) through the setup cache under the FE model's key
-    inputs ``source`` (assembly.cache_keys.mesh_source; None: not cached) and the fixed
-    DOFs: a warm run neither loads M and K for it nor repeats the analysis (0.3 s on
-    sphere_block's 11,748 DOF)."""
+    """full_factor(load_fe(), fixed_dofs, integrator_order) through the setup cache under the
+    FE model's key inputs ``source`` (assembly.cache_keys.mesh_source; None: not cached) and
+    the fixed DOFs: a warm run neither loads M and K for it nor repeats the analysis (0.3 s
+    on sphere_block's 11,748 DOF)."""
     from flexmvm import setup_cache
 
     fixed = [int(i) for i in np.asarray(fixed_dofs).ravel()]
-    inputs = None if source is None else {**source, "fixed_dofs": fixed, "v": COUNTS_VERSION}
+    inputs = None
+    if source is not None:
+        inputs = {**source, "fixed_dofs": fixed, "v": COUNTS_VERSION}
+        if not integrator_order:
+            inputs["order"] = "minimum degree"
     counts = setup_cache.cached_factor_counts(
-        inputs, lambda: full_factor(load_fe(), fixed).as_dict()
+        inputs, lambda: full_factor(load_fe(), fixed, integrator_order).as_dict()
     )
     return FullFactor(**counts)
 

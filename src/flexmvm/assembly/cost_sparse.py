@@ -16,10 +16,12 @@ assembly.cost.full_factor does for full FE). Then, in 8-byte numbers:
   fill plus the dense corner's triangle (the minimum-degree order eliminates the region's
   inner DOFs first; the corner, a clique, is last);
 - the cold set-up's peak (what the guard's fit is judged on, with the FE model's K, M and
-  M_s): K_EE's factor (about full FE's: the exterior is the body less the
-  region) with psi's exterior rows being filled in blocks of columns (ring_block_bytes a block's
-  right-hand sides, as many for their solutions) and the modes' dense columns; then the body's parts
-  made from psi in blocks of rows (the c x c products: CORNER_WORK numbers);
+  M_s): K_EE's factor (full FE's W's fill in minimum-degree order, the order K_EE is factored
+  in: the exterior is the body less the region) with psi's exterior rows being filled in
+  blocks of columns (ring_block_bytes a block's right-hand sides, as many for their
+  solutions) and the modes' dense columns; then the body's parts made from psi in blocks of
+  rows (the c x c products: CORNER_WORK numbers); then the truncation guard's (K_EE cut out
+  of K and factored again beside psi);
 - a Newton iteration streams the bordered factor twice (forward and backward), k_hat, M_qq,
   the stacked G2 part and the packed corner blocks (4.5 c^2).
 
@@ -133,14 +135,18 @@ def ring_held_bytes(shape: RingShape, sizes: int = 1) -> float:
 
 def ring_setup_bytes(shape: RingShape, full: FullFactor) -> float:
     """The cold set-up's peak beside the FE model (module doc): K_EE's factor with psi and a
-    block of columns (and the modes' columns), or psi with the parts' corner arrays."""
+    block of columns (and the modes' columns), psi with the parts' corner arrays, or the
+    truncation guard's K_EE factor beside psi and K_EE's copies."""
     n_i, c = float(shape.exterior_dof), float(shape.corner)
     psi = _CSR_BYTES * n_i * c
     modes = _BYTES * n_i * shape.extra_columns
     block = min(ring_block_bytes(shape.exterior_dof, shape.corner), _BYTES * n_i * c)
     basis = _BYTES * full.l_nnz + psi + 2 * block + modes
     parts = psi + _BYTES * CORNER_WORK * c * c
-    return max(basis, parts)
+    # the truncation guard (reduction/truncation.py): K_EE cut out of K (copies: rows,
+    # columns, csc) and factored again beside psi
+    guard = _BYTES * full.l_nnz + psi + 3 * _CSR_BYTES * full.k_nnz
+    return max(basis, parts, guard)
 
 
 def ring_step_bytes(shape: RingShape) -> float:
@@ -162,10 +168,10 @@ def ring_cost(
     name: str, n_nodes: int, shape: RingShape, full: FullFactor, sizes: int = 1
 ) -> BodyCost:
     """The BodyCost of a ring body of ``shape`` on a mesh of n_nodes nodes against its
-    full-FE body (``full``: the symbolic analysis, assembly.cost.full_factor): memory what it
-    holds at run time, compared with full FE's as the dense kinds' is; the fit judged on the
-    cold set-up's peak with the FE model (peak_bytes), which K_EE's factor makes about full
-    FE's own."""
+    full-FE body (``full``: the symbolic analysis, assembly.cost.full_factor, in minimum-degree
+    order): memory what it holds at run time, compared with full FE's as the dense kinds' is;
+    the fit judged on the cold set-up's peak with the FE model (peak_bytes), which K_EE's
+    factor makes about full FE's own."""
     from flexmvm.assembly.cost import reduced_cost
 
     ref = reduced_cost(name, n_nodes, 0, full.k_nnz, full=full, sizes=sizes)
