@@ -9,10 +9,11 @@ Every case is a process of its own, run one after the other (never two at once: 
 takes ~10 GB): full FE (FLEXMVM_NO_CACHE=1); the reduced model cold (an empty setup cache in
 --work: the basis built, factoring K_EE as full FE factors its W) and warm (the same cache:
 the run loads its parts); with --cases big-cold,big-warm the big region (--big-radius-mm:
-2,967 nodes, 944 on its ring, a corner of ~2,900 columns; its cold set-up holds the exterior
-rows of the corner twice, ~20 bytes an entry: ~15 GB beside K_EE's factor, more than this
-2-core, 23 GB machine has free beside other jobs: region_estimate reads the ring off the
-mesh and big-cold runs only if its estimated peak is under --memory-limit-gb). Prints the CPU,
+2,967 nodes, 944 on its ring, a corner of ~2,900 columns): region_estimate is the cost guard's
+estimate of its cold set-up's peak (assembly/cost_sparse.py: K_EE's factor beside psi's
+exterior rows, filled a block of columns at a time, then the parts summed over blocks of
+rows) and big-cold runs only if it is under --memory-limit-gb; the run itself is not
+allow_costly, so the guard refuses it if it would not fit the machine). Prints the CPU,
 the commit, per case the set-up and simulation wall and CPU times (time.process_time: every
 thread of the process), the peak RSS after the set-up and at the end, the resident set when
 the run starts, and against full FE the simulation ratio, the memory ratio, the force NCC and
@@ -83,41 +84,51 @@ def _sample_rss(every_s: float = 0.05) -> None:
     threading.Thread(target=sample, daemon=True).start()
 
 
-def region_estimate(radius_m: float, modes: int = 60) -> dict:
-    """The cold set-up's peak [bytes] of the ball region of ``radius_m`` about the top face's
-    centre, read off the mesh (no FE model): its nodes, its ring (the retained nodes sharing an
-    element with the rest), the corner n_c = 3 ring + modes and the exterior's n_i DOFs. The
-    basis's solve holds K_EE's factor (FACTOR_BYTES, measured: the 75-node region's basis
-    stage peaked at 4.7 GB with a 0.5 GB corner), the ring's right-hand sides and their
-    solutions (8 bytes an entry each); ring_psi then holds B (8) and psi (12) beside the FE
-    model (FE_BYTES). assembly/cost.py does not cost kind mvm-sparse (cost_columns None)."""
-    import meshio
+def region_estimate(radius_m: float) -> dict:
+    """The cost guard's estimate (assembly/cost_sparse.py, through assembly.body_build's
+    body_cost: the ring read off the mesh, the full-FE factor's fill from the setup cache or
+    its symbolic analysis) of the plate with the ball region of ``radius_m`` about the top
+    face's centre: its nodes, ring, corner, exterior DOFs and the cold set-up's peak with
+    the FE model [bytes] (the figure the guard refuses a run on: more than half the
+    machine's memory)."""
     import numpy as np
 
-    mesh = meshio.read(SCENARIO.parent / "meshes" / PLATE_MESHES[0][0])
-    tets = np.vstack([c.data for c in mesh.cells if c.data.shape[1] == 10])
-    inside = np.zeros(mesh.points.shape[0], bool)
-    used = np.unique(tets)
-    inside[used] = np.linalg.norm(mesh.points[used], axis=1) <= radius_m
-    mixed = inside[tets].any(axis=1) & (~inside[tets]).any(axis=1)
-    ring = np.unique(tets[mixed][inside[tets[mixed]]]).size
-    n_i = FREE_DOF - 3 * int(inside.sum())
-    n_c = 3 * ring + modes
-    solve = FACTOR_BYTES + 2 * 8.0 * n_i * 3 * ring
-    psi = 20.0 * n_i * n_c
+    import flexmvm as fm
+    from flexmvm.assembly.body_build import body_cost
+    from flexmvm.assembly.build_cache import default_setup
+    from flexmvm.assembly.cache_keys import mesh_key
+    from flexmvm.assembly.cost import step_sizes
+    from flexmvm.assembly.cost_sparse import ring_shape
+    from flexmvm.assembly.mesh_lookup import retained_nodes
+    from flexmvm.assembly.supports import bedded_key, clamp_label
+
+    sc = fm.load_scenario(SCENARIO)
+    region = {"ball": {"centre_m": [0.0, 0.0, 0.0], "radius_m": radius_m}}
+    cfg = sc.with_model("plate", _with_region(sc.body("plate").model, region)).body("plate")
+    setup = default_setup()
+    mesh = setup.mesh(mesh_key(cfg))
+    nodes = tuple(int(i) for i in retained_nodes(cfg.model, mesh, None, "plate"))
+    label = clamp_label(cfg, mesh, sc.supports, nodes)
+    key = bedded_key(mesh_key(cfg), cfg, sc.supports)
+    sizes = step_sizes(sc.time.dt_s, sc.time.dt_max_s)
+    cost = body_cost(cfg, setup, (mesh, key, key, label), nodes, cfg.model.modes, None, sizes)
+    fixed = setup.reference_condition(key, mesh, label).fixed_dofs
+    shape = ring_shape(mesh, np.asarray(nodes), fixed, cfg.model.modes)
+    assert cost is not None
     return {
-        "nodes": int(inside.sum()),
-        "ring": ring,
-        "corner": n_c,
-        "exterior_dof": n_i,
-        "peak_bytes": FE_BYTES + max(solve, psi),
+        "nodes": shape.region_nodes,
+        "ring": shape.ring_nodes,
+        "corner": shape.corner,
+        "exterior_dof": shape.exterior_dof,
+        "peak_bytes": cost.fit_bytes,
+        "held_bytes": cost.bytes,
+        "full_fe_bytes": cost.full_bytes,
     }
 
 
-#: The plate's DOFs free of the clamp, the FE model's and K_EE's factor's resident bytes
-#: (docs/notes/2026-11-29-big-part.md: the model assembled at 1.3 GB, the 75-node region's
-#: basis stage at 4.7 GB).
-FREE_DOF, FE_BYTES, FACTOR_BYTES = 263_685, 1.3e9, 3.0e9
+def _with_region(model, region: dict):
+    """``model`` (a ModelConfig) with ``region``, validated."""
+    return type(model).model_validate({**model.model_dump(), "region": region, "selection": None})
 
 
 def child(kind: str, radius_m: float, t_end: float, out: Path) -> None:
@@ -137,8 +148,8 @@ def child(kind: str, radius_m: float, t_end: float, out: Path) -> None:
         sc = sc.with_model("plate", fm.full())
     elif radius_m > 0:
         region = {"ball": {"centre_m": [0.0, 0.0, 0.0], "radius_m": radius_m}}
-        model = sc.body("plate").model.model_copy(update={"region": region})
-        sc = sc.with_model("plate", model.model_copy(update={"allow_costly": True}))
+        # not allow_costly: the cost guard refuses a region whose set-up would not fit
+        sc = sc.with_model("plate", _with_region(sc.body("plate").model, region))
     w0, c0 = time.perf_counter(), time.process_time()
     built = build_scenario(sc)
     w1, c1 = time.perf_counter(), time.process_time()

@@ -11,7 +11,8 @@ import numpy as np
 from flexmvm.assembly.body_reference import reference_label
 from flexmvm.assembly.build_cache import SetupCache, timed
 from flexmvm.assembly.cache_keys import ContactMass, MeshKey, mesh_key, mesh_source
-from flexmvm.assembly.cost import cached_full_factor, check_cost, reduced_cost
+from flexmvm.assembly.cost import BodyCost, cached_full_factor, check_cost, reduced_cost
+from flexmvm.assembly.cost_sparse import MASSLESS_COLUMNS, ring_cost, ring_shape
 from flexmvm.assembly.mesh_lookup import retained_nodes
 from flexmvm.assembly.stiffened_body import stiffened
 from flexmvm.assembly.supports import bedded_key, clamp_label
@@ -23,6 +24,7 @@ from flexmvm.mesh.mesh import Mesh
 from flexmvm.mesh.rod import RodMesh, RodSpec
 from flexmvm.reduction.interface import Patch, contact_patch, patch_nodes
 from flexmvm.reduction.kinds import kind_spec
+from flexmvm.reduction.kinds.mvm_sparse import RingCraigBampton
 from flexmvm.setup_cache.ring_parts import cached_ring_parts
 
 #: the kinds whose modes are fixed-interface (Craig-Bampton) modes: the truncation guard's
@@ -90,12 +92,8 @@ def build_body(
         nodes = massless if spec.nodal else np.intersect1d(massless, retained)
         if nodes.size:
             key = ContactMass(fe_key, tuple(int(i) for i in nodes))
-    columns = spec.cost_columns(len(retained), modes)
-    if columns is not None:  # assembly.cost: the full-FE factor's counts through the cache
-        fixed = setup.reference_condition(key, mesh, ref_set).fixed_dofs
-        load_fe = lambda: setup.fe_model(fe_key, material)
-        full = cached_full_factor(mesh_source(fe_key), fixed, load_fe)
-        cost = reduced_cost(cfg.name, mesh.n_nodes, columns, full.k_nnz, full=full, sizes=sizes)
+    cost = body_cost(cfg, setup, (mesh, key, fe_key, ref_set), retained, modes, massless, sizes)
+    if cost is not None:
         check_cost(cost, cfg.model.allow_costly, f"{where}.model")
     args = (key, material, kind, retained, modes, ref_set, interface)
     body = kind_body(spec, cfg, setup, mesh, args, fe_key)
@@ -114,6 +112,34 @@ def build_body(
     return body, BodyInfo(
         cfg.name, kind, mesh, material, body.nv, n_ret, modes, rod, covered, patch, truncation
     )
+
+
+def body_cost(
+    cfg, setup: SetupCache, where: tuple, retained: tuple, modes: int, massless, sizes: int
+) -> BodyCost | None:
+    """The cost guard's estimate (assembly.cost) of ``cfg``'s reduced body before it is
+    built, ``where`` = (mesh, its FE key with the redistributed mass, the FE key, the reference
+    set): the full-FE factor's counts through the cache; kind mvm-sparse from its ring
+    (assembly.cost_sparse), the other costed kinds from their dense columns; None: not
+    costed (full FE, modal, rigid, interface)."""
+    mesh, key, fe_key, ref_set = where
+    spec = kind_spec(cfg.model.kind)
+    ring = isinstance(spec, RingCraigBampton)
+    columns = spec.cost_columns(len(retained), modes)
+    if columns is None and not ring:
+        return None
+    fixed = setup.reference_condition(key, mesh, ref_set).fixed_dofs
+    load_fe = lambda: setup.fe_model(fe_key, cfg.material_obj())
+    # mvm-sparse: the minimum-degree fill (its K_EE's factor's order; the integrator's costs
+    # more set-up than the ring body on a big part: assembly.cost.full_factor)
+    full = cached_full_factor(mesh_source(fe_key), fixed, load_fe, integrator_order=not ring)
+    if ring:
+        light = massless is not None and np.intersect1d(massless, retained).size > 0
+        extra = modes + (MASSLESS_COLUMNS if light else 0)
+        shape = ring_shape(mesh, np.asarray(retained, np.int64), fixed, extra)
+        return ring_cost(cfg.name, mesh.n_nodes, shape, full, sizes)
+    assert columns is not None
+    return reduced_cost(cfg.name, mesh.n_nodes, columns, full.k_nnz, full=full, sizes=sizes)
 
 
 def truncation_of(setup: SetupCache, args: tuple, fe_key) -> dict | None:

@@ -22,11 +22,15 @@ full FE, as their runs measure (peak RSS and simulation time of `flexmvm run --m
 search, Python between kernels, ~10 ms a step on sphere_block), so it overstates either
 side's share; the comparison is what it is used for.
 
+Kind ``mvm-sparse`` keeps a large region sparse (its dense part is the region's ring, not its
+volume, docs/concepts.md): assembly/cost_sparse.py estimates what its body holds and streams
+from the mesh and the region, and the peak of its cold set-up (K_EE's factor beside psi's
+exterior rows), on which its fit is judged (BodyCost.peak_bytes).
+
 A body estimated to cost more than MARGIN x its full-FE body's memory or time a step is built
-with a ReducedCostWarning that says so (kind ``mvm-sparse`` keeps a large region sparse: its
-dense part is the region's ring, not its volume, docs/concepts.md), and refused only when it
-would not fit: more than REFUSE_SHARE of the machine's memory, unless ``model.allow_costly``
-is set. The right size of a region is a few Hertz contact radii (DESIGN.md, "Sizing a reduced
+with a ReducedCostWarning that says so, and refused only when it would not fit: more than
+REFUSE_SHARE of the machine's memory (an mvm-sparse body's set-up peak: whatever full FE
+would take), unless ``model.allow_costly`` is set. The right size of a region is a few Hertz contact radii (DESIGN.md, "Sizing a reduced
 region").
 """
 
@@ -88,12 +92,16 @@ class FullFactor:
         return {"k_nnz": self.k_nnz, "m_nnz": self.m_nnz, "l_nnz": self.l_nnz}
 
 
-def full_factor(fe, fixed_dofs=()) -> FullFactor:
+def full_factor(fe, fixed_dofs=(), integrator_order: bool = True) -> FullFactor:
     """The FullFactor of FE model ``fe`` (its M and K) without its reference condition's
     ``fixed_dofs`` (the full-FE body's coordinates): the symbolic analysis of the pattern of
     W = M + (theta h)^2 K in the order the integrator factors it with: from SPLIT_MIN_N rows
     the one a full-FE run keeps in the setup cache under W's pattern (assembly.solver_choice:
-    ~1.7 s for a 25,000-DOF rod, made once for the reduced and the full runs)."""
+    ~1.7 s for a 25,000-DOF rod, made once for the reduced and the full runs). Without
+    ``integrator_order``: in the minimum-degree order (fe.solvers.ordering.mmd_order), the one
+    fe.solvers.spd_solver factors K_EE with for kind mvm-sparse's basis; the integrator's
+    dissection order makes its separator a dense clique for SuperLU, 8.3 GB of set-up on the
+    263,685-DOF plate, against 1.5 GB (its fill there 304 M entries, minimum degree's 218 M)."""
     from flexmvm import setup_cache
     from flexmvm.fe.solvers import ldl
     from flexmvm.fe.solvers.ordering import elimination_order, iteration_pattern
@@ -102,7 +110,9 @@ def full_factor(fe, fixed_dofs=()) -> FullFactor:
     free = np.setdiff1d(np.arange(fe.K.shape[0]), np.asarray(fixed_dofs, np.int64))
     m, k = (sp.csr_matrix(a)[free][:, free] for a in (fe.M, fe.K))
     w = iteration_pattern(m, k)
-    if w.shape[0] >= ldl.SPLIT_MIN_N:
+    if not integrator_order:
+        order = None  # SymbolicFactor's own: mmd_order
+    elif w.shape[0] >= ldl.SPLIT_MIN_N:
         order = setup_cache.cached_elimination_order(w, elimination_order)
     else:
         order = elimination_order(w)
@@ -111,18 +121,25 @@ def full_factor(fe, fixed_dofs=()) -> FullFactor:
 
 
 def cached_full_factor(
-    source: Mapping | None, fixed_dofs: np.ndarray, load_fe: Callable[[], object]
+    source: Mapping | None,
+    fixed_dofs: np.ndarray,
+    load_fe: Callable[[], object],
+    integrator_order: bool = True,
 ) -> FullFactor:
-    """full_factor(load_fe(), fixed_dofs) through the setup cache under the FE model's key
-    inputs ``source`` (assembly.cache_keys.mesh_source; None: not cached) and the fixed
-    DOFs: a warm run neither loads M and K for it nor repeats the analysis (0.3 s on
-    sphere_block's 11,748 DOF)."""
+    """full_factor(load_fe(), fixed_dofs, integrator_order) through the setup cache under the
+    FE model's key inputs ``source`` (assembly.cache_keys.mesh_source; None: not cached) and
+    the fixed DOFs: a warm run neither loads M and K for it nor repeats the analysis (0.3 s
+    on sphere_block's 11,748 DOF)."""
     from flexmvm import setup_cache
 
     fixed = [int(i) for i in np.asarray(fixed_dofs).ravel()]
-    inputs = None if source is None else {**source, "fixed_dofs": fixed, "v": COUNTS_VERSION}
+    inputs = None
+    if source is not None:
+        inputs = {**source, "fixed_dofs": fixed, "v": COUNTS_VERSION}
+        if not integrator_order:
+            inputs["order"] = "minimum degree"
     counts = setup_cache.cached_factor_counts(
-        inputs, lambda: full_factor(load_fe(), fixed).as_dict()
+        inputs, lambda: full_factor(load_fe(), fixed, integrator_order).as_dict()
     )
     return FullFactor(**counts)
 
@@ -147,11 +164,19 @@ class BodyCost:
     full_bytes: float
     step_bytes: float = 0.0
     full_step_bytes: float = 0.0
+    # the peak the fit is judged on (None: ``bytes``); what ``bytes`` is, for the messages
+    peak_bytes: float | None = None
+    held: str = "of dense matrices"
+
+    @property
+    def fit_bytes(self) -> float:
+        """The memory the guard's fit is judged on: the peak if estimated, else ``bytes``."""
+        return self.bytes if self.peak_bytes is None else self.peak_bytes
 
     def line(self) -> str:
         return (
-            f"body {self.name!r}: reduced model {self.dof} DOF, ~{_mb(self.bytes)} of "
-            f"dense matrices, ~{_ms(self.step_bytes)} a Newton iteration; full FE "
+            f"body {self.name!r}: reduced model {self.dof} DOF, ~{_mb(self.bytes)} "
+            f"{self.held}, ~{_ms(self.step_bytes)} a Newton iteration; full FE "
             f"{self.full_dof} DOF, ~{_mb(self.full_bytes)}, ~{_ms(self.full_step_bytes)}"
         )
 
@@ -227,11 +252,17 @@ class ReducedCostWarning(UserWarning):
 def check_cost(cost: BodyCost, allow: bool, where: str) -> None:
     """Nothing when ``allow`` (model.allow_costly) is set or the reduced body is estimated
     within MARGIN of its full-FE body's memory and time a step; InputError (one line) when it
-    is also larger than full FE and would take more than REFUSE_ABOVE_BYTES (REFUSE_SHARE of
-    the machine's memory); else a ReducedCostWarning saying how it costs more."""
-    if allow or not cost.costlier():
+    would take more than REFUSE_ABOVE_BYTES (REFUSE_SHARE of the machine's memory) and is
+    either larger than full FE or has an estimated peak (``peak_bytes``: kind mvm-sparse,
+    assembly.cost_sparse, refused on it before it allocates); else a ReducedCostWarning
+    saying how it costs more."""
+    if allow:
         return
-    if cost.bytes <= REFUSE_ABOVE_BYTES or cost.bytes <= cost.full_bytes:
+    if cost.peak_bytes is not None and cost.peak_bytes > REFUSE_ABOVE_BYTES:
+        raise _refused(cost, where)
+    if not cost.costlier():
+        return
+    if cost.fit_bytes <= REFUSE_ABOVE_BYTES or cost.bytes <= cost.full_bytes:
         import warnings
 
         how = " and ".join(
@@ -250,9 +281,14 @@ def check_cost(cost: BodyCost, allow: bool, where: str) -> None:
             stacklevel=3,
         )
         return
-    raise InputError(
-        f"{where}: the reduced model would not fit ({cost.dof} DOF, ~{_mb(cost.bytes)} of "
-        f"dense matrices, more than {REFUSE_SHARE:.0%} of this machine's "
+    raise _refused(cost, where)
+
+
+def _refused(cost: BodyCost, where: str) -> InputError:
+    """The one-line refusal of a reduced body that would not fit."""
+    return InputError(
+        f"{where}: the reduced model would not fit ({cost.dof} DOF, ~{_mb(cost.fit_bytes)} "
+        f"{cost.held}, more than {REFUSE_SHARE:.0%} of this machine's "
         f"{_mb(REFUSE_ABOVE_BYTES / REFUSE_SHARE)}; full FE {cost.full_dof} DOF, "
         f"~{_mb(cost.full_bytes)}); expected a smaller region (a few Hertz contact radii), "
         "kind 'mvm-sparse' or 'full', or allow_costly = true"

@@ -36,20 +36,37 @@ from flexmvm.fe.assembly import FEModel
 from flexmvm.reduction.kinds import KINDS, ModelKind
 from flexmvm.reduction.kinds.mvm_sparse import RingColumns, split_ring_psi
 
+#: Bytes of the exterior rows of psi one block of the parts' products gathers (with its
+#: neighbours' rows, up to a few times this): the parts are summed over blocks of rows, so
+#: the set-up never holds the corner's exterior rows whole beside psi.
+PARTS_BLOCK_BYTES = 64e6
 
-def _exterior_components(fe: FEModel, nodes: np.ndarray, cols: RingColumns):
-    """(E nodes (n_E,), [Q_0, Q_1, Q_2] (n_E, n_c) each): the rows of B of each exterior
-    node's x, y, z DOF, zero where that DOF is a reference DOF (no row)."""
-    ext = np.setdiff1d(np.arange(fe.mesh.n_nodes), nodes)
+
+def _row_blocks(n: int, n_c: int) -> list[tuple[int, int]]:
+    """Consecutive (start, stop) blocks of n rows of n_c columns, PARTS_BLOCK_BYTES each."""
+    step = max(16, int(PARTS_BLOCK_BYTES // (8 * max(n_c, 1))))
+    return [(k, min(k + step, n)) for k in range(0, n, step)]
+
+
+def _components(cols: RingColumns, ext_nodes: np.ndarray) -> list[np.ndarray]:
+    """[Q_0, Q_1, Q_2] (len(ext_nodes), n_c): the rows of B of each exterior node's x, y, z
+    DOF, zero where that DOF is a reference DOF (no row)."""
     Q = []
     for a in range(3):
-        dof = 3 * ext + a
+        dof = 3 * ext_nodes + a
         at = np.minimum(np.searchsorted(cols.interior, dof), cols.interior.size - 1)
         has = cols.interior[at] == dof
-        Qa = np.zeros((ext.size, cols.corner.size))
-        Qa[has] = cols.B[at[has]]
+        Qa = np.zeros((ext_nodes.size, cols.corner.size))
+        Qa[has] = cols.rows(at[has])
         Q.append(Qa)
-    return ext, Q
+    return Q
+
+
+def _support(rows: sp.csr_matrix, r0: int, r1: int) -> tuple[np.ndarray, np.ndarray]:
+    """(the columns of ``rows`` (a block r0:r1 of a square matrix) and the block's own, sorted;
+    the block's positions in them)."""
+    S = np.union1d(rows.indices, np.arange(r0, r1))
+    return S, np.searchsorted(S, np.arange(r0, r1))
 
 
 def _nodal_block(M_RR: sp.coo_matrix, a: int, b: int, nq: int) -> sp.coo_matrix:
@@ -75,7 +92,8 @@ def _ring_rows(X: np.ndarray, a: int, n_c: int) -> np.ndarray:
 def ring_parts(fe: FEModel, nodes: np.ndarray, cols: RingColumns, nq: int) -> BodyParts:
     """Inertia invariants and k_hat of the ring basis of ``fe`` with retained ``nodes``
     (module doc): G2 blocks, M_qq and k_hat csr (nq, nq), the rest dense as
-    bodies.invariants.inertia_invariants gives them (to round-off)."""
+    bodies.invariants.inertia_invariants gives them (to round-off). The exterior's products
+    are summed over blocks of exterior nodes (_exterior_sums)."""
     X = np.asarray(fe.mesh.nodes, dtype=float)
     Ms = sp.csr_matrix(fe.M_scalar)
     msum = np.asarray(Ms.sum(axis=1)).ravel()
@@ -83,19 +101,15 @@ def ring_parts(fe: FEModel, nodes: np.ndarray, cols: RingColumns, nq: int) -> Bo
     G0 = X.T @ MsX
     G0 = 0.5 * (G0 + G0.T)
     S0 = msum @ X
-    ext, Q = _exterior_components(fe, nodes, cols)
-    ring_nodes = nodes[cols.ring]
     M_RR = sp.coo_matrix(Ms[nodes][:, nodes])
-    M_GE = sp.csr_matrix(Ms[ring_nodes][:, ext])
-    M_EE = sp.csr_matrix(Ms[ext][:, ext])
     n_c, corner = cols.corner.size, cols.corner
-    GQ = [np.asarray(M_GE @ Q[b]) for b in range(3)]  # (n_Gamma, n_c)
+    D, GQ, S1c, G1c = _exterior_sums(fe, nodes, cols, msum, MsX)
     G2: list[list] = [[None] * 3 for _ in range(3)]
     for b in range(3):
-        MQ = np.asarray(M_EE @ Q[b])  # one at a time: the set-up's memory is B's thrice
         for a in range(b + 1):
-            D = Q[a].T @ MQ + _ring_rows(GQ[b], a, n_c) + _ring_rows(GQ[a], b, n_c).T
-            block = sp.csr_matrix(_nodal_block(M_RR, a, b, nq) + _corner_block(D, corner, nq))
+            D_ab = D[a][b] + _ring_rows(GQ[b], a, n_c) + _ring_rows(GQ[a], b, n_c).T
+            block = sp.csr_matrix(_nodal_block(M_RR, a, b, nq) + _corner_block(D_ab, corner, nq))
+            D[a][b] = None  # freed as it is used
             G2[a][b] = block
             if b > a:
                 G2[b][a] = sp.csr_matrix(block.T)
@@ -104,10 +118,10 @@ def ring_parts(fe: FEModel, nodes: np.ndarray, cols: RingColumns, nq: int) -> Bo
     j = np.arange(nodes.size)
     for a in range(3):
         S1[a, 3 * j + a] = msum[nodes]
-        S1[a, corner] += msum[ext] @ Q[a]
+        S1[a, corner] += S1c[a]
         for b in range(3):
             G1x[a, b, 3 * j + b] = MsX[nodes, a]
-            G1x[a, b, corner] += MsX[ext, a] @ Q[b]
+            G1x[a, b, corner] += G1c[a, b]
     G1 = tuple(tuple(G1x[a, b].copy() for b in range(3)) for a in range(3))
     M_qq = G2[0][0] + G2[1][1] + G2[2][2]
     M_qq = sp.csr_matrix(0.5 * (M_qq + M_qq.T))
@@ -115,16 +129,56 @@ def ring_parts(fe: FEModel, nodes: np.ndarray, cols: RingColumns, nq: int) -> Bo
     return BodyParts(inv, ring_stiffness(fe, nodes, cols, nq))
 
 
+def _exterior_sums(fe: FEModel, nodes: np.ndarray, cols: RingColumns, msum, MsX):
+    """The exterior's products of the ring parts, summed over blocks of exterior nodes E:
+    D[a][b] = Q_a^T M_EE Q_b (a <= b; n_c, n_c), GQ[b] = M_Gamma,E Q_b (n_Gamma, n_c),
+    msum_E Q_a (3, n_c) and (MsX)_E,a Q_b (3, 3, n_c); a block gathers the rows of its nodes
+    and of their neighbours in M_EE (RingColumns.rows)."""
+    Ms = sp.csr_matrix(fe.M_scalar)
+    ext = np.setdiff1d(np.arange(fe.mesh.n_nodes), nodes)
+    M_GE = sp.csc_matrix(Ms[nodes[cols.ring]][:, ext])
+    M_EE = sp.csr_matrix(Ms[ext][:, ext])
+    n_c = cols.corner.size
+    D = [[np.zeros((n_c, n_c)) if a <= b else None for b in range(3)] for a in range(3)]
+    GQ = [np.zeros((cols.ring.size, n_c)) for _ in range(3)]
+    S1c, G1c = np.zeros((3, n_c)), np.zeros((3, 3, n_c))
+    for r0, r1 in _row_blocks(ext.size, 3 * n_c):
+        rows = M_EE[r0:r1]
+        S, pos = _support(rows, r0, r1)
+        Q = _components(cols, ext[S])
+        QR = [q[pos] for q in Q]
+        near = sp.csr_matrix(rows[:, S])
+        for b in range(3):
+            MQ = np.asarray(near @ Q[b])
+            for a in range(b + 1):
+                D[a][b] += QR[a].T @ MQ
+            GQ[b] += np.asarray(M_GE[:, r0:r1] @ QR[b])
+        for a in range(3):
+            S1c[a] += msum[ext[r0:r1]] @ QR[a]
+            for b in range(3):
+                G1c[a, b] += MsX[ext[r0:r1], a] @ QR[b]
+    return D, GQ, S1c, G1c
+
+
 def ring_stiffness(fe: FEModel, nodes: np.ndarray, cols: RingColumns, nq: int) -> sp.csr_matrix:
-    """k_hat = psi^T K psi (nq, nq) csr of the ring basis (module doc), symmetrized."""
+    """k_hat = psi^T K psi (nq, nq) csr of the ring basis (module doc), symmetrized; the
+    exterior's products B^T K_EE B and K_Gamma,E B summed over blocks of exterior rows."""
     b = (3 * nodes[:, None] + np.arange(3)).ravel()
     K = sp.csr_matrix(fe.K)
     K_bb = sp.coo_matrix(K[b][:, b])
-    n_g = cols.n_ring_dofs
+    n_g, n_c = cols.n_ring_dofs, cols.corner.size
     ring_dofs = b[cols.corner[:n_g]]
-    rows_i = K[cols.interior]
-    C = cols.B.T @ np.asarray(rows_i[:, cols.interior] @ cols.B)
-    T = np.asarray(K[ring_dofs][:, cols.interior] @ cols.B)  # (3 n_Gamma, n_c)
+    K_ii = sp.csr_matrix(K[cols.interior][:, cols.interior])
+    K_gi = sp.csc_matrix(K[ring_dofs][:, cols.interior])
+    C = np.zeros((n_c, n_c))
+    T = np.zeros((n_g, n_c))  # K_Gamma,E B
+    for r0, r1 in _row_blocks(cols.interior.size, n_c):
+        rows = K_ii[r0:r1]
+        S, pos = _support(rows, r0, r1)
+        B_S = cols.rows(S)
+        B_r = B_S[pos]
+        C += B_r.T @ np.asarray(sp.csr_matrix(rows[:, S]) @ B_S)
+        T += np.asarray(K_gi[:, r0:r1] @ B_r)
     C[:n_g] += T
     C[:, :n_g] += T.T
     k_hat = sp.coo_matrix((K_bb.data, (K_bb.row, K_bb.col)), shape=(nq, nq))
