@@ -6,7 +6,7 @@ and the simulation's), the force NCC and the peak's difference
     python benchmarks/bench_showcases.py [--scenario scenarios/sphere_beam.toml ...]
         [--t-end-s 1e-3] [--json FILE]
 
-Default: the six shipped non-rod showcases with a reduced form (SHOWCASES), each over its own
+Default: the seven shipped non-rod showcases with a reduced form (SHOWCASES), each over its own
 window (--t-end-s shortens every one of them). Full FE is ``flexmvm run --model full``; the
 reduced model is the scenario as shipped when it already has a reduced body
 (arm_stop_flexible: the arm mvm, the stop full FE), else ``--model mvm-moving`` when a body
