@@ -6,11 +6,13 @@ and the simulation's), the force NCC and the peak's difference
     python benchmarks/bench_showcases.py [--scenario scenarios/sphere_beam.toml ...]
         [--t-end-s 1e-3] [--json FILE]
 
-Default: the six shipped non-rod showcases with a reduced form (SHOWCASES), each over its own
+Default: the seven shipped non-rod showcases with a reduced form (SHOWCASES), each over its own
 window (--t-end-s shortens every one of them). Full FE is ``flexmvm run --model full``; the
 reduced model is the scenario as shipped when it already has a reduced body
-(arm_stop_flexible: the arm mvm, the stop full FE), else ``--model mvm`` (each body's own
-region and modes; sphere_block_plastic ``--model mvm-sparse``, REDUCED_KIND). Every case is a process of its own, run one after the other (the setup cache
+(arm_stop_flexible: the arm mvm, the stop full FE), else ``--model mvm-moving`` when a body
+has a moving region's windows (cam_follower: the windows switch during the simulation, timed
+with it), else ``--model mvm`` (each body's own region and modes; sphere_block_plastic
+``--model mvm-sparse``, REDUCED_KIND). Every case is a process of its own, run one after the other (the setup cache
 as a user has it: FLEXMVM_CACHE_DIR or the default), CPU time is time.process_time of the
 process over the simulation alone (every thread; a ten-step run of each case first compiles
 the kernels), the simulation's resident peak is sampled
@@ -41,6 +43,7 @@ SHOWCASES = (
     "scenarios/arm_stop_flexible.toml",
     "scenarios/sphere_block_plastic.toml",
     "scenarios/slider_crank.toml",
+    "scenarios/cam_follower.toml",
 )
 
 
@@ -73,14 +76,16 @@ REDUCED_KIND = {"sphere_block_plastic": "mvm-sparse"}
 
 
 def reduced_form(sc):
-    """The scenario as shipped if one of its bodies is already reduced, else --model mvm (or
-    REDUCED_KIND's)."""
+    """The scenario as shipped if one of its bodies is already reduced, else --model
+    mvm-moving when a body carries a moving region's windows (cam_follower), else --model
+    mvm (or REDUCED_KIND's)."""
     from flexmvm.reduction.kinds.registry import ModelKind
 
     shipped = {b.model.kind for b in sc.bodies if b.model.kind.spec.has_basis}
     if shipped - {ModelKind("full")}:
         return sc
-    return sc.with_kind(REDUCED_KIND.get(sc.name, "mvm"))
+    moving = any(getattr(b.model, "moving", None) is not None for b in sc.bodies)
+    return sc.with_kind("mvm-moving" if moving else REDUCED_KIND.get(sc.name, "mvm"))
 
 
 def child(path: str, model: str, t_end: float, out: Path) -> None:
@@ -103,7 +108,7 @@ def child(path: str, model: str, t_end: float, out: Path) -> None:
     w1, c1 = time.perf_counter(), time.process_time()
     setup_peak = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024.0
     sampler.reset()
-    res = simulate(built.system, built.states, built.grid, built.probes)
+    res = simulate(built.system, built.states, built.grid, built.probes, switches=built.switches)
     w2, c2 = time.perf_counter(), time.process_time()
     info = {
         "scenario": sc.name,

@@ -81,6 +81,7 @@ def moving_body(cfg, supports, setup, index: int, start_s: float | None = None):
     if key is not None and stored is None:
         f = windows.factor
         save_moving(key, f.phi, f.freqs_hz, f.columns, region.parts)
+    windows.factor.release()  # every window made: the run needs no more statics
     region.setup_cpu_s = time.process_time() - c0
     return region.body(start), region
 

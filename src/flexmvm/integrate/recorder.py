@@ -124,11 +124,22 @@ class OutputRecorder:
             potential=np.array([r["pot"] for r in R]),
             momentum=np.array([r["p"] for r in R]),
             angular_momentum=np.array([r["h"] for r in R]),
-            q=[np.array([r["q"][b] for r in F]) for b in range(nb)],
-            q_dot=[np.array([r["qd"][b] for r in F]) for b in range(nb)],
+            q=[_stacked([r["q"][b] for r in F]) for b in range(nb)],
+            q_dot=[_stacked([r["qd"][b] for r in F]) for b in range(nb)],
             frame_A=np.array([r["A"] for r in R]),
             body_momentum=np.array([r["pb"] for r in R]),
             field_index=None if self.field_dt_s is None else np.array(kept, dtype=int),
             field_precision=self.field_precision,
             **extra,
         )
+
+
+def _stacked(rows: list[np.ndarray]) -> np.ndarray:
+    """The rows (n_out, nq); rows of different lengths (a moving region's windows hold
+    different node counts on an unstructured path) padded with NaN to the longest."""
+    if len({r.shape for r in rows}) <= 1:
+        return np.array(rows)
+    out = np.full((len(rows), max(r.size for r in rows)), np.nan)
+    for i, r in enumerate(rows):
+        out[i, : r.size] = r
+    return out

@@ -26,6 +26,42 @@ class Refinement:
     grow_m: float
 
 
+@dataclass(frozen=True)
+class DistanceRefinement:
+    """Local refinement about a shape: element size fine_m [m] where ``distance`` (a gmsh
+    MathEval expression of x, y, z [m], the distance to the shape: a circle, a segment) is
+    below radius_m [m], growing linearly to the part's size_m over a further grow_m [m]
+    (mesh/cam.py: the cam's rim, the strip the contact travels over on its follower)."""
+
+    distance: str
+    fine_m: float
+    radius_m: float
+    grow_m: float
+
+
+def _size_field(gmsh, size_m: float, refine: Refinement | DistanceRefinement) -> None:
+    """The background size field of ``refine`` (a gmsh Threshold on the distance to its point
+    or shape), the other size sources off."""
+    check_positive(fine_m=refine.fine_m, radius_m=refine.radius_m, grow_m=refine.grow_m)
+    if isinstance(refine, DistanceRefinement):
+        distance = refine.distance
+    else:
+        x, y, z = refine.point_m
+        distance = f"Sqrt((x-({x!r}))^2+(y-({y!r}))^2+(z-({z!r}))^2)"
+    field = gmsh.model.mesh.field
+    dist = field.add("MathEval")
+    field.setString(dist, "F", distance)
+    th = field.add("Threshold")
+    field.setNumber(th, "InField", dist)
+    field.setNumber(th, "SizeMin", refine.fine_m)
+    field.setNumber(th, "SizeMax", size_m)
+    field.setNumber(th, "DistMin", refine.radius_m)
+    field.setNumber(th, "DistMax", refine.radius_m + refine.grow_m)
+    field.setAsBackgroundMesh(th)
+    for key in ("MeshSizeExtendFromBoundary", "MeshSizeFromPoints", "MeshSizeFromCurvature"):
+        gmsh.option.setNumber(f"Mesh.{key}", 0)
+
+
 def _gmsh():
     """The gmsh module, or a one-line InputError if the optional dependency is missing."""
     try:
@@ -44,28 +80,16 @@ def check_positive(**values: float) -> None:
             raise InputError(f"part: {name} must be a finite number > 0, got {value!r}")
 
 
-def _mesh_and_write(gmsh, path: Path, size_m: float, order: int, refine: Refinement | None) -> Path:
+def _mesh_and_write(
+    gmsh, path: Path, size_m: float, order: int, refine: Refinement | DistanceRefinement | None
+) -> Path:
     """Size field, 3D mesh of the given order, MSH 4.1 (ASCII) written to ``path``."""
     if order not in (1, 2):
         raise InputError(f"part: order must be 1 (tet4) or 2 (tet10), got {order!r}")
     gmsh.option.setNumber("Mesh.MeshSizeMax", size_m)
     gmsh.option.setNumber("Mesh.MeshSizeMin", size_m if refine is None else refine.fine_m)
     if refine is not None:
-        check_positive(fine_m=refine.fine_m, radius_m=refine.radius_m, grow_m=refine.grow_m)
-        x, y, z = refine.point_m
-        dist = gmsh.model.mesh.field.add("MathEval")
-        gmsh.model.mesh.field.setString(
-            dist, "F", f"Sqrt((x-({x!r}))^2+(y-({y!r}))^2+(z-({z!r}))^2)"
-        )
-        th = gmsh.model.mesh.field.add("Threshold")
-        gmsh.model.mesh.field.setNumber(th, "InField", dist)
-        gmsh.model.mesh.field.setNumber(th, "SizeMin", refine.fine_m)
-        gmsh.model.mesh.field.setNumber(th, "SizeMax", size_m)
-        gmsh.model.mesh.field.setNumber(th, "DistMin", refine.radius_m)
-        gmsh.model.mesh.field.setNumber(th, "DistMax", refine.radius_m + refine.grow_m)
-        gmsh.model.mesh.field.setAsBackgroundMesh(th)
-        for key in ("MeshSizeExtendFromBoundary", "MeshSizeFromPoints", "MeshSizeFromCurvature"):
-            gmsh.option.setNumber(f"Mesh.{key}", 0)
+        _size_field(gmsh, size_m, refine)
     gmsh.option.setNumber("Mesh.ElementOrder", order)
     gmsh.option.setNumber("Mesh.SecondOrderLinear", 0)
     gmsh.option.setNumber("Mesh.Optimize", 1)
@@ -78,7 +102,11 @@ def _mesh_and_write(gmsh, path: Path, size_m: float, order: int, refine: Refinem
 
 
 def run_gmsh(
-    path: str | os.PathLike, size_m: float, order: int, refine: Refinement | None, build: Callable
+    path: str | os.PathLike,
+    size_m: float,
+    order: int,
+    refine: Refinement | DistanceRefinement | None,
+    build: Callable,
 ) -> Path:
     """Start gmsh, build the geometry and its physical groups (``build(gmsh)``), mesh, write,
     stop gmsh. A gmsh failure becomes a one-line MeshError."""
