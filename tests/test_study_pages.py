@@ -1,0 +1,119 @@
+"""The tables of docs/studies.md come from the studies' stamped records (issue 51 item 4), as
+tests/test_page_figures.py does for other pages: each table is remade here from its record
+under docs/studies/ (selection.json, selection_search.json, ncc.csv, reference.json) and must stand on the page as it is; a record remade with other
+numbers fails this test until the page says what the record says. Reads JSON, CSV and
+Markdown only.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+STUDIES = ROOT / "docs" / "studies"
+PAGE = ROOT / "docs" / "studies.md"
+SEL, STRIKER, MATS = (
+    STUDIES / "selection",
+    STUDIES / "selection_full_striker",
+    STUDIES / "materials",
+)
+
+#: the material study's modes on the page (the record's grid: 7:43:12)
+MAT_MODES = (7, 19, 31, 43)
+
+
+def _json(path: Path) -> dict:
+    return json.loads(path.read_text())
+
+
+def _csv(path: Path) -> list[dict]:
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def _missing(rows: list[str]) -> list[str]:
+    page = PAGE.read_text().replace("**", "")
+    return [row for row in rows if row not in page]
+
+
+def _model(s: dict) -> str:
+    return f"{s['layers']}-{s['laps']} + {s['modes']}"
+
+
+def selection_table_rows(ncc: list[dict]) -> list[str]:
+    """The 140-run table: force NCC (four digits) per selection (rows by retained nodes) and
+    mode count (columns), from ncc.csv."""
+    modes = sorted({int(r["modes"]) for r in ncc})
+    cell = {(r["layers"], r["laps"], int(r["modes"])): r for r in ncc}
+    sels = sorted(
+        {(r["layers"], r["laps"]) for r in ncc}, key=lambda s: int(cell[(*s, 7)]["nodes"])
+    )
+    rows = [f"| selection (nodes) | {' | '.join(map(str, modes))} |"]
+    for i, j in sels:
+        nccs = " | ".join(f"{float(cell[(i, j, m)]['ncc_force']):.4f}" for m in modes)
+        rows.append(f"| {i}-{j} ({cell[(i, j, 7)]['nodes']}) | {nccs} |")
+    return rows
+
+
+def search_row(brute: dict, search: dict) -> str:
+    """The --search table's row of the target both records were run for."""
+    assert brute["target"] == search["target"] and search["search"] and not brute["search"]
+    return (
+        f"| `ncc>={brute['target']['ncc_min']:g}` | {_model(brute)} ({brute['dof']} DOF) | "
+        f"{_model(search)} | {search['runs']} runs |"
+    )
+
+
+def _ref_cell(ref: dict) -> str:
+    s = ref["summary"]
+    return (
+        f"{s['max_contact_force_N']:.1f} N / {1e3 * s['contact_intervals_s'][-1][1]:.3f} ms, "
+        f"{s['wall_time_s']:.0f} s"
+    )
+
+
+def striker_rows(seed_sel: dict, seed_ncc: list[dict], seed_ref: dict, full: dict) -> list[str]:
+    """The striker check's table: each side's reference (peak, end of contact, wall time),
+    answer and mean wall time per run (of the 140-run study: its 21 runs of the grid of the
+    full-striker study)."""
+    sel, ncc, ref = full["selection"], full["ncc"], full["reference"]
+    grid = {(r["layers"], r["laps"], r["modes"]) for r in ncc}
+    sub = [r for r in seed_ncc if (r["layers"], r["laps"], r["modes"]) in grid]
+    assert len(sub) == len(ncc) == 21
+
+    def answer(s: dict) -> str:
+        return f"{s['layers']}-{s['laps']} + {s['modes']} modes, {s['dof']} DOF, NCC {s['ncc_force']:.4f}"
+
+    def wall(rows: list[dict]) -> str:
+        return f"{sum(float(r['wall_time_s']) for r in rows) / len(rows):.1f} s"
+
+    return [
+        f"| reference peak / contact | {_ref_cell(seed_ref)} | {_ref_cell(ref)} |",
+        f"| smallest model for ncc >= 0.99 | {answer(seed_sel)} | {answer(sel)} |",
+        f"| mean wall time per run | {wall(sub)} | {wall(ncc)} |",
+    ]
+
+
+def test_selection_table_is_its_record():
+    missing = _missing(selection_table_rows(_csv(SEL / "ncc.csv")))
+    assert not missing, f"docs/studies.md lacks the record's rows: {missing}"
+
+
+def test_search_row_is_its_records():
+    row = search_row(_json(SEL / "selection.json"), _json(SEL / "selection_search.json"))
+    assert not _missing([row]), f"docs/studies.md lacks the record's row: {row}"
+
+
+def test_striker_table_is_its_records():
+    full = {
+        "selection": _json(STRIKER / "selection.json"),
+        "ncc": _csv(STRIKER / "ncc.csv"),
+        "reference": _json(STRIKER / "reference.json"),
+    }
+    rows = striker_rows(
+        _json(SEL / "selection.json"), _csv(SEL / "ncc.csv"), _json(SEL / "reference.json"), full
+    )
+    missing = _missing(rows)
+    assert not missing, f"docs/studies.md lacks the record's rows: {missing}"
