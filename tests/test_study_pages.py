@@ -133,3 +133,70 @@ def test_striker_table_is_its_records():
     )
     missing = _missing(rows)
     assert not missing, f"docs/studies.md lacks the record's rows: {missing}"
+
+
+#: the material study's modes on the page (the record's grid: 7:43:12)
+MAT_MODES = (7, 19, 31, 43)
+MATS = STUDIES / "materials"
+
+
+def reference_rows(materials: dict, refs: dict[str, dict]) -> list[str]:
+    """The material study's references against the 1D wave-Hertz theory (materials.json's
+    theory, each <material>/reference.json's summary): forces to 0.1 N, times to 1 us."""
+    rows = []
+    for m, ref in refs.items():
+        s, t = ref["summary"], materials["materials"][m]
+        peak, end = s["max_contact_force_N"], s["contact_intervals_s"][-1][1]
+        tp, te = t["theory_peak_force_N"], t["theory_contact_duration_s"]
+        rows.append(
+            f"| {m} | {peak:.1f} N | {tp:.1f} N ({100 * (peak / tp - 1):+.1f} %) | "
+            f"{1e6 * end:.0f} us | {1e6 * te:.0f} us ({100 * (end / te - 1):+.1f} %) | "
+            f"{s['momentum_rel_error']:.1e} | {100 * s['energy_rel_error']:+.2f} % |"
+        )
+    return rows
+
+
+def material_rows(materials: dict, table: list[dict]) -> list[str]:
+    """The material study's NCC table: force NCC at 7, 19, 31, 43 modes (four digits), the
+    peak error at 43 modes, and the guard's range over the four (0 when none, ": invalid"
+    when a run of the row is outside its model's validity, materials.json)."""
+    invalid = {b["case"] for b in materials["guard_outside_validity"]}
+    rows = []
+    for m in materials["materials"]:
+        for sel in materials["selections"]:
+            cells = {
+                int(r["modes"]): r for r in table if (r["material"], r["selection"]) == (m, sel)
+            }
+            nccs = " | ".join(f"{float(cells[n]['ncc_force']):.4f}" for n in MAT_MODES)
+            guard = [100 * float(cells[n]["guard_outside_fraction"]) for n in MAT_MODES]
+            lo, hi = min(guard), max(guard)
+            g = "0" if hi == 0 else f"{lo:.1f}-{hi:.1f} %" if lo != hi else f"{lo:.1f} %"
+            i, j = sel.split("-")
+            if any(f"{m}-l{i}-j{j}-m{n}" in invalid for n in MAT_MODES):
+                g += ": invalid"
+            peak = 100 * float(cells[43]["peak_err"])
+            rows.append(f"| {m} | {sel} | {nccs} | {peak:+.1f} % | {g} |")
+    return rows
+
+
+def test_material_tables_are_their_records():
+    materials = _json(MATS / "materials.json")
+    refs = {m: _json(MATS / m / "reference.json") for m in materials["materials"]}
+    rows = reference_rows(materials, refs) + material_rows(materials, _csv(MATS / "materials.csv"))
+    missing = _missing(rows)
+    assert not missing, f"docs/studies.md lacks the record's rows: {missing}"
+
+
+def test_material_rows_read_every_column():
+    """The rows are made from the record's numbers: another NCC or guard is another row."""
+    cells = [
+        {"material": "W", "selection": "1-1", "modes": str(n), "ncc_force": "0.92"}
+        | {"guard_outside_fraction": str(g), "peak_err": "0.048"}
+        for n, g in zip(MAT_MODES, (0.997, 0.998, 0.999, 0.999))
+    ]
+    rec = {"materials": {"W": {}}, "selections": ["1-1"]}
+    rec["guard_outside_validity"] = [{"case": "W-l1-j1-m7"}]
+    one = material_rows(rec, cells)[0]
+    assert one == "| W | 1-1 | 0.9200 | 0.9200 | 0.9200 | 0.9200 | +4.8 % | 99.7-99.9 %: invalid |"
+    cells[0] = cells[0] | {"ncc_force": "0.93"}
+    assert material_rows(rec, cells)[0] != one
