@@ -32,7 +32,8 @@ directory holds one kind (a rerun with another kind is refused: its stored param
   ``n_valid``, ``seed_ordering_holds_valid``) and the runs they do not (``guard_outside_validity``
   with the reason, runs.guard.invalid_reason: a contact patch wider than the retained
   nodes, as PA6's on selections up to 1-3, or an energy rise; docs/studies.md "Material
-  study");
+  study"); ``provenance``: per material, its study scenario's and its reference's stamps
+  (reference_run.study_provenance), so that a copy of the file is stamped on its own;
 - ``DIR/fig9_materials.png``: NCC against modes per material and selection.
 
 A material is set by rebuilding the scenario dict with an inline material table
@@ -70,7 +71,7 @@ from flexmvm.studies.material_report import (
     material_summary,
 )
 from flexmvm.studies.options import StudyOptions, with_settings
-from flexmvm.studies.reference_run import reference_history, reference_problem
+from flexmvm.studies.reference_run import reference_history, reference_problem, study_provenance
 from flexmvm.studies.report import echo_failures
 from flexmvm.studies.runner import (
     Case,
@@ -210,6 +211,7 @@ def material_study(
         modes=list(modes),
         rod=rod,
     )
+    result["provenance"] = {m: study_provenance(scen[m], body, out / m) for m in scen}
     return MaterialStudy(rows, result, material_columns([p.name for p in sc.probes]))
 
 

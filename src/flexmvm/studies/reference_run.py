@@ -116,6 +116,23 @@ def study_version(sc: Scenario, reference: Path) -> dict:
     return {"provenance": stamp(sc), "reference_sha256": file_sha256(reference)}
 
 
+def study_provenance(sc: Scenario, body: str, out_dir: Path) -> dict[str, Any]:
+    """The provenance a study's summary JSON (selection.json, materials.json) carries, so that
+    a copy of it (under docs/) is stamped on its own: {study: runs.provenance.stamp of the
+    study scenario ``sc`` (package source, libraries with scikit-fem and gmsh, resolved
+    scenario, mesh files: what its cases are keyed by), reference: the stamp stored in
+    ``out_dir/reference/reference.json`` (the full-FE reference run of ``body``; None if
+    there is none), reference_sha256: SHA-256 of its history.csv (None if absent)}."""
+    ref_dir = Path(out_dir) / "reference"
+    meta = _read_meta(ref_dir / "reference.json") or {}
+    hist = ref_dir / "history.csv"
+    return {
+        "study": stamp(sc),
+        "reference": meta.get("provenance"),
+        "reference_sha256": file_sha256(hist) if hist.is_file() else None,
+    }
+
+
 def case_reference(case, reference=None):
     """(t, force, probes) of the stored reference history a study case is compared with:
     ``reference`` (default: ``case.params["reference"]``), checked against the case's

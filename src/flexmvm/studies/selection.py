@@ -32,7 +32,9 @@ Files of a study directory ``DIR``:
   metric cells for a run that failed (solver did not converge, the case raised: its
   ``cases/<key>.error.txt`` holds the traceback and a rerun tries it again);
 - ``selection.json``: the smallest-DOF model reaching the target, the run counts, the target,
-  ``failures`` (``{"case", "reason"}`` of every run without a comparison; also printed); with
+  ``failures`` (``{"case", "reason"}`` of every run without a comparison; also printed),
+  ``provenance`` (reference_run.study_provenance: the study's and its reference's stamps, so
+  that a copy of the file is stamped on its own and covers ncc.csv beside it); with
   the interface kind (``--patches``) also ``interface``, ``best_overall``, ``grid_size`` and
   ``exact`` (select_models);
 - ``fig7_ncc_map.png`` (NCC of the force over selection x modes, seed fig. 7) and
@@ -94,6 +96,7 @@ from flexmvm.studies.reference_run import (
     case_reference,
     reference_history,
     scored_row,
+    study_provenance,
     study_version,
 )
 from flexmvm.studies.region_families import (
@@ -295,9 +298,8 @@ def select_models(
         patches=patches,
         interface_modes=interface_modes,
     )
-    return SelectionStudy(
-        report.table, report.summary, [p.name for p in sc.probes], report.interface_rows
-    )
+    summary = report.summary | {"provenance": study_provenance(sc, body, out)}
+    return SelectionStudy(report.table, summary, [p.name for p in sc.probes], report.interface_rows)
 
 
 def _silent(_line: str) -> None:
