@@ -12,6 +12,8 @@ import csv
 import json
 from pathlib import Path
 
+from flexmvm.results.summary_keys import with_current_keys
+
 ROOT = Path(__file__).resolve().parents[1]
 STUDIES = ROOT / "docs" / "studies"
 PAGE = ROOT / "docs" / "studies.md"
@@ -78,9 +80,9 @@ REPLAYS = ("ncc0.95", "ncc0.99-peak0.02", "ncc0.999", "ncc0.9999")
 
 
 def _ref_cell(ref: dict) -> str:
-    s = ref["summary"]
+    s = with_current_keys(ref["summary"])
     return (
-        f"{s['max_contact_force_N']:.1f} N / {1e3 * s['contact_intervals_s'][-1][1]:.3f} ms, "
+        f"{s['max_contact_force_interval_mean_N']:.1f} N / {1e3 * s['contact_intervals_s'][-1][1]:.3f} ms, "
         f"{s['wall_time_s']:.0f} s"
     )
 
@@ -145,13 +147,13 @@ def reference_rows(materials: dict, refs: dict[str, dict]) -> list[str]:
     theory, each <material>/reference.json's summary): forces to 0.1 N, times to 1 us."""
     rows = []
     for m, ref in refs.items():
-        s, t = ref["summary"], materials["materials"][m]
-        peak, end = s["max_contact_force_N"], s["contact_intervals_s"][-1][1]
+        s, t = with_current_keys(ref["summary"]), materials["materials"][m]
+        peak, end = s["max_contact_force_interval_mean_N"], s["contact_intervals_s"][-1][1]
         tp, te = t["theory_peak_force_N"], t["theory_contact_duration_s"]
         rows.append(
             f"| {m} | {peak:.1f} N | {tp:.1f} N ({100 * (peak / tp - 1):+.1f} %) | "
             f"{1e6 * end:.0f} us | {1e6 * te:.0f} us ({100 * (end / te - 1):+.1f} %) | "
-            f"{s['momentum_rel_error']:.1e} | {100 * s['energy_rel_error']:+.2f} % |"
+            f"{s['momentum_rel_error']:.1e} | {100 * s['energy_rel_change']:+.2f} % |"
         )
     return rows
 
