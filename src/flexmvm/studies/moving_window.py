@@ -12,6 +12,10 @@ its circle touches, at most a + h from its centre (h the facets' diameter), so
 rounded up to a whole number of path stations (the distinct positions of the path's nodes
 along its axis), so that every window holds whole stations. The spacing is one station: the
 contact never leaves the station nearest the window's centre by more than the hysteresis.
+A path whose nodes are not on stations (an unstructured mesh: fewer than two nodes a station
+on average, or two stations less than a tenth of a facet apart) has no such lattice; its
+spacing is the contact's reach h + a (a shift by it changes every node the contact loads),
+and the half width is not rounded.
 
 The Hertz radius is that of the contact pressed by the force its partner carries (Johnson,
 *Contact Mechanics*, 1985, eq. 4.22: a = (3 F R / 4 E*)^(1/3)), F the largest component
@@ -62,6 +66,7 @@ class MovingWindowEstimate:
     half_width_m: float
     nodes: int
     windows: int
+    on_stations: bool = True  # False: an unstructured path, spacing h + a (module doc)
 
     @property
     def needed_m(self) -> float:
@@ -96,13 +101,22 @@ class MovingWindowEstimate:
                 f"contact radius a {self.contact_radius_m * mm:.4g} mm"
             ),
             (
-                f"spacing {self.spacing_m * mm:.4g} mm (one path station); half width "
+                f"spacing {self.spacing_m * mm:.4g} mm ({self._spacing_reason()}); half width "
                 f"(1/2 + {self.hysteresis:g}) spacing + h {self.facet_size_m * mm:.4g} mm + a = "
-                f"{self.needed_m * mm:.4g} mm, rounded up to whole stations: "
-                f"{self.half_width_m * mm:.4g} mm"
+                f"{self.needed_m * mm:.4g} mm"
+                + (
+                    f", rounded up to whole stations: {self.half_width_m * mm:.4g} mm"
+                    if self.on_stations
+                    else ""
+                )
             ),
             f"{self.windows} windows of {self.nodes} nodes ({3 * self.nodes} DOF + the modes)",
         ]
+
+    def _spacing_reason(self) -> str:
+        if self.on_stations:
+            return "one path station"
+        return "h + a: the path's nodes are not on stations (an unstructured mesh)"
 
 
 def _pressing_force(sc: Scenario, partner: str, n: np.ndarray, where: str) -> float:
@@ -192,12 +206,16 @@ def estimate_moving_window(
     if stations.size < 2:
         raise InputError(f"moving path {name!r}: its nodes are at one station; expected a line")
     pitch = float(np.min(np.diff(stations)))
-    needed = (0.5 + HYSTERESIS) * pitch + h + a
-    half = pitch * math.ceil(needed / pitch - 1e-9)
+    # a lattice of stations: nodes share them (two a station at least, as across a
+    # structured face) and none is closer than a tenth of a facet to the next (module doc)
+    on_stations = whole.s.size >= 2 * stations.size and pitch >= 0.1 * h
+    spacing = pitch if on_stations else h + a
+    needed = (0.5 + HYSTERESIS) * spacing + h + a
+    half = pitch * math.ceil(needed / pitch - 1e-9) if on_stations else needed
     keep = ~np.isin(whole.nodes, _held_nodes(sc, body, fe.mesh))
     s = whole.s[keep]
     mid = stations[np.argmin(np.abs(stations - 0.5 * (s.min() + s.max())))]
     nodes = int(np.count_nonzero(np.abs(s - mid) <= half * (1 + 1e-9)))
-    windows = max(int(np.ceil(np.ptp(s) / pitch - 1e-9)) + 1, 1)
-    given = (F, force is not None, R, E, a, h, pitch, HYSTERESIS, pitch, half, nodes, windows)
-    return MovingWindowEstimate(body, k, partner, name, *given)
+    windows = max(int(np.ceil(np.ptp(s) / spacing - 1e-9)) + 1, 1)
+    given = (F, force is not None, R, E, a, h, pitch, HYSTERESIS, spacing, half, nodes, windows)
+    return MovingWindowEstimate(body, k, partner, name, *given, on_stations=on_stations)
