@@ -24,13 +24,13 @@ from flexmvm.assembly.initial_velocities import check_joint_velocities, with_rig
 from flexmvm.assembly.joint_build import joint_constraints
 from flexmvm.assembly.load_build import build_loads
 from flexmvm.assembly.mesh_lookup import check_contact_surfaces, contact_nodes, contact_surfaces
-from flexmvm.assembly.moving_region import moving_body_info
+from flexmvm.assembly.moving_region import driver_hook, moving_body_info
 from flexmvm.assembly.plastic_parts import plastic_parts
 from flexmvm.assembly.sag import quasi_static_sag
 from flexmvm.assembly.solver_choice import with_elimination_order
 from flexmvm.assembly.supports import support_joints
 from flexmvm.bodies.body import FlexibleBody
-from flexmvm.integrate.moving_region import MovingRegion
+from flexmvm.integrate.moving_region import MovingRegion, MovingRegions
 from flexmvm.integrate.run_result import Probe, TimeGrid
 from flexmvm.integrate.state import BodyState
 from flexmvm.integrate.system import System
@@ -47,8 +47,9 @@ class BuiltScenario:
     probes: list[Probe]
     grid: TimeGrid
     info: list[BodyInfo]
-    # a moving region's run-time state, the run's switches (integrate/moving_region.py); None: none
-    switches: MovingRegion | None = None
+    # the moving regions' run-time state, the run's switches (integrate/moving_region.py): the
+    # MovingRegion of the one moving body, MovingRegions over several; None: none
+    switches: MovingRegion | MovingRegions | None = None
 
 
 def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
@@ -59,7 +60,7 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
     bodies: list[FlexibleBody] = []
     infos: list[BodyInfo] = []
     states: list[BodyState] = []
-    switches: MovingRegion | None = None
+    regions: list[MovingRegion] = []
     for cfg in sc.bodies:
         check_contact_surfaces(sc, cfg.name, setup.mesh(mesh_key(cfg)))
         massless = None
@@ -68,7 +69,8 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
         sizes = step_sizes(sc.time.dt_s, sc.time.dt_max_s)
         surfaces = contact_surfaces(sc, cfg.name)
         if cfg.model.moves:  # a moving region (assembly/moving_region.py)
-            body, info, switches = moving_body_info(cfg, sc, setup, len(bodies), switches)
+            body, info, region = moving_body_info(cfg, sc, setup, len(bodies))
+            regions.append(region)
         else:
             body, info = build_body(cfg, setup, massless, surfaces, sc.supports, sizes)
         bodies.append(body)
@@ -113,4 +115,4 @@ def build_scenario(sc, setup: SetupCache | None = None) -> BuiltScenario:
     labels = [joint_label(j, k) for k, j in enumerate(sc.joints)]
     labels += [f"supports[{k}]" for k in range(len(sc.supports))]
     check_joint_velocities(system.bodies, states, groups + supported, labels)
-    return BuiltScenario(system, states, probes, grid, infos, switches)
+    return BuiltScenario(system, states, probes, grid, infos, driver_hook(regions))

@@ -3,7 +3,8 @@ reduction/kinds/mvm_moving.py): ``model.kind = "mvm-moving"`` with ``[bodies.mod
 (scenarios/moving_schema.py). Its FE model and reference condition (its supports, or its
 reference) come from the setup cache, the windows are made along the node set ``path`` and
 the body starts on the window nearest its first contact (the path's start by default);
-build_scenario keeps the MovingRegion as the run's ``switches`` (simulate)."""
+build_scenario keeps the MovingRegion as the run's ``switches`` (simulate); several moving
+bodies, one MovingRegions over their regions (``driver_hook``)."""
 
 from __future__ import annotations
 
@@ -17,7 +18,7 @@ from flexmvm.assembly.build_cache import SetupCache
 from flexmvm.assembly.cache_keys import mesh_key, mesh_source
 from flexmvm.assembly.supports import bedded_key, clamp_label
 from flexmvm.errors import InputError, MeshError
-from flexmvm.integrate.moving_region import MovingRegion
+from flexmvm.integrate.moving_region import MovingRegion, MovingRegions
 from flexmvm.reduction.kinds.mvm_moving import GlobalFactor, MovingWindows, moving_windows
 from flexmvm.setup_cache.moving_entries import (
     StoredWindows,
@@ -97,14 +98,9 @@ def covered_nodes(region: MovingRegion, path_nodes: np.ndarray) -> np.ndarray:
     return np.unique(np.concatenate([held, *(w.nodes(k) for k in range(len(w.centres)))]))
 
 
-def moving_body_info(cfg, sc, setup: SetupCache, index: int, switches: MovingRegion | None):
+def moving_body_info(cfg, sc, setup: SetupCache, index: int):
     """(body, BodyInfo, MovingRegion) of the moving region ``cfg``, the index-th body of
-    scenario ``sc``; InputError for a second one (a run drives one)."""
-    if switches is not None:
-        raise InputError(
-            f"bodies[{cfg.name}].model.moving: a second moving region (body "
-            f"{switches.name!r} is one); expected one per scenario"
-        )
+    scenario ``sc``."""
     body, region = moving_body(cfg, sc.supports, setup, index)
     mesh = setup.mesh(mesh_key(cfg))
     covered = covered_nodes(region, mesh.node_set(cfg.model.moving.path))
@@ -120,3 +116,11 @@ def moving_body_info(cfg, sc, setup: SetupCache, index: int, switches: MovingReg
         covered,
     )
     return body, info, region
+
+
+def driver_hook(regions: list[MovingRegion]) -> MovingRegion | MovingRegions | None:
+    """The run's ``switches``: None without a moving region, the region itself for one (its
+    switches, centres and guard read off it), MovingRegions over several."""
+    if not regions:
+        return None
+    return regions[0] if len(regions) == 1 else MovingRegions(regions)

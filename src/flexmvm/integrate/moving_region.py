@@ -183,6 +183,32 @@ class MovingRegion:
         return system, states
 
 
+class MovingRegions:
+    """The driver's hook for several moving regions in one run (one per body): after every
+    accepted step each region may switch its body's window, one after the other on the system
+    the previous one left. ``regions``: their MovingRegion, in body order."""
+
+    def __init__(self, regions):
+        self.regions = tuple(regions)
+
+    def after_step(self, t_s: float, system, states, result):
+        """(system, states) after the switches of every region that switched, or None."""
+        moved = None
+        for region in self.regions:
+            out = region.after_step(t_s, system, states, result)
+            if out is not None:
+                moved = system, states = out
+        return moved
+
+    def outside_stop(self) -> str | None:
+        """The first region's message that stops the run (MovingRegion.outside_stop), or None."""
+        return next((m for r in self.regions if (m := r.outside_stop()) is not None), None)
+
+    def region(self, name: str) -> MovingRegion:
+        """The region of body ``name``."""
+        return next(r for r in self.regions if r.name == name)
+
+
 def contact_centre(system, states, result, index: int, windows: MovingWindows) -> float | None:
     """The path parameter s [m] of the force-weighted centre of the contact points that carried
     a compressive normal impulse in the step (contact rows (contact name, slave node, facet)) with
