@@ -329,6 +329,8 @@ def test_search_finds_the_brute_force_answer_on_the_seed_table():
             r[k] = float(r[k])
         for k in ("guard_outside_fraction", "energy_gain_rel_max"):  # validity fields
             r[k] = float(r[k]) if r.get(k) not in (None, "", "None") else None
+        cells = r.get("plastic_cells_outside")  # empty: an elastic study (no plastic body)
+        r["plastic_cells_outside"] = int(cells) if cells not in (None, "", "None") else None
         table[Candidate((int(r["layers"]), int(r["laps"])), int(r["modes"]), int(r["dof"]))] = r
     targets = {
         "ncc>=0.99": (0.99, None),
