@@ -86,6 +86,11 @@ def test_default_mesh_cb_table_is_its_record():
     _check("materials_default_mesh_cb", DEFAULT_MODES)
 
 
+def test_default_mesh_eq4_table_is_its_record():
+    """Its last column is the Craig-Bampton record's NCC at 43 modes."""
+    _check("materials_default_mesh_eq4", DEFAULT_MODES, cb="materials_default_mesh_cb")
+
+
 def default_reference_cells(materials: dict) -> list[str]:
     """The references table's default-mesh cells: peak (0.1 N, % against the theory's peak
     to 0.1) and contact interval (1 us) of each material's reference, read from
