@@ -91,6 +91,10 @@ def test_default_mesh_eq4_table_is_its_record():
     _check("materials_default_mesh_eq4", DEFAULT_MODES, cb="materials_default_mesh_cb")
 
 
+def test_seed_mesh_eq4_table_is_its_record():
+    _check("materials_seed_mesh_eq4", SEED_MODES)
+
+
 def default_reference_cells(materials: dict) -> list[str]:
     """The references table's default-mesh cells: peak (0.1 N, % against the theory's peak
     to 0.1) and contact interval (1 us) of each material's reference, read from
