@@ -144,6 +144,17 @@ class Rows:
                 out += bq @ v[6:]
         return out
 
+    def body_times(self, b: int, Y: np.ndarray, psi) -> np.ndarray:
+        """Phi_b Y (m, p) for Y (6 + nq, p): Phi_b = [Phi_f, N psi] through body b's nodal
+        selector N when it has one and psi (3 n_nodes, nq) is sparse (a full FE body: its
+        dense (m, nq) block would be stacked and multiplied, ~0.1 GB and 0.2 GFlop for 460
+        contact rows on a 37,000-DOF part), else the block times Y."""
+        bf, bq = self.blocks[b]
+        sel = self.nodal_selector(b) if sp.issparse(psi) and bq.shape[1] else None
+        if sel is None:
+            return bf @ Y[:6] + bq @ Y[6:]
+        return bf @ Y[:6] + sel @ np.asarray(psi @ Y[6:])
+
     def body_matrix(self, b: int) -> np.ndarray | None:
         """The rows of body b as one (m, 6 + nq) matrix, or None."""
         blk = self.blocks.get(b)

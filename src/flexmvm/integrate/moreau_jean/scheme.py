@@ -367,7 +367,7 @@ class MoreauJeanIntegrator:
         for b, Yb in joint_columns.items():
             D[:n_j, :n_j] += jacobian[b] @ Yb
             if b in crows.rows.blocks:
-                D[n_j:, :n_j] += crows.rows.body_matrix(b) @ Yb
+                D[n_j:, :n_j] += crows.rows.body_times(b, Yb, self.system.bodies[b].psi)
         D[:n_j, n_j:] = D[n_j:, :n_j].T
         c = np.zeros(n_j + m_c)
         if n_j:
