@@ -11,7 +11,11 @@ model with fewer coordinates (3 x nodes + modes < 100), at its largest such mode
 1-3 + 19, 3-2 + 13. It prints each candidate's force NCC over the contact window, peak error,
 its DOF and CPU time on each scheme (the table of docs/notes/2026-11-29-study-scheme.md).
 
-    PYTHONPATH=src python benchmarks/study_scheme.py [--quick]
+    PYTHONPATH=src python benchmarks/study_scheme.py [--quick] \
+        [--json docs/studies/selection/scheme_side_by_side.json]
+
+The record carries the provenance stamp of every run (runs.provenance.stamp: the references'
+and each candidate's) and the script's own (script_stamp) in its meta.
 """
 
 from __future__ import annotations
@@ -22,6 +26,7 @@ import sys
 import time
 from pathlib import Path
 
+from flexmvm.runs.provenance import script_stamp, stamp
 from flexmvm.runs.run import run_scenario
 from flexmvm.scenarios import load_scenario
 from flexmvm.studies.grid import mvm_scenario, parse_model, reference_scenario, seed_scheme
@@ -62,19 +67,24 @@ def _run(sc):
 
 
 def side(sc, candidates) -> dict:
-    """The reference and the candidates' rows on scheme ``sc``."""
-    ref, cpu_ref = _run(reference_scenario(sc, "b2"))
+    """The reference and the candidates' rows on scheme ``sc``, each with its run's
+    provenance stamp (runs.provenance.stamp of the scenario it ran)."""
+    ref_sc = reference_scenario(sc, "b2")
+    ref, cpu_ref = _run(ref_sc)
     t, f, p = ref.result.curves()
     rows = []
     for i, j, m in candidates:
-        run, cpu = _run(mvm_scenario(sc, "b2", i, j, m))
+        cand = mvm_scenario(sc, "b2", i, j, m)
+        run, cpu = _run(cand)
         info = next(b for b in run.built.info if b.name == "b2")
         row = scored_row({"model": f"{i}-{j} + {m}", "dof": info.dof - 6}, run, "b2", t, f, p)
-        rows.append(row | {"cpu_s": cpu, "energy_rel": run.summary["energy_rel_change"]})
+        extra = {"cpu_s": cpu, "energy_rel": run.summary["energy_rel_change"]}
+        rows.append(row | extra | {"provenance": stamp(cand)})
     return {
         "reference_cpu_s": cpu_ref,
         "reference_peak_N": float(f.max()),
         "reference_energy_rel": ref.summary["energy_rel_change"],
+        "reference_provenance": stamp(ref_sc),
         "rows": rows,
     }
 
@@ -101,7 +111,10 @@ def main() -> None:
     from tools.validation.paths import git_commit
     from tools.validation.runs import now
 
-    out = {"meta": {"commit": git_commit(), "computed_utc": now(), "settings": SETTINGS}}
+    meta = {"commit": git_commit(), "computed_utc": now(), "settings": SETTINGS}
+    meta["made_by"] = "benchmarks/study_scheme.py"
+    meta["provenance"] = script_stamp(Path(__file__), {**SETTINGS, "quick": args.quick})
+    out = {"meta": meta}
     for name, scheme in (("shipped scheme", shipped(sc)), ("study scheme", study(sc))):
         out[name] = side(scheme, cands)
         _print(name, out[name])
