@@ -139,6 +139,19 @@ class ContactNodes:
             *self._last,
         )
 
+    def displacement_offset(self) -> tuple[np.ndarray, float]:
+        """(d0 (3,), r [m]): the centre d0 of the box of the nodes' body-frame displacements u
+        at the last update and the largest |u - d0| (over the window's nodes when there is
+        one: the ones moved). A search over these nodes' facets in their reference geometry
+        may take the facets as moved by d0 with at most r more, instead of at most max |u|:
+        a bar bent 6 mm at a contact strip moves the strip's facets by ~6 mm but apart from
+        each other by ~0.2 mm."""
+        u = self.u if self.window_rows is None else self.u[self.window_rows]
+        if not len(u):
+            return np.zeros(3), 0.0
+        d0 = 0.5 * (u.min(axis=0) + u.max(axis=0))
+        return d0, float(np.sqrt(((u - d0) ** 2).sum(axis=1).max()))
+
     def rows(self, nodes, w, kc, dirs, A, sign: float):
         """sign * rows of the pairs (nodes, w (m, k) local ids / weights, kc (m,) nodes per
         row, dirs (m, 3)), from the positions of the last update: frame (m, 6), elastic

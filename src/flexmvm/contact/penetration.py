@@ -13,8 +13,9 @@ EDGE_TOL times the facet's circumradius, and the signed normal gap g there is ne
 that projects outside every facet by more than that is beside the other surface, not in it:
 the free parts of a surface far from the contact, whose extended facet planes would give
 negative gaps, are not read as penetrations. Depths beyond the reach (the contact's search
-radius plus the facet body's largest nodal displacement, per step) are not seen; the start
-check (``deep=True``) reaches over both surfaces' extent.
+radius plus the spread of the facet nodes' displacements about their common offset,
+ContactNodes.displacement_offset, per step) are not seen; the start check (``deep=True``)
+reaches over both surfaces' extent.
 """
 
 from __future__ import annotations
@@ -93,23 +94,24 @@ class _Direction:
             memo = ProjectionMemo(node_set, facet_set, self.surface.conn, self.surface.params, k=0)
         self.memo = memo
 
-    def measure(
-        self, states, u_max_facets: float, deep: bool, floor: float
-    ) -> tuple[int, int, Penetration]:
+    def measure(self, states, deep: bool, floor: float) -> tuple[int, int, Penetration]:
         x = self.node_set.x if self.rows is None else self.node_set.x[self.rows]
         st = states[self.against]
+        # the facets searched as moved by d0 with at most u_rel more (displacement_offset):
+        # the nodes' positions taken in the facet body's frame shifted by d0
+        d0, u_rel = self.facet_set.displacement_offset()
         if deep:  # the start check: reach over both surfaces, a throwaway search state
-            reach = self.search_radius + u_max_facets + self.extent
+            reach = self.search_radius + u_rel + self.extent
             search = SearchState.empty(len(x), len(self.surface.geo))
         else:
-            reach, search = self.search_radius + u_max_facets, self.search
+            reach, search = self.search_radius + u_rel, self.search
         status, bad, depth, i, g = penetration_scan(
             x,
             self.facet_set.x,
-            st.r,
+            st.r + st.A @ d0,
             st.A,
             reach,
-            u_max_facets,
+            u_rel,
             self.surface,
             search,
             self.memo.arrays,
@@ -183,12 +185,11 @@ class SurfaceMeasure:
         (per direction, [m]; default 0): only depths above are sought, a shallower one reads 0
         (penetration_scan): the caller passes the deepest it has seen so far. Depths
         up to RESOLUTION_M always read 0."""
-        _, u_s = self._s.update(states[self.slave])
-        _, u_m = self._m.update(states[self.master])
-        u = {self.slave: u_s, self.master: u_m}
+        self._s.update(states[self.slave])
+        self._m.update(states[self.master])
         floors = [0.0] * len(self.directions) if floors is None else floors
         return [
-            d.measure(states, u[d.against], deep, max(float(f), RESOLUTION_M))
+            d.measure(states, deep, max(float(f), RESOLUTION_M))
             for d, f in zip(self.directions, floors)
         ]
 
