@@ -14,10 +14,10 @@ import types
 
 import numpy as np
 import scipy.sparse as sp
+from test_penetration import D, _bodies
 
 from flexmvm.bodies.body import FlexibleBody
 from flexmvm.contact.pairs import PointToSurfaceContact
-from test_penetration import D, _bodies
 
 U = 1.0  # every master node's displacement up [m]: 20 search radii
 
