@@ -7,6 +7,7 @@ page says what the record says. Reads JSON, CSV and Markdown only; no run.
 
 from __future__ import annotations
 
+import csv
 import json
 import math
 from pathlib import Path
@@ -144,3 +145,109 @@ def test_slider_rows_read_every_number():
     assert slider_table_rows(rec) != rows
     assert ncc_text(0.9993743) == "0.99937" and ncc_text(0.99999936) == "0.99999936"
     assert sig2(0.0024833) == "0.0025" and sig2(0.0138819) == "0.014"
+
+
+#: docs/interface_basis.md's table: front.csv's row name -> the page's name, in the page's order
+FRONT_NAMES = {
+    "p1+0": "p1 + 0",
+    "p1+1": "p1 + 1",
+    "p1+2": "p1 + 2",
+    "p1+3": "p1 + 3",
+    "p1+4": "p1 + 4",
+    "p3+3": "p3 + 3",
+    "p3+5": "p3 + 5",
+    "p5+5": "p5 + 5",
+    "p1+10": "p1 + 10",
+    "p1+10f": "p1 + 10 by frequency",
+    "interface:0.3:10": "radius 0.3 mm + 10",
+    "interface:0.6:10": "radius 0.6 mm + 10",
+    "interface:0.8:10": "radius 0.8 mm + 10",
+    "p3+10": "p3 + 10",
+    "p8+5": "p8 + 5",
+    "p5+10f": "p5 + 10 by frequency",
+    "p8+10": "p8 + 10 (shipped)",
+    "p3+20": "p3 + 20",
+    "p5+20f": "p5 + 20 by frequency",
+    "p8+20": "p8 + 20",
+    "p1+39": "p1 + 39",
+    "p5+35f": "p5 + 35 by frequency",
+    "p8+32": "p8 + 32",
+    "part-5": "no patch, 5 modes",
+    "part-10": "no patch, 10 modes",
+    "part-20": "no patch, 20 modes",
+    "mvm-1-1+37": "MVM 1-1 + 37 (seed)",
+    "mvm-1-3+25": "MVM 1-3 + 25 (study winner)",
+}
+
+
+def pct(x: float, always: int | None = None) -> str:
+    """A relative error in %, signed: two decimals below 10 %, one above (+1.49 %, +32.4 %);
+    ``always`` decimals if given."""
+    v = 100 * x
+    decimals = always if always is not None else (2 if abs(v) < 10 else 1)
+    return f"{v:+.{decimals}f} %"
+
+
+def front_rows(rows: dict[str, dict]) -> list[str]:
+    """docs/interface_basis.md's table from front.csv: force NCC to four digits, peak and
+    duration errors to two decimals (one from 10 % on), impulse errors to two, the impact-end
+    probe NCC to three, the free-end one to four."""
+    out = []
+    for name, label in FRONT_NAMES.items():
+        r = {k: float(v) for k, v in rows[name].items() if k not in ("name", "model", "commit")}
+        out.append(
+            f"| {label} | {int(r['dof'])} | {r['ncc_force']:.4f} | {pct(r['peak_err'])} | "
+            f"{pct(r['impulse_err'], 2)} | {pct(r['duration_err'])} | "
+            f"{r['ncc_b2_impact_end']:.3f} | {r['ncc_b2_free_end']:.4f} |"
+        )
+    return out
+
+
+def read_front() -> dict[str, dict]:
+    with open(FRONT / "front.csv", newline="") as fh:
+        return {r["name"]: r for r in csv.DictReader(fh)}
+
+
+def front_lines(rows: dict[str, dict]) -> list[str]:
+    """The page's words from front.csv beside its table: the goal's smallest models, the
+    shipped model, the reference's check and the guard's row of the 0.3 mm patch."""
+    r = {
+        n: {k: float(v) for k, v in row.items() if v and k not in ("name", "model", "commit")}
+        for n, row in rows.items()
+    }
+    p12, p13, p810 = r["p1+2"], r["p1+3"], r["p8+10"]
+    return [
+        (
+            f"(one patch vector + the first three axial modes: NCC {p13['ncc_force']:.4f}, "
+            f"peak {pct(p13['peak_err'])});"
+        ),
+        (
+            f"3 DOF (the first two axial modes) give NCC {p12['ncc_force']:.4f} with the peak "
+            f"{100 * p12['peak_err']:.1f} % high."
+        ),
+        (
+            f"18 DOF (eight patch radii + 10 modes): NCC {p810['ncc_force']:.4f}, peak "
+            f"{pct(p810['peak_err'])}, b2 impact-end and free-end velocity NCC "
+            f"{p810['ncc_b2_impact_end']:.3f} and {p810['ncc_b2_free_end']:.4f}."
+        ),
+        f"Its force NCC ({p810['ncc_force']:.5f})",
+        f"(MVM 1-3 + 25 gives force NCC {r['mvm-1-3+25']['ncc_force']:.6f} against it",
+        (
+            f"| seed 0.8 ms, interface radius 0.3 mm + 10 | "
+            f"{100 * r['interface:0.3:10']['guard_outside_fraction']:.0f} % | | |"
+        ),
+    ]
+
+
+def test_interface_front_table_is_its_record():
+    rows = read_front()
+    missing = _missing(front_rows(rows) + front_lines(rows), DOCS / "interface_basis.md")
+    assert not missing, f"docs/interface_basis.md lacks what front.csv says: {missing}"
+
+
+def test_front_rows_read_every_column():
+    rows = read_front()
+    table = front_rows(rows)
+    rows["p1+2"] = rows["p1+2"] | {"duration_err": "0.5"}
+    assert front_rows(rows) != table
+    assert pct(0.324) == "+32.4 %" and pct(-0.0015) == "-0.15 %" and pct(0.0048, 2) == "+0.48 %"
