@@ -13,8 +13,9 @@ DIR/front.json with its provenance stamp (flexmvm.runs.provenance: package sourc
 numpy/scipy/numba, resolved scenario, mesh files) and the reference's SHA-256, and not rerun
 while both are the same; a row of another code version or reference is rerun, said in one
 line. Prints and writes (DIR/front.csv) DOF (elastic coordinates of
-b2), force NCC, peak / impulse / duration errors, the NCC of the two b2 probe velocities and
-the wall time.
+b2), force NCC, peak / impulse / duration errors, the NCC of the two b2 probe velocities, the
+guard's outside fraction and the run's CPU (time.process_time, basis build included) and wall
+time. DIR/front.json is the CSV's stamped record: docs/interface_basis/ keeps both.
 """
 
 from __future__ import annotations
@@ -144,7 +145,7 @@ def main() -> None:
             if why is None:
                 continue
             print(f"{store.name} row {name}: {why}: recomputed", flush=True)
-        t0 = time.perf_counter()
+        t0, c0 = time.perf_counter(), time.process_time()
         run = run_scenario(sc.with_model("b2", model))
         info = next(b for b in run.built.info if b.name == "b2")
         cmp = compare_runs(t_ref, f_ref, probes_ref, *run.result.curves())
@@ -153,6 +154,7 @@ def main() -> None:
             "dof": info.dof - 6,
             "commit": commit,
             "wall_time_s": round(time.perf_counter() - t0, 1),
+            "cpu_time_s": round(time.process_time() - c0, 1),
         } | current
         row |= {k: v for k, v in cmp.items() if isinstance(v, float)}
         guard = run.summary.get("reduced_contact_guard")
@@ -171,6 +173,8 @@ def main() -> None:
         "duration_err",
         "ncc_b2_impact_end",
         "ncc_b2_free_end",
+        "guard_outside_fraction",
+        "cpu_time_s",
         "wall_time_s",
         "commit",
     ]

@@ -6,10 +6,12 @@ MVM, and the pinned-pinned beam reference (flexmvm.theory.slider_crank).
     python docs/slider_crank/figure.py --rerun    # runs every case again
 
 Each run's deflection history is stored in docs/slider_crank/<case>.npz (t [s], w [m], the
-run's wall time [s] and step count), so the figure can be remade without the runs. The 2.67 mm
-mesh and the rod meshes other than the shipped one are written to a temporary folder by
-flexmvm.mesh.link. On the shared 2-core machine the 100 us runs took 11-19 min each side by side at a load of
-~20, the 50 us run 7 min at a load of ~9.
+run's CPU time [s] (time.process_time, this process) and wall time [s], the summary entries of
+SUMMARY_KEYS, and the run's provenance stamp, flexmvm.runs.provenance.stamp, as JSON), so the
+figure can be remade without the runs; numbers.json carries every run's stamp and summary
+entries, and a stored run whose stamp is not the current code's is named on stderr. The rod
+meshes other than the shipped one are written to a temporary folder by flexmvm.mesh.link. The
+four runs one after the other take ~20 min CPU on the project's 2-core machine.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ import numpy as np
 import flexmvm as fm
 from flexmvm.mesh import link
 from flexmvm.metrics.ncc import ncc
+from flexmvm.runs.provenance import stamp, stamp_mismatch
 from flexmvm.theory.slider_crank import SliderCrank, chord_deflection
 
 HERE = Path(__file__).resolve().parent
@@ -44,11 +47,21 @@ ROD = SliderCrank(0.15, 0.30, 150.0, 200.0e9, 7870.0, 0.008**2, 0.008**4 / 12)
 # first lateral mode's coordinate = the mid-span deflection) from its initial values y(11)
 SIMEON_Q1_T01_M = 1.893192460247178e-04
 SIMEON_Q1_DOT0_MPS = 0.444896105
+# the summary entries (flexmvm.runs.run.summarize, current names) each run's record keeps
+SUMMARY_KEYS = (
+    "status",
+    "n_steps",
+    "steps_on_roundoff_floor",
+    "step_cuts",
+    "max_joint_drift",
+    "energy_rel_change",
+    "numerical_dissipation_J",
+    "newton_residual_max",
+)
 
 
-def run_case(kind: str, size_m: float, dt_s: float, t_end_s: float, mesh_dir: Path) -> dict:
-    """The shipped scenario with the rod's model kind, mesh size, step and window replaced;
-    returns the mid-span deflection history from its probes."""
+def case_scenario(kind: str, size_m: float, dt_s: float, t_end_s: float, mesh_dir: Path):
+    """The shipped scenario with the rod's model kind, mesh size, step and window replaced."""
     with open(SCENARIO, "rb") as f:
         d = tomllib.load(f)
     for b in d["bodies"]:
@@ -61,23 +74,41 @@ def run_case(kind: str, size_m: float, dt_s: float, t_end_s: float, mesh_dir: Pa
         )
     d["time"].update(t_end_s=t_end_s, dt_s=dt_s, output_dt_s=max(dt_s, 1.0e-4))
     d.pop("compare", None)
-    t0 = time.time()
-    run = fm.run(fm.scenario_from_dict(d))
+    return fm.scenario_from_dict(d)
+
+
+def run_case(sc) -> dict:
+    """A run of ``sc``: its mid-span deflection history from its probes, its CPU and wall time,
+    its SUMMARY_KEYS entries and its provenance stamp (both as JSON text)."""
+    c0, t0 = time.process_time(), time.time()
+    run = fm.run(sc)
+    cpu_s, wall_s = time.process_time() - c0, time.time() - t0
     w = chord_deflection(*(run.probe(n).x for n in ("pin_a", "mid", "pin_b")))
     return {
         "t": run.t,
         "w": w,
-        "wall_s": time.time() - t0,
+        "cpu_s": cpu_s,
+        "wall_s": wall_s,
         "steps": run.result.n_steps,
+        "summary": json.dumps({k: run.summary.get(k) for k in SUMMARY_KEYS}),
+        "provenance": json.dumps(stamp(sc)),
     }
 
 
 def stored(name: str, rerun: bool, mesh_dir: Path) -> dict:
+    """The stored run ``name`` (run and stored first if asked or absent); a stored run made
+    under other code, libraries or inputs is named on stderr (stamp_mismatch)."""
     path = HERE / f"{name}.npz"
+    sc = case_scenario(*CASES[name], mesh_dir)
     if rerun or not path.exists():
-        out = run_case(*CASES[name], mesh_dir)
-        np.savez(path, **out)
-    return dict(np.load(path))
+        np.savez(path, **run_case(sc))
+    out = dict(np.load(path))
+    why = stamp_mismatch(
+        json.loads(str(out["provenance"])) if "provenance" in out else None, stamp(sc)
+    )
+    if why is not None:
+        print(f"{name}.npz: {why}; rerun with --rerun", file=sys.stderr)
+    return out
 
 
 def numbers(runs: dict) -> dict:
@@ -107,6 +138,9 @@ def numbers(runs: dict) -> dict:
     }
     out["wall_s"] = {name: float(r["wall_s"]) for name, r in runs.items()}
     out["steps"] = {name: int(r["steps"]) for name, r in runs.items()}
+    out["cpu_s"] = {name: float(r["cpu_s"]) for name, r in runs.items()}
+    out["summary"] = {name: json.loads(str(r["summary"])) for name, r in runs.items()}
+    out["provenance"] = {name: json.loads(str(r["provenance"])) for name, r in runs.items()}
     return out
 
 
