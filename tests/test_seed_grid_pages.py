@@ -189,6 +189,9 @@ def claims_figures(cb: dict, eq: dict) -> list[str]:
             f"{min(spread[1]):.4f}-{max(spread[1]):.4f} at 37)"
         ),
         f"({_sci(min(pens))} to {_sci(max(pens))} m in every run of the eq. (4) grid;",
+        "(37 modes: {})".format(
+            ", ".join(f"{k} {100 * eq[k, 37]['peak_err']:+.1f} %" for k in ("1-1", "2-2", "4-5"))
+        ),
     ]
 
 
