@@ -4,7 +4,7 @@
         [--other scenario|full|mvm:I-J:M]
         [--models mvm-seed:1-1:37,mvm-seed-fixed:1-1:37,mvm:1-1:37]
         [--grid-kinds mvm-seed,mvm --grid-layers 1,2 --grid-laps 1,2,5 --grid-modes 7,19,37]
-        [--json FILE]
+        [--json FILE] [--csv FILE]
 
 SCENARIO defaults to scenarios/rod_impact_seed_mesh.toml. One reference run (BODY full FE, the
 other bodies as --other says), then one run per model of BODY: those of --models and the grid
@@ -15,6 +15,13 @@ of the scenario (flexmvm theory); the reference too. Printed as a table and writ
 (numbers, settings, the git commit of the code). The grids of one kind are also
 `flexmvm select --kind K` and `flexmvm study materials --kind K` (Dask, resumable); this script
 runs any list of models of any kinds, one process, no resume.
+
+With --csv, the model rows go to a CSV table (one line per model: kind, layers, laps, retained
+nodes, modes, DOF with the frame, force NCC over the reference's contact window and over the
+whole window, the errors, probes' NCC, peak force, penetration, the impulse share outside the
+retained nodes, wall and CPU time) and the JSON keeps the reference row (its full stamp) and
+each model's run key (`run_keys`, runs.provenance.run_key: code, libraries, resolved scenario,
+meshes): the record of docs/seed_reproduction/grid_eq4_meta.json + grid_eq4_ncc.csv.
 """
 
 from __future__ import annotations
@@ -25,6 +32,7 @@ import subprocess
 import time
 from pathlib import Path
 
+from flexmvm.results.atomic import write_table_csv
 from flexmvm.runs.compare import compare_runs
 from flexmvm.runs.provenance import stamp
 from flexmvm.runs.run import run_scenario
@@ -70,6 +78,51 @@ def _row(label: str, sc, run, ref_curves, theory) -> dict:
     return row
 
 
+CSV_COLUMNS = [
+    "kind",
+    "layers",
+    "laps",
+    "nodes",
+    "modes",
+    "dof_total",
+    "ncc_force",
+    "ncc_force_whole",
+    "peak_err",
+    "impulse_err",
+    "duration_err",
+    "ncc_b2_impact_end",
+    "ncc_b2_free_end",
+    "max_contact_force_N",
+    "max_penetration_m",
+    "guard_outside_fraction",
+    "wall_time_s",
+    "cpu_time_s",
+]
+
+
+def _csv_row(row: dict, body: str) -> dict:
+    """A model row as a CSV line: its grid fields from the label kind:i-j:m, retained nodes
+    from the DOF (3 per node + modes + 6 frame coordinates), vs_full's metrics."""
+    kind, sel, modes = row["model"].split(":")
+    i, j = (int(x) for x in sel.split("-"))
+    dof_total = row["dof"][body]
+    guard = (row.get("reduced_contact_guard") or {}).get(body) or {}
+    return {
+        "kind": kind,
+        "layers": i,
+        "laps": j,
+        "nodes": (dof_total - 6 - int(modes)) // 3,
+        "modes": int(modes),
+        "dof_total": dof_total,
+        **row.get("vs_full", {}),
+        "max_contact_force_N": row["max_contact_force_N"],
+        "max_penetration_m": row["max_penetration_m"],
+        "guard_outside_fraction": guard.get("impulse_fraction_outside"),
+        "wall_time_s": row["wall_time_s"],
+        "cpu_time_s": row["cpu_time_s"],
+    }
+
+
 def _fmt(row: dict, body: str) -> str:
     v = row.get("vs_full", {})
     t = row.get("vs_theory", {})
@@ -101,6 +154,7 @@ def main() -> None:
     ap.add_argument("--grid-laps", default="1,2,5")
     ap.add_argument("--grid-modes", default="7,19,37")
     ap.add_argument("--json", type=Path, default=None)
+    ap.add_argument("--csv", type=Path, default=None)
     args = ap.parse_args()
 
     base = study_scenario(
@@ -125,7 +179,7 @@ def main() -> None:
         text=True,
         check=False,
     ).stdout.strip()
-    t0 = time.perf_counter()
+    t0, c0 = time.perf_counter(), time.process_time()
     ref_sc = base.with_model(args.body, full(reference=ref_set))
     ref = run_scenario(ref_sc, label="full")
     ref_curves = ref.result.curves()
@@ -143,7 +197,10 @@ def main() -> None:
     print(_fmt(rows[0], args.body), flush=True)
     for text in models:
         sc = base.with_overrides(body_models={args.body: _model(text, ref_set)})
-        row = _row(text, sc, run_scenario(sc, label=text), ref_curves, theory)
+        c_run = time.process_time()
+        run = run_scenario(sc, label=text)
+        row = _row(text, sc, run, ref_curves, theory)
+        row["cpu_time_s"] = time.process_time() - c_run
         rows.append(row)
         print(_fmt(row, args.body), flush=True)
     out = {
@@ -154,8 +211,16 @@ def main() -> None:
         "other": args.other,
         "commit": commit,
         "wall_time_total_s": time.perf_counter() - t0,
+        "cpu_time_total_s": time.process_time() - c0,
         "rows": rows,
     }
+    if args.csv is not None:
+        args.csv.parent.mkdir(parents=True, exist_ok=True)
+        write_table_csv(args.csv, CSV_COLUMNS, [_csv_row(r, args.body) for r in rows[1:]])
+        out["reference"] = rows[0]
+        out["run_keys"] = {r["model"]: r["provenance"]["key"] for r in rows[1:]}
+        out["rows_csv"] = args.csv.name
+        del out["rows"]
     if args.json is not None:
         args.json.parent.mkdir(parents=True, exist_ok=True)
         args.json.write_text(json.dumps(out, indent=1))
