@@ -147,7 +147,7 @@ class ContactNodes:
         a bar bent 6 mm at a contact strip moves the strip's facets by ~6 mm but apart from
         each other by ~0.2 mm."""
         u = self.u if self.window_rows is None else self.u[self.window_rows]
-        if not len(u):
+        if not self.nq or not len(u):  # a rigid body's nodes do not move in its frame
             return np.zeros(3), 0.0
         d0 = 0.5 * (u.min(axis=0) + u.max(axis=0))
         return d0, float(np.sqrt(((u - d0) ** 2).sum(axis=1).max()))

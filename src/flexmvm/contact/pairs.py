@@ -224,9 +224,7 @@ class PointToSurfaceContact:
         self._facet, self._out); returns the number of nodes with a facet."""
         sm = states[self.master]
         m = self._m
-        # the master facets searched as moved by d0 with at most u_rel more
-        # (ContactNodes.displacement_offset): a deflected master keeps its pruning
-        d0, u_rel = m.displacement_offset() if self._u_max > 0.0 else (np.zeros(3), 0.0)
+        d0, u_rel = m.displacement_offset()  # the facets as moved by d0, at most u_rel more
         status, facet, n = scan_nodes(
             self._s.x,
             self._s.xd,
