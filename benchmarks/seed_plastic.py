@@ -35,7 +35,8 @@ impulse kept as `theory`), the run's wall and CPU time (this process's, over the
 as a table; OUT gets seed_plastic.json (all numbers, each row with its provenance stamp), each
 run's curves (LABEL.npz) and seed_plastic.png (the seed's fig. 5 layout: contact force, and
 the axial velocities of BODY's impact end and free end; elastic, plastic, theory), all
-rewritten as each run finishes: a process stopped late keeps the runs it finished, and --reuse OUT takes up its elastic and plastic ones.
+rewritten as each run finishes: a process stopped late keeps the runs it finished, and
+--reuse OUT takes up its elastic and plastic ones.
 """
 
 from __future__ import annotations
