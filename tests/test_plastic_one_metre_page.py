@@ -1,6 +1,7 @@
 """docs/plasticity.md's 1 m rods (the seed's own case, elastic and plastic, and the MVM form of
 b2 against full FE plastic) are their stamped records (issue 51 item 4): the page's tables
-are remade here from docs/seed_plastic/one_metre.json (benchmarks/seed_plastic.py) and must stand on the page as they are. Reads JSON, TOML and
+are remade here from docs/seed_plastic/one_metre.json and one_metre_mvm.json
+(benchmarks/seed_plastic.py) and must stand on the page as they are. Reads JSON, TOML and
 Markdown only; no run.
 """
 
@@ -150,6 +151,55 @@ def _vibration(row: dict, v0: float) -> float:
     return 1 - (m1 * v1**2 + m2 * v2**2) / (m1 * v0**2)
 
 
+def _mvm_row(name: str, r: dict, fe: dict, verdict: str) -> str:
+    b2, fe_b2 = r["plastic"]["b2"], fe["plastic"]["b2"]
+    vs = r["vs_plastic"]
+    dof = r["dof"]["b2"]  # the reduced b2 with its 6 frame coordinates
+    work, dent = _work_uJ(r, "b2"), 1e6 * b2["permanent_indentation_m"]
+    out = b2["cells_yield_outside_retained"]
+    outside = f"{out} (in {b2['steps_yield_outside_retained']} steps)" if out else "0"
+    return (
+        f"| {name} | {dof:,} | {vs['ncc_force']:.5f} | {100 * vs['peak_err']:+.2f} % | "
+        f"{100 * vs['impulse_err']:+.2f} % | {work:,.0f} uJ ({_pct(work, _work_uJ(fe, 'b2'))}) | "
+        f"{dent:.3f} um ({_pct(dent, 1e6 * fe_b2['permanent_indentation_m'])}) | "
+        f"{b2['plastic_cells']} | {outside} | {verdict} |"
+    )
+
+
+def mvm_table_rows(record: dict, mvm: dict) -> list[str]:
+    """The page's table 'MVM b2 on the 1 m rods' (the full-FE row and the benchmark's MVM
+    rows; the whole-cell column is left out: the record does not hold it; the 5-5 row is the
+    select study's, one_metre_select_ncc.csv) and the sentences after it that read the runs
+    (7-5's plastic strain and b1's work, the CPU), from one_metre.json and one_metre_mvm.json."""
+    fe = _rows(record)["plastic"]
+    runs = _rows(mvm)
+    b2 = fe["plastic"]["b2"]
+    rows = [
+        (
+            f"| full FE | {fe['dof']['b2']:,} | all | 1 | {fe['peak_force_N']:.1f} N | "
+            f"{1e3 * fe['impulse_Ns']:.2f} mN s | {_work_uJ(fe, 'b2'):,.0f} uJ | "
+            f"{1e6 * b2['permanent_indentation_m']:.3f} um | {b2['plastic_cells']} | - | |"
+        )
+    ]
+    names = {"mvm 5-7:37": ("5-7", "invalid (plastic guard)"), "mvm 7-5:37": ("**7-5**", None)}
+    for run, (name, verdict) in names.items():
+        r = runs[run]
+        rows.append(_mvm_row(name, r, fe, verdict or "**holds the zone**"))
+    r75, r57 = runs["mvm 7-5:37"], runs["mvm 5-7:37"]
+    alpha = [r["plastic"]["b2"]["peak_equivalent_plastic_strain"] for r in (r75, fe)]
+    b1 = _pct(_work_uJ(r75, "b1"), _work_uJ(fe, "b1"))
+    cpu = [r["cpu_time_s"] for r in (r75, fe, r57)]
+    rows += [
+        f"dent and its peak plastic strain ({alpha[0]:.4f} against {alpha[1]:.4f}) are full FE's",
+        f"b1's plastic work (full FE in both) moves by {b1[:-2]} %.",
+        (
+            f"the 7-5 run took {cpu[0]:.0f} s of CPU against the full-FE plastic run's {cpu[1]:.0f} s "
+            f"({cpu[0] / cpu[1]:.2f} times; 5-7: {cpu[2]:.0f} s, {cpu[2] / cpu[1]:.2f} times;"
+        ),
+    ]
+    return rows
+
+
 def _missing(rows: list[str], page: str) -> list[str]:
     """The rows not on the page; an MVM row is matched with its whole-cell column cut out, a
     sentence across the page's line breaks."""
@@ -163,6 +213,21 @@ def test_one_metre_table_is_its_record():
     record = _load("one_metre.json")
     missing = _missing(one_metre_table_rows(record, _v0(record)), PAGE.read_text())
     assert not missing, f"docs/plasticity.md lacks one_metre.json's rows: {missing}"
+
+
+def test_one_metre_mvm_table_is_its_record():
+    rows = mvm_table_rows(_load("one_metre.json"), _load("one_metre_mvm.json"))
+    missing = _missing(rows, PAGE.read_text())
+    assert not missing, f"docs/plasticity.md lacks one_metre_mvm.json's rows: {missing}"
+
+
+def test_mvm_record_reuses_the_stored_full_fe_runs():
+    """one_metre_mvm.json's elastic and plastic rows are one_metre.json's (--reuse): the
+    same stamps, so its MVM rows were compared with the stored full-FE run."""
+    fe, mvm = _rows(_load("one_metre.json")), _rows(_load("one_metre_mvm.json"))
+    for run in ("elastic", "plastic"):
+        assert mvm[run]["provenance"] == fe[run]["provenance"]
+        assert mvm[run]["peak_force_N"] == fe[run]["peak_force_N"]
 
 
 @pytest.mark.parametrize("field", ["peak_force_N", "restitution"])
