@@ -30,11 +30,13 @@ e = J / (m* v0) - 1 (m* = m1 m2 / (m1 + m2): the rods' centres of mass), per pla
 plastic work, permanent indentation, peak equivalent plastic strain and the retained-region
 guard; every run against the elastic one and the MVM runs against the plastic one (force NCC
 over the contact window, peak / impulse / duration errors: runs.compare.compare_runs),
-and against the 1D wave-Hertz theory (elastic; `flexmvm theory`). Printed as a table; OUT gets
-seed_plastic.json (all numbers), each run's curves (LABEL.npz) and seed_plastic.png (the seed's
-fig. 5 layout: contact force, and the axial velocities of BODY's impact end and free end;
-elastic, plastic, theory), all rewritten as each run finishes: a process stopped late keeps the
-runs it finished, and --reuse OUT takes up its elastic and plastic ones.
+and against the 1D wave-Hertz theory (elastic; `flexmvm theory`; its peak, contact span and
+impulse kept as `theory`), the run's wall and CPU time (this process's, over the run). Printed
+as a table; OUT gets seed_plastic.json (all numbers, each row with its provenance stamp), each
+run's curves (LABEL.npz) and seed_plastic.png (the seed's fig. 5 layout: contact force, and
+the axial velocities of BODY's impact end and free end; elastic, plastic, theory), all
+rewritten as each run finishes: a process stopped late keeps the runs it finished, and
+--reuse OUT takes up its elastic and plastic ones.
 """
 
 from __future__ import annotations
@@ -72,7 +74,8 @@ def _impulse(run) -> float:
     return float(np.sum(run.steps.contact_impulse_Ns))
 
 
-def _row(label: str, run, sc, refs: dict) -> dict:
+def _row(label: str, run, sc, refs: dict, cpu_s: float) -> dict:
+    """The run's numbers (module doc); cpu_s: this process's CPU time over the run [s]."""
     s = run.summary
     masses = [b.inv.mass for b in run.built.system.bodies]  # [kg], b1 the striker
     v0 = float(np.linalg.norm(sc.bodies[0].placement.velocity_mps))
@@ -92,6 +95,7 @@ def _row(label: str, run, sc, refs: dict) -> dict:
         "step_cuts": s["step_cuts"],
         "n_steps": s["n_steps"],
         "wall_time_s": s["wall_time_s"],
+        "cpu_time_s": cpu_s,
         "plastic": s.get("plastic", {}),
         "provenance": stamp(sc),
     }
@@ -99,6 +103,18 @@ def _row(label: str, run, sc, refs: dict) -> dict:
     for name, ref in refs.items():
         row[f"vs_{name}"] = compare_runs(*ref, *curves)
     return row
+
+
+def _theory_numbers(theory) -> dict | None:
+    """The 1D theory's peak force [N], contact span (first to last instant of positive force,
+    [s]) and impulse [N s] (trapezoidal), for the page's theory columns."""
+    if theory is None:
+        return None
+    t, f = theory[0], theory[1]
+    on = np.flatnonzero(f > 0.0)
+    span = float(t[on[-1]] - t[on[0]]) if on.size else 0.0
+    impulse = float(np.sum(0.5 * (f[1:] + f[:-1]) * np.diff(t)))
+    return {"peak_force_N": float(np.max(f)), "contact_s": span, "impulse_Ns": impulse}
 
 
 def reused_rows(record: Path, scenarios: dict) -> list[dict]:
@@ -242,13 +258,14 @@ def main() -> None:
         print(_fmt(row, args.body), "(reused)", flush=True)
     t0 = time.perf_counter()
     for label, sc in _cases(args, plastic, elastic, set(curves)):
+        c0 = time.process_time()
         try:
             run = run_scenario(sc, label=label, progress=args.progress)
         except (InputError, SimulationFailed) as exc:  # e.g. a region holding no whole cell
             print(f"{label:12s} not run: {exc}", flush=True)
             rows.append({"run": label, "status": "refused or failed", "reason": str(exc)})
             continue
-        row = _row(label, run, sc, refs)
+        row = _row(label, run, sc, refs, time.process_time() - c0)
         rows.append(row)
         curves[label] = run.result.curves()
         _save_curves(args.out / f"{label.replace(' ', '_').replace(':', '_')}.npz", curves[label])
@@ -260,6 +277,7 @@ def main() -> None:
             "t_end_s": plastic.time.t_end_s,
             "dt_s": plastic.time.dt_s,
             "body": args.body,
+            "theory": _theory_numbers(theory),
             "rows": rows,
             "wall_time_total_s": time.perf_counter() - t0,
         }
