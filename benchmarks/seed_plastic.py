@@ -277,10 +277,10 @@ def main() -> None:
         print(_fmt(row, args.body), flush=True)
         out = {
             "scenario": str(args.scenario),
+            "rod_mesh": FINE_MESH if args.fine_mesh else "the scenario's",
             "t_end_s": plastic.time.t_end_s,
             "dt_s": plastic.time.dt_s,
             "body": args.body,
-            "rod_mesh": FINE_MESH if args.fine_mesh else "the scenario's",
             "rows": rows,
             "wall_time_total_s": time.perf_counter() - t0,
         }

@@ -2,12 +2,15 @@
 (issue 51 item 4), as tests/test_page_figures.py does for other pages: the short plastic rods
 on the finer contact mesh (docs/seed_plastic/short_rods_fine_mesh_plastic.json, from
 ``benchmarks/seed_plastic.py --fine-mesh``, against the default mesh's plastic run in
-short_rods.json). Each figure is remade here from its record and must stand on the page as it
-is. Reads JSON and Markdown only; no run.
+short_rods.json), and `flexmvm select` on the 1 m plastic rods (one_metre_select_ncc.csv and
+its stamped one_metre_select_selection.json: the answer and the 1 m table's 5-5 and 7-5
+columns the study measures). Each figure is remade here from its record and must stand on the
+page as it is. Reads JSON, CSV and Markdown only; no run.
 """
 
 from __future__ import annotations
 
+import csv
 import json
 from pathlib import Path
 
@@ -93,3 +96,61 @@ def test_fine_mesh_phrases_read_the_record():
     b1 = {**row["plastic"]["b1"], "plastic_work_J": 1.1 * row["plastic"]["b1"]["plastic_work_J"]}
     other = {**fine, "rows": [{**row, "plastic": {**row["plastic"], "b1": b1}}]}
     assert fine_mesh_phrases(other, coarse)[5] != one[5]
+
+
+#: `flexmvm select` on the 1 m plastic rods: its ncc.csv and selection.json, stored side by side
+SELECT_CSV = PLASTIC / "one_metre_select_ncc.csv"
+SELECT_JSON = PLASTIC / "one_metre_select_selection.json"
+#: the frame coordinates the page's 1 m table adds to the study's DOF (3 x nodes + modes)
+FRAME_DOF = 6
+
+
+def _rows(path: Path) -> list[dict]:
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(fh))
+
+
+def _sel(r: dict) -> str:
+    return f"{r['layers']}-{r['laps']}"
+
+
+def select_phrases(selection: dict, ncc: list[dict]) -> list[str]:
+    """The 1 m select's answer (model, DOF, force NCC to six digits) and, per study row, the
+    page's 1 m table columns the study measures: DOF with the frame's 6, force NCC (five
+    digits), peak and impulse errors, cells outside the region at yield and the verdict
+    (runs.guard's plastic guard: any such cell makes the row invalid)."""
+    answer = f"{_sel(selection)} + {selection['modes']}"
+    invalid = [_sel(r) for r in ncc if int(r["plastic_cells_outside"]) > 0]
+    found = f"{selection['dof']:,} DOF, NCC {selection['ncc_force']:.6f}"
+    phrases = [f"answers {answer}, {found}, with {' and '.join(invalid)} invalid by the guard"]
+    for r in ncc:
+        cells = int(r["plastic_cells_outside"])
+        verdict = "invalid (plastic guard)" if cells else "holds the zone"
+        errors = f"{100 * float(r['peak_err']):+.2f} % | {100 * float(r['impulse_err']):+.2f} %"
+        phrases += [
+            f"| {_sel(r)} | {int(r['dof']) + FRAME_DOF:,} | ",
+            f"| {float(r['ncc_force']):.5f} | {errors} | ",
+            f"| {cells} | {verdict} |",
+        ]
+    return phrases
+
+
+def test_one_metre_select_figures_are_its_record():
+    selection = _json(SELECT_JSON)
+    ncc = _rows(SELECT_CSV)
+    assert selection["passed"] and [_sel(r) for r in ncc] == ["5-5", "7-5"]
+    (answer,) = [r for r in ncc if _sel(r) == _sel(selection)]  # the same study: its row
+    assert float(answer["ncc_force"]) == selection["ncc_force"]
+    assert int(answer["dof"]) == selection["dof"]
+    missing = _missing([*select_phrases(selection, ncc), SELECT_JSON.name])
+    assert not missing, f"docs/plasticity.md lacks the 1 m select's figures: {missing}"
+
+
+def test_select_phrases_read_the_record():
+    """Another NCC or another count of cells outside is another phrase."""
+    selection, ncc = _json(SELECT_JSON), _rows(SELECT_CSV)
+    one = select_phrases(selection, ncc)
+    assert select_phrases({**selection, "ncc_force": 0.9998}, ncc)[0] != one[0]
+    quiet = [{**r, "plastic_cells_outside": "0"} for r in ncc]
+    assert select_phrases(selection, quiet)[0] != one[0]
+    assert select_phrases(selection, quiet)[3] != one[3]
