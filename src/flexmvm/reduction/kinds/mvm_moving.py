@@ -110,9 +110,10 @@ class GlobalFactor:
         self.columns.clear()
         self.solve = _LazySolve(self.fe, self.free)
 
-    def attachment(self, nodes: np.ndarray) -> np.ndarray:
+    def attachment(self, nodes: np.ndarray, extra: int = 0) -> np.ndarray:
         """(n_dof, 3 n_w) static responses to unit loads at the nodes' DOFs (a held DOF
-        gives a zero column). Each node's three are solved once (with K_ff's factor, one
+        gives a zero column), Fortran order, and ``extra`` columns after them left unset
+        (room for a window's modal part: nodal_form makes the basis in place). Each node's three are solved once (with K_ff's factor, one
         BLAS thread: the many-right-hand-side solve is ~10x slower threaded on shared cores)
         and kept: neighbouring windows share most of their nodes."""
         new = [int(k) for k in nodes if int(k) not in self.columns]
@@ -127,7 +128,7 @@ class GlobalFactor:
                 out[self.free] = np.asarray(self.solve(rhs)).reshape(self.free.size, b.size)
             for j, k in enumerate(new):
                 self.columns[k] = out[:, 3 * j : 3 * j + 3]
-        return _columns_side_by_side([self.columns[int(k)] for k in nodes])
+        return _columns_side_by_side([self.columns[int(k)] for k in nodes], extra)
 
     def window_basis(self, nodes: np.ndarray) -> Basis:
         """The window of ``nodes``: span{attachment modes, Phi} in nodal form (module doc)."""
@@ -135,7 +136,8 @@ class GlobalFactor:
 
     def window(self, nodes: np.ndarray) -> tuple[Basis, np.ndarray]:
         """(the window's Basis, its k_hat = psi^T K psi (nq, nq) [N/m]) (nodal_form)."""
-        psi, freqs, k_hat = nodal_form(self.fe, self.attachment(nodes), self.phi, node_dofs(nodes))
+        work = self.attachment(nodes, self.phi.shape[1])
+        psi, freqs, k_hat = nodal_form(self.fe, work, self.phi, node_dofs(nodes))
         basis = Basis(ModelKind(NAME), psi, nodes, self.phi.shape[1], self.reference, freqs)
         return basis, k_hat
 
@@ -155,10 +157,12 @@ class _LazySolve:
         return solve(rhs)
 
 
-def _columns_side_by_side(blocks: list[np.ndarray]) -> np.ndarray:
-    """np.hstack(blocks) in Fortran order: each block's columns copied whole (a C-order
-    hstack of column blocks of 12,000 rows took 18 ms a window on the fine beam)."""
-    out = np.empty((blocks[0].shape[0], sum(b.shape[1] for b in blocks)), order="F")
+def _columns_side_by_side(blocks: list[np.ndarray], extra: int = 0) -> np.ndarray:
+    """np.hstack(blocks) in Fortran order and ``extra`` unset columns after them: each
+    block's columns copied whole (a C-order hstack of column blocks of 12,000 rows took 18 ms
+    a window on the fine beam)."""
+    n = sum(b.shape[1] for b in blocks)
+    out = np.empty((blocks[0].shape[0], n + extra), order="F")
     j = 0
     for b in blocks:
         out[:, j : j + b.shape[1]] = b
@@ -167,9 +171,11 @@ def _columns_side_by_side(blocks: list[np.ndarray]) -> np.ndarray:
 
 
 def nodal_form(
-    fe: FEModel, statics: np.ndarray, phi: np.ndarray, b: np.ndarray
+    fe: FEModel, work: np.ndarray, phi: np.ndarray, b: np.ndarray
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """span{statics, phi} (n_dof, 3 n_w + m) rewritten as [T, Z]: T = statics F^-1 with F =
+    """span{statics, phi} (n_dof, 3 n_w + m) rewritten as [T, Z], made in ``work`` (n_dof,
+    3 n_w + m), Fortran order, whose first 3 n_w columns hold the statics (attachment's
+    ``extra``: a 74 MB copy a window less on the cam's follower): T = statics F^-1 with F =
     statics[b] (the window's flexibility, symmetric positive definite): the static constraint
     modes of the window DOFs b (T[b] = I, the least strain energy with those values), and
     Z = phi - T phi[b] (the global modes with the window held, Z[b] = 0) made M-orthonormal
@@ -177,15 +183,14 @@ def nodal_form(
     reduced stiffness without a product with K: K T = E F^-1 (E the unit columns at b), so
     T^T K T = F^-1 and T^T K Z = F^-1 Z[b] = 0; Z^T K Z = diag(omega^2). InputError when F
     is singular (a DOF in b held by the reference condition)."""
+    n_b, n_z = b.size, phi.shape[1]
+    psi, statics = work, work[:, :n_b]
     F = 0.5 * (statics[b] + statics[b].T)
     try:
         chol = sla.cho_factor(F)
     except np.linalg.LinAlgError:
         raise InputError("a moving window holds a DOF its reference condition holds") from None
-    n_b, n_z = b.size, phi.shape[1]
-    psi = np.empty((statics.shape[0], n_b + n_z), order="F")
-    psi[:, :n_b] = statics
-    T = _right_solve(chol, psi[:, :n_b])
+    T = _right_solve(chol, statics)
     T[b] = np.eye(b.size)
     Z = phi - T @ phi[b]
     Z[b] = 0.0
