@@ -1,8 +1,8 @@
 """A moving region read from the setup cache makes a window's basis when the contact first
 reaches it, not every window at the set-up (assembly/moving_region.py; the cam follower's
-contact visits 13 of its 24 windows). A run that makes them all (the entry absent) and one that
-makes them as visited give the same history bit for bit: the same basis from the same stored
-columns, in the same order of operations."""
+contact visits 14 of its 24 windows in a revolution). A run that makes them all (the entry
+absent) and one that makes them as visited give the same history bit for bit: the same basis
+from the same stored columns, in the same order of operations."""
 
 from __future__ import annotations
 

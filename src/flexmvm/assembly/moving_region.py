@@ -72,7 +72,7 @@ def moving_body(cfg, supports, setup, index: int, start_s: float | None = None):
     stored in the setup cache's ``moving-`` entry (setup_cache/moving_entries.py), then the
     statics released; from a stored entry: the parts read, the first window's basis made, and
     each other window's when the contact first reaches it (from the stored static columns,
-    kept: a cam's contact visits 13 of the follower's 24 windows)."""
+    kept: one revolution of the cam visits 14 of its follower's 24 windows)."""
     c0 = time.process_time()
     windows, key, stored = _windows(cfg, supports, setup)
     start = 0 if start_s is None else windows.nearest(start_s)
