@@ -19,7 +19,12 @@ from flexmvm.assembly.cache_keys import mesh_key, mesh_source
 from flexmvm.assembly.supports import bedded_key, clamp_label
 from flexmvm.errors import InputError, MeshError
 from flexmvm.integrate.moving_region import MovingRegion, MovingRegions
-from flexmvm.reduction.kinds.mvm_moving import GlobalFactor, MovingWindows, moving_windows
+from flexmvm.reduction.kinds.mvm_moving import (
+    GlobalFactor,
+    MovingWindows,
+    basis_signature,
+    moving_windows,
+)
 from flexmvm.setup_cache.moving_entries import (
     StoredWindows,
     load_moving,
@@ -79,12 +84,14 @@ def moving_body(cfg, supports, setup, index: int, start_s: float | None = None):
     region = MovingRegion(index, windows, cfg.name, start, cfg.model.moving.outside)
     if stored is not None:
         region.parts.update(stored.parts)
+        region.signatures.update(stored.signatures)
     else:
         for k in range(len(windows.centres)):
             region.body(k)
         if key is not None:
-            f = windows.factor
-            save_moving(key, f.phi, f.freqs_hz, f.columns, region.parts)
+            f, n = windows.factor, len(windows.centres)
+            signatures = {k: basis_signature(windows.basis(k).psi) for k in range(n)}
+            save_moving(key, f.phi, f.freqs_hz, f.columns, region.parts, signatures)
         windows.factor.release()  # every window made: the run needs no more statics
     body = region.body(start)
     region.setup_cpu_s = time.process_time() - c0

@@ -37,7 +37,12 @@ from flexmvm.bodies.build import BodyParts, body_from_parts
 from flexmvm.bodies.invariants import inertia_invariants
 from flexmvm.bodies.rotation import cross3
 from flexmvm.integrate.state import BodyState
-from flexmvm.reduction.kinds.mvm_moving import MovingWindows, one_blas_thread
+from flexmvm.reduction.kinds.mvm_moving import (
+    MovingWindows,
+    basis_signature,
+    one_blas_thread,
+    same_signature,
+)
 
 #: The switch's hysteresis: the contact centre must pass the half spacing by this fraction of
 #: the spacing before the body switches (no switching back and forth at a boundary)
@@ -89,6 +94,10 @@ class MovingRegion:
         self.window, self.outside, self.hysteresis = start, MovingOutside(outside), hysteresis
         self._bodies: dict[int, object] = {}
         self.parts: dict[int, BodyParts] = {}  # each window's parts (made, or from the cache)
+        # the signatures of the bases stored parts came from (basis_signature), and how many
+        # windows made again differed from theirs (their parts then made again too)
+        self.signatures: dict[int, np.ndarray] = {}
+        self.parts_remade = 0
         self.switches: list[Switch] = []
         self.uncovered: str | None = None  # the guard's message, once the contact left
         self.centres: list[tuple[float, float]] = []  # (t, s) of the contact centre
@@ -97,11 +106,17 @@ class MovingRegion:
 
     def body(self, k: int):
         """The FlexibleBody of window k (its parts made on first use unless ``parts`` holds
-        them: a setup-cache entry)."""
+        them: a setup-cache entry, used only if the basis made now has the signature of the
+        one they came from)."""
         if k not in self._bodies:
             fe = self.windows.factor.fe
             with one_blas_thread():  # small products, shared cores
                 basis = self.windows.basis(k)
+                stored = self.signatures.get(k)
+                checkable = stored is not None and k in self.parts
+                if checkable and not same_signature(basis_signature(basis.psi), stored):
+                    del self.parts[k]
+                    self.parts_remade += 1
                 if k not in self.parts:
                     inv = inertia_invariants(fe.mesh.nodes, fe.M_scalar, basis.psi)
                     self.parts[k] = BodyParts(inv, self.windows.stiffness(k))  # no K psi

@@ -5,9 +5,10 @@ a second run of the same scenario skips it.
 Stored: the global modes Phi (n_dof, m) and their frequencies [Hz], every path node's three
 static columns K_ff^-1 e_d (n_dof, 3 per node: the windows' attachment modes, the costly part
 of a window's basis) and every window's body parts (inertia invariants and k_hat: the other
-costly part). A warm run then makes each window's basis again from the stored columns (the
-nodal form: small dense products, the same bits) and neither factors K_ff nor computes the
-invariants. Not stored: the bases themselves (n_dof x nq each, 79 of them on the coarse
+costly part) with the signature of the basis they came from. A warm run then makes a window's
+basis again from the stored columns when the contact reaches it (the nodal form: small dense
+products under one BLAS thread, the same bits) and neither factors K_ff nor computes the
+invariants (unless the basis made again differs from the signature: its parts made again). Not stored: the bases themselves (n_dof x nq each, 79 of them on the coarse
 moving-load beam: 100 MB, more than the columns they are made from).
 
 Keyed by the FE model's inputs, material, reference condition (set and held DOFs), path nodes,
@@ -39,12 +40,14 @@ __all__ = ["StoredWindows", "load_moving", "moving_key", "save_moving"]
 @dataclass(frozen=True)
 class StoredWindows:
     """A ``moving-`` entry: Phi (n_dof, m), its frequencies [Hz] (m,), the static columns by
-    node ({node: (n_dof, 3)}) and the windows' parts ({window: BodyParts})."""
+    node ({node: (n_dof, 3)}), the windows' parts ({window: BodyParts}) and the signatures of
+    the bases they came from."""
 
     phi: np.ndarray
     freqs_hz: np.ndarray
     columns: dict[int, np.ndarray]
     parts: dict[int, BodyParts]
+    signatures: dict[int, np.ndarray]  # {window: basis_signature of its basis}
 
 
 def moving_key(
@@ -69,8 +72,11 @@ def moving_key(
     return make_key("moving", inputs, code_version(BODY_SOURCES))
 
 
-def save_moving(key: str, phi, freqs_hz, columns: Mapping[int, np.ndarray], parts) -> None:
-    """Store entry ``key`` (module doc): parts ``{window: BodyParts}``."""
+def save_moving(
+    key: str, phi, freqs_hz, columns: Mapping[int, np.ndarray], parts, signatures
+) -> None:
+    """Store entry ``key`` (module doc): parts ``{window: BodyParts}``, signatures ``{window:
+    basis_signature}``."""
     nodes = np.array(sorted(columns), dtype=np.int64)
     arrays = {
         "phi": np.ascontiguousarray(phi),
@@ -84,6 +90,7 @@ def save_moving(key: str, phi, freqs_hz, columns: Mapping[int, np.ndarray], part
     }
     for k in sorted(parts):
         arrays |= {f"w{k}_{name}": a for name, a in parts_arrays(parts[k]).items()}
+        arrays[f"w{k}_signature"] = np.asarray(signatures[k], float)
     save(key, arrays)
 
 
@@ -99,7 +106,8 @@ def load_moving(key: str, n_dof: int, n_modes: int) -> StoredWindows | None:
             int(k): parts_from({n: a[f"w{k}_{n}"] for n in _PARTS}, int(nq))
             for k, nq in zip(a["windows"], a["nq"], strict=True)
         }
-        return StoredWindows(phi, a["freqs_hz"], columns, parts)
+        signatures = {int(k): a[f"w{k}_signature"] for k in a["windows"]}
+        return StoredWindows(phi, a["freqs_hz"], columns, parts, signatures)
 
     return decoded(key, decode)
 

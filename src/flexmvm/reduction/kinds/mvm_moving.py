@@ -51,6 +51,25 @@ def one_blas_thread():
     return _controller().limit(limits=1, user_api="blas")
 
 
+def basis_signature(psi: np.ndarray) -> np.ndarray:
+    """(nq,) w^T psi for a fixed pseudo-random w (seeded): a window's basis told from another
+    (a column of the opposite sign, or round-off of another BLAS) in one pass over psi, kept
+    with the stored parts (setup_cache/moving_entries.py) so a window made again is checked
+    against the basis its parts came from (integrate/moving_region.py)."""
+    w = np.random.default_rng(53).standard_normal(psi.shape[0])
+    with one_blas_thread():
+        return w @ psi
+
+
+def same_signature(a: np.ndarray, b: np.ndarray) -> bool:
+    """Whether two signatures are of one basis: equal to 1e-9 of the largest (round-off of
+    another BLAS passes; a column of the opposite sign differs by 2 |w^T psi_j|)."""
+    a, b = np.asarray(a), np.asarray(b)
+    return a.shape == b.shape and bool(
+        np.all(np.abs(a - b) <= 1e-9 * max(float(np.abs(b).max(initial=0.0)), 1e-300))
+    )
+
+
 @dataclass(frozen=True)
 class MovingModes(NodesAndModes):
     """Columns: the window nodes' x, y, z (unit columns), then the m global-mode columns held
@@ -113,9 +132,10 @@ class GlobalFactor:
     def attachment(self, nodes: np.ndarray, extra: int = 0) -> np.ndarray:
         """(n_dof, 3 n_w) static responses to unit loads at the nodes' DOFs (a held DOF
         gives a zero column), Fortran order, and ``extra`` columns after them left unset
-        (room for a window's modal part: nodal_form makes the basis in place). Each node's three are solved once (with K_ff's factor, one
-        BLAS thread: the many-right-hand-side solve is ~10x slower threaded on shared cores)
-        and kept: neighbouring windows share most of their nodes."""
+        (room for a window's modal part: nodal_form makes the basis in place). Each node's
+        three are solved once (with K_ff's factor, one BLAS thread: the many-right-hand-side
+        solve is ~10x slower threaded on shared cores) and kept: neighbouring windows share
+        most of their nodes."""
         new = [int(k) for k in nodes if int(k) not in self.columns]
         if new:
             b = node_dofs(np.asarray(new, dtype=np.int64))
@@ -269,9 +289,13 @@ class MovingWindows:
         return self.path.nodes[(s >= lo - tol) & (s <= lo + 2.0 * hw + tol)]
 
     def basis(self, k: int) -> Basis:
-        """Window k's Basis (made on first use, kept)."""
+        """Window k's Basis (made on first use, kept), always under one BLAS thread: a basis
+        made later (a warm run's window, made when the contact reaches it) must equal bit for
+        bit the one its stored parts came from, and a threaded product rounds otherwise (a
+        modal column of the opposite sign, from eigh on a round-off-different pencil)."""
         if k not in self._bases:
-            self._bases[k] = self.factor.window(self.nodes(k))
+            with one_blas_thread():
+                self._bases[k] = self.factor.window(self.nodes(k))
         return self._bases[k][0]
 
     def stiffness(self, k: int) -> np.ndarray:
