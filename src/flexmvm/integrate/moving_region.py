@@ -112,9 +112,8 @@ class MovingRegion:
             fe = self.windows.factor.fe
             with one_blas_thread():  # small products, shared cores
                 basis = self.windows.basis(k)
-                stored = self.signatures.get(k)
-                checkable = stored is not None and k in self.parts
-                if checkable and not same_signature(basis_signature(basis.psi), stored):
+                stored = self.signatures.get(k) if k in self.parts else None
+                if stored is not None and not same_signature(basis_signature(basis.psi), stored):
                     del self.parts[k]
                     self.parts_remade += 1
                 if k not in self.parts:
