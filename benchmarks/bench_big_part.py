@@ -3,7 +3,7 @@ reduced (its own model, kind mvm-sparse), and a region of ~3,000 retained nodes 
 
     python benchmarks/bench_big_part.py [--work DIR] [--skip-full] [--big-radius-mm 1.25]
         [--t-end-us T]
-        [--cases cold,warm,big-cold,big-warm] [--memory-limit-gb 8]
+        [--cases cold,warm,big-cold,big-warm] [--memory-limit-gb 8] [--json RECORD]
 
 Every case is a process of its own, run one after the other (never two at once: full FE
 takes ~10 GB): full FE (FLEXMVM_NO_CACHE=1); the reduced model cold (an empty setup cache in
@@ -18,7 +18,9 @@ the commit, per case the set-up and simulation wall and CPU times (time.process_
 thread of the process), the peak RSS after the set-up and at the end, the resident set when
 the run starts, and against full FE the simulation ratio, the memory ratio, the force NCC and
 the peak's error. The setup log (SETUP_LOG lines: basis and body build times) of each case
-is printed under it. docs/notes/ quotes the runs, docs/performance.md the ratios.
+is printed under it. --json RECORD writes every case's figures (not its force history)
+with the estimate, the machine and the provenance stamp (runs.provenance.script_stamp) for
+the pages to read. docs/notes/ quotes the runs, docs/performance.md the ratios.
 """
 
 from __future__ import annotations
@@ -219,6 +221,51 @@ def _line(r: dict, ref: dict | None) -> str:
     return "\n".join([text, *r["log"]])
 
 
+def _record_case(r: dict, ref: dict | None) -> dict:
+    """A case's figures for the --json record: its numbers without the force history and
+    log, with its force peak [N] and, against full FE, the simulation ratios, the memory
+    ratio, the force NCC and the peak's error."""
+    import numpy as np
+
+    from flexmvm.metrics.ncc import ncc
+
+    row = {k: v for k, v in r.items() if k not in ("t", "force", "log")}
+    if "error" in r:
+        return row
+    row["peak_force_n"] = max(r["force"])
+    if ref is not None and "error" not in ref and r is not ref:
+        row["vs_full"] = {
+            "sim_cpu_ratio": ref["sim_cpu_s"] / r["sim_cpu_s"],
+            "sim_wall_ratio": ref["sim_wall_s"] / r["sim_wall_s"],
+            "peak_rss_fraction": r["peak_rss_mb"] / ref["peak_rss_mb"],
+            "force_ncc": ncc(
+                np.array(ref["t"]), np.array(ref["force"]), np.array(r["t"]), r["force"]
+            ),
+            "peak_error": max(r["force"]) / max(ref["force"]) - 1.0,
+        }
+    return row
+
+
+def _write_record(path: Path, settings: dict, cases: list, estimate, ref) -> None:
+    """The --json record (module doc), written atomically."""
+    from flexmvm.runs.provenance import script_stamp
+
+    record = {
+        "cpu": cpu_name(),
+        "cores": os.cpu_count(),
+        "load": list(os.getloadavg()),
+        "full": None if ref is None else _record_case(ref, None),
+        "cases": [_record_case(r, ref) for r in cases],
+        "estimate": estimate,
+        "provenance": script_stamp(
+            [Path(__file__), ROOT / "benchmarks" / "bench_ring_body.py"], settings
+        ),
+    }
+    tmp = path.with_name(path.name + ".partial")
+    tmp.write_text(json.dumps(record, indent=1) + "\n")
+    os.replace(tmp, path)
+
+
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--work", default=None, help="setup cache of the reduced cases")
@@ -227,6 +274,7 @@ def main() -> None:
     ap.add_argument("--big-radius-mm", type=float, default=1.25)  # ~3,000 nodes
     ap.add_argument("--t-end-us", type=float, default=0.0, help="0: the scenario's")
     ap.add_argument("--memory-limit-gb", type=float, default=8.0, help="big-cold above: no run")
+    ap.add_argument("--json", type=Path, default=None, help="write the stamped record here")
     args = ap.parse_args()
     work = Path(args.work or tempfile.mkdtemp(prefix="flexmvm-bigpart-"))
     work.mkdir(parents=True, exist_ok=True)
@@ -256,7 +304,7 @@ def main() -> None:
         (f"region {args.big_radius_mm:g} mm cold", args.big_radius_mm * 1e-3, "big"),
         (f"region {args.big_radius_mm:g} mm warm", args.big_radius_mm * 1e-3, "big"),
     ]
-    chosen = args.cases.split(",")
+    chosen, est, done = args.cases.split(","), None, []
     if "big-cold" in chosen:
         est = region_estimate(args.big_radius_mm * 1e-3)
         print(f"region {args.big_radius_mm:g} mm estimated: {est}", flush=True)
@@ -273,7 +321,17 @@ def main() -> None:
         env.pop("FLEXMVM_NO_CACHE", None)
         if cache == "warm":
             env["FLEXMVM_CACHE_DIR"] = str(work / "cold")
-        print(_line(_run("mvm-sparse", radius, t_end, env, label), ref), flush=True)
+        done.append(_run("mvm-sparse", radius, t_end, env, label))
+        print(_line(done[-1], ref), flush=True)
+    if args.json is not None:
+        settings = {
+            "cases": args.cases,
+            "big_radius_mm": args.big_radius_mm,
+            "t_end_us": args.t_end_us,
+            "memory_limit_gb": args.memory_limit_gb,
+        }
+        _write_record(args.json, settings, done, est, ref)
+        print(f"record: {args.json}", flush=True)
 
 
 if __name__ == "__main__":

@@ -21,6 +21,7 @@ integrate/moving_region.py's MovingRegion on a MovingWindows made here (moving_w
 
 from __future__ import annotations
 
+import contextlib
 import functools
 from collections.abc import Callable
 from dataclasses import dataclass, field
@@ -36,6 +37,11 @@ from flexmvm.fe.modes import shift_invert_modes, spd_solver, to_hz
 from flexmvm.reduction.kinds.mvm import node_dofs
 from flexmvm.reduction.kinds.registry import ModelKind
 from flexmvm.reduction.kinds.spec import Basis, BasisRequest, NodesAndModes
+
+try:  # numpy >= 2
+    from numpy._core import multiarray as _multiarray
+except ImportError:  # pragma: no cover - numpy 1.26
+    from numpy.core import multiarray as _multiarray  # type: ignore[no-redef]
 
 NAME = "mvm-moving"
 
@@ -177,12 +183,32 @@ class _LazySolve:
         return solve(rhs)
 
 
+@contextlib.contextmanager
+def _no_hugepage_advice():
+    """numpy's transparent-hugepage advice off for the allocations inside (restored after).
+    A window's basis is ~80 MB of fresh memory (the cam's follower); with the advice, under a
+    kernel whose THP defrag is "madvise", each first touch of it tries to compact memory: its
+    copy took 145 ms against 40 ms without (and no huge page was given). Only here: off for
+    the whole process, full FE's simulation took 35 % longer."""
+    setter = getattr(_multiarray, "_set_madvise_hugepage", None)
+    if setter is None:
+        yield
+        return
+    previous = setter(False)
+    try:
+        yield
+    finally:
+        setter(previous)
+
+
 def _columns_side_by_side(blocks: list[np.ndarray], extra: int = 0) -> np.ndarray:
     """np.hstack(blocks) in Fortran order and ``extra`` unset columns after them: each
     block's columns copied whole (a C-order hstack of column blocks of 12,000 rows took 18 ms
-    a window on the fine beam)."""
+    a window on the fine beam), into memory allocated without the hugepage advice
+    (_no_hugepage_advice)."""
     n = sum(b.shape[1] for b in blocks)
-    out = np.empty((blocks[0].shape[0], n + extra), order="F")
+    with _no_hugepage_advice():
+        out = np.empty((blocks[0].shape[0], n + extra), order="F")
     j = 0
     for b in blocks:
         out[:, j : j + b.shape[1]] = b
