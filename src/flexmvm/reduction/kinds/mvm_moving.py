@@ -39,9 +39,9 @@ from flexmvm.reduction.kinds.registry import ModelKind
 from flexmvm.reduction.kinds.spec import Basis, BasisRequest, NodesAndModes
 
 try:  # numpy >= 2
-    from numpy._core import multiarray as _multiarray
+    from numpy._core.multiarray import _set_madvise_hugepage  # type: ignore[attr-defined]
 except ImportError:  # pragma: no cover - numpy 1.26
-    from numpy.core import multiarray as _multiarray  # type: ignore[no-redef]
+    from numpy.core.multiarray import _set_madvise_hugepage  # type: ignore[no-redef]
 
 NAME = "mvm-moving"
 
@@ -190,15 +190,11 @@ def _no_hugepage_advice():
     kernel whose THP defrag is "madvise", each first touch of it tries to compact memory: its
     copy took 145 ms against 40 ms without (and no huge page was given). Only here: off for
     the whole process, full FE's simulation took 35 % longer."""
-    setter = getattr(_multiarray, "_set_madvise_hugepage", None)
-    if setter is None:
-        yield
-        return
-    previous = setter(False)
+    previous = _set_madvise_hugepage(False)
     try:
         yield
     finally:
-        setter(previous)
+        _set_madvise_hugepage(previous)
 
 
 def _columns_side_by_side(blocks: list[np.ndarray], extra: int = 0) -> np.ndarray:
