@@ -25,8 +25,8 @@ predicts above --memory-limit-gb is not run: its row is that power law's estimat
 a step, set-up, memory, floor), marked "est.". The floor of a step: the bytes of the matrices
 it must read (the L D L^T factor of W for full FE and mvm-sparse, plus the packed corner blocks
 of the latter; the dense W and the G2 blocks for mvm) over STREAM_BYTES_PER_S. Prints per case
-a line, then markdown tables; --json writes the rows with the provenance stamp
-(runs.provenance.script_stamp), --markdown the tables. docs/performance.md quotes the
+a line, then markdown tables; --json writes the rows (and the region sweep's full-FE
+reference) with the provenance stamp (runs.provenance.script_stamp), --markdown the tables. docs/performance.md quotes the
 ratios, docs/notes/ the runs.
 """
 
@@ -377,7 +377,7 @@ def main() -> None:
         for kind in ("full", "mvm-sparse", "mvm"):
             _run(kind, plate, ball, radius_for(plate, 100), 2)
     first = next((n for n in counts if n >= 100), counts[0])
-    pairs, rows, text = [], [], ""
+    pairs, rows, text, ref = [], [], "", None
     if "body" in args.sweeps:
         pairs = body_sweep(args, work, fars, first)
         text += (
@@ -410,6 +410,8 @@ def main() -> None:
             "load": [load0, load1],
             "body_size": [{"full": f, "mvm-sparse": s, "mesh_dof": d} for f, s, d in pairs],
             "region_size": [{"nodes": n, "mvm-sparse": s, "mvm": d} for n, s, d in rows],
+            "region_full": ref,  # the region sweep's full-FE reference (None without it)
+            "region_plate_dof": mesh_dof(plate) if rows else None,
             "provenance": script_stamp(scripts, settings),
         }
         Path(args.json).write_text(json.dumps(record, indent=1))
