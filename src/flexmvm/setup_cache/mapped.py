@@ -20,6 +20,7 @@ from flexmvm.setup_cache.store import (
     CHECKSUM,
     SUFFIX,
     UNREADABLE,
+    array_bytes,
     cache_dir,
     decoded,
     enabled,
@@ -60,7 +61,7 @@ def _stream(a: np.ndarray, digest, finite: list[bool]) -> None:
     """Feed a's bytes to ``digest`` and check them finite: block by block from its file when
     mapped (not making it resident), else whole."""
     if not isinstance(a, np.memmap):
-        digest.update(np.ascontiguousarray(a).tobytes())
+        digest.update(array_bytes(a))
         if a.dtype.kind in "fc" and not np.all(np.isfinite(a)):
             finite[0] = False
         return

@@ -19,6 +19,7 @@ from flexmvm.bodies.build import BodyParts
 from flexmvm.bodies.invariants import InertiaInvariants
 from flexmvm.setup_cache.store import (
     BODY_SOURCES,
+    array_bytes,
     code_version,
     csr_arrays,
     csr_from,
@@ -35,9 +36,9 @@ RING_SOURCES = BODY_SOURCES + ("bodies/ring_body.py",)
 def _sha(*arrays) -> str:
     digest = hashlib.sha256()
     for a in arrays:
-        a = np.ascontiguousarray(a)
+        a = np.asarray(a)
         digest.update(f"{a.dtype.str}{a.shape}".encode())
-        digest.update(a.tobytes())
+        digest.update(array_bytes(a))
     return digest.hexdigest()
 
 

@@ -119,14 +119,22 @@ def material_inputs(material: Material) -> dict:
     return {"E": float(material.E), "nu": float(material.nu), "rho": float(material.rho)}
 
 
+def array_bytes(a: np.ndarray) -> memoryview:
+    """The C-order bytes of ``a`` (as a.tobytes() gives them) read in place when it is
+    C-contiguous: a hash of a basis of GBs made without copying it (its save's peak held the
+    copy beside it: +5.6 GB on a 3,000-node region of a 274k-DOF plate)."""
+    a = np.ascontiguousarray(a)
+    return memoryview(a.reshape(-1)).cast("B") if a.size else memoryview(b"")
+
+
 def checksum(arrays: Mapping[str, np.ndarray]) -> str:
     """SHA-256 (hex) of an entry's arrays: each name, dtype, shape and C-order bytes, in
     name order (the CHECKSUM array itself left out)."""
     digest = hashlib.sha256()
     for name in sorted(n for n in arrays if n != CHECKSUM):
-        a = np.ascontiguousarray(arrays[name])
+        a = np.asarray(arrays[name])
         digest.update(f"{name}\0{a.dtype.str}\0{a.shape}\0".encode())
-        digest.update(a.tobytes())
+        digest.update(array_bytes(a))
     return digest.hexdigest()
 
 
