@@ -93,7 +93,8 @@ class ContactNodes:
         rows.sort_indices()
         self.indptr = rows.indptr.astype(np.int64)
         self.indices = rows.indices.astype(np.int64)
-        self.data = rows.data.astype(np.float64)
+        # the gathered rows' own values, not a copy (a face of a big part's ring basis: GBs)
+        self.data = np.asarray(rows.data, dtype=np.float64)
 
     def update(self, st) -> tuple[float, float]:
         """Positions x, velocities xd (global), body-frame positions s at state st (kept
