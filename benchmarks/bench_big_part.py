@@ -101,7 +101,7 @@ def region_estimate(radius_m: float) -> dict:
     from flexmvm.assembly.cache_keys import mesh_key
     from flexmvm.assembly.cost import step_sizes
     from flexmvm.assembly.cost_sparse import ring_shape
-    from flexmvm.assembly.mesh_lookup import retained_nodes
+    from flexmvm.assembly.mesh_lookup import contact_surfaces, retained_nodes
     from flexmvm.assembly.supports import bedded_key, clamp_label
 
     sc = fm.load_scenario(SCENARIO)
@@ -113,7 +113,9 @@ def region_estimate(radius_m: float) -> dict:
     label = clamp_label(cfg, mesh, sc.supports, nodes)
     key = bedded_key(mesh_key(cfg), cfg, sc.supports)
     sizes = step_sizes(sc.time.dt_s, sc.time.dt_max_s)
-    cost = body_cost(cfg, setup, (mesh, key, key, label), nodes, cfg.model.modes, None, sizes)
+    where = (mesh, key, key, label)
+    surfaces = contact_surfaces(sc, "plate")
+    cost = body_cost(cfg, setup, where, nodes, cfg.model.modes, None, sizes, surfaces)
     fixed = setup.reference_condition(key, mesh, label).fixed_dofs
     shape = ring_shape(mesh, np.asarray(nodes), fixed, cfg.model.modes)
     assert cost is not None

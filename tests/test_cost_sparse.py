@@ -18,6 +18,7 @@ from flexmvm.assembly import cost
 from flexmvm.assembly.build import build_scenario
 from flexmvm.assembly.cost import FullFactor, ReducedCostWarning, check_cost
 from flexmvm.assembly.cost_sparse import (
+    psi_bytes,
     ring_cost,
     ring_factor_nnz,
     ring_held_bytes,
@@ -73,7 +74,7 @@ def test_the_estimate_is_the_built_bodys_size(block_fe):
     solver = BodySolver(body)
     solver.elastic_solve(0.5e-6)
     l_nnz = solver._symbolic.nnz
-    estimate = ring_held_bytes(shape, sizes=1) - 8 * ring_factor_nnz(shape)
+    estimate = ring_held_bytes(shape, sizes=1) - 8 * ring_factor_nnz(shape) + psi_bytes(shape)
     print(held / estimate, l_nnz / ring_factor_nnz(shape))
     assert 0.7 < held / estimate < 1.3
     assert 1 / 1.5 < l_nnz / ring_factor_nnz(shape) < 1.5
@@ -97,14 +98,18 @@ def test_a_region_that_would_not_fit_is_refused_before_it_is_built(monkeypatch):
     def refuse(*args, **kwargs):
         raise AssertionError("the basis was built")
 
+    from flexmvm.assembly.build_cache import SetupCache
+
     monkeypatch.setattr(cost, "REFUSE_ABOVE_BYTES", 50e6)
     monkeypatch.setattr(mvm_sparse, "ring_solve", refuse)
+    # no basis from an earlier test (the disk cache, the worker's default set-up)
+    monkeypatch.setenv("FLEXMVM_NO_CACHE", "1")
     with pytest.raises(InputError) as info:
-        build_scenario(_sphere_block("mvm-sparse", 5e-3))
+        build_scenario(_sphere_block("mvm-sparse", 5e-3), SetupCache())
     msg = str(info.value)
     assert "\n" not in msg and "would not fit" in msg and "bodies[block].model" in msg
     with pytest.raises(AssertionError, match="the basis was built"):
-        build_scenario(_sphere_block("mvm-sparse", 5e-3, allow=True))
+        build_scenario(_sphere_block("mvm-sparse", 5e-3, allow=True), SetupCache())
 
 
 def test_a_large_region_that_fits_is_built_as_mvm_sparse(monkeypatch):
@@ -123,12 +128,13 @@ def test_a_large_region_that_fits_is_built_as_mvm_sparse(monkeypatch):
 
 def test_the_shipped_plate_region_is_not_warned():
     """scenarios/plate_impact.toml's plate (273,789 DOF; its region: 75 nodes, 70 on the
-    ring, 60 modes) with its full-FE factor's counts in minimum-degree order (as the guard
-    makes them for kind mvm-sparse, measured once: K 19.7 M, M 6.6 M, L 218 M entries):
-    estimated within MARGIN of full FE's memory and ~670 x cheaper a Newton iteration, no
-    warning (before: no estimate at all); its set-up peak estimated 3.6 GB with the FE model
-    (measured 4.7 GB: docs/notes/2026-11-29-cost-guard.md). The mesh is made by gmsh, not kept in
-    git: skipped without it. ~5-20 s (the mesh read)."""
+    ring, 60 modes; its top face the contact's) with its full-FE factor's counts (as the guard
+    makes them for kind mvm-sparse, measured once: K 19.7 M, M 6.6 M entries; in the
+    integrator's order, full FE's: L 304 M, stored 422 M, fronts 419 M; in minimum degree,
+    K_EE's: 218 M, 265 M, 185 M): estimated within MARGIN of full FE's memory and ~670 x
+    cheaper a Newton iteration, no warning (before: no estimate at all); its set-up peak
+    estimated 3.9-4.3 GB with the FE model (measured 4.7 GB: docs/notes/2026-11-29-cost-guard.md).
+    The mesh is made by gmsh, not kept in git: skipped without it. ~5-20 s (the mesh read)."""
     if not (PLATE.parent / "meshes" / "plate_100x100x4.msh").exists():
         pytest.skip("the plate's mesh is not made (python -m flexmvm.mesh.parts scenarios/meshes)")
     sc = fm.load_scenario(PLATE)
@@ -143,18 +149,20 @@ def test_the_shipped_plate_region_is_not_warned():
     nodes = retained_nodes(cfg.model, mesh, None, "plate")
     label = clamp_label(cfg, mesh, sc.supports, tuple(int(i) for i in nodes))
     fixed = setup.reference_condition(mesh_key(cfg), mesh, label).fixed_dofs
-    shape = ring_shape(mesh, nodes, fixed, cfg.model.modes)
+    top = mesh.facet_set("top").nodes
+    shape = ring_shape(mesh, nodes, fixed, cfg.model.modes, top)
     assert (shape.region_nodes, shape.ring_nodes, shape.corner) == (75, 70, 270)
-    full = FullFactor(FULL_PLATE["k_nnz"], FULL_PLATE["m_nnz"], FULL_PLATE["l_nnz"])
-    c = ring_cost("plate", mesh.n_nodes, shape, full)
+    assert shape.contact_rows == 3 * np.setdiff1d(top, nodes).size
+    c = ring_cost("plate", mesh.n_nodes, shape, FULL_PLATE, k_ee=FULL_PLATE_MMD)
     assert c.bytes < cost.MARGIN * c.full_bytes and c.step_bytes < 1e-2 * c.full_step_bytes
-    assert 2.5e9 < c.fit_bytes < 5.5e9
+    assert 3.5e9 < c.fit_bytes < 5.5e9
     with warnings.catch_warnings():
         warnings.simplefilter("error", ReducedCostWarning)
         check_cost(c, False, "bodies[plate].model")
 
 
-#: full_factor(..., integrator_order=False) of the shipped plate, as the guard makes it for
-#: kind mvm-sparse (the FE model's K and M without the clamp's DOFs, the minimum-degree
-#: symbolic analysis of its iteration matrix: ~40 s of CPU, hence stored here)
-FULL_PLATE = {"k_nnz": 19_747_999, "m_nnz": 6_590_871, "l_nnz": 218_346_104}
+#: full_factor of the shipped plate (the FE model's K and M without the clamp's DOFs, the
+#: symbolic analysis of its iteration matrix: ~40 s of CPU, hence stored here), in the
+#: integrator's order (full FE's) and in minimum-degree order (K_EE's, integrator_order=False)
+FULL_PLATE = FullFactor(19_747_999, 6_590_871, 303_736_103, 422_096_302, 418_613_337)
+FULL_PLATE_MMD = FullFactor(19_747_999, 6_590_871, 218_346_104, 264_797_373, 184_906_764)

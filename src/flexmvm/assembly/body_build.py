@@ -92,7 +92,9 @@ def build_body(
         nodes = massless if spec.nodal else np.intersect1d(massless, retained)
         if nodes.size:
             key = ContactMass(fe_key, tuple(int(i) for i in nodes))
-    cost = body_cost(cfg, setup, (mesh, key, fe_key, ref_set), retained, modes, massless, sizes)
+    cost = body_cost(
+        cfg, setup, (mesh, key, fe_key, ref_set), retained, modes, massless, sizes, surfaces
+    )
     if cost is not None:
         check_cost(cost, cfg.model.allow_costly, f"{where}.model")
     args = (key, material, kind, retained, modes, ref_set, interface)
@@ -115,13 +117,20 @@ def build_body(
 
 
 def body_cost(
-    cfg, setup: SetupCache, where: tuple, retained: tuple, modes: int, massless, sizes: int
+    cfg,
+    setup: SetupCache,
+    where: tuple,
+    retained: tuple,
+    modes: int,
+    massless,
+    sizes: int,
+    surfaces: tuple[str, ...] = (),
 ) -> BodyCost | None:
     """The cost guard's estimate (assembly.cost) of ``cfg``'s reduced body before it is
     built, ``where`` = (mesh, its FE key with the redistributed mass, the FE key, the reference
-    set): the full-FE factor's counts through the cache; kind mvm-sparse from its ring
-    (assembly.cost_sparse), the other costed kinds from their dense columns; None: not
-    costed (full FE, modal, rigid, interface)."""
+    set): the full-FE factor's counts through the cache; kind mvm-sparse from its ring and
+    its contact ``surfaces``' nodes (assembly.cost_sparse), the other costed kinds from their
+    dense columns; None: not costed (full FE, modal, rigid, interface)."""
     mesh, key, fe_key, ref_set = where
     spec = kind_spec(cfg.model.kind)
     ring = isinstance(spec, RingCraigBampton)
@@ -130,14 +139,17 @@ def body_cost(
         return None
     fixed = setup.reference_condition(key, mesh, ref_set).fixed_dofs
     load_fe = lambda: setup.fe_model(fe_key, cfg.material_obj())
-    # mvm-sparse: the minimum-degree fill (its K_EE's factor's order; the integrator's costs
-    # more set-up than the ring body on a big part: assembly.cost.full_factor)
-    full = cached_full_factor(mesh_source(fe_key), fixed, load_fe, integrator_order=not ring)
+    full = cached_full_factor(mesh_source(fe_key), fixed, load_fe)
     if ring:
+        # its K_EE is factored in minimum-degree order (assembly.cost.full_factor): its
+        # set-up peak from that analysis, the comparison with the integrator's
+        k_ee = cached_full_factor(mesh_source(fe_key), fixed, load_fe, integrator_order=False)
         light = massless is not None and np.intersect1d(massless, retained).size > 0
         extra = modes + (MASSLESS_COLUMNS if light else 0)
-        shape = ring_shape(mesh, np.asarray(retained, np.int64), fixed, extra)
-        return ring_cost(cfg.name, mesh.n_nodes, shape, full, sizes)
+        touched = [mesh.facet_set(name).nodes for name in surfaces]
+        contact = np.unique(np.concatenate(touched)) if touched else None
+        shape = ring_shape(mesh, np.asarray(retained, np.int64), fixed, extra, contact)
+        return ring_cost(cfg.name, mesh.n_nodes, shape, full, sizes, k_ee)
     assert columns is not None
     return reduced_cost(cfg.name, mesh.n_nodes, columns, full.k_nnz, full=full, sizes=sizes)
 

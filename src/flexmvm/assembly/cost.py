@@ -12,8 +12,11 @@ The full-FE body holds sparse M and K (CSR: 12 bytes an entry), its iteration ma
 (theta h)^2 K while it is factored, and one L D L^T factor of W per step size, whose stored
 entries are read off the symbolic analysis (fe.solvers.symbolic, with the elimination order
 the integrator uses: fe.solvers.ordering.elimination_order) -- the fill, not a guess: 4.2 x
-nnz(K) on sphere_block's tet10 block, 2.6 x on sphere_beam's beam. A Newton iteration solves
-with the factor (forward and backward: L read twice) and multiplies by M and K.
+nnz(K) on sphere_block's tet10 block, 2.6 x on sphere_beam's beam -- and, while the last one
+is made, the multifrontal fronts beside it, read off the same analysis
+(fe.solvers.cholesky.held_entries: about the factor's size again on a big part). A Newton
+iteration solves with the factor (forward and backward: L read twice) and multiplies by M
+and K.
 
 Measured against these estimates (2-core AMD EPYC, docs/notes/2026-11-29-warm-command.md):
 the shipped reduced scenarios estimate the reduced body both smaller and cheaper a step than
@@ -70,17 +73,25 @@ MAX_FACTORS = 10
 
 #: Version of full_factor's counting, in its cache entries' key (the code version covers
 #: fe/, mesh/, reduction/, not this module): bump when full_factor counts differently.
-COUNTS_VERSION = 1
+COUNTS_VERSION = 2  # 2: the factor as stored and the fronts (held_entries)
 
 
 @dataclass(frozen=True)
 class FullFactor:
     """Nonzeros of a full-FE body's K and M and the stored entries of its iteration matrix's
-    L D L^T factor (the symbolic analysis's, or estimated: FullFactor.estimated)."""
+    L D L^T factor (the symbolic analysis's, or estimated: FullFactor.estimated); with the
+    analysis, the numbers its factorization holds (fe.solvers.cholesky.held_entries): the
+    packed factor as stored (``factor_entries``: each supernode's triangle as a square) and,
+    besides it at the worst moment, the multifrontal fronts (``front_entries``). On the
+    263,685-DOF plate in the integrator's order: L 304 M entries, stored 422 M, fronts 419 M:
+    6.7 GB at the factorization's peak, where the fill alone said 2.4 GB (full FE measured
+    8.9 GB with its FE model and body)."""
 
     k_nnz: int
     m_nnz: int
     l_nnz: int
+    factor_entries: int = 0  # 0: not analysed (taken as l_nnz)
+    front_entries: int = 0  # 0: not analysed (taken as the factor's: measured 0.7-1.0 x)
 
     @classmethod
     def estimated(cls, k_nnz: int) -> FullFactor:
@@ -88,8 +99,24 @@ class FullFactor:
         node blocks)."""
         return cls(int(k_nnz), int(k_nnz) // 3, int(FILL_PER_NNZ * k_nnz))
 
+    @property
+    def stored(self) -> int:
+        """Numbers one factor holds."""
+        return self.factor_entries or self.l_nnz
+
+    @property
+    def fronts(self) -> int:
+        """Numbers the fronts hold beside the factor at the factorization's peak."""
+        return self.front_entries or self.stored
+
     def as_dict(self) -> dict:
-        return {"k_nnz": self.k_nnz, "m_nnz": self.m_nnz, "l_nnz": self.l_nnz}
+        return {
+            "k_nnz": self.k_nnz,
+            "m_nnz": self.m_nnz,
+            "l_nnz": self.l_nnz,
+            "factor_entries": self.factor_entries,
+            "front_entries": self.front_entries,
+        }
 
 
 def full_factor(fe, fixed_dofs=(), integrator_order: bool = True) -> FullFactor:
@@ -104,6 +131,7 @@ def full_factor(fe, fixed_dofs=(), integrator_order: bool = True) -> FullFactor:
     263,685-DOF plate, against 1.5 GB (its fill there 304 M entries, minimum degree's 218 M)."""
     from flexmvm import setup_cache
     from flexmvm.fe.solvers import ldl
+    from flexmvm.fe.solvers.cholesky import held_entries
     from flexmvm.fe.solvers.ordering import elimination_order, iteration_pattern
     from flexmvm.fe.solvers.symbolic import SymbolicFactor
 
@@ -117,7 +145,9 @@ def full_factor(fe, fixed_dofs=(), integrator_order: bool = True) -> FullFactor:
     else:
         order = elimination_order(w)
     symbolic = SymbolicFactor(w, order if order is not None and order.size else None)
-    return FullFactor(int(k.nnz), int(m.nnz), int(symbolic.nnz))
+    factor = int(symbolic.t_off[-1] + symbolic.b_off[-1]) + symbolic.n
+    fronts = held_entries(symbolic) - factor
+    return FullFactor(int(k.nnz), int(m.nnz), int(symbolic.nnz), factor, fronts)
 
 
 def cached_full_factor(
@@ -220,7 +250,10 @@ def reduced_cost(
     analysis, else FullFactor.estimated), for a run of ``sizes`` step sizes (module doc)."""
     full = FullFactor.estimated(k_nnz) if full is None else full
     dense = _BYTES * ((8.0 + sizes) * nq * nq + 3.0 * n_nodes * nq)
-    sparse = _CSR_BYTES * (2.0 * full.k_nnz + full.m_nnz) + _BYTES * sizes * full.l_nnz
+    # one factor per step size, the last one made beside its fronts (FullFactor)
+    sparse = _CSR_BYTES * (2.0 * full.k_nnz + full.m_nnz) + _BYTES * (
+        sizes * full.stored + full.fronts
+    )
     step = _BYTES * 9.0 * nq * nq
     full_step = _BYTES * 2.0 * full.l_nnz + _CSR_BYTES * (full.k_nnz + full.m_nnz)
     return BodyCost(name, 6 + nq, dense, 6 + 3 * n_nodes - 6, sparse, step, full_step)

@@ -9,19 +9,23 @@ block of K (9 entries per node pair sharing a cell) and the fill of its L D L^T 
 symbolic analysis of that block in the integrator's elimination order, as
 assembly.cost.full_factor does for full FE). Then, in 8-byte numbers:
 
-- held at run time: psi's exterior rows over the corner (12 bytes an entry, csr), k_hat and
-  M_qq (the region's block plus the dense c x c corner, csr), the nine G2 blocks (csr, each
-  with the corner) and their split for the contraction (the stacked off-corner part, the
-  six distinct dense corner blocks), and s factors of the bordered iteration matrix: the region's
+- held at run time with the setup cache (psi's exterior rows mapped from its file, only
+  the rows read resident): k_hat and M_qq (the region's block plus the dense c x c corner,
+  csr), the nine G2 blocks (csr, each with the corner) and their split for the contraction
+  (the stacked off-corner part, the six distinct dense corner blocks), the contact
+  surface's rows of psi outside the region (dense on the corner: 16 bytes an entry as
+  contact.nodes keeps them), and s factors of the bordered iteration matrix: the region's
   fill plus the dense corner's triangle (the minimum-degree order eliminates the region's
   inner DOFs first; the corner, a clique, is last);
 - the cold set-up's peak (what the guard's fit is judged on, with the FE model's K, M and
-  M_s): K_EE's factor (full FE's W's fill in minimum-degree order, the order K_EE is factored
-  in: the exterior is the body less the region) with psi's exterior rows being filled in
-  blocks of columns (ring_block_bytes a block's right-hand sides, as many for their
-  solutions) and the modes' dense columns; then the body's parts made from psi in blocks of
-  rows (the c x c products: CORNER_WORK numbers); then the truncation guard's (K_EE cut out
-  of K and factored again beside psi);
+  M_s), the largest of its stages: K_EE's factorization (its factor and multifrontal fronts,
+  read off full FE's W's analysis in minimum-degree order, the order K_EE is factored in:
+  the exterior is the body less the region), then its factor with psi's exterior rows (12
+  bytes an entry, csr) being filled in blocks of columns (ring_block_bytes a block's
+  right-hand sides, as many for their solutions) and the modes' dense columns; the body's
+  parts made from psi in blocks of rows (the c x c products: CORNER_WORK numbers); the
+  truncation guard's (K_EE cut out of K and factored again beside psi); the body with psi
+  and its contact rows being gathered;
 - a Newton iteration streams the bordered factor twice (forward and backward), k_hat, M_qq,
   the stacked G2 part and the packed corner blocks (4.5 c^2).
 
@@ -59,6 +63,7 @@ class RingShape:
     exterior_dof: int  # n_i: the free DOFs of the nodes outside the region
     region_k_nnz: int  # K_RR's nonzeros
     region_l_nnz: int  # stored entries of the region block's L D L^T factor
+    contact_rows: int = 0  # rows of psi the contact gathers outside the region (dense on c)
 
     @property
     def corner(self) -> int:
@@ -85,9 +90,12 @@ def node_graph(mesh) -> sp.csr_matrix:
     return g
 
 
-def ring_shape(mesh, retained: np.ndarray, fixed_dofs: np.ndarray, extra: int) -> RingShape:
+def ring_shape(
+    mesh, retained: np.ndarray, fixed_dofs: np.ndarray, extra: int, contact_nodes=None
+) -> RingShape:
     """The RingShape of retained node ids ``retained`` on ``mesh`` under the reference
-    condition's ``fixed_dofs``, with ``extra`` static and modal columns."""
+    condition's ``fixed_dofs``, with ``extra`` static and modal columns; ``contact_nodes``:
+    the body's contact-surface nodes, whose rows of psi the contact gathers (contact.nodes)."""
     from flexmvm.fe.solvers.ordering import elimination_order
     from flexmvm.fe.solvers.symbolic import SymbolicFactor
 
@@ -110,8 +118,15 @@ def ring_shape(mesh, retained: np.ndarray, fixed_dofs: np.ndarray, extra: int) -
     if block.shape[0]:
         order = elimination_order(block)
         l_nnz = SymbolicFactor(block, order if order is not None and order.size else None).nnz
+    touched = np.setdiff1d(np.asarray(contact_nodes if contact_nodes is not None else []), nodes)
     return RingShape(
-        int(nodes.size), ring, int(extra), int(free_dof.sum()), int(block.nnz), int(l_nnz)
+        int(nodes.size),
+        ring,
+        int(extra),
+        int(free_dof.sum()),
+        int(block.nnz),
+        int(l_nnz),
+        3 * int(touched.size),
     )
 
 
@@ -122,31 +137,48 @@ def ring_factor_nnz(shape: RingShape) -> float:
     return shape.region_l_nnz + 0.5 * c * (c + 1)
 
 
+#: Bytes a gathered row entry of psi holds in contact.nodes (int64 column, float64 value)
+#: and, while it is gathered, besides (the gathered csr's int32 column; its values are kept).
+_ROW_HELD, _ROW_GATHER = 16, 4
+
+
 def ring_held_bytes(shape: RingShape, sizes: int = 1) -> float:
-    """Bytes the ring body holds at run time (module doc)."""
+    """Bytes the ring body and its contact rows hold at run time beside psi's exterior rows
+    (module doc): a run with the setup cache maps those from the cache's file and makes
+    resident only the rows it reads (the contact's, counted here)."""
     c2 = float(shape.corner) ** 2
-    psi = _CSR_BYTES * (float(shape.exterior_dof) * shape.corner + 3 * shape.region_nodes)
     k_rr = float(shape.region_k_nnz)
     # k_hat, M_qq (a third of K's pattern per component pair: 3 x k_rr / 9), nine G2 blocks
     parts = _CSR_BYTES * (k_rr + c2 + k_rr / 3 + c2 + k_rr + 9 * c2)
     split = _CSR_BYTES * k_rr + _BYTES * 6 * c2  # the contraction's stack and corner blocks
-    return psi + parts + split + _BYTES * sizes * ring_factor_nnz(shape)
+    rows = _ROW_HELD * float(shape.contact_rows) * shape.corner
+    return parts + split + rows + _BYTES * sizes * ring_factor_nnz(shape)
 
 
-def ring_setup_bytes(shape: RingShape, full: FullFactor) -> float:
-    """The cold set-up's peak beside the FE model (module doc): K_EE's factor with psi and a
-    block of columns (and the modes' columns), psi with the parts' corner arrays, or the
-    truncation guard's K_EE factor beside psi and K_EE's copies."""
+def psi_bytes(shape: RingShape) -> float:
+    """psi's exterior rows over the corner and the region's unit rows, csr."""
+    return _CSR_BYTES * (float(shape.exterior_dof) * shape.corner + 3 * shape.region_nodes)
+
+
+def ring_setup_bytes(shape: RingShape, k_ee: FullFactor, sizes: int = 1) -> float:
+    """The cold set-up's peak beside the FE model (module doc), the largest of its stages:
+    K_EE's factorization (its factor and fronts, ``k_ee``: the analysis in minimum-degree
+    order), then its factor with psi and a block of columns (and the modes' columns); psi
+    with the parts' corner arrays; the truncation guard's K_EE factorization beside psi and
+    K_EE's copies; the body with psi, its contact rows gathered."""
     n_i, c = float(shape.exterior_dof), float(shape.corner)
-    psi = _CSR_BYTES * n_i * c
+    psi = psi_bytes(shape)
     modes = _BYTES * n_i * shape.extra_columns
     block = min(ring_block_bytes(shape.exterior_dof, shape.corner), _BYTES * n_i * c)
-    basis = _BYTES * full.l_nnz + psi + 2 * block + modes
+    factoring = _BYTES * (k_ee.stored + k_ee.fronts)
+    basis = max(factoring, _BYTES * k_ee.stored + psi + 2 * block + modes)
     parts = psi + _BYTES * CORNER_WORK * c * c
     # the truncation guard (reduction/truncation.py): K_EE cut out of K (copies: rows,
     # columns, csc) and factored again beside psi
-    guard = _BYTES * full.l_nnz + psi + 3 * _CSR_BYTES * full.k_nnz
-    return max(basis, parts, guard)
+    guard = factoring + psi + 3 * _CSR_BYTES * k_ee.k_nnz
+    gather = _ROW_GATHER * float(shape.contact_rows) * c
+    body = psi + ring_held_bytes(shape, sizes) + gather
+    return max(basis, parts, guard, body)
 
 
 def ring_step_bytes(shape: RingShape) -> float:
@@ -165,18 +197,25 @@ def fe_model_bytes(full: FullFactor, n_nodes: int) -> float:
 
 
 def ring_cost(
-    name: str, n_nodes: int, shape: RingShape, full: FullFactor, sizes: int = 1
+    name: str,
+    n_nodes: int,
+    shape: RingShape,
+    full: FullFactor,
+    sizes: int = 1,
+    k_ee: FullFactor | None = None,
 ) -> BodyCost:
     """The BodyCost of a ring body of ``shape`` on a mesh of n_nodes nodes against its
-    full-FE body (``full``: the symbolic analysis, assembly.cost.full_factor, in minimum-degree
-    order): memory what it holds at run time, compared with full FE's as the dense kinds' is;
-    the fit judged on the cold set-up's peak with the FE model (peak_bytes), which K_EE's
-    factor makes about full FE's own."""
+    full-FE body (``full``: the symbolic analysis, assembly.cost.full_factor, in the
+    integrator's order, as a full-FE run factors): memory what it holds at run time with the
+    setup cache (ring_held_bytes), compared with full FE's as the dense kinds' is; the fit
+    judged on the cold set-up's peak with the FE model (peak_bytes), K_EE's factorization
+    read off ``k_ee`` (the analysis in minimum-degree order, K_EE's; default ``full``)."""
     from flexmvm.assembly.cost import reduced_cost
 
     ref = reduced_cost(name, n_nodes, 0, full.k_nnz, full=full, sizes=sizes)
     held = ring_held_bytes(shape, sizes)
-    peak = max(held, ring_setup_bytes(shape, full)) + fe_model_bytes(full, n_nodes)
+    setup = ring_setup_bytes(shape, full if k_ee is None else k_ee, sizes)
+    peak = max(held, setup) + fe_model_bytes(full, n_nodes)
     return BodyCost(
         name,
         6 + shape.nq,

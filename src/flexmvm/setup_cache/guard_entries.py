@@ -67,12 +67,13 @@ def cached_truncation(
 
 
 #: The counts of a factorcounts- entry.
-_FACTOR_COUNTS = ("k_nnz", "m_nnz", "l_nnz")
+_FACTOR_COUNTS = ("k_nnz", "m_nnz", "l_nnz", "factor_entries", "front_entries")
 
 
 def cached_factor_counts(source: Mapping | None, build: Callable[[], dict]) -> dict:
-    """{k_nnz, m_nnz, l_nnz} of the FE model of key inputs ``source`` (assembly.cache_keys
-    mesh_source) from the cache, else ``build()`` stored; source None: build, no caching."""
+    """{k_nnz, m_nnz, l_nnz, factor_entries, front_entries} (assembly.cost.FullFactor) of the
+    FE model of key inputs ``source`` (assembly.cache_keys mesh_source) from the cache, else
+    ``build()`` stored; source None: build, no caching."""
     if source is None:
         return build()
     key = make_key("factorcounts", {"fe_model": dict(source)})
