@@ -3,17 +3,20 @@ reduced (its own model, kind mvm-sparse), and a region of ~3,000 retained nodes 
 
     python benchmarks/bench_big_part.py [--work DIR] [--skip-full] [--big-radius-mm 1.25]
         [--t-end-us T]
-        [--cases cold,warm,big-cold,big-warm] [--memory-limit-gb 8] [--json RECORD]
+        [--cases cold,warm,big-cold,big-warm] [--memory-limit-gb 8] [--allow-costly]
+        [--json RECORD]
 
 Every case is a process of its own, run one after the other (never two at once: full FE
 takes ~10 GB): full FE (FLEXMVM_NO_CACHE=1); the reduced model cold (an empty setup cache in
 --work: the basis built, factoring K_EE as full FE factors its W) and warm (the same cache:
 the run loads its parts); with --cases big-cold,big-warm the big region (--big-radius-mm:
-2,967 nodes, 944 on its ring, a corner of ~2,900 columns): region_estimate is the cost guard's
-estimate of its cold set-up's peak (assembly/cost_sparse.py: K_EE's factor beside psi's
-exterior rows, filled a block of columns at a time, then the parts summed over blocks of
-rows) and big-cold runs only if it is under --memory-limit-gb; the run itself is not
-allow_costly, so the guard refuses it if it would not fit the machine). Prints the CPU,
+2,967 nodes, 944 on its ring, a corner of ~2,900 columns): region_estimate (in a process of
+its own) is the cost guard's estimate of its cold set-up's peak (assembly/cost_sparse.py: the
+largest of its stages, K_EE's factorization, its factor beside psi's exterior rows filled a
+block of columns at a time, the parts summed over blocks of rows, the truncation guard, the
+contact rows gathered) and big-cold runs only if it is under --memory-limit-gb; the run is
+allow_costly only with --allow-costly, else the guard refuses it above half the machine's
+memory). Prints the CPU,
 the commit, per case the set-up and simulation wall and CPU times (time.process_time: every
 thread of the process), the peak RSS after the set-up and at the end, the resident set when
 the run starts, and against full FE the simulation ratio, the memory ratio, the force NCC and
@@ -130,13 +133,25 @@ def region_estimate(radius_m: float) -> dict:
     }
 
 
-def _with_region(model, region: dict):
-    """``model`` (a ModelConfig) with ``region``, validated."""
-    return type(model).model_validate({**model.model_dump(), "region": region, "selection": None})
+def _estimate_apart(radius_m: float) -> dict:
+    """region_estimate in a process of its own: the cases' peak RSS (ru_maxrss, which a
+    child starts from its parent's resident set at the fork) not raised by the estimate's."""
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "estimate.json"
+        cmd = [sys.executable, __file__, "--estimate", str(radius_m), str(out)]
+        subprocess.run(cmd, capture_output=True, text=True, check=True)
+        return json.loads(out.read_text())
 
 
-def child(kind: str, radius_m: float, t_end: float, out: Path) -> None:
-    """One case: build, simulate, write its numbers as JSON to ``out``."""
+def _with_region(model, region: dict, allow: bool = False):
+    """``model`` (a ModelConfig) with ``region`` (and allow_costly when ``allow``), validated."""
+    fields = {"region": region, "selection": None} | ({"allow_costly": True} if allow else {})
+    return type(model).model_validate({**model.model_dump(), **fields})
+
+
+def child(kind: str, radius_m: float, t_end: float, out: Path, allow: bool = False) -> None:
+    """One case: build, simulate, write its numbers as JSON to ``out``; ``allow``: the region
+    allow_costly (built whatever the cost guard's refusal)."""
     import numpy as np
 
     import flexmvm as fm
@@ -152,8 +167,8 @@ def child(kind: str, radius_m: float, t_end: float, out: Path) -> None:
         sc = sc.with_model("plate", fm.full())
     elif radius_m > 0:
         region = {"ball": {"centre_m": [0.0, 0.0, 0.0], "radius_m": radius_m}}
-        # not allow_costly: the cost guard refuses a region whose set-up would not fit
-        sc = sc.with_model("plate", _with_region(sc.body("plate").model, region))
+        # without allow: the cost guard refuses a region whose set-up would not fit
+        sc = sc.with_model("plate", _with_region(sc.body("plate").model, region, allow))
     w0, c0 = time.perf_counter(), time.process_time()
     built = build_scenario(sc)
     w1, c1 = time.perf_counter(), time.process_time()
@@ -182,10 +197,13 @@ def child(kind: str, radius_m: float, t_end: float, out: Path) -> None:
     out.write_text(json.dumps(info))
 
 
-def _run(kind: str, radius_m: float, t_end: float, env: dict, label: str) -> dict:
+def _run(
+    kind: str, radius_m: float, t_end: float, env: dict, label: str, allow: bool = False
+) -> dict:
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "case.json"
         cmd = [sys.executable, __file__, "--child", kind, str(radius_m), str(t_end), str(out)]
+        cmd += ["allow"] if allow else []
         proc = subprocess.run(cmd, capture_output=True, text=True, check=False, env=env)
         log = [ln for ln in proc.stderr.splitlines() if ln.startswith("    ")]
         if proc.returncode != 0:
@@ -277,6 +295,11 @@ def main() -> None:
     ap.add_argument("--t-end-us", type=float, default=0.0, help="0: the scenario's")
     ap.add_argument("--memory-limit-gb", type=float, default=8.0, help="big-cold above: no run")
     ap.add_argument("--json", type=Path, default=None, help="write the stamped record here")
+    ap.add_argument(
+        "--allow-costly",
+        action="store_true",
+        help="build the big region allow_costly (the guard refuses it above half the machine)",
+    )
     args = ap.parse_args()
     work = Path(args.work or tempfile.mkdtemp(prefix="flexmvm-bigpart-"))
     work.mkdir(parents=True, exist_ok=True)
@@ -308,7 +331,7 @@ def main() -> None:
     ]
     chosen, est, done = args.cases.split(","), None, []
     if "big-cold" in chosen:
-        est = region_estimate(args.big_radius_mm * 1e-3)
+        est = _estimate_apart(args.big_radius_mm * 1e-3)
         print(f"region {args.big_radius_mm:g} mm estimated: {est}", flush=True)
         if est["peak_bytes"] > args.memory_limit_gb * 1e9:
             print(f"  over --memory-limit-gb {args.memory_limit_gb:g}: not run", flush=True)
@@ -323,7 +346,8 @@ def main() -> None:
         env.pop("FLEXMVM_NO_CACHE", None)
         if cache == "warm":
             env["FLEXMVM_CACHE_DIR"] = str(work / "cold")
-        done.append(_run("mvm-sparse", radius, t_end, env, label))
+        allow = args.allow_costly and name.startswith("big")
+        done.append(_run("mvm-sparse", radius, t_end, env, label, allow))
         print(_line(done[-1], ref), flush=True)
     if args.json is not None:
         settings = {
@@ -331,6 +355,7 @@ def main() -> None:
             "big_radius_mm": args.big_radius_mm,
             "t_end_us": args.t_end_us,
             "memory_limit_gb": args.memory_limit_gb,
+            "allow_costly": args.allow_costly,
         }
         _write_record(args.json, settings, done, est, ref)
         print(f"record: {args.json}", flush=True)
@@ -339,6 +364,8 @@ def main() -> None:
 if __name__ == "__main__":
     if len(sys.argv) > 1 and sys.argv[1] == "--child":
         kind, radius, t_end, out = sys.argv[2:6]
-        child(kind, float(radius), float(t_end), Path(out))
+        child(kind, float(radius), float(t_end), Path(out), sys.argv[6:7] == ["allow"])
+    elif len(sys.argv) > 1 and sys.argv[1] == "--estimate":
+        Path(sys.argv[3]).write_text(json.dumps(region_estimate(float(sys.argv[2]))))
     else:
         main()

@@ -129,9 +129,8 @@ def test_a_large_region_that_fits_is_built_as_mvm_sparse(monkeypatch):
 def test_the_shipped_plate_region_is_not_warned():
     """scenarios/plate_impact.toml's plate (273,789 DOF; its region: 75 nodes, 70 on the
     ring, 60 modes; its top face the contact's) with its full-FE factor's counts (as the guard
-    makes them for kind mvm-sparse, measured once: K 19.7 M, M 6.6 M entries; in the
-    integrator's order, full FE's: L 304 M, stored 422 M, fronts 419 M; in minimum degree,
-    K_EE's: 218 M, 265 M, 185 M): estimated within MARGIN of full FE's memory and ~670 x
+    makes them for kind mvm-sparse, in minimum degree, K_EE's order, measured once: K 19.7 M,
+    M 6.6 M, L 218 M, stored 265 M, fronts 185 M entries): estimated within MARGIN of full FE's memory and ~670 x
     cheaper a Newton iteration, no warning (before: no estimate at all); its set-up peak
     estimated 3.9-4.3 GB with the FE model (measured 4.7 GB: docs/notes/2026-11-29-cost-guard.md).
     The mesh is made by gmsh, not kept in git: skipped without it. ~5-20 s (the mesh read)."""
@@ -153,7 +152,7 @@ def test_the_shipped_plate_region_is_not_warned():
     shape = ring_shape(mesh, nodes, fixed, cfg.model.modes, top)
     assert (shape.region_nodes, shape.ring_nodes, shape.corner) == (75, 70, 270)
     assert shape.contact_rows == 3 * np.setdiff1d(top, nodes).size
-    c = ring_cost("plate", mesh.n_nodes, shape, FULL_PLATE, k_ee=FULL_PLATE_MMD)
+    c = ring_cost("plate", mesh.n_nodes, shape, FULL_PLATE_MMD)
     assert c.bytes < cost.MARGIN * c.full_bytes and c.step_bytes < 1e-2 * c.full_step_bytes
     assert 3.5e9 < c.fit_bytes < 5.5e9
     with warnings.catch_warnings():
@@ -161,8 +160,8 @@ def test_the_shipped_plate_region_is_not_warned():
         check_cost(c, False, "bodies[plate].model")
 
 
-#: full_factor of the shipped plate (the FE model's K and M without the clamp's DOFs, the
-#: symbolic analysis of its iteration matrix: ~40 s of CPU, hence stored here), in the
-#: integrator's order (full FE's) and in minimum-degree order (K_EE's, integrator_order=False)
-FULL_PLATE = FullFactor(19_747_999, 6_590_871, 303_736_103, 422_096_302, 418_613_337)
+#: full_factor(..., integrator_order=False) of the shipped plate, as the guard makes it for
+#: kind mvm-sparse (the FE model's K and M without the clamp's DOFs, the minimum-degree
+#: symbolic analysis of its iteration matrix: ~10 s of CPU, hence stored here); in the
+#: integrator's order: L 303,736,103, stored 422,096,302, fronts 418,613,337 entries
 FULL_PLATE_MMD = FullFactor(19_747_999, 6_590_871, 218_346_104, 264_797_373, 184_906_764)

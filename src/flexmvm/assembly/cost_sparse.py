@@ -205,11 +205,12 @@ def ring_cost(
     k_ee: FullFactor | None = None,
 ) -> BodyCost:
     """The BodyCost of a ring body of ``shape`` on a mesh of n_nodes nodes against its
-    full-FE body (``full``: the symbolic analysis, assembly.cost.full_factor, in the
-    integrator's order, as a full-FE run factors): memory what it holds at run time with the
-    setup cache (ring_held_bytes), compared with full FE's as the dense kinds' is; the fit
-    judged on the cold set-up's peak with the FE model (peak_bytes), K_EE's factorization
-    read off ``k_ee`` (the analysis in minimum-degree order, K_EE's; default ``full``)."""
+    full-FE body (``full``: the symbolic analysis, assembly.cost.full_factor, in minimum-degree
+    order: K_EE's, and a lower bound of full FE's in the integrator's order, 0.54 of it on the
+    263,685-DOF plate, whose own analysis would cost the guard full FE's set-up memory): memory
+    what it holds at run time with the setup cache (ring_held_bytes), compared with full
+    FE's as the dense kinds' is; the fit judged on the cold set-up's peak with the FE model
+    (peak_bytes), K_EE's factorization read off ``k_ee`` (default ``full``)."""
     from flexmvm.assembly.cost import reduced_cost
 
     ref = reduced_cost(name, n_nodes, 0, full.k_nnz, full=full, sizes=sizes)
