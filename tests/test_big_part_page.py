@@ -62,3 +62,16 @@ def test_the_record_is_stamped_and_whole():
     order = ["reduced cold", "reduced warm", "region 1.25 mm cold", "region 1.25 mm warm"]
     assert [c["label"] for c in d["cases"]] == order
     assert all("error" not in c and c["steps"] == d["full"]["steps"] == 100 for c in d["cases"])
+
+
+def test_the_big_regions_sentence_is_its_record():
+    """The sentence after the table: the big region's cold set-up (CPU minutes, peak) and the
+    cost guard's estimate of it, as the record has them."""
+    d = json.loads(RECORD.read_text())
+    cold = {c["label"]: c for c in d["cases"]}["region 1.25 mm cold"]
+    text = " ".join(PAGE.read_text().split())
+    minutes = f"{cold['build_cpu_s'] / 60:.0f} minutes of CPU"
+    peak = f"{cold['peak_rss_mb'] / 1e3:.1f} GB at the peak"
+    estimate = f"the cost guard's estimate, {d['estimate']['peak_bytes'] / 1e9:.1f} GB"
+    for phrase in (minutes, peak, estimate):
+        assert phrase in text, phrase
