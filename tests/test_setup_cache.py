@@ -283,6 +283,25 @@ def test_unwritable_cache_dir_is_ignored(rod, fe, tmp_path, monkeypatch):
     assert builder.calls == 1 and basis.n_modes == 5
 
 
+def test_a_full_disk_is_said_in_one_line_and_the_run_goes_on(rod, fe, monkeypatch):
+    """An entry that cannot be written for want of space (ENOSPC) is announced in one line
+    (the next run would make it again unawares); the run has its basis all the same, and no
+    partial entry is left. A read-only directory stays silent (the test above)."""
+    import errno
+
+    from flexmvm.setup_cache import store
+
+    def full(*_args, **_kw):
+        raise OSError(errno.ENOSPC, "No space left on device")
+
+    monkeypatch.setattr(store.np, "savez", full)
+    with pytest.warns(StaleDataWarning, match="no space left") as seen:
+        basis, builder = _cb(fe, rod)
+    assert builder.calls == 1 and basis.n_modes == 5
+    assert all("\n" not in str(w.message) for w in seen)
+    assert setup_cache.info().n_entries == 0
+
+
 def test_scenario_builder_reads_the_disk_cache(cache, monkeypatch):
     """A second process (here: a new SetupCache, empty per-process caches) builds nothing,
     mode floor included."""
