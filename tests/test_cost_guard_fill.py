@@ -96,7 +96,8 @@ def test_within_the_margin_is_not_warned():
     """Estimated up to MARGIN x full FE in memory and time: no warning (the estimates leave
     out what both models hold; within that they are not told apart)."""
     full = FullFactor(k_nnz=1_000_000, m_nnz=300_000, l_nnz=4_000_000)
-    c = reduced_cost("b", 20_000, 150, full.k_nnz, full=full)
+    # full FE: 27.6 MB of M and K, 64 MB of factor and fronts; reduced: 93.8 MB dense
+    c = reduced_cost("b", 20_000, 190, full.k_nnz, full=full)
     assert c.full_bytes < c.bytes <= cost.MARGIN * c.full_bytes
     with warnings.catch_warnings():
         warnings.simplefilter("error", ReducedCostWarning)
@@ -115,8 +116,19 @@ def test_step_sizes_are_the_grids_levels(dt, dt_max):
 
 
 def test_without_an_analysis_the_fill_is_estimated():
-    """reduced_cost without ``full`` (the studies' quick estimates) takes FILL_PER_NNZ."""
+    """reduced_cost without ``full`` (the studies' quick estimates) takes FILL_PER_NNZ, and
+    the fronts of the factorization as large as the factor (measured 0.7-1.0 x it)."""
     c = reduced_cost("b", 1000, 10, 100_000)
     e = FullFactor.estimated(100_000)
-    assert e.l_nnz == int(cost.FILL_PER_NNZ * 100_000)
-    np.testing.assert_allclose(c.full_bytes, 12 * (2 * 100_000 + e.m_nnz) + 8 * e.l_nnz)
+    assert e.l_nnz == int(cost.FILL_PER_NNZ * 100_000) and e.stored == e.fronts == e.l_nnz
+    np.testing.assert_allclose(c.full_bytes, 12 * (2 * 100_000 + e.m_nnz) + 8 * 2 * e.l_nnz)
+
+
+def test_an_analysis_counts_the_factor_as_stored_and_its_fronts():
+    """With the symbolic analysis's counts, full FE holds its factor as stored (squares per
+    supernode) per step size and, beside the last one made, the fronts."""
+    full = FullFactor(1_000_000, 300_000, 4_000_000, factor_entries=5_000_000, front_entries=3e6)
+    c = reduced_cost("b", 20_000, 10, full.k_nnz, full=full, sizes=2)
+    np.testing.assert_allclose(c.full_bytes, 12 * 2_300_000 + 8 * (2 * 5_000_000 + 3_000_000))
+    # a Newton iteration reads L's entries (not the squares' upper halves) twice
+    np.testing.assert_allclose(c.full_step_bytes, 2 * 8 * 4_000_000 + 12 * 1_300_000)

@@ -486,3 +486,29 @@ def test_elimination_order_round_trip(cache):
     small = sp.eye(5, format="csr")
     assert setup_cache.cached_elimination_order(small, none) is None
     assert setup_cache.cached_elimination_order(small, none) is None and none.calls == 1
+
+
+def test_the_checksum_reads_the_bytes_tobytes_gives():
+    """store.checksum hashes an array's bytes in place (no copy of a basis of GBs) to the
+    same digest as its C-order tobytes() did, 0-d, strided, Fortran-ordered and text arrays
+    included: entries written before stay valid."""
+    import hashlib
+
+    from flexmvm.setup_cache import store
+
+    arrays = {
+        "a": np.arange(10.0).reshape(2, 5),
+        "b": np.array("xyz"),
+        "c": np.zeros((0, 3)),
+        "d": np.array([True, False]),
+        "e": np.asfortranarray(np.arange(6.0).reshape(2, 3)),
+        "f": np.array(3.5),
+        "g": np.arange(5, dtype=np.int32),
+        "h": np.arange(12.0)[::2],
+    }
+    digest = hashlib.sha256()
+    for name in sorted(arrays):
+        a = np.ascontiguousarray(arrays[name])
+        digest.update(f"{name}\0{a.dtype.str}\0{a.shape}\0".encode())
+        digest.update(a.tobytes())
+    assert store.checksum(arrays) == digest.hexdigest()

@@ -36,7 +36,7 @@ RING_SOURCES = BODY_SOURCES + ("bodies/ring_body.py",)
 def _sha(*arrays) -> str:
     digest = hashlib.sha256()
     for a in arrays:
-        a = np.asarray(a)
+        a = np.ascontiguousarray(a)
         digest.update(f"{a.dtype.str}{a.shape}".encode())
         digest.update(array_bytes(a))
     return digest.hexdigest()

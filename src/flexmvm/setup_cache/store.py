@@ -125,7 +125,7 @@ def array_bytes(a: np.ndarray) -> memoryview:
     C-contiguous: a hash of a basis of GBs made without copying it (its save's peak held the
     copy beside it: +5.6 GB on a 3,000-node region of a 274k-DOF plate)."""
     a = np.ascontiguousarray(a)
-    return memoryview(a.reshape(-1)).cast("B") if a.size else memoryview(b"")
+    return a.reshape(-1).data.cast("B") if a.size else memoryview(b"")
 
 
 def checksum(arrays: Mapping[str, np.ndarray]) -> str:
@@ -133,7 +133,7 @@ def checksum(arrays: Mapping[str, np.ndarray]) -> str:
     name order (the CHECKSUM array itself left out)."""
     digest = hashlib.sha256()
     for name in sorted(n for n in arrays if n != CHECKSUM):
-        a = np.asarray(arrays[name])
+        a = np.ascontiguousarray(arrays[name])  # (ndim >= 1: a 0-d array hashed as (1,))
         digest.update(f"{name}\0{a.dtype.str}\0{a.shape}\0".encode())
         digest.update(array_bytes(a))
     return digest.hexdigest()
