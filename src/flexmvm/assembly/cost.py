@@ -131,7 +131,7 @@ def full_factor(fe, fixed_dofs=(), integrator_order: bool = True) -> FullFactor:
     263,685-DOF plate, against 1.5 GB (its fill there 304 M entries, minimum degree's 218 M)."""
     from flexmvm import setup_cache
     from flexmvm.fe.solvers import ldl
-    from flexmvm.fe.solvers.cholesky import held_entries
+    from flexmvm.fe.solvers.cholesky import held_entries, packed_entries
     from flexmvm.fe.solvers.ordering import elimination_order, iteration_pattern
     from flexmvm.fe.solvers.symbolic import SymbolicFactor
 
@@ -145,7 +145,7 @@ def full_factor(fe, fixed_dofs=(), integrator_order: bool = True) -> FullFactor:
     else:
         order = elimination_order(w)
     symbolic = SymbolicFactor(w, order if order is not None and order.size else None)
-    factor = int(symbolic.t_off[-1] + symbolic.b_off[-1]) + symbolic.n
+    factor = packed_entries(symbolic)
     fronts = held_entries(symbolic) - factor
     return FullFactor(int(k.nnz), int(m.nnz), int(symbolic.nnz), factor, fronts)
 

@@ -197,12 +197,7 @@ def fe_model_bytes(full: FullFactor, n_nodes: int) -> float:
 
 
 def ring_cost(
-    name: str,
-    n_nodes: int,
-    shape: RingShape,
-    full: FullFactor,
-    sizes: int = 1,
-    k_ee: FullFactor | None = None,
+    name: str, n_nodes: int, shape: RingShape, full: FullFactor, sizes: int = 1
 ) -> BodyCost:
     """The BodyCost of a ring body of ``shape`` on a mesh of n_nodes nodes against its
     full-FE body (``full``: the symbolic analysis, assembly.cost.full_factor, in minimum-degree
@@ -210,12 +205,12 @@ def ring_cost(
     263,685-DOF plate, whose own analysis would cost the guard full FE's set-up memory): memory
     what it holds at run time with the setup cache (ring_held_bytes), compared with full
     FE's as the dense kinds' is; the fit judged on the cold set-up's peak with the FE model
-    (peak_bytes), K_EE's factorization read off ``k_ee`` (default ``full``)."""
+    (peak_bytes), K_EE's factorization read off the same analysis."""
     from flexmvm.assembly.cost import reduced_cost
 
     ref = reduced_cost(name, n_nodes, 0, full.k_nnz, full=full, sizes=sizes)
     held = ring_held_bytes(shape, sizes)
-    setup = ring_setup_bytes(shape, full if k_ee is None else k_ee, sizes)
+    setup = ring_setup_bytes(shape, full, sizes)
     peak = max(held, setup) + fe_model_bytes(full, n_nodes)
     return BodyCost(
         name,

@@ -42,6 +42,11 @@ from flexmvm.reduction.kinds.mvm_sparse import RingColumns, split_ring_psi
 PARTS_BLOCK_BYTES = 64e6
 
 
+def _rows_per_block(n_c: int) -> int:
+    """Rows of n_c columns in PARTS_BLOCK_BYTES (at least 16)."""
+    return max(16, int(PARTS_BLOCK_BYTES // (8 * max(n_c, 1))))
+
+
 def _row_blocks(pattern: sp.csr_matrix, n_c: int) -> list[np.ndarray]:
     """Blocks of the rows of the symmetric ``pattern`` (n, n) (sorted row ids, PARTS_BLOCK_BYTES
     of n_c columns each), consecutive in its reverse Cuthill-McKee order: a block's rows and
@@ -52,7 +57,7 @@ def _row_blocks(pattern: sp.csr_matrix, n_c: int) -> list[np.ndarray]:
 
     n = pattern.shape[0]
     order = reverse_cuthill_mckee(sp.csr_matrix(pattern), symmetric_mode=True)
-    step = max(16, int(PARTS_BLOCK_BYTES // (8 * max(n_c, 1))))
+    step = _rows_per_block(n_c)
     return [np.sort(order[k : k + step]).astype(np.int64) for k in range(0, n, step)]
 
 
@@ -208,7 +213,7 @@ def _condensed(K_ii, K_gi, T, cols: RingColumns) -> np.ndarray | None:
     random combination of the ring's columns does not satisfy it."""
     n_g, n_c, n_i = cols.n_ring_dofs, cols.corner.size, cols.interior.size
     z = np.random.default_rng(49).standard_normal(n_g)
-    step = max(16, int(PARTS_BLOCK_BYTES // (8 * n_c)))
+    step = _rows_per_block(n_c)
     blocks = [(k, min(k + step, n_i)) for k in range(0, n_i, step)]
     colmax, y, B_x = np.zeros(n_g), np.zeros(n_i), np.zeros((n_i, n_c - n_g))
     for r0, r1 in blocks:  # one pass over B: its ring columns' extent, B_s z, B_x

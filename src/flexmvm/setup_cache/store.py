@@ -196,8 +196,8 @@ def save(key: str, arrays: Mapping[str, np.ndarray]) -> None:
         with atomic_path(directory / (key + SUFFIX)) as tmp, open(tmp, "wb") as f:
             # the arrays' names are not savez's keywords (numpy's stubs cannot tell)
             np.savez(f, **arrays, **{CHECKSUM: np.array(checksum(arrays))})  # type: ignore[arg-type]
-    except (OSError, InputError, ValueError) as exc:  # a read-only or full disk must not stop
-        if isinstance(exc, OSError) and exc.errno in (errno.ENOSPC, errno.EDQUOT):  # a run
+    except (OSError, InputError, ValueError) as exc:  # a read-only or full disk: run on
+        if isinstance(exc, OSError) and exc.errno in (errno.ENOSPC, errno.EDQUOT):
             size = sum(np.asarray(a).nbytes for a in arrays.values()) / 1e6
             announce_recompute(
                 f"setup cache {key}: not written, no space left in {directory} "
