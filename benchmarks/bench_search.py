@@ -28,6 +28,7 @@ from flexmvm.contact.search_state import (
     FacetSurface,
     MemoArrays,
     SearchState,
+    facet_edges,
     facet_grid,
     facet_planes,
 )
@@ -79,7 +80,8 @@ def scan_ms(xs, xm, conn, geo, one_cell: bool, reach: float = 2e-4) -> tuple[flo
     else:
         grid = facet_grid(geo)
     planes = facet_planes(xm[conn], 0, geo[:, :3])
-    surface = FacetSurface(geo, conn, 0, *adj, box, rho, projection_params(), grid, planes)
+    edges = facet_edges(xm[conn], 0)
+    surface = FacetSurface(geo, conn, 0, *adj, box, rho, projection_params(), grid, planes, edges)
     times = {True: [], False: []}
     for rep in range(5):
         state = SearchState.empty(ns, nf, 256)

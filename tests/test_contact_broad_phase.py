@@ -131,7 +131,7 @@ def test_slab_bound_never_exceeds_the_distance():
     """_slab_bound <= the distance of a point to a facet (triangles and warped quads, points
     near and far, above and beside): sampled densely, each facet's distance is at least the
     bound less the sampling's reach (the facet's points within 1/400 of its size)."""
-    from flexmvm.contact.search import _slab_bound
+    from flexmvm.contact.certificate import slab_bound as _slab_bound
     from flexmvm.contact.search_state import facet_planes
 
     rng = np.random.default_rng(7)

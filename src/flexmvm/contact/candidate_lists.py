@@ -13,7 +13,7 @@ import numpy as np
 
 
 @numba.njit(cache=True)
-def _distance(p, c, k):
+def row_distance(p, c, k):
     """|p - c[k, :3]| [m]: p (3,) and the point in the first three entries of row k of c
     (a facet's centroid, a node's reference position). Row k is read in place, not as a
     view c[k]: a view takes a reference count (two atomic operations), which cost a scan a
@@ -47,7 +47,7 @@ def _refresh_list(i, p, reach, rho, geo, lists, ref, gmeta, gdims, gstart, gface
                 cell = (ci * gdims[1] + cj) * gdims[2] + ck
                 for e in range(gstart[cell], gstart[cell + 1]):
                     g = gfacets[e]
-                    if _distance(p, geo, g) - geo[g, 3] <= radius:
+                    if row_distance(p, geo, g) - geo[g, 3] <= radius:
                         if n == cap:
                             overflow = True
                             break
@@ -71,7 +71,7 @@ def node_candidates(i, p, reach, rho, geo, lists, ref, mark, tag, cand, lb, grid
     Marks mark[g] = tag, writes cand[:n] and lower bounds lb[:n] = |p - c_g| - R_g [m].
     Returns n."""
     radius = ref[i, 3]
-    moved = _distance(p, ref, i)
+    moved = row_distance(p, ref, i)
     if radius < 0.0 or moved + reach > radius - (1e-12 + 1e-9 * radius):
         _refresh_list(i, p, reach, rho, geo, lists, ref, grid[0], grid[1], grid[2], grid[3])
     n_list = lists[i, 0]
@@ -79,7 +79,7 @@ def node_candidates(i, p, reach, rho, geo, lists, ref, mark, tag, cand, lb, grid
     n = 0
     for k in range(n_all):
         g = k if n_list < 0 else lists[i, 1 + k]
-        d = _distance(p, geo, g)
+        d = row_distance(p, geo, g)
         if d <= reach + geo[g, 3]:
             mark[g] = tag
             cand[n] = g

@@ -5,7 +5,9 @@ clamping of outside projections in pairs) is the specification, reproduced pair 
 round-off. What differs is the search: per slave node a cached superset of its broad-phase
 candidates, rebuilt from a grid of the facets (contact.candidate_lists), and a warm start
 from the facet chosen at the previous step, with facets pruned by a distance bound (see
-:func:`_closest`). What it reads and keeps comes in three typed tuples (contact.search_state):
+:func:`_closest`); a node whose last facet is certified still to win (contact.certificate:
+the other facets' bounds kept from its last search, less its motion since) is projected on
+that facet alone, its candidates not read. What it reads and keeps comes in three typed tuples (contact.search_state):
 the facets (FacetSurface), the per-node state (SearchState) and the kept projections
 (MemoArrays); the two scans, :func:`scan_nodes` (the constraint pass) and
 :func:`penetration_scan` (the penetration measure, contact.penetration), unpack them once
@@ -31,7 +33,16 @@ from __future__ import annotations
 import numba
 import numpy as np
 
-from flexmvm.contact.candidate_lists import node_candidates
+from flexmvm.contact.candidate_lists import node_candidates, row_distance
+from flexmvm.contact.certificate import (
+    MARGIN_ABS,
+    MARGIN_D,
+    MARGIN_R,
+    certified,
+    certify,
+    list_holds,
+    slab_bound,
+)
 from flexmvm.contact.geometry import TIE_ABS, TIE_REL
 from flexmvm.contact.projection import (
     REC_DIST,
@@ -115,22 +126,6 @@ def _try(g, i, xs, xm, conn, n_quads, params, work, memo, best, best_g):
     return status, best_g
 
 
-@numba.njit(cache=True)
-def _slab_bound(p, geo, plane, g):
-    """Lower bound [m] of the distance from p (3,) to undeformed facet g, centroid and
-    circumradius geo[g], unit normal and half-thickness plane[g] (search_state.facet_planes;
-    rows read in place: candidate_lists._distance): the distance to the cylinder |n . (x - c)| <= t,
-    |x - c - (n . (x - c)) n| <= R, which holds the facet, sqrt(max(|h| - t, 0)^2 +
-    max(l - R, 0)^2) with h, l the normal and lateral offsets of p from c; at least the
-    ball's |p - c| - R."""
-    d0, d1, d2 = p[0] - geo[g, 0], p[1] - geo[g, 1], p[2] - geo[g, 2]
-    h = (d0 * plane[g, 0] + d1 * plane[g, 1]) + d2 * plane[g, 2]
-    dd = (d0 * d0 + d1 * d1) + d2 * d2
-    a = max(abs(h) - plane[g, 3], 0.0)
-    b = max(np.sqrt(max(dd - h * h, 0.0)) - geo[g, 3], 0.0)
-    return max(np.sqrt(a * a + b * b), np.sqrt(dd) - geo[g, 3])
-
-
 @numba.njit(cache=True, inline="always")
 def _closest(
     i,
@@ -162,7 +157,7 @@ def _closest(
     distance minus u_max (undeformed facet moved by at most the largest facet node
     displacement u_max) and a margin for the inside tolerance and round-off exceeds s: any
     projection on g scores at least its distance, so g cannot win. The bound: |p - c_g| - R_g
-    (lb, the ball), then, when that does not skip g, _slab_bound (the facet's slab, plane
+    (lb, the ball), then, when that does not skip g, certificate.slab_bound (the facet's slab, plane
     (nf, 4)): on a smooth surface it leaves the facets next to the foot point, where the
     ball alone leaves every facet within the node's gap (a scan projected 4 to 5 times as
     many). Skipping only facets that cannot win, the result is the same as without it.
@@ -188,9 +183,9 @@ def _closest(
             continue
         if best_g >= 0:
             R = geo[g, 3]
-            margin = u_max * (1.0 + 1e-5) + 1e-5 * R + 1e-9 * (lb[k] + R) + 1e-15
+            margin = u_max * (1.0 + MARGIN_R) + MARGIN_R * R + MARGIN_D * (lb[k] + R) + MARGIN_ABS
             score = _score(best)
-            if lb[k] - margin > score or _slab_bound(p, geo, plane, g) - margin > score:
+            if lb[k] - margin > score or slab_bound(p, geo, plane, g) - margin > score:
                 continue
         status, best_g = _try(g, i, xs, xm, conn, n_quads, params, work, memo, best, best_g)
         mark[g] = tag + 1
@@ -274,16 +269,29 @@ def _search_node(
     memo,
     best,
     p,
+    cert,
+    edges,
 ):
-    """Closest facet of node i of xs, shared by scan_nodes and penetration_scan, for a node
-    within the box (_in_box, which wrote p, its position in the facet body's frame): the
-    candidate superset, the closest projection.
-    Returns (searched: False without candidates, status, facet).
+    """Closest facet of node i of xs (scan_nodes, penetration_scan) within the box (_in_box
+    wrote p, its facet-body frame position): its last facet if certified (contact.certificate),
+    else the closest among its candidates. Returns (searched: False without any, status, facet).
 
     The per-node helpers take the fields of FacetSurface and SearchState (unpacked once per
     scan), not the named tuples: a field read from a tuple passed in takes a reference count
     (an atomic increment and decrement per array): passed down to here and to _try, they
     made a scan a quarter slower (docs/notes/2026-11-27-contact-kernels-split.md)."""
+    f0 = prev[i]
+    if (
+        f0 >= 0
+        and cert[i, 0] > -np.inf
+        and list_holds(i, p, reach, ref)
+        and row_distance(p, geo, f0) <= reach + geo[f0, 3]
+    ):
+        status, g = _try(f0, i, xs[i], xm, conn, n_quads, params, work, memo, best, -1)
+        if status:
+            return True, status, f0
+        if best[REC_IN] == 1.0 and certified(i, p, f0, _score(best), u_max, cert):
+            return True, 0, f0
     counter[0] += 2
     tag = counter[0]
     n = node_candidates(i, p, reach, rho, geo, lists, ref, mark, tag, cand, lb, grid)
@@ -312,6 +320,8 @@ def _search_node(
         memo,
         best,
     )
+    if status == 0:
+        certify(i, p, g, geo, plane, edges, lists, cert)
     return True, status, g
 
 
@@ -339,8 +349,8 @@ def scan_nodes(xs, vs, xm, vm, r_m, A_m, reach, u_max, surface, state, memo, fac
     work, best, p = work_arrays()
     _memo_begin(memo)
     kept = (memo.facets, memo.count, memo.records)
-    geo, conn, n_quads, adj_ptr, adj_idx, box, rho, params, grid, plane = surface
-    lists, ref, prev, mark, counter, cand, lb = state
+    geo, conn, n_quads, adj_ptr, adj_idx, box, rho, params, grid, plane, edges = surface
+    lists, ref, prev, mark, counter, cand, lb, cert = state
     n_pairs = 0
     for i in range(xs.shape[0]):
         facet[i] = -1
@@ -372,6 +382,8 @@ def scan_nodes(xs, vs, xm, vm, r_m, A_m, reach, u_max, surface, state, memo, fac
             kept,
             best,
             p,
+            cert,
+            edges,
         )
         if not searched:
             continue
@@ -422,16 +434,14 @@ def penetration_scan(xs, xm, r_m, A_m, reach, u_max, surface, state, memo, edge_
     i.e. if the other surface folded back over the facet within g0 of the node (a sheet
     thinner than the node's gap); at a ridge (convex edge) of plane facets the projection
     on the far facet is outside it. Contact surfaces do not fold so: the search is skipped.
-    Projections kept as in scan_nodes (memo): the warm start's projection is not made again
-    in the node's search, nor, with the constraint pass's memo at the same positions, in the
-    next step's scan_nodes.
-    Returns (status, facet of a failure, depth [m], node (-1 when none), facet of the
-    deepest node)."""
+    Projections kept as in scan_nodes (memo): the warm start's is not made again in the
+    node's search, nor (the same memo and positions) in the next step's scan_nodes. Returns
+    (status, facet of a failure, depth [m], node (-1 when none), facet of the deepest node)."""
     work, best, p = work_arrays()
     _memo_begin(memo)
     kept = (memo.facets, memo.count, memo.records)
-    geo, conn, n_quads, adj_ptr, adj_idx, box, rho, params, grid, plane = surface
-    lists, ref, prev, mark, counter, cand, lb = state
+    geo, conn, n_quads, adj_ptr, adj_idx, box, rho, params, grid, plane, edges = surface
+    lists, ref, prev, mark, counter, cand, lb, cert = state
     depth, node, at = floor, -1, -1
     for i in range(xs.shape[0]):
         if not _in_box(i, xs, r_m, A_m, box, reach, p):
@@ -469,6 +479,8 @@ def penetration_scan(xs, xm, r_m, A_m, reach, u_max, surface, state, memo, edge_
             kept,
             best,
             p,
+            cert,
+            edges,
         )
         if not searched:
             continue

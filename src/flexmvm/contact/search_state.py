@@ -53,13 +53,14 @@ class FacetSurface(NamedTuple):
     params: np.ndarray  # (7,) projection tolerances (projection.projection_params)
     grid: FacetGrid
     plane: np.ndarray  # (nf, 4) unit normal and half-thickness [m] (facet_planes), body frame
+    edges: np.ndarray  # (nf, 3, 4) a triangle's edge half-planes (facet_edges), body frame
 
 
 class SearchState(NamedTuple):
     """Search state of n nodes against nf facets: kept between calls, per node, its candidate
     superset (lists: count first, -1 when it overflowed, then facet ids; ref: the position
-    and radius it was built for) and its last facet (prev, -1: none); work arrays mark,
-    counter (1,), cand, lb."""
+    and radius it was built for), its last facet (prev, -1: none) and the certificate that
+    it still wins (cert, contact.certificate); work arrays mark, counter (1,), cand, lb."""
 
     lists: np.ndarray  # (n, min(nf, cap) + 1) int64
     ref: np.ndarray  # (n, 4) position [m] and radius [m]; radius < 0: none yet
@@ -68,6 +69,7 @@ class SearchState(NamedTuple):
     counter: np.ndarray  # (1,) int64
     cand: np.ndarray  # (nf,) int64
     lb: np.ndarray  # (nf,) lower bounds of the candidates' distances [m]
+    cert: np.ndarray  # (n, 5) the warm start's certificate (contact.certificate.certify)
 
     @classmethod
     def empty(cls, n: int, nf: int, cap: int = LIST_CAP) -> SearchState:
@@ -80,6 +82,7 @@ class SearchState(NamedTuple):
             np.zeros(1, dtype=np.int64),
             np.zeros(nf, dtype=np.int64),
             np.zeros(nf),
+            np.full((n, 5), -np.inf),
         )
 
 
@@ -116,6 +119,7 @@ def facet_surface(
         projection_params(),
         facet_grid(geo),
         facet_planes(corners, surface.n_quads, geo[:, :3]),
+        facet_edges(corners, surface.n_quads),
     )
 
 
@@ -125,7 +129,7 @@ def facet_planes(corners: np.ndarray, n_quads: int, centroids: np.ndarray) -> np
     corners X_a (corners (nf, 4, 3), undeformed, body frame; c the centroid) about the plane
     through c. The facet (a bilinear quad or a triangle: inside the convex hull of its
     corners) lies in the slab |n . (x - c)| <= t and in the ball |x - c| <= R (R its
-    circumradius): search._slab_bound's lower bound of a point's distance to it. A facet with
+    circumradius): certificate.slab_bound's lower bound of a point's distance to it. A facet with
     no normal (zero cross product) gets n = 0, t = 0 (the bound is then the ball's)."""
     corners = np.asarray(corners, dtype=np.float64)
     nf = len(corners)
@@ -139,6 +143,33 @@ def facet_planes(corners: np.ndarray, n_quads: int, centroids: np.ndarray) -> np
     n[~ok] = 0.0
     t = np.abs(np.einsum("fi,fai->fa", n, corners - centroids[:, None])).max(axis=1)
     return np.ascontiguousarray(np.column_stack([n, t]).reshape(nf, 4))
+
+
+def facet_edges(corners: np.ndarray, n_quads: int) -> np.ndarray:
+    """Per facet (nf, 3, 4): the three edges of a triangle as half-planes m . x <= o of its
+    plane, m (3,) the unit in-plane normal of the edge pointing away from the third corner
+    and o [m] (corners (nf, 4, 3) undeformed, body frame): the triangle is their intersection
+    with its plane, so max(0, max_e m_e . p - o_e) is a lower bound of p's lateral distance
+    to it (certificate.triangle_bound). Quads (possibly warped) and degenerate triangles get
+    m = 0, o = inf (no lateral bound)."""
+    corners = np.asarray(corners, dtype=np.float64)
+    nf = len(corners)
+    out = np.zeros((nf, 3, 4))
+    out[:, :, 3] = np.inf
+    tri = corners[n_quads:, :3]
+    if len(tri):
+        n = np.cross(tri[:, 1] - tri[:, 0], tri[:, 2] - tri[:, 0])
+        for e in range(3):
+            a, b, c = tri[:, e], tri[:, (e + 1) % 3], tri[:, (e + 2) % 3]
+            m = np.cross(b - a, n)
+            norm = np.linalg.norm(m, axis=1)
+            ok = norm > 0.0
+            m[ok] /= norm[ok, None]
+            m[~ok] = 0.0
+            m[np.einsum("fi,fi->f", m, c - a) > 0.0] *= -1.0
+            o = np.where(ok, np.einsum("fi,fi->f", m, a), np.inf)
+            out[n_quads:, e, :3], out[n_quads:, e, 3] = m, o
+    return out
 
 
 def facet_grid(geo: np.ndarray) -> FacetGrid:
