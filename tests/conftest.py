@@ -4,7 +4,9 @@ directory."""
 
 from __future__ import annotations
 
+import hashlib
 import os
+import shutil
 import sys
 from pathlib import Path
 
@@ -18,11 +20,37 @@ import pytest
 # cache beside the sources that benchmarks and users' runs read (numba's cache key does not
 # hold the level), hence the separate directory. A developer who sets NUMBA_OPT keeps it and
 # their own cache directory.
+#
+# The directory is named for the kernels' sources (_kernel_sources_digest): numba checks a
+# cached kernel against its own file's time stamp only, so a kernel that calls or inlines one
+# of another module (contact.search's scans and contact.certificate) kept its old compiled
+# callee when only the callee's file changed (a checkout of another branch, an edit): the
+# tests then ran the old code and passed (so did a constant read by a kernel from a module
+# without kernels). Any change to the package's sources now starts an empty directory (the
+# others are removed): a test run after an edit compiles its kernels again.
+
+
+def _kernel_sources_digest(package: Path) -> str:
+    """A digest of the contents of every module of `package`."""
+    digest = hashlib.sha256()
+    for path in sorted(package.rglob("*.py")):
+        digest.update(path.relative_to(package).as_posix().encode() + b"\0" + path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def _kernel_cache_dir(root: Path) -> Path:
+    """.pytest_cache/numba-opt1-<digest>; the directories of other digests removed."""
+    name = f"numba-opt1-{_kernel_sources_digest(root / 'src' / 'flexmvm')}"
+    cache = root / ".pytest_cache"
+    for old in cache.glob("numba-opt1*"):
+        if old.name != name:
+            shutil.rmtree(old, ignore_errors=True)  # a worker may be removing it too
+    return cache / name
+
+
 if "NUMBA_OPT" not in os.environ:
     os.environ["NUMBA_OPT"] = "1"
-    os.environ["NUMBA_CACHE_DIR"] = str(
-        Path(__file__).resolve().parents[1] / ".pytest_cache" / "numba-opt1"
-    )
+    os.environ["NUMBA_CACHE_DIR"] = str(_kernel_cache_dir(Path(__file__).resolve().parents[1]))
     if "numba" in sys.modules:  # imported by a plugin before this file: read the settings again
         from numba.core import config
 
