@@ -144,11 +144,13 @@ def _valley(t: float, L: float = 1e-3):
 def test_a_winner_that_changes_inside_both_facets():
     """Nodes over a 30-degree valley moved parallel to its left side (height 0.2-0.3 mm over
     it kept) across the crease's bisector, x from -0.2 to 0.08 mm (0.1 um steps within 5 um
-    of it, 3-7 um elsewhere; within the reach of their candidate lists as first made): their foot points lie inside the left facet throughout, so
-    the right one wins while the last facet still holds an inside projection at an unchanged
-    score, the case where a certificate that said too much would keep the wrong facet.
-    Every scan gives the brute force's facet, and the certificate is taken on the way (with
-    the motion left out of it, the left facet is kept past the bisector: checked)."""
+    of it, 3-7 um elsewhere; within the reach of their candidate lists as first made): their
+    foot points lie inside the left facet throughout, so the right one wins while the last
+    facet still holds an inside projection at an unchanged score, the case where a
+    certificate that said too much would keep the wrong facet. Every scan gives the brute
+    force's facet, and the certificate is taken on the way (with the motion left out of it,
+    or a bound raised by 1 um, the left facet is kept past the bisector: checked with an
+    empty kernel cache)."""
     t = np.tan(np.radians(30.0))
     X, surf = _valley(t)
     y = np.array([0.25e-3, -0.4e-3, 0.6e-3])

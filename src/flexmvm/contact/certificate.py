@@ -8,8 +8,10 @@ tests the bounds of the others (on sphere_block, 20 candidates a node read, 0.85
 
 The certificate does the same test once for several scans. After a full search of node i
 with winner g, it keeps C_i = min over every facet h != g of the node's candidate superset of
-(slab_bound(p_i, h) - the margin's parts that do not depend on the motion), with p_i the node
-where it was computed. At a later scan, with the node at p and the facet body's largest node
+(a lower bound of the distance from p_i to h - the margin's parts that do not depend on the
+motion), p_i the node's position then; the bound is the largest of the ball's, slab_bound and
+triangle_bound (the slab alone gives a far node's neighbour facet the node's own gap: no
+certificate). At a later scan, with the node at p and the facet body's largest node
 displacement u_max, every such bound has fallen by at most |p - p_i| (a distance to a convex
 set is 1-Lipschitz in p). So while the superset still holds every candidate (the node has not
 moved so far that node_candidates would rebuild it), f0 = g is a candidate, its projection is
@@ -37,10 +39,10 @@ MARGIN_R, MARGIN_D, MARGIN_ABS = 1e-5, 1e-9, 1e-15
 def slab_bound(p, geo, plane, g):
     """Lower bound [m] of the distance from p (3,) to undeformed facet g, centroid and
     circumradius geo[g], unit normal and half-thickness plane[g] (search_state.facet_planes;
-    rows read in place: candidate_lists.row_distance): the distance to the cylinder |n . (x - c)| <= t,
-    |x - c - (n . (x - c)) n| <= R, which holds the facet, sqrt(max(|h| - t, 0)^2 +
-    max(l - R, 0)^2) with h, l the normal and lateral offsets of p from c; at least the
-    ball's |p - c| - R."""
+    rows read in place: candidate_lists.row_distance): the distance to the cylinder
+    |n . (x - c)| <= t, |x - c - (n . (x - c)) n| <= R, which holds the facet,
+    sqrt(max(|h| - t, 0)^2 + max(l - R, 0)^2) with h, l the normal and lateral offsets of p
+    from c; at least the ball's |p - c| - R."""
     d0, d1, d2 = p[0] - geo[g, 0], p[1] - geo[g, 1], p[2] - geo[g, 2]
     h = (d0 * plane[g, 0] + d1 * plane[g, 1]) + d2 * plane[g, 2]
     dd = (d0 * d0 + d1 * d1) + d2 * d2

@@ -7,9 +7,9 @@ candidates, rebuilt from a grid of the facets (contact.candidate_lists), and a w
 from the facet chosen at the previous step, with facets pruned by a distance bound (see
 :func:`_closest`); a node whose last facet is certified still to win (contact.certificate:
 the other facets' bounds kept from its last search, less its motion since) is projected on
-that facet alone, its candidates not read. What it reads and keeps comes in three typed tuples (contact.search_state):
-the facets (FacetSurface), the per-node state (SearchState) and the kept projections
-(MemoArrays); the two scans, :func:`scan_nodes` (the constraint pass) and
+that facet alone, its candidates not read. What it reads and keeps comes in three typed
+tuples (contact.search_state): the facets (FacetSurface), the per-node state (SearchState)
+and the kept projections (MemoArrays); the two scans, :func:`scan_nodes` (the constraint pass) and
 :func:`penetration_scan` (the penetration measure, contact.penetration), unpack them once
 and hand their arrays to the per-node helpers (see :func:`_search_node` for why).
 
@@ -157,8 +157,8 @@ def _closest(
     distance minus u_max (undeformed facet moved by at most the largest facet node
     displacement u_max) and a margin for the inside tolerance and round-off exceeds s: any
     projection on g scores at least its distance, so g cannot win. The bound: |p - c_g| - R_g
-    (lb, the ball), then, when that does not skip g, certificate.slab_bound (the facet's slab, plane
-    (nf, 4)): on a smooth surface it leaves the facets next to the foot point, where the
+    (lb, the ball), then, when that does not skip g, certificate.slab_bound (the facet's
+    slab, plane (nf, 4)): on a smooth surface it leaves the facets next to the foot point, where the
     ball alone leaves every facet within the node's gap (a scan projected 4 to 5 times as
     many). Skipping only facets that cannot win, the result is the same as without it.
     Returns (status, facet; -1 when none)."""
