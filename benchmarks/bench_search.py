@@ -111,6 +111,8 @@ def scan_ms(xs, xm, conn, geo, one_cell: bool, reach: float = 2e-4) -> tuple[flo
                 memo,
                 facet,
                 out,
+                np.inf,  # every node searched
+                np.zeros(len(x), np.int64),
             )
             times[cold].append(1e3 * (time.perf_counter() - t0))
     return float(np.median(times[True])), float(np.median(times[False]))

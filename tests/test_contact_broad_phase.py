@@ -71,6 +71,8 @@ def _scan_args(X, surf, xs, state=None, keep=64):
         memo,
         facet,
         out,
+        np.inf,  # need: every node searched
+        np.zeros(n, np.int64),
     )
 
 

@@ -117,14 +117,16 @@ def _reference_rows(bodies, prov, states, h):
 
 def test_provider_matches_reference_along_a_trajectory():
     """40 steps of a slave grid sweeping over a warped plate and through it: every step the
-    warm-started search picks the facet of the reference's full search for every node, with
-    the same gap and normal (1e-12), and the rows (frame, elastic, nodal selector), lower
-    bounds and keys equal the reference rows built by reference.body_rows."""
+    warm-started search picks the facet of the reference's full search for every node it
+    searches (a node certified in front by more than a row's window gets no pair: such a
+    pair of the reference is in front and no row), with the same gap and normal (1e-12),
+    and the rows (frame, elastic, nodal selector), lower bounds and keys equal the reference
+    rows built by reference.body_rows."""
     rng = np.random.default_rng(11)
     bodies, surf = _bodies(rng)
     A = _rotation(rng)
     prov = PointToSurfaceContact(bodies, 1, np.arange(25), 0, surf, search_radius_m=0.05)
-    h, n_rows, ties = 1e-3, 0, 0
+    h, n_rows, ties, left = 1e-3, 0, 0, 0
     for t in np.linspace(0.0, 1.0, 40):
         states = _states(rng, t, A)
         crows = prov.candidate_rows(bodies, states, h)
@@ -133,6 +135,13 @@ def test_provider_matches_reference_along_a_trajectory():
             assert (prov._facet < 0).all() and crows.rows.m == 0
             continue
         got = np.nonzero(prov._facet >= 0)[0]
+        # a node certified in front by more than any row's window gets no pair (contact.
+        # certificate.far): the reference's pairs but those, each in front and never a row
+        searched = np.isin(proj.point, got)
+        assert np.isin(got, proj.point).all() and (proj.gap[~searched] > 0.0).all()
+        assert not np.isin(proj.point[~searched], act.point).any()
+        left += int((~searched).sum())
+        proj = proj.take(searched)
         np.testing.assert_array_equal(got, proj.point)
         if not np.array_equal(prov._facet[got], proj.facet):
             _assert_round_off_tie(bodies, states, prov, proj)
@@ -156,6 +165,7 @@ def test_provider_matches_reference_along_a_trajectory():
     # ties: a node beside a shared edge scores the same on both facets (the closest-distance
     # rule, geometry.closest_facets); 3 of the 288 row-carrying projections here
     assert n_rows > 50 and ties <= 4
+    assert left > 100  # nodes left out over the 40 steps: 213 measured
 
 
 def _assert_round_off_tie(bodies, states, prov, proj):

@@ -20,6 +20,11 @@ would prune every other candidate: it tries f0 alone, and :func:`certified` says
 reading the candidates. Results, kept projections and failures are those of the search bit for
 bit (tests/test_contact_certificate.py).
 
+The same bounds give D_i, a lower bound of the node's distance to the whole surface: a node
+in front of it by more than its motion since plus the largest gap any consumer of the call
+can read (`far`) needs no pair at all (search.scan_nodes' `need`, passed by
+pairs.PointToSurfaceContact: the rows' window, the look-ahead's horizon).
+
 Units: metres.
 """
 
@@ -33,6 +38,11 @@ from flexmvm.contact.candidate_lists import row_distance
 #: relative and absolute allowances of the search's pruning margin (search._closest), also
 #: taken off the certificate: 1e-5 of the facet's circumradius, 1e-9 of the distance, 1e-15 m
 MARGIN_R, MARGIN_D, MARGIN_ABS = 1e-5, 1e-9, 1e-15
+
+#: |u_N| <= |v_S - v_C| <= sqrt(3) (the largest slave plus the largest master velocity
+#: component: the reach rule's speed of pairs.PointToSurfaceContact), with a round-off margin:
+#: a pair of gap g can close within a time t only if g <= t UN_SPEED speed (far's need)
+UN_SPEED = np.sqrt(3.0) * (1.0 + 1e-6)
 
 
 @numba.njit(cache=True)
@@ -81,13 +91,16 @@ def list_holds(i, p, reach, ref):
 
 
 @numba.njit(cache=True)
-def certify(i, p, g, geo, plane, edges, lists, cert):
+def certify(i, p, g, geo, plane, edges, lists, ref, cert):
     """After a full search of node i (at p, its position in the facet body's frame) that
-    chose facet g: cert[i] = (C_i, p, g) (module doc); C_i = -inf (no certificate) when g < 0
-    or the superset overflowed (all facets are candidates), +inf when g is its only facet.
-    Each facet's bound is the largest of its ball's, slab_bound and triangle_bound, the
-    latter two computed only where the former would lower the minimum."""
+    chose facet g: cert[i] = (C_i, p, g, D_i) (module doc); C_i = -inf (no certificate) when
+    g < 0 or the superset overflowed (all facets are candidates), +inf when g is its only
+    facet. Each facet's bound is the largest of its ball's, slab_bound and triangle_bound,
+    the latter two computed only where the former would lower the minimum. D_i [m]: a lower
+    bound of the node's distance to the whole surface, min(C_i, g's own bound, the facets
+    beyond the superset's radius ref[i, 3] about ref[i, :3]) (far; -inf with C_i)."""
     cert[i, 0] = -np.inf
+    cert[i, 5] = -np.inf
     n_list = lists[i, 0]
     if g < 0 or n_list < 0:
         return
@@ -107,6 +120,11 @@ def certify(i, p, g, geo, plane, edges, lists, cert):
     cert[i, 0] = low
     cert[i, 1], cert[i, 2], cert[i, 3] = p[0], p[1], p[2]
     cert[i, 4] = g
+    R = geo[g, 3]
+    own = max(slab_bound(p, geo, plane, g), triangle_bound(p, geo, plane, edges, g))
+    own -= MARGIN_R * R + MARGIN_D * (abs(own) + R) + MARGIN_ABS
+    beyond = ref[i, 3] - row_distance(p, ref, i) - (1e-12 + 1e-9 * ref[i, 3])
+    cert[i, 5] = min(low, own, beyond)
 
 
 @numba.njit(cache=True)
@@ -123,3 +141,22 @@ def certified(i, p, f0, score, u_max, cert):
     slack = u_max * (1.0 + MARGIN_R) + moved * (1.0 + MARGIN_D)
     slack += MARGIN_D * (abs(low) + moved + score) + MARGIN_ABS
     return low - slack > score
+
+
+@numba.njit(cache=True)
+def far(i, p, need, u_max, cert):
+    """Whether node i, now at p, is certainly in front of the surface by more than need [m]:
+    D_i (certify: a lower bound of its distance to the whole surface at p_i, where its gap
+    was positive: the scan sets D_i = -inf otherwise) less |p - p_i| and u_max (with the
+    round-off allowances) exceeds need. The ball about p_i of radius D_i - u_max holds no
+    point of the surface, so p, inside it, is on p_i's side, at a distance over need: a pair
+    of it would have a gap over need. pairs.PointToSurfaceContact passes the largest gap a
+    pair can need in a call (a row's window, the look-ahead's horizon), so that the rows and
+    the look-ahead's sign are those of the search of every node."""
+    low = cert[i, 5]
+    if not low > -np.inf or not need < np.inf:
+        return False
+    moved = np.sqrt((p[0] - cert[i, 1]) ** 2 + (p[1] - cert[i, 2]) ** 2 + (p[2] - cert[i, 3]) ** 2)
+    slack = u_max * (1.0 + MARGIN_R) + moved * (1.0 + MARGIN_D)
+    slack += MARGIN_D * (abs(low) + moved + need) + MARGIN_ABS
+    return low - slack > need

@@ -35,10 +35,9 @@ the projection outright when it opens (no impulse) or when the two gaps are more
 HOLD_DRIFT_MAX gap_tol apart.
 Bonded contact (seed eq. 7, all three components) locks a pair once it has carried a
 compressive impulse: three equality rows x_S - x_C = 0 at the frozen shape functions, until
-the normal component of its impulse would turn tensile.
-
-Only slave nodes are held; `penetration` measures both ways (contact.penetration), master
-surface nodes against the slave facets too (given `slave_surface`).
+the normal component of its impulse would turn tensile. Only slave nodes are held;
+`penetration` measures both ways (contact.penetration), master surface nodes against the
+slave facets too (given `slave_surface`).
 """
 
 from __future__ import annotations
@@ -50,6 +49,7 @@ import numpy as np
 
 from flexmvm.constraints.contact import ContactKind, ContactLaw, ContactRows, FrictionRows
 from flexmvm.constraints.rows import Rows
+from flexmvm.contact.certificate import UN_SPEED
 from flexmvm.contact.geometry import BroadPhase, MasterSurface
 from flexmvm.contact.held_pairs import gap_offsets, hold_pairs
 from flexmvm.contact.nodes import ContactNodes
@@ -96,11 +96,9 @@ class PointToSurfaceContact:
     """Contact of slave nodes (body `slave`) with master facets (body `master`).
 
     Per call the contact-node kinematics, the search and the rows run in compiled kernels
-    (contact.kinematics, contact.search, contact.pair_rows) on arrays kept here; the result
-    equals the numpy reference (contact.numpy_step) to round-off. Search state kept between calls, which never changes a
-    result: per slave node a superset of its broad-phase candidates, rebuilt once the node
-    has moved far enough to leave it, and the facet chosen last time, tried first.
-    """
+    (contact.kinematics, contact.search, contact.pair_rows) on arrays kept here; the rows
+    equal the numpy reference's (contact.numpy_step) to round-off. The search's state
+    (contact.search_state, contact.certificate) never changes a row or the look-ahead."""
 
     def __init__(
         self,
@@ -219,9 +217,9 @@ class PointToSurfaceContact:
                 vs, _ = self._s.update(states[self.slave])  # the new window's
         return float(vs + vm)
 
-    def _scan(self, states, reach: float) -> int:
-        """Closest facet, gap and normal velocity of every slave node within reach (into
-        self._facet, self._out); returns the number of nodes with a facet."""
+    def _scan(self, states, reach: float, need: float) -> int:
+        """Closest facet, gap and u_N of the slave nodes within reach, but those certified in
+        front by more than need [m] (never held or bonded ones), into _facet, _out: n pairs."""
         sm = states[self.master]
         m = self._m
         d0, u_rel = m.displacement_offset()  # the facets as moved by d0, at most u_rel more
@@ -239,6 +237,8 @@ class PointToSurfaceContact:
             self._memo.arrays,
             self._facet,
             self._out,
+            need,
+            (self._held >= 0) | self._bonded,
         )
         if status:
             raise SolverError(f"{self._who}: " + _failure(status, facet))
@@ -254,7 +254,8 @@ class PointToSurfaceContact:
 
     def min_gap_ahead(self, bodies, states, horizon_s: float) -> float:
         speed = self._kinematics(states, lambda v: self.search_radius + v * horizon_s)
-        if self._scan(states, self.search_radius + speed * horizon_s) == 0:
+        need = np.inf if self._bonds else UN_SPEED * speed * horizon_s  # gap <= horizon |u_N|
+        if self._scan(states, self.search_radius + speed * horizon_s, need) == 0:
             return np.inf
         if self._bonds:
             return -np.inf
@@ -278,7 +279,8 @@ class PointToSurfaceContact:
     # -- constraint rows ----------------------------------------------------------------------
     def candidate_rows(self, bodies, states, h: float) -> ContactRows:
         speed = self._kinematics(states, lambda v: self.search_radius + 2 * v * h)
-        self._scan(states, self.search_radius + 2 * speed * h)
+        hp, tol = self.law.spec.row_window(h, self.gap_tol, speed)  # rows: g + hp u_N- <= tol
+        self._scan(states, self.search_radius + 2 * speed * h, tol + abs(hp) * UN_SPEED * speed)
         A_m = states[self.master].A
         if self._holds:
             hold_pairs(
@@ -299,8 +301,6 @@ class PointToSurfaceContact:
                 HOLD_DRIFT_MAX * self.gap_tol,
                 HOLD_SLIDE_MAX,
             )
-        # rows: g + hp u_N- <= tol (the law's window: constraints/contact_laws)
-        hp, tol = self.law.spec.row_window(h, self.gap_tol, speed)
         m_n, idx, slave_ids, facets, normal, gaps, u_n, s_pairs, m_pairs = active_pairs(
             self._facet,
             self._out,

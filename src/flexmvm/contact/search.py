@@ -15,14 +15,10 @@ and hand their arrays to the per-node helpers (see :func:`_search_node` for why)
 
 Projections made at unchanged node positions are kept and read again (search_state.
 ProjectionMemo, :func:`_try`): the penetration measure at the end of a step and the next
-step's search project the same pairs at the same positions. The three helpers called per
-node with many array arguments (_search_node, _closest, _try) are inlined into the scans
-(numba ``inline="always"``, same results bit for bit): a call of one cost ~0.4 us in the
-arguments' reference counts alone, as much as a projection, and inlined the sphere_block
-scan of 757 slave nodes (383 with a facet) takes 0.64 ms instead of 0.90 ms; the first-run
-compilation of the scans grows by about a second (docs/notes/2026-11-29-step-cost-cuts.md).
-The other helpers stay separate functions (inlining them too saved nothing measurable and
-compiled longer).
+step's search project the same pairs at the same positions. The helpers called per node
+with many array arguments (_search_node, _closest, _try) are inlined into the scans (numba
+``inline="always"``): a call cost ~0.4 us in the arguments' reference counts alone, as much
+as a projection (docs/notes/2026-11-29-step-cost-cuts.md).
 
 Units: metres, seconds. Node arrays hold the contact nodes of one body only ("local" node
 indices 0..n_c-1); facets refer to local node indices of the body that carries them.
@@ -40,6 +36,7 @@ from flexmvm.contact.certificate import (
     MARGIN_R,
     certified,
     certify,
+    far,
     list_holds,
     slab_bound,
 )
@@ -321,7 +318,7 @@ def _search_node(
         best,
     )
     if status == 0:
-        certify(i, p, g, geo, plane, edges, lists, cert)
+        certify(i, p, g, geo, plane, edges, lists, ref, cert)
     return True, status, g
 
 
@@ -335,7 +332,9 @@ def work_arrays():
 
 
 @numba.njit(cache=True)
-def scan_nodes(xs, vs, xm, vm, r_m, A_m, reach, u_max, surface, state, memo, facet, out):
+def scan_nodes(
+    xs, vs, xm, vm, r_m, A_m, reach, u_max, surface, state, memo, facet, out, need, keep
+):  # fmt: skip
     """Closest facet of every slave node within reach, as PointToSurfaceContact's numpy path
     (box test in the master frame, BroadPhase candidates, project_points, closest_facets,
     clamping) and its normal velocity.
@@ -344,7 +343,9 @@ def scan_nodes(xs, vs, xm, vm, r_m, A_m, reach, u_max, surface, state, memo, fac
     nodes; r_m (3,), A_m (3, 3) master frame; reach [m]; u_max [m] largest master node
     displacement; surface (FacetSurface) the master facets; state (SearchState, ns nodes)
     kept between calls; memo (MemoArrays) the projections kept at the current positions
-    (_try). Output: facet (ns,) (-1: none), out (ns, 11) as in _finish.
+    (_try). need [m]: a node certified in front of the surface by more than need
+    (certificate.far; keep[i] != 0: never) gets no pair (np.inf: every node searched).
+    Output: facet (ns,) (-1: none), out (ns, 11) as in _finish.
     Returns (status, facet of the failure, number of pairs)."""
     work, best, p = work_arrays()
     _memo_begin(memo)
@@ -355,6 +356,8 @@ def scan_nodes(xs, vs, xm, vm, r_m, A_m, reach, u_max, surface, state, memo, fac
     for i in range(xs.shape[0]):
         facet[i] = -1
         if not _in_box(i, xs, r_m, A_m, box, reach, p):
+            continue
+        if keep[i] == 0 and far(i, p, need, u_max, cert):
             continue
         searched, status, g = _search_node(
             i,
@@ -392,6 +395,8 @@ def scan_nodes(xs, vs, xm, vm, r_m, A_m, reach, u_max, surface, state, memo, fac
         facet[i] = g
         prev[i] = g
         _finish(i, g, best, xs[i], vs[i], xm, vm, conn, n_quads, out)
+        if not out[i, 9] > 0.0:  # on or behind the surface: never far (certificate.far)
+            cert[i, 5] = -np.inf
         n_pairs += 1
     return 0, -1, n_pairs
 

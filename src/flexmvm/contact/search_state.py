@@ -69,7 +69,7 @@ class SearchState(NamedTuple):
     counter: np.ndarray  # (1,) int64
     cand: np.ndarray  # (nf,) int64
     lb: np.ndarray  # (nf,) lower bounds of the candidates' distances [m]
-    cert: np.ndarray  # (n, 5) the warm start's certificate (contact.certificate.certify)
+    cert: np.ndarray  # (n, 6) the warm start's certificate (contact.certificate.certify)
 
     @classmethod
     def empty(cls, n: int, nf: int, cap: int = LIST_CAP) -> SearchState:
@@ -82,7 +82,7 @@ class SearchState(NamedTuple):
             np.zeros(1, dtype=np.int64),
             np.zeros(nf, dtype=np.int64),
             np.zeros(nf),
-            np.full((n, 5), -np.inf),
+            np.full((n, 6), -np.inf),
         )
 
 
