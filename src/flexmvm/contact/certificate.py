@@ -135,12 +135,18 @@ def certified(i, p, f0, score, u_max, cert):
     low = cert[i, 0]
     if not low > -np.inf or cert[i, 4] != f0:
         return False
+    return low == np.inf or low - _slack(i, p, u_max, low, score, cert) > score
+
+
+@numba.njit(cache=True)
+def _slack(i, p, u_max, low, than, cert):
+    """What a bound ``low`` [m] kept at node i's position p_i = cert[i, 1:4] may have fallen by
+    at p, compared with ``than`` [m]: the node's motion |p - p_i| and the facets' u_max, with
+    the round-off allowances (certified, far)."""
     moved = np.sqrt((p[0] - cert[i, 1]) ** 2 + (p[1] - cert[i, 2]) ** 2 + (p[2] - cert[i, 3]) ** 2)
-    if low == np.inf:
-        return True
     slack = u_max * (1.0 + MARGIN_R) + moved * (1.0 + MARGIN_D)
-    slack += MARGIN_D * (abs(low) + moved + score) + MARGIN_ABS
-    return low - slack > score
+    slack += MARGIN_D * (abs(low) + moved + than) + MARGIN_ABS
+    return slack
 
 
 @numba.njit(cache=True)
@@ -156,7 +162,4 @@ def far(i, p, need, u_max, cert):
     low = cert[i, 5]
     if not low > -np.inf or not need < np.inf:
         return False
-    moved = np.sqrt((p[0] - cert[i, 1]) ** 2 + (p[1] - cert[i, 2]) ** 2 + (p[2] - cert[i, 3]) ** 2)
-    slack = u_max * (1.0 + MARGIN_R) + moved * (1.0 + MARGIN_D)
-    slack += MARGIN_D * (abs(low) + moved + need) + MARGIN_ABS
-    return low - slack > need
+    return low - _slack(i, p, u_max, low, need, cert) > need
